@@ -1,0 +1,133 @@
+"""The ``gyrolab`` command: serve, migrate, create-user, and the science commands."""
+
+from __future__ import annotations
+
+import argparse
+import getpass
+import sys
+
+
+def _serve(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    from app.config import get_settings
+    from app.db import write_session
+    from app.demo import (
+        create_demo_data,
+        database_is_empty,
+        format_credentials,
+        write_credentials_file,
+    )
+    from app.migrate import upgrade_to_head
+
+    settings = get_settings()
+    upgrade_to_head()
+    credentials_file = settings.var_dir / "demo-credentials.txt"
+    if not args.no_demo:
+        with write_session() as db:
+            credentials = create_demo_data(db) if database_is_empty(db) else None
+        if credentials:
+            write_credentials_file(credentials_file, credentials)
+            print(format_credentials(credentials), flush=True)
+            print(f"(also saved in {credentials_file})", flush=True)
+        elif credentials_file.exists():
+            print(f"Demo accounts: see {credentials_file}", flush=True)
+    host = args.host or settings.host
+    port = args.port or settings.port
+    print(f"GyroLab is serving on http://{host}:{port}  (Ctrl+C stops it)", flush=True)
+    uvicorn.run(
+        "app.main:app",
+        host=host,
+        port=port,
+        workers=args.workers,
+        proxy_headers=args.proxy_headers,
+        access_log=not args.no_access_log,
+    )
+    return 0
+
+
+def _migrate(_args: argparse.Namespace) -> int:
+    from app.migrate import upgrade_to_head
+
+    upgrade_to_head()
+    print("database is at the newest schema")
+    return 0
+
+
+def _create_user(args: argparse.Namespace) -> int:
+    from app.accounts import AccountError, create_user
+    from app.db import write_session
+    from app.migrate import upgrade_to_head
+    from app.models import Role
+    from app.security import password_problem
+
+    password = args.password
+    if password is None:
+        if not sys.stdin.isatty():
+            password = sys.stdin.readline().rstrip("\n")
+        else:
+            password = getpass.getpass("Password: ")
+            if getpass.getpass("Password again: ") != password:
+                print("error: the passwords differ", file=sys.stderr)
+                return 2
+    problem = password_problem(password, args.username)
+    if problem:
+        print(f"error: unacceptable password ({problem})", file=sys.stderr)
+        return 2
+    upgrade_to_head()
+    try:
+        with write_session() as db:
+            create_user(
+                db,
+                username=args.username,
+                display_name=args.display_name or args.username,
+                role=Role(args.role),
+                password=password,
+                email=args.email,
+            )
+    except AccountError as error:
+        print(f"error: {error.key}: {args.username}", file=sys.stderr)
+        return 2
+    print(f"created {args.role} {args.username}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="gyrolab", description=__doc__)
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    serve = commands.add_parser("serve", help="migrate, add demo data if empty, and serve")
+    serve.add_argument("--host", help="default: GYROLAB_HOST or 127.0.0.1")
+    serve.add_argument("--port", type=int, help="default: GYROLAB_PORT or 8000")
+    serve.add_argument("--workers", type=int, default=1)
+    serve.add_argument("--no-demo", action="store_true", help="do not create demo accounts")
+    serve.add_argument(
+        "--proxy-headers", action="store_true", help="trust X-Forwarded-* from a reverse proxy"
+    )
+    serve.add_argument("--no-access-log", action="store_true")
+    serve.set_defaults(handler=_serve)
+
+    migrate = commands.add_parser("migrate", help="apply database migrations")
+    migrate.set_defaults(handler=_migrate)
+
+    create = commands.add_parser("create-user", help="create a teacher (or student) account")
+    create.add_argument("--role", choices=["teacher", "student"], default="teacher")
+    create.add_argument("--username", required=True)
+    create.add_argument("--display-name")
+    create.add_argument("--email")
+    create.add_argument("--password", help="default: asked for (or one line of stdin)")
+    create.set_defaults(handler=_create_user)
+
+    from app.science_cli import add_science_commands
+
+    add_science_commands(commands)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return args.handler(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

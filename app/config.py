@@ -1,0 +1,69 @@
+"""Settings from environment variables prefixed ``GYROLAB_`` (pydantic-settings).
+
+| variable | default |
+|---|---|
+| GYROLAB_DATABASE_URL | ``sqlite:///<var dir>/gyrolab.db`` |
+| GYROLAB_VAR_DIR | ``./var`` (database, secret key, demo credentials) |
+| GYROLAB_SECRET_KEY | generated on first run and kept in ``<var dir>/secret_key`` |
+| GYROLAB_SESSION_IDLE_MINUTES | 120 |
+| GYROLAB_SESSION_LIFETIME_HOURS | 12 |
+| GYROLAB_HOST / GYROLAB_PORT | 127.0.0.1 / 8000 |
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+from functools import lru_cache
+from pathlib import Path
+
+from pydantic import Field, field_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+
+class Settings(BaseSettings):
+    model_config = SettingsConfigDict(env_prefix="GYROLAB_", extra="ignore")
+
+    var_dir: Path = Path("var")
+    database_url: str = ""
+    secret_key: str = ""
+    session_idle_minutes: int = Field(default=120, ge=1)
+    session_lifetime_hours: int = Field(default=12, ge=1)
+    host: str = "127.0.0.1"
+    port: int = Field(default=8000, ge=1, le=65535)
+    login_max_failures_per_account: int = Field(default=5, ge=1)
+    login_max_failures_per_address: int = Field(default=30, ge=1)
+    login_window_minutes: int = Field(default=15, ge=1)
+
+    @field_validator("secret_key")
+    @classmethod
+    def _no_placeholder(cls, value: str) -> str:
+        if value and (len(value) < 16 or value.lower() in {"changeme", "secret", "change-me"}):
+            raise ValueError("GYROLAB_SECRET_KEY must be a random string of at least 16 characters")
+        return value
+
+    def resolved(self) -> Settings:
+        """Fill in the database URL and secret key defaults that depend on the var dir."""
+        var_dir = self.var_dir.resolve()
+        var_dir.mkdir(parents=True, exist_ok=True)
+        url = self.database_url or f"sqlite:///{var_dir / 'gyrolab.db'}"
+        key = self.secret_key or _persisted_secret(var_dir / "secret_key")
+        return self.model_copy(update={"var_dir": var_dir, "database_url": url, "secret_key": key})
+
+
+def _persisted_secret(path: Path) -> str:
+    if path.exists():
+        return path.read_text().strip()
+    key = secrets.token_urlsafe(48)
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    except FileExistsError:  # another worker wrote it first
+        return path.read_text().strip()
+    with os.fdopen(fd, "w") as handle:
+        handle.write(key)
+    return key
+
+
+@lru_cache
+def get_settings() -> Settings:
+    return Settings().resolved()

@@ -1,0 +1,62 @@
+"""Demo data for a newcomer: one teacher, three students, one course."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from sqlmodel import Session, func, select
+
+from app.accounts import create_user, enroll
+from app.models import Course, Role, User
+from app.security import generate_password
+
+DEMO_TEACHER = ("teacher", "Demo Teacher 王老师")
+DEMO_STUDENTS = (
+    ("student1", "张三 Zhang San"),
+    ("student2", "李四 Li Si"),
+    ("student3", "王五 Wang Wu"),
+)
+DEMO_COURSE = "Demo: FOG north-finding lab 光纤陀螺寻北实验"
+
+
+def database_is_empty(db: Session) -> bool:
+    return db.exec(select(func.count()).select_from(User)).one() == 0
+
+
+def create_demo_data(db: Session) -> list[tuple[str, str, str]]:
+    """Create the demo accounts and course; returns (role, username, password) rows."""
+    credentials = []
+    teacher_password = generate_password()
+    teacher = create_user(
+        db,
+        username=DEMO_TEACHER[0],
+        display_name=DEMO_TEACHER[1],
+        role=Role.teacher,
+        password=teacher_password,
+    )
+    credentials.append(("teacher", teacher.username, teacher_password))
+    course = Course(name=DEMO_COURSE, teacher_id=teacher.id)
+    db.add(course)
+    db.flush()
+    for username, name in DEMO_STUDENTS:
+        password = generate_password()
+        student = create_user(
+            db, username=username, display_name=name, role=Role.student, password=password
+        )
+        enroll(db, course, student)
+        credentials.append(("student", username, password))
+    return credentials
+
+
+def write_credentials_file(path: Path, credentials: list[tuple[str, str, str]]) -> None:
+    lines = ["# GyroLab demo accounts (role, username, password)"]
+    lines += [",".join(row) for row in credentials]
+    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(fd, "w") as handle:
+        handle.write("\n".join(lines) + "\n")
+
+
+def format_credentials(credentials: list[tuple[str, str, str]]) -> str:
+    rows = [f"  {role:<8} {username:<10} {password}" for role, username, password in credentials]
+    return "\n".join(["Demo accounts (role, username, password):", *rows])

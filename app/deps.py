@@ -1,0 +1,142 @@
+"""FastAPI dependencies: database session, current user, role checks and CSRF."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from datetime import timedelta
+from typing import Annotated
+
+from fastapi import Depends, Request
+from sqlmodel import Session, select
+
+from app.config import Settings, get_settings
+from app.db import get_engine, write_session, writer
+from app.models import AuthSession, Role, User, utcnow
+from app.security import session_is_live, token_digest, tokens_match
+from app.web import CSRF_COOKIE, SESSION_COOKIE
+
+SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
+TOUCH_INTERVAL = timedelta(seconds=60)
+# Pages a user who must change their password may still reach.
+PASSWORD_CHANGE_PATHS = {"/account/password", "/logout", "/lang"}
+
+
+class LoginRequired(Exception):
+    """No valid session: HTML routes redirect to the login page."""
+
+
+class Forbidden(Exception):
+    """Logged in, but this role may not do this."""
+
+
+class CsrfFailed(Exception):
+    """A state-changing request without the right CSRF token."""
+
+
+class PasswordChangeRequired(Exception):
+    """The user must choose a new password before anything else."""
+
+
+def get_db(request: Request) -> Iterator[Session]:
+    """One session per request; writes (POST, PUT, ...) start with BEGIN IMMEDIATE."""
+    engine = get_engine()
+    bind = engine if request.method in SAFE_METHODS else writer(engine)
+    with Session(bind, expire_on_commit=False) as session:
+        yield session
+
+
+SessionDep = Annotated[Session, Depends(get_db)]
+SettingsDep = Annotated[Settings, Depends(get_settings)]
+
+
+def load_login(request: Request, db: Session, settings: Settings) -> User | None:
+    """Resolve the session cookie to a user once per request (cached on request.state)."""
+    if getattr(request.state, "auth_loaded", False):
+        return request.state.user
+    request.state.auth_loaded = True
+    request.state.user = None
+    request.state.auth = None
+    token = request.cookies.get(SESSION_COOKIE)
+    if not token:
+        return None
+    record = db.exec(
+        select(AuthSession).where(AuthSession.token_hash == token_digest(token))
+    ).first()
+    if record is None or not session_is_live(record, settings):
+        return None
+    user = db.get(User, record.user_id)
+    if user is None:
+        return None
+    if utcnow() - record.last_seen_at > TOUCH_INTERVAL:
+        if request.method in SAFE_METHODS:
+            _touch(record.id)
+        else:  # this request already holds the write lock; its commit saves the touch
+            record.last_seen_at = utcnow()
+            db.add(record)
+    request.state.user = user
+    request.state.auth = record
+    return user
+
+
+def _touch(session_id: int) -> None:
+    """Extend the idle timer in its own short write transaction."""
+    with write_session() as db:
+        record = db.get(AuthSession, session_id)
+        if record is not None:
+            record.last_seen_at = utcnow()
+            db.add(record)
+
+
+async def csrf_protect(request: Request, db: SessionDep, settings: SettingsDep) -> None:
+    """Check the CSRF token of every state-changing cookie-authenticated (or anonymous) form.
+
+    Logged in: the token stored with the server-side session.  Not logged in (login form):
+    a double-submit cookie.  Token from the ``X-CSRF-Token`` header or ``csrf_token`` field.
+    """
+    if request.method in SAFE_METHODS:
+        return
+    given = request.headers.get("x-csrf-token")
+    if given is None:
+        content_type = request.headers.get("content-type", "")
+        if content_type.startswith(("application/x-www-form-urlencoded", "multipart/form-data")):
+            form = await request.form()
+            value = form.get("csrf_token")
+            given = value if isinstance(value, str) else None
+    user = load_login(request, db, settings)
+    expected = request.state.auth.csrf_token if user else request.cookies.get(CSRF_COOKIE)
+    if not tokens_match(expected, given):
+        raise CsrfFailed()
+
+
+def optional_user(request: Request, db: SessionDep, settings: SettingsDep) -> User | None:
+    return load_login(request, db, settings)
+
+
+def current_user(request: Request, db: SessionDep, settings: SettingsDep) -> User:
+    user = load_login(request, db, settings)
+    if user is None:
+        raise LoginRequired()
+    if user.must_change_password and request.url.path not in PASSWORD_CHANGE_PATHS:
+        raise PasswordChangeRequired()
+    return user
+
+
+CurrentUser = Annotated[User, Depends(current_user)]
+OptionalUser = Annotated[User | None, Depends(optional_user)]
+
+
+def teacher_user(user: CurrentUser) -> User:
+    if user.role != Role.teacher:
+        raise Forbidden()
+    return user
+
+
+def student_user(user: CurrentUser) -> User:
+    if user.role != Role.student:
+        raise Forbidden()
+    return user
+
+
+TeacherUser = Annotated[User, Depends(teacher_user)]
+StudentUser = Annotated[User, Depends(student_user)]
+CsrfProtected = Depends(csrf_protect)

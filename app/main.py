@@ -1,0 +1,123 @@
+"""The ASGI application: ``create_app()`` wires middleware, static files, routers, errors."""
+
+from __future__ import annotations
+
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+import plotly
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import FileResponse, JSONResponse
+from fastapi.staticfiles import StaticFiles
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from app import __version__
+from app.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequired
+from app.paths import STATIC_DIR
+from app.routers import auth, courses, home
+from app.web import redirect, render
+
+PLOTLY_JS = Path(plotly.__file__).parent / "package_data" / "plotly.min.js"
+PLOTLY_URL = f"/vendor/plotly-{plotly.__version__}.min.js"
+
+
+def _wants_json(request: Request) -> bool:
+    return request.url.path.startswith("/api/") or "application/json" in request.headers.get(
+        "accept", ""
+    )
+
+
+def _error_page(request: Request, status: int, key: str):
+    if _wants_json(request):
+        return JSONResponse({"detail": key}, status_code=status)
+    return render(request, "error.html", {"status": status, "message_key": key}, status)
+
+
+def create_app(*, migrate_on_start: bool = True) -> FastAPI:
+    @asynccontextmanager
+    async def lifespan(_app: FastAPI):
+        if migrate_on_start:
+            from app.migrate import upgrade_to_head
+
+            upgrade_to_head()
+        yield
+
+    app = FastAPI(
+        title="GyroLab",
+        version=__version__,
+        lifespan=lifespan,
+        docs_url="/docs",
+        redoc_url=None,
+    )
+    app.mount("/static", StaticFiles(directory=str(STATIC_DIR)), name="static")
+
+    @app.get(PLOTLY_URL, include_in_schema=False)
+    def plotly_js() -> FileResponse:
+        """plotly.js straight from the installed plotly package, cached for a year."""
+        return FileResponse(
+            PLOTLY_JS,
+            media_type="text/javascript",
+            headers={"Cache-Control": "public, max-age=31536000, immutable"},
+        )
+
+    app.state.plotly_url = PLOTLY_URL
+
+    @app.exception_handler(LoginRequired)
+    async def _login_required(request: Request, _exc: LoginRequired):
+        if _wants_json(request):
+            return JSONResponse({"detail": "Not authenticated"}, status_code=401)
+        target = request.url.path
+        if request.url.query:
+            target += "?" + request.url.query
+        from urllib.parse import quote
+
+        return redirect(f"/login?next={quote(target)}")
+
+    @app.exception_handler(PasswordChangeRequired)
+    async def _password_change(request: Request, _exc: PasswordChangeRequired):
+        if _wants_json(request):
+            return JSONResponse({"detail": "Password change required"}, status_code=403)
+        return redirect("/account/password")
+
+    @app.exception_handler(Forbidden)
+    async def _forbidden(request: Request, _exc: Forbidden):
+        return _error_page(request, 403, "error.forbidden")
+
+    @app.exception_handler(CsrfFailed)
+    async def _csrf(request: Request, _exc: CsrfFailed):
+        return _error_page(request, 403, "error.csrf")
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request: Request, exc: StarletteHTTPException):
+        if _wants_json(request):
+            return JSONResponse({"detail": exc.detail}, status_code=exc.status_code)
+        key = {404: "error.not_found", 405: "error.method", 413: "error.too_large"}.get(
+            exc.status_code, "error.generic"
+        )
+        return render(
+            request, "error.html", {"status": exc.status_code, "message_key": key}, exc.status_code
+        )
+
+    @app.exception_handler(RequestValidationError)
+    async def _invalid(request: Request, exc: RequestValidationError):
+        if _wants_json(request):
+            return JSONResponse({"detail": jsonable_errors(exc)}, status_code=422)
+        return render(
+            request, "error.html", {"status": 400, "message_key": "error.bad_request"}, 400
+        )
+
+    app.include_router(auth.router)
+    app.include_router(home.router)
+    app.include_router(courses.router)
+    return app
+
+
+def jsonable_errors(exc: RequestValidationError) -> list[dict]:
+    return [
+        {"loc": list(err.get("loc", ())), "msg": err.get("msg", ""), "type": err.get("type", "")}
+        for err in exc.errors()
+    ]
+
+
+app = create_app()

@@ -1,0 +1,148 @@
+"""Login, logout, password change and the language switch."""
+
+from __future__ import annotations
+
+from typing import Annotated
+from urllib.parse import urlsplit
+
+from fastapi import APIRouter, Form, Request
+
+from app.deps import CsrfProtected, CurrentUser, OptionalUser, SessionDep, SettingsDep
+from app.i18n import normalise
+from app.models import AuthSession, User, utcnow
+from app.security import (
+    authenticate,
+    clear_login_failures,
+    create_session,
+    hash_password,
+    login_throttled,
+    password_problem,
+    record_login_failure,
+    revoke_sessions,
+    verify_password,
+)
+from app.web import LANG_COOKIE, SESSION_COOKIE, flash, redirect, render, set_cookie
+
+router = APIRouter(tags=["pages: account"], include_in_schema=False)
+
+
+def safe_next(target: str | None) -> str:
+    """Only same-site relative paths may be redirect targets after login."""
+    if not target:
+        return "/"
+    parts = urlsplit(target)
+    if parts.scheme or parts.netloc or not target.startswith("/") or target.startswith("//"):
+        return "/"
+    return target
+
+
+def client_address(request: Request) -> str:
+    return request.client.host if request.client else "unknown"
+
+
+@router.get("/login")
+def login_page(request: Request, user: OptionalUser, next: str = "/"):
+    if user is not None:
+        return redirect(safe_next(next))
+    return render(request, "auth/login.html", {"next": safe_next(next)})
+
+
+@router.post("/login", dependencies=[CsrfProtected])
+def login(
+    request: Request,
+    db: SessionDep,
+    settings: SettingsDep,
+    username: Annotated[str, Form(max_length=200)] = "",
+    password: Annotated[str, Form(max_length=1000)] = "",
+    next: Annotated[str, Form(max_length=2000)] = "/",
+):
+    address = client_address(request)
+    context = {"next": safe_next(next), "username": username}
+    if login_throttled(db, username, address, settings):
+        context["error"] = "login.throttled"
+        context["minutes"] = settings.login_window_minutes
+        return render(request, "auth/login.html", context, 429)
+    user = authenticate(db, username, password)
+    if user is None:
+        record_login_failure(db, username, address)
+        db.commit()
+        context["error"] = "login.failed"
+        return render(request, "auth/login.html", context, 401)
+    clear_login_failures(db, user.username)
+    token = create_session(db, user, settings)
+    db.commit()
+    response = redirect("/account/password" if user.must_change_password else safe_next(next))
+    set_cookie(response, request, SESSION_COOKIE, token, settings.session_lifetime_hours * 3600)
+    return response
+
+
+@router.post("/logout", dependencies=[CsrfProtected])
+def logout(request: Request, db: SessionDep):
+    auth: AuthSession | None = getattr(request.state, "auth", None)
+    if auth is not None:
+        auth.revoked_at = utcnow()
+        db.add(auth)
+        db.commit()
+    response = redirect("/login")
+    response.delete_cookie(SESSION_COOKIE, path="/")
+    flash(response, request, "login.logged_out")
+    return response
+
+
+@router.get("/account/password")
+def password_page(request: Request, user: CurrentUser):
+    return render(request, "auth/password.html", {"forced": user.must_change_password})
+
+
+@router.post("/account/password", dependencies=[CsrfProtected])
+def change_password(
+    request: Request,
+    user: CurrentUser,
+    db: SessionDep,
+    settings: SettingsDep,
+    current_password: Annotated[str, Form(max_length=1000)] = "",
+    new_password: Annotated[str, Form(max_length=1000)] = "",
+    confirm_password: Annotated[str, Form(max_length=1000)] = "",
+):
+    error = None
+    if not verify_password(current_password, user.password_hash):
+        error = "password.wrong_current"
+    elif new_password != confirm_password:
+        error = "password.mismatch"
+    elif new_password == current_password:
+        error = "password.unchanged"
+    else:
+        error = password_problem(new_password, user.username)
+    if error:
+        context = {"forced": user.must_change_password, "error": error}
+        return render(request, "auth/password.html", context, 400)
+    db_user = db.get(User, user.id)
+    db_user.password_hash = hash_password(new_password)
+    db_user.must_change_password = False
+    db.add(db_user)
+    revoke_sessions(db, user.id)  # every session, this one too: a fresh one follows
+    token = create_session(db, db_user, settings)
+    db.commit()
+    response = redirect("/")
+    set_cookie(response, request, SESSION_COOKIE, token, settings.session_lifetime_hours * 3600)
+    flash(response, request, "password.changed", "success")
+    return response
+
+
+@router.post("/lang", dependencies=[CsrfProtected])
+def switch_language(
+    request: Request,
+    user: OptionalUser,
+    db: SessionDep,
+    lang: Annotated[str, Form(max_length=16)] = "en",
+    next: Annotated[str, Form(max_length=2000)] = "/",
+):
+    language = normalise(lang) or "en"
+    if user is not None:
+        db_user = db.get(User, user.id)
+        db_user.language = language
+        db.add(db_user)
+        db.commit()
+    response = redirect(safe_next(next))
+    set_cookie(response, request, LANG_COOKIE, language, 365 * 24 * 3600)
+    return response

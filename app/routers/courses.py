@@ -1,0 +1,256 @@
+"""Teacher pages: courses and their rosters."""
+
+from __future__ import annotations
+
+import csv
+import io
+from typing import Annotated
+from urllib.parse import quote
+
+from fastapi import APIRouter, File, Form, HTTPException, Request, UploadFile
+from sqlmodel import Session, select
+
+from app.accounts import (
+    AccountError,
+    NewCredential,
+    add_student,
+    check_roster_against_accounts,
+    import_roster,
+    reset_password,
+)
+from app.deps import CsrfProtected, SessionDep, TeacherUser
+from app.models import Course, Enrollment, User
+from app.roster import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
+from app.web import flash, redirect, render
+
+router = APIRouter(prefix="/courses", tags=["pages: courses"], include_in_schema=False)
+
+NameField = Annotated[str, Form(max_length=200)]
+
+
+def own_course(db: Session, teacher: User, course_id: int) -> Course:
+    """The teacher's own course, else 404 (never reveal that another teacher's exists)."""
+    course = db.get(Course, course_id)
+    if course is None or course.teacher_id != teacher.id:
+        raise HTTPException(404)
+    return course
+
+
+def enrolled_student(db: Session, course: Course, student_id: int) -> User:
+    enrollment = db.exec(
+        select(Enrollment).where(
+            Enrollment.course_id == course.id, Enrollment.student_id == student_id
+        )
+    ).first()
+    if enrollment is None:
+        raise HTTPException(404)
+    return db.get(User, student_id)
+
+
+def roster(db: Session, course: Course) -> list[User]:
+    return list(
+        db.exec(
+            select(User)
+            .join(Enrollment, Enrollment.student_id == User.id)
+            .where(Enrollment.course_id == course.id)
+            .order_by(User.username)
+        ).all()
+    )
+
+
+def credentials_csv_href(credentials) -> str:
+    """A data: URL holding the one-time passwords as CSV (UTF-8 with BOM for Excel)."""
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow(["username", "display_name", "initial_password"])
+    for item in credentials:
+        writer.writerow([item.username, item.display_name, item.password])
+    return "data:text/csv;charset=utf-8," + quote("\ufeff" + buffer.getvalue())
+
+
+@router.get("")
+def course_list(teacher: TeacherUser):
+    return redirect("/")
+
+
+@router.post("", dependencies=[CsrfProtected])
+def create_course(request: Request, teacher: TeacherUser, db: SessionDep, name: NameField = ""):
+    if not name.strip():
+        response = redirect("/")
+        flash(response, request, "course.name_required", "error")
+        return response
+    course = Course(name=name.strip(), teacher_id=teacher.id)
+    db.add(course)
+    db.commit()
+    response = redirect(f"/courses/{course.id}")
+    flash(response, request, "course.created", "success", name=course.name)
+    return response
+
+
+@router.get("/{course_id}")
+def course_page(request: Request, course_id: int, teacher: TeacherUser, db: SessionDep):
+    course = own_course(db, teacher, course_id)
+    return render(
+        request, "courses/detail.html", {"course": course, "students": roster(db, course)}
+    )
+
+
+@router.post("/{course_id}/rename", dependencies=[CsrfProtected])
+def rename_course(
+    request: Request, course_id: int, teacher: TeacherUser, db: SessionDep, name: NameField = ""
+):
+    course = own_course(db, teacher, course_id)
+    response = redirect(f"/courses/{course.id}")
+    if not name.strip():
+        flash(response, request, "course.name_required", "error")
+        return response
+    course.name = name.strip()
+    db.add(course)
+    db.commit()
+    flash(response, request, "course.renamed", "success", name=course.name)
+    return response
+
+
+@router.post("/{course_id}/archive", dependencies=[CsrfProtected])
+def archive_course(
+    request: Request,
+    course_id: int,
+    teacher: TeacherUser,
+    db: SessionDep,
+    archived: Annotated[bool, Form()] = True,
+):
+    course = own_course(db, teacher, course_id)
+    course.archived = archived
+    db.add(course)
+    db.commit()
+    response = redirect(f"/courses/{course.id}")
+    flash(response, request, "course.archived" if archived else "course.unarchived", "success")
+    return response
+
+
+@router.post("/{course_id}/students", dependencies=[CsrfProtected])
+def add_student_by_hand(
+    request: Request,
+    course_id: int,
+    teacher: TeacherUser,
+    db: SessionDep,
+    username: Annotated[str, Form(max_length=64)] = "",
+    display_name: NameField = "",
+    email: Annotated[str, Form(max_length=254)] = "",
+):
+    course = own_course(db, teacher, course_id)
+    context = {
+        "course": course,
+        "students": roster(db, course),
+        "form": {"username": username, "display_name": display_name, "email": email},
+    }
+    if not USERNAME_RE.match(username.strip()):
+        context["add_error"] = "roster.bad_username"
+        context["add_error_params"] = {"value": username}
+        return render(request, "courses/detail.html", context, 400)
+    if not display_name.strip():
+        context["add_error"] = "roster.no_name"
+        context["add_error_params"] = {"value": username}
+        return render(request, "courses/detail.html", context, 400)
+    try:
+        credential = add_student(
+            db, course, username.strip(), display_name.strip(), email.strip() or None
+        )
+    except AccountError as error:
+        db.rollback()
+        context["add_error"] = error.key
+        context["add_error_params"] = error.params
+        return render(request, "courses/detail.html", context, 400)
+    db.commit()
+    if credential is None:
+        response = redirect(f"/courses/{course.id}")
+        flash(response, request, "roster.enrolled_existing", "success", username=username)
+        return response
+    return render(
+        request,
+        "courses/credentials.html",
+        {
+            "course": course,
+            "credentials": [credential],
+            "enrolled": [],
+            "csv_href": credentials_csv_href([credential]),
+        },
+    )
+
+
+@router.post("/{course_id}/import", dependencies=[CsrfProtected])
+async def import_students(
+    request: Request,
+    course_id: int,
+    teacher: TeacherUser,
+    db: SessionDep,
+    roster_file: Annotated[UploadFile | None, File()] = None,
+):
+    course = own_course(db, teacher, course_id)
+    data = await roster_file.read(MAX_ROSTER_BYTES + 1) if roster_file else b""
+    parsed = parse_roster(data)
+    problems = parsed.problems or check_roster_against_accounts(db, parsed.rows)
+    if problems or not parsed.rows:
+        return render(
+            request,
+            "courses/detail.html",
+            {
+                "course": course,
+                "students": roster(db, course),
+                "import_problems": problems,
+            },
+            400,
+        )
+    created, enrolled = import_roster(db, course, parsed.rows)
+    db.commit()
+    return render(
+        request,
+        "courses/credentials.html",
+        {
+            "course": course,
+            "credentials": created,
+            "enrolled": enrolled,
+            "csv_href": credentials_csv_href(created),
+        },
+    )
+
+
+@router.post("/{course_id}/students/{student_id}/reset-password", dependencies=[CsrfProtected])
+def reset_student_password(
+    request: Request, course_id: int, student_id: int, teacher: TeacherUser, db: SessionDep
+):
+    course = own_course(db, teacher, course_id)
+    student = enrolled_student(db, course, student_id)
+    password = reset_password(db, student)
+    db.commit()
+    credential = NewCredential(student.username, student.display_name, password)
+    return render(
+        request,
+        "courses/credentials.html",
+        {
+            "course": course,
+            "credentials": [credential],
+            "enrolled": [],
+            "reset": True,
+            "csv_href": credentials_csv_href([credential]),
+        },
+    )
+
+
+@router.post("/{course_id}/students/{student_id}/remove", dependencies=[CsrfProtected])
+def remove_student(
+    request: Request, course_id: int, student_id: int, teacher: TeacherUser, db: SessionDep
+):
+    """Take a student off the roster; their account and all their work stay."""
+    course = own_course(db, teacher, course_id)
+    student = enrolled_student(db, course, student_id)
+    enrollment = db.exec(
+        select(Enrollment).where(
+            Enrollment.course_id == course.id, Enrollment.student_id == student.id
+        )
+    ).one()
+    db.delete(enrollment)
+    db.commit()
+    response = redirect(f"/courses/{course.id}")
+    flash(response, request, "roster.removed", "success", username=student.username)
+    return response

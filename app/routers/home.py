@@ -1,0 +1,37 @@
+"""The dashboard: what a teacher or a student sees after logging in."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Request
+from sqlmodel import select
+
+from app.deps import CurrentUser, SessionDep
+from app.models import Course, Enrollment, Role, User
+from app.web import render
+
+router = APIRouter(tags=["pages: home"], include_in_schema=False)
+
+
+@router.get("/")
+def dashboard(request: Request, user: CurrentUser, db: SessionDep):
+    if user.role == Role.teacher:
+        courses = db.exec(
+            select(Course)
+            .where(Course.teacher_id == user.id)
+            .order_by(Course.archived, Course.name)
+        ).all()
+        counts = {
+            course.id: len(
+                db.exec(select(Enrollment.id).where(Enrollment.course_id == course.id)).all()
+            )
+            for course in courses
+        }
+        return render(request, "dashboard/teacher.html", {"courses": courses, "counts": counts})
+    rows = db.exec(
+        select(Course, User)
+        .join(Enrollment, Enrollment.course_id == Course.id)
+        .join(User, User.id == Course.teacher_id)
+        .where(Enrollment.student_id == user.id, Course.archived == False)  # noqa: E712
+        .order_by(Course.name)
+    ).all()
+    return render(request, "dashboard/student.html", {"courses": rows})

@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""GyroLab's two commands, usable on a fresh machine with nothing but Python 3.11+.
+
+    python3 dev.py run    create .venv, install, migrate, add demo data, serve on 127.0.0.1:8000
+    python3 dev.py test   the same set-up plus test extras and Debian's Chromium, then pytest
+
+Extra arguments after ``run`` go to ``gyrolab serve`` (e.g. ``--port 8080 --no-demo``);
+after ``test`` they go to pytest (e.g. ``-k auth``).  Uses only the standard library.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent
+VENV = ROOT / ".venv"
+BIN = VENV / "bin"
+CHROMIUM = Path("/usr/bin/chromium")
+
+
+def say(message: str) -> None:
+    print(f"[gyrolab] {message}", flush=True)
+
+
+def run(cmd: list[str], **kwargs) -> None:
+    subprocess.run(cmd, check=True, **kwargs)
+
+
+def apt_install(*packages: str) -> bool:
+    """Install Debian packages when we are root (or have sudo) and apt-get exists."""
+    apt = shutil.which("apt-get")
+    if apt is None:
+        return False
+    prefix: list[str] = []
+    if os.geteuid() != 0:
+        sudo = shutil.which("sudo")
+        if sudo is None:
+            return False
+        prefix = [sudo, "-n"]
+    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    say(f"installing Debian package(s): {' '.join(packages)}")
+    try:
+        run([*prefix, apt, "-qq", "update"], env=env)
+        run([*prefix, apt, "install", "-y", "-qq", *packages], env=env)
+    except subprocess.CalledProcessError:
+        return False
+    return True
+
+
+def ensure_venv() -> None:
+    if (BIN / "python").exists():
+        return
+    say("creating virtual environment .venv")
+    try:
+        run([sys.executable, "-m", "venv", str(VENV)])
+    except subprocess.CalledProcessError:
+        # Debian ships venv/ensurepip separately.
+        shutil.rmtree(VENV, ignore_errors=True)
+        version = f"{sys.version_info.major}.{sys.version_info.minor}"
+        if not apt_install(f"python{version}-venv"):
+            sys.exit("python3 -m venv failed; install python3-venv and try again")
+        run([sys.executable, "-m", "venv", str(VENV)])
+
+
+def ensure_installed(extras: str) -> None:
+    """pip install the project (editable) with pinned versions, skipped when unchanged."""
+    stamp = VENV / f".installed-{extras or 'base'}"
+    digest = hashlib.sha256()
+    for name in ("pyproject.toml", "constraints.txt"):
+        digest.update((ROOT / name).read_bytes())
+    if stamp.exists() and stamp.read_text() == digest.hexdigest():
+        return
+    target = f".[{extras}]" if extras else "."
+    say(f"installing gyrolab{target[1:]} into .venv (versions pinned by constraints.txt)")
+    pip = [str(BIN / "python"), "-m", "pip", "install", "--disable-pip-version-check", "-q"]
+    run([*pip, "-c", "constraints.txt", "-e", target], cwd=ROOT)
+    stamp.write_text(digest.hexdigest())
+
+
+def ensure_chromium() -> None:
+    if CHROMIUM.exists():
+        return
+    if not apt_install("chromium"):
+        say("Chromium is not installed and cannot be installed here: browser tests will skip")
+
+
+def main(argv: list[str]) -> int:
+    if not argv or argv[0] not in {"run", "test"}:
+        print(__doc__)
+        return 2
+    command, rest = argv[0], argv[1:]
+    os.chdir(ROOT)
+    ensure_venv()
+    if command == "run":
+        ensure_installed("")
+        return subprocess.call([str(BIN / "gyrolab"), "serve", *rest])
+    ensure_installed("test")
+    ensure_chromium()
+    return subprocess.call([str(BIN / "python"), "-m", "pytest", *rest])
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
