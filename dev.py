@@ -85,7 +85,7 @@ def ensure_installed(extras: str) -> None:
 def ensure_chromium() -> None:
     if CHROMIUM.exists():
         return
-    if not apt_install("chromium"):
+    if not apt_install("chromium", "fonts-wqy-zenhei"):
         say("Chromium is not installed and cannot be installed here: browser tests will skip")
 
 

@@ -1,0 +1,127 @@
+"""Shared fixtures: a fresh migrated SQLite file per test, an HTTP client, login helpers."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+
+import pytest
+from fastapi.testclient import TestClient
+
+from app.config import get_settings
+from app.db import engine_for, write_session
+from app.models import Role, User
+
+CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
+PASSWORD = "correct-horse-42"
+
+
+@pytest.fixture
+def var_dir(tmp_path, monkeypatch) -> Iterator:
+    monkeypatch.setenv("GYROLAB_VAR_DIR", str(tmp_path / "var"))
+    for name in ("GYROLAB_DATABASE_URL", "GYROLAB_SECRET_KEY"):
+        monkeypatch.delenv(name, raising=False)
+    get_settings.cache_clear()
+    engine_for.cache_clear()
+    yield tmp_path / "var"
+    if engine_for.cache_info().currsize:
+        engine_for(get_settings().database_url).dispose()
+    get_settings.cache_clear()
+    engine_for.cache_clear()
+
+
+@pytest.fixture
+def app(var_dir):
+    from app.main import create_app
+    from app.migrate import upgrade_to_head
+
+    upgrade_to_head()
+    return create_app(migrate_on_start=False)
+
+
+@pytest.fixture
+def client(app) -> Iterator[TestClient]:
+    with TestClient(app, follow_redirects=False) as test_client:
+        yield test_client
+
+
+def make_user(
+    username: str, role: Role = Role.student, *, must_change: bool = False, name: str = ""
+) -> User:
+    from app.accounts import create_user
+
+    with write_session() as db:
+        return create_user(
+            db,
+            username=username,
+            display_name=name or username.title(),
+            role=role,
+            password=PASSWORD,
+            must_change_password=must_change,
+        )
+
+
+def make_course(teacher: User, name: str = "Lab", students: tuple[User, ...] = ()) -> int:
+    from app.accounts import enroll
+    from app.models import Course
+
+    with write_session() as db:
+        course = Course(name=name, teacher_id=teacher.id)
+        db.add(course)
+        db.flush()
+        for student in students:
+            enroll(db, course, student)
+        return course.id
+
+
+def csrf_from(client: TestClient, path: str) -> str:
+    response = client.get(path)
+    match = CSRF_RE.search(response.text)
+    assert match, f"no CSRF token on {path} ({response.status_code})"
+    return match.group(1)
+
+
+def login(client: TestClient, username: str, password: str = PASSWORD, next: str = "/"):
+    token = csrf_from(client, "/login")
+    return client.post(
+        "/login",
+        data={"username": username, "password": password, "csrf_token": token, "next": next},
+    )
+
+
+def post_form(client: TestClient, path: str, data: dict | None = None, files=None, page="/"):
+    """POST a form the way the browser does: with the CSRF token from a page."""
+    token = csrf_from(client, page)
+    return client.post(path, data={**(data or {}), "csrf_token": token}, files=files)
+
+
+@pytest.fixture
+def teacher():
+    return make_user("teacher1", Role.teacher, name="Teacher One")
+
+
+@pytest.fixture
+def student():
+    return make_user("student1", Role.student, name="张三")
+
+
+@pytest.fixture
+def teacher_client(client, teacher):
+    assert login(client, "teacher1").status_code == 303
+    return client
+
+
+@pytest.fixture
+def student_client(client, student):
+    assert login(client, "student1").status_code == 303
+    return client
+
+
+def iter_routes(routes) -> Iterator:
+    """Every APIRoute/WebSocket route, looking inside included routers (any FastAPI version)."""
+    for route in routes:
+        inner = getattr(route, "original_router", None)
+        if inner is not None:
+            yield from iter_routes(inner.routes)
+        else:
+            yield route

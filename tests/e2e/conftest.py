@@ -1,0 +1,128 @@
+"""A real uvicorn server on a free loopback port and Debian's Chromium driven by Playwright.
+
+Browser tests skip when /usr/bin/chromium is missing -- except in CI (CI=true), where
+they fail instead, so that CI can never pass without running them.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import httpx
+import pytest
+
+CHROMIUM = Path("/usr/bin/chromium")
+ARTIFACTS = Path(__file__).resolve().parents[1] / "artifacts"
+CHROMIUM_ARGS = [
+    "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--disable-background-networking",
+    "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic",
+]
+TEACHER_PASSWORD = "e2e-teacher-pass-1"
+
+
+@dataclass
+class LiveServer:
+    url: str
+    var_dir: Path
+    env: dict
+
+    def gyrolab(self, *args: str, stdin: str | None = None) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            [sys.executable, "-m", "app.cli", *args], env=self.env, input=stdin,
+            capture_output=True, text=True, check=True,
+        )
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return sock.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def live_server(tmp_path_factory) -> Iterator[LiveServer]:
+    var_dir = tmp_path_factory.mktemp("live-var")
+    port = free_port()
+    env = {**os.environ, "GYROLAB_VAR_DIR": str(var_dir)}
+    env.pop("GYROLAB_DATABASE_URL", None)
+    server = LiveServer(f"http://127.0.0.1:{port}", var_dir, env)
+    server.gyrolab("create-user", "--role", "teacher", "--username", "teacher",
+                   "--display-name", "E2E Teacher 李老师", stdin=TEACHER_PASSWORD + "\n")
+    log = open(var_dir / "server.log", "w")  # noqa: SIM115
+    process = subprocess.Popen(
+        [sys.executable, "-m", "app.cli", "serve", "--no-demo", "--port", str(port)],
+        env=env, stdout=log, stderr=subprocess.STDOUT,
+    )
+    deadline = time.monotonic() + 30
+    while True:
+        try:
+            if httpx.get(f"{server.url}/login", timeout=1).status_code == 200:
+                break
+        except httpx.HTTPError:
+            pass
+        if process.poll() is not None or time.monotonic() > deadline:
+            process.kill()
+            raise RuntimeError((var_dir / "server.log").read_text())
+        time.sleep(0.2)
+    yield server
+    process.terminate()
+    try:
+        process.wait(10)
+    except subprocess.TimeoutExpired:
+        process.kill()
+    log.close()
+
+
+@pytest.fixture(scope="session")
+def browser():
+    if not CHROMIUM.exists():
+        if os.environ.get("CI", "").lower() == "true":
+            pytest.fail("CI=true but /usr/bin/chromium is missing: browser tests must run in CI")
+        pytest.skip("Debian's chromium is not installed (python3 dev.py test installs it)")
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as playwright:
+        instance = playwright.chromium.launch(
+            executable_path=str(CHROMIUM), headless=True, args=CHROMIUM_ARGS
+        )
+        yield instance
+        instance.close()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(item, call):
+    report = yield
+    if report.when == "call":
+        item.rep_call = report
+    return report
+
+
+@pytest.fixture
+def new_page(browser, request):
+    """Open pages in fresh contexts (one per person); screenshots of failures are kept."""
+    contexts = []
+
+    def open_page(locale: str = "en-US"):
+        context = browser.new_context(locale=locale, viewport={"width": 1280, "height": 860})
+        contexts.append(context)
+        page = context.new_page()
+        page.set_default_timeout(10_000)
+        return page
+
+    yield open_page
+    report = getattr(request.node, "rep_call", None)
+    if report is not None and report.failed:
+        ARTIFACTS.mkdir(exist_ok=True)
+        for index, context in enumerate(contexts):
+            for number, page in enumerate(context.pages):
+                name = f"{request.node.name}-{index}-{number}.png"
+                page.screenshot(path=str(ARTIFACTS / name), full_page=True)
+    for context in contexts:
+        context.close()

@@ -1,0 +1,226 @@
+"""Login, logout, sessions, throttling, password changes and CSRF."""
+
+from __future__ import annotations
+
+from datetime import timedelta
+
+from sqlmodel import select
+
+from app.config import get_settings
+from app.db import read_session, write_session
+from app.models import AuthSession, Role, User, utcnow
+from app.security import verify_password
+from app.web import SESSION_COOKIE
+from tests.conftest import PASSWORD, csrf_from, iter_routes, login, make_user, post_form
+
+
+def test_login_page_renders_with_csrf_cookie(client):
+    response = client.get("/login")
+    assert response.status_code == 200
+    assert "gyrolab_csrf" in response.cookies
+    assert 'name="csrf_token"' in response.text
+
+
+def test_anonymous_is_sent_to_login(client):
+    response = client.get("/")
+    assert response.status_code == 303
+    assert response.headers["location"] == "/login?next=/"
+
+
+def test_login_and_logout(client, teacher):
+    response = login(client, "teacher1")
+    assert response.status_code == 303 and response.headers["location"] == "/"
+    cookie = client.cookies[SESSION_COOKIE]
+    page = client.get("/")
+    assert page.status_code == 200 and "Teacher One" in page.text
+    response = post_form(client, "/logout")
+    assert response.headers["location"] == "/login"
+    # Replaying the old cookie after logout gets the login page, not the dashboard.
+    client.cookies.set(SESSION_COOKIE, cookie)
+    assert client.get("/").headers["location"].startswith("/login")
+
+
+def test_username_is_case_insensitive(client, teacher):
+    assert login(client, "  TEACHER1 ").status_code == 303
+
+
+def test_session_cookie_flags(client, teacher):
+    response = login(client, "teacher1")
+    header = response.headers["set-cookie"].lower()
+    assert "httponly" in header and "samesite=lax" in header
+    assert "secure" not in header  # plain http in tests; https sets Secure
+
+
+def test_session_token_is_stored_hashed(client, teacher):
+    login(client, "teacher1")
+    token = client.cookies[SESSION_COOKIE]
+    with read_session() as db:
+        stored = db.exec(select(AuthSession.token_hash)).all()
+    assert token not in stored and len(stored) == 1
+
+
+def test_same_message_for_unknown_user_and_wrong_password(client, teacher):
+    unknown = login(client, "nobody", "whatever-123")
+    wrong = login(client, "teacher1", "wrong-password")
+    assert unknown.status_code == wrong.status_code == 401
+    assert "Wrong username or password." in unknown.text
+    assert "Wrong username or password." in wrong.text
+
+
+def test_ten_wrong_passwords_are_throttled(client, teacher):
+    statuses = [login(client, "teacher1", f"wrong-{i}").status_code for i in range(10)]
+    assert statuses[:5] == [401] * 5
+    assert statuses[5:] == [429] * 5
+    response = login(client, "teacher1")  # even the right password waits
+    assert response.status_code == 429
+    assert "Too many failed log-in attempts" in response.text
+
+
+def test_throttle_is_stored_in_the_database(app, teacher):
+    """A new app instance (a restart, another worker) still sees the failures."""
+    from fastapi.testclient import TestClient
+
+    from app.main import create_app
+
+    with TestClient(app, follow_redirects=False) as first:
+        for i in range(5):
+            login(first, "teacher1", f"wrong-{i}")
+    with TestClient(create_app(migrate_on_start=False), follow_redirects=False) as second:
+        assert login(second, "teacher1").status_code == 429
+
+
+def test_throttle_window_expires(client, teacher):
+    for i in range(5):
+        login(client, "teacher1", f"wrong-{i}")
+    from app.models import LoginFailure
+
+    with write_session() as db:
+        for failure in db.exec(select(LoginFailure)).all():
+            failure.at = utcnow() - timedelta(minutes=get_settings().login_window_minutes + 1)
+            db.add(failure)
+    assert login(client, "teacher1").status_code == 303
+
+
+def test_idle_session_expires(client, teacher):
+    login(client, "teacher1")
+    with write_session() as db:
+        record = db.exec(select(AuthSession)).one()
+        record.last_seen_at = utcnow() - timedelta(
+            minutes=get_settings().session_idle_minutes + 1
+        )
+        db.add(record)
+    assert client.get("/").status_code == 303
+
+
+def test_absolute_lifetime_expires(client, teacher):
+    login(client, "teacher1")
+    with write_session() as db:
+        record = db.exec(select(AuthSession)).one()
+        record.expires_at = utcnow() - timedelta(seconds=1)
+        db.add(record)
+    assert client.get("/").status_code == 303
+
+
+def test_open_redirect_is_refused(client, teacher):
+    response = login(client, "teacher1", next="//evil.example/")
+    assert response.headers["location"] == "/"
+    response = post_form(client, "/logout")
+    response = login(client, "teacher1", next="https://evil.example/")
+    assert response.headers["location"] == "/"
+
+
+def test_post_without_csrf_token_is_refused(client, teacher):
+    login(client, "teacher1")
+    response = client.post("/courses", data={"name": "Sneaky"})
+    assert response.status_code == 403
+    response = client.post("/courses", data={"name": "Sneaky", "csrf_token": "forged"})
+    assert response.status_code == 403
+
+
+def test_login_without_csrf_is_refused(client, teacher):
+    client.get("/login")
+    response = client.post("/login", data={"username": "teacher1", "password": PASSWORD})
+    assert response.status_code == 403
+
+
+def test_csrf_header_is_accepted(client, teacher):
+    login(client, "teacher1")
+    token = csrf_from(client, "/")
+    response = client.post("/courses", data={"name": "Via header"},
+                           headers={"X-CSRF-Token": token})
+    assert response.status_code == 303
+
+
+def test_every_state_changing_route_checks_csrf(app):
+    from fastapi.routing import APIRoute
+
+    from app.deps import csrf_protect
+
+    unsafe = [
+        route for route in iter_routes(app.routes)
+        if isinstance(route, APIRoute) and route.methods - {"GET", "HEAD", "OPTIONS"}
+        and not route.path.startswith("/api/")
+    ]
+    assert unsafe, "expected some form routes"
+    for route in unsafe:
+        calls = {dep.call for dep in route.dependant.dependencies}
+        assert csrf_protect in calls, f"{route.path} lacks CSRF protection"
+
+
+def test_forced_password_change(client):
+    make_user("newbie", Role.student, must_change=True)
+    response = login(client, "newbie")
+    assert response.headers["location"] == "/account/password"
+    assert client.get("/").headers["location"] == "/account/password"
+    page = client.get("/account/password")
+    assert "initial password" in page.text
+    response = post_form(client, "/account/password", {
+        "current_password": PASSWORD, "new_password": "my-own-secret-9",
+        "confirm_password": "my-own-secret-9"}, page="/account/password")
+    assert response.status_code == 303
+    assert client.get("/").status_code == 200
+    with read_session() as db:
+        user = db.exec(select(User).where(User.username == "newbie")).one()
+    assert not user.must_change_password
+    assert verify_password("my-own-secret-9", user.password_hash)
+
+
+def test_password_change_revokes_other_sessions(app, teacher):
+    from fastapi.testclient import TestClient
+
+    with TestClient(app, follow_redirects=False) as laptop, \
+            TestClient(app, follow_redirects=False) as phone:
+        login(laptop, "teacher1")
+        login(phone, "teacher1")
+        response = post_form(laptop, "/account/password", {
+            "current_password": PASSWORD, "new_password": "another-secret-7",
+            "confirm_password": "another-secret-7"}, page="/account/password")
+        assert response.status_code == 303
+        assert laptop.get("/").status_code == 200
+        assert phone.get("/").status_code == 303
+
+
+def test_password_rules(client, teacher):
+    login(client, "teacher1")
+    cases = [
+        ({"current_password": "nope", "new_password": "abcdefgh1", "confirm_password": "abcdefgh1"},
+         "current password is wrong"),
+        ({"current_password": PASSWORD, "new_password": "abcdefgh1", "confirm_password": "x"},
+         "differ"),
+        ({"current_password": PASSWORD, "new_password": "short", "confirm_password": "short"},
+         "at least 8"),
+        ({"current_password": PASSWORD, "new_password": "teacher1", "confirm_password": "teacher1"},
+         "must not be your username"),
+    ]
+    for data, message in cases:
+        response = post_form(client, "/account/password", data, page="/account/password")
+        assert response.status_code == 400
+        assert message in response.text
+
+
+def test_argon2id_parameters():
+    from app.security import hash_password
+
+    encoded = hash_password("x" * 12)
+    assert encoded.startswith("$argon2id$")
+    assert "m=19456,t=2,p=1" in encoded

@@ -1,0 +1,181 @@
+"""Courses and rosters: create, rename, archive, add, import, reset, remove."""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from urllib.parse import unquote
+
+from sqlmodel import func, select
+
+from app.db import read_session
+from app.models import Course, Enrollment, Role, User
+from app.security import verify_password
+from tests.conftest import login, make_course, make_user, post_form
+
+ROSTER = "学号,姓名,邮箱\n2024001,张三,zhangsan@example.edu\n2024002,李四,\n"
+
+
+def user_count() -> int:
+    with read_session() as db:
+        return db.exec(select(func.count()).select_from(User)).one()
+
+
+def create_course(client, name="Navigation lab") -> int:
+    response = post_form(client, "/courses", {"name": name})
+    assert response.status_code == 303
+    return int(response.headers["location"].rsplit("/", 1)[1])
+
+
+def import_file(client, course_id, content: bytes, name="roster.csv"):
+    return post_form(client, f"/courses/{course_id}/import",
+                     files={"roster_file": (name, content, "text/csv")},
+                     page=f"/courses/{course_id}")
+
+
+def credentials_from(page: str) -> dict[str, str]:
+    href = re.search(r'href="data:text/csv;charset=utf-8,([^"]+)"', page).group(1)
+    text = unquote(href.replace("&amp;", "&")).lstrip("\ufeff")
+    return {row["username"]: row["initial_password"] for row in csv.DictReader(io.StringIO(text))}
+
+
+def test_create_rename_archive(teacher_client):
+    course_id = create_course(teacher_client)
+    page = teacher_client.get(f"/courses/{course_id}")
+    assert page.status_code == 200 and "Navigation lab" in page.text
+    post_form(teacher_client, f"/courses/{course_id}/rename", {"name": "惯导实验"})
+    post_form(teacher_client, f"/courses/{course_id}/archive", {"archived": "true"})
+    with read_session() as db:
+        course = db.get(Course, course_id)
+    assert course.name == "惯导实验" and course.archived
+
+
+def test_empty_course_name_is_refused(teacher_client):
+    response = post_form(teacher_client, "/courses", {"name": "   "})
+    assert response.status_code == 303
+    assert "Give the course a name" in teacher_client.get("/").text
+
+
+def test_import_roster_creates_accounts_with_one_time_passwords(teacher_client, client):
+    course_id = create_course(teacher_client)
+    response = import_file(teacher_client, course_id, ROSTER.encode("utf-8-sig"))
+    assert response.status_code == 200
+    assert "张三" in response.text and "李四" in response.text
+    passwords = credentials_from(response.text)
+    assert set(passwords) == {"2024001", "2024002"}
+    with read_session() as db:
+        zhang = db.exec(select(User).where(User.username == "2024001")).one()
+        enrolled = db.exec(select(func.count()).select_from(Enrollment)).one()
+    assert zhang.display_name == "张三" and zhang.email == "zhangsan@example.edu"
+    assert zhang.must_change_password and zhang.role == Role.student
+    assert verify_password(passwords["2024001"], zhang.password_hash)
+    assert enrolled == 2
+    # The roster page lists them; nothing shows the passwords again.
+    roster_page = teacher_client.get(f"/courses/{course_id}").text
+    assert "2024001" in roster_page and passwords["2024001"] not in roster_page
+
+
+def test_import_gb18030_file_from_excel(teacher_client):
+    course_id = create_course(teacher_client)
+    response = import_file(teacher_client, course_id, ROSTER.encode("gb18030"))
+    assert response.status_code == 200
+    with read_session() as db:
+        names = set(db.exec(select(User.display_name).where(User.role == "student")).all())
+    assert names == {"张三", "李四"}
+
+
+def test_invalid_roster_creates_nothing_and_reports_each_row(teacher_client):
+    course_id = create_course(teacher_client)
+    before = user_count()
+    bad = "学号,姓名,邮箱\n2024001,张三,\nbad name!,李四,\n2024003,,\n2024001,重复,\n2024005,赵六,not-mail\n"
+    response = import_file(teacher_client, course_id, bad.encode())
+    assert response.status_code == 400
+    text = response.text
+    for line in ("Line 3", "Line 4", "Line 5", "Line 6"):
+        assert line in text
+    assert "already appears on line 2" in text
+    assert user_count() == before
+
+
+def test_roster_rejects_teacher_usernames(teacher_client):
+    course_id = create_course(teacher_client)
+    before = user_count()
+    response = import_file(teacher_client, course_id, b"username,name\nteacher1,Me\n2024009,X\n")
+    assert response.status_code == 400 and "teacher account" in response.text
+    assert user_count() == before
+
+
+def test_roster_edge_files(teacher_client):
+    course_id = create_course(teacher_client)
+    assert import_file(teacher_client, course_id, b"").status_code == 400
+    assert "empty" in import_file(teacher_client, course_id, b"\n\n").text
+    assert import_file(teacher_client, course_id, b"\xff\xfe\x00\x00garbage\x81").status_code == 400
+    big = b"u,n\n" + b"x" * 1_100_000
+    assert "larger than" in import_file(teacher_client, course_id, big).text
+
+
+def test_import_without_header_and_existing_student(teacher_client):
+    make_user("2024100", Role.student)
+    course_id = create_course(teacher_client)
+    response = import_file(teacher_client, course_id, "2024100,Old\n2024101,新同学\n".encode())
+    assert response.status_code == 200
+    assert set(credentials_from(response.text)) == {"2024101"}
+    assert "2024100" in response.text  # listed as enrolled, no new password
+
+
+def test_add_student_by_hand_and_reset_and_remove(teacher_client, client):
+    course_id = create_course(teacher_client)
+    response = post_form(teacher_client, f"/courses/{course_id}/students",
+                         {"username": "s42", "display_name": "王五", "email": ""},
+                         page=f"/courses/{course_id}")
+    assert response.status_code == 200
+    first = credentials_from(response.text)["s42"]
+    with read_session() as db:
+        student = db.exec(select(User).where(User.username == "s42")).one()
+    response = post_form(teacher_client,
+                         f"/courses/{course_id}/students/{student.id}/reset-password",
+                         page=f"/courses/{course_id}")
+    second = credentials_from(response.text)["s42"]
+    assert first != second
+    with read_session() as db:
+        assert verify_password(second, db.get(User, student.id).password_hash)
+    response = post_form(teacher_client, f"/courses/{course_id}/students/{student.id}/remove",
+                         page=f"/courses/{course_id}")
+    assert response.status_code == 303
+    with read_session() as db:
+        assert db.get(User, student.id) is not None  # the account (and its work) stays
+        assert db.exec(select(Enrollment).where(Enrollment.student_id == student.id)).first() is None
+
+
+def test_add_student_validation(teacher_client):
+    course_id = create_course(teacher_client)
+    response = post_form(teacher_client, f"/courses/{course_id}/students",
+                         {"username": "bad name", "display_name": "X"},
+                         page=f"/courses/{course_id}")
+    assert response.status_code == 400 and "not a valid username" in response.text
+    response = post_form(teacher_client, f"/courses/{course_id}/students",
+                         {"username": "teacher1", "display_name": "X"},
+                         page=f"/courses/{course_id}")
+    assert response.status_code == 400 and "teacher account" in response.text
+
+
+def test_student_sees_their_courses(client, teacher):
+    student = make_user("s1", Role.student)
+    other = make_user("s2", Role.student)
+    make_course(teacher, "Mine 我的课", (student,))
+    make_course(teacher, "Not mine", (other,))
+    login(client, "s1")
+    page = client.get("/").text
+    assert "Mine 我的课" in page and "Not mine" not in page
+
+
+def test_imported_student_must_change_password(teacher_client, app):
+    from fastapi.testclient import TestClient
+
+    course_id = create_course(teacher_client)
+    response = import_file(teacher_client, course_id, ROSTER.encode())
+    password = credentials_from(response.text)["2024002"]
+    with TestClient(app, follow_redirects=False) as browser:
+        assert login(browser, "2024002", password).headers["location"] == "/account/password"
+        assert browser.get(f"/courses/{course_id}").headers["location"] == "/account/password"

@@ -1,0 +1,91 @@
+"""Translations are complete; the language follows the user; static assets are served."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from app.i18n import negotiate, translate
+from app.messages import MESSAGES
+from app.paths import PROJECT_ROOT, TEMPLATES_DIR
+from tests.conftest import login, post_form
+
+KEY_IN_TEMPLATE = re.compile(r"""_\(\s*["']([a-z_]+\.[a-z_]+)["']""")
+KEY_IN_PYTHON = re.compile(r"""["']((?:%s)\.[a-z_]+)["']""" % "|".join(
+    sorted({key.split(".")[0] for key in MESSAGES})))
+
+
+def test_every_message_has_both_languages():
+    for key, entry in MESSAGES.items():
+        assert entry.get("en", "").strip(), key
+        assert entry.get("zh-CN", "").strip(), key
+        placeholders_en = set(re.findall(r"{(\w+)}", entry["en"]))
+        placeholders_zh = set(re.findall(r"{(\w+)}", entry["zh-CN"]))
+        assert placeholders_en == placeholders_zh, key
+
+
+def test_every_key_used_exists():
+    used: set[str] = set()
+    for path in TEMPLATES_DIR.rglob("*.html"):
+        used |= set(KEY_IN_TEMPLATE.findall(path.read_text()))
+    for path in (PROJECT_ROOT / "app").rglob("*.py"):
+        if path.name != "messages.py":
+            used |= set(KEY_IN_PYTHON.findall(path.read_text()))
+    not_messages = {"course.id", "error.html"}  # an attribute and a template name
+    missing = sorted(key for key in used - not_messages if key not in MESSAGES)
+    assert not missing, missing
+    assert len(used) > 50
+
+
+@pytest.mark.parametrize(("header", "expected"), [
+    (None, "en"), ("zh-CN,zh;q=0.9,en;q=0.8", "zh-CN"), ("en-US,en;q=0.9,zh;q=0.8", "en"),
+    ("fr-FR, zh-TW;q=0.5", "zh-CN"), ("de", "en"), ("en;q=0.1, zh;q=0.9", "zh-CN"),
+])
+def test_accept_language(header, expected):
+    assert negotiate(header) == expected
+
+
+def test_translate_formats_parameters():
+    assert translate("roster.line", "zh-CN", line=3) == "第 3 行"
+    assert translate("no.such.key", "en") == "no.such.key"
+
+
+def test_pages_follow_accept_language(client):
+    page = client.get("/login", headers={"Accept-Language": "zh-CN,zh;q=0.9"})
+    assert '<html lang="zh-CN">' in page.text and "用户名或学号" in page.text
+
+
+def test_language_switch_is_remembered_per_user(client, teacher, app):
+    from fastapi.testclient import TestClient
+
+    login(client, "teacher1")
+    response = post_form(client, "/lang", {"lang": "zh-CN", "next": "/"})
+    assert response.status_code == 303
+    assert "我的课程" in client.get("/").text
+    with TestClient(app, follow_redirects=False) as other_browser:  # no cookie, same user
+        login(other_browser, "teacher1")
+        assert "我的课程" in other_browser.get("/", headers={"Accept-Language": "en"}).text
+
+
+def test_plotly_is_served_from_the_installed_package(client):
+    from app.main import PLOTLY_JS, PLOTLY_URL
+
+    response = client.get(PLOTLY_URL)
+    assert response.status_code == 200
+    assert "max-age=31536000" in response.headers["cache-control"]
+    assert len(response.content) == Path(PLOTLY_JS).stat().st_size > 1_000_000
+
+
+def test_no_page_loads_anything_from_the_internet():
+    for path in list(TEMPLATES_DIR.rglob("*.html")) + list((PROJECT_ROOT / "static").rglob("*")):
+        if path.is_file() and path.suffix in {".html", ".css", ".js"}:
+            text = path.read_text()
+            assert not re.search(r"""(src|href)=["']https?://""", text), path
+            assert "@import url(http" not in text, path
+
+
+def test_unknown_page_is_a_friendly_404(client):
+    response = client.get("/nowhere", headers={"Accept-Language": "zh-CN"})
+    assert response.status_code == 404 and "页面不存在" in response.text

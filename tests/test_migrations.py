@@ -1,0 +1,57 @@
+"""Models and Alembic migrations agree, and an empty database upgrades to head."""
+
+from __future__ import annotations
+
+import sqlite3
+
+from alembic.autogenerate import compare_metadata
+from alembic.migration import MigrationContext
+from alembic.script import ScriptDirectory
+from sqlmodel import SQLModel
+
+import app.models  # noqa: F401
+from app.db import make_engine
+from app.migrate import alembic_config, upgrade_to_head
+
+
+def test_upgrade_empty_database_and_no_pending_changes(tmp_path):
+    url = f"sqlite:///{tmp_path / 'fresh.db'}"
+    upgrade_to_head(url)
+    engine = make_engine(url)
+    with engine.connect() as connection:
+        context = MigrationContext.configure(connection, opts={"compare_type": True})
+        assert compare_metadata(context, SQLModel.metadata) == []
+        head = ScriptDirectory.from_config(alembic_config(url)).get_current_head()
+        assert context.get_current_revision() == head
+    engine.dispose()
+    upgrade_to_head(url)  # a second run is a no-op
+
+
+def test_sqlite_pragmas(tmp_path):
+    url = f"sqlite:///{tmp_path / 'p.db'}"
+    engine = make_engine(url)
+    with engine.connect() as connection:
+        assert connection.exec_driver_sql("PRAGMA journal_mode").scalar() == "wal"
+        assert connection.exec_driver_sql("PRAGMA foreign_keys").scalar() == 1
+        assert connection.exec_driver_sql("PRAGMA busy_timeout").scalar() >= 5000
+    engine.dispose()
+
+
+def test_write_transactions_begin_immediate(tmp_path):
+    """A write session holds the write lock from its first statement (BEGIN IMMEDIATE)."""
+    from app.db import write_session
+
+    url = f"sqlite:///{tmp_path / 'w.db'}"
+    upgrade_to_head(url)
+    engine = make_engine(url)
+    with write_session(engine) as db:
+        db.exec(SQLModel.metadata.tables["user"].select())  # a read only
+        other = sqlite3.connect(tmp_path / "w.db", timeout=0.05, isolation_level=None)
+        try:
+            other.execute("BEGIN IMMEDIATE")
+            raise AssertionError("second writer should have been locked out")
+        except sqlite3.OperationalError as error:
+            assert "locked" in str(error)
+        finally:
+            other.close()
+    engine.dispose()
