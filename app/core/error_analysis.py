@@ -1,0 +1,213 @@
+"""How error sources move the heading: first-order formulas and Monte Carlo with the simulator.
+
+γ (= A) is the true azimuth of position 1.  Two-position method (lab-reference §4, from
+``two_position_fog_error_analysis.zh.txt``): positions γ and γ+180°,
+γ̂ = arccos((U1 − U2)/(2KΩcos φ)), the east/west half-plane taken from the truth.
+
+| source | definition | two-position Δγ | four-position ΔA |
+|---|---|---|---|
+| drift | ε = bias(1) − bias(2) | −ε/(2KΩ cos φ sin γ) | — |
+| linear drift | ḃ °/h per h, T between stops | ḃT/(2KΩ cos φ sin γ) | ḃT(sin A ∓ cos A)/H ccw/cw |
+| scale factor | ΔK/K of the K used | (ΔK/K)/tan γ | 0 |
+| latitude | Δφ = φ true − φ used | tan φ·Δφ/tan γ | 0 |
+| indexing | stop k lands δ past its dial | δ/2 | k=2,4: (δ/2)cos²A; k=3: (δ/2)sin²A |
+| level | elevation α at 1, −α at 2 | arccos(cos α cos γ + tan φ sin α) − γ | 0 (H shrinks) |
+| east tilt | east side low by t_E | — | tan φ·t_E |
+
+The four-position rows follow from A = atan2(y, x) with δA = (x·δy − y·δx)/H²; the
+Monte Carlo functions reproduce all of them with :func:`app.core.simulate.simulate_run`.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from app.core.exceptions import GyroInputError
+from app.core.simulate import GyroPreset, Setup, simulate_run
+from app.core.solve import heading_angles, solve_heading, solve_two_position, wrap180, wrap360
+from app.core.units import EARTH_RATE_DEG_H
+
+METHODS = ("two", "four")
+
+
+@dataclass(frozen=True)
+class ErrorSources:
+    """Sizes of the deliberate error sources (zero = off)."""
+
+    drift_deg_h: float = 0.0  # two-position drift difference ε
+    drift_rate_deg_h_per_h: float = 0.0  # linear drift ḃ
+    scale_factor_ppm: float = 0.0  # ΔK/K of the K the method uses
+    latitude_error_deg: float = 0.0  # Δφ
+    indexing_deg: float = 0.0  # δ on ``indexing_stop``
+    indexing_stop: int = 2
+    level_deg: float = 0.0  # two-position α
+    east_tilt_deg: float = 0.0  # four-position t_E
+    pitch_deg: float = 0.0  # table tilt relative to position 1 (papers' figures)
+    roll_deg: float = 0.0
+
+
+def _rad(deg):
+    return np.radians(deg)
+
+
+def two_position_first_order(
+    sources: ErrorSources,
+    azimuths_deg,
+    latitude_deg: float,
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+    stop_spacing_s: float = 0.0,
+) -> np.ndarray:
+    """Sum of the first-order two-position heading errors (degrees) at each azimuth."""
+    g = _rad(np.asarray(azimuths_deg, dtype=float))
+    phi = math.radians(latitude_deg)
+    horizontal = 2.0 * earth_rate_deg_h * math.cos(phi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        total = -sources.drift_deg_h / (horizontal * np.sin(g))
+        drift = sources.drift_rate_deg_h_per_h * stop_spacing_s / 3600.0
+        total = total + drift / (horizontal * np.sin(g))
+        total = total + sources.scale_factor_ppm * 1e-6 / np.tan(g)
+        total = total + math.tan(phi) * math.radians(sources.latitude_error_deg) / np.tan(g)
+    total = total + math.radians(sources.indexing_deg) / 2.0
+    if sources.level_deg:
+        alpha = math.radians(sources.level_deg)
+        ratio = np.clip(math.cos(alpha) * np.cos(g) + math.tan(phi) * math.sin(alpha), -1, 1)
+        exact = np.arccos(ratio)
+        exact = np.where(np.sin(g) >= 0, exact, 2 * math.pi - exact)
+        total = total + np.angle(np.exp(1j * (exact - g)))
+    return np.degrees(total)
+
+
+def four_position_first_order(
+    sources: ErrorSources,
+    azimuths_deg,
+    latitude_deg: float,
+    amplitude_deg_h: float | None = None,
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+    rotation: str = "ccw",
+    stop_spacing_s: float = 0.0,
+) -> np.ndarray:
+    """Sum of the first-order four-position heading errors (degrees) at each azimuth."""
+    a = _rad(np.asarray(azimuths_deg, dtype=float))
+    phi = math.radians(latitude_deg)
+    h = amplitude_deg_h or earth_rate_deg_h * math.cos(phi)
+    drift = sources.drift_rate_deg_h_per_h * stop_spacing_s / 3600.0
+    shape = np.sin(a) - np.cos(a) if rotation == "ccw" else np.sin(a) + np.cos(a)
+    total = drift * shape / h
+    delta = math.radians(sources.indexing_deg)
+    if sources.indexing_stop in (2, 4):
+        total = total + delta / 2.0 * np.cos(a) ** 2
+    elif sources.indexing_stop == 3:
+        total = total + delta / 2.0 * np.sin(a) ** 2
+    total = total + math.tan(phi) * math.radians(sources.east_tilt_deg)
+    return np.degrees(total)
+
+
+@dataclass(frozen=True)
+class MonteCarloCurve:
+    azimuths_deg: np.ndarray
+    mean_error_deg: np.ndarray
+    std_error_deg: np.ndarray
+    runs: int
+    valid_runs: np.ndarray  # runs that produced a heading, per azimuth
+
+
+def _tilt_for(sources: ErrorSources, azimuth_deg: float) -> tuple[float, float]:
+    """Table pitch/roll (relative to position 1) for the requested tilts."""
+    pitch, roll = sources.pitch_deg + sources.level_deg, sources.roll_deg
+    if sources.east_tilt_deg:
+        a = math.radians(azimuth_deg)
+        pitch += -sources.east_tilt_deg * math.sin(a)
+        roll += sources.east_tilt_deg * math.cos(a)
+    return pitch, roll
+
+
+def _gyro_for(preset: GyroPreset, sources: ErrorSources) -> GyroPreset:
+    # The method assumes K = 1; a gyro whose true K is 1/(1+ΔK/K) makes the used K too large.
+    true_sf_ppm = (1.0 / (1.0 + sources.scale_factor_ppm * 1e-6) - 1.0) * 1e6
+    return replace(
+        preset,
+        scale_factor_ppm=preset.scale_factor_ppm + true_sf_ppm,
+        drift_deg_h_per_h=preset.drift_deg_h_per_h + sources.drift_rate_deg_h_per_h,
+    )
+
+
+def monte_carlo_heading_errors(
+    method: str,
+    preset: GyroPreset,
+    sources: ErrorSources,
+    azimuths_deg,
+    *,
+    latitude_deg: float,
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+    runs: int = 20,
+    dwell_s: float = 60.0,
+    rotation: str = "ccw",
+    seed: int = 0,
+) -> MonteCarloCurve:
+    """Heading error (estimate − truth, wrapped) of simulated runs at each true azimuth."""
+    if method not in METHODS:
+        raise ValueError("method must be 'two' or 'four'")
+    gyro = _gyro_for(preset, sources)
+    stops = 2 if method == "two" else 4
+    angles = heading_angles(stops, rotation, 0.0, 180.0 if method == "two" else 90.0)
+    extra = np.zeros(stops)
+    if sources.indexing_deg and sources.indexing_stop <= stops:
+        extra[sources.indexing_stop - 1] = sources.indexing_deg
+    azimuths = np.asarray(azimuths_deg, dtype=float)
+    errors = np.empty((azimuths.size, runs))
+    used_latitude = latitude_deg - sources.latitude_error_deg
+    for i, azimuth in enumerate(azimuths):
+        pitch, roll = _tilt_for(sources, azimuth)
+        setup = Setup(latitude_deg, float(azimuth), earth_rate_deg_h, pitch, roll)
+        for run in range(runs):
+            simulated = simulate_run(
+                gyro,
+                setup,
+                "heading",
+                angles,
+                dwell_s,
+                seed=seed + 7919 * i + run,
+                extra_indexing_deg=extra,
+            )
+            means = [float(p.mean()) for p in simulated.positions]
+            try:
+                errors[i, run] = wrap180(
+                    _estimate(
+                        method,
+                        simulated,
+                        angles,
+                        means,
+                        sources,
+                        azimuth,
+                        earth_rate_deg_h,
+                        used_latitude,
+                    )
+                    - azimuth
+                )
+            except GyroInputError:  # no heading can be found from this run
+                errors[i, run] = np.nan
+    valid = np.isfinite(errors).sum(axis=1)
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        mean = np.nanmean(errors, axis=1)
+        std = np.nanstd(errors, axis=1, ddof=1) if runs > 1 else np.zeros(azimuths.size)
+    return MonteCarloCurve(azimuths, mean, std, runs, valid)
+
+
+def _estimate(
+    method, simulated, angles, means, sources, azimuth, earth_rate_deg_h, used_latitude
+) -> float:
+    if method == "two":
+        result = solve_two_position(
+            means[0] + sources.drift_deg_h,
+            means[1],
+            earth_rate_deg_h=earth_rate_deg_h,
+            latitude_deg=used_latitude,
+        )
+        gamma = result.gamma_deg
+        return gamma if math.sin(math.radians(azimuth)) >= 0 else wrap360(-gamma)
+    return solve_heading(simulated.positions, angles).azimuth_deg

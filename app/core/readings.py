@@ -1,0 +1,162 @@
+"""Readings files: the two CSV layouts shared by ``gyrolab solve``, uploads and exports.
+
+* wide — like the handout's tables: a header ``position_1,...,position_N`` and one reading
+  per row; other columns (``sample``, ``time``...) are ignored and blank cells allowed.
+* long — header ``position,angle_deg,value`` with optional ``time_s``; one reading per row,
+  the angle of each position used as given.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from app.core.exceptions import GyroInputError
+
+WIDE_COLUMN = re.compile(r"^position_(\d+)$")
+
+
+@dataclass
+class Readings:
+    positions: list[np.ndarray]
+    angles_deg: list[float] | None  # given by the long layout, else None
+    times_s: list[np.ndarray] | None = None
+    layout: str = "wide"
+
+
+def _number(text: str, line: int, column: str) -> float:
+    try:
+        value = float(text)
+    except ValueError as error:
+        raise GyroInputError(
+            "csv.not_a_number",
+            f"Line {line}, column {column}: '{text}' is not a number.",
+            line=line,
+            column=column,
+            value=text[:40],
+        ) from error
+    if not math.isfinite(value):
+        raise GyroInputError(
+            "csv.not_finite",
+            f"Line {line}, column {column}: '{text}' is not a finite number.",
+            line=line,
+            column=column,
+            value=text[:40],
+        )
+    return value
+
+
+def parse_readings_csv(text: str) -> Readings:
+    """Parse either layout; raises GyroInputError with the line and column of any problem."""
+    text = text.lstrip("\ufeff")
+    rows = list(csv.reader(io.StringIO(text)))
+    rows = [
+        (number, row)
+        for number, row in enumerate(rows, start=1)
+        if any(cell.strip() for cell in row)
+    ]
+    if not rows:
+        raise GyroInputError("csv.empty", "The file has no readings.")
+    header_line, header = rows[0]
+    names = [cell.strip().lower() for cell in header]
+    if {"position", "value"} <= set(names):
+        return _parse_long(names, rows[1:])
+    wide = {
+        index: int(m.group(1)) for index, name in enumerate(names) if (m := WIDE_COLUMN.match(name))
+    }
+    if wide:
+        return _parse_wide(wide, rows[1:])
+    raise GyroInputError(
+        "csv.unknown_layout",
+        f"Line {header_line}: expected a header 'position_1,position_2,...' (wide) or "
+        "'position,angle_deg,value' (long).",
+        line=header_line,
+    )
+
+
+def _parse_wide(columns: dict[int, int], rows) -> Readings:
+    numbers = sorted(columns.values())
+    if numbers != list(range(1, len(numbers) + 1)):
+        raise GyroInputError(
+            "csv.position_columns",
+            "Position columns must be position_1 ... position_N without gaps.",
+        )
+    order = sorted(columns, key=columns.get)
+    values: list[list[float]] = [[] for _ in order]
+    for line, row in rows:
+        for slot, index in enumerate(order):
+            cell = row[index].strip() if index < len(row) else ""
+            if cell:
+                values[slot].append(_number(cell, line, f"position_{slot + 1}"))
+    for slot, column in enumerate(values, start=1):
+        if not column:
+            raise GyroInputError(
+                "readings.empty_position", f"Position {slot} has no readings.", position=slot
+            )
+    return Readings([np.array(v) for v in values], None, None, "wide")
+
+
+def _parse_long(names: list[str], rows) -> Readings:
+    index = {
+        name: names.index(name)
+        for name in ("position", "angle_deg", "value", "time_s")
+        if name in names
+    }
+    labels: list[str] = []
+    grouped: dict[str, dict] = {}
+    for line, row in rows:
+
+        def cell(name: str, row=row) -> str:
+            position = index.get(name)
+            return row[position].strip() if position is not None and position < len(row) else ""
+
+        label = cell("position")
+        if not label:
+            raise GyroInputError(
+                "csv.no_position", f"Line {line}: the position is missing.", line=line
+            )
+        entry = grouped.get(label)
+        if entry is None:
+            entry = grouped[label] = {"values": [], "times": [], "angle": None}
+            labels.append(label)
+        entry["values"].append(_number(cell("value"), line, "value"))
+        if "time_s" in index:
+            entry["times"].append(_number(cell("time_s"), line, "time_s"))
+        if "angle_deg" in index:
+            angle = _number(cell("angle_deg"), line, "angle_deg")
+            if entry["angle"] is None:
+                entry["angle"] = angle
+            elif abs(entry["angle"] - angle) > 1e-9:
+                raise GyroInputError(
+                    "csv.angle_changes",
+                    f"Line {line}: position {label} has angle {angle} but earlier rows say "
+                    f"{entry['angle']}.",
+                    line=line,
+                    position=label,
+                )
+    if not labels:
+        raise GyroInputError("csv.empty", "The file has no readings.")
+    if all(label.lstrip("-").isdigit() for label in labels):
+        labels.sort(key=int)
+    angles = None
+    if "angle_deg" in index:
+        angles = [grouped[label]["angle"] for label in labels]
+    times = [np.array(grouped[label]["times"]) for label in labels] if "time_s" in index else None
+    positions = [np.array(grouped[label]["values"]) for label in labels]
+    return Readings(positions, angles, times, "long")
+
+
+def readings_to_long_csv(positions, angles_deg, times_s=None, value_format: str = ".6f") -> str:
+    """Write the long layout (position, angle_deg, time_s, value)."""
+    buffer = io.StringIO()
+    buffer.write("position,angle_deg,time_s,value\n")
+    for number, (values, angle) in enumerate(zip(positions, angles_deg, strict=True), start=1):
+        times = times_s[number - 1] if times_s is not None else np.arange(len(values), dtype=float)
+        for time, value in zip(times, values, strict=True):
+            buffer.write(f"{number},{angle:.6g},{time:.3f},{value:{value_format}}\n")
+    return buffer.getvalue()

@@ -1,0 +1,418 @@
+"""Fibre-optic gyro on a manual two-axis turntable: a seeded, vectorised simulator.
+
+True rate (lab-reference §1, §5).  In the local north-east-up frame Earth's rate is
+Ω_vec = (Ω cos φ, 0, Ω sin φ).  The gyro axis in the turntable frame, for horizontal dial
+angle h (clockwise) and vertical dial angle v (elevation), is u_t = (cos v cos h,
+cos v sin h, sin v); the table is rolled by r (right side down), pitched by p (reference
+direction up) and yawed to the true azimuth ψ of its reference direction, so
+u = R_yaw(ψ)·R_pitch(p)·R_roll(r)·u_t and the true rate is Ω_vec·u.
+
+Measured rate, each term switchable by setting it to zero (IEEE Std 952 error model):
+
+    ω_k = (1 + ΔK/K)·Ω_vec·u + b0 + b_on + ḃ·t + g·u_up + x_k + r_k + n_k, then quantised
+
+* b0 constant bias, b_on turn-on bias ~ N(0, σ_on) drawn once per run (seed);
+* g·u_up: g-dependent bias (axis up vs down), °/h per g;
+* n_k angle random walk: white, σ = 60·N/√Δt °/h (N in °/√h, Δt in s);
+* x_k bias instability: first-order Gauss–Markov with exact discretisation
+  x_k = φ·x_(k−1) + σ_GM·√(1−φ²)·w_k, φ = e^(−Δt/τ_c), σ_GM = 1.075·B, so its Allan
+  deviation peaks at ≈ 0.664·B near τ ≈ 1.89·τ_c;
+* ḃ·t linear bias drift (warm-up), °/h per hour;
+* r_k rate random walk: r_k = r_(k−1) + K·√Δt_h·w_k (K in °/h/√h);
+* quantisation: the angle ∫ω dt is floored to the angle LSB and differenced;
+* turntable: each stop after the first lands at its dial angle plus an indexing error
+  ~ N(0, σ_idx); the dial reads to its resolution; the sensitive axis may be misaligned
+  from the dial by (δh, δv).
+
+Reproducibility: every noise source has its own random stream spawned from the seed, all
+recursions carry their state, and cumulative sums continue from the previous value, so
+generating samples 0..n in one call or in any chunking gives bit-identical values
+(:class:`GyroStream`), and a live stream can be resumed by regenerating to its position.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy.signal import lfilter
+
+from app.core.units import EARTH_RATE_DEG_H
+
+GM_SIGMA_PER_B = 0.664 / 0.6178  # σ_GM giving an Allan peak of 0.664·B
+GM_PEAK_TAU_PER_TC = 1.89
+SECONDS_PER_HOUR = 3600.0
+
+
+@dataclass(frozen=True)
+class GyroPreset:
+    """One gyro grade and its turntable.  Units in the field names."""
+
+    name: str
+    sample_rate_hz: float
+    arw_deg_rt_h: float
+    bias_instability_deg_h: float
+    bias_corr_time_s: float
+    rrw_deg_h_rt_h: float
+    angle_lsb_deg: float
+    scale_factor_ppm: float
+    constant_bias_deg_h: float
+    turn_on_bias_sigma_deg_h: float
+    g_sensitivity_deg_h_per_g: float
+    misalignment_deg: tuple[float, float]
+    indexing_sigma_arcsec: float
+    dial_resolution_deg: float
+    drift_deg_h_per_h: float = 0.0  # linear bias drift ḃ (warm-up), °/h per hour
+    source: str = ""
+    description: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def dt_s(self) -> float:
+        return 1.0 / self.sample_rate_hz
+
+    @property
+    def white_sigma_deg_h(self) -> float:
+        """Per-sample σ of the angle random walk: 60·N/√Δt (°/h)."""
+        return 60.0 * self.arw_deg_rt_h / math.sqrt(self.dt_s)
+
+    def without(self, *errors: str) -> GyroPreset:
+        """The same gyro with some error terms switched off (set to zero)."""
+        names = {
+            "arw": "arw_deg_rt_h",
+            "bias_instability": "bias_instability_deg_h",
+            "rrw": "rrw_deg_h_rt_h",
+            "quantization": "angle_lsb_deg",
+            "scale_factor": "scale_factor_ppm",
+            "constant_bias": "constant_bias_deg_h",
+            "turn_on_bias": "turn_on_bias_sigma_deg_h",
+            "g_sensitivity": "g_sensitivity_deg_h_per_g",
+            "indexing": "indexing_sigma_arcsec",
+            "dial": "dial_resolution_deg",
+            "drift": "drift_deg_h_per_h",
+        }
+        changes: dict = {names[e]: 0.0 for e in errors if e in names}
+        if "misalignment" in errors:
+            changes["misalignment_deg"] = (0.0, 0.0)
+        unknown = set(errors) - set(names) - {"misalignment"}
+        if unknown:
+            raise ValueError(f"unknown error terms: {sorted(unknown)}")
+        return replace(self, **changes)
+
+    def ideal(self) -> GyroPreset:
+        return self.without(
+            "arw",
+            "bias_instability",
+            "rrw",
+            "quantization",
+            "scale_factor",
+            "constant_bias",
+            "turn_on_bias",
+            "g_sensitivity",
+            "misalignment",
+            "indexing",
+            "dial",
+            "drift",
+        )
+
+
+PRESETS: dict[str, GyroPreset] = {
+    "teaching-fog": GyroPreset(
+        name="teaching-fog",
+        sample_rate_hz=1.0,
+        arw_deg_rt_h=0.0018,
+        bias_instability_deg_h=0.02,
+        bias_corr_time_s=60.0,
+        rrw_deg_h_rt_h=0.0,
+        angle_lsb_deg=0.1 / SECONDS_PER_HOUR,  # 0.1 °/h steps at 1 Hz, as in the handout
+        scale_factor_ppm=500.0,
+        constant_bias_deg_h=0.0,
+        turn_on_bias_sigma_deg_h=1.0,
+        g_sensitivity_deg_h_per_g=0.1,
+        misalignment_deg=(0.0, 0.0),
+        indexing_sigma_arcsec=60.0,
+        dial_resolution_deg=0.1,
+        source="Tuned to the handout's tables (lab-reference §2): one reading per second, "
+        "≈0.1 °/h scatter and 0.1 °/h steps; scale-factor error 500 ppm as for a "
+        "low-cost FOG (lab-reference §5).",
+        description={
+            "en": "The lab's FOG: readings like the handout's (0.1 °/h steps, ~0.1 °/h scatter).",
+            "zh-CN": "实验用光纤陀螺：读数与讲义相近（0.1 °/h 步进，约 0.1 °/h 抖动）。",
+        },
+    ),
+    "tactical-fog": GyroPreset(
+        name="tactical-fog",
+        sample_rate_hz=10.0,
+        arw_deg_rt_h=0.012,
+        bias_instability_deg_h=0.05,
+        bias_corr_time_s=100.0,
+        rrw_deg_h_rt_h=0.0,
+        angle_lsb_deg=1e-6,
+        scale_factor_ppm=100.0,
+        constant_bias_deg_h=0.0,
+        turn_on_bias_sigma_deg_h=0.5,
+        g_sensitivity_deg_h_per_g=0.05,
+        misalignment_deg=(0.0, 0.0),
+        indexing_sigma_arcsec=30.0,
+        dial_resolution_deg=0.01,
+        source="KVH DSP-1750 class (lab-reference §5): ARW 0.012 °/√h, bias instability "
+        "0.05 °/h, scale factor ~100 ppm.",
+        description={
+            "en": "Tactical-grade FOG (DSP-1750 class): heading to a few tenths of "
+            "a degree in minutes.",
+            "zh-CN": "战术级光纤陀螺（DSP-1750 级）：几分钟内寻北精度达零点几度。",
+        },
+    ),
+    "navigation-fog": GyroPreset(
+        name="navigation-fog",
+        sample_rate_hz=10.0,
+        arw_deg_rt_h=0.002,
+        bias_instability_deg_h=0.005,
+        bias_corr_time_s=300.0,
+        rrw_deg_h_rt_h=0.0,
+        angle_lsb_deg=1e-7,
+        scale_factor_ppm=10.0,
+        constant_bias_deg_h=0.0,
+        turn_on_bias_sigma_deg_h=0.01,
+        g_sensitivity_deg_h_per_g=0.0,
+        misalignment_deg=(0.0, 0.0),
+        indexing_sigma_arcsec=10.0,
+        dial_resolution_deg=0.001,
+        source="Navigation-grade FOG (lab-reference §5): ARW ≈ 0.002 °/√h, B < 0.01 °/h.",
+        description={
+            "en": "Navigation-grade FOG: heading to a few hundredths of a degree.",
+            "zh-CN": "导航级光纤陀螺：寻北精度达百分之几度。",
+        },
+    ),
+    "mems": GyroPreset(
+        name="mems",
+        sample_rate_hz=10.0,
+        arw_deg_rt_h=0.5,
+        bias_instability_deg_h=10.0,
+        bias_corr_time_s=30.0,
+        rrw_deg_h_rt_h=5.0,
+        angle_lsb_deg=1e-4,
+        scale_factor_ppm=3000.0,
+        constant_bias_deg_h=0.0,
+        turn_on_bias_sigma_deg_h=360.0,
+        g_sensitivity_deg_h_per_g=36.0,
+        misalignment_deg=(0.0, 0.0),
+        indexing_sigma_arcsec=60.0,
+        dial_resolution_deg=0.1,
+        source="Consumer MEMS (lab-reference §5): B ≈ 10 °/h, N ≈ 0.3–1 °/√h; turn-on bias "
+        "0.1 °/s; g-sensitivity 0.01 °/s/g.",
+        description={
+            "en": "Consumer MEMS gyro: its noise and drift exceed Earth's rate, so it "
+            "cannot find north in a lab period.",
+            "zh-CN": "消费级 MEMS 陀螺：噪声和漂移超过地球自转角速度，一节实验课内无法寻北。",
+        },
+    ),
+}
+
+
+def get_preset(name: str) -> GyroPreset:
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise ValueError(f"unknown preset {name!r}; choose from {', '.join(PRESETS)}") from None
+
+
+# --- geometry ------------------------------------------------------------------------------
+
+
+def earth_rate_vector(
+    latitude_deg: float, earth_rate_deg_h: float = EARTH_RATE_DEG_H
+) -> np.ndarray:
+    """Earth's rotation in north-east-up: (Ω cos φ, 0, Ω sin φ) °/h."""
+    phi = math.radians(latitude_deg)
+    return np.array([earth_rate_deg_h * math.cos(phi), 0.0, earth_rate_deg_h * math.sin(phi)])
+
+
+def axis_vectors(
+    yaw_deg: float, h_deg, v_deg, pitch_deg: float = 0.0, roll_deg: float = 0.0
+) -> np.ndarray:
+    """Unit vectors (…, 3) in north-east-up of the gyro axis for dial angles h, v."""
+    h, v = np.radians(np.asarray(h_deg, dtype=float)), np.radians(np.asarray(v_deg, dtype=float))
+    h, v = np.broadcast_arrays(h, v)
+    x, y, z = np.cos(v) * np.cos(h), np.cos(v) * np.sin(h), np.sin(v)
+    r, p, psi = math.radians(roll_deg), math.radians(pitch_deg), math.radians(yaw_deg)
+    y, z = y * math.cos(r) + z * math.sin(r), -y * math.sin(r) + z * math.cos(r)  # roll
+    x, z = x * math.cos(p) - z * math.sin(p), x * math.sin(p) + z * math.cos(p)  # pitch
+    north, east = x * math.cos(psi) - y * math.sin(psi), x * math.sin(psi) + y * math.cos(psi)
+    return np.stack([north, east, z], axis=-1)
+
+
+def true_rate(
+    latitude_deg: float, vectors: np.ndarray, earth_rate_deg_h: float = EARTH_RATE_DEG_H
+) -> np.ndarray:
+    return vectors @ earth_rate_vector(latitude_deg, earth_rate_deg_h)
+
+
+# --- the sensor: a resumable stream ----------------------------------------------------------
+
+
+class GyroStream:
+    """Sensor errors for consecutive samples; ``read(true_rates)`` consumes the next block."""
+
+    def __init__(self, preset: GyroPreset, seed: int) -> None:
+        self.preset = preset
+        arw_seq, gm_seq, rrw_seq, run_seq = np.random.SeedSequence(seed).spawn(4)
+        self._arw = np.random.Generator(np.random.PCG64(arw_seq))
+        self._gm = np.random.Generator(np.random.PCG64(gm_seq))
+        self._rrw = np.random.Generator(np.random.PCG64(rrw_seq))
+        run = np.random.Generator(np.random.PCG64(run_seq))
+        self.turn_on_bias_deg_h = float(run.normal(0.0, 1.0) * preset.turn_on_bias_sigma_deg_h)
+        dt = preset.dt_s
+        self._phi = math.exp(-dt / preset.bias_corr_time_s) if preset.bias_corr_time_s > 0 else 0.0
+        self._gm_sigma = GM_SIGMA_PER_B * preset.bias_instability_deg_h
+        self._gm_state = float(self._gm.normal()) * self._gm_sigma  # stationary start
+        self._rrw_state = 0.0
+        self._angle = 0.0  # accumulated angle (deg) for quantisation
+        self.samples_read = 0
+
+    def read(self, true_rates: np.ndarray, g_component: np.ndarray | float = 0.0) -> np.ndarray:
+        """Measured rates (°/h) for the next ``len(true_rates)`` samples."""
+        p = self.preset
+        true_rates = np.asarray(true_rates, dtype=float)
+        n = true_rates.size
+        rate = (1.0 + p.scale_factor_ppm * 1e-6) * true_rates
+        rate = rate + p.constant_bias_deg_h + self.turn_on_bias_deg_h
+        rate = rate + p.g_sensitivity_deg_h_per_g * np.asarray(g_component, dtype=float)
+        if p.drift_deg_h_per_h:
+            hours = (self.samples_read + np.arange(n)) * p.dt_s / SECONDS_PER_HOUR
+            rate = rate + p.drift_deg_h_per_h * hours
+        white = self._arw.standard_normal(n)
+        gm_noise = self._gm.standard_normal(n)
+        rrw_noise = self._rrw.standard_normal(n)
+        if p.arw_deg_rt_h:
+            rate = rate + p.white_sigma_deg_h * white
+        if p.bias_instability_deg_h and n:
+            drive = self._gm_sigma * math.sqrt(1.0 - self._phi**2) * gm_noise
+            gm, _ = lfilter([1.0], [1.0, -self._phi], drive, zi=[self._phi * self._gm_state])
+            self._gm_state = float(gm[-1])
+            rate = rate + gm
+        if p.rrw_deg_h_rt_h and n:
+            steps = p.rrw_deg_h_rt_h * math.sqrt(p.dt_s / SECONDS_PER_HOUR) * rrw_noise
+            walk = np.cumsum(np.concatenate([[self._rrw_state], steps]))[1:]
+            self._rrw_state = float(walk[-1])
+            rate = rate + walk
+        if p.angle_lsb_deg and n:
+            dt_h = p.dt_s / SECONDS_PER_HOUR
+            angle = np.cumsum(np.concatenate([[self._angle], rate * dt_h]))
+            counts = np.diff(np.floor(angle / p.angle_lsb_deg))
+            self._angle = float(angle[-1])
+            rate = counts * p.angle_lsb_deg / dt_h
+        self.samples_read += n
+        return rate
+
+
+# --- a lab run: positions on the turntable --------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Setup:
+    """The secret truth of one run: where the table points and how it is tilted."""
+
+    latitude_deg: float
+    azimuth_deg: float = 0.0  # true azimuth of position 1 (heading) / of the vertical plane
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H
+    pitch_deg: float = 0.0
+    roll_deg: float = 0.0
+    mount_elevation_deg: float = 0.0  # heading part: axis elevation above the table plane
+
+
+@dataclass
+class SimulatedRun:
+    positions: list[np.ndarray]
+    times_s: list[np.ndarray]
+    dial_angles_deg: list[float]  # what the student reads on the dial
+    true_angles_deg: list[float]  # where the table really stopped
+    turn_on_bias_deg_h: float
+    indexing_errors_deg: list[float]
+
+
+def indexing_errors(preset: GyroPreset, seed: int, n_positions: int) -> np.ndarray:
+    """Stop k (k ≥ 2) lands off by N(0, σ_idx); stop 1 defines the reference (0)."""
+    errors = np.zeros(n_positions)
+    for move in range(1, n_positions):
+        rng = np.random.Generator(
+            np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(9, move)))
+        )
+        errors[move] = rng.normal() * preset.indexing_sigma_arcsec / 3600.0
+    return errors
+
+
+def simulate_run(
+    preset: GyroPreset,
+    setup: Setup,
+    part: str,
+    dial_angles_deg: Sequence[float],
+    seconds_per_position: float,
+    *,
+    settle_s: float = 0.0,
+    seed: int = 0,
+    extra_indexing_deg: Sequence[float] | None = None,
+) -> SimulatedRun:
+    """Readings at each dial angle: ``part`` 'heading' turns h, 'latitude' turns v.
+
+    ``extra_indexing_deg`` adds a fixed error to each stop (error-analysis experiments).
+    """
+    if part not in ("heading", "latitude"):
+        raise ValueError("part must be 'heading' or 'latitude'")
+    stream = GyroStream(preset, seed)
+    errors = indexing_errors(preset, seed, len(dial_angles_deg))
+    if extra_indexing_deg is not None:
+        errors = errors + np.asarray(extra_indexing_deg, dtype=float)
+    per_position = max(1, int(round(seconds_per_position * preset.sample_rate_hz)))
+    settle = int(round(settle_s * preset.sample_rate_hz))
+    dh, dv = preset.misalignment_deg
+    positions, times, true_angles, dial_read = [], [], [], []
+    clock = 0
+    for nominal, error in zip(dial_angles_deg, errors, strict=True):
+        actual = nominal + error
+        if part == "heading":
+            vector = axis_vectors(
+                setup.azimuth_deg,
+                actual + dh,
+                setup.mount_elevation_deg + dv,
+                setup.pitch_deg,
+                setup.roll_deg,
+            )
+        else:
+            vector = axis_vectors(
+                setup.azimuth_deg, dh, actual + dv, setup.pitch_deg, setup.roll_deg
+            )
+        rate = float(true_rate(setup.latitude_deg, vector, setup.earth_rate_deg_h))
+        count = settle + per_position
+        measured = stream.read(np.full(count, rate), float(vector[2]))
+        positions.append(measured[settle:])
+        times.append((clock + settle + np.arange(per_position)) / preset.sample_rate_hz)
+        clock += count
+        true_angles.append(float(actual))
+        dial_read.append(read_dial(actual, preset.dial_resolution_deg))
+    return SimulatedRun(
+        positions,
+        times,
+        dial_read,
+        true_angles,
+        stream.turn_on_bias_deg_h,
+        [float(e) for e in errors],
+    )
+
+
+def read_dial(angle_deg: float, resolution_deg: float) -> float:
+    if resolution_deg <= 0:
+        return float(angle_deg)
+    return float(np.round(angle_deg / resolution_deg) * resolution_deg)
+
+
+def simulate_static(
+    preset: GyroPreset, setup: Setup, seconds: float, *, seed: int = 0, elevation_deg: float = 0.0
+) -> np.ndarray:
+    """A long record at one fixed orientation (for the Allan deviation)."""
+    stream = GyroStream(preset, seed)
+    vector = axis_vectors(setup.azimuth_deg, 0.0, elevation_deg, setup.pitch_deg, setup.roll_deg)
+    rate = float(true_rate(setup.latitude_deg, vector, setup.earth_rate_deg_h))
+    count = max(1, int(round(seconds * preset.sample_rate_hz)))
+    return stream.read(np.full(count, rate), float(vector[2]))

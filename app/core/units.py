@@ -1,0 +1,50 @@
+"""Angular-rate units.  Everything inside GyroLab is °/h; convert only at the boundary.
+
+1 °/s = 3600 °/h;  1 rad/s = (180/π)·3600 °/h ≈ 206 264.8 °/h.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from app.core.exceptions import GyroInputError
+
+DEG_PER_HOUR = "deg/h"
+DEG_PER_SECOND = "deg/s"
+RAD_PER_SECOND = "rad/s"
+TO_DEG_PER_HOUR: dict[str, float] = {
+    DEG_PER_HOUR: 1.0,
+    DEG_PER_SECOND: 3600.0,
+    RAD_PER_SECOND: math.degrees(1.0) * 3600.0,
+}
+UNITS = tuple(TO_DEG_PER_HOUR)
+ALIASES = {
+    "°/h": DEG_PER_HOUR,
+    "deg/hr": DEG_PER_HOUR,
+    "dph": DEG_PER_HOUR,
+    "°/s": DEG_PER_SECOND,
+    "dps": DEG_PER_SECOND,
+    "rad/sec": RAD_PER_SECOND,
+}
+
+EARTH_RATE_DEG_H = 15.041  # sidereal: 360° / 23.9345 h
+HANDOUT_EARTH_RATE_DEG_H = 15.04
+
+
+def canonical_unit(unit: str) -> str:
+    name = ALIASES.get(unit.strip(), unit.strip())
+    if name not in TO_DEG_PER_HOUR:
+        raise GyroInputError(
+            "unit.unknown", f"Unknown unit '{unit}': use one of {', '.join(UNITS)}.", unit=unit
+        )
+    return name
+
+
+def to_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:
+    return np.asarray(values, dtype=float) * TO_DEG_PER_HOUR[canonical_unit(unit)]
+
+
+def from_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:
+    return np.asarray(values, dtype=float) / TO_DEG_PER_HOUR[canonical_unit(unit)]
