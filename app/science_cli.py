@@ -1,5 +1,261 @@
-"""``gyrolab solve`` / ``simulate`` / ``allan`` (added with the science core)."""
+"""``gyrolab solve`` / ``simulate`` / ``allan``: the science core on the command line.
+
+Bad input exits with status 2 and one clear line on stderr, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from dataclasses import replace
+
+import numpy as np
+
+from app.core.allan import allan_deviation
+from app.core.exceptions import GyroInputError
+from app.core.explain import explain_heading, explain_latitude, render_text
+from app.core.readings import Readings, parse_readings_csv, readings_to_long_csv
+from app.core.simulate import PRESETS, Setup, simulate_run, simulate_static
+from app.core.solve import elevation_angles, heading_angles, solve_heading, solve_latitude
+from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
+
+
+class CommandError(Exception):
+    """A problem with the command's input: printed as one line, exit status 2."""
+
+
+def _clean(value):
+    """JSON-safe: NaN/inf become null, numpy scalars become floats."""
+    if isinstance(value, dict):
+        return {key: _clean(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_clean(item) for item in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def to_json_text(payload: dict) -> str:
+    return json.dumps(_clean(payload), indent=2, ensure_ascii=False, allow_nan=False)
+
+
+def _read_text(path: str) -> str:
+    try:
+        if path == "-":
+            return sys.stdin.read()
+        with open(path, encoding="utf-8-sig") as handle:
+            return handle.read()
+    except FileNotFoundError:
+        raise CommandError(f"no such file: {path}") from None
+    except UnicodeDecodeError:
+        raise CommandError(f"{path} is not UTF-8 text") from None
+    except OSError as error:
+        raise CommandError(f"cannot read {path}: {error.strerror}") from None
+
+
+def _finite(name: str, value: float | None) -> None:
+    if value is not None and not math.isfinite(value):
+        raise CommandError(f"{name} must be a finite number")
+
+
+def solve_readings(part: str, readings: Readings, args: argparse.Namespace):
+    """Solve ``readings`` as the ``solve`` command does (shared with tests and the API)."""
+    positions = [to_deg_per_hour(values, args.unit) for values in readings.positions]
+    count = len(positions)
+    if part == "heading":
+        if readings.angles_deg is not None:
+            angles = np.asarray(readings.angles_deg)
+        else:
+            angles = heading_angles(count, args.rotation, args.start_angle, args.step)
+        return solve_heading(positions, angles, true_azimuth_deg=args.true_azimuth)
+    if readings.angles_deg is not None:
+        angles = np.asarray(readings.angles_deg)
+    else:
+        angles = elevation_angles(count, args.start_angle, args.step)
+    return solve_latitude(
+        positions, angles, true_latitude_deg=args.latitude, true_earth_rate_deg_h=args.earth_rate
+    )
+
+
+def _solve(args: argparse.Namespace) -> int:
+    for name in ("start_angle", "step", "latitude", "earth_rate", "true_azimuth"):
+        _finite(f"--{name.replace('_', '-')}", getattr(args, name))
+    readings = parse_readings_csv(_read_text(args.file))
+    result = solve_readings(args.part, readings, args)
+    if args.json:
+        print(to_json_text(result.to_json()))
+        return 0
+    steps = explain_heading(result) if args.part == "heading" else explain_latitude(result)
+    print(render_text(steps, args.language))
+    return 0
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    preset = PRESETS[args.preset]
+    if args.rate:
+        preset = replace(preset, sample_rate_hz=args.rate)
+    if args.indexing_sigma is not None:
+        preset = replace(preset, indexing_sigma_arcsec=args.indexing_sigma)
+    for name in ("latitude", "azimuth", "pitch", "roll", "rate", "seconds", "elevation"):
+        _finite(f"--{name}", getattr(args, name))
+    if not -90 <= args.latitude <= 90:
+        raise CommandError("--latitude must be between -90 and 90 degrees")
+    setup = Setup(
+        args.latitude,
+        args.azimuth,
+        args.earth_rate,
+        args.pitch,
+        args.roll,
+        args.elevation if args.part == "heading" else 0.0,
+    )
+    if args.part == "static":
+        seconds = args.seconds or args.seconds_per_position or 600.0
+        values = simulate_static(
+            preset, setup, seconds, seed=args.seed, elevation_deg=args.elevation
+        )
+        times = [np.arange(values.size) / preset.sample_rate_hz]
+        sys.stdout.write(readings_to_long_csv([values], [0.0], times))
+        return 0
+    if args.positions < 3:
+        raise CommandError("--positions must be at least 3")
+    seconds = args.seconds_per_position or args.seconds or 10.0
+    if seconds <= 0 or seconds * preset.sample_rate_hz > 5_000_000:
+        raise CommandError("the dwell time must be positive and under 5 million samples")
+    step = 360.0 / args.positions
+    if args.part == "heading":
+        dials = heading_angles(args.positions, args.rotation, 0.0, step)
+    else:
+        dials = elevation_angles(args.positions, 0.0, step)
+    run = simulate_run(
+        preset, setup, args.part, dials, seconds, settle_s=args.settle, seed=args.seed
+    )
+    sys.stdout.write(readings_to_long_csv(run.positions, run.dial_angles_deg, run.times_s))
+    return 0
+
+
+def _allan(args: argparse.Namespace) -> int:
+    text = _read_text(args.file)
+    try:
+        readings = parse_readings_csv(text)
+        if len(readings.positions) != 1:
+            raise CommandError("the Allan deviation needs one static record (one position)")
+        values = readings.positions[0]
+    except GyroInputError as error:
+        if error.key != "csv.unknown_layout":
+            raise
+        values = _single_column(text)
+    result = allan_deviation(to_deg_per_hour(values, args.unit), args.rate)
+    if args.json:
+        print(to_json_text(result.to_json()))
+        return 0
+    print(f"{'tau (s)':>12} {'ADEV (°/h)':>14}")
+    for tau, adev in zip(result.taus_s, result.adev_deg_h, strict=True):
+        print(f"{tau:12.3f} {adev:14.6f}")
+    print(f"ARW N = {result.arw_deg_rt_h:.5f} °/√h")
+    if result.bias_instability_deg_h is not None:
+        print(f"bias instability B = {result.bias_instability_deg_h:.5f} °/h")
+    if result.rrw_deg_h_rt_h is not None:
+        print(f"rate random walk K = {result.rrw_deg_h_rt_h:.5f} °/h/√h")
+    print(f"Allan minimum {result.adev_min_deg_h:.5f} °/h at τ = {result.tau_min_s:.1f} s")
+    print(f"recommended dwell per position ≈ {result.recommended_dwell_s:.0f} s")
+    return 0
+
+
+def _single_column(text: str) -> np.ndarray:
+    values = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        cell = line.strip().split(",")[-1].strip()
+        if not cell:
+            continue
+        try:
+            values.append(float(cell))
+        except ValueError:
+            if number == 1:  # a header line
+                continue
+            raise CommandError(f"line {number}: '{cell[:40]}' is not a number") from None
+    return np.array(values)
+
+
+def _guarded(handler):
+    def run(args: argparse.Namespace) -> int:
+        try:
+            return handler(args)
+        except (GyroInputError, CommandError) as error:
+            print(f"gyrolab {args.command}: {error}", file=sys.stderr)
+            return 2
+
+    return run
 
 
 def add_science_commands(commands) -> None:
-    return None
+    solve = commands.add_parser("solve", help="heading, or latitude and Earth rate, from a CSV")
+    solve.add_argument("part", choices=["heading", "latitude"])
+    solve.add_argument("file", help="CSV file (wide or long layout); '-' reads stdin")
+    solve.add_argument(
+        "--rotation",
+        choices=["ccw", "cw"],
+        default="ccw",
+        help="heading: direction the table was turned (handout: ccw)",
+    )
+    solve.add_argument(
+        "--start-angle",
+        type=float,
+        default=0.0,
+        help="angle of position 1 (heading: relative azimuth; latitude: "
+        "elevation from the north horizon)",
+    )
+    solve.add_argument("--step", type=float, default=90.0, help="step between positions (deg)")
+    solve.add_argument("--unit", choices=UNITS, default="deg/h")
+    solve.add_argument("--latitude", type=float, help="true latitude φ0 (for percent errors)")
+    solve.add_argument(
+        "--earth-rate",
+        type=float,
+        default=EARTH_RATE_DEG_H,
+        help="true Earth rate Ω0 in °/h (default 15.041; the handout used 15.04)",
+    )
+    solve.add_argument("--true-azimuth", type=float, help="true azimuth of position 1 (deg)")
+    solve.add_argument("--json", action="store_true")
+    solve.add_argument("--language", choices=["en", "zh-CN"], default="en")
+    solve.set_defaults(handler=_guarded(_solve))
+
+    simulate = commands.add_parser("simulate", help="simulated gyro readings as long CSV")
+    simulate.add_argument("part", choices=["heading", "latitude", "static"])
+    simulate.add_argument("--preset", choices=sorted(PRESETS), default="teaching-fog")
+    simulate.add_argument("--latitude", type=float, required=True)
+    simulate.add_argument("--earth-rate", type=float, default=EARTH_RATE_DEG_H)
+    simulate.add_argument(
+        "--azimuth",
+        type=float,
+        default=0.0,
+        help="true azimuth of position 1 (heading) or of the vertical plane",
+    )
+    simulate.add_argument("--seconds-per-position", type=float)
+    simulate.add_argument("--seconds", type=float, help="static: record length")
+    simulate.add_argument(
+        "--settle", type=float, default=0.0, help="seconds discarded after each turn"
+    )
+    simulate.add_argument("--rate", type=float, help="sample rate in Hz (default: the preset's)")
+    simulate.add_argument("--positions", type=int, default=4)
+    simulate.add_argument("--rotation", choices=["ccw", "cw"], default="ccw")
+    simulate.add_argument("--pitch", type=float, default=0.0)
+    simulate.add_argument("--roll", type=float, default=0.0)
+    simulate.add_argument(
+        "--elevation",
+        type=float,
+        default=0.0,
+        help="heading/static: axis elevation above the table plane",
+    )
+    simulate.add_argument("--indexing-sigma", type=float, help="arcsec per turn (default: preset)")
+    simulate.add_argument("--seed", type=int, default=0)
+    simulate.set_defaults(handler=_guarded(_simulate))
+
+    allan = commands.add_parser("allan", help="Allan deviation of a static record")
+    allan.add_argument("file", help="CSV (long/wide with one position, or one value per line)")
+    allan.add_argument("--rate", type=float, required=True, help="sample rate in Hz")
+    allan.add_argument("--unit", choices=UNITS, default="deg/h")
+    allan.add_argument("--json", action="store_true")
+    allan.set_defaults(handler=_guarded(_allan))

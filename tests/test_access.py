@@ -50,8 +50,10 @@ def test_student_cannot_reach_teacher_pages(client, world):
     for path in TEACHER_GETS:
         assert client.get(fill(path, world)).status_code == 403
     for path in ["/courses", *TEACHER_POSTS]:
-        response = client.post(fill(path, world), data={"csrf_token": token, "name": "x",
-                                                         "username": "zz", "display_name": "z"})
+        response = client.post(
+            fill(path, world),
+            data={"csrf_token": token, "name": "x", "username": "zz", "display_name": "z"},
+        )
         assert response.status_code == 403, path
         assert "do not have access" in response.text
 
@@ -64,8 +66,10 @@ def test_teacher_cannot_reach_another_teachers_course(client, world):
         assert response.status_code == 404
         assert "s1" not in response.text
     for path in TEACHER_POSTS:
-        response = client.post(fill(path, world), data={"csrf_token": token, "name": "x",
-                                                         "username": "zz", "display_name": "z"})
+        response = client.post(
+            fill(path, world),
+            data={"csrf_token": token, "name": "x", "username": "zz", "display_name": "z"},
+        )
         assert response.status_code == 404, path
     assert "A" not in [line.strip() for line in client.get("/").text.splitlines()]
 
@@ -76,8 +80,9 @@ def test_teacher_cannot_touch_a_student_outside_the_course(client, world, teache
     token = csrf_from(client, "/")
     course = world["course"]
     for action in ("reset-password", "remove"):
-        response = client.post(f"/courses/{course}/students/{outsider.id}/{action}",
-                               data={"csrf_token": token})
+        response = client.post(
+            f"/courses/{course}/students/{outsider.id}/{action}", data={"csrf_token": token}
+        )
         assert response.status_code == 404
 
 

@@ -105,9 +105,7 @@ def test_idle_session_expires(client, teacher):
     login(client, "teacher1")
     with write_session() as db:
         record = db.exec(select(AuthSession)).one()
-        record.last_seen_at = utcnow() - timedelta(
-            minutes=get_settings().session_idle_minutes + 1
-        )
+        record.last_seen_at = utcnow() - timedelta(minutes=get_settings().session_idle_minutes + 1)
         db.add(record)
     assert client.get("/").status_code == 303
 
@@ -146,8 +144,7 @@ def test_login_without_csrf_is_refused(client, teacher):
 def test_csrf_header_is_accepted(client, teacher):
     login(client, "teacher1")
     token = csrf_from(client, "/")
-    response = client.post("/courses", data={"name": "Via header"},
-                           headers={"X-CSRF-Token": token})
+    response = client.post("/courses", data={"name": "Via header"}, headers={"X-CSRF-Token": token})
     assert response.status_code == 303
 
 
@@ -157,8 +154,10 @@ def test_every_state_changing_route_checks_csrf(app):
     from app.deps import csrf_protect
 
     unsafe = [
-        route for route in iter_routes(app.routes)
-        if isinstance(route, APIRoute) and route.methods - {"GET", "HEAD", "OPTIONS"}
+        route
+        for route in iter_routes(app.routes)
+        if isinstance(route, APIRoute)
+        and route.methods - {"GET", "HEAD", "OPTIONS"}
         and not route.path.startswith("/api/")
     ]
     assert unsafe, "expected some form routes"
@@ -174,9 +173,16 @@ def test_forced_password_change(client):
     assert client.get("/").headers["location"] == "/account/password"
     page = client.get("/account/password")
     assert "initial password" in page.text
-    response = post_form(client, "/account/password", {
-        "current_password": PASSWORD, "new_password": "my-own-secret-9",
-        "confirm_password": "my-own-secret-9"}, page="/account/password")
+    response = post_form(
+        client,
+        "/account/password",
+        {
+            "current_password": PASSWORD,
+            "new_password": "my-own-secret-9",
+            "confirm_password": "my-own-secret-9",
+        },
+        page="/account/password",
+    )
     assert response.status_code == 303
     assert client.get("/").status_code == 200
     with read_session() as db:
@@ -188,13 +194,22 @@ def test_forced_password_change(client):
 def test_password_change_revokes_other_sessions(app, teacher):
     from fastapi.testclient import TestClient
 
-    with TestClient(app, follow_redirects=False) as laptop, \
-            TestClient(app, follow_redirects=False) as phone:
+    with (
+        TestClient(app, follow_redirects=False) as laptop,
+        TestClient(app, follow_redirects=False) as phone,
+    ):
         login(laptop, "teacher1")
         login(phone, "teacher1")
-        response = post_form(laptop, "/account/password", {
-            "current_password": PASSWORD, "new_password": "another-secret-7",
-            "confirm_password": "another-secret-7"}, page="/account/password")
+        response = post_form(
+            laptop,
+            "/account/password",
+            {
+                "current_password": PASSWORD,
+                "new_password": "another-secret-7",
+                "confirm_password": "another-secret-7",
+            },
+            page="/account/password",
+        )
         assert response.status_code == 303
         assert laptop.get("/").status_code == 200
         assert phone.get("/").status_code == 303
@@ -203,14 +218,30 @@ def test_password_change_revokes_other_sessions(app, teacher):
 def test_password_rules(client, teacher):
     login(client, "teacher1")
     cases = [
-        ({"current_password": "nope", "new_password": "abcdefgh1", "confirm_password": "abcdefgh1"},
-         "current password is wrong"),
-        ({"current_password": PASSWORD, "new_password": "abcdefgh1", "confirm_password": "x"},
-         "differ"),
-        ({"current_password": PASSWORD, "new_password": "short", "confirm_password": "short"},
-         "at least 8"),
-        ({"current_password": PASSWORD, "new_password": "teacher1", "confirm_password": "teacher1"},
-         "must not be your username"),
+        (
+            {
+                "current_password": "nope",
+                "new_password": "abcdefgh1",
+                "confirm_password": "abcdefgh1",
+            },
+            "current password is wrong",
+        ),
+        (
+            {"current_password": PASSWORD, "new_password": "abcdefgh1", "confirm_password": "x"},
+            "differ",
+        ),
+        (
+            {"current_password": PASSWORD, "new_password": "short", "confirm_password": "short"},
+            "at least 8",
+        ),
+        (
+            {
+                "current_password": PASSWORD,
+                "new_password": "teacher1",
+                "confirm_password": "teacher1",
+            },
+            "must not be your username",
+        ),
     ]
     for data, message in cases:
         response = post_form(client, "/account/password", data, page="/account/password")

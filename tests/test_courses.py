@@ -29,9 +29,12 @@ def create_course(client, name="Navigation lab") -> int:
 
 
 def import_file(client, course_id, content: bytes, name="roster.csv"):
-    return post_form(client, f"/courses/{course_id}/import",
-                     files={"roster_file": (name, content, "text/csv")},
-                     page=f"/courses/{course_id}")
+    return post_form(
+        client,
+        f"/courses/{course_id}/import",
+        files={"roster_file": (name, content, "text/csv")},
+        page=f"/courses/{course_id}",
+    )
 
 
 def credentials_from(page: str) -> dict[str, str]:
@@ -88,7 +91,10 @@ def test_import_gb18030_file_from_excel(teacher_client):
 def test_invalid_roster_creates_nothing_and_reports_each_row(teacher_client):
     course_id = create_course(teacher_client)
     before = user_count()
-    bad = "学号,姓名,邮箱\n2024001,张三,\nbad name!,李四,\n2024003,,\n2024001,重复,\n2024005,赵六,not-mail\n"
+    bad = (
+        "学号,姓名,邮箱\n2024001,张三,\nbad name!,李四,\n2024003,,\n2024001,重复,\n"
+        "2024005,赵六,not-mail\n"
+    )
     response = import_file(teacher_client, course_id, bad.encode())
     assert response.status_code == 400
     text = response.text
@@ -126,37 +132,53 @@ def test_import_without_header_and_existing_student(teacher_client):
 
 def test_add_student_by_hand_and_reset_and_remove(teacher_client, client):
     course_id = create_course(teacher_client)
-    response = post_form(teacher_client, f"/courses/{course_id}/students",
-                         {"username": "s42", "display_name": "王五", "email": ""},
-                         page=f"/courses/{course_id}")
+    response = post_form(
+        teacher_client,
+        f"/courses/{course_id}/students",
+        {"username": "s42", "display_name": "王五", "email": ""},
+        page=f"/courses/{course_id}",
+    )
     assert response.status_code == 200
     first = credentials_from(response.text)["s42"]
     with read_session() as db:
         student = db.exec(select(User).where(User.username == "s42")).one()
-    response = post_form(teacher_client,
-                         f"/courses/{course_id}/students/{student.id}/reset-password",
-                         page=f"/courses/{course_id}")
+    response = post_form(
+        teacher_client,
+        f"/courses/{course_id}/students/{student.id}/reset-password",
+        page=f"/courses/{course_id}",
+    )
     second = credentials_from(response.text)["s42"]
     assert first != second
     with read_session() as db:
         assert verify_password(second, db.get(User, student.id).password_hash)
-    response = post_form(teacher_client, f"/courses/{course_id}/students/{student.id}/remove",
-                         page=f"/courses/{course_id}")
+    response = post_form(
+        teacher_client,
+        f"/courses/{course_id}/students/{student.id}/remove",
+        page=f"/courses/{course_id}",
+    )
     assert response.status_code == 303
     with read_session() as db:
         assert db.get(User, student.id) is not None  # the account (and its work) stays
-        assert db.exec(select(Enrollment).where(Enrollment.student_id == student.id)).first() is None
+        assert (
+            db.exec(select(Enrollment).where(Enrollment.student_id == student.id)).first() is None
+        )
 
 
 def test_add_student_validation(teacher_client):
     course_id = create_course(teacher_client)
-    response = post_form(teacher_client, f"/courses/{course_id}/students",
-                         {"username": "bad name", "display_name": "X"},
-                         page=f"/courses/{course_id}")
+    response = post_form(
+        teacher_client,
+        f"/courses/{course_id}/students",
+        {"username": "bad name", "display_name": "X"},
+        page=f"/courses/{course_id}",
+    )
     assert response.status_code == 400 and "not a valid username" in response.text
-    response = post_form(teacher_client, f"/courses/{course_id}/students",
-                         {"username": "teacher1", "display_name": "X"},
-                         page=f"/courses/{course_id}")
+    response = post_form(
+        teacher_client,
+        f"/courses/{course_id}/students",
+        {"username": "teacher1", "display_name": "X"},
+        page=f"/courses/{course_id}",
+    )
     assert response.status_code == 400 and "teacher account" in response.text
 
 

@@ -13,8 +13,8 @@ from app.paths import PROJECT_ROOT, TEMPLATES_DIR
 from tests.conftest import login, post_form
 
 KEY_IN_TEMPLATE = re.compile(r"""_\(\s*["']([a-z_]+\.[a-z_]+)["']""")
-KEY_IN_PYTHON = re.compile(r"""["']((?:%s)\.[a-z_]+)["']""" % "|".join(
-    sorted({key.split(".")[0] for key in MESSAGES})))
+PREFIXES = "|".join(sorted({key.split(".")[0] for key in MESSAGES}))
+KEY_IN_PYTHON = re.compile(rf"""["']((?:{PREFIXES})\.[a-z_]+)["']""")
 
 
 def test_every_message_has_both_languages():
@@ -39,10 +39,17 @@ def test_every_key_used_exists():
     assert len(used) > 50
 
 
-@pytest.mark.parametrize(("header", "expected"), [
-    (None, "en"), ("zh-CN,zh;q=0.9,en;q=0.8", "zh-CN"), ("en-US,en;q=0.9,zh;q=0.8", "en"),
-    ("fr-FR, zh-TW;q=0.5", "zh-CN"), ("de", "en"), ("en;q=0.1, zh;q=0.9", "zh-CN"),
-])
+@pytest.mark.parametrize(
+    ("header", "expected"),
+    [
+        (None, "en"),
+        ("zh-CN,zh;q=0.9,en;q=0.8", "zh-CN"),
+        ("en-US,en;q=0.9,zh;q=0.8", "en"),
+        ("fr-FR, zh-TW;q=0.5", "zh-CN"),
+        ("de", "en"),
+        ("en;q=0.1, zh;q=0.9", "zh-CN"),
+    ],
+)
 def test_accept_language(header, expected):
     assert negotiate(header) == expected
 

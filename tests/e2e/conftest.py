@@ -21,8 +21,14 @@ import pytest
 CHROMIUM = Path("/usr/bin/chromium")
 ARTIFACTS = Path(__file__).resolve().parents[1] / "artifacts"
 CHROMIUM_ARGS = [
-    "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage", "--disable-background-networking",
-    "--disable-component-update", "--disable-sync", "--no-first-run", "--disable-quic",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-dev-shm-usage",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+    "--disable-quic",
 ]
 TEACHER_PASSWORD = "e2e-teacher-pass-1"
 
@@ -35,8 +41,12 @@ class LiveServer:
 
     def gyrolab(self, *args: str, stdin: str | None = None) -> subprocess.CompletedProcess:
         return subprocess.run(
-            [sys.executable, "-m", "app.cli", *args], env=self.env, input=stdin,
-            capture_output=True, text=True, check=True,
+            [sys.executable, "-m", "app.cli", *args],
+            env=self.env,
+            input=stdin,
+            capture_output=True,
+            text=True,
+            check=True,
         )
 
 
@@ -53,12 +63,22 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
     env = {**os.environ, "GYROLAB_VAR_DIR": str(var_dir)}
     env.pop("GYROLAB_DATABASE_URL", None)
     server = LiveServer(f"http://127.0.0.1:{port}", var_dir, env)
-    server.gyrolab("create-user", "--role", "teacher", "--username", "teacher",
-                   "--display-name", "E2E Teacher 李老师", stdin=TEACHER_PASSWORD + "\n")
+    server.gyrolab(
+        "create-user",
+        "--role",
+        "teacher",
+        "--username",
+        "teacher",
+        "--display-name",
+        "E2E Teacher 李老师",
+        stdin=TEACHER_PASSWORD + "\n",
+    )
     log = open(var_dir / "server.log", "w")  # noqa: SIM115
     process = subprocess.Popen(
         [sys.executable, "-m", "app.cli", "serve", "--no-demo", "--port", str(port)],
-        env=env, stdout=log, stderr=subprocess.STDOUT,
+        env=env,
+        stdout=log,
+        stderr=subprocess.STDOUT,
     )
     deadline = time.monotonic() + 30
     while True:

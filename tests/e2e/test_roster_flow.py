@@ -30,8 +30,9 @@ def test_teacher_imports_roster_and_student_changes_password(live_server, new_pa
     expect(teacher.locator("h1")).to_contain_text("惯性导航实验 1 班")
 
     roster = tmp_path / "roster.csv"
-    roster.write_text("学号,姓名,邮箱\n2024001,张三,\n2024002,李四,li@example.edu\n",
-                      encoding="utf-8-sig")
+    roster.write_text(
+        "学号,姓名,邮箱\n2024001,张三,\n2024002,李四,li@example.edu\n", encoding="utf-8-sig"
+    )
     teacher.set_input_files("input[name=roster_file]", str(roster))
     teacher.get_by_role("button", name="Import", exact=True).click()
     expect(teacher.locator("#credentials")).to_contain_text("张三")
