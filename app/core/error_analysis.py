@@ -10,9 +10,14 @@
 | linear drift | ḃ °/h per h, T between stops | ḃT/(2KΩ cos φ sin γ) | ḃT(sin A ∓ cos A)/H ccw/cw |
 | scale factor | ΔK/K of the K used | (ΔK/K)/tan γ | 0 |
 | latitude | Δφ = φ true − φ used | tan φ·Δφ/tan γ | 0 |
-| indexing | stop k lands δ past its dial | δ/2 | k=2,4: (δ/2)cos²A; k=3: (δ/2)sin²A |
+| indexing | stop k lands δ past its dial | δ/2 (level)* | k=2,4: (δ/2)cos²A; k=3: (δ/2)sin²A |
 | level | elevation α at 1, −α at 2 | arccos(cos α cos γ + tan φ sin α) − γ | 0 (H shrinks) |
 | east tilt | east side low by t_E | — | tan φ·t_E |
+
+* On a table with known (compensated) pitch p and roll r, as in
+``two_position_tilt_indexing_error.zh.txt``:
+Δγ = (δ/2)·[cos r sin γ − sin r sin p cos γ + tan φ sin r cos p]/(cos p sin γ) — constant
+δ/2 when level, a ripple over azimuth for small tilts, large near γ = 0°/180° for big ones.
 
 The four-position rows follow from A = atan2(y, x) with δA = (x·δy − y·δx)/H²; the
 Monte Carlo functions reproduce all of them with :func:`app.core.simulate.simulate_run`.
@@ -46,7 +51,7 @@ class ErrorSources:
     indexing_stop: int = 2
     level_deg: float = 0.0  # two-position α
     east_tilt_deg: float = 0.0  # four-position t_E
-    pitch_deg: float = 0.0  # table tilt relative to position 1 (papers' figures)
+    pitch_deg: float = 0.0  # known table tilt relative to position 1, compensated (papers)
     roll_deg: float = 0.0
 
 
@@ -71,7 +76,18 @@ def two_position_first_order(
         total = total + drift / (horizontal * np.sin(g))
         total = total + sources.scale_factor_ppm * 1e-6 / np.tan(g)
         total = total + math.tan(phi) * math.radians(sources.latitude_error_deg) / np.tan(g)
-    total = total + math.radians(sources.indexing_deg) / 2.0
+    if sources.indexing_deg:
+        # stop 2 lands δ past 180° on a table with known pitch p and roll r:
+        # Δγ = (δ/2)·[cos r sin γ − sin r sin p cos γ + tan φ sin r cos p] / (cos p sin γ)
+        p, r = math.radians(sources.pitch_deg), math.radians(sources.roll_deg)
+        delta = math.radians(sources.indexing_deg)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            bracket = (
+                math.cos(r) * np.sin(g)
+                - math.sin(r) * math.sin(p) * np.cos(g)
+                + math.tan(phi) * math.sin(r) * math.cos(p)
+            )
+            total = total + delta / 2.0 * bracket / (math.cos(p) * np.sin(g))
     if sources.level_deg:
         alpha = math.radians(sources.level_deg)
         ratio = np.clip(math.cos(alpha) * np.cos(g) + math.tan(phi) * math.sin(alpha), -1, 1)
@@ -207,6 +223,7 @@ def _estimate(
             means[1],
             earth_rate_deg_h=earth_rate_deg_h,
             latitude_deg=used_latitude,
+            pitch_deg=sources.pitch_deg,
         )
         gamma = result.gamma_deg
         return gamma if math.sin(math.radians(azimuth)) >= 0 else wrap360(-gamma)

@@ -84,8 +84,9 @@ def wrap180(angle_deg: float) -> float:
 
 
 def wrap360(angle_deg: float) -> float:
-    wrapped = math.fmod(angle_deg, 360.0)
-    return wrapped + 360.0 if wrapped < 0 else (0.0 if wrapped == 360.0 else wrapped)
+    """Wrap an angle to [0°, 360°) (a tiny negative rounds to 0, never to 360)."""
+    wrapped = angle_deg % 360.0
+    return 0.0 if wrapped >= 360.0 else wrapped
 
 
 def heading_angles(
@@ -198,8 +199,11 @@ def _polar(
     )
 
 
-def _check_significant(amplitude: float, sigma: float | None, what: str) -> None:
-    if amplitude == 0.0 or (sigma is not None and amplitude < SIGNIFICANCE * sigma):
+def _check_significant(amplitude: float, sigma: float | None, what: str, scale: float) -> None:
+    """Refuse an amplitude that is zero (to rounding) or below 3σ."""
+    if amplitude <= 1e-9 * max(scale, 1e-300) or (
+        sigma is not None and amplitude < SIGNIFICANCE * sigma
+    ):
         sigma_text = f" ± {sigma:.3g}" if sigma is not None else ""
         raise GyroInputError(
             "readings.amplitude_too_small",
@@ -209,6 +213,10 @@ def _check_significant(amplitude: float, sigma: float | None, what: str) -> None
             amplitude=round(amplitude, 4),
             sigma=None if sigma is None else round(sigma, 4),
         )
+
+
+def _scale(fit: SinusoidFit) -> float:
+    return float(np.max(np.abs(fit.means))) if fit.means.size else 0.0
 
 
 def _closure(angles: np.ndarray, means: np.ndarray) -> float | None:
@@ -296,7 +304,7 @@ def solve_heading(
         flip = np.diag([1.0, -1.0])
         cov_xy = flip @ fit.cov[:2, :2] @ flip
     angle_ref, amplitude, sigma_az, sigma_amp = _polar(fit.a, -fit.c, cov_xy)
-    _check_significant(amplitude, sigma_amp, "horizontal")
+    _check_significant(amplitude, sigma_amp, "horizontal", _scale(fit))
     azimuth = wrap360(angle_ref + float(fit.angles_deg[0]))
     theta, direction, rotate, points = handout_theta(azimuth)
     error = None if true_azimuth_deg is None else wrap180(azimuth - true_azimuth_deg)
@@ -366,7 +374,7 @@ def solve_latitude(
     fit = fit_sinusoid(positions, elevations_deg)
     cov_xy = None if fit.cov is None else fit.cov[:2, :2]
     latitude, omega, sigma_lat, sigma_omega = _polar(fit.a, fit.c, cov_xy)
-    _check_significant(omega, sigma_omega, "Earth-rate")
+    _check_significant(omega, sigma_omega, "Earth-rate", _scale(fit))
     if abs(latitude) > 90.0:
         raise GyroInputError(
             "readings.latitude_out_of_range",
@@ -404,18 +412,24 @@ def solve_two_position(
     scale_factor: float = 1.0,
     earth_rate_deg_h: float = EARTH_RATE_DEG_H,
     latitude_deg: float,
+    pitch_deg: float = 0.0,
 ) -> TwoPositionResult:
     """γ = arccos((U1 − U2) / (2 K Ω cos φ)) (lab-reference §4).
 
+    With a measured table pitch p (the reference direction raised by p, as a north seeker's
+    accelerometers report it) the vertical rate is compensated:
+    cos γ = ((U1 − U2)/2K − Ω sin φ sin p) / (Ω cos φ cos p); roll cancels in U1 − U2.
     Needs K, Ω and φ; cannot tell east from west (γ and 360° − γ fit equally); the
     derivative 1/sin γ makes it ill-conditioned near 0° and 180°.
     """
-    horizontal = 2.0 * scale_factor * earth_rate_deg_h * math.cos(math.radians(latitude_deg))
+    phi, pitch = math.radians(latitude_deg), math.radians(pitch_deg)
+    horizontal = 2.0 * scale_factor * earth_rate_deg_h * math.cos(phi) * math.cos(pitch)
     if horizontal <= 0:
         raise GyroInputError(
             "two_position.no_horizontal", "K·Ω·cos φ must be positive for the two-position method."
         )
-    ratio = (u1 - u2) / horizontal
+    vertical = 2.0 * scale_factor * earth_rate_deg_h * math.sin(phi) * math.sin(pitch)
+    ratio = (u1 - u2 - vertical) / horizontal
     clipped = False
     if abs(ratio) > 1.0:
         if abs(ratio) > 1.05:
