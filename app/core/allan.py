@@ -2,12 +2,12 @@
 
 σ²(τ) = 3Q²/τ² + N²/τ + (2 ln2/π)·B² + K²·τ/3 + R²·τ²/2   (IEEE Std 952-1997, Annex C).
 
-Computed with ``allantools.oadev`` (overlapping, octave-spaced τ).  Read-outs come from
-a weighted non-negative least-squares fit of σ²(τ) to the model's terms (rates in °/h,
-τ in hours), which uses every τ rather than one point on each slope: quantisation Q,
-ARW N (°/√h), rate random walk K (°/h/√h), and the bias instability as a first-order
-Gauss–Markov term (correlation time scanned), reported as B = peak/0.664 — the value whose
-flicker floor 0.664·B equals the Gauss–Markov peak.
+Computed with ``allantools.oadev`` (overlapping, octave-spaced τ).  Read-outs (rates in
+°/h, τ in hours): ARW N (°/√h) = σ(τ)·√τ on the −½ slope; then a weighted non-negative
+least-squares fit of the rest of σ²(τ), which uses every τ rather than one point on each
+slope: quantisation Q, rate random walk K (°/h/√h), and the bias instability as a
+first-order Gauss–Markov term (correlation time scanned), reported as B = peak/0.664 —
+the value whose flicker floor 0.664·B equals the Gauss–Markov peak.
 
 Recommended dwell per position: where the ARW line meets the bias-instability floor,
 τ* = (N / 0.664·B)² — averaging longer gains little (lab-reference §6); without a floor,
@@ -73,33 +73,45 @@ def gauss_markov_avar(tau_h: np.ndarray, corr_time_h: float) -> np.ndarray:
     return (2.0 / x) * (1.0 - (3.0 - 4.0 * np.exp(-x) + np.exp(-2.0 * x)) / (2.0 * x))
 
 
+def white_noise_arw(taus_s: np.ndarray, adev: np.ndarray) -> float:
+    """N = σ(τ)·√τ (τ in hours) at the shortest τ on the −½ slope (else the shortest τ)."""
+    if taus_s.size < 2:
+        return float(adev[0] * math.sqrt(taus_s[0] / 3600.0))
+    slopes = np.gradient(np.log(adev), np.log(taus_s))
+    white = np.flatnonzero(np.abs(slopes + 0.5) < 0.15)
+    first = int(white[0]) if white.size else 0
+    return float(adev[first] * math.sqrt(taus_s[first] / 3600.0))
+
+
 def fit_noise_model(taus_s: np.ndarray, adev: np.ndarray, error: np.ndarray) -> NoiseFit:
-    """Weighted non-negative least squares of σ²(τ) on the IEEE 952 terms, with the bias
-    instability as a Gauss–Markov term whose correlation time is scanned on a log grid:
-    σ² = 3Q²/τ² + N²/τ + σ_GM²·g(τ/T) + K²τ/3.  B = 0.6178·σ_GM / 0.664."""
+    """N from the −½ slope, then weighted non-negative least squares of what remains,
+    σ² − N²/τ = 3Q²/τ² + σ_GM²·g(τ/T) + K²τ/3, with the Gauss–Markov correlation time T
+    scanned on a log grid (T ≥ the shortest τ, so it cannot pose as white noise).
+    B = 0.6178·σ_GM / 0.664."""
     tau_h = taus_s / 3600.0
-    avar = adev**2
+    arw = white_noise_arw(taus_s, adev)
+    rest = adev**2 - arw**2 / tau_h
     weight = 1.0 / np.maximum(2.0 * adev * np.maximum(error, 1e-12 * adev), 1e-300)
-    basis = [3.0 / tau_h**2, 1.0 / tau_h, tau_h / 3.0]
+    basis = [3.0 / tau_h**2, tau_h / 3.0]
     best = None
-    grid = np.geomspace(tau_h[0] / 4.0, tau_h[-1] * 4.0, 48) if tau_h.size > 2 else [None]
+    grid = np.geomspace(tau_h[0], tau_h[-1] * 4.0, 48) if tau_h.size > 2 else [None]
     for corr in grid:
         columns = [*basis, gauss_markov_avar(tau_h, corr)] if corr is not None else basis
         matrix = np.column_stack(columns) * weight[:, None]
         scale = np.linalg.norm(matrix, axis=0)
         scale[scale == 0] = 1.0
-        coefficients, residual = nnls(matrix / scale, avar * weight)
+        coefficients, residual = nnls(matrix / scale, rest * weight)
         coefficients = coefficients / scale
         if best is None or residual < best[0]:
             best = (residual, coefficients, corr)
     _, c, corr = best
-    gm_sigma = math.sqrt(c[3]) if len(c) > 3 and c[3] > 0 else 0.0
+    gm_sigma = math.sqrt(c[2]) if len(c) > 2 and c[2] > 0 else 0.0
     return NoiseFit(
         quantization_deg=math.sqrt(c[0]),
-        arw_deg_rt_h=math.sqrt(c[1]),
+        arw_deg_rt_h=arw,
         bias_instability_deg_h=GM_PEAK * gm_sigma / FLOOR_FACTOR if gm_sigma else None,
         bias_corr_time_s=corr * 3600.0 if gm_sigma else None,
-        rrw_deg_h_rt_h=math.sqrt(c[2]) if c[2] > 0 else None,
+        rrw_deg_h_rt_h=math.sqrt(c[1]) if c[1] > 0 else None,
     )
 
 

@@ -1,0 +1,247 @@
+"""``gyrolab solve`` / ``simulate`` / ``allan`` on the handout files and simulated data."""
+
+from __future__ import annotations
+
+import io
+import json
+import subprocess
+import sys
+
+import pytest
+
+from app.cli import main
+from tests.test_core_solve import DATA
+
+HEADING_KEYS = [
+    "part",
+    "n_positions",
+    "samples_per_position",
+    "position_means_deg_h",
+    "position_sems_deg_h",
+    "azimuth_deg",
+    "azimuth_sigma_deg",
+    "theta_deg",
+    "rotate_direction",
+    "rotate_deg",
+    "then_axis_points",
+    "bias_deg_h",
+    "amplitude_deg_h",
+    "amplitude_sigma_deg_h",
+    "closure_residual_deg_h",
+    "azimuth_error_deg",
+]
+LATITUDE_KEYS = [
+    "part",
+    "n_positions",
+    "samples_per_position",
+    "position_means_deg_h",
+    "position_sems_deg_h",
+    "latitude_deg",
+    "latitude_sigma_deg",
+    "earth_rate_deg_h",
+    "earth_rate_sigma_deg_h",
+    "bias_deg_h",
+    "latitude_error_percent",
+    "earth_rate_error_percent",
+]
+
+
+def run(capsys, *args: str, stdin: str | None = None):
+    if stdin is not None:
+        sys.stdin = io.StringIO(stdin)
+    try:
+        code = main(list(args))
+    finally:
+        sys.stdin = sys.__stdin__
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_solve_heading_json_on_the_handout(capsys):
+    code, out, _ = run(capsys, "solve", "heading", str(DATA / "handout_horizontal.csv"), "--json")
+    assert code == 0
+    result = json.loads(out)
+    assert list(result) == HEADING_KEYS
+    assert result["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
+    assert result["rotate_direction"] == "counterclockwise"
+    assert result["azimuth_error_deg"] is None
+
+
+def test_solve_latitude_json_on_the_handout(capsys):
+    code, out, _ = run(
+        capsys,
+        "solve",
+        "latitude",
+        str(DATA / "handout_vertical.csv"),
+        "--latitude",
+        "39.93",
+        "--earth-rate",
+        "15.04",
+        "--json",
+    )
+    result = json.loads(out)
+    assert code == 0 and list(result) == LATITUDE_KEYS
+    assert result["latitude_deg"] == pytest.approx(40.727, abs=5e-4)
+    assert result["latitude_error_percent"] == pytest.approx(2.00, abs=5e-3)
+    assert result["earth_rate_error_percent"] == pytest.approx(0.62, abs=5e-3)
+
+
+def test_solve_text_is_the_worked_calculation(capsys):
+    code, out, _ = run(capsys, "solve", "heading", str(DATA / "handout_horizontal.csv"))
+    assert code == 0
+    assert "tan θ = (ω4 − ω2) / (ω1 − ω3)" in out and "-10.75°" in out
+    assert "Turn the table counter-clockwise by 10.75°: the axis then points north." in out
+    code, out, _ = run(
+        capsys,
+        "solve",
+        "latitude",
+        str(DATA / "handout_vertical.csv"),
+        "--latitude",
+        "39.93",
+        "--language",
+        "zh-CN",
+    )
+    assert "由四个位置求纬度" in out and "η_φ" in out
+
+
+def test_units_are_converted_at_the_boundary(capsys):
+    text = (DATA / "handout_horizontal.csv").read_text().splitlines()
+    header, rows = text[0], text[1:]
+    scaled = [header] + [
+        ",".join([r.split(",")[0]] + [str(float(v) / 3600) for v in r.split(",")[1:]]) for r in rows
+    ]
+    code, out, _ = run(
+        capsys, "solve", "heading", "-", "--unit", "deg/s", "--json", stdin="\n".join(scaled)
+    )
+    assert code == 0
+    result = json.loads(out)
+    assert result["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
+    assert result["position_means_deg_h"][0] == pytest.approx(10.706)
+
+
+def test_long_layout_uses_the_given_angles(capsys):
+    rows = ["position,angle_deg,value"]
+    for position, angle, value in [
+        (1, 0, 10.706),
+        (2, -90, 2.793),
+        (3, -180, -8.951),
+        (4, -270, -0.94),
+    ]:
+        rows += [f"{position},{angle},{value}"] * 3
+    code, out, _ = run(
+        capsys, "solve", "heading", "-", "--rotation", "cw", "--json", stdin="\n".join(rows)
+    )
+    assert code == 0 and json.loads(out)["azimuth_deg"] == pytest.approx(10.753, abs=1e-3)
+
+
+@pytest.mark.parametrize("azimuth", [20.0, 110.0, 200.0, 290.0])
+@pytest.mark.parametrize("rotation", ["ccw", "cw"])
+def test_simulate_then_solve_every_quadrant(capsys, azimuth, rotation):
+    code, csv_text, _ = run(
+        capsys,
+        "simulate",
+        "heading",
+        "--preset",
+        "tactical-fog",
+        "--latitude",
+        "40",
+        "--azimuth",
+        str(azimuth),
+        "--rotation",
+        rotation,
+        "--seconds-per-position",
+        "60",
+        "--seed",
+        "3",
+        "--indexing-sigma",
+        "0",
+    )
+    assert code == 0 and csv_text.startswith("position,angle_deg,time_s,value")
+    code, out, _ = run(
+        capsys, "solve", "heading", "-", "--true-azimuth", str(azimuth), "--json", stdin=csv_text
+    )
+    result = json.loads(out)
+    assert code == 0
+    assert abs(result["azimuth_error_deg"]) < 4 * result["azimuth_sigma_deg"] + 0.05
+
+
+def test_simulate_latitude_then_solve(capsys):
+    code, csv_text, _ = run(
+        capsys,
+        "simulate",
+        "latitude",
+        "--preset",
+        "tactical-fog",
+        "--latitude",
+        "39.93",
+        "--seconds-per-position",
+        "60",
+        "--seed",
+        "1",
+    )
+    code, out, _ = run(
+        capsys, "solve", "latitude", "-", "--latitude", "39.93", "--json", stdin=csv_text
+    )
+    result = json.loads(out)
+    assert code == 0 and abs(result["latitude_deg"] - 39.93) < 1.0
+
+
+def test_simulate_static_and_allan(capsys, tmp_path):
+    code, csv_text, _ = run(
+        capsys,
+        "simulate",
+        "static",
+        "--preset",
+        "tactical-fog",
+        "--latitude",
+        "40",
+        "--seconds",
+        "600",
+    )
+    path = tmp_path / "static.csv"
+    path.write_text(csv_text)
+    code, out, _ = run(capsys, "allan", str(path), "--rate", "10", "--json")
+    result = json.loads(out)
+    assert code == 0
+    assert result["arw_deg_rt_h"] == pytest.approx(0.012, rel=0.1)
+    code, out, _ = run(capsys, "allan", str(path), "--rate", "10")
+    assert "ARW N =" in out and "recommended dwell" in out
+    single = tmp_path / "single.txt"
+    single.write_text("\n".join(csv_text.splitlines()[1:][i].split(",")[-1] for i in range(500)))
+    assert run(capsys, "allan", str(single), "--rate", "10")[0] == 0
+
+
+@pytest.mark.parametrize(
+    ("args", "stdin", "message"),
+    [
+        (["solve", "heading", "/no/such/file.csv"], None, "no such file"),
+        (["solve", "heading", "-"], "x,y\n1,2\n", "expected a header"),
+        (["solve", "heading", "-"], "position_1,position_2\n1,2\n", "At least 3 different angles"),
+        (["solve", "heading", "-"], "position_1,position_2,position_3\n1,abc,3\n", "not a number"),
+        (["solve", "heading", "-"], "position_1,position_2,position_3\n1,nan,3\n", "not a finite"),
+        (["solve", "heading", "-"], "position_1,position_2,position_3\n1,,3\n", "no readings"),
+        (["solve", "heading", "-"], "", "no readings"),
+        (["solve", "heading", "-", "--start-angle", "nan"], "position_1\n1\n", "finite"),
+        (["allan", "-", "--rate", "10"], "1\n2\n", "at least 16"),
+        (["simulate", "heading", "--latitude", "95"], None, "between -90 and 90"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(capsys, args, stdin, message):
+    code, out, err = run(capsys, *args, stdin=stdin)
+    assert code == 2
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert "Traceback" not in err
+
+
+def test_real_process_prints_no_traceback(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("position_1,position_2,position_3,position_4\n1,2,3,oops\n")
+    process = subprocess.run(
+        [sys.executable, "-m", "app.cli", "solve", "heading", str(bad)],
+        capture_output=True,
+        text=True,
+    )
+    assert process.returncode == 2
+    assert process.stderr.strip() == (
+        "gyrolab solve: Line 2, column position_4: 'oops' is not a number."
+    )
