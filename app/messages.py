@@ -244,3 +244,7 @@ MESSAGES: dict[str, dict[str, str]] = {
     },
     "credentials.back": {"en": "Back to the course", "zh-CN": "返回课程"},
 }
+
+from app.messages_lab import LAB_MESSAGES  # noqa: E402
+
+MESSAGES.update(LAB_MESSAGES)

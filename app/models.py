@@ -68,3 +68,100 @@ class Enrollment(SQLModel, table=True):
     course_id: int = Field(foreign_key="course.id", index=True, ondelete="CASCADE")
     student_id: int = Field(foreign_key="user.id", index=True)
     created_at: datetime = Field(default_factory=utcnow)
+
+
+class InputMethod(StrEnum):
+    manual = "manual"
+    csv = "csv"
+    simulator = "simulator"
+    api = "api"
+
+
+class Assignment(SQLModel, table=True):
+    """A lab a teacher sets for a course; station values are the truth for percent errors."""
+
+    id: int | None = Field(default=None, primary_key=True)
+    course_id: int = Field(foreign_key="course.id", index=True, ondelete="CASCADE")
+    title: str = Field(max_length=200)
+    instructions: str = Field(default="", max_length=20_000)
+    latitude_deg: float
+    earth_rate_deg_h: float = 15.041
+    allowed_methods: str = Field(default="manual,csv,simulator", max_length=64)
+    simulator_preset: str = Field(default="teaching-fog", max_length=32)
+    min_readings: int = 10
+    due_at: datetime | None = None
+    created_at: datetime = Field(default_factory=utcnow)
+
+    @property
+    def methods(self) -> list[str]:
+        return [m for m in self.allowed_methods.split(",") if m]
+
+
+class LabSession(SQLModel, table=True):
+    """One student's run of the experiment (practice, or for an assignment).
+
+    ``sim_*`` columns are the simulator's secret truth for this session: never sent to the
+    student's browser.
+    """
+
+    __tablename__ = "lab_session"
+    id: int | None = Field(default=None, primary_key=True)
+    owner_id: int = Field(foreign_key="user.id", index=True)
+    assignment_id: int | None = Field(default=None, foreign_key="assignment.id", index=True)
+    title: str = Field(max_length=200)
+    latitude_deg: float
+    earth_rate_deg_h: float = 15.041
+    heading_rotation: str = Field(default="ccw", max_length=3)
+    heading_start_deg: float = 0.0
+    latitude_start_deg: float = 0.0
+    latitude_step_deg: float = 90.0
+    min_readings: int = 10
+    simulator_preset: str = Field(default="teaching-fog", max_length=32)
+    sim_seed: int = 0
+    sim_azimuth_deg: float = 0.0
+    sim_turns: int = 0
+    sim_table_heading: int = 1  # position the virtual table is at, per part
+    sim_table_latitude: int = 1
+    stream_part: str | None = Field(default=None, max_length=8)  # a live recording under way
+    stream_position: int | None = None
+    status: str = Field(default="in_progress", max_length=16)
+    created_at: datetime = Field(default_factory=utcnow)
+    updated_at: datetime = Field(default_factory=utcnow)
+
+
+class Take(SQLModel, table=True):
+    """One recording of one position.  Re-recording supersedes, never deletes."""
+
+    id: int | None = Field(default=None, primary_key=True)
+    session_id: int = Field(foreign_key="lab_session.id", index=True, ondelete="CASCADE")
+    part: str = Field(max_length=8)  # heading | latitude
+    position: int
+    angle_deg: float
+    source: str = Field(max_length=16)
+    unit: str = Field(default="deg/h", max_length=8)
+    n_samples: int
+    created_at: datetime = Field(default_factory=utcnow)
+    superseded_at: datetime | None = None
+
+
+class SampleChunk(SQLModel, table=True):
+    """A block of a take's samples: little-endian float64 °/h (and optional seconds)."""
+
+    __tablename__ = "sample_chunk"
+    __table_args__ = (UniqueConstraint("take_id", "seq"),)
+    id: int | None = Field(default=None, primary_key=True)
+    take_id: int = Field(foreign_key="take.id", index=True, ondelete="CASCADE")
+    seq: int
+    values: bytes
+    times: bytes | None = None
+
+
+class Attempt(SQLModel, table=True):
+    """A submission: the data and results frozen at the moment of submitting."""
+
+    id: int | None = Field(default=None, primary_key=True)
+    session_id: int = Field(foreign_key="lab_session.id", index=True, ondelete="CASCADE")
+    number: int
+    take_ids: str = Field(max_length=2000)  # comma-separated current takes
+    results_json: str
+    submitted_at: datetime = Field(default_factory=utcnow)

@@ -84,7 +84,7 @@ def solve_readings(part: str, readings: Readings, args: argparse.Namespace):
 def _solve(args: argparse.Namespace) -> int:
     for name in ("start_angle", "step", "latitude", "earth_rate", "true_azimuth"):
         _finite(f"--{name.replace('_', '-')}", getattr(args, name))
-    readings = parse_readings_csv(_read_text(args.file))
+    readings = parse_readings_csv(_read_text(args.file), part=args.part)
     result = solve_readings(args.part, readings, args)
     if args.json:
         print(to_json_text(result.to_json()))

@@ -33,8 +33,10 @@ def test_every_key_used_exists():
     for path in (PROJECT_ROOT / "app").rglob("*.py"):
         if path.name != "messages.py":
             used |= set(KEY_IN_PYTHON.findall(path.read_text()))
-    not_messages = {"course.id", "error.html"}  # an attribute and a template name
-    missing = sorted(key for key in used - not_messages if key not in MESSAGES)
+    not_messages = {"course.id", "assignment.id", "error.html"}  # attributes, a template
+    # keys completed at run time ("lab.part_" ~ part) are prefixes of real keys
+    missing = sorted(key for key in used - not_messages if key not in MESSAGES
+                     and not (key.endswith("_") and any(k.startswith(key) for k in MESSAGES)))
     assert not missing, missing
     assert len(used) > 50
 

@@ -51,21 +51,29 @@ def _number(text: str, line: int, column: str) -> float:
     return value
 
 
-def parse_readings_csv(text: str) -> Readings:
-    """Parse either layout; raises GyroInputError with the line and column of any problem."""
+def parse_readings_csv(text: str, part: str | None = None) -> Readings:
+    """Parse either layout; raises GyroInputError with the line and column of any problem.
+
+    Lines starting with ``#`` are comments.  A long file with a ``part`` column (GyroLab's
+    session export) keeps only the rows of ``part`` when one is given.
+    """
     text = text.lstrip("\ufeff")
     rows = list(csv.reader(io.StringIO(text)))
     rows = [
         (number, row)
         for number, row in enumerate(rows, start=1)
-        if any(cell.strip() for cell in row)
+        if any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")
     ]
     if not rows:
         raise GyroInputError("csv.empty", "The file has no readings.")
     header_line, header = rows[0]
     names = [cell.strip().lower() for cell in header]
     if {"position", "value"} <= set(names):
-        return _parse_long(names, rows[1:])
+        body = rows[1:]
+        if part is not None and "part" in names:
+            column = names.index("part")
+            body = [(n, r) for n, r in body if column < len(r) and r[column].strip() == part]
+        return _parse_long(names, body)
     wide = {
         index: int(m.group(1)) for index, name in enumerate(names) if (m := WIDE_COLUMN.match(name))
     }

@@ -18,8 +18,9 @@ from app.accounts import (
     import_roster,
     reset_password,
 )
+from app.core.simulate import PRESETS
 from app.deps import CsrfProtected, SessionDep, TeacherUser
-from app.models import Course, Enrollment, User
+from app.models import Assignment, Course, Enrollment, User
 from app.roster import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
 from app.web import flash, redirect, render
 
@@ -87,12 +88,21 @@ def create_course(request: Request, teacher: TeacherUser, db: SessionDep, name: 
     return response
 
 
+def course_context(db: Session, course: Course, **extra) -> dict:
+    """What the course page shows: roster, assignments, and any form errors in ``extra``."""
+    assignments = db.exec(
+        select(Assignment)
+        .where(Assignment.course_id == course.id)
+        .order_by(Assignment.created_at.desc())
+    ).all()
+    return {"course": course, "students": roster(db, course), "assignments": assignments,
+            "presets": sorted(PRESETS), **extra}
+
+
 @router.get("/{course_id}")
 def course_page(request: Request, course_id: int, teacher: TeacherUser, db: SessionDep):
     course = own_course(db, teacher, course_id)
-    return render(
-        request, "courses/detail.html", {"course": course, "students": roster(db, course)}
-    )
+    return render(request, "courses/detail.html", course_context(db, course))
 
 
 @router.post("/{course_id}/rename", dependencies=[CsrfProtected])
@@ -139,11 +149,9 @@ def add_student_by_hand(
     email: Annotated[str, Form(max_length=254)] = "",
 ):
     course = own_course(db, teacher, course_id)
-    context = {
-        "course": course,
-        "students": roster(db, course),
-        "form": {"username": username, "display_name": display_name, "email": email},
-    }
+    context = course_context(
+        db, course, form={"username": username, "display_name": display_name, "email": email}
+    )
     if not USERNAME_RE.match(username.strip()):
         context["add_error"] = "roster.bad_username"
         context["add_error_params"] = {"value": username}
@@ -192,13 +200,7 @@ async def import_students(
     problems = parsed.problems or check_roster_against_accounts(db, parsed.rows)
     if problems or not parsed.rows:
         return render(
-            request,
-            "courses/detail.html",
-            {
-                "course": course,
-                "students": roster(db, course),
-                "import_problems": problems,
-            },
+            request, "courses/detail.html", course_context(db, course, import_problems=problems),
             400,
         )
     created, enrolled = import_roster(db, course, parsed.rows)

@@ -1,0 +1,244 @@
+"""Lab sessions in the database: takes, results, submissions and exports.
+
+Every number comes from ``app.core``; this module only moves data in and out.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+from sqlmodel import Session, select
+
+from app import __version__
+from app.core.exceptions import GyroInputError
+from app.core.explain import explain_heading, explain_latitude
+from app.core.solve import solve_heading, solve_latitude
+from app.models import Attempt, LabSession, SampleChunk, Take, utcnow
+from app.samples import chunks, unpack
+
+PARTS = ("heading", "latitude")
+POSITIONS = 4
+MAX_SAMPLES_PER_POSITION = 1_000_000
+
+
+@dataclass
+class PositionData:
+    take: Take
+    values: np.ndarray
+    times: np.ndarray | None
+
+
+@dataclass
+class PartResult:
+    part: str
+    positions: dict[int, PositionData]
+    result: object | None = None  # HeadingResult | LatitudeResult
+    error: GyroInputError | None = None
+    steps: list = field(default_factory=list)
+    flags: list[dict] = field(default_factory=list)
+
+    def to_json(self) -> dict | None:
+        return None if self.result is None else self.result.to_json()
+
+
+def current_takes(db: Session, session_id: int) -> list[Take]:
+    return list(db.exec(
+        select(Take).where(Take.session_id == session_id, Take.superseded_at.is_(None))
+        .order_by(Take.part, Take.position)
+    ).all())
+
+
+def take_history(db: Session, session_id: int) -> list[Take]:
+    return list(db.exec(select(Take).where(Take.session_id == session_id)
+                        .order_by(Take.created_at, Take.id)).all())
+
+
+def load_samples(db: Session, take: Take) -> tuple[np.ndarray, np.ndarray | None]:
+    rows = db.exec(select(SampleChunk).where(SampleChunk.take_id == take.id)
+                   .order_by(SampleChunk.seq)).all()
+    values = np.concatenate([unpack(r.values) for r in rows]) if rows else np.empty(0)
+    if rows and all(r.times is not None for r in rows):
+        return values, np.concatenate([unpack(r.times) for r in rows])
+    return values, None
+
+
+def store_take(
+    db: Session, session: LabSession, *, part: str, position: int, angle_deg: float,
+    values: np.ndarray, times: np.ndarray | None, source: str, unit: str = "deg/h",
+) -> Take:
+    """Add a take (values in °/h) and supersede the previous one; the caller commits once,
+    so the position is either fully saved or not at all."""
+    if part not in PARTS or not 1 <= position <= POSITIONS:
+        raise GyroInputError("lab.bad_position", "No such position.")
+    if values.size == 0:
+        raise GyroInputError("readings.empty_position", f"Position {position} has no readings.",
+                             position=position)
+    if values.size > MAX_SAMPLES_PER_POSITION:
+        raise GyroInputError("lab.too_many_samples",
+                             f"At most {MAX_SAMPLES_PER_POSITION} readings per position.",
+                             limit=MAX_SAMPLES_PER_POSITION)
+    if not np.all(np.isfinite(values)):
+        raise GyroInputError("readings.not_finite", "A reading is not a finite number.",
+                             position=position)
+    now = utcnow()
+    for old in db.exec(select(Take).where(Take.session_id == session.id, Take.part == part,
+                                          Take.position == position,
+                                          Take.superseded_at.is_(None))).all():
+        old.superseded_at = now
+        db.add(old)
+    take = Take(session_id=session.id, part=part, position=position, angle_deg=angle_deg,
+                source=source, unit=unit, n_samples=int(values.size))
+    db.add(take)
+    db.flush()
+    for seq, value_blob, time_blob in chunks(values, times):
+        db.add(SampleChunk(take_id=take.id, seq=seq, values=value_blob, times=time_blob))
+    session.updated_at = now
+    if session.status == "submitted":
+        session.status = "in_progress"  # an edit after submitting starts a new attempt
+    db.add(session)
+    return take
+
+
+def part_data(db: Session, session: LabSession, part: str) -> dict[int, PositionData]:
+    data = {}
+    for take in current_takes(db, session.id):
+        if take.part == part:
+            values, times = load_samples(db, take)
+            data[take.position] = PositionData(take, values, times)
+    return data
+
+
+def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) -> PartResult:
+    outcome = PartResult(part, data)
+    if len(data) < 3:
+        outcome.error = GyroInputError(
+            "lab.need_positions", "Record at least 3 positions to compute a result.",
+            recorded=len(data))
+        return outcome
+    ordered = [data[k] for k in sorted(data)]
+    values = [p.values for p in ordered]
+    angles = [p.take.angle_deg for p in ordered]
+    try:
+        if part == "heading":
+            outcome.result = solve_heading(values, angles)
+            outcome.steps = explain_heading(outcome.result)
+        else:
+            outcome.result = solve_latitude(values, angles, true_latitude_deg=session.latitude_deg,
+                                            true_earth_rate_deg_h=session.earth_rate_deg_h)
+            outcome.steps = explain_latitude(outcome.result)
+    except GyroInputError as error:
+        outcome.error = error
+    outcome.flags = quality_flags(session, data)
+    return outcome
+
+
+def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[dict]:
+    """Data-quality warnings: too few readings, a noisy position, spikes."""
+    flags = []
+    stds = {}
+    for position, item in sorted(data.items()):
+        if item.values.size < session.min_readings:
+            flags.append({"key": "flag.too_few", "position": position, "n": int(item.values.size),
+                          "minimum": session.min_readings})
+        if item.values.size >= 2:
+            stds[position] = float(item.values.std(ddof=1))
+            median = float(np.median(item.values))
+            mad = float(np.median(np.abs(item.values - median))) * 1.4826
+            if mad > 0 and np.any(np.abs(item.values - median) > 6 * mad):
+                count = int(np.sum(np.abs(item.values - median) > 6 * mad))
+                flags.append({"key": "flag.spikes", "position": position, "n": count})
+    if len(stds) >= 3:
+        typical = float(np.median(list(stds.values())))
+        for position, std in stds.items():
+            if typical > 0 and std > 3 * typical:
+                flags.append({"key": "flag.noisy", "position": position,
+                              "ratio": round(std / typical, 1)})
+    return flags
+
+
+def session_results(db: Session, session: LabSession) -> dict[str, PartResult]:
+    return {part: solve_part(session, part, part_data(db, session, part)) for part in PARTS}
+
+
+def results_json(results: dict[str, PartResult]) -> dict:
+    return {part: outcome.to_json() for part, outcome in results.items()}
+
+
+def submit(db: Session, session: LabSession) -> Attempt:
+    """Freeze the current data and results as a new attempt."""
+    results = session_results(db, session)
+    if all(outcome.result is None for outcome in results.values()):
+        raise GyroInputError("lab.nothing_to_submit",
+                             "There is no result to submit yet: record the positions first.")
+    previous = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
+    takes = current_takes(db, session.id)
+    attempt = Attempt(session_id=session.id, number=len(previous) + 1,
+                      take_ids=",".join(str(t.id) for t in takes),
+                      results_json=json.dumps(_finite(results_json(results))))
+    session.status = "submitted"
+    session.updated_at = utcnow()
+    db.add(attempt)
+    db.add(session)
+    return attempt
+
+
+def _finite(value):
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_finite(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
+def export_metadata(session: LabSession) -> dict:
+    """What a teacher or a script needs to know about a session (never the secret truth)."""
+    return {
+        "software": f"GyroLab {__version__}",
+        "session_id": session.id,
+        "title": session.title,
+        "assignment_id": session.assignment_id,
+        "station": {"latitude_deg": session.latitude_deg,
+                    "earth_rate_deg_h": session.earth_rate_deg_h},
+        "heading": {"rotation": session.heading_rotation,
+                    "start_angle_deg": session.heading_start_deg},
+        "latitude": {"start_angle_deg": session.latitude_start_deg,
+                     "step_deg": session.latitude_step_deg},
+        "simulator_preset": session.simulator_preset,
+        "status": session.status,
+        "exported_at": utcnow().isoformat(),
+    }
+
+
+def export_json(db: Session, session: LabSession) -> dict:
+    results = session_results(db, session)
+    takes = []
+    for part in PARTS:
+        for position, item in sorted(results[part].positions.items()):
+            takes.append({
+                "part": part, "position": position, "angle_deg": item.take.angle_deg,
+                "source": item.take.source, "recorded_at": item.take.created_at.isoformat(),
+                "values_deg_h": item.values.tolist(),
+                "times_s": None if item.times is None else item.times.tolist(),
+            })
+    return _finite({"metadata": export_metadata(session), "positions": takes,
+                    "results": results_json(results)})
+
+
+def export_csv(db: Session, session: LabSession) -> str:
+    meta = export_metadata(session)
+    lines = [f"# {meta['software']}; session {session.id}: {session.title}",
+             f"# station latitude {session.latitude_deg} deg, Earth rate "
+             f"{session.earth_rate_deg_h} deg/h; heading rotation {session.heading_rotation}; "
+             "values in deg/h",
+             "part,position,angle_deg,source,time_s,value"]
+    for part in PARTS:
+        for position, item in sorted(part_data(db, session, part).items()):
+            times = item.times if item.times is not None else np.arange(item.values.size)
+            for time, value in zip(times, item.values, strict=True):
+                lines.append(f"{part},{position},{item.take.angle_deg:g},{item.take.source},"
+                             f"{time:.3f},{value:.6f}")
+    return "\n".join(lines) + "\n"

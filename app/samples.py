@@ -1,0 +1,25 @@
+"""Sample arrays stored compactly: little-endian float64 in BLOB chunks."""
+
+from __future__ import annotations
+
+import numpy as np
+
+CHUNK_SAMPLES = 65_536
+DTYPE = np.dtype("<f8")
+
+
+def pack(values: np.ndarray) -> bytes:
+    return np.ascontiguousarray(values, dtype=DTYPE).tobytes()
+
+
+def unpack(blob: bytes | None) -> np.ndarray:
+    if not blob:
+        return np.empty(0, dtype=float)
+    return np.frombuffer(blob, dtype=DTYPE).astype(float)
+
+
+def chunks(values: np.ndarray, times: np.ndarray | None = None):
+    """(seq, values bytes, times bytes|None) blocks of at most CHUNK_SAMPLES samples."""
+    for seq, start in enumerate(range(0, max(len(values), 1), CHUNK_SAMPLES)):
+        stop = start + CHUNK_SAMPLES
+        yield seq, pack(values[start:stop]), None if times is None else pack(times[start:stop])
