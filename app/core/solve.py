@@ -337,6 +337,10 @@ class LatitudeResult:
     latitude_error_percent: float | None
     earth_rate_error_percent: float
 
+    @property
+    def bias_deg_h(self) -> float:
+        return self.fit.b
+
     def to_json(self) -> dict:
         return {
             "part": "latitude",
