@@ -16,9 +16,12 @@ from app.core.exceptions import GyroInputError
 
 MAX_POINTS = 2000
 COLORS = ["#0b6bcb", "#d1495b", "#2a9d8f", "#e9a23b", "#6d597a", "#264653"]
-LAYOUT = {"margin": {"l": 60, "r": 20, "t": 40, "b": 50}, "height": 320,
-          "font": {"family": "system-ui, 'PingFang SC', 'Noto Sans CJK SC', sans-serif"},
-          "legend": {"orientation": "h", "y": -0.25}}
+LAYOUT = {
+    "margin": {"l": 60, "r": 20, "t": 40, "b": 50},
+    "height": 320,
+    "font": {"family": "system-ui, 'PingFang SC', 'Noto Sans CJK SC', sans-serif"},
+    "legend": {"orientation": "h", "y": -0.25},
+}
 
 
 def downsample(times: np.ndarray, values: np.ndarray, limit: int = MAX_POINTS):
@@ -41,13 +44,25 @@ def readings_figure(part_result, _: Callable[..., str]) -> dict:
     for position, item in sorted(part_result.positions.items()):
         times = item.times if item.times is not None else np.arange(item.values.size, dtype=float)
         t, v = downsample(times, item.values)
-        traces.append({"type": "scattergl" if t.size > 500 else "scatter", "mode": "lines+markers"
-                       if t.size <= 60 else "lines", "name": _("chart.position", n=position),
-                       "x": np.round(t, 3).tolist(), "y": np.round(v, 5).tolist(),
-                       "line": {"color": COLORS[(position - 1) % len(COLORS)], "width": 1}})
-    return {"data": traces, "layout": {**LAYOUT, "title": {"text": _("chart.readings_title")},
+        traces.append(
+            {
+                "type": "scattergl" if t.size > 500 else "scatter",
+                "mode": "lines+markers" if t.size <= 60 else "lines",
+                "name": _("chart.position", n=position),
+                "x": np.round(t, 3).tolist(),
+                "y": np.round(v, 5).tolist(),
+                "line": {"color": COLORS[(position - 1) % len(COLORS)], "width": 1},
+            }
+        )
+    return {
+        "data": traces,
+        "layout": {
+            **LAYOUT,
+            "title": {"text": _("chart.readings_title")},
             "xaxis": {"title": {"text": _("chart.time_s")}},
-            "yaxis": {"title": {"text": _("chart.rate_deg_h")}}}}
+            "yaxis": {"title": {"text": _("chart.rate_deg_h")}},
+        },
+    }
 
 
 def fit_figure(part_result, _: Callable[..., str]) -> dict | None:
@@ -57,20 +72,40 @@ def fit_figure(part_result, _: Callable[..., str]) -> dict | None:
     fit = result.fit
     angles = fit.angles_deg
     sems = [s.sem if s.sem is not None else 0.0 for s in fit.stats]
-    grid = np.linspace(angles.min() - 20, angles.max() + 20, 241) if np.ptp(angles) < 360 \
+    grid = (
+        np.linspace(angles.min() - 20, angles.max() + 20, 241)
+        if np.ptp(angles) < 360
         else np.linspace(angles.min(), angles.max(), 241)
+    )
     curve = fit.a * np.cos(np.radians(grid)) + fit.c * np.sin(np.radians(grid)) + fit.b
     axis = _("chart.angle_heading") if part_result.part == "heading" else _("chart.angle_latitude")
-    return {"data": [
-        {"type": "scatter", "mode": "markers", "name": _("chart.means"),
-         "x": angles.tolist(), "y": fit.means.tolist(),
-         "error_y": {"type": "data", "array": sems, "visible": True},
-         "marker": {"size": 9, "color": COLORS[0]}},
-        {"type": "scatter", "mode": "lines", "name": _("chart.fit"), "x": grid.tolist(),
-         "y": np.round(curve, 5).tolist(), "line": {"color": COLORS[1], "dash": "dot"}},
-    ], "layout": {**LAYOUT, "title": {"text": _("chart.fit_title")},
-                  "xaxis": {"title": {"text": axis}},
-                  "yaxis": {"title": {"text": _("chart.rate_deg_h")}}}}
+    return {
+        "data": [
+            {
+                "type": "scatter",
+                "mode": "markers",
+                "name": _("chart.means"),
+                "x": angles.tolist(),
+                "y": fit.means.tolist(),
+                "error_y": {"type": "data", "array": sems, "visible": True},
+                "marker": {"size": 9, "color": COLORS[0]},
+            },
+            {
+                "type": "scatter",
+                "mode": "lines",
+                "name": _("chart.fit"),
+                "x": grid.tolist(),
+                "y": np.round(curve, 5).tolist(),
+                "line": {"color": COLORS[1], "dash": "dot"},
+            },
+        ],
+        "layout": {
+            **LAYOUT,
+            "title": {"text": _("chart.fit_title")},
+            "xaxis": {"title": {"text": axis}},
+            "yaxis": {"title": {"text": _("chart.rate_deg_h")}},
+        },
+    }
 
 
 def compass_figure(heading_result, angles, _: Callable[..., str]) -> dict | None:
@@ -79,28 +114,51 @@ def compass_figure(heading_result, angles, _: Callable[..., str]) -> dict | None
         return None
     start = heading_result.azimuth_deg
     first = float(angles[0]) if len(angles) else 0.0
-    traces = [{"type": "scatterpolar", "mode": "lines+text", "r": [0, 1.05], "theta": [0, 0],
-               "name": _("chart.north"), "text": ["", _("chart.north_short")],
-               "textposition": "top center", "line": {"color": "#b3261e", "width": 4}}]
+    traces = [
+        {
+            "type": "scatterpolar",
+            "mode": "lines+text",
+            "r": [0, 1.05],
+            "theta": [0, 0],
+            "name": _("chart.north"),
+            "text": ["", _("chart.north_short")],
+            "textposition": "top center",
+            "line": {"color": "#b3261e", "width": 4},
+        }
+    ]
     for index, angle in enumerate(angles, start=1):
         direction = (start + float(angle) - first) % 360
-        traces.append({"type": "scatterpolar", "mode": "lines+text", "r": [0, 0.85],
-                       "theta": [direction, direction], "text": ["", str(index)],
-                       "name": _("chart.position", n=index), "textposition": "top center",
-                       "line": {"color": COLORS[(index - 1) % len(COLORS)],
-                                "width": 3 if index == 1 else 1.5}})
-    layout = {**LAYOUT, "height": 340, "showlegend": False,
-              "title": {"text": _("chart.compass_title", azimuth=f"{start:.2f}")},
-              "polar": {"angularaxis": {"direction": "clockwise", "rotation": 90,
-                                        "dtick": 30},
-                        "radialaxis": {"visible": False, "range": [0, 1.15]}}}
+        traces.append(
+            {
+                "type": "scatterpolar",
+                "mode": "lines+text",
+                "r": [0, 0.85],
+                "theta": [direction, direction],
+                "text": ["", str(index)],
+                "name": _("chart.position", n=index),
+                "textposition": "top center",
+                "line": {
+                    "color": COLORS[(index - 1) % len(COLORS)],
+                    "width": 3 if index == 1 else 1.5,
+                },
+            }
+        )
+    layout = {
+        **LAYOUT,
+        "height": 340,
+        "showlegend": False,
+        "title": {"text": _("chart.compass_title", azimuth=f"{start:.2f}")},
+        "polar": {
+            "angularaxis": {"direction": "clockwise", "rotation": 90, "dtick": 30},
+            "radialaxis": {"visible": False, "range": [0, 1.15]},
+        },
+    }
     return {"data": traces, "layout": layout}
 
 
 def allan_figure(part_result, _: Callable[..., str], minimum_samples: int = 1000) -> dict | None:
     """Allan deviation of the longest position, when it is a long static record."""
-    longest = max(part_result.positions.values(), key=lambda item: item.values.size,
-                  default=None)
+    longest = max(part_result.positions.values(), key=lambda item: item.values.size, default=None)
     if longest is None or longest.values.size < minimum_samples:
         return None
     times = longest.times
@@ -113,11 +171,25 @@ def allan_figure(part_result, _: Callable[..., str], minimum_samples: int = 1000
         result = allan_deviation(longest.values, rate)
     except GyroInputError:
         return None
-    return {"data": [{"type": "scatter", "mode": "lines+markers", "name": "σ(τ)",
-                      "x": result.taus_s.tolist(), "y": result.adev_deg_h.tolist(),
-                      "error_y": {"type": "data", "array": result.adev_error_deg_h.tolist(),
-                                  "visible": True}}],
-            "layout": {**LAYOUT, "title": {"text": _("chart.allan_title",
-                                                       n=longest.take.position)},
-                       "xaxis": {"type": "log", "title": {"text": "τ (s)"}},
-                       "yaxis": {"type": "log", "title": {"text": _("chart.adev")}}}}
+    return {
+        "data": [
+            {
+                "type": "scatter",
+                "mode": "lines+markers",
+                "name": "σ(τ)",
+                "x": result.taus_s.tolist(),
+                "y": result.adev_deg_h.tolist(),
+                "error_y": {
+                    "type": "data",
+                    "array": result.adev_error_deg_h.tolist(),
+                    "visible": True,
+                },
+            }
+        ],
+        "layout": {
+            **LAYOUT,
+            "title": {"text": _("chart.allan_title", n=longest.take.position)},
+            "xaxis": {"type": "log", "title": {"text": "τ (s)"}},
+            "yaxis": {"type": "log", "title": {"text": _("chart.adev")}},
+        },
+    }

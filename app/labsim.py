@@ -54,8 +54,9 @@ def nominal_angle(session: LabSession, part: str, position: int) -> float:
 class SimulatedTake:
     """Samples of one simulated recording, generated block by block on demand."""
 
-    def __init__(self, session: LabSession, part: str, position: int, attempt: int,
-                 settle_s: float) -> None:
+    def __init__(
+        self, session: LabSession, part: str, position: int, attempt: int, settle_s: float
+    ) -> None:
         preset = preset_for(session)
         turn_on = GyroStream(preset, derived_seed(session, "power-on")).turn_on_bias_deg_h
         self.preset = preset
@@ -66,8 +67,7 @@ class SimulatedTake:
         self.dial_angle_deg = read_dial(nominal, preset.dial_resolution_deg)
         if part == "heading":
             # dial angles are relative to position 1, which points at the secret azimuth
-            vector = axis_vectors(session.sim_azimuth_deg, actual - session.heading_start_deg,
-                                  0.0)
+            vector = axis_vectors(session.sim_azimuth_deg, actual - session.heading_start_deg, 0.0)
         else:
             vector = axis_vectors(0.0, 0.0, actual)
         self.true_rate = float(true_rate(session.latitude_deg, vector, session.earth_rate_deg_h))

@@ -21,6 +21,7 @@ from app.samples import chunks, unpack
 PARTS = ("heading", "latitude")
 POSITIONS = 4
 MAX_SAMPLES_PER_POSITION = 1_000_000
+PLAUSIBLE_RATE_DEG_H = 7200.0  # 2 °/s: a gyro at rest reads Earth's rate plus its bias
 
 
 @dataclass
@@ -44,20 +45,27 @@ class PartResult:
 
 
 def current_takes(db: Session, session_id: int) -> list[Take]:
-    return list(db.exec(
-        select(Take).where(Take.session_id == session_id, Take.superseded_at.is_(None))
-        .order_by(Take.part, Take.position)
-    ).all())
+    return list(
+        db.exec(
+            select(Take)
+            .where(Take.session_id == session_id, Take.superseded_at.is_(None))
+            .order_by(Take.part, Take.position)
+        ).all()
+    )
 
 
 def take_history(db: Session, session_id: int) -> list[Take]:
-    return list(db.exec(select(Take).where(Take.session_id == session_id)
-                        .order_by(Take.created_at, Take.id)).all())
+    return list(
+        db.exec(
+            select(Take).where(Take.session_id == session_id).order_by(Take.created_at, Take.id)
+        ).all()
+    )
 
 
 def load_samples(db: Session, take: Take) -> tuple[np.ndarray, np.ndarray | None]:
-    rows = db.exec(select(SampleChunk).where(SampleChunk.take_id == take.id)
-                   .order_by(SampleChunk.seq)).all()
+    rows = db.exec(
+        select(SampleChunk).where(SampleChunk.take_id == take.id).order_by(SampleChunk.seq)
+    ).all()
     values = np.concatenate([unpack(r.values) for r in rows]) if rows else np.empty(0)
     if rows and all(r.times is not None for r in rows):
         return values, np.concatenate([unpack(r.times) for r in rows])
@@ -65,31 +73,71 @@ def load_samples(db: Session, take: Take) -> tuple[np.ndarray, np.ndarray | None
 
 
 def store_take(
-    db: Session, session: LabSession, *, part: str, position: int, angle_deg: float,
-    values: np.ndarray, times: np.ndarray | None, source: str, unit: str = "deg/h",
+    db: Session,
+    session: LabSession,
+    *,
+    part: str,
+    position: int,
+    angle_deg: float,
+    values: np.ndarray,
+    times: np.ndarray | None,
+    source: str,
+    unit: str = "deg/h",
 ) -> Take:
     """Add a take (values in °/h) and supersede the previous one; the caller commits once,
     so the position is either fully saved or not at all."""
     if part not in PARTS or not 1 <= position <= POSITIONS:
         raise GyroInputError("lab.bad_position", "No such position.")
     if values.size == 0:
-        raise GyroInputError("readings.empty_position", f"Position {position} has no readings.",
-                             position=position)
+        raise GyroInputError(
+            "readings.empty_position", f"Position {position} has no readings.", position=position
+        )
     if values.size > MAX_SAMPLES_PER_POSITION:
-        raise GyroInputError("lab.too_many_samples",
-                             f"At most {MAX_SAMPLES_PER_POSITION} readings per position.",
-                             limit=MAX_SAMPLES_PER_POSITION)
+        raise GyroInputError(
+            "lab.too_many_samples",
+            f"At most {MAX_SAMPLES_PER_POSITION} readings per position.",
+            limit=MAX_SAMPLES_PER_POSITION,
+        )
     if not np.all(np.isfinite(values)):
-        raise GyroInputError("readings.not_finite", "A reading is not a finite number.",
-                             position=position)
+        raise GyroInputError(
+            "readings.not_finite", "A reading is not a finite number.", position=position
+        )
+    if values.size < session.min_readings:
+        raise GyroInputError(
+            "lab.too_few_readings",
+            f"Position {position} has {values.size} readings; at least "
+            f"{session.min_readings} are required.",
+            position=position,
+            n=int(values.size),
+            minimum=session.min_readings,
+        )
+    if float(np.max(np.abs(values))) > PLAUSIBLE_RATE_DEG_H:
+        raise GyroInputError(
+            "lab.implausible_rate",
+            f"Position {position} has readings above {PLAUSIBLE_RATE_DEG_H:g} °/h, far more than "
+            "a gyro at rest can read: check the unit.",
+            position=position,
+        )
     now = utcnow()
-    for old in db.exec(select(Take).where(Take.session_id == session.id, Take.part == part,
-                                          Take.position == position,
-                                          Take.superseded_at.is_(None))).all():
+    for old in db.exec(
+        select(Take).where(
+            Take.session_id == session.id,
+            Take.part == part,
+            Take.position == position,
+            Take.superseded_at.is_(None),
+        )
+    ).all():
         old.superseded_at = now
         db.add(old)
-    take = Take(session_id=session.id, part=part, position=position, angle_deg=angle_deg,
-                source=source, unit=unit, n_samples=int(values.size))
+    take = Take(
+        session_id=session.id,
+        part=part,
+        position=position,
+        angle_deg=angle_deg,
+        source=source,
+        unit=unit,
+        n_samples=int(values.size),
+    )
     db.add(take)
     db.flush()
     for seq, value_blob, time_blob in chunks(values, times):
@@ -114,8 +162,10 @@ def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) ->
     outcome = PartResult(part, data)
     if len(data) < 3:
         outcome.error = GyroInputError(
-            "lab.need_positions", "Record at least 3 positions to compute a result.",
-            recorded=len(data))
+            "lab.need_positions",
+            "Record at least 3 positions to compute a result.",
+            recorded=len(data),
+        )
         return outcome
     ordered = [data[k] for k in sorted(data)]
     values = [p.values for p in ordered]
@@ -125,8 +175,12 @@ def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) ->
             outcome.result = solve_heading(values, angles)
             outcome.steps = explain_heading(outcome.result)
         else:
-            outcome.result = solve_latitude(values, angles, true_latitude_deg=session.latitude_deg,
-                                            true_earth_rate_deg_h=session.earth_rate_deg_h)
+            outcome.result = solve_latitude(
+                values,
+                angles,
+                true_latitude_deg=session.latitude_deg,
+                true_earth_rate_deg_h=session.earth_rate_deg_h,
+            )
             outcome.steps = explain_latitude(outcome.result)
     except GyroInputError as error:
         outcome.error = error
@@ -140,8 +194,14 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
     stds = {}
     for position, item in sorted(data.items()):
         if item.values.size < session.min_readings:
-            flags.append({"key": "flag.too_few", "position": position, "n": int(item.values.size),
-                          "minimum": session.min_readings})
+            flags.append(
+                {
+                    "key": "flag.too_few",
+                    "position": position,
+                    "n": int(item.values.size),
+                    "minimum": session.min_readings,
+                }
+            )
         if item.values.size >= 2:
             stds[position] = float(item.values.std(ddof=1))
             median = float(np.median(item.values))
@@ -153,8 +213,9 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
         typical = float(np.median(list(stds.values())))
         for position, std in stds.items():
             if typical > 0 and std > 3 * typical:
-                flags.append({"key": "flag.noisy", "position": position,
-                              "ratio": round(std / typical, 1)})
+                flags.append(
+                    {"key": "flag.noisy", "position": position, "ratio": round(std / typical, 1)}
+                )
     return flags
 
 
@@ -170,13 +231,17 @@ def submit(db: Session, session: LabSession) -> Attempt:
     """Freeze the current data and results as a new attempt."""
     results = session_results(db, session)
     if all(outcome.result is None for outcome in results.values()):
-        raise GyroInputError("lab.nothing_to_submit",
-                             "There is no result to submit yet: record the positions first.")
+        raise GyroInputError(
+            "lab.nothing_to_submit", "There is no result to submit yet: record the positions first."
+        )
     previous = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
     takes = current_takes(db, session.id)
-    attempt = Attempt(session_id=session.id, number=len(previous) + 1,
-                      take_ids=",".join(str(t.id) for t in takes),
-                      results_json=json.dumps(_finite(results_json(results))))
+    attempt = Attempt(
+        session_id=session.id,
+        number=len(previous) + 1,
+        take_ids=",".join(str(t.id) for t in takes),
+        results_json=json.dumps(_finite(results_json(results))),
+    )
     session.status = "submitted"
     session.updated_at = utcnow()
     db.add(attempt)
@@ -201,12 +266,18 @@ def export_metadata(session: LabSession) -> dict:
         "session_id": session.id,
         "title": session.title,
         "assignment_id": session.assignment_id,
-        "station": {"latitude_deg": session.latitude_deg,
-                    "earth_rate_deg_h": session.earth_rate_deg_h},
-        "heading": {"rotation": session.heading_rotation,
-                    "start_angle_deg": session.heading_start_deg},
-        "latitude": {"start_angle_deg": session.latitude_start_deg,
-                     "step_deg": session.latitude_step_deg},
+        "station": {
+            "latitude_deg": session.latitude_deg,
+            "earth_rate_deg_h": session.earth_rate_deg_h,
+        },
+        "heading": {
+            "rotation": session.heading_rotation,
+            "start_angle_deg": session.heading_start_deg,
+        },
+        "latitude": {
+            "start_angle_deg": session.latitude_start_deg,
+            "step_deg": session.latitude_step_deg,
+        },
         "simulator_preset": session.simulator_preset,
         "status": session.status,
         "exported_at": utcnow().isoformat(),
@@ -218,27 +289,37 @@ def export_json(db: Session, session: LabSession) -> dict:
     takes = []
     for part in PARTS:
         for position, item in sorted(results[part].positions.items()):
-            takes.append({
-                "part": part, "position": position, "angle_deg": item.take.angle_deg,
-                "source": item.take.source, "recorded_at": item.take.created_at.isoformat(),
-                "values_deg_h": item.values.tolist(),
-                "times_s": None if item.times is None else item.times.tolist(),
-            })
-    return _finite({"metadata": export_metadata(session), "positions": takes,
-                    "results": results_json(results)})
+            takes.append(
+                {
+                    "part": part,
+                    "position": position,
+                    "angle_deg": item.take.angle_deg,
+                    "source": item.take.source,
+                    "recorded_at": item.take.created_at.isoformat(),
+                    "values_deg_h": item.values.tolist(),
+                    "times_s": None if item.times is None else item.times.tolist(),
+                }
+            )
+    return _finite(
+        {"metadata": export_metadata(session), "positions": takes, "results": results_json(results)}
+    )
 
 
 def export_csv(db: Session, session: LabSession) -> str:
     meta = export_metadata(session)
-    lines = [f"# {meta['software']}; session {session.id}: {session.title}",
-             f"# station latitude {session.latitude_deg} deg, Earth rate "
-             f"{session.earth_rate_deg_h} deg/h; heading rotation {session.heading_rotation}; "
-             "values in deg/h",
-             "part,position,angle_deg,source,time_s,value"]
+    lines = [
+        f"# {meta['software']}; session {session.id}: {session.title}",
+        f"# station latitude {session.latitude_deg} deg, Earth rate "
+        f"{session.earth_rate_deg_h} deg/h; heading rotation {session.heading_rotation}; "
+        "values in deg/h",
+        "part,position,angle_deg,source,time_s,value",
+    ]
     for part in PARTS:
         for position, item in sorted(part_data(db, session, part).items()):
             times = item.times if item.times is not None else np.arange(item.values.size)
             for time, value in zip(times, item.values, strict=True):
-                lines.append(f"{part},{position},{item.take.angle_deg:g},{item.take.source},"
-                             f"{time:.3f},{value:.6f}")
+                lines.append(
+                    f"{part},{position},{item.take.angle_deg:g},{item.take.source},"
+                    f"{time:.3f},{value:.6f}"
+                )
     return "\n".join(lines) + "\n"

@@ -23,8 +23,11 @@ PLOTLY_URL = f"/vendor/plotly-{plotly.__version__}.min.js"
 
 
 def _wants_json(request: Request) -> bool:
-    return request.url.path.startswith("/api/") or "application/json" in request.headers.get(
-        "accept", ""
+    """API paths, fetch() calls sending JSON, and clients asking for JSON get JSON errors."""
+    return (
+        request.url.path.startswith("/api/")
+        or "application/json" in request.headers.get("accept", "")
+        or request.headers.get("content-type", "").startswith("application/json")
     )
 
 

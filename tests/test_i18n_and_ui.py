@@ -35,8 +35,12 @@ def test_every_key_used_exists():
             used |= set(KEY_IN_PYTHON.findall(path.read_text()))
     not_messages = {"course.id", "assignment.id", "error.html"}  # attributes, a template
     # keys completed at run time ("lab.part_" ~ part) are prefixes of real keys
-    missing = sorted(key for key in used - not_messages if key not in MESSAGES
-                     and not (key.endswith("_") and any(k.startswith(key) for k in MESSAGES)))
+    missing = sorted(
+        key
+        for key in used - not_messages
+        if key not in MESSAGES
+        and not (key.endswith("_") and any(k.startswith(key) for k in MESSAGES))
+    )
     assert not missing, missing
     assert len(used) > 50
 

@@ -55,11 +55,17 @@ def parse_assignment_form(form: dict) -> Assignment:
             raise FormProblem("assignment.bad_due") from None
         if due.tzinfo is None:
             due = due.replace(tzinfo=UTC)
-    return Assignment(course_id=0, title=title[:200], instructions=form["instructions"].strip(),
-                      latitude_deg=latitude, earth_rate_deg_h=earth_rate,
-                      allowed_methods=",".join(methods),
-                      simulator_preset=form["simulator_preset"], min_readings=int(readings),
-                      due_at=due)
+    return Assignment(
+        course_id=0,
+        title=title[:200],
+        instructions=form["instructions"].strip(),
+        latitude_deg=latitude,
+        earth_rate_deg_h=earth_rate,
+        allowed_methods=",".join(methods),
+        simulator_preset=form["simulator_preset"],
+        min_readings=int(readings),
+        due_at=due,
+    )
 
 
 @router.post("/{course_id}/assignments", dependencies=[CsrfProtected])
@@ -78,15 +84,26 @@ def create_assignment(
     due_at: Annotated[str, Form(max_length=32)] = "",
 ):
     course = own_course(db, teacher, course_id)
-    form = {"title": title, "instructions": instructions, "latitude_deg": latitude_deg,
-            "earth_rate_deg_h": earth_rate_deg_h, "methods": methods or [],
-            "simulator_preset": simulator_preset, "min_readings": min_readings, "due_at": due_at}
+    form = {
+        "title": title,
+        "instructions": instructions,
+        "latitude_deg": latitude_deg,
+        "earth_rate_deg_h": earth_rate_deg_h,
+        "methods": methods or [],
+        "simulator_preset": simulator_preset,
+        "min_readings": min_readings,
+        "due_at": due_at,
+    }
     try:
         assignment = parse_assignment_form(form)
     except FormProblem as problem:
-        context = course_context(db, course, assignment_form=form,
-                                 assignment_error=problem.key,
-                                 assignment_error_params=problem.params)
+        context = course_context(
+            db,
+            course,
+            assignment_form=form,
+            assignment_error=problem.key,
+            assignment_error_params=problem.params,
+        )
         return render(request, "courses/detail.html", context, 400)
     assignment.course_id = course.id
     db.add(assignment)

@@ -95,8 +95,13 @@ def course_context(db: Session, course: Course, **extra) -> dict:
         .where(Assignment.course_id == course.id)
         .order_by(Assignment.created_at.desc())
     ).all()
-    return {"course": course, "students": roster(db, course), "assignments": assignments,
-            "presets": sorted(PRESETS), **extra}
+    return {
+        "course": course,
+        "students": roster(db, course),
+        "assignments": assignments,
+        "presets": sorted(PRESETS),
+        **extra,
+    }
 
 
 @router.get("/{course_id}")
@@ -200,7 +205,9 @@ async def import_students(
     problems = parsed.problems or check_roster_against_accounts(db, parsed.rows)
     if problems or not parsed.rows:
         return render(
-            request, "courses/detail.html", course_context(db, course, import_problems=problems),
+            request,
+            "courses/detail.html",
+            course_context(db, course, import_problems=problems),
             400,
         )
     created, enrolled = import_roster(db, course, parsed.rows)

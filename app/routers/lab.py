@@ -65,8 +65,11 @@ def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignmen
         if course is None or course.teacher_id != user.id:
             raise HTTPException(404)
         return assignment
-    enrolled = db.exec(select(Enrollment).where(Enrollment.course_id == assignment.course_id,
-                                                Enrollment.student_id == user.id)).first()
+    enrolled = db.exec(
+        select(Enrollment).where(
+            Enrollment.course_id == assignment.course_id, Enrollment.student_id == user.id
+        )
+    ).first()
     if enrolled is None or course is None or course.archived:
         raise HTTPException(404)
     return assignment
@@ -88,21 +91,37 @@ def my_assignments(db: Session, user: User) -> list[tuple[Assignment, Course]]:
     if user.role == Role.teacher:
         query = select(Assignment, Course).join(Course).where(Course.teacher_id == user.id)
     else:
-        query = (select(Assignment, Course).join(Course)
-                 .join(Enrollment, Enrollment.course_id == Course.id)
-                 .where(Enrollment.student_id == user.id))
-    return list(db.exec(query.where(Course.archived == False)  # noqa: E712
-                        .order_by(Assignment.created_at.desc())).all())
+        query = (
+            select(Assignment, Course)
+            .join(Course)
+            .join(Enrollment, Enrollment.course_id == Course.id)
+            .where(Enrollment.student_id == user.id)
+        )
+    return list(
+        db.exec(
+            query.where(Course.archived == False).order_by(Assignment.created_at.desc())  # noqa: E712
+        ).all()
+    )
 
 
 @router.get("")
 def lab_home(request: Request, user: CurrentUser, db: SessionDep):
-    sessions = db.exec(select(LabSession).where(LabSession.owner_id == user.id)
-                       .order_by(LabSession.updated_at.desc())).all()
-    return render(request, "lab/home.html", {
-        "sessions": sessions, "assignments": my_assignments(db, user), "stations": STATIONS,
-        "presets": sorted(PRESETS), "now": utcnow(),
-    })
+    sessions = db.exec(
+        select(LabSession)
+        .where(LabSession.owner_id == user.id)
+        .order_by(LabSession.updated_at.desc())
+    ).all()
+    return render(
+        request,
+        "lab/home.html",
+        {
+            "sessions": sessions,
+            "assignments": my_assignments(db, user),
+            "stations": STATIONS,
+            "presets": sorted(PRESETS),
+            "now": utcnow(),
+        },
+    )
 
 
 @router.post("/sessions", dependencies=[CsrfProtected])
@@ -126,11 +145,17 @@ def create_session(
     angles = (heading_start_deg, latitude_start_deg, latitude_step_deg)
     if not all(math.isfinite(a) for a in angles) or abs(latitude_step_deg) < 1:
         return _back_with_error(request, "lab.bad_angles")
-    session = LabSession(owner_id=user.id, title=title.strip()[:200], latitude_deg=0.0,
-                         heading_rotation=rotation, heading_start_deg=heading_start_deg,
-                         latitude_start_deg=latitude_start_deg,
-                         latitude_step_deg=latitude_step_deg, sim_seed=seed,
-                         sim_azimuth_deg=azimuth)
+    session = LabSession(
+        owner_id=user.id,
+        title=title.strip()[:200],
+        latitude_deg=0.0,
+        heading_rotation=rotation,
+        heading_start_deg=heading_start_deg,
+        latitude_start_deg=latitude_start_deg,
+        latitude_step_deg=latitude_step_deg,
+        sim_seed=seed,
+        sim_azimuth_deg=azimuth,
+    )
     if assignment_id is not None:
         assignment = visible_assignment(db, user, assignment_id)
         session.assignment_id = assignment.id
@@ -187,34 +212,70 @@ def session_page(request: Request, session_id: int, user: CurrentUser, db: Sessi
     session = own_session(db, user, session_id)
     _ = translator(request_language(request))
     results = session_results(db, session)
-    attempts = db.exec(select(Attempt).where(Attempt.session_id == session.id)
-                       .order_by(Attempt.number)).all()
+    attempts = db.exec(
+        select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
+    ).all()
     assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
-    nominal = {part: [nominal_angle(session, part, k) for k in range(1, POSITIONS + 1)]
-               for part in PARTS}
+    nominal = {
+        part: [nominal_angle(session, part, k) for k in range(1, POSITIONS + 1)] for part in PARTS
+    }
     config = {
-        "sessionId": session.id, "csrf": csrf_token_for(request), "minReadings":
-        session.min_readings, "table": {"heading": session.sim_table_heading,
-                                        "latitude": session.sim_table_latitude},
+        "sessionId": session.id,
+        "csrf": csrf_token_for(request),
+        "minReadings": session.min_readings,
+        "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
         "messages": {key: _(key) for key in JS_MESSAGES},
     }
-    return render(request, "lab/session.html", {
-        "session": session, "results": results, "figures": _figures(results, _),
-        "attempts": attempts, "assignment": assignment, "history": take_history(db, session.id),
-        "methods": allowed_methods(db, session), "units": UNITS, "nominal": nominal,
-        "unit_names": UNIT_NAMES, "drawing": drawing_coordinates(session),
-        "positions": range(1, POSITIONS + 1), "preset": PRESETS.get(session.simulator_preset),
-        "plotly_url": request.app.state.plotly_url, "interrupted": session.stream_part,
-        "config": config, "error_text": lambda error: error_text(error, _),
-    })
+    return render(
+        request,
+        "lab/session.html",
+        {
+            "session": session,
+            "results": results,
+            "figures": _figures(results, _),
+            "attempts": attempts,
+            "assignment": assignment,
+            "history": take_history(db, session.id),
+            "methods": allowed_methods(db, session),
+            "units": UNITS,
+            "nominal": nominal,
+            "unit_names": UNIT_NAMES,
+            "drawing": drawing_coordinates(session),
+            "positions": range(1, POSITIONS + 1),
+            "preset": PRESETS.get(session.simulator_preset),
+            "plotly_url": request.app.state.plotly_url,
+            "interrupted": session.stream_part,
+            "config": config,
+            "error_text": lambda error: error_text(error, _),
+        },
+    )
 
 
 UNIT_NAMES = {"deg/h": "°/h", "deg/s": "°/s", "rad/s": "rad/s"}
-JS_MESSAGES = ("js.not_a_number", "js.not_finite", "js.grid_ok", "js.grid_empty", "js.saving",
-               "js.saved", "js.failed", "js.preview_title", "js.choose_file", "js.recording",
-               "js.done", "js.connection_lost", "js.turned", "js.turn_needed", "js.position",
-               "js.samples", "js.mean", "js.angle", "js.too_large", "chart.time_s",
-               "chart.rate_deg_h", "js.pasted")
+JS_MESSAGES = (
+    "js.not_a_number",
+    "js.not_finite",
+    "js.grid_ok",
+    "js.grid_empty",
+    "js.saving",
+    "js.saved",
+    "js.failed",
+    "js.preview_title",
+    "js.choose_file",
+    "js.recording",
+    "js.done",
+    "js.connection_lost",
+    "js.turned",
+    "js.turn_needed",
+    "js.position",
+    "js.samples",
+    "js.mean",
+    "js.angle",
+    "js.too_large",
+    "chart.time_s",
+    "chart.rate_deg_h",
+    "js.pasted",
+)
 
 
 def error_text(error: GyroInputError, _) -> str:
@@ -228,12 +289,20 @@ def drawing_coordinates(session: LabSession) -> dict[str, dict[int, tuple]]:
     for k in range(1, POSITIONS + 1):
         relative = math.radians(nominal_angle(session, "heading", k) - session.heading_start_deg)
         sx, sy = math.sin(relative), -math.cos(relative)  # position 1 drawn pointing up
-        out["heading"][k] = (round(100 + 70 * sx, 2), round(100 + 70 * sy, 2),
-                             round(100 + 90 * sx, 2), round(100 + 90 * sy, 2))
+        out["heading"][k] = (
+            round(100 + 70 * sx, 2),
+            round(100 + 70 * sy, 2),
+            round(100 + 90 * sx, 2),
+            round(100 + 90 * sy, 2),
+        )
         elevation = math.radians(nominal_angle(session, "latitude", k))
         cx, cy = math.cos(elevation), -math.sin(elevation)  # north to the right, zenith up
-        out["latitude"][k] = (round(100 + 70 * cx, 2), round(100 + 70 * cy, 2),
-                              round(100 + 90 * cx, 2), round(100 + 90 * cy, 2))
+        out["latitude"][k] = (
+            round(100 + 70 * cx, 2),
+            round(100 + 70 * cy, 2),
+            round(100 + 90 * cx, 2),
+            round(100 + 90 * cy, 2),
+        )
     return out
 
 
@@ -242,8 +311,8 @@ class ManualReadings(BaseModel):
 
     part: Literal["heading", "latitude"]
     unit: str = "deg/h"
-    columns: dict[int, Annotated[list[StrictFloat | StrictInt], Field(max_length=100_000)]] = (
-        Field(max_length=POSITIONS)
+    columns: dict[int, Annotated[list[StrictFloat | StrictInt], Field(max_length=100_000)]] = Field(
+        max_length=POSITIONS
     )
 
 
@@ -252,8 +321,9 @@ def _json_error(error: GyroInputError, request: Request, status: int = 400) -> J
 
     language = request_language(request)
     message = translate(error.key, language, **error.params) if _known(error.key) else str(error)
-    return JSONResponse({"detail": message, "key": error.key, "params": error.params},
-                        status_code=status)
+    return JSONResponse(
+        {"detail": message, "key": error.key, "params": error.params}, status_code=status
+    )
 
 
 def _known(key: str) -> bool:
@@ -262,27 +332,47 @@ def _known(key: str) -> bool:
     return key in MESSAGES
 
 
-def _store_columns(db: Session, session: LabSession, part: str, unit: str,
-                   columns: dict[int, np.ndarray], source: str,
-                   angles: dict[int, float] | None = None,
-                   times: dict[int, np.ndarray] | None = None) -> list[int]:
+def _store_columns(
+    db: Session,
+    session: LabSession,
+    part: str,
+    unit: str,
+    columns: dict[int, np.ndarray],
+    source: str,
+    angles: dict[int, float] | None = None,
+    times: dict[int, np.ndarray] | None = None,
+) -> list[int]:
     unit = canonical_unit(unit)
     saved = []
     for position, values in sorted(columns.items()):
         if not 1 <= position <= POSITIONS:
-            raise GyroInputError("lab.bad_position", f"There is no position {position}.",
-                                 position=position)
+            raise GyroInputError(
+                "lab.bad_position", f"There is no position {position}.", position=position
+            )
         angle = (angles or {}).get(position, nominal_angle(session, part, position))
-        store_take(db, session, part=part, position=position, angle_deg=angle,
-                   values=to_deg_per_hour(values, unit), times=(times or {}).get(position),
-                   source=source, unit=unit)
+        store_take(
+            db,
+            session,
+            part=part,
+            position=position,
+            angle_deg=angle,
+            values=to_deg_per_hour(values, unit),
+            times=(times or {}).get(position),
+            source=source,
+            unit=unit,
+        )
         saved.append(position)
     return saved
 
 
 @router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected])
-def save_manual(request: Request, session_id: int, user: CurrentUser, db: SessionDep,
-                body: Annotated[ManualReadings, Body()]):
+def save_manual(
+    request: Request,
+    session_id: int,
+    user: CurrentUser,
+    db: SessionDep,
+    body: Annotated[ManualReadings, Body()],
+):
     session = own_session(db, user, session_id)
     require_method(db, session, "manual")
     columns = {k: np.asarray(v, dtype=float) for k, v in body.columns.items() if len(v)}
@@ -300,22 +390,35 @@ def save_manual(request: Request, session_id: int, user: CurrentUser, db: Sessio
 class CsvUpload(BaseModel):
     part: Literal["heading", "latitude"]
     unit: str = "deg/h"
-    text: str = Field(max_length=MAX_CSV_CHARS)
+    text: str
 
 
 def _parse_upload(body: CsvUpload):
+    if len(body.text) > MAX_CSV_CHARS:
+        raise GyroInputError(
+            "lab.file_too_large",
+            "The file is larger than 5 MB.",
+            limit_mb=MAX_CSV_CHARS // 1_000_000,
+        )
     readings = parse_readings_csv(body.text, part=body.part)
     if len(readings.positions) > POSITIONS:
-        raise GyroInputError("lab.too_many_positions",
-                             f"The file has {len(readings.positions)} positions; at most "
-                             f"{POSITIONS}.", count=len(readings.positions))
+        raise GyroInputError(
+            "lab.too_many_positions",
+            f"The file has {len(readings.positions)} positions; at most {POSITIONS}.",
+            count=len(readings.positions),
+        )
     canonical_unit(body.unit)
     return readings
 
 
 @router.post("/sessions/{session_id}/csv/preview", dependencies=[CsrfProtected])
-def preview_csv(request: Request, session_id: int, user: CurrentUser, db: SessionDep,
-                body: Annotated[CsvUpload, Body()]):
+def preview_csv(
+    request: Request,
+    session_id: int,
+    user: CurrentUser,
+    db: SessionDep,
+    body: Annotated[CsvUpload, Body()],
+):
     session = own_session(db, user, session_id)
     require_method(db, session, "csv")
     try:
@@ -325,26 +428,42 @@ def preview_csv(request: Request, session_id: int, user: CurrentUser, db: Sessio
     rows = []
     for index, values in enumerate(readings.positions, start=1):
         converted = to_deg_per_hour(values, body.unit)
-        angle = (readings.angles_deg[index - 1] if readings.angles_deg is not None
-                 else nominal_angle(session, body.part, index))
-        rows.append({"position": index, "n": int(values.size), "angle_deg": angle,
-                     "mean_deg_h": float(converted.mean()),
-                     "first": [float(v) for v in converted[:5]]})
+        angle = (
+            readings.angles_deg[index - 1]
+            if readings.angles_deg is not None
+            else nominal_angle(session, body.part, index)
+        )
+        rows.append(
+            {
+                "position": index,
+                "n": int(values.size),
+                "angle_deg": angle,
+                "mean_deg_h": float(converted.mean()),
+                "first": [float(v) for v in converted[:5]],
+            }
+        )
     return {"layout": readings.layout, "positions": rows}
 
 
 @router.post("/sessions/{session_id}/csv", dependencies=[CsrfProtected])
-def save_csv(request: Request, session_id: int, user: CurrentUser, db: SessionDep,
-             body: Annotated[CsvUpload, Body()]):
+def save_csv(
+    request: Request,
+    session_id: int,
+    user: CurrentUser,
+    db: SessionDep,
+    body: Annotated[CsvUpload, Body()],
+):
     session = own_session(db, user, session_id)
     require_method(db, session, "csv")
     try:
         readings = _parse_upload(body)
         columns = dict(enumerate(readings.positions, start=1))
-        angles = (dict(enumerate(readings.angles_deg, start=1))
-                  if readings.angles_deg is not None else None)
-        times = (dict(enumerate(readings.times_s, start=1))
-                 if readings.times_s is not None else None)
+        angles = (
+            dict(enumerate(readings.angles_deg, start=1))
+            if readings.angles_deg is not None
+            else None
+        )
+        times = dict(enumerate(readings.times_s, start=1)) if readings.times_s is not None else None
         saved = _store_columns(db, session, body.part, body.unit, columns, "csv", angles, times)
     except GyroInputError as error:
         db.rollback()
@@ -359,8 +478,7 @@ class Turn(BaseModel):
 
 
 @router.post("/sessions/{session_id}/turn", dependencies=[CsrfProtected])
-def turn_table(session_id: int, user: CurrentUser, db: SessionDep,
-               body: Annotated[Turn, Body()]):
+def turn_table(session_id: int, user: CurrentUser, db: SessionDep, body: Annotated[Turn, Body()]):
     """Turn the virtual turntable; every real turn gets a new indexing error."""
     session = own_session(db, user, session_id)
     require_method(db, session, "simulator")
@@ -370,8 +488,11 @@ def turn_table(session_id: int, user: CurrentUser, db: SessionDep,
         session.sim_turns += 1
         db.add(session)
         db.commit()
-    return {"part": body.part, "position": body.position,
-            "dial_angle_deg": nominal_angle(session, body.part, body.position)}
+    return {
+        "part": body.part,
+        "position": body.position,
+        "dial_angle_deg": nominal_angle(session, body.part, body.position),
+    }
 
 
 @router.get("/sessions/{session_id}/results.json")
@@ -410,18 +531,24 @@ def submit_session(request: Request, session_id: int, user: CurrentUser, db: Ses
 @router.get("/sessions/{session_id}/export.csv")
 def export_session_csv(session_id: int, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
-    return PlainTextResponse("\ufeff" + export_csv(db, session), media_type="text/csv",
-                             headers=_download(session, "csv"))
+    return PlainTextResponse(
+        "\ufeff" + export_csv(db, session), media_type="text/csv", headers=_download(session, "csv")
+    )
 
 
 @router.get("/sessions/{session_id}/export.json")
 def export_session_json(session_id: int, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
-    return Response(json.dumps(export_json(db, session), ensure_ascii=False, indent=1),
-                    media_type="application/json", headers=_download(session, "json"))
+    return Response(
+        json.dumps(export_json(db, session), ensure_ascii=False, indent=1),
+        media_type="application/json",
+        headers=_download(session, "json"),
+    )
 
 
 def _download(session: LabSession, extension: str) -> dict[str, str]:
     stamp = datetime.now().strftime("%Y%m%d")
-    return {"Content-Disposition": f'attachment; filename="gyrolab-session-{session.id}-'
-                                   f'{stamp}.{extension}"'}
+    return {
+        "Content-Disposition": f'attachment; filename="gyrolab-session-{session.id}-'
+        f'{stamp}.{extension}"'
+    }

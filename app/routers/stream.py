@@ -26,6 +26,7 @@ from sqlmodel import select
 from starlette.concurrency import run_in_threadpool
 
 from app.config import get_settings
+from app.core.exceptions import GyroInputError
 from app.db import write_session
 from app.i18n import translate
 from app.labsim import MAX_DWELL_S, MAX_SETTLE_S, SimulatedTake
@@ -54,14 +55,19 @@ def _owner(websocket: WebSocket, session_id: int) -> tuple[User, LabSession] | N
         return None
     settings = get_settings()
     with write_session() as db:
-        record = db.exec(select(AuthSession).where(
-            AuthSession.token_hash == token_digest(token))).first()
+        record = db.exec(
+            select(AuthSession).where(AuthSession.token_hash == token_digest(token))
+        ).first()
         if record is None or not session_is_live(record, settings):
             return None
         user = db.get(User, record.user_id)
         session = db.get(LabSession, session_id)
-        if user is None or user.must_change_password or session is None \
-                or session.owner_id != user.id:
+        if (
+            user is None
+            or user.must_change_password
+            or session is None
+            or session.owner_id != user.id
+        ):
             return None
         if session.assignment_id is not None:
             assignment = db.get(Assignment, session.assignment_id)
@@ -82,15 +88,35 @@ def _save(session_id: int, part: str, position: int, dial: float, values, times)
     with write_session() as db:
         session = db.get(LabSession, session_id)
         session.stream_part = session.stream_position = None
-        store_take(db, session, part=part, position=position, angle_deg=dial,
-                   values=np.asarray(values), times=np.asarray(times), source="simulator")
+        store_take(
+            db,
+            session,
+            part=part,
+            position=position,
+            angle_deg=dial,
+            values=np.asarray(values),
+            times=np.asarray(times),
+            source="simulator",
+        )
         return len(values)
+
+
+def _clear_mark(session_id: int) -> None:
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        session.stream_part = session.stream_position = None
+        db.add(session)
 
 
 def _attempt_number(session_id: int, part: str, position: int) -> int:
     with write_session() as db:
-        return len(db.exec(select(Take.id).where(Take.session_id == session_id, Take.part == part,
-                                                 Take.position == position)).all())
+        return len(
+            db.exec(
+                select(Take.id).where(
+                    Take.session_id == session_id, Take.part == part, Take.position == position
+                )
+            ).all()
+        )
 
 
 class StreamError(Exception):
@@ -131,9 +157,13 @@ async def stream(websocket: WebSocket, session_id: int) -> None:
             try:
                 await _record(websocket, session_id, message, inbox)
             except StreamError as error:
-                await websocket.send_json({"type": "error", "key": error.key,
-                                           "message": translate(error.key, language,
-                                                                **error.params)})
+                await websocket.send_json(
+                    {
+                        "type": "error",
+                        "key": error.key,
+                        "message": translate(error.key, language, **error.params),
+                    }
+                )
     except (WebSocketDisconnect, RuntimeError, _Closed):
         return
     finally:
@@ -159,8 +189,9 @@ async def _read_into(websocket: WebSocket, inbox: asyncio.Queue) -> None:
         await inbox.put(None)
 
 
-async def _record(websocket: WebSocket, session_id: int, message: dict,
-                  inbox: asyncio.Queue) -> None:
+async def _record(
+    websocket: WebSocket, session_id: int, message: dict, inbox: asyncio.Queue
+) -> None:
     part, position = message.get("part"), message.get("position")
     if part not in PARTS or not isinstance(position, int) or not 1 <= position <= POSITIONS:
         raise StreamError("stream.bad_position")
@@ -177,9 +208,16 @@ async def _record(websocket: WebSocket, session_id: int, message: dict,
     session = await run_in_threadpool(_mark_started, session_id, part, position)
     take = SimulatedTake(session, part, position, attempt, settle)
     total = max(1, int(round(dwell * take.rate_hz)))
-    await websocket.send_json({"type": "started", "rate_hz": take.rate_hz, "total": total,
-                               "dial_angle_deg": take.dial_angle_deg, "part": part,
-                               "position": position})
+    await websocket.send_json(
+        {
+            "type": "started",
+            "rate_hz": take.rate_hz,
+            "total": total,
+            "dial_angle_deg": take.dial_angle_deg,
+            "part": part,
+            "position": position,
+        }
+    )
     values, times = [], []
     per_frame = take.rate_hz * speed * FRAME_SECONDS
     owed = 0.0
@@ -202,8 +240,20 @@ async def _record(websocket: WebSocket, session_id: int, message: dict,
         batch, batch_times = take.next(count)
         values.extend(batch.tolist())
         times.extend(batch_times.tolist())
-        await websocket.send_json({"type": "samples", "t": batch_times.tolist(),
-                                   "v": batch.tolist(), "done": len(values), "total": total})
-    saved = await run_in_threadpool(_save, session_id, part, position, take.dial_angle_deg,
-                                    values, times)
+        await websocket.send_json(
+            {
+                "type": "samples",
+                "t": batch_times.tolist(),
+                "v": batch.tolist(),
+                "done": len(values),
+                "total": total,
+            }
+        )
+    try:
+        saved = await run_in_threadpool(
+            _save, session_id, part, position, take.dial_angle_deg, values, times
+        )
+    except GyroInputError as error:  # e.g. stopped before the minimum number of readings
+        await run_in_threadpool(_clear_mark, session_id)
+        raise StreamError(error.key, **error.params) from error
     await websocket.send_json({"type": "saved", "part": part, "position": position, "n": saved})

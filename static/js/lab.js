@@ -49,16 +49,33 @@
     updateTurnHint(part);
   }
 
+  // The chosen tab and position survive the reload that follows each save.
+  const memoryKey = `gyrolab-lab-${config.sessionId}`;
+  const memory = JSON.parse(sessionStorage.getItem(memoryKey) || "{}");
+  function remember(part, values) {
+    memory[part] = { ...(memory[part] || {}), ...values };
+    sessionStorage.setItem(memoryKey, JSON.stringify(memory));
+  }
+
   document.querySelectorAll(".step").forEach((step) => {
-    step.addEventListener("click", () => selectPosition(step.dataset.part, Number(step.dataset.position)));
+    step.addEventListener("click", () => {
+      selectPosition(step.dataset.part, Number(step.dataset.position));
+      remember(step.dataset.part, { position: Number(step.dataset.position) });
+    });
   });
+  function showMethod(part, method) {
+    const section = document.getElementById(`part-${part}`);
+    const tab = section.querySelector(`.method-tab[data-method="${method}"]`);
+    if (!tab) return;
+    section.querySelectorAll(".method-tab").forEach((other) => other.classList.toggle("active", other === tab));
+    section.querySelectorAll(".method-panel").forEach((panel) => {
+      panel.hidden = panel.dataset.method !== method;
+    });
+  }
   document.querySelectorAll(".method-tab").forEach((tab) => {
     tab.addEventListener("click", () => {
-      const section = document.getElementById(`part-${tab.dataset.part}`);
-      section.querySelectorAll(".method-tab").forEach((other) => other.classList.toggle("active", other === tab));
-      section.querySelectorAll(".method-panel").forEach((panel) => {
-        panel.hidden = panel.dataset.method !== tab.dataset.method;
-      });
+      showMethod(tab.dataset.part, tab.dataset.method);
+      remember(tab.dataset.part, { method: tab.dataset.method });
     });
   });
 
@@ -282,6 +299,7 @@
           progress.value = frame.done;
         } else if (frame.type === "saved") {
           saved = true;
+          remember(part, { position: Math.min(frame.position + 1, 4) });
           finish(t("js.done", { n: frame.n }));
           socket.close();
           reloadSoon();
@@ -301,6 +319,9 @@
   }
   document.querySelectorAll('.method-panel[data-method="simulator"]').forEach(setupSimulator);
 
-  selectPosition("heading", 1);
-  selectPosition("latitude", 1);
+  ["heading", "latitude"].forEach((part) => {
+    if (!document.getElementById(`part-${part}`)) return;
+    selectPosition(part, memory[part]?.position || 1);
+    if (memory[part]?.method) showMethod(part, memory[part].method);
+  });
 })();

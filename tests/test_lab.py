@@ -1,0 +1,429 @@
+"""Student lab over HTTP and WebSocket: every input method, bad input, submit, export."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from sqlmodel import func, select
+
+from app.core.readings import parse_readings_csv
+from app.core.solve import elevation_angles, heading_angles, solve_heading, solve_latitude
+from app.db import read_session, write_session
+from app.models import Assignment, Attempt, LabSession, Role, SampleChunk, Take
+from app.samples import unpack
+from tests.conftest import csrf_from, login, make_course, make_user, post_form
+
+DATA = Path(__file__).resolve().parent / "data"
+
+
+def handout(name: str) -> dict[int, list[float]]:
+    with open(DATA / name) as handle:
+        rows = list(csv.DictReader(handle))
+    return {i: [float(r[f"position_{i}"]) for r in rows] for i in range(1, 5)}
+
+
+def new_session(client, **fields) -> int:
+    data = {"station": "handout", "rotation": "ccw", **fields}
+    response = post_form(client, "/lab/sessions", data, page="/lab")
+    assert response.status_code == 303, response.text
+    return int(response.headers["location"].rsplit("/", 1)[1])
+
+
+def post_json(client, path: str, body: dict, page: str):
+    token = csrf_from(client, page)  # json.dumps writes NaN/Infinity as a browser could send
+    return client.post(
+        path,
+        content=json.dumps(body),
+        headers={"X-CSRF-Token": token, "Content-Type": "application/json"},
+    )
+
+
+def save_manual(client, session_id, part, columns, unit="deg/h"):
+    return post_json(
+        client,
+        f"/lab/sessions/{session_id}/manual",
+        {"part": part, "unit": unit, "columns": columns},
+        page=f"/lab/sessions/{session_id}",
+    )
+
+
+def assert_same(actual, expected) -> None:
+    """Equal results: numbers to 1e-9 relative, everything else exactly."""
+    if isinstance(expected, dict):
+        assert set(actual) == set(expected)
+        for key in expected:
+            assert_same(actual[key], expected[key])
+    elif isinstance(expected, list | tuple):
+        assert len(actual) == len(expected)
+        for a, e in zip(actual, expected, strict=True):
+            assert_same(a, e)
+    elif isinstance(expected, float):
+        assert actual == pytest.approx(expected, rel=1e-9, abs=1e-12)
+    else:
+        assert actual == expected
+
+
+def count(model) -> int:
+    with read_session() as db:
+        return db.exec(select(func.count()).select_from(model)).one()
+
+
+def test_practice_session_with_a_station_preset(student_client):
+    session_id = new_session(student_client)
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+    assert session.latitude_deg == 39.93 and session.earth_rate_deg_h == 15.04
+    page = student_client.get(f"/lab/sessions/{session_id}")
+    assert page.status_code == 200 and "Part A" in page.text
+    assert str(session.sim_azimuth_deg) not in page.text  # the truth stays server-side
+
+
+@pytest.mark.parametrize(
+    ("fields", "message"),
+    [
+        ({"station": "custom"}, "Enter the station"),
+        (
+            {"station": "custom", "latitude_deg": "95", "earth_rate_deg_h": "15"},
+            "between −90° and 90°",
+        ),
+        ({"station": "custom", "latitude_deg": "40", "earth_rate_deg_h": "-1"}, "positive number"),
+    ],
+)
+def test_practice_session_validation(student_client, fields, message):
+    response = post_form(
+        student_client, "/lab/sessions", {"rotation": "ccw", **fields}, page="/lab"
+    )
+    assert response.status_code == 303 and response.headers["location"] == "/lab"
+    assert message in student_client.get("/lab").text
+    assert count(LabSession) == 0
+
+
+def test_typed_handout_tables_give_the_handout_results(student_client):
+    session_id = new_session(student_client)
+    assert (
+        save_manual(
+            student_client, session_id, "heading", handout("handout_horizontal.csv")
+        ).status_code
+        == 200
+    )
+    assert (
+        save_manual(
+            student_client, session_id, "latitude", handout("handout_vertical.csv")
+        ).status_code
+        == 200
+    )
+    results = student_client.get(f"/lab/sessions/{session_id}/results.json").json()
+    assert results["heading"]["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
+    assert results["latitude"]["latitude_deg"] == pytest.approx(40.727, abs=5e-4)
+    assert results["latitude"]["earth_rate_error_percent"] == pytest.approx(0.62, abs=5e-3)
+    # the same numbers as the core on the same data (no recomputation elsewhere)
+    expected = solve_heading(list(handout("handout_horizontal.csv").values()), heading_angles(4))
+    assert_same(results["heading"], expected.to_json())
+    page = student_client.get(f"/lab/sessions/{session_id}").text
+    assert "-10.75°" in page and "40.73°" in page and "2.00 %" in page
+    assert "tan θ = (ω4 − ω2) / (ω1 − ω3)" in page
+
+
+def test_samples_are_stored_compactly_one_transaction(student_client):
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    with read_session() as db:
+        chunks = db.exec(select(SampleChunk)).all()
+        takes = db.exec(select(Take)).all()
+    assert len(takes) == 4 and len(chunks) == 4
+    assert all(len(chunk.values) == 10 * 8 for chunk in chunks)
+    assert unpack(chunks[0].values).tolist() == handout("handout_horizontal.csv")[1]
+
+
+def test_units_are_converted(student_client):
+    session_id = new_session(student_client)
+    columns = {k: [v / 3600 for v in vals] for k, vals in handout("handout_horizontal.csv").items()}
+    assert save_manual(student_client, session_id, "heading", columns, "deg/s").status_code == 200
+    results = student_client.get(f"/lab/sessions/{session_id}/results.json").json()
+    assert results["heading"]["position_means_deg_h"][0] == pytest.approx(10.706)
+
+
+@pytest.mark.parametrize(
+    ("columns", "unit", "message"),
+    [
+        ({"1": [1.0] * 10, "2": [float("nan")] + [1.0] * 9}, "deg/h", "not a finite number"),
+        ({"1": [1.0] * 10, "2": [float("inf")] * 10}, "deg/h", "not a finite number"),
+        ({}, "deg/h", "at least one reading"),
+        ({"1": [1.0] * 5}, "deg/h", "has 5 readings; at least 10"),
+        ({"1": [10.7] * 10}, "deg/s", "check the unit"),
+        ({"1": [1.0] * 10}, "furlongs/h", "Unknown unit"),
+        ({"7": [1.0] * 10}, "deg/h", "no position 7"),
+    ],
+)
+def test_bad_typed_input_stores_nothing(student_client, columns, unit, message):
+    session_id = new_session(student_client)
+    response = save_manual(student_client, session_id, "heading", columns, unit)
+    assert response.status_code == 400
+    assert message in response.json()["detail"]
+    assert count(Take) == 0 and count(SampleChunk) == 0
+
+
+def test_non_numeric_typed_input_is_refused(student_client):
+    session_id = new_session(student_client)
+    for bad in (["abc"], [True], [None]):
+        response = save_manual(student_client, session_id, "heading", {"1": bad * 10})
+        assert response.status_code == 422
+        assert isinstance(response.json()["detail"], list)
+    assert count(Take) == 0
+
+
+def test_csv_preview_stores_nothing_then_accept(student_client):
+    session_id = new_session(student_client)
+    text = (DATA / "handout_vertical.csv").read_text()
+    page = f"/lab/sessions/{session_id}"
+    preview = post_json(
+        student_client,
+        f"{page}/csv/preview",
+        {"part": "latitude", "unit": "deg/h", "text": text},
+        page,
+    )
+    assert preview.status_code == 200
+    body = preview.json()
+    assert [p["n"] for p in body["positions"]] == [10, 10, 10, 10]
+    assert body["positions"][1]["angle_deg"] == 90.0
+    assert count(Take) == 0
+    saved = post_json(
+        student_client, f"{page}/csv", {"part": "latitude", "unit": "deg/h", "text": text}, page
+    )
+    assert saved.status_code == 200 and saved.json()["saved"] == [1, 2, 3, 4]
+    results = student_client.get(f"{page}/results.json").json()
+    expected = solve_latitude(
+        list(handout("handout_vertical.csv").values()),
+        elevation_angles(4),
+        true_latitude_deg=39.93,
+        true_earth_rate_deg_h=15.04,
+    )
+    assert_same(results["latitude"], expected.to_json())
+
+
+def test_csv_long_layout_keeps_angles_and_times(student_client):
+    session_id = new_session(student_client)
+    rows = ["position,angle_deg,time_s,value"]
+    for position, angle in enumerate([0, 88, 181, 272], start=1):
+        for i in range(12):
+            value = 15.04 * np.cos(np.radians(angle - 39.93)) + 0.01 * (i % 3)
+            rows.append(f"{position},{angle},{i * 0.5},{value}")
+    page = f"/lab/sessions/{session_id}"
+    response = post_json(
+        student_client,
+        f"{page}/csv",
+        {"part": "latitude", "unit": "deg/h", "text": "\n".join(rows)},
+        page,
+    )
+    assert response.status_code == 200
+    with read_session() as db:
+        angles = sorted(t.angle_deg for t in db.exec(select(Take)).all())
+        chunk = db.exec(select(SampleChunk)).first()
+    assert angles == [0, 88, 181, 272]
+    assert unpack(chunk.times)[:3].tolist() == [0.0, 0.5, 1.0]
+    latitude = student_client.get(f"{page}/results.json").json()["latitude"]["latitude_deg"]
+    assert latitude == pytest.approx(39.93, abs=0.05)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("position_1,position_2\n1,abc\n", "'abc' is not a number"),
+        ("position_1,position_2\n1,nan\n", "not a finite number"),
+        ("", "no readings"),
+        ("hello,world\n1,2\n", "expected a header"),
+        (
+            "position_1,position_2,position_3,position_4,position_5\n" + "1,2,3,4,5\n" * 10,
+            "at most 4",
+        ),
+        ("position_1\n" + "1\n" * 3, "at least 10"),
+        ("x" * 5_000_001, "larger than 5 MB"),
+    ],
+)
+def test_bad_csv_stores_nothing(student_client, text, message):
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    for path in ("/csv/preview", "/csv"):
+        response = post_json(
+            student_client, page + path, {"part": "heading", "unit": "deg/h", "text": text}, page
+        )
+        if path == "/csv/preview" and message == "at least 10":
+            assert response.status_code == 200  # the preview shows it; storing refuses
+            continue
+        assert response.status_code == 400, path
+        assert message in response.json()["detail"]
+    assert count(Take) == 0
+
+
+def test_re_recording_keeps_history(student_client):
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", {"1": [1.0] * 10})
+    save_manual(student_client, session_id, "heading", {"1": [2.0] * 12})
+    with read_session() as db:
+        takes = db.exec(select(Take).order_by(Take.id)).all()
+    assert len(takes) == 2 and takes[0].superseded_at is not None and takes[1].n_samples == 12
+    page = student_client.get(f"/lab/sessions/{session_id}").text
+    assert "replaced" in page
+
+
+def test_submit_freezes_an_attempt_and_edits_start_a_new_one(student_client):
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    response = post_form(student_client, f"{page}/submit", page=page)
+    assert "no result to submit" in student_client.get(page).text
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    post_form(student_client, f"{page}/submit", page=page)
+    with read_session() as db:
+        assert db.get(LabSession, session_id).status == "submitted"
+        first = db.exec(select(Attempt)).one()
+    frozen = json.loads(first.results_json)
+    assert frozen["heading"]["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
+    assert frozen["latitude"] is None
+    save_manual(student_client, session_id, "heading", {"1": [11.0] * 10})
+    with read_session() as db:
+        assert db.get(LabSession, session_id).status == "in_progress"
+    response = post_form(student_client, f"{page}/submit", page=page)
+    assert response.status_code == 303
+    with read_session() as db:
+        attempts = db.exec(select(Attempt).order_by(Attempt.number)).all()
+    assert [a.number for a in attempts] == [1, 2]
+    assert json.loads(attempts[0].results_json) == frozen  # nothing overwritten
+
+
+def test_exports(student_client):
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    save_manual(student_client, session_id, "latitude", handout("handout_vertical.csv"))
+    exported = student_client.get(f"/lab/sessions/{session_id}/export.csv")
+    assert exported.status_code == 200 and "attachment" in exported.headers["content-disposition"]
+    text = exported.content.decode("utf-8-sig")
+    assert text.startswith("# GyroLab")
+    readings = parse_readings_csv(text, part="latitude")
+    assert [len(p) for p in readings.positions] == [10, 10, 10, 10]
+    document = student_client.get(f"/lab/sessions/{session_id}/export.json").json()
+    assert document["metadata"]["station"]["latitude_deg"] == 39.93
+    assert document["metadata"]["software"].startswith("GyroLab")
+    assert len(document["positions"]) == 8 and document["positions"][0]["source"] == "manual"
+    assert document["results"]["heading"]["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
+    assert "sim_azimuth" not in json.dumps(document) and "seed" not in json.dumps(document)
+
+
+def test_other_students_cannot_see_or_touch_a_session(client, app):
+    from fastapi.testclient import TestClient
+
+    make_user("owner", Role.student)
+    make_user("other", Role.student)
+    with TestClient(app, follow_redirects=False) as owner:
+        login(owner, "owner")
+        session_id = new_session(owner)
+        save_manual(owner, session_id, "heading", handout("handout_horizontal.csv"))
+    login(client, "other")
+    base = f"/lab/sessions/{session_id}"
+    for path in ("", "/results.json", "/export.csv", "/export.json"):
+        assert client.get(base + path).status_code == 404
+    token = csrf_from(client, "/lab")
+    for path, body in (
+        ("/manual", {"part": "heading", "columns": {"1": [1.0] * 10}}),
+        ("/csv", {"part": "heading", "text": "position_1\n1\n"}),
+        ("/csv/preview", {"part": "heading", "text": "position_1\n1\n"}),
+        ("/turn", {"part": "heading", "position": 2}),
+    ):
+        response = client.post(base + path, json=body, headers={"X-CSRF-Token": token})
+        assert response.status_code == 404, path
+    assert client.post(base + "/submit", data={"csrf_token": token}).status_code == 404
+    assert count(Take) == 4
+
+
+def test_json_endpoints_need_csrf(student_client):
+    session_id = new_session(student_client)
+    response = student_client.post(
+        f"/lab/sessions/{session_id}/manual", json={"part": "heading", "columns": {"1": [1.0] * 10}}
+    )
+    assert response.status_code == 403 and count(Take) == 0
+
+
+@pytest.fixture
+def assignment_world(teacher):
+    student = make_user("s1", Role.student)
+    outsider = make_user("s2", Role.student)
+    course_id = make_course(teacher, "Nav lab", (student,))
+    with write_session() as db:
+        assignment = Assignment(
+            course_id=course_id,
+            title="Find north",
+            latitude_deg=34.26,
+            earth_rate_deg_h=15.041,
+            allowed_methods="manual",
+            simulator_preset="tactical-fog",
+            min_readings=12,
+        )
+        db.add(assignment)
+        db.flush()
+        return {
+            "assignment": assignment.id,
+            "course": course_id,
+            "student": student,
+            "outsider": outsider,
+        }
+
+
+def test_teacher_creates_an_assignment(client, teacher):
+    course_id = make_course(teacher, "Nav lab")
+    login(client, "teacher1")
+    page = f"/courses/{course_id}"
+    response = post_form(
+        client,
+        f"{page}/assignments",
+        {
+            "title": "寻北实验",
+            "instructions": "Use 12 readings.",
+            "latitude_deg": "39.93",
+            "earth_rate_deg_h": "15.04",
+            "methods": ["manual", "simulator"],
+            "simulator_preset": "teaching-fog",
+            "min_readings": "12",
+            "due_at": "2030-01-31T18:00",
+        },
+        page=page,
+    )
+    assert response.status_code == 303
+    with read_session() as db:
+        assignment = db.exec(select(Assignment)).one()
+    assert assignment.methods == ["manual", "simulator"] and assignment.min_readings == 12
+    assert assignment.due_at.year == 2030
+    bad = post_form(
+        client,
+        f"{page}/assignments",
+        {"title": "x", "latitude_deg": "north", "methods": ["manual"]},
+        page=page,
+    )
+    assert bad.status_code == 400 and "must be a number" in bad.text
+    bad = post_form(client, f"{page}/assignments", {"title": "x", "latitude_deg": "40"}, page=page)
+    assert bad.status_code == 400 and "at least one way" in bad.text
+
+
+def test_student_starts_an_assignment_with_its_settings(client, assignment_world):
+    login(client, "s1")
+    assert "Find north" in client.get("/lab").text
+    session_id = new_session(client, assignment_id=str(assignment_world["assignment"]))
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+    assert session.latitude_deg == 34.26 and session.min_readings == 12
+    assert session.simulator_preset == "tactical-fog" and session.title == "Find north"
+    page = f"/lab/sessions/{session_id}"
+    assert save_manual(client, session_id, "heading", {"1": [1.0] * 10}).status_code == 400
+    denied = post_json(client, f"{page}/csv", {"part": "heading", "text": "position_1\n1\n"}, page)
+    assert denied.status_code == 403  # this assignment allows typing only
+
+
+def test_outsider_cannot_start_someone_elses_assignment(client, assignment_world):
+    login(client, "s2")
+    assert "Find north" not in client.get("/lab").text
+    response = post_form(
+        client, "/lab/sessions", {"assignment_id": str(assignment_world["assignment"])}, page="/lab"
+    )
+    assert response.status_code == 404 and count(LabSession) == 0

@@ -1,0 +1,211 @@
+"""The simulated gyro's WebSocket stream: stored = streamed, truth never sent, recovery."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from sqlmodel import select
+from starlette.websockets import WebSocketDisconnect
+
+from app.db import read_session
+from app.labsim import SimulatedTake
+from app.labstore import load_samples
+from app.models import LabSession, Role, Take
+from tests.conftest import login, make_user
+from tests.test_lab import new_session, post_json
+
+ORIGIN = {"origin": "http://testserver"}
+
+
+def connect(client, session_id):
+    return client.websocket_connect(f"/lab/sessions/{session_id}/stream", headers=ORIGIN)
+
+
+def record(ws, **message) -> list[dict]:
+    ws.send_json({"action": "start", **message})
+    frames = []
+    while True:
+        frame = ws.receive_json()
+        frames.append(frame)
+        if frame["type"] in ("saved", "error"):
+            return frames
+
+
+def turn(client, session_id, part, position):
+    page = f"/lab/sessions/{session_id}"
+    return post_json(client, f"{page}/turn", {"part": part, "position": position}, page)
+
+
+def test_stored_samples_equal_streamed_ones_and_no_truth_is_sent(student_client):
+    session_id = new_session(student_client)
+    raw = []
+    with connect(student_client, session_id) as ws:
+        for position in (1, 2, 3, 4):
+            if position > 1:
+                assert turn(student_client, session_id, "heading", position).status_code == 200
+            ws.send_json(
+                {
+                    "action": "start",
+                    "part": "heading",
+                    "position": position,
+                    "dwell_s": 20,
+                    "settle_s": 3,
+                    "speed": 60,
+                }
+            )
+            while True:
+                text = ws.receive_text()
+                raw.append(text)
+                if json.loads(text)["type"] == "saved":
+                    break
+    frames = [json.loads(text) for text in raw]
+    streamed = [v for f in frames if f["type"] == "samples" for v in f["v"]]
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        takes = db.exec(select(Take).order_by(Take.position)).all()
+        stored = [v for take in takes for v in load_samples(db, take)[0].tolist()]
+        times = load_samples(db, takes[0])[1]
+    assert len(takes) == 4 and all(t.source == "simulator" and t.n_samples == 20 for t in takes)
+    assert stored == streamed
+    assert times[0] == pytest.approx(3.0)  # the settle time was skipped
+    truth = GyroTruth(session)
+    everything = "".join(raw)
+    for secret in truth.values():
+        assert secret not in everything
+    assert max(len(f.get("v", [])) for f in frames) > 1  # batched frames
+    results = student_client.get(f"/lab/sessions/{session_id}/results.json").json()
+    error = (results["heading"]["azimuth_deg"] - session.sim_azimuth_deg + 180) % 360 - 180
+    assert abs(error) < 5 * results["heading"]["azimuth_sigma_deg"] + 0.2
+
+
+def GyroTruth(session) -> dict[str, str]:  # noqa: N802
+    take = SimulatedTake(session, "heading", 1, 0, 0.0)
+    bias = take.stream.turn_on_bias_deg_h
+    return {
+        "azimuth": f"{session.sim_azimuth_deg:.3f}",
+        "azimuth_repr": repr(session.sim_azimuth_deg),
+        "seed": str(session.sim_seed),
+        "bias": f"{bias:.6f}",
+        "true_rate": repr(take.true_rate),
+    }
+
+
+def test_recording_needs_the_table_turned_first(student_client):
+    session_id = new_session(student_client)
+    with connect(student_client, session_id) as ws:
+        frames = record(ws, part="heading", position=2, dwell_s=5, speed=60)
+    assert frames[-1]["type"] == "error" and "Turn the table to position 2" in frames[-1]["message"]
+
+
+@pytest.mark.parametrize(
+    ("message", "text"),
+    [
+        ({"part": "heading", "position": 1, "dwell_s": True}, "must be a number"),
+        ({"part": "heading", "position": 1, "dwell_s": 99999}, "between"),
+        ({"part": "heading", "position": 1, "speed": "fast"}, "must be a number"),
+        ({"part": "nowhere", "position": 1}, "No such position"),
+        ({"part": "heading", "position": 9}, "No such position"),
+    ],
+)
+def test_bad_stream_requests(student_client, message, text):
+    session_id = new_session(student_client)
+    with connect(student_client, session_id) as ws:
+        frames = record(ws, **message)
+    assert frames[-1]["type"] == "error" and text in frames[-1]["message"]
+
+
+def test_stop_early_keeps_what_was_recorded(student_client):
+    session_id = new_session(student_client)
+    with connect(student_client, session_id) as ws:
+        ws.send_json(
+            {"action": "start", "part": "latitude", "position": 1, "dwell_s": 600, "speed": 10}
+        )
+        seen = 0
+        while seen < 12:
+            frame = ws.receive_json()
+            seen = frame.get("done", 0)
+        ws.send_json({"action": "stop"})
+        while frame["type"] != "saved":
+            frame = ws.receive_json()
+    with read_session() as db:
+        take = db.exec(select(Take)).one()
+    assert 12 <= take.n_samples < 600 and frame["n"] == take.n_samples
+
+
+def test_stopping_before_the_minimum_saves_nothing_and_says_why(student_client):
+    session_id = new_session(student_client)
+    with connect(student_client, session_id) as ws:
+        ws.send_json(
+            {"action": "start", "part": "latitude", "position": 1, "dwell_s": 600, "speed": 1}
+        )
+        ws.receive_json()  # started
+        ws.send_json({"action": "stop"})
+        frame = ws.receive_json()
+        while frame["type"] == "samples":
+            frame = ws.receive_json()
+    assert frame["type"] == "error" and "at least 10 are required" in frame["message"]
+    with read_session() as db:
+        assert db.exec(select(Take)).first() is None
+        assert db.get(LabSession, session_id).stream_part is None
+
+
+def test_a_dropped_connection_saves_nothing_and_the_page_says_so(student_client):
+    session_id = new_session(student_client)
+    with connect(student_client, session_id) as ws:
+        ws.send_json(
+            {"action": "start", "part": "heading", "position": 1, "dwell_s": 600, "speed": 1}
+        )
+        assert ws.receive_json()["type"] == "started"
+    with read_session() as db:
+        assert db.exec(select(Take)).first() is None
+    page = student_client.get(f"/lab/sessions/{session_id}").text
+    assert "was interrupted and not saved" in page
+    with connect(student_client, session_id) as ws:  # recording again clears the notice
+        frames = record(ws, part="heading", position=1, dwell_s=10, speed=60)
+    assert frames[-1]["type"] == "saved"
+    assert "was interrupted" not in student_client.get(f"/lab/sessions/{session_id}").text
+
+
+def test_redo_gives_a_new_take_with_new_noise(student_client):
+    session_id = new_session(student_client)
+    with connect(student_client, session_id) as ws:
+        record(ws, part="heading", position=1, dwell_s=10, speed=60)
+        record(ws, part="heading", position=1, dwell_s=10, speed=60)
+    with read_session() as db:
+        takes = db.exec(select(Take).order_by(Take.id)).all()
+        first, second = (load_samples(db, t)[0] for t in takes)
+    assert takes[0].superseded_at is not None and takes[1].superseded_at is None
+    assert not np.array_equal(first, second)
+
+
+def test_each_turn_gets_an_indexing_error(student_client):
+    session_id = new_session(student_client)
+    for position in (2, 3, 2):
+        turn(student_client, session_id, "heading", position)
+    turn(student_client, session_id, "heading", 2)  # already there: not a turn
+    with read_session() as db:
+        assert db.get(LabSession, session_id).sim_turns == 3
+
+
+def test_strangers_and_other_origins_are_refused(client, student, app):
+    from fastapi.testclient import TestClient
+
+    make_user("other", Role.student)
+    with TestClient(app, follow_redirects=False) as owner:
+        login(owner, "student1")
+        session_id = new_session(owner)
+        with (
+            pytest.raises(WebSocketDisconnect),
+            owner.websocket_connect(
+                f"/lab/sessions/{session_id}/stream", headers={"origin": "http://evil.example"}
+            ) as ws,
+        ):
+            ws.receive_json()
+    login(client, "other")
+    with pytest.raises(WebSocketDisconnect), connect(client, session_id) as ws:
+        ws.receive_json()
+    anonymous = TestClient(app)
+    with pytest.raises(WebSocketDisconnect), connect(anonymous, session_id) as ws:
+        ws.receive_json()
