@@ -31,6 +31,7 @@ CHROMIUM_ARGS = [
     "--disable-quic",
 ]
 TEACHER_PASSWORD = "e2e-teacher-pass-1"
+STUDENT_PASSWORD = "e2e-student-pass-1"
 
 
 @dataclass
@@ -73,6 +74,16 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
         "E2E Teacher 李老师",
         stdin=TEACHER_PASSWORD + "\n",
     )
+    server.gyrolab(
+        "create-user",
+        "--role",
+        "student",
+        "--username",
+        "student",
+        "--display-name",
+        "E2E 学生",
+        stdin=STUDENT_PASSWORD + "\n",
+    )
     log = open(var_dir / "server.log", "w")  # noqa: SIM115
     process = subprocess.Popen(
         [sys.executable, "-m", "app.cli", "serve", "--no-demo", "--port", str(port)],
@@ -114,6 +125,15 @@ def browser():
         )
         yield instance
         instance.close()
+
+
+def log_in(page, url: str, username: str, password: str) -> None:
+    page.goto(f"{url}/login")
+    page.fill("input[name=username]", username)
+    page.fill("input[name=password]", password)
+    with page.expect_navigation():
+        page.click("button[type=submit].primary")
+    assert "/login" not in page.url, f"log-in as {username} failed"
 
 
 @pytest.hookimpl(wrapper=True)

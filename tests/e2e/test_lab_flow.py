@@ -1,0 +1,117 @@
+"""A student does the handout's experiment in a real browser: typed, and from the simulator."""
+
+from __future__ import annotations
+
+import csv
+import re
+from pathlib import Path
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.e2e.conftest import ARTIFACTS, STUDENT_PASSWORD, log_in
+
+pytestmark = pytest.mark.e2e
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def table(name: str) -> list[list[str]]:
+    with open(DATA / name) as handle:
+        rows = list(csv.DictReader(handle))
+    return [[row[f"position_{i}"] for i in range(1, 5)] for row in rows]
+
+
+def start_practice(page, url: str) -> None:
+    page.goto(f"{url}/lab")
+    page.locator("#new-session button.primary").click()
+    page.wait_for_url(re.compile(r".*/lab/sessions/\d+$"))
+    page.wait_for_load_state("load")
+
+
+def test_student_types_the_handout_tables(live_server, new_page):
+    page = new_page()
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    start_practice(page, live_server.url)
+
+    # Part A: typed cell by cell, as a student would
+    cells = page.locator("#part-heading .readings-grid tbody tr")
+    for r, row in enumerate(table("handout_horizontal.csv")):
+        inputs = cells.nth(r).locator("input")
+        for c, value in enumerate(row):
+            inputs.nth(c).fill(value)
+    status = page.locator("#part-heading .grid-status")
+    expect(status).to_contain_text("40 readings")
+    page.locator("#part-heading .readings-grid tbody input").first.fill("10.7x")
+    expect(status).to_contain_text("not a number")
+    page.locator("#part-heading .readings-grid tbody input").first.fill("10.74")
+    with page.expect_navigation():
+        page.locator("#part-heading .save-manual").click()
+
+    # Part B: a whole block pasted from a spreadsheet
+    text = "\n".join("\t".join(row) for row in table("handout_vertical.csv"))
+    first = page.locator("#part-latitude .readings-grid tbody input").first
+    first.click()
+    page.evaluate(
+        """([selector, text]) => {
+            const data = new DataTransfer();
+            data.setData('text/plain', text);
+            document.querySelector(selector).dispatchEvent(
+                new ClipboardEvent('paste', {clipboardData: data, bubbles: true}));
+        }""",
+        ["#part-latitude .readings-grid tbody input", text],
+    )
+    expect(page.locator("#part-latitude .grid-status")).to_contain_text("Pasted 10 rows")
+    with page.expect_navigation():
+        page.locator("#part-latitude .save-manual").click()
+
+    expect(page.locator("#summary-heading .theta")).to_have_text("-10.75°")
+    expect(page.locator("#summary-heading")).to_contain_text("turn counter-clockwise by 10.75°")
+    expect(page.locator("#summary-latitude .latitude")).to_contain_text("40.73°")
+    expect(page.locator("#summary-latitude .earth-rate")).to_contain_text("15.133")
+    expect(page.locator("#summary-latitude .eta-phi")).to_have_text("2.00 %")
+    expect(page.locator("#summary-latitude .eta-omega")).to_have_text("0.62 %")
+    expect(page.locator(".chart[data-figure='heading-fit'] .main-svg").first).to_be_visible()
+    expect(page.locator(".chart[data-figure='heading-compass'] .main-svg").first).to_be_visible()
+
+
+def test_student_records_everything_from_the_simulated_gyro_and_submits(live_server, new_page):
+    page = new_page()
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    start_practice(page, live_server.url)
+    for part in ("heading", "latitude"):
+        for position in (1, 2, 3, 4):
+            section = page.locator(f"#part-{part}")
+            section.locator(".method-tab[data-method=simulator]").click()
+            step = section.locator(f".step[data-position='{position}']")
+            step.click()
+            if position > 1:
+                section.locator(".turn").click()
+                expect(section.locator(".table-position")).to_have_text(str(position))
+            section.locator(".dwell").fill("12")
+            section.locator(".speed").select_option("60")
+            with page.expect_navigation(timeout=20_000):
+                section.locator(".start-sim").click()
+                expect(section.locator(".sim-progress")).to_be_visible()
+            expect(page.locator(f"#part-{part} .step[data-position='{position}']")).to_contain_text(
+                "simulated gyro"
+            )
+    expect(page.locator("#summary-heading")).to_contain_text("Azimuth of position 1")
+    expect(page.locator("#summary-latitude .latitude")).to_contain_text("°")
+    page.once("dialog", lambda dialog: dialog.accept())
+    with page.expect_navigation():
+        page.locator("#submit-session").click()
+    expect(page.locator("#session-status")).to_have_text("submitted")
+    expect(page.locator(".flash-success")).to_contain_text("Submitted (attempt 1)")
+
+
+def test_session_page_in_chinese(live_server, new_page):
+    page = new_page(locale="zh-CN")
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    start_practice(page, live_server.url)
+    expect(page.locator("#part-heading h2")).to_have_text("A 部分 — 寻北")
+    expect(page.locator("#part-latitude h2")).to_contain_text("纬度与地球自转角速度")
+    expect(page.locator("#part-heading .method-tab[data-method=manual]")).to_have_text("手动输入")
+    page.locator("#part-heading .readings-grid tbody input").first.fill("abc")
+    expect(page.locator("#part-heading .grid-status")).to_contain_text("不是数字")
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS / "lab-session-zh-CN.png"), full_page=True)
