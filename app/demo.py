@@ -8,7 +8,7 @@ from pathlib import Path
 from sqlmodel import Session, func, select
 
 from app.accounts import create_user, enroll
-from app.models import Course, Role, User
+from app.models import Assignment, Course, Role, User
 from app.security import generate_password
 
 DEMO_TEACHER = ("teacher", "Demo Teacher 王老师")
@@ -18,6 +18,12 @@ DEMO_STUDENTS = (
     ("student3", "王五 Wang Wu"),
 )
 DEMO_COURSE = "Demo: FOG north-finding lab 光纤陀螺寻北实验"
+DEMO_ASSIGNMENT = "Four-position north finding 四位置法寻北"
+DEMO_INSTRUCTIONS = (
+    "Part A: turn the table counter-clockwise in 90° steps and take at least 10 readings at "
+    "each position. Part B: turn the gyro in the north–south vertical plane.\n"
+    "A 部分：转台逆时针每次转 90°，每个位置至少读 10 个数。B 部分：在南北竖直面内转动陀螺。"
+)
 
 
 def database_is_empty(db: Session) -> bool:
@@ -46,6 +52,11 @@ def create_demo_data(db: Session) -> list[tuple[str, str, str]]:
         )
         enroll(db, course, student)
         credentials.append(("student", username, password))
+    db.add(Assignment(
+        course_id=course.id, title=DEMO_ASSIGNMENT, latitude_deg=39.93, earth_rate_deg_h=15.04,
+        instructions=DEMO_INSTRUCTIONS, allowed_methods="manual,csv,simulator",
+        simulator_preset="teaching-fog", min_readings=10,
+    ))
     return credentials
 
 

@@ -2,6 +2,8 @@
 
 LAB_MESSAGES: dict[str, dict[str, str]] = {
     "nav.lab": {"en": "Lab", "zh-CN": "实验"},
+    "dashboard.lab_help": {"en": "Record your readings position by position — typed, from a CSV file or live from the simulated gyro — and see heading, latitude and Earth rate worked out step by step.", "zh-CN": "逐个位置记录读数（手动输入、CSV 文件或模拟陀螺实时采集），并按步骤算出北向、纬度和地球自转角速度。"},
+    "dashboard.open_lab": {"en": "Open the lab", "zh-CN": "进入实验"},
     "lab.title": {"en": "Lab sessions", "zh-CN": "实验记录"},
     "lab.assignments": {"en": "Assignments", "zh-CN": "实验作业"},
     "lab.no_assignments": {
