@@ -193,3 +193,74 @@ def allan_figure(part_result, _: Callable[..., str], minimum_samples: int = 1000
             "yaxis": {"type": "log", "title": {"text": _("chart.adev")}},
         },
     }
+
+
+def class_error_figure(rows, _: Callable[..., str]) -> dict:
+    """Each student's heading error (°) and latitude error (%) with 1σ error bars."""
+    names, heading, heading_sigma, latitude, latitude_sigma = [], [], [], [], []
+    for row in rows:
+        if not row.attempts:
+            continue
+        names.append(row.student.display_name)
+        head = row.results.get("heading") or {}
+        lat = row.results.get("latitude") or {}
+        heading.append(row.check_error("heading"))
+        heading_sigma.append(head.get("azimuth_sigma_deg"))
+        latitude.append(row.check_error("latitude"))
+        sigma = lat.get("latitude_sigma_deg")
+        truth = row.truth.latitude_deg if row.truth else None
+        latitude_sigma.append(sigma / abs(truth) * 100 if sigma is not None and truth else None)
+    return {
+        "data": [
+            {
+                "type": "scatter",
+                "mode": "markers",
+                "name": _("review.heading_error"),
+                "x": names,
+                "y": heading,
+                "error_y": {"type": "data", "array": heading_sigma, "visible": True},
+                "marker": {"size": 10, "color": COLORS[0]},
+            },
+            {
+                "type": "scatter",
+                "mode": "markers",
+                "name": _("review.latitude_error"),
+                "x": names,
+                "y": latitude,
+                "yaxis": "y2",
+                "marker": {"size": 10, "symbol": "diamond", "color": COLORS[1]},
+                "error_y": {"type": "data", "array": latitude_sigma, "visible": True},
+            },
+        ],
+        "layout": {
+            **LAYOUT,
+            "title": {"text": _("review.class_errors_title")},
+            "yaxis": {"title": {"text": _("review.heading_error")}, "zeroline": True},
+            "yaxis2": {
+                "title": {"text": _("review.latitude_error")},
+                "overlaying": "y",
+                "side": "right",
+                "rangemode": "tozero",
+            },
+        },
+    }
+
+
+def class_histogram_figure(rows, _: Callable[..., str]) -> dict:
+    errors = [row.check_error("heading") for row in rows if row.attempts]
+    return {
+        "data": [
+            {
+                "type": "histogram",
+                "x": [e for e in errors if e is not None],
+                "name": _("review.heading_error"),
+                "marker": {"color": COLORS[0]},
+            }
+        ],
+        "layout": {
+            **LAYOUT,
+            "title": {"text": _("review.histogram_title")},
+            "xaxis": {"title": {"text": _("review.heading_error")}},
+            "yaxis": {"title": {"text": _("review.students")}},
+        },
+    }

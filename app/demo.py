@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import os
+import random
 from pathlib import Path
 
 from sqlmodel import Session, func, select
 
 from app.accounts import create_user, enroll
-from app.models import Assignment, Course, Role, User
+from app.labsim import SimulatedTake
+from app.labstore import store_take, submit
+from app.models import Assignment, Course, LabSession, Role, User
+from app.review import draw_truth
 from app.security import generate_password
 
 DEMO_TEACHER = ("teacher", "Demo Teacher 王老师")
@@ -31,33 +35,65 @@ def database_is_empty(db: Session) -> bool:
 
 
 def create_demo_data(db: Session) -> list[tuple[str, str, str]]:
-    """Create the demo accounts and course; returns (role, username, password) rows."""
+    """Create the demo accounts, course, assignment and some students' work.
+
+    Returns (role, username, password) rows.
+    """
     credentials = []
     teacher_password = generate_password()
-    teacher = create_user(
-        db,
-        username=DEMO_TEACHER[0],
-        display_name=DEMO_TEACHER[1],
-        role=Role.teacher,
-        password=teacher_password,
-    )
+    teacher = create_user(db, username=DEMO_TEACHER[0], display_name=DEMO_TEACHER[1],
+                          role=Role.teacher, password=teacher_password)
     credentials.append(("teacher", teacher.username, teacher_password))
     course = Course(name=DEMO_COURSE, teacher_id=teacher.id)
     db.add(course)
     db.flush()
+    students = []
     for username, name in DEMO_STUDENTS:
         password = generate_password()
-        student = create_user(
-            db, username=username, display_name=name, role=Role.student, password=password
-        )
+        student = create_user(db, username=username, display_name=name, role=Role.student,
+                              password=password)
         enroll(db, course, student)
+        students.append(student)
         credentials.append(("student", username, password))
-    db.add(Assignment(
+    assignment = Assignment(
         course_id=course.id, title=DEMO_ASSIGNMENT, latitude_deg=39.93, earth_rate_deg_h=15.04,
         instructions=DEMO_INSTRUCTIONS, allowed_methods="manual,csv,simulator",
         simulator_preset="teaching-fog", min_readings=10,
-    ))
+    )
+    db.add(assignment)
+    db.flush()
+    add_demo_work(db, assignment, students)
     return credentials
+
+
+def add_demo_work(db: Session, assignment: Assignment, students: list[User]) -> None:
+    """Two students submitted a full simulated run and the third has done part A only, so a
+    newcomer's teacher dashboard shows real data."""
+    rng = random.Random(2026)
+    plans = [(students[0], ("heading", "latitude"), 30, True),
+             (students[1], ("heading", "latitude"), 20, True),
+             (students[2], ("heading",), 15, False)]
+    for student, parts, dwell, submit_it in plans:
+        session = LabSession(owner_id=student.id, assignment_id=assignment.id,
+                             title=assignment.title, latitude_deg=assignment.latitude_deg,
+                             earth_rate_deg_h=assignment.earth_rate_deg_h,
+                             simulator_preset=assignment.simulator_preset,
+                             min_readings=assignment.min_readings,
+                             sim_seed=rng.getrandbits(62))
+        draw_truth(assignment, session, rng)
+        db.add(session)
+        db.flush()
+        for part in parts:
+            for position in range(1, 5):
+                if position > 1:
+                    session.sim_turns += 1
+                take = SimulatedTake(session, part, position, 0, settle_s=5.0)
+                values, times = take.next(int(dwell * take.rate_hz))
+                store_take(db, session, part=part, position=position,
+                           angle_deg=take.dial_angle_deg, values=values, times=times,
+                           source="simulator")
+        if submit_it:
+            submit(db, session)
 
 
 def write_credentials_file(path: Path, credentials: list[tuple[str, str, str]]) -> None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import secrets
+from dataclasses import replace
 
 import numpy as np
 
@@ -32,7 +33,18 @@ def derived_seed(session: LabSession, *labels: object) -> int:
 
 
 def preset_for(session: LabSession):
-    return PRESETS.get(session.simulator_preset, PRESETS["teaching-fog"])
+    """The session's gyro, with an assignment's indexing-error override applied."""
+    preset = PRESETS.get(session.simulator_preset, PRESETS["teaching-fog"])
+    if session.sim_indexing_sigma_arcsec is not None:
+        preset = replace(preset, indexing_sigma_arcsec=session.sim_indexing_sigma_arcsec)
+    return preset
+
+
+def turn_on_bias(session: LabSession) -> float:
+    """The session's turn-on bias: drawn by its assignment, else by the preset's model."""
+    if session.sim_turn_on_bias_deg_h is not None:
+        return session.sim_turn_on_bias_deg_h
+    return GyroStream(preset_for(session), derived_seed(session, "power-on")).turn_on_bias_deg_h
 
 
 def indexing_error_deg(session: LabSession, turn: int) -> float:
@@ -58,7 +70,7 @@ class SimulatedTake:
         self, session: LabSession, part: str, position: int, attempt: int, settle_s: float
     ) -> None:
         preset = preset_for(session)
-        turn_on = GyroStream(preset, derived_seed(session, "power-on")).turn_on_bias_deg_h
+        turn_on = turn_on_bias(session)
         self.preset = preset
         self.stream = GyroStream(preset, derived_seed(session, part, position, attempt))
         self.stream.turn_on_bias_deg_h = turn_on  # one power-on per session

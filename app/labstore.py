@@ -15,7 +15,7 @@ from app import __version__
 from app.core.exceptions import GyroInputError
 from app.core.explain import explain_heading, explain_latitude
 from app.core.solve import solve_heading, solve_latitude
-from app.models import Attempt, LabSession, SampleChunk, Take, utcnow
+from app.models import Assignment, Attempt, LabSession, SampleChunk, Take, utcnow
 from app.samples import chunks, unpack
 
 PARTS = ("heading", "latitude")
@@ -86,6 +86,12 @@ def store_take(
 ) -> Take:
     """Add a take (values in °/h) and supersede the previous one; the caller commits once,
     so the position is either fully saved or not at all."""
+    if session.status == "graded":
+        raise GyroInputError("lab.already_graded", "This work has been graded.")
+    if session.status == "submitted" and session.assignment_id is not None:
+        raise GyroInputError(
+            "lab.awaiting_review", "Your last attempt is waiting for your teacher's review."
+        )
     if part not in PARTS or not 1 <= position <= POSITIONS:
         raise GyroInputError("lab.bad_position", "No such position.")
     if values.size == 0:
@@ -143,7 +149,7 @@ def store_take(
     for seq, value_blob, time_blob in chunks(values, times):
         db.add(SampleChunk(take_id=take.id, seq=seq, values=value_blob, times=time_blob))
     session.updated_at = now
-    if session.status == "submitted":
+    if session.status in ("submitted", "returned"):
         session.status = "in_progress"  # an edit after submitting starts a new attempt
     db.add(session)
     return take
@@ -228,19 +234,46 @@ def results_json(results: dict[str, PartResult]) -> dict:
 
 
 def submit(db: Session, session: LabSession) -> Attempt:
-    """Freeze the current data and results as a new attempt."""
+    """Freeze the current data and results as a new attempt.
+
+    An assignment's rules apply: no new attempt while the last one awaits review or after
+    grading, at most ``max_attempts``, and after the due date either refused or flagged late.
+    """
+    assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
+    previous = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
+    if session.status == "graded":
+        raise GyroInputError("lab.already_graded", "This work has been graded.")
+    if assignment is not None and session.status == "submitted":
+        raise GyroInputError(
+            "lab.awaiting_review", "Your last attempt is waiting for your teacher's review."
+        )
+    if (
+        assignment is not None
+        and assignment.max_attempts
+        and len(previous) >= assignment.max_attempts
+    ):
+        raise GyroInputError(
+            "lab.no_attempts_left",
+            f"All {assignment.max_attempts} attempts are used.",
+            limit=assignment.max_attempts,
+        )
+    now = utcnow()
+    late = bool(assignment and assignment.due_at and now > assignment.due_at)
+    if late and assignment.late_policy == "refuse":
+        raise GyroInputError("lab.past_due", "The due date has passed; submissions are closed.")
     results = session_results(db, session)
     if all(outcome.result is None for outcome in results.values()):
         raise GyroInputError(
             "lab.nothing_to_submit", "There is no result to submit yet: record the positions first."
         )
-    previous = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
     takes = current_takes(db, session.id)
     attempt = Attempt(
         session_id=session.id,
         number=len(previous) + 1,
         take_ids=",".join(str(t.id) for t in takes),
         results_json=json.dumps(_finite(results_json(results))),
+        submitted_at=now,
+        late=late,
     )
     session.status = "submitted"
     session.updated_at = utcnow()

@@ -15,7 +15,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from app import __version__
 from app.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequired
 from app.paths import STATIC_DIR
-from app.routers import assignments, auth, courses, home, lab, stream
+from app.routers import assignments, auth, courses, home, lab, review, stream
 from app.web import redirect, render
 
 PLOTLY_JS = Path(plotly.__file__).parent / "package_data" / "plotly.min.js"
@@ -115,6 +115,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(courses.router)
     app.include_router(assignments.router)
     app.include_router(lab.router)
+    app.include_router(review.router)
     app.include_router(stream.router)
     return app
 

@@ -91,6 +91,20 @@ class Assignment(SQLModel, table=True):
     min_readings: int = 10
     due_at: datetime | None = None
     created_at: datetime = Field(default_factory=utcnow)
+    # secret truth drawn per student for simulator runs
+    azimuth_min_deg: float = 0.0
+    azimuth_max_deg: float = 360.0
+    turn_on_bias_max_deg_h: float | None = None  # None: the preset's own turn-on bias
+    indexing_sigma_arcsec: float | None = None  # None: the preset's own
+    true_heading_deg: float | None = None  # a real bench's known start azimuth, if any
+    # auto-check tolerances
+    tolerance_heading_deg: float = 2.0
+    tolerance_latitude_pct: float = 5.0
+    tolerance_earth_rate_pct: float = 5.0
+    max_attempts: int = 3  # 0 = unlimited
+    late_policy: str = Field(default="accept", max_length=8)  # accept (and flag) | refuse
+    # when students may see their truth: never | after_submission | after_grading
+    reveal_truth: str = Field(default="after_grading", max_length=20)
 
     @property
     def methods(self) -> list[str]:
@@ -124,7 +138,15 @@ class LabSession(SQLModel, table=True):
     sim_table_latitude: int = 1
     stream_part: str | None = Field(default=None, max_length=8)  # a live recording under way
     stream_position: int | None = None
+    sim_turn_on_bias_deg_h: float | None = None  # drawn per student by an assignment
+    sim_indexing_sigma_arcsec: float | None = None
+    # in_progress | submitted | returned | graded
     status: str = Field(default="in_progress", max_length=16)
+    grade: str | None = Field(default=None, max_length=32)
+    feedback: str = Field(default="", max_length=20_000)
+    feedback_positions: str = Field(default="{}", max_length=20_000)  # JSON {"heading-1": "..."}
+    graded_at: datetime | None = None
+    returned_at: datetime | None = None
     created_at: datetime = Field(default_factory=utcnow)
     updated_at: datetime = Field(default_factory=utcnow)
 
@@ -165,3 +187,4 @@ class Attempt(SQLModel, table=True):
     take_ids: str = Field(max_length=2000)  # comma-separated current takes
     results_json: str
     submitted_at: datetime = Field(default_factory=utcnow)
+    late: bool = False

@@ -6,7 +6,7 @@ from fastapi import APIRouter, Request
 from sqlmodel import select
 
 from app.deps import CurrentUser, SessionDep
-from app.models import Course, Enrollment, Role, User
+from app.models import Assignment, Course, Enrollment, LabSession, Role, User
 from app.web import render
 
 router = APIRouter(tags=["pages: home"], include_in_schema=False)
@@ -34,4 +34,10 @@ def dashboard(request: Request, user: CurrentUser, db: SessionDep):
         .where(Enrollment.student_id == user.id, Course.archived == False)  # noqa: E712
         .order_by(Course.name)
     ).all()
-    return render(request, "dashboard/student.html", {"courses": rows})
+    work = db.exec(
+        select(LabSession, Assignment)
+        .join(Assignment, Assignment.id == LabSession.assignment_id)
+        .where(LabSession.owner_id == user.id)
+        .order_by(LabSession.updated_at.desc())
+    ).all()
+    return render(request, "dashboard/student.html", {"courses": rows, "work": work})

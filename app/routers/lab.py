@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import random
 from datetime import datetime
 from typing import Annotated, Literal
 
@@ -32,6 +33,7 @@ from app.labstore import (
     take_history,
 )
 from app.models import Assignment, Attempt, Course, Enrollment, LabSession, Role, User, utcnow
+from app.review import auto_check, draw_truth, session_truth, truth_visible
 from app.web import csrf_token_for, flash, redirect, render, request_language
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
@@ -158,6 +160,14 @@ def create_session(
     )
     if assignment_id is not None:
         assignment = visible_assignment(db, user, assignment_id)
+        existing = db.exec(
+            select(LabSession).where(
+                LabSession.assignment_id == assignment.id, LabSession.owner_id == user.id
+            )
+        ).first()
+        if existing is not None:  # one session per student and assignment
+            return redirect(f"/lab/sessions/{existing.id}")
+        draw_truth(assignment, session, random.SystemRandom())
         session.assignment_id = assignment.id
         session.latitude_deg = assignment.latitude_deg
         session.earth_rate_deg_h = assignment.earth_rate_deg_h
@@ -211,14 +221,10 @@ def _figures(results, _) -> dict[str, dict]:
 def session_page(request: Request, session_id: int, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
     _ = translator(request_language(request))
-    results = session_results(db, session)
     attempts = db.exec(
         select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
     ).all()
     assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
-    nominal = {
-        part: [nominal_angle(session, part, k) for k in range(1, POSITIONS + 1)] for part in PARTS
-    }
     config = {
         "sessionId": session.id,
         "csrf": csrf_token_for(request),
@@ -226,29 +232,59 @@ def session_page(request: Request, session_id: int, user: CurrentUser, db: Sessi
         "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
         "messages": {key: _(key) for key in JS_MESSAGES},
     }
+    editable = session.status != "graded" and not (
+        session.assignment_id and session.status == "submitted"
+    )
     return render(
         request,
         "lab/session.html",
         {
-            "session": session,
-            "results": results,
-            "figures": _figures(results, _),
-            "attempts": attempts,
-            "assignment": assignment,
+            **session_view(db, session, assignment, attempts, _),
             "history": take_history(db, session.id),
             "methods": allowed_methods(db, session),
             "units": UNITS,
-            "nominal": nominal,
             "unit_names": UNIT_NAMES,
-            "drawing": drawing_coordinates(session),
-            "positions": range(1, POSITIONS + 1),
-            "preset": PRESETS.get(session.simulator_preset),
             "plotly_url": request.app.state.plotly_url,
             "interrupted": session.stream_part,
             "config": config,
-            "error_text": lambda error: error_text(error, _),
+            "editable": editable,
+            "reviewer": False,
         },
     )
+
+
+def session_view(db: Session, session: LabSession, assignment, attempts, _) -> dict:
+    """What both the student's page and the teacher's review show of a session."""
+    results = session_results(db, session)
+    nominal = {
+        part: [nominal_angle(session, part, k) for k in range(1, POSITIONS + 1)] for part in PARTS
+    }
+    shows_feedback = session.status in ("returned", "graded")
+    visible = truth_visible(session, assignment, len(attempts))
+    truth = session_truth(db, session, assignment) if visible else None
+    check = None
+    if truth is not None and assignment is not None and attempts:
+        check = auto_check(json.loads(attempts[-1].results_json), truth, assignment)
+    return {
+        "session": session,
+        "results": results,
+        "figures": _figures(results, _),
+        "attempts": attempts,
+        "assignment": assignment,
+        "nominal": nominal,
+        "drawing": drawing_coordinates(session),
+        "positions": range(1, POSITIONS + 1),
+        "preset": PRESETS.get(session.simulator_preset),
+        "error_text": lambda error: error_text(error, _),
+        "truth": truth,
+        "check": check,
+        "feedback": session.feedback if shows_feedback else "",
+        "position_feedback": json.loads(session.feedback_positions or "{}")
+        if shows_feedback
+        else {},
+        "grade": session.grade if session.status == "graded" else None,
+        "attempt_results": [(a, json.loads(a.results_json)) for a in attempts],
+    }
 
 
 UNIT_NAMES = {"deg/h": "°/h", "deg/s": "°/s", "rad/s": "rad/s"}

@@ -1,0 +1,317 @@
+"""Teacher review: each student's truth, auto-checks, statuses, class rows and exports.
+
+Heading truth: the session's secret simulator azimuth when every heading position came
+from the simulated gyro; otherwise the assignment's known bench azimuth, if the teacher
+gave one.  Latitude and Earth-rate truth: the assignment's station values.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import random
+from dataclasses import dataclass, field
+from datetime import datetime
+
+from sqlmodel import Session, select
+
+from app.core.solve import percent_error, wrap180
+from app.labstore import current_takes, load_samples
+from app.models import Assignment, Attempt, Enrollment, LabSession, User, utcnow
+
+STATUSES = ("not_started", "in_progress", "submitted", "returned", "graded")
+
+
+def draw_truth(assignment: Assignment, session: LabSession, rng: random.Random) -> None:
+    """Give a new assignment session its secret truth from the teacher's ranges."""
+    low, high = assignment.azimuth_min_deg, assignment.azimuth_max_deg
+    span = (high - low) % 360.0 or (360.0 if high != low else 0.0)
+    session.sim_azimuth_deg = (low + rng.random() * span) % 360.0
+    if assignment.turn_on_bias_max_deg_h is not None:
+        limit = abs(assignment.turn_on_bias_max_deg_h)
+        session.sim_turn_on_bias_deg_h = rng.uniform(-limit, limit)
+    session.sim_indexing_sigma_arcsec = assignment.indexing_sigma_arcsec
+
+
+@dataclass
+class Truth:
+    azimuth_deg: float | None
+    latitude_deg: float
+    earth_rate_deg_h: float
+    turn_on_bias_deg_h: float | None
+    azimuth_source: str | None  # "simulator" | "bench" | None
+
+
+def session_truth(db: Session, session: LabSession, assignment: Assignment | None) -> Truth:
+    from app.labsim import turn_on_bias
+
+    heading_sources = {t.source for t in current_takes(db, session.id) if t.part == "heading"}
+    azimuth, source = None, None
+    if heading_sources == {"simulator"}:
+        azimuth, source = session.sim_azimuth_deg, "simulator"
+    elif assignment is not None and assignment.true_heading_deg is not None:
+        azimuth, source = assignment.true_heading_deg, "bench"
+    uses_simulator = any(t.source == "simulator" for t in current_takes(db, session.id))
+    return Truth(
+        azimuth,
+        session.latitude_deg,
+        session.earth_rate_deg_h,
+        turn_on_bias(session) if uses_simulator else None,
+        source,
+    )
+
+
+@dataclass
+class Check:
+    name: str  # heading | latitude | earth_rate
+    error: float | None  # degrees for heading, percent otherwise
+    tolerance: float
+    passed: bool | None  # None: cannot be checked
+
+
+@dataclass
+class AutoCheck:
+    checks: list[Check] = field(default_factory=list)
+
+    @property
+    def passed(self) -> bool | None:
+        decided = [c.passed for c in self.checks if c.passed is not None]
+        if not decided:
+            return None
+        return all(decided)
+
+
+def heading_error(azimuth_deg: float | None, truth_deg: float | None) -> float | None:
+    """Estimate − truth wrapped to (−180°, 180°]: 359.5° against 0.5° is −1°, not 359°."""
+    if azimuth_deg is None or truth_deg is None:
+        return None
+    return wrap180(azimuth_deg - truth_deg)
+
+
+def auto_check(results: dict, truth: Truth, assignment: Assignment) -> AutoCheck:
+    """Compare a results dict (the solve JSON of each part) with the truth."""
+    heading = results.get("heading") or {}
+    latitude = results.get("latitude") or {}
+    checks = []
+    error = heading_error(heading.get("azimuth_deg"), truth.azimuth_deg)
+    checks.append(
+        Check(
+            "heading",
+            error,
+            assignment.tolerance_heading_deg,
+            None if error is None else abs(error) <= assignment.tolerance_heading_deg,
+        )
+    )
+    lat_error = (
+        percent_error(latitude["latitude_deg"], truth.latitude_deg)
+        if latitude.get("latitude_deg") is not None
+        else None
+    )
+    checks.append(
+        Check(
+            "latitude",
+            lat_error,
+            assignment.tolerance_latitude_pct,
+            None if lat_error is None else lat_error <= assignment.tolerance_latitude_pct,
+        )
+    )
+    rate_error = (
+        percent_error(latitude["earth_rate_deg_h"], truth.earth_rate_deg_h)
+        if latitude.get("earth_rate_deg_h") is not None
+        else None
+    )
+    checks.append(
+        Check(
+            "earth_rate",
+            rate_error,
+            assignment.tolerance_earth_rate_pct,
+            None if rate_error is None else rate_error <= assignment.tolerance_earth_rate_pct,
+        )
+    )
+    return AutoCheck(checks)
+
+
+def truth_visible(session: LabSession, assignment: Assignment | None, attempts: int) -> bool:
+    """May the student see their secret truth now?"""
+    if assignment is None:
+        return attempts > 0  # practice: after submitting
+    if assignment.reveal_truth == "after_submission":
+        return attempts > 0
+    if assignment.reveal_truth == "after_grading":
+        return session.status == "graded"
+    return False
+
+
+def is_late(assignment: Assignment | None, when: datetime) -> bool:
+    return bool(assignment and assignment.due_at and when > assignment.due_at)
+
+
+def data_fingerprint(db: Session, session: LabSession) -> tuple[str | None, str | None]:
+    """(hash of the exact samples, hash of the position means to 0.001 °/h) of current data."""
+    takes = sorted(current_takes(db, session.id), key=lambda t: (t.part, t.position))
+    if not takes:
+        return None, None
+    exact, rounded = hashlib.sha256(), hashlib.sha256()
+    for take in takes:
+        values, _ = load_samples(db, take)
+        exact.update(f"{take.part}{take.position}".encode() + values.tobytes())
+        rounded.update(f"{take.part}{take.position}:{values.mean():.3f};".encode())
+    return exact.hexdigest(), rounded.hexdigest()
+
+
+@dataclass
+class StudentRow:
+    student: User
+    session: LabSession | None
+    attempts: list[Attempt]
+    status: str
+    results: dict
+    truth: Truth | None
+    check: AutoCheck | None
+    flags: list[dict]
+    late: bool
+    duplicate_of: list[str] = field(default_factory=list)
+
+    @property
+    def submitted_at(self) -> datetime | None:
+        return self.attempts[-1].submitted_at if self.attempts else None
+
+    def check_error(self, name: str) -> float | None:
+        if self.check is None:
+            return None
+        return next((c.error for c in self.check.checks if c.name == name), None)
+
+
+def latest_results(attempts: list[Attempt]) -> dict:
+    return json.loads(attempts[-1].results_json) if attempts else {}
+
+
+def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
+    """One row per enrolled student, with their submitted (latest attempt) results."""
+    from app.labstore import session_results
+
+    students = db.exec(
+        select(User)
+        .join(Enrollment, Enrollment.student_id == User.id)
+        .where(Enrollment.course_id == assignment.course_id)
+        .order_by(User.username)
+    ).all()
+    rows = []
+    fingerprints: dict[str, list[str]] = {}
+    for student in students:
+        session = db.exec(
+            select(LabSession).where(
+                LabSession.assignment_id == assignment.id, LabSession.owner_id == student.id
+            )
+        ).first()
+        if session is None:
+            rows.append(StudentRow(student, None, [], "not_started", {}, None, None, [], False))
+            continue
+        attempts = list(
+            db.exec(
+                select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
+            ).all()
+        )
+        results = latest_results(attempts)
+        truth = session_truth(db, session, assignment)
+        check = auto_check(results, truth, assignment) if attempts else None
+        flags = []
+        for outcome in session_results(db, session).values():
+            flags.extend(outcome.flags)
+        row = StudentRow(
+            student,
+            session,
+            attempts,
+            session.status,
+            results,
+            truth,
+            check,
+            flags,
+            any(a.late for a in attempts),
+        )
+        rows.append(row)
+        for print_ in data_fingerprint(db, session):
+            if print_:
+                fingerprints.setdefault(print_, []).append(student.username)
+    for row in rows:
+        if row.session is None:
+            continue
+        for print_ in data_fingerprint(db, row.session):
+            others = [u for u in fingerprints.get(print_, []) if u != row.student.username]
+            row.duplicate_of.extend(u for u in others if u not in row.duplicate_of)
+    return rows
+
+
+def status_counts(rows: list[StudentRow]) -> dict[str, int]:
+    counts = dict.fromkeys(STATUSES, 0)
+    for row in rows:
+        counts[row.status] = counts.get(row.status, 0) + 1
+    return counts
+
+
+def export_rows(rows: list[StudentRow]) -> list[list]:
+    """The assignment CSV: identifiers, status, results, errors, grade, late flag."""
+    header = [
+        "username",
+        "display_name",
+        "status",
+        "attempts",
+        "submitted_at_utc",
+        "late",
+        "azimuth_deg",
+        "azimuth_sigma_deg",
+        "heading_error_deg",
+        "latitude_deg",
+        "latitude_error_percent",
+        "earth_rate_deg_h",
+        "earth_rate_error_percent",
+        "auto_check",
+        "grade",
+        "flags",
+        "identical_data_with",
+    ]
+    out = [header]
+    for row in rows:
+        heading = row.results.get("heading") or {}
+        latitude = row.results.get("latitude") or {}
+        passed = None if row.check is None else row.check.passed
+        out.append(
+            [
+                row.student.username,
+                row.student.display_name,
+                row.status,
+                len(row.attempts),
+                row.submitted_at.strftime("%Y-%m-%d %H:%M:%S") if row.submitted_at else "",
+                "yes" if row.late else "no",
+                _num(heading.get("azimuth_deg")),
+                _num(heading.get("azimuth_sigma_deg")),
+                _num(row.check_error("heading")),
+                _num(latitude.get("latitude_deg")),
+                _num(row.check_error("latitude")),
+                _num(latitude.get("earth_rate_deg_h")),
+                _num(row.check_error("earth_rate")),
+                "" if passed is None else ("pass" if passed else "fail"),
+                (row.session.grade or "") if row.session and row.session.status == "graded" else "",
+                ";".join(sorted({f["key"].split(".")[-1] for f in row.flags})),
+                ";".join(row.duplicate_of),
+            ]
+        )
+    return out
+
+
+def _num(value: float | None) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return ""
+    return f"{value:.4f}"
+
+
+def return_for_revision(session: LabSession) -> None:
+    session.status = "returned"
+    session.returned_at = utcnow()
+
+
+def grade_and_release(session: LabSession, grade: str) -> None:
+    session.grade = grade
+    session.status = "graded"
+    session.graded_at = utcnow()
