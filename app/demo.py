@@ -41,8 +41,13 @@ def create_demo_data(db: Session) -> list[tuple[str, str, str]]:
     """
     credentials = []
     teacher_password = generate_password()
-    teacher = create_user(db, username=DEMO_TEACHER[0], display_name=DEMO_TEACHER[1],
-                          role=Role.teacher, password=teacher_password)
+    teacher = create_user(
+        db,
+        username=DEMO_TEACHER[0],
+        display_name=DEMO_TEACHER[1],
+        role=Role.teacher,
+        password=teacher_password,
+    )
     credentials.append(("teacher", teacher.username, teacher_password))
     course = Course(name=DEMO_COURSE, teacher_id=teacher.id)
     db.add(course)
@@ -50,15 +55,21 @@ def create_demo_data(db: Session) -> list[tuple[str, str, str]]:
     students = []
     for username, name in DEMO_STUDENTS:
         password = generate_password()
-        student = create_user(db, username=username, display_name=name, role=Role.student,
-                              password=password)
+        student = create_user(
+            db, username=username, display_name=name, role=Role.student, password=password
+        )
         enroll(db, course, student)
         students.append(student)
         credentials.append(("student", username, password))
     assignment = Assignment(
-        course_id=course.id, title=DEMO_ASSIGNMENT, latitude_deg=39.93, earth_rate_deg_h=15.04,
-        instructions=DEMO_INSTRUCTIONS, allowed_methods="manual,csv,simulator",
-        simulator_preset="teaching-fog", min_readings=10,
+        course_id=course.id,
+        title=DEMO_ASSIGNMENT,
+        latitude_deg=39.93,
+        earth_rate_deg_h=15.04,
+        instructions=DEMO_INSTRUCTIONS,
+        allowed_methods="manual,csv,simulator",
+        simulator_preset="teaching-fog",
+        min_readings=10,
     )
     db.add(assignment)
     db.flush()
@@ -70,16 +81,22 @@ def add_demo_work(db: Session, assignment: Assignment, students: list[User]) -> 
     """Two students submitted a full simulated run and the third has done part A only, so a
     newcomer's teacher dashboard shows real data."""
     rng = random.Random(2026)
-    plans = [(students[0], ("heading", "latitude"), 30, True),
-             (students[1], ("heading", "latitude"), 20, True),
-             (students[2], ("heading",), 15, False)]
+    plans = [
+        (students[0], ("heading", "latitude"), 30, True),
+        (students[1], ("heading", "latitude"), 20, True),
+        (students[2], ("heading",), 15, False),
+    ]
     for student, parts, dwell, submit_it in plans:
-        session = LabSession(owner_id=student.id, assignment_id=assignment.id,
-                             title=assignment.title, latitude_deg=assignment.latitude_deg,
-                             earth_rate_deg_h=assignment.earth_rate_deg_h,
-                             simulator_preset=assignment.simulator_preset,
-                             min_readings=assignment.min_readings,
-                             sim_seed=rng.getrandbits(62))
+        session = LabSession(
+            owner_id=student.id,
+            assignment_id=assignment.id,
+            title=assignment.title,
+            latitude_deg=assignment.latitude_deg,
+            earth_rate_deg_h=assignment.earth_rate_deg_h,
+            simulator_preset=assignment.simulator_preset,
+            min_readings=assignment.min_readings,
+            sim_seed=rng.getrandbits(62),
+        )
         draw_truth(assignment, session, rng)
         db.add(session)
         db.flush()
@@ -89,9 +106,16 @@ def add_demo_work(db: Session, assignment: Assignment, students: list[User]) -> 
                     session.sim_turns += 1
                 take = SimulatedTake(session, part, position, 0, settle_s=5.0)
                 values, times = take.next(int(dwell * take.rate_hz))
-                store_take(db, session, part=part, position=position,
-                           angle_deg=take.dial_angle_deg, values=values, times=times,
-                           source="simulator")
+                store_take(
+                    db,
+                    session,
+                    part=part,
+                    position=position,
+                    angle_deg=take.dial_angle_deg,
+                    values=values,
+                    times=times,
+                    source="simulator",
+                )
         if submit_it:
             submit(db, session)
 

@@ -12,6 +12,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -57,14 +58,49 @@ def free_port() -> int:
         return sock.getsockname()[1]
 
 
-@pytest.fixture(scope="module")
-def live_server(tmp_path_factory) -> Iterator[LiveServer]:
-    var_dir = tmp_path_factory.mktemp("live-var")
+@contextmanager
+def running_server(var_dir: Path, *serve_args: str) -> Iterator[LiveServer]:
+    """``gyrolab serve`` in a subprocess on a free loopback port, stopped afterwards."""
     port = free_port()
     env = {**os.environ, "GYROLAB_VAR_DIR": str(var_dir)}
     env.pop("GYROLAB_DATABASE_URL", None)
     server = LiveServer(f"http://127.0.0.1:{port}", var_dir, env)
-    server.gyrolab(
+    yield_server = server
+    with open(var_dir / "server.log", "w") as log:
+        process = subprocess.Popen(
+            [sys.executable, "-m", "app.cli", "serve", "--port", str(port), *serve_args],
+            env=env,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+        )
+        try:
+            deadline = time.monotonic() + 60
+            while True:
+                try:
+                    if httpx.get(f"{server.url}/login", timeout=1).status_code == 200:
+                        break
+                except httpx.HTTPError:
+                    pass
+                if process.poll() is not None or time.monotonic() > deadline:
+                    raise RuntimeError((var_dir / "server.log").read_text())
+                time.sleep(0.2)
+            yield yield_server
+        finally:
+            process.terminate()
+            try:
+                process.wait(10)
+            except subprocess.TimeoutExpired:
+                process.kill()
+
+
+@pytest.fixture(scope="module")
+def live_server(tmp_path_factory) -> Iterator[LiveServer]:
+    """An empty installation with one teacher and one student."""
+    var_dir = tmp_path_factory.mktemp("live-var")
+    env = {**os.environ, "GYROLAB_VAR_DIR": str(var_dir)}
+    env.pop("GYROLAB_DATABASE_URL", None)
+    setup = LiveServer("", var_dir, env)
+    setup.gyrolab(
         "create-user",
         "--role",
         "teacher",
@@ -74,7 +110,7 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
         "E2E Teacher 李老师",
         stdin=TEACHER_PASSWORD + "\n",
     )
-    server.gyrolab(
+    setup.gyrolab(
         "create-user",
         "--role",
         "student",
@@ -84,31 +120,20 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
         "E2E 学生",
         stdin=STUDENT_PASSWORD + "\n",
     )
-    log = open(var_dir / "server.log", "w")  # noqa: SIM115
-    process = subprocess.Popen(
-        [sys.executable, "-m", "app.cli", "serve", "--no-demo", "--port", str(port)],
-        env=env,
-        stdout=log,
-        stderr=subprocess.STDOUT,
-    )
-    deadline = time.monotonic() + 30
-    while True:
-        try:
-            if httpx.get(f"{server.url}/login", timeout=1).status_code == 200:
-                break
-        except httpx.HTTPError:
-            pass
-        if process.poll() is not None or time.monotonic() > deadline:
-            process.kill()
-            raise RuntimeError((var_dir / "server.log").read_text())
-        time.sleep(0.2)
-    yield server
-    process.terminate()
-    try:
-        process.wait(10)
-    except subprocess.TimeoutExpired:
-        process.kill()
-    log.close()
+    with running_server(var_dir, "--no-demo") as server:
+        yield server
+
+
+@pytest.fixture(scope="module")
+def demo_server(tmp_path_factory) -> Iterator[tuple[LiveServer, dict[str, str]]]:
+    """What a newcomer gets from the RUN command: demo accounts, class and submissions."""
+    var_dir = tmp_path_factory.mktemp("demo-var")
+    with running_server(var_dir) as server:
+        lines = (var_dir / "demo-credentials.txt").read_text().splitlines()
+        credentials = {
+            line.split(",")[1]: line.split(",")[2] for line in lines if not line.startswith("#")
+        }
+        yield server, credentials
 
 
 @pytest.fixture(scope="session")

@@ -1,0 +1,378 @@
+"""Teacher review: truth per student, auto-checks, states and transitions, exports, access."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import random
+import zipfile
+from datetime import timedelta
+
+import pytest
+from fastapi.testclient import TestClient
+from sqlmodel import select
+
+from app.db import read_session, write_session
+from app.models import Assignment, Attempt, LabSession, Role, utcnow
+from app.review import Truth, auto_check, draw_truth, heading_error
+from tests.conftest import csrf_from, login, make_course, make_user, post_form
+from tests.test_lab import handout, new_session, save_manual
+
+HEADING = handout("handout_horizontal.csv")
+VERTICAL = handout("handout_vertical.csv")
+
+
+@pytest.fixture
+def world(app, teacher):
+    students = [make_user(f"s{i}", Role.student, name=f"学生{i}") for i in (1, 2, 3)]
+    course_id = make_course(teacher, "Nav lab 惯导", tuple(students))
+    with write_session() as db:
+        assignment = Assignment(
+            course_id=course_id,
+            title="Find north",
+            latitude_deg=39.93,
+            earth_rate_deg_h=15.04,
+            allowed_methods="manual,csv,simulator",
+            true_heading_deg=10.8,
+            max_attempts=3,
+        )
+        db.add(assignment)
+        db.flush()
+        assignment_id = assignment.id
+    return {"course": course_id, "assignment": assignment_id, "app": app}
+
+
+def browser(world, username):
+    client = TestClient(world["app"], follow_redirects=False)
+    login(client, username)
+    return client
+
+
+def start(client, world) -> int:
+    return new_session(client, assignment_id=str(world["assignment"]))
+
+
+def do_lab(client, session_id, heading=HEADING, vertical=VERTICAL):
+    assert save_manual(client, session_id, "heading", heading).status_code == 200
+    assert save_manual(client, session_id, "latitude", vertical).status_code == 200
+
+
+def submit(client, session_id):
+    page = f"/lab/sessions/{session_id}"
+    post_form(client, f"{page}/submit", page=page)
+
+
+def review(client, session_id, **data):
+    page = f"/review/sessions/{session_id}"
+    return post_form(client, f"{page}/feedback", data, page=page)
+
+
+def session_of(session_id) -> LabSession:
+    with read_session() as db:
+        return db.get(LabSession, session_id)
+
+
+def test_heading_error_wraps_around_north():
+    assert heading_error(359.5, 0.5) == pytest.approx(-1.0)
+    assert heading_error(0.5, 359.5) == pytest.approx(1.0)
+    assert heading_error(180.0, 0.0) == pytest.approx(180.0)
+    assert heading_error(None, 3.0) is None
+    truth = Truth(0.5, 40.0, 15.041, None, "simulator")
+    assignment = Assignment(course_id=1, title="t", latitude_deg=40.0, tolerance_heading_deg=2.0)
+    results = {
+        "heading": {"azimuth_deg": 359.2},
+        "latitude": {"latitude_deg": 41.0, "earth_rate_deg_h": 15.1},
+    }
+    check = auto_check(results, truth, assignment)
+    assert [c.passed for c in check.checks] == [True, True, True]
+    assert check.checks[0].error == pytest.approx(-1.3)
+    assert check.checks[1].error == pytest.approx(2.5)
+    results["heading"]["azimuth_deg"] = 357.0
+    assert auto_check(results, truth, assignment).passed is False
+    assert auto_check({}, truth, assignment).passed is None  # nothing to check
+
+
+def test_truth_is_drawn_per_student_within_the_ranges():
+    assignment = Assignment(
+        course_id=1,
+        title="t",
+        latitude_deg=40.0,
+        azimuth_min_deg=350.0,
+        azimuth_max_deg=20.0,
+        turn_on_bias_max_deg_h=2.0,
+        indexing_sigma_arcsec=30.0,
+    )
+    rng = random.Random(1)
+    drawn = []
+    for _ in range(200):
+        session = LabSession(owner_id=1, title="x", latitude_deg=40.0)
+        draw_truth(assignment, session, rng)
+        drawn.append(session)
+    azimuths = [s.sim_azimuth_deg for s in drawn]
+    assert all(a >= 350 or a <= 20 for a in azimuths)  # the range wraps through north
+    assert len(set(azimuths)) == 200
+    assert all(abs(s.sim_turn_on_bias_deg_h) <= 2.0 for s in drawn)
+    assert all(s.sim_indexing_sigma_arcsec == 30.0 for s in drawn)
+
+
+def test_full_cycle_submit_return_resubmit_grade_release(world):
+    teacher = browser(world, "teacher1")
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    assert start(student, world) == session_id  # one session per student and assignment
+    do_lab(student, session_id)
+    submit(student, session_id)
+    assert session_of(session_id).status == "submitted"
+    # while waiting for review the student can neither edit nor submit again
+    assert save_manual(student, session_id, "heading", {"1": [1.0] * 10}).status_code == 400
+    submit(student, session_id)
+    with read_session() as db:
+        assert len(db.exec(select(Attempt)).all()) == 1
+    # the teacher comments and returns it
+    response = review(
+        teacher,
+        session_id,
+        feedback="Position 3 looks noisy.",
+        **{"comment-heading-3": "Wait until the table settles."},
+        action="return",
+    )
+    assert response.status_code == 303
+    assert session_of(session_id).status == "returned"
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert "Position 3 looks noisy." in page and "Wait until the table settles." in page
+    assert "returned" in student.get("/").text
+    # the student revises and resubmits
+    assert save_manual(student, session_id, "heading", HEADING).status_code == 200
+    assert session_of(session_id).status == "in_progress"
+    submit(student, session_id)
+    with read_session() as db:
+        assert [a.number for a in db.exec(select(Attempt).order_by(Attempt.number))] == [1, 2]
+    # draft grades are not shown; released ones are
+    review(teacher, session_id, feedback="Good.", grade="A-", action="save")
+    assert "A-" not in student.get("/").text
+    assert (
+        review(teacher, session_id, feedback="Good.", grade="A-", action="release").status_code
+        == 303
+    )
+    assert session_of(session_id).status == "graded"
+    dashboard = student.get("/").text
+    assert "A-" in dashboard and "Good." in dashboard
+    assert save_manual(student, session_id, "heading", HEADING).status_code == 400  # frozen
+    submission = teacher.get(f"/review/sessions/{session_id}").text
+    assert "Attempt 2" in submission and "Attempt 1" in submission
+
+
+def test_release_needs_a_grade_and_a_submission(world):
+    teacher = browser(world, "teacher1")
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    review(teacher, session_id, grade="B", action="release")
+    assert session_of(session_id).status == "in_progress"
+    do_lab(student, session_id)
+    submit(student, session_id)
+    review(teacher, session_id, grade="", action="release")
+    assert session_of(session_id).status == "submitted"
+    assert "Enter a grade" in teacher.get(f"/review/sessions/{session_id}").text
+
+
+def set_assignment(world, **fields):
+    with write_session() as db:
+        assignment = db.get(Assignment, world["assignment"])
+        for key, value in fields.items():
+            setattr(assignment, key, value)
+        db.add(assignment)
+
+
+def test_late_submission_is_accepted_and_flagged(world):
+    set_assignment(world, due_at=utcnow() - timedelta(hours=1), late_policy="accept")
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    do_lab(student, session_id)
+    submit(student, session_id)
+    with read_session() as db:
+        assert db.exec(select(Attempt)).one().late
+    teacher = browser(world, "teacher1")
+    page = teacher.get(f"/courses/{world['course']}/assignments/{world['assignment']}").text
+    assert "late" in page
+
+
+def test_late_submission_is_refused_when_the_policy_says_so(world):
+    set_assignment(world, due_at=utcnow() - timedelta(hours=1), late_policy="refuse")
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    do_lab(student, session_id)
+    submit(student, session_id)
+    assert "submissions are closed" in student.get(f"/lab/sessions/{session_id}").text
+    assert session_of(session_id).status == "in_progress"
+
+
+def test_maximum_attempts(world):
+    set_assignment(world, max_attempts=1)
+    teacher = browser(world, "teacher1")
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    do_lab(student, session_id)
+    submit(student, session_id)
+    review(teacher, session_id, action="return")
+    save_manual(student, session_id, "heading", HEADING)
+    submit(student, session_id)
+    assert "attempts are used" in student.get(f"/lab/sessions/{session_id}").text
+
+
+@pytest.mark.parametrize(
+    ("policy", "after_submit", "after_grade"),
+    [
+        ("never", False, False),
+        ("after_submission", True, True),
+        ("after_grading", False, True),
+    ],
+)
+def test_truth_is_revealed_only_when_the_rule_allows(world, policy, after_submit, after_grade):
+    set_assignment(world, reveal_truth=policy)
+    teacher = browser(world, "teacher1")
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    secret = f"{session_of(session_id).sim_azimuth_deg:.2f}"
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert "True values and auto-check" not in page
+    do_lab(student, session_id)
+    submit(student, session_id)
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert ("True values and auto-check" in page) is after_submit
+    review(teacher, session_id, grade="B", action="release")
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert ("True values and auto-check" in page) is after_grade
+    # JSON and exports never carry the simulator's secrets
+    for path in ("/results.json", "/export.json", "/export.csv"):
+        body = student.get(f"/lab/sessions/{session_id}{path}").text
+        assert "sim_azimuth" not in body and "sim_seed" not in body
+    assert secret not in student.get(f"/lab/sessions/{session_id}/results.json").text
+
+
+def test_dashboard_rows_counts_checks_and_identical_data(world):
+    teacher = browser(world, "teacher1")
+    for username in ("s1", "s2"):
+        student = browser(world, username)
+        session_id = start(student, world)
+        do_lab(student, session_id)  # both typed the same handout tables
+        submit(student, session_id)
+    page = teacher.get(f"/courses/{world['course']}/assignments/{world['assignment']}")
+    assert page.status_code == 200
+    text = page.text
+    assert "same data as s2" in text and "same data as s1" in text
+    assert 'data-status="submitted"' in text
+    assert ">submitted <strong>2</strong>" in text and ">not started <strong>1</strong>" in text
+    assert "pass" in text  # 10.753° against the bench's 10.8°: within 2°
+    filtered = teacher.get(
+        f"/courses/{world['course']}/assignments/{world['assignment']}?status=not_started"
+    ).text
+    assert "学生3" in filtered and "学生1" not in filtered
+
+
+def test_csv_export_opens_in_excel_with_chinese_names(world):
+    teacher = browser(world, "teacher1")
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    do_lab(student, session_id)
+    submit(student, session_id)
+    base = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    response = teacher.get(f"{base}/export.csv")
+    assert response.content.startswith("\ufeff".encode())
+    rows = list(csv.DictReader(io.StringIO(response.content.decode("utf-8-sig"))))
+    assert [r["display_name"] for r in rows] == ["学生1", "学生2", "学生3"]
+    first = rows[0]
+    assert first["status"] == "submitted" and first["late"] == "no"
+    assert float(first["heading_error_deg"]) == pytest.approx(10.753 - 10.8, abs=1e-3)
+    assert float(first["latitude_error_percent"]) == pytest.approx(2.00, abs=5e-3)
+    assert first["auto_check"] == "pass"
+    assert rows[1]["status"] == "not_started" and rows[1]["azimuth_deg"] == ""
+    archive = zipfile.ZipFile(io.BytesIO(teacher.get(f"{base}/export.zip").content))
+    names = set(archive.namelist())
+    assert {"class.csv", "s1/readings.csv", "s1/session.json"} <= names
+    document = json.loads(archive.read("s1/session.json"))
+    assert document["attempts"][0]["results"]["heading"]["theta_deg"] == pytest.approx(
+        -10.753, abs=1e-3
+    )
+
+
+def test_settings_form_updates_the_rules(world):
+    teacher = browser(world, "teacher1")
+    page = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    response = post_form(
+        teacher,
+        f"{page}/settings",
+        {
+            "title": "Find north v2",
+            "latitude_deg": "39.93",
+            "earth_rate_deg_h": "15.04",
+            "methods": ["simulator"],
+            "simulator_preset": "tactical-fog",
+            "min_readings": "20",
+            "azimuth_min_deg": "0",
+            "azimuth_max_deg": "90",
+            "tolerance_heading_deg": "1.5",
+            "tolerance_latitude_pct": "3",
+            "tolerance_earth_rate_pct": "3",
+            "max_attempts": "2",
+            "late_policy": "refuse",
+            "reveal_truth": "never",
+            "turn_on_bias_max_deg_h": "1",
+        },
+        page=page,
+    )
+    assert response.status_code == 303
+    with read_session() as db:
+        assignment = db.get(Assignment, world["assignment"])
+    assert assignment.title == "Find north v2" and assignment.methods == ["simulator"]
+    assert assignment.tolerance_heading_deg == 1.5 and assignment.late_policy == "refuse"
+    assert assignment.turn_on_bias_max_deg_h == 1.0 and assignment.true_heading_deg is None
+    bad = post_form(
+        teacher,
+        f"{page}/settings",
+        {"title": "x", "latitude_deg": "39", "methods": ["manual"], "tolerance_heading_deg": "-1"},
+        page=page,
+    )
+    assert bad.status_code == 303
+    assert "must be between" in teacher.get(page).text
+
+
+def test_access_rules_for_review_routes(world):
+    session_student = browser(world, "s1")
+    session_id = start(session_student, world)
+    do_lab(session_student, session_id)
+    submit(session_student, session_id)
+    make_user("t2", Role.teacher)
+    other_teacher = browser(world, "t2")
+    base = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    gets = [base, f"{base}/export.csv", f"{base}/export.zip", f"/review/sessions/{session_id}"]
+    for path in gets:
+        assert other_teacher.get(path).status_code == 404, path
+        assert session_student.get(path).status_code == 403, path
+    token = csrf_from(other_teacher, "/")
+    for path in (f"{base}/settings", f"/review/sessions/{session_id}/feedback"):
+        assert (
+            other_teacher.post(path, data={"csrf_token": token, "action": "release"}).status_code
+            == 404
+        )
+    student_token = csrf_from(session_student, "/")
+    assert (
+        session_student.post(
+            f"/review/sessions/{session_id}/feedback",
+            data={"csrf_token": student_token, "grade": "A+", "action": "release"},
+        ).status_code
+        == 403
+    )
+    assert session_of(session_id).status == "submitted"
+    # a classmate sees nothing of it
+    classmate = browser(world, "s2")
+    assert classmate.get(f"/lab/sessions/{session_id}").status_code == 404
+    assert classmate.get(f"/lab/sessions/{session_id}/results.json").status_code == 404
+
+
+def test_teacher_can_try_the_assignment_as_a_student(world):
+    teacher = browser(world, "teacher1")
+    session_id = start(teacher, world)
+    do_lab(teacher, session_id)
+    results = teacher.get(f"/lab/sessions/{session_id}/results.json").json()
+    assert results["heading"]["theta_deg"] == pytest.approx(-10.753, abs=1e-3)
