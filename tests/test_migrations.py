@@ -55,3 +55,30 @@ def test_write_transactions_begin_immediate(tmp_path):
         finally:
             other.close()
     engine.dispose()
+
+
+def test_populated_database_upgrades_across_revisions(tmp_path):
+    """Rows written under an older schema survive and get the new columns' defaults."""
+    from alembic import command
+
+    url = f"sqlite:///{tmp_path / 'old.db'}"
+    command.upgrade(alembic_config(url), "0002")
+    connection = sqlite3.connect(tmp_path / "old.db")
+    connection.executescript("""
+        INSERT INTO user (username, display_name, role, password_hash, must_change_password,
+                          created_at) VALUES ('t', 'T', 'teacher', 'x', 0, '2026-01-01');
+        INSERT INTO course (name, teacher_id, archived, created_at)
+            VALUES ('C', 1, 0, '2026-01-01');
+        INSERT INTO assignment (course_id, title, instructions, latitude_deg, earth_rate_deg_h,
+                                allowed_methods, simulator_preset, min_readings, created_at)
+            VALUES (1, 'A', '', 40.0, 15.041, 'manual', 'teaching-fog', 10, '2026-01-01');
+    """)
+    connection.commit()
+    connection.close()
+    upgrade_to_head(url)
+    connection = sqlite3.connect(tmp_path / "old.db")
+    row = connection.execute(
+        "SELECT azimuth_max_deg, tolerance_heading_deg, max_attempts, late_policy, reveal_truth "
+        "FROM assignment").fetchone()
+    connection.close()
+    assert row == (360.0, 2.0, 3, "accept", "after_grading")
