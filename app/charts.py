@@ -234,6 +234,7 @@ def class_error_figure(rows, _: Callable[..., str]) -> dict:
         ],
         "layout": {
             **LAYOUT,
+            "margin": {**LAYOUT["margin"], "r": 70},
             "title": {"text": _("review.class_errors_title")},
             "yaxis": {"title": {"text": _("review.heading_error")}, "zeroline": True},
             "yaxis2": {
@@ -252,6 +253,7 @@ def class_histogram_figure(rows, _: Callable[..., str]) -> dict:
         "data": [
             {
                 "type": "histogram",
+                "nbinsx": 24,
                 "x": [e for e in errors if e is not None],
                 "name": _("review.heading_error"),
                 "marker": {"color": COLORS[0]},
