@@ -8,16 +8,27 @@ from pathlib import Path
 import plotly
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
+from fastapi.openapi.docs import get_swagger_ui_html
 from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from swagger_ui_bundle import swagger_ui_path
 
 from app import __version__
+from app.config import get_settings
 from app.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequired
 from app.paths import STATIC_DIR
-from app.routers import assignments, auth, courses, home, lab, review, stream
+from app.routers import api, assignments, auth, courses, home, lab, review, stream, tokens
 from app.web import redirect, render
 
+API_DESCRIPTION = """REST API of GyroLab, the FOG north-finding teaching lab.
+
+Authenticate with `Authorization: Bearer <token>`: a personal access token (page *API
+tokens*; scopes `read` and `upload`) or a one-hour token from `POST /api/v1/auth/token`.
+Rates are °/h unless a unit is given; angles are degrees.  Errors are
+`{"detail": "..."}` with a 4xx status.  Limits: request bodies up to 16 MiB, at most
+1,000,000 samples per position, 600 requests per minute per token.
+"""
 PLOTLY_JS = Path(plotly.__file__).parent / "package_data" / "plotly.min.js"
 PLOTLY_URL = f"/vendor/plotly-{plotly.__version__}.min.js"
 
@@ -49,11 +60,24 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app = FastAPI(
         title="GyroLab",
         version=__version__,
+        description=API_DESCRIPTION,
         lifespan=lifespan,
-        docs_url="/docs",
+        docs_url=None,
         redoc_url=None,
+        max_body_size=get_settings().max_body_bytes,
     )
     app.mount("/static", StaticFiles(directory=str(STATIC_DIR)), name="static")
+    app.mount("/vendor/swagger-ui", StaticFiles(directory=swagger_ui_path), name="swagger-ui")
+
+    @app.get("/docs", include_in_schema=False)
+    def api_docs():
+        """The API reference, with Swagger UI served from the installed swagger-ui-bundle."""
+        return get_swagger_ui_html(
+            openapi_url="/openapi.json", title="GyroLab API",
+            swagger_js_url="/vendor/swagger-ui/swagger-ui-bundle.js",
+            swagger_css_url="/vendor/swagger-ui/swagger-ui.css",
+            swagger_favicon_url="/static/favicon.svg",
+        )
 
     @app.get(PLOTLY_URL, include_in_schema=False)
     def plotly_js() -> FileResponse:
@@ -117,6 +141,8 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(lab.router)
     app.include_router(review.router)
     app.include_router(stream.router)
+    app.include_router(tokens.router)
+    app.include_router(api.router)
     return app
 
 

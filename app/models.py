@@ -188,3 +188,23 @@ class Attempt(SQLModel, table=True):
     results_json: str
     submitted_at: datetime = Field(default_factory=utcnow)
     late: bool = False
+
+
+class ApiToken(SQLModel, table=True):
+    """A bearer token: a personal access token (named, scoped, revocable) or a short-lived
+    token from ``POST /api/v1/auth/token``.  Only its SHA-256 is stored."""
+
+    __tablename__ = "api_token"
+    id: int | None = Field(default=None, primary_key=True)
+    user_id: int = Field(foreign_key="user.id", index=True, ondelete="CASCADE")
+    kind: str = Field(max_length=8)  # personal | login
+    name: str = Field(default="", max_length=100)
+    token_hash: str = Field(max_length=64, unique=True, index=True)
+    prefix: str = Field(max_length=12)  # the first characters, to recognise a token
+    scopes: str = Field(max_length=32)  # "read" or "read,upload"
+    created_at: datetime = Field(default_factory=utcnow)
+    expires_at: datetime | None = None
+    last_used_at: datetime | None = None
+    revoked_at: datetime | None = None
+    window_start: datetime | None = None  # per-token rate limit: fixed one-minute windows
+    window_count: int = 0

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import random
 from datetime import datetime
 from typing import Annotated, Literal
 
@@ -14,6 +13,7 @@ from fastapi.responses import JSONResponse, PlainTextResponse, Response
 from pydantic import BaseModel, Field, StrictFloat, StrictInt
 from sqlmodel import Session, select
 
+from app import labsessions
 from app.charts import allan_figure, compass_figure, fit_figure, readings_figure
 from app.core.exceptions import GyroInputError
 from app.core.readings import parse_readings_csv
@@ -21,7 +21,7 @@ from app.core.simulate import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS, canonical_unit, to_deg_per_hour
 from app.deps import CsrfProtected, CurrentUser, SessionDep
 from app.i18n import translator
-from app.labsim import new_truth, nominal_angle
+from app.labsim import nominal_angle
 from app.labstore import (
     PARTS,
     POSITIONS,
@@ -33,7 +33,7 @@ from app.labstore import (
     take_history,
 )
 from app.models import Assignment, Attempt, Course, Enrollment, LabSession, Role, User, utcnow
-from app.review import auto_check, draw_truth, session_truth, truth_visible
+from app.review import auto_check, session_truth, truth_visible
 from app.web import csrf_token_for, flash, redirect, render, request_language
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
@@ -49,32 +49,22 @@ STATIONS = [  # practice presets: (key, latitude, Earth rate)
 ]
 
 
+STATION_VALUES = {key: (latitude, rate) for key, latitude, rate in STATIONS}
+
+
 def own_session(db: Session, user: User, session_id: int) -> LabSession:
     """The caller's own session, else 404."""
-    session = db.get(LabSession, session_id)
-    if session is None or session.owner_id != user.id:
-        raise HTTPException(404)
-    return session
+    try:
+        return labsessions.own_session(db, user, session_id)
+    except labsessions.NotVisible:
+        raise HTTPException(404) from None
 
 
 def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignment:
-    """An assignment of a course the student is enrolled in (or the teacher owns)."""
-    assignment = db.get(Assignment, assignment_id)
-    if assignment is None:
-        raise HTTPException(404)
-    course = db.get(Course, assignment.course_id)
-    if user.role == Role.teacher:
-        if course is None or course.teacher_id != user.id:
-            raise HTTPException(404)
-        return assignment
-    enrolled = db.exec(
-        select(Enrollment).where(
-            Enrollment.course_id == assignment.course_id, Enrollment.student_id == user.id
-        )
-    ).first()
-    if enrolled is None or course is None or course.archived:
-        raise HTTPException(404)
-    return assignment
+    try:
+        return labsessions.visible_assignment(db, user, assignment_id)
+    except labsessions.NotVisible:
+        raise HTTPException(404) from None
 
 
 def allowed_methods(db: Session, session: LabSession) -> list[str]:
@@ -143,53 +133,22 @@ def create_session(
     preset: Annotated[str, Form(max_length=32)] = "teaching-fog",
 ):
     _ = translator(request_language(request))
-    seed, azimuth = new_truth()
-    angles = (heading_start_deg, latitude_start_deg, latitude_step_deg)
-    if not all(math.isfinite(a) for a in angles) or abs(latitude_step_deg) < 1:
-        return _back_with_error(request, "lab.bad_angles")
-    session = LabSession(
-        owner_id=user.id,
-        title=title.strip()[:200],
-        latitude_deg=0.0,
-        heading_rotation=rotation,
-        heading_start_deg=heading_start_deg,
-        latitude_start_deg=latitude_start_deg,
-        latitude_step_deg=latitude_step_deg,
-        sim_seed=seed,
-        sim_azimuth_deg=azimuth,
-    )
-    if assignment_id is not None:
-        assignment = visible_assignment(db, user, assignment_id)
-        existing = db.exec(
-            select(LabSession).where(
-                LabSession.assignment_id == assignment.id, LabSession.owner_id == user.id
-            )
-        ).first()
-        if existing is not None:  # one session per student and assignment
-            return redirect(f"/lab/sessions/{existing.id}")
-        draw_truth(assignment, session, random.SystemRandom())
-        session.assignment_id = assignment.id
-        session.latitude_deg = assignment.latitude_deg
-        session.earth_rate_deg_h = assignment.earth_rate_deg_h
-        session.simulator_preset = assignment.simulator_preset
-        session.min_readings = assignment.min_readings
-        session.title = session.title or assignment.title
-    else:
-        known = {key: (lat, rate) for key, lat, rate in STATIONS}
-        if station in known:
-            session.latitude_deg, session.earth_rate_deg_h = known[station]
-        else:
-            if latitude_deg is None or earth_rate_deg_h is None:
-                return _back_with_error(request, "lab.station_required")
-            session.latitude_deg, session.earth_rate_deg_h = latitude_deg, earth_rate_deg_h
-        if not (math.isfinite(session.latitude_deg) and -90 <= session.latitude_deg <= 90):
-            return _back_with_error(request, "lab.bad_latitude")
-        if not (math.isfinite(session.earth_rate_deg_h) and 0 < session.earth_rate_deg_h < 1000):
-            return _back_with_error(request, "lab.bad_earth_rate")
-        session.simulator_preset = preset if preset in PRESETS else "teaching-fog"
-        session.title = session.title or _("lab.practice_title")
-    db.add(session)
-    db.commit()
+    assignment = visible_assignment(db, user, assignment_id) if assignment_id is not None \
+        else None
+    if assignment is None and station in STATION_VALUES:
+        latitude_deg, earth_rate_deg_h = STATION_VALUES[station]
+    settings = labsessions.SessionSettings(
+        title=title, latitude_deg=latitude_deg, earth_rate_deg_h=earth_rate_deg_h,
+        rotation=rotation, heading_start_deg=heading_start_deg,
+        latitude_start_deg=latitude_start_deg, latitude_step_deg=latitude_step_deg,
+        preset=preset)
+    try:
+        session, created = labsessions.start_session(db, user, settings, assignment,
+                                                     _("lab.practice_title"))
+    except GyroInputError as error:
+        return _back_with_error(request, error.key)
+    if created:
+        db.commit()
     return redirect(f"/lab/sessions/{session.id}")
 
 
