@@ -20,13 +20,25 @@ LOGIN_TOKEN_LIFETIME = timedelta(hours=1)
 SCOPES = ("read", "upload")
 
 
-def new_token(db: Session, user: User, *, kind: str, name: str = "",
-              scopes: tuple[str, ...] = SCOPES, lifetime: timedelta | None = None
-              ) -> tuple[str, ApiToken]:
+def new_token(
+    db: Session,
+    user: User,
+    *,
+    kind: str,
+    name: str = "",
+    scopes: tuple[str, ...] = SCOPES,
+    lifetime: timedelta | None = None,
+) -> tuple[str, ApiToken]:
     raw = "gl_" + secrets.token_urlsafe(32)
-    record = ApiToken(user_id=user.id, kind=kind, name=name[:100], token_hash=token_digest(raw),
-                      prefix=raw[:10], scopes=",".join(s for s in SCOPES if s in scopes),
-                      expires_at=utcnow() + lifetime if lifetime else None)
+    record = ApiToken(
+        user_id=user.id,
+        kind=kind,
+        name=name[:100],
+        token_hash=token_digest(raw),
+        prefix=raw[:10],
+        scopes=",".join(s for s in SCOPES if s in scopes),
+        expires_at=utcnow() + lifetime if lifetime else None,
+    )
     db.add(record)
     db.flush()
     return raw, record
@@ -43,8 +55,11 @@ def check_token(db: Session, raw: str, rate_per_minute: int) -> TokenCheck:
     """Find a live token, count this request in its window (caller commits)."""
     record = db.exec(select(ApiToken).where(ApiToken.token_hash == token_digest(raw))).first()
     now = utcnow()
-    if record is None or record.revoked_at is not None or (
-            record.expires_at is not None and record.expires_at <= now):
+    if (
+        record is None
+        or record.revoked_at is not None
+        or (record.expires_at is not None and record.expires_at <= now)
+    ):
         return TokenCheck(None, "invalid")
     if record.window_start is None or now - record.window_start >= timedelta(minutes=1):
         record.window_start, record.window_count = now, 0
@@ -58,6 +73,10 @@ def check_token(db: Session, raw: str, rate_per_minute: int) -> TokenCheck:
 
 
 def user_tokens(db: Session, user: User) -> list[ApiToken]:
-    return list(db.exec(select(ApiToken).where(ApiToken.user_id == user.id,
-                                               ApiToken.kind == "personal")
-                        .order_by(ApiToken.created_at.desc())).all())
+    return list(
+        db.exec(
+            select(ApiToken)
+            .where(ApiToken.user_id == user.id, ApiToken.kind == "personal")
+            .order_by(ApiToken.created_at.desc())
+        ).all()
+    )

@@ -36,8 +36,11 @@ def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignmen
         if course.teacher_id != user.id:
             raise NotVisible()
         return assignment
-    enrolled = db.exec(select(Enrollment).where(Enrollment.course_id == assignment.course_id,
-                                                Enrollment.student_id == user.id)).first()
+    enrolled = db.exec(
+        select(Enrollment).where(
+            Enrollment.course_id == assignment.course_id, Enrollment.student_id == user.id
+        )
+    ).first()
     if enrolled is None or course.archived:
         raise NotVisible()
     return assignment
@@ -55,30 +58,44 @@ class SessionSettings:
     preset: str = "teaching-fog"
 
 
-def start_session(db: Session, user: User, settings: SessionSettings,
-                  assignment: Assignment | None, default_title: str) -> tuple[LabSession, bool]:
+def start_session(
+    db: Session,
+    user: User,
+    settings: SessionSettings,
+    assignment: Assignment | None,
+    default_title: str,
+) -> tuple[LabSession, bool]:
     """A new session (added, not committed), or the existing one for this assignment.
 
     Returns (session, created).  Raises GyroInputError for impossible settings.
     """
-    angles = (settings.heading_start_deg, settings.latitude_start_deg,
-              settings.latitude_step_deg)
+    angles = (settings.heading_start_deg, settings.latitude_start_deg, settings.latitude_step_deg)
     if not all(math.isfinite(a) for a in angles) or abs(settings.latitude_step_deg) < 1:
-        raise GyroInputError("lab.bad_angles", "The start angles and the step must be finite "
-                             "numbers, the step at least 1°.")
+        raise GyroInputError(
+            "lab.bad_angles",
+            "The start angles and the step must be finite numbers, the step at least 1°.",
+        )
     if settings.rotation not in ("ccw", "cw"):
         raise GyroInputError("rotation.unknown", "Rotation must be 'ccw' or 'cw'.")
     if assignment is not None:
-        existing = db.exec(select(LabSession).where(LabSession.assignment_id == assignment.id,
-                                                    LabSession.owner_id == user.id)).first()
+        existing = db.exec(
+            select(LabSession).where(
+                LabSession.assignment_id == assignment.id, LabSession.owner_id == user.id
+            )
+        ).first()
         if existing is not None:  # one session per student and assignment
             return existing, False
     seed, azimuth = new_truth()
     session = LabSession(
-        owner_id=user.id, title=settings.title.strip()[:200], latitude_deg=0.0,
-        heading_rotation=settings.rotation, heading_start_deg=settings.heading_start_deg,
+        owner_id=user.id,
+        title=settings.title.strip()[:200],
+        latitude_deg=0.0,
+        heading_rotation=settings.rotation,
+        heading_start_deg=settings.heading_start_deg,
         latitude_start_deg=settings.latitude_start_deg,
-        latitude_step_deg=settings.latitude_step_deg, sim_seed=seed, sim_azimuth_deg=azimuth,
+        latitude_step_deg=settings.latitude_step_deg,
+        sim_seed=seed,
+        sim_azimuth_deg=azimuth,
     )
     if assignment is not None:
         draw_truth(assignment, session, random.SystemRandom())
@@ -90,17 +107,18 @@ def start_session(db: Session, user: User, settings: SessionSettings,
         session.title = session.title or assignment.title
     else:
         if settings.latitude_deg is None or settings.earth_rate_deg_h is None:
-            raise GyroInputError("lab.station_required",
-                                 "Enter the station's latitude and Earth rate.")
+            raise GyroInputError(
+                "lab.station_required", "Enter the station's latitude and Earth rate."
+            )
         if not (math.isfinite(settings.latitude_deg) and -90 <= settings.latitude_deg <= 90):
             raise GyroInputError("lab.bad_latitude", "The latitude must be between −90° and 90°.")
         if not (math.isfinite(settings.earth_rate_deg_h) and 0 < settings.earth_rate_deg_h < 1000):
-            raise GyroInputError("lab.bad_earth_rate",
-                                 "The Earth rate must be a positive number of °/h.")
+            raise GyroInputError(
+                "lab.bad_earth_rate", "The Earth rate must be a positive number of °/h."
+            )
         session.latitude_deg = settings.latitude_deg
         session.earth_rate_deg_h = settings.earth_rate_deg_h
-        session.simulator_preset = settings.preset if settings.preset in PRESETS \
-            else "teaching-fog"
+        session.simulator_preset = settings.preset if settings.preset in PRESETS else "teaching-fog"
         session.title = session.title or default_title
     db.add(session)
     return session, True

@@ -147,8 +147,16 @@ def store_take(
 
 
 def append_samples(
-    db: Session, session: LabSession, *, part: str, position: int, angle_deg: float,
-    values: np.ndarray, times: np.ndarray | None, unit: str = "deg/h", offset: int | None = None,
+    db: Session,
+    session: LabSession,
+    *,
+    part: str,
+    position: int,
+    angle_deg: float,
+    values: np.ndarray,
+    times: np.ndarray | None,
+    unit: str = "deg/h",
+    offset: int | None = None,
 ) -> tuple[Take, int]:
     """Append readings (°/h) to the position's current API take, or start one.
 
@@ -156,19 +164,29 @@ def append_samples(
     retried batch is not duplicated); an offset beyond the stored count is a gap.
     Returns (take, number of values added).
     """
-    if session.status == "graded" or (session.status == "submitted"
-                                      and session.assignment_id is not None):
+    if session.status == "graded" or (
+        session.status == "submitted" and session.assignment_id is not None
+    ):
         raise GyroInputError("lab.awaiting_review", "This work is waiting for review or graded.")
     if part not in PARTS or not 1 <= position <= POSITIONS:
         raise GyroInputError("lab.bad_position", "No such position.")
-    take = db.exec(select(Take).where(Take.session_id == session.id, Take.part == part,
-                                      Take.position == position, Take.superseded_at.is_(None),
-                                      Take.source == "api")).first()
+    take = db.exec(
+        select(Take).where(
+            Take.session_id == session.id,
+            Take.part == part,
+            Take.position == position,
+            Take.superseded_at.is_(None),
+            Take.source == "api",
+        )
+    ).first()
     stored = take.n_samples if take is not None else 0
     if offset is not None:
         if offset > stored:
-            raise GyroInputError("lab.offset_gap", f"Expected offset {stored}, got {offset}: "
-                                 "some samples are missing.", expected=stored)
+            raise GyroInputError(
+                "lab.offset_gap",
+                f"Expected offset {stored}, got {offset}: some samples are missing.",
+                expected=stored,
+            )
         skip = stored - offset
         values = values[skip:]
         times = None if times is None else times[skip:]
@@ -176,25 +194,36 @@ def append_samples(
         if take is None:
             if not values.size:
                 raise GyroInputError("readings.empty_position", "No samples to add.")
-            new = store_take(db, session, part=part, position=position, angle_deg=angle_deg,
-                             values=values, times=times, source="api", unit=unit,
-                             check_minimum=False)
+            new = store_take(
+                db,
+                session,
+                part=part,
+                position=position,
+                angle_deg=angle_deg,
+                values=values,
+                times=times,
+                source="api",
+                unit=unit,
+                check_minimum=False,
+            )
             return new, int(values.size)
         return take, 0
     if stored + values.size > MAX_SAMPLES_PER_POSITION:
-        raise GyroInputError("lab.too_many_samples",
-                             f"At most {MAX_SAMPLES_PER_POSITION} readings per position.",
-                             limit=MAX_SAMPLES_PER_POSITION)
+        raise GyroInputError(
+            "lab.too_many_samples",
+            f"At most {MAX_SAMPLES_PER_POSITION} readings per position.",
+            limit=MAX_SAMPLES_PER_POSITION,
+        )
     _check_values(session, position, values)
     existing = db.exec(select(SampleChunk).where(SampleChunk.take_id == take.id)).all()
     has_times = all(chunk.times is not None for chunk in existing)
     if has_times != (times is not None):
-        raise GyroInputError("lab.times_mismatch",
-                             "Send times with every batch of a position, or with none.")
+        raise GyroInputError(
+            "lab.times_mismatch", "Send times with every batch of a position, or with none."
+        )
     next_seq = max(chunk.seq for chunk in existing) + 1
     for seq, value_blob, time_blob in chunks(values, times):
-        db.add(SampleChunk(take_id=take.id, seq=next_seq + seq, values=value_blob,
-                           times=time_blob))
+        db.add(SampleChunk(take_id=take.id, seq=next_seq + seq, values=value_blob, times=time_blob))
     take.n_samples = stored + int(values.size)
     session.updated_at = utcnow()
     if session.status in ("submitted", "returned"):
@@ -206,13 +235,16 @@ def append_samples(
 
 def _check_values(session: LabSession, position: int, values: np.ndarray) -> None:
     if not np.all(np.isfinite(values)):
-        raise GyroInputError("readings.not_finite", "A reading is not a finite number.",
-                             position=position)
+        raise GyroInputError(
+            "readings.not_finite", "A reading is not a finite number.", position=position
+        )
     if values.size and float(np.max(np.abs(values))) > PLAUSIBLE_RATE_DEG_H:
         raise GyroInputError(
             "lab.implausible_rate",
             f"Position {position} has readings above {PLAUSIBLE_RATE_DEG_H:g} °/h, far more than "
-            "a gyro at rest can read: check the unit.", position=position)
+            "a gyro at rest can read: check the unit.",
+            position=position,
+        )
 
 
 def part_data(db: Session, session: LabSession, part: str) -> dict[int, PositionData]:

@@ -73,7 +73,8 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     def api_docs():
         """The API reference, with Swagger UI served from the installed swagger-ui-bundle."""
         return get_swagger_ui_html(
-            openapi_url="/openapi.json", title="GyroLab API",
+            openapi_url="/openapi.json",
+            title="GyroLab API",
             swagger_js_url="/vendor/swagger-ui/swagger-ui-bundle.js",
             swagger_css_url="/vendor/swagger-ui/swagger-ui.css",
             swagger_favicon_url="/static/favicon.svg",
@@ -118,7 +119,9 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     @app.exception_handler(StarletteHTTPException)
     async def _http(request: Request, exc: StarletteHTTPException):
         if _wants_json(request):
-            return JSONResponse({"detail": exc.detail}, status_code=exc.status_code)
+            return JSONResponse(
+                {"detail": exc.detail}, status_code=exc.status_code, headers=exc.headers
+            )
         key = {404: "error.not_found", 405: "error.method", 413: "error.too_large"}.get(
             exc.status_code, "error.generic"
         )

@@ -4,14 +4,23 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     "nav.lab": {"en": "Lab", "zh-CN": "实验"},
     "nav.tokens": {"en": "API tokens", "zh-CN": "API 令牌"},
     "tokens.title": {"en": "API tokens", "zh-CN": "API 令牌"},
-    "tokens.intro": {"en": "Personal access tokens let scripts, notebooks and the serial-port bridge use the REST API as you. Treat them like passwords.", "zh-CN": "个人访问令牌让脚本、笔记本和串口桥以你的身份使用 REST API，请像密码一样保管。"},
-    "tokens.shown_once": {"en": "Your new token “{name}” is shown only now; copy it:", "zh-CN": "新令牌“{name}”只显示这一次，请复制保存："},
+    "tokens.intro": {
+        "en": "Personal access tokens let scripts, notebooks and the serial-port bridge use the REST API as you. Treat them like passwords.",
+        "zh-CN": "个人访问令牌让脚本、笔记本和串口桥以你的身份使用 REST API，请像密码一样保管。",
+    },
+    "tokens.shown_once": {
+        "en": "Your new token “{name}” is shown only now; copy it:",
+        "zh-CN": "新令牌“{name}”只显示这一次，请复制保存：",
+    },
     "tokens.list": {"en": "Your tokens", "zh-CN": "我的令牌"},
     "tokens.name": {"en": "Name", "zh-CN": "名称"},
     "tokens.name_placeholder": {"en": "e.g. bench 3 bridge", "zh-CN": "例如：3 号台串口桥"},
     "tokens.scopes": {"en": "Scopes", "zh-CN": "权限"},
     "tokens.scope_read": {"en": "read (sessions and results)", "zh-CN": "读取（实验与结果）"},
-    "tokens.scope_upload": {"en": "upload (create sessions, send readings, submit)", "zh-CN": "上传（创建实验、发送读数、提交）"},
+    "tokens.scope_upload": {
+        "en": "upload (create sessions, send readings, submit)",
+        "zh-CN": "上传（创建实验、发送读数、提交）",
+    },
     "tokens.created": {"en": "Created", "zh-CN": "创建时间"},
     "tokens.last_used": {"en": "Last used", "zh-CN": "最近使用"},
     "tokens.never": {"en": "never", "zh-CN": "从未"},
@@ -21,7 +30,10 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     "tokens.none": {"en": "No tokens yet.", "zh-CN": "还没有令牌。"},
     "tokens.new": {"en": "New token", "zh-CN": "新建令牌"},
     "tokens.create": {"en": "Create token", "zh-CN": "创建令牌"},
-    "tokens.invalid": {"en": "Give the token a name and at least the read scope.", "zh-CN": "请填写令牌名称，并至少选择读取权限。"},
+    "tokens.invalid": {
+        "en": "Give the token a name and at least the read scope.",
+        "zh-CN": "请填写令牌名称，并至少选择读取权限。",
+    },
     "tokens.docs": {"en": "API documentation", "zh-CN": "API 文档"},
     "dashboard.lab_help": {
         "en": "Record your readings position by position — typed, from a CSV file or live from the simulated gyro — and see heading, latitude and Earth rate worked out step by step.",
@@ -185,8 +197,14 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "en": "The due date has passed; submissions are closed.",
         "zh-CN": "已过截止时间，不再接受提交。",
     },
-    "lab.offset_gap": {"en": "Expected offset {expected}: some samples are missing.", "zh-CN": "偏移量应为 {expected}：有样本缺失。"},
-    "lab.times_mismatch": {"en": "Send times with every batch of a position, or with none.", "zh-CN": "同一位置的每批数据要么都带时间，要么都不带。"},
+    "lab.offset_gap": {
+        "en": "Expected offset {expected}: some samples are missing.",
+        "zh-CN": "偏移量应为 {expected}：有样本缺失。",
+    },
+    "lab.times_mismatch": {
+        "en": "Send times with every batch of a position, or with none.",
+        "zh-CN": "同一位置的每批数据要么都带时间，要么都不带。",
+    },
     "lab.too_few_readings": {
         "en": "Position {position} has {n} readings; at least {minimum} are required.",
         "zh-CN": "位置 {position} 只有 {n} 个读数，至少需要 {minimum} 个。",

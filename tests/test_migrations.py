@@ -79,6 +79,7 @@ def test_populated_database_upgrades_across_revisions(tmp_path):
     connection = sqlite3.connect(tmp_path / "old.db")
     row = connection.execute(
         "SELECT azimuth_max_deg, tolerance_heading_deg, max_attempts, late_policy, reveal_truth "
-        "FROM assignment").fetchone()
+        "FROM assignment"
+    ).fetchone()
     connection.close()
     assert row == (360.0, 2.0, 3, "accept", "after_grading")

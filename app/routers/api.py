@@ -57,8 +57,10 @@ class Error(BaseModel):
 ERRORS: dict[int | str, dict[str, Any]] = {
     400: {"description": "Bad input (the message says what is wrong)", "model": Error},
     401: {"description": "Not authenticated", "model": Error},
-    403: {"description": "Not allowed (role, token scope, CSRF or assignment rules)",
-          "model": Error},
+    403: {
+        "description": "Not allowed (role, token scope, CSRF or assignment rules)",
+        "model": Error,
+    },
     404: {"description": "No such object, or not yours", "model": Error},
     413: {"description": "Request body too large", "model": Error},
     422: {"description": "Wrong types or missing fields", "model": Error},
@@ -69,6 +71,7 @@ router = APIRouter(prefix="/api/v1", tags=["api"], responses=ERRORS)
 
 
 # --- authentication ------------------------------------------------------------------------
+
 
 @dataclass
 class Caller:
@@ -85,11 +88,15 @@ async def api_caller(request: Request, db: SessionDep, settings: SettingsDep) ->
             user_id = check.token.user_id if check.token else None
             scopes = set(check.token.scopes.split(",")) if check.token else set()
         if check.problem == "invalid":
-            raise HTTPException(401, "Invalid, revoked or expired token.",
-                                headers={"WWW-Authenticate": "Bearer"})
+            raise HTTPException(
+                401, "Invalid, revoked or expired token.", headers={"WWW-Authenticate": "Bearer"}
+            )
         if check.problem == "rate":
-            raise HTTPException(429, "Too many requests with this token; slow down.",
-                                headers={"Retry-After": str(check.retry_after)})
+            raise HTTPException(
+                429,
+                "Too many requests with this token; slow down.",
+                headers={"Retry-After": str(check.retry_after)},
+            )
         user = db.get(User, user_id)
         if user is None:
             raise HTTPException(401, "Invalid token.", headers={"WWW-Authenticate": "Bearer"})
@@ -98,7 +105,8 @@ async def api_caller(request: Request, db: SessionDep, settings: SettingsDep) ->
     if user is None:
         raise HTTPException(401, "Not authenticated.", headers={"WWW-Authenticate": "Bearer"})
     if request.method not in SAFE_METHODS and not tokens_match(
-            request.state.auth.csrf_token, request.headers.get("x-csrf-token")):
+        request.state.auth.csrf_token, request.headers.get("x-csrf-token")
+    ):
         raise HTTPException(403, "Missing or wrong X-CSRF-Token header.")
     if user.must_change_password:
         raise HTTPException(403, "Change your initial password first.")
@@ -136,14 +144,18 @@ def login_for_token(
     log-in page."""
     address = request.client.host if request.client else "unknown"
     if login_throttled(db, username, address, settings):
-        raise HTTPException(429, "Too many failed log-in attempts; wait and try again.",
-                            headers={"Retry-After": str(settings.login_window_minutes * 60)})
+        raise HTTPException(
+            429,
+            "Too many failed log-in attempts; wait and try again.",
+            headers={"Retry-After": str(settings.login_window_minutes * 60)},
+        )
     user = authenticate(db, username, password)
     if user is None:
         record_login_failure(db, username, address)
         db.commit()
-        raise HTTPException(401, "Wrong username or password.",
-                            headers={"WWW-Authenticate": "Bearer"})
+        raise HTTPException(
+            401, "Wrong username or password.", headers={"WWW-Authenticate": "Bearer"}
+        )
     if user.must_change_password:
         raise HTTPException(403, "Change your initial password in the browser first.")
     clear_login_failures(db, user.username)
@@ -153,6 +165,7 @@ def login_for_token(
 
 
 # --- models ---------------------------------------------------------------------------------
+
 
 class MeOut(BaseModel):
     id: int
@@ -181,11 +194,19 @@ class LatitudeSettings(BaseModel):
 
 
 class SessionCreate(BaseModel):
-    model_config = ConfigDict(strict=True, json_schema_extra={"examples": [{
-        "title": "Bench 3, Tuesday", "station": {"latitude_deg": 39.93,
-                                                 "earth_rate_deg_h": 15.04},
-        "heading": {"rotation": "ccw", "start_angle_deg": 0.0},
-        "latitude": {"start_angle_deg": 0.0, "step_deg": 90.0}}]})
+    model_config = ConfigDict(
+        strict=True,
+        json_schema_extra={
+            "examples": [
+                {
+                    "title": "Bench 3, Tuesday",
+                    "station": {"latitude_deg": 39.93, "earth_rate_deg_h": 15.04},
+                    "heading": {"rotation": "ccw", "start_angle_deg": 0.0},
+                    "latitude": {"start_angle_deg": 0.0, "step_deg": 90.0},
+                }
+            ]
+        },
+    )
     title: str = Field(default="", max_length=200)
     assignment_id: int | None = None
     station: Station | None = None
@@ -218,19 +239,44 @@ class SessionOut(BaseModel):
 
 
 class PositionUpload(BaseModel):
-    model_config = ConfigDict(strict=True, json_schema_extra={"examples": [{
-        "samples": [10.74, 10.65, 10.84, 10.46, 10.65, 10.65, 10.74, 10.65, 10.84, 10.84],
-        "unit": "deg/h"}]})
-    samples: list[StrictFloat | StrictInt] = Field(min_length=1,
-                                                    max_length=MAX_SAMPLES_PER_POSITION)
+    model_config = ConfigDict(
+        strict=True,
+        json_schema_extra={
+            "examples": [
+                {
+                    "samples": [
+                        10.74,
+                        10.65,
+                        10.84,
+                        10.46,
+                        10.65,
+                        10.65,
+                        10.74,
+                        10.65,
+                        10.84,
+                        10.84,
+                    ],
+                    "unit": "deg/h",
+                }
+            ]
+        },
+    )
+    samples: list[StrictFloat | StrictInt] = Field(
+        min_length=1, max_length=MAX_SAMPLES_PER_POSITION
+    )
     unit: Literal["deg/h", "deg/s", "rad/s"] = "deg/h"
     angle_deg: StrictFloat | StrictInt | None = Field(
-        default=None, description="the dial angle; default: from the session's settings")
-    times_s: list[StrictFloat | StrictInt] | None = Field(default=None,
-                                                          max_length=MAX_SAMPLES_PER_POSITION)
+        default=None, description="the dial angle; default: from the session's settings"
+    )
+    times_s: list[StrictFloat | StrictInt] | None = Field(
+        default=None, max_length=MAX_SAMPLES_PER_POSITION
+    )
     offset: StrictInt | None = Field(
-        default=None, ge=0, description="append only: index of the first sample, so a "
-        "retried batch is not stored twice")
+        default=None,
+        ge=0,
+        description="append only: index of the first sample, so a "
+        "retried batch is not stored twice",
+    )
 
 
 class UploadOut(BaseModel):
@@ -278,8 +324,7 @@ class LatitudeOut(BaseModel):
 class ResultsOut(BaseModel):
     heading: HeadingOut | None
     latitude: LatitudeOut | None
-    problems: dict[str, str] = Field(default_factory=dict,
-                                     description="why a part has no result")
+    problems: dict[str, str] = Field(default_factory=dict, description="why a part has no result")
 
 
 class AttemptOut(BaseModel):
@@ -315,6 +360,7 @@ class SubmissionRow(BaseModel):
 
 # --- helpers --------------------------------------------------------------------------------
 
+
 def own(db: Session, caller: Caller, session_id: int) -> LabSession:
     try:
         return labsessions.own_session(db, caller.user, session_id)
@@ -324,20 +370,34 @@ def own(db: Session, caller: Caller, session_id: int) -> LabSession:
 
 def session_out(db: Session, session: LabSession) -> SessionOut:
     return SessionOut(
-        id=session.id, title=session.title, assignment_id=session.assignment_id,
+        id=session.id,
+        title=session.title,
+        assignment_id=session.assignment_id,
         status=session.status,
-        station=Station(latitude_deg=session.latitude_deg,
-                        earth_rate_deg_h=session.earth_rate_deg_h),
-        heading=HeadingSettings(rotation=session.heading_rotation,
-                                start_angle_deg=session.heading_start_deg),
-        latitude=LatitudeSettings(start_angle_deg=session.latitude_start_deg,
-                                  step_deg=session.latitude_step_deg),
+        station=Station(
+            latitude_deg=session.latitude_deg, earth_rate_deg_h=session.earth_rate_deg_h
+        ),
+        heading=HeadingSettings(
+            rotation=session.heading_rotation, start_angle_deg=session.heading_start_deg
+        ),
+        latitude=LatitudeSettings(
+            start_angle_deg=session.latitude_start_deg, step_deg=session.latitude_step_deg
+        ),
         min_readings=session.min_readings,
-        positions=[PositionSummary(part=t.part, position=t.position, angle_deg=t.angle_deg,
-                                   n_samples=t.n_samples, source=t.source,
-                                   recorded_at=t.created_at)
-                   for t in current_takes(db, session.id)],
-        created_at=session.created_at, updated_at=session.updated_at)
+        positions=[
+            PositionSummary(
+                part=t.part,
+                position=t.position,
+                angle_deg=t.angle_deg,
+                n_samples=t.n_samples,
+                source=t.source,
+                recorded_at=t.created_at,
+            )
+            for t in current_takes(db, session.id)
+        ],
+        created_at=session.created_at,
+        updated_at=session.updated_at,
+    )
 
 
 def bad_input(error: GyroInputError) -> HTTPException:
@@ -351,8 +411,9 @@ async def read_upload(request: Request) -> PositionUpload:
         raise HTTPException(413, f"The body is larger than {MAX_UPLOAD_BYTES} bytes.")
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if content_type == "text/csv":
-        return parse_csv_upload(body, request.query_params.get("unit", "deg/h"),
-                                request.query_params.get("angle_deg"))
+        return parse_csv_upload(
+            body, request.query_params.get("unit", "deg/h"), request.query_params.get("angle_deg")
+        )
     if content_type not in ("application/json", ""):
         raise HTTPException(415, "Send application/json or text/csv.")
     try:
@@ -364,8 +425,9 @@ async def read_upload(request: Request) -> PositionUpload:
     try:
         return PositionUpload.model_validate(data)
     except ValidationError as error:
-        details = [{"loc": list(e["loc"]), "msg": e["msg"], "type": e["type"]}
-                   for e in error.errors()]
+        details = [
+            {"loc": list(e["loc"]), "msg": e["msg"], "type": e["type"]} for e in error.errors()
+        ]
         raise HTTPException(422, details) from None
 
 
@@ -385,8 +447,9 @@ def parse_csv_upload(body: bytes, unit: str, angle: str | None) -> PositionUploa
         except ValueError:
             if number == 1 and not values:
                 continue  # a header such as "time_s,value"
-            raise HTTPException(400, f"Line {number}: '{','.join(cells)[:40]}' is not a "
-                                     "number.") from None
+            raise HTTPException(
+                400, f"Line {number}: '{','.join(cells)[:40]}' is not a number."
+            ) from None
         if len(numbers) == 1:
             values.append(numbers[0])
         elif len(numbers) == 2:
@@ -403,8 +466,7 @@ def parse_csv_upload(body: bytes, unit: str, angle: str | None) -> PositionUploa
         angle_value = float(angle) if angle is not None else None
     except (GyroInputError, ValueError) as error:
         raise HTTPException(400, str(error)) from None
-    return PositionUpload(samples=values, unit=unit, times_s=times or None,
-                          angle_deg=angle_value)
+    return PositionUpload(samples=values, unit=unit, times_s=times or None, angle_deg=angle_value)
 
 
 def upload_arrays(upload: PositionUpload) -> tuple[np.ndarray, np.ndarray | None]:
@@ -431,28 +493,45 @@ def require_api_method(db: Session, session: LabSession) -> None:
 
 PartPath = Annotated[Literal["heading", "latitude"], Path(description="heading | latitude")]
 PositionPath = Annotated[int, Path(ge=1, le=POSITIONS)]
-UPLOAD_BODY = {"requestBody": {"required": True, "content": {
-    "application/json": {"schema": {"$ref": "#/components/schemas/PositionUpload"}},
-    "text/csv": {"schema": {"type": "string"},
-                 "example": "time_s,value\n0,10.74\n1,10.65\n2,10.84\n"}}}}
+UPLOAD_BODY = {
+    "requestBody": {
+        "required": True,
+        "content": {
+            "application/json": {"schema": {"$ref": "#/components/schemas/PositionUpload"}},
+            "text/csv": {
+                "schema": {"type": "string"},
+                "example": "time_s,value\n0,10.74\n1,10.65\n2,10.84\n",
+            },
+        },
+    }
+}
 
 
 # --- routes ---------------------------------------------------------------------------------
+
 
 @router.get("/me", response_model=MeOut)
 def me(caller: CallerDep):
     """Who the token or session belongs to."""
     user = caller.user
-    return MeOut(id=user.id, username=user.username, display_name=user.display_name,
-                 role=user.role, language=user.language)
+    return MeOut(
+        id=user.id,
+        username=user.username,
+        display_name=user.display_name,
+        role=user.role,
+        language=user.language,
+    )
 
 
 @router.get("/sessions", response_model=list[SessionOut])
 def list_sessions(caller: CallerDep, db: SessionDep):
     """The caller's own lab sessions, newest first."""
     need(caller, "read")
-    sessions = db.exec(select(LabSession).where(LabSession.owner_id == caller.user.id)
-                       .order_by(LabSession.updated_at.desc())).all()
+    sessions = db.exec(
+        select(LabSession)
+        .where(LabSession.owner_id == caller.user.id)
+        .order_by(LabSession.updated_at.desc())
+    ).all()
     return [session_out(db, s) for s in sessions]
 
 
@@ -470,19 +549,25 @@ def create_session(body: SessionCreate, caller: CallerDep, db: SessionDep):
     elif body.station is None:
         raise HTTPException(400, "Give either station (practice) or assignment_id.")
     settings = labsessions.SessionSettings(
-        title=body.title, latitude_deg=body.station.latitude_deg if body.station else None,
+        title=body.title,
+        latitude_deg=body.station.latitude_deg if body.station else None,
         earth_rate_deg_h=body.station.earth_rate_deg_h if body.station else None,
-        rotation=body.heading.rotation, heading_start_deg=body.heading.start_angle_deg,
-        latitude_start_deg=body.latitude.start_angle_deg, latitude_step_deg=body.latitude.step_deg,
-        preset=body.simulator_preset)
+        rotation=body.heading.rotation,
+        heading_start_deg=body.heading.start_angle_deg,
+        latitude_start_deg=body.latitude.start_angle_deg,
+        latitude_step_deg=body.latitude.step_deg,
+        preset=body.simulator_preset,
+    )
     try:
-        session, created = labsessions.start_session(db, caller.user, settings, assignment,
-                                                     "API session")
+        session, created = labsessions.start_session(
+            db, caller.user, settings, assignment, "API session"
+        )
     except GyroInputError as error:
         raise bad_input(error) from None
     db.commit()
-    return JSONResponse(session_out(db, session).model_dump(mode="json"),
-                        status_code=201 if created else 200)
+    return JSONResponse(
+        session_out(db, session).model_dump(mode="json"), status_code=201 if created else 200
+    )
 
 
 @router.get("/sessions/{session_id}", response_model=SessionOut)
@@ -491,10 +576,19 @@ def get_session(session_id: int, caller: CallerDep, db: SessionDep):
     return session_out(db, own(db, caller, session_id))
 
 
-@router.put("/sessions/{session_id}/{part}/positions/{position}", response_model=UploadOut,
-            openapi_extra=UPLOAD_BODY)
-async def put_position(request: Request, session_id: int, part: PartPath,
-                       position: PositionPath, caller: CallerDep, db: SessionDep):
+@router.put(
+    "/sessions/{session_id}/{part}/positions/{position}",
+    response_model=UploadOut,
+    openapi_extra=UPLOAD_BODY,
+)
+async def put_position(
+    request: Request,
+    session_id: int,
+    part: PartPath,
+    position: PositionPath,
+    caller: CallerDep,
+    db: SessionDep,
+):
     """Replace this position's readings (the previous take stays in the history).
     Atomic: on any error nothing is stored."""
     need(caller, "upload")
@@ -502,23 +596,47 @@ async def put_position(request: Request, session_id: int, part: PartPath,
     require_api_method(db, session)
     upload = await read_upload(request)
     values, times = upload_arrays(upload)
-    angle = upload.angle_deg if upload.angle_deg is not None else \
-        nominal_angle(session, part, position)
+    angle = (
+        upload.angle_deg if upload.angle_deg is not None else nominal_angle(session, part, position)
+    )
     try:
-        take = store_take(db, session, part=part, position=position, angle_deg=float(angle),
-                          values=values, times=times, source="api", unit=upload.unit)
+        take = store_take(
+            db,
+            session,
+            part=part,
+            position=position,
+            angle_deg=float(angle),
+            values=values,
+            times=times,
+            source="api",
+            unit=upload.unit,
+        )
     except GyroInputError as error:
         db.rollback()
         raise bad_input(error) from None
     db.commit()
-    return UploadOut(session_id=session.id, part=part, position=position,
-                     n_samples=take.n_samples, added=take.n_samples)
+    return UploadOut(
+        session_id=session.id,
+        part=part,
+        position=position,
+        n_samples=take.n_samples,
+        added=take.n_samples,
+    )
 
 
-@router.post("/sessions/{session_id}/{part}/positions/{position}/samples",
-             response_model=UploadOut, openapi_extra=UPLOAD_BODY)
-async def append_position(request: Request, session_id: int, part: PartPath,
-                          position: PositionPath, caller: CallerDep, db: SessionDep):
+@router.post(
+    "/sessions/{session_id}/{part}/positions/{position}/samples",
+    response_model=UploadOut,
+    openapi_extra=UPLOAD_BODY,
+)
+async def append_position(
+    request: Request,
+    session_id: int,
+    part: PartPath,
+    position: PositionPath,
+    caller: CallerDep,
+    db: SessionDep,
+):
     """Append readings to this position (streaming devices).  With ``offset`` (the index
     of the first sample) a retried batch is stored once; a gap answers 409."""
     need(caller, "upload")
@@ -526,19 +644,29 @@ async def append_position(request: Request, session_id: int, part: PartPath,
     require_api_method(db, session)
     upload = await read_upload(request)
     values, times = upload_arrays(upload)
-    angle = upload.angle_deg if upload.angle_deg is not None else \
-        nominal_angle(session, part, position)
+    angle = (
+        upload.angle_deg if upload.angle_deg is not None else nominal_angle(session, part, position)
+    )
     try:
-        take, added = append_samples(db, session, part=part, position=position,
-                                     angle_deg=float(angle), values=values, times=times,
-                                     unit=upload.unit, offset=upload.offset)
+        take, added = append_samples(
+            db,
+            session,
+            part=part,
+            position=position,
+            angle_deg=float(angle),
+            values=values,
+            times=times,
+            unit=upload.unit,
+            offset=upload.offset,
+        )
     except GyroInputError as error:
         db.rollback()
         status = 409 if error.key == "lab.offset_gap" else 400
         raise HTTPException(status, str(error)) from None
     db.commit()
-    return UploadOut(session_id=session.id, part=part, position=position,
-                     n_samples=take.n_samples, added=added)
+    return UploadOut(
+        session_id=session.id, part=part, position=position, n_samples=take.n_samples, added=added
+    )
 
 
 @router.get("/sessions/{session_id}/results", response_model=ResultsOut)
@@ -574,12 +702,17 @@ def submit_session(session_id: int, caller: CallerDep, db: SessionDep):
         attempt = submit(db, session)
     except GyroInputError as error:
         db.rollback()
-        raise HTTPException(409 if error.key != "lab.nothing_to_submit" else 400,
-                            str(error)) from None
+        raise HTTPException(
+            409 if error.key != "lab.nothing_to_submit" else 400, str(error)
+        ) from None
     db.commit()
-    return AttemptOut(session_id=session.id, attempt=attempt.number,
-                      submitted_at=attempt.submitted_at, late=attempt.late,
-                      status=session.status)
+    return AttemptOut(
+        session_id=session.id,
+        attempt=attempt.number,
+        submitted_at=attempt.submitted_at,
+        late=attempt.late,
+        status=session.status,
+    )
 
 
 @router.get("/courses", response_model=list[CourseOut], tags=["api: teachers"])
@@ -587,15 +720,27 @@ def list_courses(caller: CallerDep, db: SessionDep):
     """Teachers: their courses with the assignments in each."""
     need(caller, "read")
     need_teacher(caller)
-    courses = db.exec(select(Course).where(Course.teacher_id == caller.user.id)
-                      .order_by(Course.name)).all()
+    courses = db.exec(
+        select(Course).where(Course.teacher_id == caller.user.id).order_by(Course.name)
+    ).all()
     out = []
     for course in courses:
         assignments = db.exec(select(Assignment).where(Assignment.course_id == course.id)).all()
-        out.append(CourseOut(id=course.id, name=course.name, archived=course.archived,
-                             assignments=[{"id": a.id, "title": a.title,
-                                           "due_at": a.due_at.isoformat() if a.due_at else None}
-                                          for a in assignments]))
+        out.append(
+            CourseOut(
+                id=course.id,
+                name=course.name,
+                archived=course.archived,
+                assignments=[
+                    {
+                        "id": a.id,
+                        "title": a.title,
+                        "due_at": a.due_at.isoformat() if a.due_at else None,
+                    }
+                    for a in assignments
+                ],
+            )
+        )
     return out
 
 
@@ -609,33 +754,45 @@ def teacher_assignment(db: Session, caller: Caller, assignment_id: int) -> Assig
     return assignment
 
 
-@router.get("/assignments/{assignment_id}/submissions", response_model=list[SubmissionRow],
-            tags=["api: teachers"])
+@router.get(
+    "/assignments/{assignment_id}/submissions",
+    response_model=list[SubmissionRow],
+    tags=["api: teachers"],
+)
 def list_submissions(assignment_id: int, caller: CallerDep, db: SessionDep):
     """Teachers: one row per enrolled student with their latest submitted results."""
     assignment = teacher_assignment(db, caller, assignment_id)
     rows = []
     for row in class_rows(db, assignment):
-        rows.append(SubmissionRow(
-            username=row.student.username, display_name=row.student.display_name,
-            status=row.status, session_id=row.session.id if row.session else None,
-            attempts=len(row.attempts), submitted_at=row.submitted_at, late=row.late,
-            results=row.results, heading_error_deg=row.check_error("heading"),
-            latitude_error_percent=row.check_error("latitude"),
-            earth_rate_error_percent=row.check_error("earth_rate"),
-            auto_check=None if row.check is None else row.check.passed,
-            grade=row.session.grade if row.session and row.session.status == "graded"
-            else None))
+        rows.append(
+            SubmissionRow(
+                username=row.student.username,
+                display_name=row.student.display_name,
+                status=row.status,
+                session_id=row.session.id if row.session else None,
+                attempts=len(row.attempts),
+                submitted_at=row.submitted_at,
+                late=row.late,
+                results=row.results,
+                heading_error_deg=row.check_error("heading"),
+                latitude_error_percent=row.check_error("latitude"),
+                earth_rate_error_percent=row.check_error("earth_rate"),
+                auto_check=None if row.check is None else row.check.passed,
+                grade=row.session.grade if row.session and row.session.status == "graded" else None,
+            )
+        )
     return rows
 
 
-@router.get("/assignments/{assignment_id}/export.csv", tags=["api: teachers"],
-            response_class=Response,
-            responses={200: {"content": {"text/csv": {}}, "description": "the class table"}})
+@router.get(
+    "/assignments/{assignment_id}/export.csv",
+    tags=["api: teachers"],
+    response_class=Response,
+    responses={200: {"content": {"text/csv": {}}, "description": "the class table"}},
+)
 def export_submissions(assignment_id: int, caller: CallerDep, db: SessionDep):
     """Teachers: the class table as CSV (UTF-8 with BOM)."""
     assignment = teacher_assignment(db, caller, assignment_id)
     buffer = io.StringIO()
     csv.writer(buffer).writerows(export_rows(class_rows(db, assignment)))
     return Response("\ufeff" + buffer.getvalue(), media_type="text/csv; charset=utf-8")
-

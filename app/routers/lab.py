@@ -133,18 +133,23 @@ def create_session(
     preset: Annotated[str, Form(max_length=32)] = "teaching-fog",
 ):
     _ = translator(request_language(request))
-    assignment = visible_assignment(db, user, assignment_id) if assignment_id is not None \
-        else None
+    assignment = visible_assignment(db, user, assignment_id) if assignment_id is not None else None
     if assignment is None and station in STATION_VALUES:
         latitude_deg, earth_rate_deg_h = STATION_VALUES[station]
     settings = labsessions.SessionSettings(
-        title=title, latitude_deg=latitude_deg, earth_rate_deg_h=earth_rate_deg_h,
-        rotation=rotation, heading_start_deg=heading_start_deg,
-        latitude_start_deg=latitude_start_deg, latitude_step_deg=latitude_step_deg,
-        preset=preset)
+        title=title,
+        latitude_deg=latitude_deg,
+        earth_rate_deg_h=earth_rate_deg_h,
+        rotation=rotation,
+        heading_start_deg=heading_start_deg,
+        latitude_start_deg=latitude_start_deg,
+        latitude_step_deg=latitude_step_deg,
+        preset=preset,
+    )
     try:
-        session, created = labsessions.start_session(db, user, settings, assignment,
-                                                     _("lab.practice_title"))
+        session, created = labsessions.start_session(
+            db, user, settings, assignment, _("lab.practice_title")
+        )
     except GyroInputError as error:
         return _back_with_error(request, error.key)
     if created:

@@ -33,8 +33,11 @@ def create_token(
         return render(request, "auth/tokens.html", context, 400)
     raw, record = new_token(db, user, kind="personal", name=name.strip(), scopes=chosen)
     db.commit()
-    return render(request, "auth/tokens.html",
-                  {"tokens": user_tokens(db, user), "new_token": raw, "new_record": record})
+    return render(
+        request,
+        "auth/tokens.html",
+        {"tokens": user_tokens(db, user), "new_token": raw, "new_record": record},
+    )
 
 
 @router.post("/{token_id}/revoke", dependencies=[CsrfProtected])

@@ -1,0 +1,346 @@
+"""REST API v1 contract: every route, tokens, limits, atomicity and the CLI's schema."""
+
+from __future__ import annotations
+
+import json
+from datetime import timedelta
+
+import pytest
+from sqlmodel import select
+
+from app.core.solve import heading_angles, solve_heading
+from app.db import read_session, write_session
+from app.models import ApiToken, Assignment, Role, SampleChunk, Take, utcnow
+from tests.conftest import PASSWORD, csrf_from, login, make_course, make_user, post_form
+from tests.test_cli_science import HEADING_KEYS, LATITUDE_KEYS
+from tests.test_lab import handout
+
+API = "/api/v1"
+PRACTICE = {
+    "title": "Bench 3",
+    "station": {"latitude_deg": 39.93, "earth_rate_deg_h": 15.04},
+    "heading": {"rotation": "ccw", "start_angle_deg": 0.0},
+    "latitude": {"start_angle_deg": 0.0, "step_deg": 90.0},
+}
+
+
+def token_for(client, username, password=PASSWORD) -> dict[str, str]:
+    response = client.post(f"{API}/auth/token", data={"username": username, "password": password})
+    assert response.status_code == 200, response.text
+    body = response.json()
+    assert body["token_type"] == "bearer" and body["expires_in"] == 3600
+    return {"Authorization": f"Bearer {body['access_token']}"}
+
+
+@pytest.fixture
+def auth(client, student):
+    return token_for(client, "student1")
+
+
+def new_api_session(client, auth, body=PRACTICE) -> int:
+    response = client.post(f"{API}/sessions", json=body, headers=auth)
+    assert response.status_code == 201, response.text
+    return response.json()["id"]
+
+
+def upload_handout(client, auth, session_id):
+    for part, name in (("heading", "handout_horizontal.csv"), ("latitude", "handout_vertical.csv")):
+        for k, values in handout(name).items():
+            response = client.put(
+                f"{API}/sessions/{session_id}/{part}/positions/{k}",
+                json={"samples": values, "unit": "deg/h"},
+                headers=auth,
+            )
+            assert response.status_code == 200, response.text
+
+
+def test_token_me_and_errors(client, student, auth):
+    me = client.get(f"{API}/me", headers=auth).json()
+    assert me["username"] == "student1" and me["role"] == "student"
+    assert client.get(f"{API}/me").status_code == 401
+    assert client.get(f"{API}/me").json() == {"detail": "Not authenticated."}
+    assert client.get(f"{API}/me", headers={"Authorization": "Bearer nope"}).status_code == 401
+    wrong = client.post(f"{API}/auth/token", data={"username": "student1", "password": "x"})
+    assert wrong.status_code == 401 and wrong.json()["detail"] == "Wrong username or password."
+
+
+def test_token_endpoint_is_throttled_like_the_login_page(client, student):
+    for i in range(5):
+        client.post(f"{API}/auth/token", data={"username": "student1", "password": f"w{i}"})
+    response = client.post(f"{API}/auth/token", data={"username": "student1", "password": PASSWORD})
+    assert response.status_code == 429 and "Retry-After" in response.headers
+
+
+def test_expired_login_token_is_refused(client, student, auth):
+    with write_session() as db:
+        record = db.exec(select(ApiToken)).one()
+        record.expires_at = utcnow() - timedelta(seconds=1)
+        db.add(record)
+    assert client.get(f"{API}/me", headers=auth).status_code == 401
+
+
+def test_tokens_are_stored_hashed(client, student, auth):
+    raw = auth["Authorization"].split()[1]
+    with read_session() as db:
+        record = db.exec(select(ApiToken)).one()
+    assert raw not in (record.token_hash, record.prefix) and record.prefix == raw[:10]
+
+
+def test_whole_handout_via_the_api_equals_gyrolab_solve(client, auth):
+    session_id = new_api_session(client, auth)
+    upload_handout(client, auth, session_id)
+    results = client.get(f"{API}/sessions/{session_id}/results", headers=auth).json()
+    assert list(results["heading"]) == HEADING_KEYS
+    assert list(results["latitude"]) == LATITUDE_KEYS
+    expected = solve_heading(
+        list(handout("handout_horizontal.csv").values()), heading_angles(4)
+    ).to_json()
+    assert results["heading"]["azimuth_deg"] == pytest.approx(expected["azimuth_deg"])
+    assert results["latitude"]["latitude_error_percent"] == pytest.approx(2.00, abs=5e-3)
+    detail = client.get(f"{API}/sessions/{session_id}", headers=auth).json()
+    assert len(detail["positions"]) == 8 and detail["positions"][0]["source"] == "api"
+    submitted = client.post(f"{API}/sessions/{session_id}/submit", headers=auth)
+    assert submitted.status_code == 200 and submitted.json()["attempt"] == 1
+    listed = client.get(f"{API}/sessions", headers=auth).json()
+    assert [s["id"] for s in listed] == [session_id] and listed[0]["status"] == "submitted"
+
+
+def test_results_are_null_without_enough_data(client, auth):
+    session_id = new_api_session(client, auth)
+    results = client.get(f"{API}/sessions/{session_id}/results", headers=auth).json()
+    assert results["heading"] is None and results["latitude"] is None
+    assert "at least 3 positions" in results["problems"]["heading"]
+
+
+def test_csv_bodies(client, auth):
+    session_id = new_api_session(client, auth)
+    url = f"{API}/sessions/{session_id}/heading/positions/1"
+    lines = "\n".join(str(v) for v in handout("handout_horizontal.csv")[1])
+    response = client.put(url, content=lines, headers={**auth, "Content-Type": "text/csv"})
+    assert response.status_code == 200 and response.json()["n_samples"] == 10
+    timed = "time_s,value\n" + "\n".join(
+        f"{i},{v}" for i, v in enumerate(handout("handout_horizontal.csv")[2])
+    )
+    response = client.put(
+        f"{API}/sessions/{session_id}/heading/positions/2?unit=deg/h",
+        content=timed,
+        headers={**auth, "Content-Type": "text/csv"},
+    )
+    assert response.status_code == 200
+    bad = client.put(url, content="1\n2\nthree\n", headers={**auth, "Content-Type": "text/csv"})
+    assert bad.status_code == 400 and "Line 3" in bad.json()["detail"]
+
+
+@pytest.mark.parametrize(
+    ("body", "status", "text"),
+    [
+        ({"samples": [True] * 10}, 422, ""),
+        ({"samples": ["1.0"] * 10}, 422, ""),
+        ({"samples": []}, 422, ""),
+        ({"samples": [1.0] * 10, "unit": "furlong/h"}, 422, ""),
+        ({"samples": [1.0] * 5}, 400, "at least 10"),
+        ({"samples": [1.0] * 10, "times_s": [0.0] * 9}, 400, "one entry per sample"),
+        ({"samples": [1.0] * 10, "unit": "deg/s"}, 200, ""),
+        ({"samples": [3.0] * 10, "unit": "deg/s"}, 400, "check the unit"),
+    ],
+)
+def test_strict_validation(client, auth, body, status, text):
+    session_id = new_api_session(client, auth)
+    response = client.put(
+        f"{API}/sessions/{session_id}/heading/positions/1", json=body, headers=auth
+    )
+    assert response.status_code == status, response.text
+    if text:
+        assert text in response.json()["detail"]
+
+
+def test_non_finite_samples_store_nothing(client, auth):
+    session_id = new_api_session(client, auth)
+    body = '{"samples": [1.0, 2.0, NaN, 4, 5, 6, 7, 8, 9, 10]}'
+    response = client.put(
+        f"{API}/sessions/{session_id}/heading/positions/1",
+        content=body,
+        headers={**auth, "Content-Type": "application/json"},
+    )
+    assert response.status_code == 400 and "finite" in response.json()["detail"]
+    with read_session() as db:
+        assert db.exec(select(Take)).first() is None
+        assert db.exec(select(SampleChunk)).first() is None
+    response = client.put(
+        f"{API}/sessions/{session_id}/heading/positions/1",
+        content="{oops",
+        headers={**auth, "Content-Type": "application/json"},
+    )
+    assert response.status_code == 400
+
+
+def test_append_with_offsets_is_idempotent(client, auth):
+    session_id = new_api_session(client, auth)
+    url = f"{API}/sessions/{session_id}/latitude/positions/3/samples"
+    first = client.post(url, json={"samples": [1.0, 2.0, 3.0], "offset": 0}, headers=auth)
+    assert first.json() == {
+        "session_id": session_id,
+        "part": "latitude",
+        "position": 3,
+        "n_samples": 3,
+        "added": 3,
+    }
+    again = client.post(url, json={"samples": [1.0, 2.0, 3.0], "offset": 0}, headers=auth)
+    assert again.json()["n_samples"] == 3 and again.json()["added"] == 0  # a retry
+    overlap = client.post(url, json={"samples": [3.0, 4.0, 5.0], "offset": 2}, headers=auth)
+    assert overlap.json()["n_samples"] == 5 and overlap.json()["added"] == 2
+    gap = client.post(url, json={"samples": [9.0], "offset": 7}, headers=auth)
+    assert gap.status_code == 409 and "Expected offset 5" in gap.json()["detail"]
+    with read_session() as db:
+        take = db.exec(select(Take)).one()
+        from app.labstore import load_samples
+
+        assert load_samples(db, take)[0].tolist() == [1.0, 2.0, 3.0, 4.0, 5.0]
+
+
+def test_objects_of_others_answer_404(client, app, student, auth):
+    from fastapi.testclient import TestClient
+
+    session_id = new_api_session(client, auth)
+    make_user("other", Role.student)
+    with TestClient(app) as other_client:
+        other = token_for(other_client, "other")
+        base = f"{API}/sessions/{session_id}"
+        assert other_client.get(base, headers=other).status_code == 404
+        assert other_client.get(f"{base}/results", headers=other).status_code == 404
+        assert (
+            other_client.put(
+                f"{base}/heading/positions/1", json={"samples": [1.0] * 10}, headers=other
+            ).status_code
+            == 404
+        )
+        assert other_client.post(f"{base}/submit", headers=other).status_code == 404
+        assert other_client.get(f"{API}/courses", headers=other).status_code == 403
+
+
+def test_personal_tokens_page_scopes_and_revocation(client, student):
+    login(client, "student1")
+    page = post_form(
+        client,
+        "/account/tokens",
+        {"name": "bench bridge", "scopes": ["read"]},
+        page="/account/tokens",
+    )
+    assert page.status_code == 200 and "shown only now" in page.text
+    raw = page.text.split('id="new-token">')[1].split("<")[0]
+    headers = {"Authorization": f"Bearer {raw}"}
+    client.cookies.clear()
+    assert client.get(f"{API}/me", headers=headers).status_code == 200
+    denied = client.post(f"{API}/sessions", json=PRACTICE, headers=headers)
+    assert denied.status_code == 403 and "'upload' scope" in denied.json()["detail"]
+    login(client, "student1")
+    listing = client.get("/account/tokens").text
+    assert "bench bridge" in listing and raw not in listing and raw[:10] in listing
+    with read_session() as db:
+        token_id = db.exec(select(ApiToken)).one().id
+    post_form(client, f"/account/tokens/{token_id}/revoke", page="/account/tokens")
+    client.cookies.clear()
+    assert client.get(f"{API}/me", headers=headers).status_code == 401
+
+
+def test_rate_limit_per_token(client, student, auth, monkeypatch):
+    from app.config import get_settings
+
+    monkeypatch.setattr(get_settings(), "api_rate_per_minute", 3)
+    statuses = [client.get(f"{API}/me", headers=auth).status_code for _ in range(5)]
+    assert statuses == [200, 200, 200, 429, 429]
+
+
+def test_cookie_requests_need_the_csrf_header(client, student):
+    login(client, "student1")
+    assert client.get(f"{API}/me").status_code == 200
+    assert client.post(f"{API}/sessions", json=PRACTICE).status_code == 403
+    token = csrf_from(client, "/lab")
+    response = client.post(f"{API}/sessions", json=PRACTICE, headers={"X-CSRF-Token": token})
+    assert response.status_code == 201
+
+
+def test_bearer_requests_need_no_csrf(client, auth):
+    assert client.post(f"{API}/sessions", json=PRACTICE, headers=auth).status_code == 201
+
+
+def test_teacher_routes(client, app, teacher):
+    from fastapi.testclient import TestClient
+
+    student = make_user("s1", Role.student, name="张三")
+    course_id = make_course(teacher, "Nav 惯导", (student,))
+    with write_session() as db:
+        assignment = Assignment(
+            course_id=course_id,
+            title="Find north",
+            latitude_deg=39.93,
+            earth_rate_deg_h=15.04,
+            allowed_methods="manual,csv",
+        )
+        db.add(assignment)
+        db.flush()
+        assignment_id = assignment.id
+    with TestClient(app) as student_client:
+        student_auth = token_for(student_client, "s1")
+        body = {"assignment_id": assignment_id}
+        session_id = new_api_session(student_client, student_auth, body)
+        again = student_client.post(f"{API}/sessions", json=body, headers=student_auth)
+        assert again.status_code == 200 and again.json()["id"] == session_id
+        upload_handout(student_client, student_auth, session_id)
+        student_client.post(f"{API}/sessions/{session_id}/submit", headers=student_auth)
+        assert (
+            student_client.get(
+                f"{API}/assignments/{assignment_id}/submissions", headers=student_auth
+            ).status_code
+            == 403
+        )
+    teacher_auth = token_for(client, "teacher1")
+    courses = client.get(f"{API}/courses", headers=teacher_auth).json()
+    assert courses[0]["assignments"][0]["id"] == assignment_id
+    rows = client.get(f"{API}/assignments/{assignment_id}/submissions", headers=teacher_auth).json()
+    assert rows[0]["display_name"] == "张三" and rows[0]["status"] == "submitted"
+    assert rows[0]["latitude_error_percent"] == pytest.approx(2.00, abs=5e-3)
+    exported = client.get(f"{API}/assignments/{assignment_id}/export.csv", headers=teacher_auth)
+    assert exported.content.startswith("\ufeff".encode()) and "张三" in exported.text
+    make_user("t2", Role.teacher)
+    with TestClient(app) as other:
+        other_auth = token_for(other, "t2")
+        assert (
+            other.get(
+                f"{API}/assignments/{assignment_id}/submissions", headers=other_auth
+            ).status_code
+            == 404
+        )
+
+
+def test_must_change_password_users_get_no_token(client):
+    make_user("fresh", Role.student, must_change=True)
+    response = client.post(f"{API}/auth/token", data={"username": "fresh", "password": PASSWORD})
+    assert response.status_code == 403
+
+
+def test_openapi_documents_every_route(client):
+    schema = client.get("/openapi.json").json()
+    paths = schema["paths"]
+    assert len(paths) == 11
+    for path, operations in paths.items():
+        for method, operation in operations.items():
+            assert operation.get("summary"), (method, path)
+            assert "401" in operation["responses"] or path.endswith("/auth/token")
+    upload = paths[f"{API}/sessions/{{session_id}}/{{part}}/positions/{{position}}"]["put"]
+    assert set(upload["requestBody"]["content"]) == {"application/json", "text/csv"}
+    docs = client.get("/docs")
+    assert docs.status_code == 200 and "/vendor/swagger-ui/swagger-ui-bundle.js" in docs.text
+    assert "cdn" not in docs.text.lower()
+    assert client.get("/vendor/swagger-ui/swagger-ui-bundle.js").status_code == 200
+
+
+def test_oversized_body_is_refused(client, auth):
+    session_id = new_api_session(client, auth)
+    body = json.dumps({"samples": [1.0] * 10}) + " " * (17 * 1024 * 1024)
+    response = client.put(
+        f"{API}/sessions/{session_id}/heading/positions/1",
+        content=body,
+        headers={**auth, "Content-Type": "application/json"},
+    )
+    assert response.status_code == 413

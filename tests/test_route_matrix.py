@@ -1,0 +1,232 @@
+"""Access matrix: every route, every role.  Adding a route without listing it here fails."""
+
+from __future__ import annotations
+
+import pytest
+from fastapi.routing import APIRoute, APIWebSocketRoute
+from fastapi.testclient import TestClient
+from starlette.websockets import WebSocketDisconnect
+
+from app.models import Role
+from tests.conftest import csrf_from, iter_routes, login, make_user
+from tests.test_api import token_for
+from tests.test_review import world  # noqa: F401  (fixture)
+
+# rule: public | user (any log-in) | teacher (own course) | owner (own session)
+#       | review (teacher of the session's course) | token (own API token)
+ACCESS = {
+    "GET /docs": "public",
+    "GET /vendor/plotly-{version}.min.js": "public",
+    "GET /login": "public",
+    "POST /login": "public",
+    "POST /lang": "public",
+    "POST /logout": "user",
+    "GET /account/password": "user",
+    "POST /account/password": "user",
+    "GET /": "user",
+    "GET /lab": "user",
+    "POST /lab/sessions": "user",
+    "GET /account/tokens": "user",
+    "POST /account/tokens": "user",
+    "POST /account/tokens/{token_id}/revoke": "token",
+    "GET /courses": "teacher-any",
+    "POST /courses": "teacher-any",
+    "GET /courses/{course_id}": "teacher",
+    "POST /courses/{course_id}/rename": "teacher",
+    "POST /courses/{course_id}/archive": "teacher",
+    "POST /courses/{course_id}/students": "teacher",
+    "POST /courses/{course_id}/import": "teacher",
+    "POST /courses/{course_id}/students/{student_id}/reset-password": "teacher",
+    "POST /courses/{course_id}/students/{student_id}/remove": "teacher",
+    "POST /courses/{course_id}/assignments": "teacher",
+    "GET /courses/{course_id}/assignments/{assignment_id}": "teacher",
+    "POST /courses/{course_id}/assignments/{assignment_id}/settings": "teacher",
+    "GET /courses/{course_id}/assignments/{assignment_id}/export.csv": "teacher",
+    "GET /courses/{course_id}/assignments/{assignment_id}/export.zip": "teacher",
+    "GET /review/sessions/{session_id}": "review",
+    "POST /review/sessions/{session_id}/feedback": "review",
+    "GET /lab/sessions/{session_id}": "owner",
+    "POST /lab/sessions/{session_id}/manual": "owner",
+    "POST /lab/sessions/{session_id}/csv/preview": "owner",
+    "POST /lab/sessions/{session_id}/csv": "owner",
+    "POST /lab/sessions/{session_id}/turn": "owner",
+    "GET /lab/sessions/{session_id}/results.json": "owner",
+    "POST /lab/sessions/{session_id}/submit": "owner",
+    "GET /lab/sessions/{session_id}/export.csv": "owner",
+    "GET /lab/sessions/{session_id}/export.json": "owner",
+    "WS /lab/sessions/{session_id}/stream": "owner",
+    "POST /api/v1/auth/token": "public",
+    "GET /api/v1/me": "user",
+    "GET /api/v1/sessions": "user",
+    "POST /api/v1/sessions": "user",
+    "GET /api/v1/sessions/{session_id}": "owner",
+    "PUT /api/v1/sessions/{session_id}/{part}/positions/{position}": "owner",
+    "POST /api/v1/sessions/{session_id}/{part}/positions/{position}/samples": "owner",
+    "GET /api/v1/sessions/{session_id}/results": "owner",
+    "POST /api/v1/sessions/{session_id}/submit": "owner",
+    "GET /api/v1/courses": "teacher-any",
+    "GET /api/v1/assignments/{assignment_id}/submissions": "teacher",
+    "GET /api/v1/assignments/{assignment_id}/export.csv": "teacher",
+}
+
+
+def app_routes(app) -> set[str]:
+    found = set()
+    for route in iter_routes(app.routes):
+        if isinstance(route, APIWebSocketRoute):
+            found.add(f"WS {route.path}")
+        elif isinstance(route, APIRoute) or hasattr(route, "methods"):
+            if route.path == "/openapi.json":
+                continue
+            path = route.path
+            if path.startswith("/vendor/plotly-"):
+                path = "/vendor/plotly-{version}.min.js"
+            for method in route.methods - {"HEAD"}:
+                found.add(f"{method} {path}")
+    return found
+
+
+def test_every_route_is_in_the_matrix(app):
+    assert app_routes(app) == set(ACCESS)
+
+
+@pytest.fixture
+def ids(world):  # noqa: F811
+    from tests.test_lab import new_session, save_manual
+    from tests.test_review import browser, do_lab, submit
+
+    student = browser(world, "s1")
+    session_id = new_session(student, assignment_id=str(world["assignment"]))
+    do_lab(student, session_id)
+    submit(student, session_id)
+    save_manual  # noqa: B018  (imported for side effects of the fixture chain)
+    token = csrf_from(student, "/account/tokens")
+    page = student.post(
+        "/account/tokens", data={"csrf_token": token, "name": "t", "scopes": ["read", "upload"]}
+    )
+    assert page.status_code == 200
+    from sqlmodel import select
+
+    from app.db import read_session
+    from app.models import ApiToken, User
+
+    with read_session() as db:
+        token_id = db.exec(select(ApiToken.id)).first()
+        student_id = db.exec(select(User.id).where(User.username == "s1")).one()
+    return {
+        "course_id": world["course"],
+        "assignment_id": world["assignment"],
+        "session_id": session_id,
+        "student_id": student_id,
+        "token_id": token_id,
+        "part": "heading",
+        "position": 1,
+        "version": "x",
+        "app": world["app"],
+    }
+
+
+def concrete(route: str, ids: dict) -> tuple[str, str]:
+    method, path = route.split(" ", 1)
+    if "{version}" in path:
+        from app.main import PLOTLY_URL
+
+        return method, PLOTLY_URL
+    return method, path.format(**ids)
+
+
+JSON_BODIES = {  # routes of the lab page that take JSON (fetch) rather than forms
+    "/manual": {"part": "heading", "columns": {"1": [1.0] * 10}},
+    "/csv": {"part": "heading", "text": "position_1\n1\n"},
+    "/csv/preview": {"part": "heading", "text": "position_1\n1\n"},
+    "/turn": {"part": "heading", "position": 2},
+}
+
+
+def request(client, method, path, headers=None):
+    headers = dict(headers or {})
+    if method in ("POST", "PUT"):
+        if path.startswith("/api/"):
+            return client.request(method, path, json={"samples": [1.0] * 10}, headers=headers)
+        page = "/login" if "gyrolab_session" not in client.cookies else "/lab"
+        token = csrf_from(client, page)
+        suffix = next(
+            (s for s in JSON_BODIES if path.startswith("/lab/") and path.endswith(s)), None
+        )
+        if suffix:
+            return client.request(
+                method, path, json=JSON_BODIES[suffix], headers={**headers, "X-CSRF-Token": token}
+            )
+        return client.request(method, path, data={"csrf_token": token}, headers=headers)
+    return client.request(method, path, headers=headers)
+
+
+@pytest.mark.parametrize("route", sorted(r for r, rule in ACCESS.items() if rule != "public"))
+def test_anonymous_is_refused(ids, route):
+    method, path = concrete(route, ids)
+    with TestClient(ids["app"], follow_redirects=False) as anonymous:
+        if method == "WS":
+            with pytest.raises(WebSocketDisconnect), anonymous.websocket_connect(path) as ws:
+                ws.receive_json()
+            return
+        response = request(anonymous, method, path)
+    json_route = method == "POST" and any(path.endswith(s) for s in JSON_BODIES)
+    if path.startswith("/api/") or json_route:
+        assert response.status_code == 401, route  # JSON callers get JSON, not a redirect
+    else:
+        assert response.status_code == 303 and "/login" in response.headers["location"], route
+
+
+@pytest.mark.parametrize(
+    "route", sorted(r for r, rule in ACCESS.items() if rule in ("teacher", "teacher-any", "review"))
+)
+def test_students_are_refused_teacher_routes(ids, route):
+    method, path = concrete(route, ids)
+    with TestClient(ids["app"], follow_redirects=False) as student:
+        headers = {}
+        if path.startswith("/api/"):
+            headers = token_for(student, "s1")
+        else:
+            login(student, "s1")
+        response = request(student, method, path, headers)
+    assert response.status_code == 403, route
+    assert "学生2" not in response.text  # no classmate's data on the refusal
+
+
+@pytest.mark.parametrize(
+    "route", sorted(r for r, rule in ACCESS.items() if rule in ("teacher", "review"))
+)
+def test_other_teachers_get_404(ids, route):
+    make_user("t2", Role.teacher)
+    method, path = concrete(route, ids)
+    with TestClient(ids["app"], follow_redirects=False) as other:
+        headers = {}
+        if path.startswith("/api/"):
+            headers = token_for(other, "t2")
+        else:
+            login(other, "t2")
+        response = request(other, method, path, headers)
+    assert response.status_code == 404, route
+
+
+@pytest.mark.parametrize(
+    "route", sorted(r for r, rule in ACCESS.items() if rule in ("owner", "token"))
+)
+def test_other_students_get_404(ids, route):
+    method, path = concrete(route, ids)
+    with TestClient(ids["app"], follow_redirects=False) as other:
+        if method == "WS":
+            login(other, "s2")
+            with (
+                pytest.raises(WebSocketDisconnect),
+                other.websocket_connect(path, headers={"origin": "http://testserver"}) as ws,
+            ):
+                ws.receive_json()
+            return
+        headers = {}
+        if path.startswith("/api/"):
+            headers = token_for(other, "s2")
+        else:
+            login(other, "s2")
+        response = request(other, method, path, headers)
+    assert response.status_code == 404, route
