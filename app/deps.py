@@ -6,7 +6,7 @@ from collections.abc import Iterator
 from datetime import timedelta
 from typing import Annotated
 
-from fastapi import Depends, Request
+from fastapi import Depends, Path, Request
 from sqlmodel import Session, select
 
 from app.config import Settings, get_settings
@@ -140,3 +140,6 @@ def student_user(user: CurrentUser) -> User:
 TeacherUser = Annotated[User, Depends(teacher_user)]
 StudentUser = Annotated[User, Depends(student_user)]
 CsrfProtected = Depends(csrf_protect)
+
+MAX_ID = 2**63 - 1  # SQLite's INTEGER: larger ids cannot exist, so they answer 404/422
+ObjectId = Annotated[int, Path(ge=1, le=MAX_ID)]

@@ -26,7 +26,7 @@ from app.apitokens import LOGIN_TOKEN_LIFETIME, check_token, new_token
 from app.core.exceptions import GyroInputError
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.db import write_session
-from app.deps import SAFE_METHODS, SessionDep, SettingsDep, load_login
+from app.deps import SAFE_METHODS, ObjectId, SessionDep, SettingsDep, load_login
 from app.labsim import nominal_angle
 from app.labstore import (
     MAX_SAMPLES_PER_POSITION,
@@ -137,8 +137,8 @@ def login_for_token(
     request: Request,
     db: SessionDep,
     settings: SettingsDep,
-    username: Annotated[str, Form(max_length=200)],
-    password: Annotated[str, Form(max_length=1000)],
+    username: Annotated[str, Form(min_length=1, max_length=200)],
+    password: Annotated[str, Form(min_length=1, max_length=1000)],
 ):
     """OAuth2 password flow: a one-hour bearer token (read and upload), throttled like the
     log-in page."""
@@ -208,7 +208,7 @@ class SessionCreate(BaseModel):
         },
     )
     title: str = Field(default="", max_length=200)
-    assignment_id: int | None = None
+    assignment_id: int | None = Field(default=None, ge=1, le=2**63 - 1)
     station: Station | None = None
     heading: HeadingSettings = HeadingSettings()
     latitude: LatitudeSettings = LatitudeSettings()
@@ -571,7 +571,7 @@ def create_session(body: SessionCreate, caller: CallerDep, db: SessionDep):
 
 
 @router.get("/sessions/{session_id}", response_model=SessionOut)
-def get_session(session_id: int, caller: CallerDep, db: SessionDep):
+def get_session(session_id: ObjectId, caller: CallerDep, db: SessionDep):
     need(caller, "read")
     return session_out(db, own(db, caller, session_id))
 
@@ -583,7 +583,7 @@ def get_session(session_id: int, caller: CallerDep, db: SessionDep):
 )
 async def put_position(
     request: Request,
-    session_id: int,
+    session_id: ObjectId,
     part: PartPath,
     position: PositionPath,
     caller: CallerDep,
@@ -631,7 +631,7 @@ async def put_position(
 )
 async def append_position(
     request: Request,
-    session_id: int,
+    session_id: ObjectId,
     part: PartPath,
     position: PositionPath,
     caller: CallerDep,
@@ -670,7 +670,7 @@ async def append_position(
 
 
 @router.get("/sessions/{session_id}/results", response_model=ResultsOut)
-def get_results(session_id: int, caller: CallerDep, db: SessionDep):
+def get_results(session_id: ObjectId, caller: CallerDep, db: SessionDep):
     """Exactly the keys of ``gyrolab solve --json`` per part (null without enough data)."""
     need(caller, "read")
     session = own(db, caller, session_id)
@@ -694,7 +694,7 @@ def _finite(value):
 
 
 @router.post("/sessions/{session_id}/submit", response_model=AttemptOut)
-def submit_session(session_id: int, caller: CallerDep, db: SessionDep):
+def submit_session(session_id: ObjectId, caller: CallerDep, db: SessionDep):
     """Freeze the data and results as a new attempt (the assignment's rules apply)."""
     need(caller, "upload")
     session = own(db, caller, session_id)
@@ -759,7 +759,7 @@ def teacher_assignment(db: Session, caller: Caller, assignment_id: int) -> Assig
     response_model=list[SubmissionRow],
     tags=["api: teachers"],
 )
-def list_submissions(assignment_id: int, caller: CallerDep, db: SessionDep):
+def list_submissions(assignment_id: ObjectId, caller: CallerDep, db: SessionDep):
     """Teachers: one row per enrolled student with their latest submitted results."""
     assignment = teacher_assignment(db, caller, assignment_id)
     rows = []
@@ -790,7 +790,7 @@ def list_submissions(assignment_id: int, caller: CallerDep, db: SessionDep):
     response_class=Response,
     responses={200: {"content": {"text/csv": {}}, "description": "the class table"}},
 )
-def export_submissions(assignment_id: int, caller: CallerDep, db: SessionDep):
+def export_submissions(assignment_id: ObjectId, caller: CallerDep, db: SessionDep):
     """Teachers: the class table as CSV (UTF-8 with BOM)."""
     assignment = teacher_assignment(db, caller, assignment_id)
     buffer = io.StringIO()

@@ -19,7 +19,7 @@ from app.accounts import (
     reset_password,
 )
 from app.core.simulate import PRESETS
-from app.deps import CsrfProtected, SessionDep, TeacherUser
+from app.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
 from app.models import Assignment, Course, Enrollment, User
 from app.roster import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
 from app.web import flash, redirect, render
@@ -105,14 +105,18 @@ def course_context(db: Session, course: Course, **extra) -> dict:
 
 
 @router.get("/{course_id}")
-def course_page(request: Request, course_id: int, teacher: TeacherUser, db: SessionDep):
+def course_page(request: Request, course_id: ObjectId, teacher: TeacherUser, db: SessionDep):
     course = own_course(db, teacher, course_id)
     return render(request, "courses/detail.html", course_context(db, course))
 
 
 @router.post("/{course_id}/rename", dependencies=[CsrfProtected])
 def rename_course(
-    request: Request, course_id: int, teacher: TeacherUser, db: SessionDep, name: NameField = ""
+    request: Request,
+    course_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
+    name: NameField = "",
 ):
     course = own_course(db, teacher, course_id)
     response = redirect(f"/courses/{course.id}")
@@ -129,7 +133,7 @@ def rename_course(
 @router.post("/{course_id}/archive", dependencies=[CsrfProtected])
 def archive_course(
     request: Request,
-    course_id: int,
+    course_id: ObjectId,
     teacher: TeacherUser,
     db: SessionDep,
     archived: Annotated[bool, Form()] = True,
@@ -146,7 +150,7 @@ def archive_course(
 @router.post("/{course_id}/students", dependencies=[CsrfProtected])
 def add_student_by_hand(
     request: Request,
-    course_id: int,
+    course_id: ObjectId,
     teacher: TeacherUser,
     db: SessionDep,
     username: Annotated[str, Form(max_length=64)] = "",
@@ -194,7 +198,7 @@ def add_student_by_hand(
 @router.post("/{course_id}/import", dependencies=[CsrfProtected])
 async def import_students(
     request: Request,
-    course_id: int,
+    course_id: ObjectId,
     teacher: TeacherUser,
     db: SessionDep,
     roster_file: Annotated[UploadFile | None, File()] = None,
@@ -226,7 +230,11 @@ async def import_students(
 
 @router.post("/{course_id}/students/{student_id}/reset-password", dependencies=[CsrfProtected])
 def reset_student_password(
-    request: Request, course_id: int, student_id: int, teacher: TeacherUser, db: SessionDep
+    request: Request,
+    course_id: ObjectId,
+    student_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
 ):
     course = own_course(db, teacher, course_id)
     student = enrolled_student(db, course, student_id)
@@ -248,7 +256,11 @@ def reset_student_password(
 
 @router.post("/{course_id}/students/{student_id}/remove", dependencies=[CsrfProtected])
 def remove_student(
-    request: Request, course_id: int, student_id: int, teacher: TeacherUser, db: SessionDep
+    request: Request,
+    course_id: ObjectId,
+    student_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
 ):
     """Take a student off the roster; their account and all their work stay."""
     course = own_course(db, teacher, course_id)

@@ -19,7 +19,7 @@ from app.core.exceptions import GyroInputError
 from app.core.readings import parse_readings_csv
 from app.core.simulate import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS, canonical_unit, to_deg_per_hour
-from app.deps import CsrfProtected, CurrentUser, SessionDep
+from app.deps import CsrfProtected, CurrentUser, ObjectId, SessionDep
 from app.i18n import translator
 from app.labsim import nominal_angle
 from app.labstore import (
@@ -122,7 +122,7 @@ def create_session(
     user: CurrentUser,
     db: SessionDep,
     title: Annotated[str, Form(max_length=200)] = "",
-    assignment_id: Annotated[int | None, Form()] = None,
+    assignment_id: Annotated[int | None, Form(ge=1, le=2**63 - 1)] = None,
     station: Annotated[str, Form(max_length=32)] = "handout",
     latitude_deg: Annotated[float | None, Form()] = None,
     earth_rate_deg_h: Annotated[float | None, Form()] = None,
@@ -182,7 +182,7 @@ def _figures(results, _) -> dict[str, dict]:
 
 
 @router.get("/sessions/{session_id}")
-def session_page(request: Request, session_id: int, user: CurrentUser, db: SessionDep):
+def session_page(request: Request, session_id: ObjectId, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
     _ = translator(request_language(request))
     attempts = db.exec(
@@ -368,7 +368,7 @@ def _store_columns(
 @router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected])
 def save_manual(
     request: Request,
-    session_id: int,
+    session_id: ObjectId,
     user: CurrentUser,
     db: SessionDep,
     body: Annotated[ManualReadings, Body()],
@@ -414,7 +414,7 @@ def _parse_upload(body: CsvUpload):
 @router.post("/sessions/{session_id}/csv/preview", dependencies=[CsrfProtected])
 def preview_csv(
     request: Request,
-    session_id: int,
+    session_id: ObjectId,
     user: CurrentUser,
     db: SessionDep,
     body: Annotated[CsvUpload, Body()],
@@ -448,7 +448,7 @@ def preview_csv(
 @router.post("/sessions/{session_id}/csv", dependencies=[CsrfProtected])
 def save_csv(
     request: Request,
-    session_id: int,
+    session_id: ObjectId,
     user: CurrentUser,
     db: SessionDep,
     body: Annotated[CsvUpload, Body()],
@@ -478,7 +478,9 @@ class Turn(BaseModel):
 
 
 @router.post("/sessions/{session_id}/turn", dependencies=[CsrfProtected])
-def turn_table(session_id: int, user: CurrentUser, db: SessionDep, body: Annotated[Turn, Body()]):
+def turn_table(
+    session_id: ObjectId, user: CurrentUser, db: SessionDep, body: Annotated[Turn, Body()]
+):
     """Turn the virtual turntable; every real turn gets a new indexing error."""
     session = own_session(db, user, session_id)
     require_method(db, session, "simulator")
@@ -496,7 +498,7 @@ def turn_table(session_id: int, user: CurrentUser, db: SessionDep, body: Annotat
 
 
 @router.get("/sessions/{session_id}/results.json")
-def results_endpoint(session_id: int, user: CurrentUser, db: SessionDep):
+def results_endpoint(session_id: ObjectId, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
     results = session_results(db, session)
     payload = {part: outcome.to_json() for part, outcome in results.items()}
@@ -514,7 +516,7 @@ def _nulls(value):
 
 
 @router.post("/sessions/{session_id}/submit", dependencies=[CsrfProtected])
-def submit_session(request: Request, session_id: int, user: CurrentUser, db: SessionDep):
+def submit_session(request: Request, session_id: ObjectId, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
     response = redirect(f"/lab/sessions/{session.id}")
     try:
@@ -529,7 +531,7 @@ def submit_session(request: Request, session_id: int, user: CurrentUser, db: Ses
 
 
 @router.get("/sessions/{session_id}/export.csv")
-def export_session_csv(session_id: int, user: CurrentUser, db: SessionDep):
+def export_session_csv(session_id: ObjectId, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
     return PlainTextResponse(
         "\ufeff" + export_csv(db, session), media_type="text/csv", headers=_download(session, "csv")
@@ -537,7 +539,7 @@ def export_session_csv(session_id: int, user: CurrentUser, db: SessionDep):
 
 
 @router.get("/sessions/{session_id}/export.json")
-def export_session_json(session_id: int, user: CurrentUser, db: SessionDep):
+def export_session_json(session_id: ObjectId, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
     return Response(
         json.dumps(export_json(db, session), ensure_ascii=False, indent=1),

@@ -13,7 +13,7 @@ from sqlmodel import Session, select
 
 from app.charts import class_error_figure, class_histogram_figure
 from app.core.simulate import PRESETS
-from app.deps import CsrfProtected, SessionDep, TeacherUser
+from app.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
 from app.i18n import translator
 from app.labstore import export_csv, export_json
 from app.models import Assignment, Attempt, Course, LabSession, User
@@ -61,8 +61,8 @@ def reviewable_session(db: Session, teacher: User, session_id: int):
 @router.get("/courses/{course_id}/assignments/{assignment_id}")
 def assignment_dashboard(
     request: Request,
-    course_id: int,
-    assignment_id: int,
+    course_id: ObjectId,
+    assignment_id: ObjectId,
     teacher: TeacherUser,
     db: SessionDep,
     status: str = "",
@@ -95,7 +95,11 @@ def assignment_dashboard(
     "/courses/{course_id}/assignments/{assignment_id}/settings", dependencies=[CsrfProtected]
 )
 async def update_settings(
-    request: Request, course_id: int, assignment_id: int, teacher: TeacherUser, db: SessionDep
+    request: Request,
+    course_id: ObjectId,
+    assignment_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
 ):
     course, assignment = own_assignment(db, teacher, course_id, assignment_id)
     form = await request.form()
@@ -117,7 +121,9 @@ async def update_settings(
 
 
 @router.get("/courses/{course_id}/assignments/{assignment_id}/export.csv")
-def export_assignment_csv(course_id: int, assignment_id: int, teacher: TeacherUser, db: SessionDep):
+def export_assignment_csv(
+    course_id: ObjectId, assignment_id: ObjectId, teacher: TeacherUser, db: SessionDep
+):
     _, assignment = own_assignment(db, teacher, course_id, assignment_id)
     buffer = io.StringIO()
     csv.writer(buffer).writerows(export_rows(class_rows(db, assignment)))
@@ -129,7 +135,9 @@ def export_assignment_csv(course_id: int, assignment_id: int, teacher: TeacherUs
 
 
 @router.get("/courses/{course_id}/assignments/{assignment_id}/export.zip")
-def export_assignment_zip(course_id: int, assignment_id: int, teacher: TeacherUser, db: SessionDep):
+def export_assignment_zip(
+    course_id: ObjectId, assignment_id: ObjectId, teacher: TeacherUser, db: SessionDep
+):
     """Every student's submitted data (CSV and JSON with results) plus the class table."""
     _, assignment = own_assignment(db, teacher, course_id, assignment_id)
     rows = class_rows(db, assignment)
@@ -164,7 +172,7 @@ def export_assignment_zip(course_id: int, assignment_id: int, teacher: TeacherUs
 
 
 @router.get("/review/sessions/{session_id}")
-def submission_page(request: Request, session_id: int, teacher: TeacherUser, db: SessionDep):
+def submission_page(request: Request, session_id: ObjectId, teacher: TeacherUser, db: SessionDep):
     session, assignment, course = reviewable_session(db, teacher, session_id)
     _ = translator(request_language(request))
     attempts = db.exec(
@@ -200,7 +208,9 @@ def submission_page(request: Request, session_id: int, teacher: TeacherUser, db:
 
 
 @router.post("/review/sessions/{session_id}/feedback", dependencies=[CsrfProtected])
-async def save_feedback(request: Request, session_id: int, teacher: TeacherUser, db: SessionDep):
+async def save_feedback(
+    request: Request, session_id: ObjectId, teacher: TeacherUser, db: SessionDep
+):
     """Comments (overall and per position) and the grade; 'action' may return or release."""
     session, _, _ = reviewable_session(db, teacher, session_id)
     form = await request.form()

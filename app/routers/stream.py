@@ -28,6 +28,7 @@ from starlette.concurrency import run_in_threadpool
 from app.config import get_settings
 from app.core.exceptions import GyroInputError
 from app.db import write_session
+from app.deps import ObjectId
 from app.i18n import translate
 from app.labsim import MAX_DWELL_S, MAX_SETTLE_S, SimulatedTake
 from app.labstore import PARTS, POSITIONS, store_take
@@ -135,7 +136,7 @@ def _number(message: dict, name: str, default: float, low: float, high: float) -
 
 
 @router.websocket("/lab/sessions/{session_id}/stream")
-async def stream(websocket: WebSocket, session_id: int) -> None:
+async def stream(websocket: WebSocket, session_id: ObjectId) -> None:
     if not _same_origin(websocket):
         await websocket.close(code=4403)
         return

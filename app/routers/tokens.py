@@ -7,7 +7,7 @@ from typing import Annotated
 from fastapi import APIRouter, Form, HTTPException, Request
 
 from app.apitokens import new_token, user_tokens
-from app.deps import CsrfProtected, CurrentUser, SessionDep
+from app.deps import CsrfProtected, CurrentUser, ObjectId, SessionDep
 from app.models import ApiToken, utcnow
 from app.web import flash, redirect, render
 
@@ -41,7 +41,7 @@ def create_token(
 
 
 @router.post("/{token_id}/revoke", dependencies=[CsrfProtected])
-def revoke_token(request: Request, token_id: int, user: CurrentUser, db: SessionDep):
+def revoke_token(request: Request, token_id: ObjectId, user: CurrentUser, db: SessionDep):
     record = db.get(ApiToken, token_id)
     if record is None or record.user_id != user.id or record.kind != "personal":
         raise HTTPException(404)

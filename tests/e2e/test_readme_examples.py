@@ -20,15 +20,18 @@ DATA = ROOT / "tests" / "data"
 
 def example(kind: str) -> str:
     text = (ROOT / "README.md").read_text()
-    match = re.search(rf"<!-- example:{kind} -->\n```\w+\n(.*?)```\n<!-- /example -->", text,
-                      re.S)
+    match = re.search(rf"<!-- example:{kind} -->\n```\w+\n(.*?)```\n<!-- /example -->", text, re.S)
     assert match, f"README has no {kind} example"
     return match.group(1)
 
 
 def environment(server) -> dict[str, str]:
-    return {**server.env, "GYROLAB_URL": server.url, "GYROLAB_USER": "student",
-            "GYROLAB_PASSWORD": STUDENT_PASSWORD}
+    return {
+        **server.env,
+        "GYROLAB_URL": server.url,
+        "GYROLAB_USER": "student",
+        "GYROLAB_PASSWORD": STUDENT_PASSWORD,
+    }
 
 
 def test_curl_example(live_server):
@@ -36,17 +39,29 @@ def test_curl_example(live_server):
         if os.environ.get("CI", "").lower() == "true":
             pytest.fail("curl is needed for the README's curl example")
         pytest.skip("curl is not installed")
-    done = subprocess.run(["bash", "-euo", "pipefail", "-c", example("curl")], cwd=DATA,
-                          env=environment(live_server), capture_output=True, text=True,
-                          timeout=60)
+    done = subprocess.run(
+        ["bash", "-euo", "pipefail", "-c", example("curl")],
+        cwd=DATA,
+        env=environment(live_server),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert done.returncode == 0, done.stderr
     assert '"theta_deg":-10.75' in done.stdout.replace(" ", "")
 
 
 def test_python_example(live_server):
-    done = subprocess.run([sys.executable, "-c", example("python")], cwd=DATA,
-                          env=environment(live_server), capture_output=True, text=True,
-                          timeout=60)
+    done = subprocess.run(
+        [sys.executable, "-c", example("python")],
+        cwd=DATA,
+        env=environment(live_server),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert done.returncode == 0, done.stderr
-    assert done.stdout.splitlines() == ["theta -10.75 latitude 40.73 earth rate 15.133",
-                                        "submitted"]
+    assert done.stdout.splitlines() == [
+        "theta -10.75 latitude 40.73 earth rate 15.133",
+        "submitted",
+    ]
