@@ -15,6 +15,7 @@ from app import __version__
 from app.core.exceptions import GyroInputError
 from app.core.explain import explain_heading, explain_latitude
 from app.core.solve import solve_heading, solve_latitude
+from app.jsonsafe import json_safe
 from app.models import Assignment, Attempt, LabSession, SampleChunk, Take, utcnow
 from app.samples import chunks, unpack
 
@@ -363,7 +364,7 @@ def submit(db: Session, session: LabSession) -> Attempt:
         session_id=session.id,
         number=len(previous) + 1,
         take_ids=",".join(str(t.id) for t in takes),
-        results_json=json.dumps(_finite(results_json(results))),
+        results_json=json.dumps(json_safe(results_json(results))),
         submitted_at=now,
         late=late,
     )
@@ -372,16 +373,6 @@ def submit(db: Session, session: LabSession) -> Attempt:
     db.add(attempt)
     db.add(session)
     return attempt
-
-
-def _finite(value):
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_finite(v) for v in value]
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
-    return value
 
 
 def export_metadata(session: LabSession) -> dict:
@@ -425,7 +416,7 @@ def export_json(db: Session, session: LabSession) -> dict:
                     "times_s": None if item.times is None else item.times.tolist(),
                 }
             )
-    return _finite(
+    return json_safe(
         {"metadata": export_metadata(session), "positions": takes, "results": results_json(results)}
     )
 

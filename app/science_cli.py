@@ -20,27 +20,15 @@ from app.core.readings import Readings, parse_readings_csv, readings_to_long_csv
 from app.core.simulate import PRESETS, Setup, simulate_run, simulate_static
 from app.core.solve import elevation_angles, heading_angles, solve_heading, solve_latitude
 from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
+from app.jsonsafe import json_safe
 
 
 class CommandError(Exception):
     """A problem with the command's input: printed as one line, exit status 2."""
 
 
-def _clean(value):
-    """JSON-safe: NaN/inf become null, numpy scalars become floats."""
-    if isinstance(value, dict):
-        return {key: _clean(item) for key, item in value.items()}
-    if isinstance(value, list | tuple):
-        return [_clean(item) for item in value]
-    if isinstance(value, np.generic):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
-
-
 def to_json_text(payload: dict) -> str:
-    return json.dumps(_clean(payload), indent=2, ensure_ascii=False, allow_nan=False)
+    return json.dumps(json_safe(payload), indent=2, ensure_ascii=False, allow_nan=False)
 
 
 def _read_text(path: str) -> str:

@@ -27,6 +27,7 @@ from app.core.exceptions import GyroInputError
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.db import write_session
 from app.deps import SAFE_METHODS, ObjectId, SessionDep, SettingsDep, load_login
+from app.jsonsafe import json_safe
 from app.labsim import nominal_angle
 from app.labstore import (
     MAX_SAMPLES_PER_POSITION,
@@ -491,6 +492,21 @@ def require_api_method(db: Session, session: LabSession) -> None:
         raise HTTPException(403, "This assignment does not allow uploaded readings.")
 
 
+async def prepare_upload(
+    request: Request, db: Session, caller: Caller, session_id: int, part: str, position: int
+):
+    """The checks and parsing shared by replacing and appending a position's readings."""
+    need(caller, "upload")
+    session = own(db, caller, session_id)
+    require_api_method(db, session)
+    upload = await read_upload(request)
+    values, times = upload_arrays(upload)
+    angle = (
+        upload.angle_deg if upload.angle_deg is not None else nominal_angle(session, part, position)
+    )
+    return session, upload, values, times, float(angle)
+
+
 PartPath = Annotated[Literal["heading", "latitude"], Path(description="heading | latitude")]
 PositionPath = Annotated[int, Path(ge=1, le=POSITIONS)]
 UPLOAD_BODY = {
@@ -591,13 +607,8 @@ async def put_position(
 ):
     """Replace this position's readings (the previous take stays in the history).
     Atomic: on any error nothing is stored."""
-    need(caller, "upload")
-    session = own(db, caller, session_id)
-    require_api_method(db, session)
-    upload = await read_upload(request)
-    values, times = upload_arrays(upload)
-    angle = (
-        upload.angle_deg if upload.angle_deg is not None else nominal_angle(session, part, position)
+    session, upload, values, times, angle = await prepare_upload(
+        request, db, caller, session_id, part, position
     )
     try:
         take = store_take(
@@ -605,7 +616,7 @@ async def put_position(
             session,
             part=part,
             position=position,
-            angle_deg=float(angle),
+            angle_deg=angle,
             values=values,
             times=times,
             source="api",
@@ -639,13 +650,8 @@ async def append_position(
 ):
     """Append readings to this position (streaming devices).  With ``offset`` (the index
     of the first sample) a retried batch is stored once; a gap answers 409."""
-    need(caller, "upload")
-    session = own(db, caller, session_id)
-    require_api_method(db, session)
-    upload = await read_upload(request)
-    values, times = upload_arrays(upload)
-    angle = (
-        upload.angle_deg if upload.angle_deg is not None else nominal_angle(session, part, position)
+    session, upload, values, times, angle = await prepare_upload(
+        request, db, caller, session_id, part, position
     )
     try:
         take, added = append_samples(
@@ -653,7 +659,7 @@ async def append_position(
             session,
             part=part,
             position=position,
-            angle_deg=float(angle),
+            angle_deg=angle,
             values=values,
             times=times,
             unit=upload.unit,
@@ -677,20 +683,10 @@ def get_results(session_id: ObjectId, caller: CallerDep, db: SessionDep):
     results = session_results(db, session)
     payload: dict[str, Any] = {"problems": {}}
     for part, outcome in results.items():
-        payload[part] = _finite(outcome.to_json())
+        payload[part] = json_safe(outcome.to_json())
         if outcome.result is None and outcome.error is not None:
             payload["problems"][part] = str(outcome.error)
     return payload
-
-
-def _finite(value):
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_finite(v) for v in value]
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
-    return value
 
 
 @router.post("/sessions/{session_id}/submit", response_model=AttemptOut)

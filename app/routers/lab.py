@@ -21,6 +21,7 @@ from app.core.simulate import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS, canonical_unit, to_deg_per_hour
 from app.deps import CsrfProtected, CurrentUser, ObjectId, SessionDep
 from app.i18n import translator
+from app.jsonsafe import json_safe
 from app.labsim import nominal_angle
 from app.labstore import (
     PARTS,
@@ -502,17 +503,7 @@ def results_endpoint(session_id: ObjectId, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
     results = session_results(db, session)
     payload = {part: outcome.to_json() for part, outcome in results.items()}
-    return Response(json.dumps(_nulls(payload)), media_type="application/json")
-
-
-def _nulls(value):
-    if isinstance(value, dict):
-        return {k: _nulls(v) for k, v in value.items()}
-    if isinstance(value, list):
-        return [_nulls(v) for v in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value
+    return Response(json.dumps(json_safe(payload)), media_type="application/json")
 
 
 @router.post("/sessions/{session_id}/submit", dependencies=[CsrfProtected])
