@@ -73,12 +73,18 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     def api_docs():
         """The API reference, with Swagger UI served from the installed swagger-ui-bundle."""
         return get_swagger_ui_html(
-            openapi_url="/openapi.json",
+            openapi_url="/docs/openapi.json",
             title="GyroLab API",
             swagger_js_url="/vendor/swagger-ui/swagger-ui-bundle.js",
             swagger_css_url="/vendor/swagger-ui/swagger-ui.css",
             swagger_favicon_url="/static/favicon.svg",
         )
+
+    @app.get("/docs/openapi.json", include_in_schema=False)
+    def docs_schema() -> dict:
+        """The schema labelled 3.0 for the packaged Swagger UI 4, which predates OpenAPI 3.1
+        (the real schema, 3.1, is /openapi.json)."""
+        return {**app.openapi(), "openapi": "3.0.3"}
 
     @app.get(PLOTLY_URL, include_in_schema=False)
     def plotly_js() -> FileResponse:

@@ -15,7 +15,7 @@ from tests.test_review import world  # noqa: F401  (fixture)
 # rule: public | user (any log-in) | teacher (own course) | owner (own session)
 #       | review (teacher of the session's course) | token (own API token)
 ACCESS = {
-    "GET /docs": "public",
+    "GET /docs": "public", "GET /docs/openapi.json": "public",
     "GET /vendor/plotly-{version}.min.js": "public",
     "GET /login": "public",
     "POST /login": "public",
