@@ -18,7 +18,18 @@ from app import __version__
 from app.config import get_settings
 from app.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequired
 from app.paths import STATIC_DIR
-from app.routers import api, assignments, auth, courses, home, lab, review, stream, tokens
+from app.routers import (
+    api,
+    assignments,
+    auth,
+    courses,
+    explore,
+    home,
+    lab,
+    review,
+    stream,
+    tokens,
+)
 from app.web import redirect, render
 
 API_DESCRIPTION = """REST API of GyroLab, the FOG north-finding teaching lab.
@@ -151,6 +162,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(review.router)
     app.include_router(stream.router)
     app.include_router(tokens.router)
+    app.include_router(explore.router)
     app.include_router(api.router)
     return app
 

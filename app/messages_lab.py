@@ -2,6 +2,148 @@
 
 LAB_MESSAGES: dict[str, dict[str, str]] = {
     "nav.lab": {"en": "Lab", "zh-CN": "实验"},
+    "nav.explore": {"en": "Error explorer", "zh-CN": "误差分析"},
+    "explore.title": {"en": "Why four positions beat two", "zh-CN": "为什么四位置法优于二位置法"},
+    "explore.intro": {
+        "en": "Pick a method, a station and the size of each error source: the line is the first-order formula, the points are simulated runs of the same gyro simulator the lab uses (mean ± spread).",
+        "zh-CN": "选择方法、实验地点和各误差源的大小：曲线是一阶误差公式，点是用实验所用的同一陀螺模拟器得到的仿真结果（均值 ± 离散度）。",
+    },
+    "explore.scenario": {"en": "Preset", "zh-CN": "预设情景"},
+    "explore.custom": {"en": "(your own settings)", "zh-CN": "（自定义设置）"},
+    "explore.method": {"en": "Method", "zh-CN": "方法"},
+    "explore.method_two": {"en": "two-position", "zh-CN": "二位置法"},
+    "explore.method_four": {"en": "four-position", "zh-CN": "四位置法"},
+    "explore.method_both": {"en": "both", "zh-CN": "两者对比"},
+    "explore.latitude": {"en": "Latitude φ (°)", "zh-CN": "纬度 φ（°）"},
+    "explore.noise": {"en": "Simulate the gyro's random noise", "zh-CN": "模拟陀螺随机噪声"},
+    "explore.indexing": {"en": "Indexing error δ", "zh-CN": "转位误差 δ"},
+    "explore.indexing_stop": {
+        "en": "Stop with the indexing error (four-position)",
+        "zh-CN": "存在转位误差的停位（四位置法）",
+    },
+    "explore.pitch": {
+        "en": "Table pitch (known, compensated)",
+        "zh-CN": "转台俯仰角（已知并补偿）",
+    },
+    "explore.roll": {"en": "Table roll (known, compensated)", "zh-CN": "转台横滚角（已知并补偿）"},
+    "explore.east_tilt": {"en": "East–west tilt of the rotation axis", "zh-CN": "转轴东西向倾斜"},
+    "explore.level": {"en": "Level error (not compensated)", "zh-CN": "调平误差（未补偿）"},
+    "explore.drift": {"en": "Drift difference ε", "zh-CN": "漂移差 ε"},
+    "explore.scale_factor": {"en": "Scale-factor error ΔK/K", "zh-CN": "标度因数误差 ΔK/K"},
+    "explore.latitude_error": {"en": "Latitude error Δφ", "zh-CN": "纬度误差 Δφ"},
+    "explore.dwell": {"en": "Dwell per position", "zh-CN": "每个位置的采样时长"},
+    "explore.runs": {"en": "Monte Carlo runs per azimuth", "zh-CN": "每个方位的仿真次数"},
+    "explore.csv": {"en": "Download the chart's data (CSV)", "zh-CN": "下载图表数据（CSV）"},
+    "explore.axis_azimuth": {
+        "en": "true azimuth of position 1 (°)",
+        "zh-CN": "位置 1 的真方位角（°）",
+    },
+    "explore.axis_error": {"en": "heading error (°)", "zh-CN": "寻北误差（°）"},
+    "explore.formula": {"en": "first-order formula", "zh-CN": "一阶公式"},
+    "explore.monte_carlo": {"en": "simulation (mean ± σ)", "zh-CN": "仿真（均值 ± σ）"},
+    "explore.chart_title": {
+        "en": "Heading error against true azimuth",
+        "zh-CN": "寻北误差随真方位角的变化",
+    },
+    "explore.runs_used": {
+        "en": "Monte Carlo: {runs} run(s) at each of {points} azimuths, {total} simulated runs in {seconds} s.",
+        "zh-CN": "仿真：{points} 个方位各 {runs} 次，共 {total} 次仿真，用时 {seconds} 秒。",
+    },
+    "explore.dwell_heading": {"en": "What dwell time?", "zh-CN": "每个位置采样多久？"},
+    "explore.dwell_help": {
+        "en": "Expected four-position heading σ for the chosen gyro: white noise (ARW) falls as 1/√T until bias instability sets a floor; the dotted line marks where they meet.",
+        "zh-CN": "所选陀螺在四位置法下的期望寻北标准差：白噪声（角度随机游走）按 1/√T 下降，直到零偏不稳定性形成下限；点线标出两者相交处。",
+    },
+    "explore.dwell_title": {
+        "en": "Expected heading σ against dwell per position",
+        "zh-CN": "期望寻北标准差随采样时长的变化",
+    },
+    "explore.dwell_axis": {"en": "dwell per position (s)", "zh-CN": "每个位置的采样时长（秒）"},
+    "explore.sigma_axis": {"en": "heading σ (°)", "zh-CN": "寻北标准差（°）"},
+    "explore.floor": {"en": "bias-instability floor", "zh-CN": "零偏不稳定性下限"},
+    "explore.white_only": {"en": "white noise only", "zh-CN": "仅白噪声"},
+    "explore.expected": {"en": "expected σ", "zh-CN": "期望标准差"},
+    "explore.knee": {"en": "ARW meets the floor", "zh-CN": "白噪声与下限相交"},
+    "scenario.indexing-level": {
+        "en": "Paper: indexing error, level table (φ = 60°)",
+        "zh-CN": "论文：转位误差，转台水平（φ = 60°）",
+    },
+    "scenario.indexing-tilt-5": {
+        "en": "Paper: indexing error, pitch 5°, roll −5°",
+        "zh-CN": "论文：转位误差，俯仰 5°、横滚 −5°",
+    },
+    "scenario.indexing-tilt-10": {
+        "en": "Paper: indexing error, pitch −10°, roll 10°",
+        "zh-CN": "论文：转位误差，俯仰 −10°、横滚 10°",
+    },
+    "scenario.indexing-tilt-20": {
+        "en": "Paper: indexing error, pitch and roll 20°",
+        "zh-CN": "论文：转位误差，俯仰与横滚均为 20°",
+    },
+    "scenario.drift": {
+        "en": "Two-position: drift ∝ 1/sin γ",
+        "zh-CN": "二位置法：漂移误差 ∝ 1/sin γ",
+    },
+    "scenario.scale-factor": {
+        "en": "Two-position: scale factor ∝ 1/tan γ",
+        "zh-CN": "二位置法：标度因数误差 ∝ 1/tan γ",
+    },
+    "scenario.latitude-error": {
+        "en": "Two-position: latitude error ∝ 1/tan γ",
+        "zh-CN": "二位置法：纬度误差 ∝ 1/tan γ",
+    },
+    "scenario.four-cancels": {
+        "en": "Four-position: scale factor and latitude cancel",
+        "zh-CN": "四位置法：标度因数与纬度误差相互抵消",
+    },
+    "scenario.four-east-tilt": {
+        "en": "Four-position: east–west tilt ≈ tan φ · tilt",
+        "zh-CN": "四位置法：东西向倾斜 ≈ tan φ · 倾角",
+    },
+    "scenario.noise": {
+        "en": "Random noise only (tactical FOG, 60 s)",
+        "zh-CN": "仅随机噪声（战术级光纤陀螺，60 秒）",
+    },
+    "scenario_text.indexing-level": {
+        "en": "The table stops 15′ past 180° for the second reading. On a level table the heading error is a constant δ/2 at every azimuth, as in the paper's first figure.",
+        "zh-CN": "第二次读数时转台多转了 15′。转台水平时，寻北误差在任何方位都是常数 δ/2，与论文的第一幅图一致。",
+    },
+    "scenario_text.indexing-tilt-5": {
+        "en": "With a small known tilt the error stays near δ/2 but gains a ripple over azimuth. The tilt itself is measured and compensated, as the paper's north seeker does.",
+        "zh-CN": "转台有已知的小倾角时，误差仍接近 δ/2，但随方位出现波动。倾角本身由寻北仪测量并补偿，与论文一致。",
+    },
+    "scenario_text.indexing-tilt-10": {
+        "en": "At 10° the mean error is still about δ/2 and the ripple is larger than at 5°. The paper's advice: keep the tilt within ±10°.",
+        "zh-CN": "倾角为 10° 时，平均误差仍约为 δ/2，但波动比 5° 时更大。论文的建议是：倾角保持在 ±10° 以内。",
+    },
+    "scenario_text.indexing-tilt-20": {
+        "en": "At 20° the pattern breaks up and the error grows large near 0° and 180°. This is why the paper warns against strong tilts.",
+        "zh-CN": "倾角为 20° 时规律被破坏，在 0° 和 180° 附近误差很大。这就是论文提醒避免大倾角的原因。",
+    },
+    "scenario_text.drift": {
+        "en": "A drift difference ε between the two readings enters as −ε/(2KΩcos φ sin γ). It blows up near 0° and 180°, where the cosine is flat.",
+        "zh-CN": "两次读数之间的漂移差 ε 带来 −ε/(2KΩcos φ sin γ) 的误差。在 0° 和 180° 附近余弦变化平缓，误差急剧增大。",
+    },
+    "scenario_text.scale-factor": {
+        "en": "The two-position method needs the scale factor K. An error ΔK/K moves the heading by (ΔK/K)/tan γ: zero at 90°, large near north and south.",
+        "zh-CN": "二位置法需要已知标度因数 K。误差 ΔK/K 使方位偏移 (ΔK/K)/tan γ：在 90° 为零，在南北方向附近很大。",
+    },
+    "scenario_text.latitude-error": {
+        "en": "The two-position method also needs the latitude. An error Δφ gives tan φ·Δφ/tan γ.",
+        "zh-CN": "二位置法还需要已知纬度。纬度误差 Δφ 带来 tan φ·Δφ/tan γ 的方位误差。",
+    },
+    "scenario_text.four-cancels": {
+        "en": "The same scale-factor and latitude errors leave the four-position heading untouched: atan2 uses a ratio, and needs neither K nor φ.",
+        "zh-CN": "同样的标度因数和纬度误差对四位置法毫无影响：atan2 只用比值，既不需要 K 也不需要 φ。",
+    },
+    "scenario_text.four-east-tilt": {
+        "en": "An east–west tilt of the rotation axis lets Earth's vertical rate leak into the sinusoid. The four-position heading then shifts by about tan φ times the tilt.",
+        "zh-CN": "转轴的东西向倾斜使地球自转的垂直分量混入正弦曲线，四位置法的方位因此偏移约 tan φ 乘以倾角。",
+    },
+    "scenario_text.noise": {
+        "en": "Only the gyro's random noise: the spread of the points is the heading uncertainty. Four positions spend twice the time and average it down further.",
+        "zh-CN": "只有陀螺随机噪声：点的离散度就是寻北不确定度。四位置法用两倍的时间，把噪声进一步平均下去。",
+    },
     "nav.tokens": {"en": "API tokens", "zh-CN": "API 令牌"},
     "tokens.title": {"en": "API tokens", "zh-CN": "API 令牌"},
     "tokens.intro": {

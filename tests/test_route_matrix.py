@@ -15,7 +15,8 @@ from tests.test_review import world  # noqa: F401  (fixture)
 # rule: public | user (any log-in) | teacher (own course) | owner (own session)
 #       | review (teacher of the session's course) | token (own API token)
 ACCESS = {
-    "GET /docs": "public", "GET /docs/openapi.json": "public",
+    "GET /docs": "public",
+    "GET /docs/openapi.json": "public",
     "GET /vendor/plotly-{version}.min.js": "public",
     "GET /login": "public",
     "POST /login": "public",
@@ -27,6 +28,9 @@ ACCESS = {
     "GET /lab": "user",
     "POST /lab/sessions": "user",
     "GET /account/tokens": "user",
+    "GET /explore": "user",
+    "GET /explore/data": "user",
+    "GET /explore/data.csv": "user",
     "POST /account/tokens": "user",
     "POST /account/tokens/{token_id}/revoke": "token",
     "GET /courses": "teacher-any",

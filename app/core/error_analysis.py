@@ -12,7 +12,7 @@
 | latitude | Δφ = φ true − φ used | tan φ·Δφ/tan γ | 0 |
 | indexing | stop k lands δ past its dial | δ/2 (level)* | k=2,4: (δ/2)cos²A; k=3: (δ/2)sin²A |
 | level | elevation α at 1, −α at 2 | arccos(cos α cos γ + tan φ sin α) − γ | 0 (H shrinks) |
-| east tilt | east side low by t_E | — | tan φ·t_E |
+| east tilt | east side low by t_E | tan φ·t_E | tan φ·t_E |
 
 * On a table with known (compensated) pitch p and roll r, as in
 ``two_position_tilt_indexing_error.zh.txt``:
@@ -70,13 +70,20 @@ def two_position_first_order(
     g = _rad(np.asarray(azimuths_deg, dtype=float))
     phi = math.radians(latitude_deg)
     horizontal = 2.0 * earth_rate_deg_h * math.cos(phi)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        total = -sources.drift_deg_h / (horizontal * np.sin(g))
-        drift = sources.drift_rate_deg_h_per_h * stop_spacing_s / 3600.0
-        total = total + drift / (horizontal * np.sin(g))
-        total = total + sources.scale_factor_ppm * 1e-6 / np.tan(g)
-        total = total + math.tan(phi) * math.radians(sources.latitude_error_deg) / np.tan(g)
-    if sources.indexing_deg:
+    total = np.zeros_like(g)
+    drift = sources.drift_rate_deg_h_per_h * stop_spacing_s / 3600.0 - sources.drift_deg_h
+    cot = sources.scale_factor_ppm * 1e-6 + math.tan(phi) * math.radians(sources.latitude_error_deg)
+    with np.errstate(divide="ignore", invalid="ignore"):  # terms that are on diverge at 0°/180°
+        if drift:
+            total = total + drift / (horizontal * np.sin(g))
+        if cot:
+            total = total + cot / np.tan(g)
+    # an east-west tilt t_E puts −t_E·sin A of elevation on the axis: U1 − U2 gains
+    # −2Ω sin φ t_E sin γ, so Δγ = tan φ · t_E, as for four positions
+    total = total + math.tan(phi) * math.radians(sources.east_tilt_deg)
+    if sources.indexing_deg and not (sources.pitch_deg or sources.roll_deg):
+        total = total + math.radians(sources.indexing_deg) / 2.0  # level table: exactly δ/2
+    elif sources.indexing_deg:
         # stop 2 lands δ past 180° on a table with known pitch p and roll r:
         # Δγ = (δ/2)·[cos r sin γ − sin r sin p cos γ + tan φ sin r cos p] / (cos p sin γ)
         p, r = math.radians(sources.pitch_deg), math.radians(sources.roll_deg)

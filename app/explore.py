@@ -1,0 +1,227 @@
+"""The error-analysis explorer: heading error against true azimuth, first order and Monte Carlo,
+and the expected heading σ against dwell time.  Everything comes from ``app.core``.
+
+Dwell view (lab-reference §3): with angle random walk N (°/√h) and bias instability B (°/h)
+the standard error of one position's mean after T seconds is about
+σ_m(T) = √((60·N/√T)² + (0.664·B)²) °/h, and the four-position heading σ is
+σ_A = σ_m / (√2·H) rad, H = Ω cos φ.  The floor 0.664·B/(√2·H) is where averaging stops
+helping.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from app.core.error_analysis import (
+    ErrorSources,
+    four_position_first_order,
+    monte_carlo_heading_errors,
+    two_position_first_order,
+)
+from app.core.simulate import PRESETS
+from app.core.units import EARTH_RATE_DEG_H
+
+CURVE_STEP_DEG = 2.0
+MC_STEP_DEG = 15.0
+MAX_RUNS = 40
+MAX_DWELL_S = 600.0
+
+
+@dataclass
+class ExplorerInput:
+    method: str = "both"  # two | four | both
+    latitude_deg: float = 60.0
+    preset: str = "navigation-fog"
+    noise: bool = True  # simulate the preset's random noise in the Monte Carlo
+    dwell_s: float = 30.0
+    runs: int = 8
+    drift_deg_h: float = 0.0
+    scale_factor_ppm: float = 0.0
+    latitude_error_deg: float = 0.0
+    indexing_arcsec: float = 0.0
+    indexing_stop: int = 2
+    pitch_deg: float = 0.0
+    roll_deg: float = 0.0
+    east_tilt_deg: float = 0.0
+    level_deg: float = 0.0
+
+    def sources(self) -> ErrorSources:
+        return ErrorSources(
+            drift_deg_h=self.drift_deg_h,
+            scale_factor_ppm=self.scale_factor_ppm,
+            latitude_error_deg=self.latitude_error_deg,
+            indexing_deg=self.indexing_arcsec / 3600,
+            indexing_stop=self.indexing_stop,
+            level_deg=self.level_deg,
+            east_tilt_deg=self.east_tilt_deg,
+            pitch_deg=self.pitch_deg,
+            roll_deg=self.roll_deg,
+        )
+
+
+@dataclass
+class Curve:
+    method: str
+    azimuths_deg: list[float]
+    formula_deg: list[float | None]
+    mc_azimuths_deg: list[float] = field(default_factory=list)
+    mc_mean_deg: list[float | None] = field(default_factory=list)
+    mc_std_deg: list[float | None] = field(default_factory=list)
+
+
+def _clean(values) -> list[float | None]:
+    return [None if not math.isfinite(v) or abs(v) > 180 else float(v) for v in values]
+
+
+def heading_error_curves(params: ExplorerInput, seed: int = 1) -> tuple[list[Curve], dict]:
+    """Formula curves on a fine azimuth grid and Monte Carlo points on a coarse one."""
+    started = time.perf_counter()
+    preset = PRESETS[params.preset]
+    gyro = preset.ideal()
+    if params.noise:
+        gyro = replace(
+            gyro,
+            arw_deg_rt_h=preset.arw_deg_rt_h,
+            bias_instability_deg_h=preset.bias_instability_deg_h,
+            bias_corr_time_s=preset.bias_corr_time_s,
+        )
+    sources = params.sources()
+    fine = np.arange(0.0, 360.0 + 1e-9, CURVE_STEP_DEG)
+    coarse = np.arange(MC_STEP_DEG / 2, 360.0, MC_STEP_DEG)
+    methods = ["two", "four"] if params.method == "both" else [params.method]
+    runs = max(1, min(params.runs, MAX_RUNS)) if params.noise else 1
+    curves = []
+    for method in methods:
+        if method == "two":
+            formula = two_position_first_order(
+                sources, fine, params.latitude_deg, stop_spacing_s=params.dwell_s
+            )
+        else:
+            formula = four_position_first_order(
+                sources, fine, params.latitude_deg, stop_spacing_s=params.dwell_s
+            )
+        mc = monte_carlo_heading_errors(
+            method,
+            gyro,
+            sources,
+            coarse,
+            latitude_deg=params.latitude_deg,
+            runs=runs,
+            dwell_s=params.dwell_s,
+            seed=seed,
+        )
+        curves.append(
+            Curve(
+                method,
+                fine.tolist(),
+                _clean(formula),
+                coarse.tolist(),
+                _clean(mc.mean_error_deg),
+                _clean(mc.std_error_deg),
+            )
+        )
+    info = {
+        "runs": runs,
+        "points": int(coarse.size),
+        "simulated_runs": runs * int(coarse.size) * len(methods),
+        "seconds": round(time.perf_counter() - started, 3),
+    }
+    return curves, info
+
+
+def dwell_curve(preset_name: str, latitude_deg: float) -> dict:
+    """Expected four-position heading σ (°) against dwell per position, and its floor."""
+    preset = PRESETS[preset_name]
+    amplitude = EARTH_RATE_DEG_H * math.cos(math.radians(latitude_deg))
+    dwell = np.geomspace(5.0, 3600.0, 60)
+    white = 60.0 * preset.arw_deg_rt_h / np.sqrt(dwell)
+    floor = 0.664 * preset.bias_instability_deg_h
+    sigma_mean = np.sqrt(white**2 + floor**2)
+    to_heading = np.degrees(1.0 / (math.sqrt(2.0) * amplitude)) if amplitude > 0 else math.nan
+    knee = (preset.arw_deg_rt_h / floor) ** 2 * 3600.0 if floor > 0 else None
+    return {
+        "dwell_s": dwell.tolist(),
+        "sigma_deg": (sigma_mean * to_heading).tolist(),
+        "white_only_deg": (white * to_heading).tolist(),
+        "floor_deg": floor * to_heading,
+        "knee_s": knee,
+        "arw_deg_rt_h": preset.arw_deg_rt_h,
+        "bias_instability_deg_h": preset.bias_instability_deg_h,
+    }
+
+
+# Presets reproducing the papers' figures and the four-position contrasts (lab-reference §4).
+SCENARIOS: dict[str, dict] = {
+    "indexing-level": {
+        "method": "two",
+        "latitude_deg": 60.0,
+        "indexing_arcsec": 900.0,
+        "noise": False,
+    },
+    "indexing-tilt-5": {
+        "method": "two",
+        "latitude_deg": 60.0,
+        "indexing_arcsec": 900.0,
+        "pitch_deg": 5.0,
+        "roll_deg": -5.0,
+        "noise": False,
+    },
+    "indexing-tilt-10": {
+        "method": "two",
+        "latitude_deg": 60.0,
+        "indexing_arcsec": 900.0,
+        "pitch_deg": -10.0,
+        "roll_deg": 10.0,
+        "noise": False,
+    },
+    "indexing-tilt-20": {
+        "method": "two",
+        "latitude_deg": 60.0,
+        "indexing_arcsec": 900.0,
+        "pitch_deg": 20.0,
+        "roll_deg": 20.0,
+        "noise": False,
+    },
+    "drift": {"method": "two", "latitude_deg": 40.0, "drift_deg_h": 0.05, "noise": False},
+    "scale-factor": {
+        "method": "two",
+        "latitude_deg": 40.0,
+        "scale_factor_ppm": 2000.0,
+        "noise": False,
+    },
+    "latitude-error": {
+        "method": "two",
+        "latitude_deg": 40.0,
+        "latitude_error_deg": 0.1,
+        "noise": False,
+    },
+    "four-cancels": {
+        "method": "both",
+        "latitude_deg": 40.0,
+        "scale_factor_ppm": 2000.0,
+        "latitude_error_deg": 0.1,
+        "noise": False,
+    },
+    "four-east-tilt": {
+        "method": "both",
+        "latitude_deg": 40.0,
+        "east_tilt_deg": 1.0,
+        "noise": False,
+    },
+    "noise": {
+        "method": "both",
+        "latitude_deg": 40.0,
+        "preset": "tactical-fog",
+        "noise": True,
+        "runs": 10,
+        "dwell_s": 60.0,
+    },
+}
+
+
+def scenario_input(name: str) -> ExplorerInput:
+    return ExplorerInput(**SCENARIOS[name])
