@@ -102,3 +102,20 @@ def test_no_page_loads_anything_from_the_internet():
 def test_unknown_page_is_a_friendly_404(client):
     response = client.get("/nowhere", headers={"Accept-Language": "zh-CN"})
     assert response.status_code == 404 and "页面不存在" in response.text
+
+
+def test_security_headers(client):
+    response = client.get("/login")
+    csp = response.headers["content-security-policy"]
+    assert "script-src 'self'" in csp and "frame-ancestors 'none'" in csp
+    assert response.headers["x-content-type-options"] == "nosniff"
+    assert response.headers["referrer-policy"] == "same-origin"
+    assert "strict-transport-security" not in response.headers  # plain http here
+    secure = client.get("https://testserver/login")
+    assert secure.headers["strict-transport-security"].startswith("max-age=")
+
+
+def test_no_inline_scripts_in_templates():
+    for path in TEMPLATES_DIR.rglob("*.html"):
+        for tag in re.findall(r"<script[^>]*>", path.read_text()):
+            assert "src=" in tag or 'type="application/json"' in tag, (path, tag)

@@ -173,12 +173,22 @@ def pytest_runtest_makereport(item, call):
 def new_page(browser, request):
     """Open pages in fresh contexts (one per person); screenshots of failures are kept."""
     contexts = []
+    violations: list[str] = []
 
     def open_page(locale: str = "en-US"):
         context = browser.new_context(locale=locale, viewport={"width": 1280, "height": 860})
         contexts.append(context)
         page = context.new_page()
         page.set_default_timeout(10_000)
+        page.on(
+            "console",
+            lambda message: (
+                violations.append(message.text)
+                if "Content Security Policy" in message.text
+                else None
+            ),
+        )
+        page.on("pageerror", lambda error: violations.append(f"page error: {error}"))
         return page
 
     yield open_page
@@ -191,3 +201,4 @@ def new_page(browser, request):
                 page.screenshot(path=str(ARTIFACTS / name), full_page=True)
     for context in contexts:
         context.close()
+    assert not violations, violations  # the CSP blocked something, or a script failed

@@ -69,3 +69,10 @@ def test_logout_then_replayed_cookie_gets_login_page(live_server, new_page):
     page.context.add_cookies(cookies)
     page.goto(f"{live_server.url}/")
     expect(page).to_have_url(f"{live_server.url}/login?next=/")
+
+
+def test_api_reference_renders_under_the_csp(live_server, new_page):
+    page = new_page()
+    page.goto(f"{live_server.url}/docs")
+    expect(page.locator(".opblock-summary-path").first).to_be_visible()
+    expect(page.locator("#swagger-ui")).to_contain_text("/api/v1/sessions")
