@@ -142,6 +142,55 @@ def _bridge(args: argparse.Namespace) -> int:
     return 0
 
 
+def _backup(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from app.backup import BackupError, backup, postgres_hint, sqlite_path
+    from app.config import get_settings
+
+    url = get_settings().database_url
+    try:
+        database = sqlite_path(url)
+        if database is None:
+            print(postgres_hint(url, "backup", args.file))
+            return 2
+        backup(database, Path(args.file))
+    except BackupError as error:
+        print(f"gyrolab backup: {error}", file=sys.stderr)
+        return 2
+    print(f"backed up {database} to {args.file}")
+    return 0
+
+
+def _restore(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from app.backup import BackupError, postgres_hint, restore, sqlite_path
+    from app.config import get_settings
+    from app.migrate import upgrade_to_head
+
+    url = get_settings().database_url
+    try:
+        database = sqlite_path(url)
+        if database is None:
+            print(postgres_hint(url, "restore", args.file))
+            return 2
+        if not args.yes:
+            print(
+                "gyrolab restore: this replaces the whole database; stop the server and "
+                "repeat with --yes",
+                file=sys.stderr,
+            )
+            return 2
+        restore(Path(args.file), database)
+    except BackupError as error:
+        print(f"gyrolab restore: {error}", file=sys.stderr)
+        return 2
+    upgrade_to_head()
+    print(f"restored {database} from {args.file}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="gyrolab", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
@@ -167,6 +216,14 @@ def build_parser() -> argparse.ArgumentParser:
     create.add_argument("--email")
     create.add_argument("--password", help="default: asked for (or one line of stdin)")
     create.set_defaults(handler=_create_user)
+
+    backup = commands.add_parser("backup", help="copy the database (safe while serving)")
+    backup.add_argument("file", help="new file to write, e.g. gyrolab-2026-11-21.db")
+    backup.set_defaults(handler=_backup)
+    restore = commands.add_parser("restore", help="replace the database with a backup")
+    restore.add_argument("file")
+    restore.add_argument("--yes", action="store_true", help="really replace everything")
+    restore.set_defaults(handler=_restore)
 
     bridge = commands.add_parser("bridge", help="send a gyro's serial output to a session")
     source = bridge.add_mutually_exclusive_group()

@@ -1,0 +1,89 @@
+"""``gyrolab backup`` and ``gyrolab restore`` for the SQLite database.
+
+Backup uses SQLite's online backup API: a consistent copy even while the server writes.
+Restore checks the file (integrity check, a GyroLab schema) before copying it over the
+live database, then migrates it to the current schema.  PostgreSQL installations use
+``pg_dump`` / ``pg_restore`` (printed by the command).
+"""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+from sqlalchemy.engine import make_url
+
+
+class BackupError(Exception):
+    pass
+
+
+def sqlite_path(database_url: str) -> Path | None:
+    url = make_url(database_url)
+    if not url.drivername.startswith("sqlite"):
+        return None
+    if not url.database or url.database == ":memory:":
+        raise BackupError("an in-memory database cannot be backed up")
+    return Path(url.database)
+
+
+def postgres_hint(database_url: str, action: str, target: str) -> str:
+    url = make_url(database_url)
+    if action == "backup":
+        return (
+            f"PostgreSQL: pg_dump --format=custom --file={target} "
+            f"--host={url.host or 'localhost'} --username={url.username or ''} {url.database}"
+        )
+    return (
+        f"PostgreSQL: pg_restore --clean --if-exists --dbname={url.database} "
+        f"--host={url.host or 'localhost'} --username={url.username or ''} {target}"
+    )
+
+
+def check_file(path: Path) -> None:
+    if not path.is_file():
+        raise BackupError(f"{path} does not exist")
+    try:
+        connection = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
+        try:
+            result = connection.execute("PRAGMA integrity_check").fetchone()[0]
+            tables = {
+                row[0]
+                for row in connection.execute("SELECT name FROM sqlite_master WHERE type='table'")
+            }
+        finally:
+            connection.close()
+    except sqlite3.DatabaseError as error:
+        raise BackupError(f"{path} is not an SQLite database ({error})") from None
+    if result != "ok":
+        raise BackupError(f"{path} fails the integrity check: {result}")
+    if not {"alembic_version", "user"} <= tables:
+        raise BackupError(f"{path} is not a GyroLab database")
+
+
+def backup(database: Path, target: Path) -> None:
+    if not database.exists():
+        raise BackupError(f"no database at {database}")
+    if target.exists():
+        raise BackupError(f"{target} exists already; choose a new file name")
+    source = sqlite3.connect(database)
+    destination = sqlite3.connect(target)
+    try:
+        with destination:
+            source.backup(destination)
+    finally:
+        destination.close()
+        source.close()
+    check_file(target)
+
+
+def restore(source_file: Path, database: Path) -> None:
+    check_file(source_file)
+    database.parent.mkdir(parents=True, exist_ok=True)
+    source = sqlite3.connect(f"file:{source_file}?mode=ro", uri=True)
+    destination = sqlite3.connect(database, timeout=30)
+    try:
+        source.backup(destination)
+    finally:
+        destination.close()
+        source.close()

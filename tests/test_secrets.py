@@ -1,0 +1,86 @@
+"""No page or response carries a secret: password hashes, token hashes, or (for students)
+the simulator's truth before the assignment's rule reveals it."""
+
+from __future__ import annotations
+
+import json
+
+from sqlmodel import select
+
+from app.db import read_session, write_session
+from app.models import ApiToken, Assignment, AuthSession, LabSession, User
+from tests.test_api import token_for
+from tests.test_review import browser, do_lab, start, submit
+from tests.test_review import world  # noqa: F401
+from tests.test_route_matrix import ACCESS, concrete
+
+
+def secrets_in_database() -> dict[str, list[str]]:
+    with read_session() as db:
+        hashes = [u.password_hash for u in db.exec(select(User)).all()]
+        hashes += [t.token_hash for t in db.exec(select(ApiToken)).all()]
+        hashes += [s.token_hash for s in db.exec(select(AuthSession)).all()]
+        truths = []
+        for session in db.exec(select(LabSession)).all():
+            truths += [str(session.sim_seed), f"{session.sim_azimuth_deg:.2f}"]
+    return {"hashes": hashes, "truths": truths}
+
+
+def test_no_response_carries_a_secret(world):  # noqa: F811
+    with write_session() as db:
+        assignment = db.get(Assignment, world["assignment"])
+        assignment.reveal_truth = "never"
+        assignment.allowed_methods = "manual,csv,simulator"
+        db.add(assignment)
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    with write_session() as db:  # a truth that cannot collide with the handout's numbers
+        session = db.get(LabSession, session_id)
+        session.sim_azimuth_deg = 277.3141
+        db.add(session)
+    do_lab(student, session_id)
+    submit(student, session_id)
+    teacher = browser(world, "teacher1")
+    student_api = token_for(student, "s1")
+    teacher_api = token_for(teacher, "teacher1")
+    secrets = secrets_in_database()
+    ids = {
+        "course_id": world["course"],
+        "assignment_id": world["assignment"],
+        "session_id": session_id,
+        "student_id": 1,
+        "token_id": 1,
+        "part": "heading",
+        "position": 1,
+        "version": "x",
+    }
+    checked = 0
+    for route in ACCESS:
+        method, path = concrete(route, ids)
+        if method != "GET":
+            continue
+        for client, headers, is_student in (
+            (student, student_api, True),
+            (teacher, teacher_api, False),
+        ):
+            response = client.get(path, headers=headers if path.startswith("/api/") else {})
+            body = response.content.decode("utf-8", errors="replace")
+            if path.endswith(".zip"):
+                import io
+                import zipfile
+
+                if response.status_code == 200:
+                    archive = zipfile.ZipFile(io.BytesIO(response.content))
+                    body = "".join(archive.read(n).decode() for n in archive.namelist())
+            for secret in secrets["hashes"]:
+                assert secret not in body, (route, "hash")
+            assert "$argon2" not in body, route
+            if is_student:
+                for truth in secrets["truths"]:
+                    assert truth not in body, (route, "truth")
+            checked += 1
+    assert checked >= 40
+    # the truth does reach the teacher (the review page), so the check above can fail
+    review = teacher.get(f"/review/sessions/{session_id}").text
+    assert any(truth in review for truth in secrets["truths"]) or "True azimuth" in review
+    assert json.loads(student.get(f"/lab/sessions/{session_id}/results.json").text)
