@@ -288,33 +288,33 @@ def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) ->
 
 
 def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[dict]:
-    """Data-quality warnings: too few readings, a noisy position, spikes."""
+    """Data-quality warnings: too few readings, spikes, a position far noisier than the rest.
+
+    Each flag is ``{"key": message key, "params": {...}}``.
+    """
+
+    def flag(key: str, **params) -> dict:
+        return {"key": key, "params": params}
+
     flags = []
     stds = {}
     for position, item in sorted(data.items()):
         if item.values.size < session.min_readings:
-            flags.append(
-                {
-                    "key": "flag.too_few",
-                    "position": position,
-                    "n": int(item.values.size),
-                    "minimum": session.min_readings,
-                }
-            )
+            flags.append(flag("flag.too_few", position=position, n=int(item.values.size),
+                              minimum=session.min_readings))
         if item.values.size >= 2:
             stds[position] = float(item.values.std(ddof=1))
             median = float(np.median(item.values))
             mad = float(np.median(np.abs(item.values - median))) * 1.4826
-            if mad > 0 and np.any(np.abs(item.values - median) > 6 * mad):
-                count = int(np.sum(np.abs(item.values - median) > 6 * mad))
-                flags.append({"key": "flag.spikes", "position": position, "n": count})
+            outliers = int(np.sum(np.abs(item.values - median) > 6 * mad)) if mad > 0 else 0
+            if outliers:
+                flags.append(flag("flag.spikes", position=position, n=outliers))
     if len(stds) >= 3:
         typical = float(np.median(list(stds.values())))
         for position, std in stds.items():
             if typical > 0 and std > 3 * typical:
-                flags.append(
-                    {"key": "flag.noisy", "position": position, "ratio": round(std / typical, 1)}
-                )
+                flags.append(flag("flag.noisy", position=position,
+                                  ratio=round(std / typical, 1)))
     return flags
 
 

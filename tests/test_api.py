@@ -339,7 +339,7 @@ def test_openapi_documents_every_route(client):
 
 def test_oversized_body_is_refused(client, auth):
     session_id = new_api_session(client, auth)
-    body = json.dumps({"samples": [1.0] * 10}) + " " * (17 * 1024 * 1024)
+    body = json.dumps({"samples": [1.0] * 10}) + " " * (33 * 1024 * 1024)
     response = client.put(
         f"{API}/sessions/{session_id}/heading/positions/1",
         content=body,

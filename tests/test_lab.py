@@ -427,3 +427,17 @@ def test_outsider_cannot_start_someone_elses_assignment(client, assignment_world
         client, "/lab/sessions", {"assignment_id": str(assignment_world["assignment"])}, page="/lab"
     )
     assert response.status_code == 404 and count(LabSession) == 0
+
+
+def test_data_quality_flags_are_shown(student_client):
+    session_id = new_session(student_client)
+    rng = np.random.default_rng(4)
+    columns = {str(k): (rng.normal(5.0 * k, 0.05, 12)).tolist() for k in (1, 2, 3, 4)}
+    columns["2"] = (rng.normal(3.0, 0.05, 12)).tolist()
+    columns["2"][5] = 4.0  # a spike
+    columns["4"] = (rng.normal(-2.0, 3.0, 12)).tolist()  # a noisy position
+    assert save_manual(student_client, session_id, "heading", columns).status_code == 200
+    page = student_client.get(f"/lab/sessions/{session_id}")
+    assert page.status_code == 200
+    assert "Position 2 has 1 spike(s)" in page.text
+    assert "Position 4 is" in page.text and "noisier than the others" in page.text
