@@ -36,15 +36,20 @@ def main() -> None:
     record = simulate_static(preset, Setup(40.0), N / preset.sample_rate_hz)
     rates = np.full(N, 5.0)
     figures = {
-        "solve heading, 4 positions × 1e6 samples": best_of(lambda: solve_heading(positions,
-                                                                                   angles)),
+        "solve heading, 4 positions × 1e6 samples": best_of(
+            lambda: solve_heading(positions, angles)
+        ),
         "simulate 1e6 samples (all error terms)": best_of(
-            lambda: GyroStream(preset, 1).read(rates, 0.3)),
+            lambda: GyroStream(preset, 1).read(rates, 0.3)
+        ),
         "Allan deviation of 1e6 samples (+ read-outs)": best_of(
-            lambda: allan_deviation(record, preset.sample_rate_hz), 3),
+            lambda: allan_deviation(record, preset.sample_rate_hz), 3
+        ),
     }
-    print(f"machine: {platform.machine()}, {platform.processor() or 'cpu'}, "
-          f"Python {platform.python_version()}, numpy {np.__version__}")
+    print(
+        f"machine: {platform.machine()}, {platform.processor() or 'cpu'}, "
+        f"Python {platform.python_version()}, numpy {np.__version__}"
+    )
     for name, seconds in figures.items():
         print(f"{name:48s} {seconds * 1000:8.1f} ms")
 

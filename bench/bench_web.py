@@ -93,8 +93,9 @@ with write_session() as db:
         submit(db, session)
     print(assignment.id, course.id)
 """
-    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
-                          check=True)
+    done = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
     return [int(x) for x in done.stdout.split()]
 
 
@@ -107,55 +108,118 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as var:
         env = {**os.environ, "GYROLAB_VAR_DIR": var}
         for role, name in (("teacher", "teacher"), ("student", "student")):
-            subprocess.run([sys.executable, "-m", "app.cli", "create-user", "--role", role,
-                            "--username", name], input=PASSWORD + "\n", env=env, text=True,
-                           check=True, capture_output=True)
+            subprocess.run(
+                [
+                    sys.executable,
+                    "-m",
+                    "app.cli",
+                    "create-user",
+                    "--role",
+                    role,
+                    "--username",
+                    name,
+                ],
+                input=PASSWORD + "\n",
+                env=env,
+                text=True,
+                check=True,
+                capture_output=True,
+            )
         port, bare_port = free_port(), free_port()
-        app = subprocess.Popen([sys.executable, "-m", "app.cli", "serve", "--no-demo",
-                                "--no-access-log", "--port", str(port)], env=env,
-                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        bare = subprocess.Popen([sys.executable, "-m", "uvicorn", "bare_app:app", "--port",
-                                 str(bare_port), "--no-access-log", "--log-level", "warning"],
-                                cwd=ROOT / "bench", stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL)
+        app = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "app.cli",
+                "serve",
+                "--no-demo",
+                "--no-access-log",
+                "--port",
+                str(port),
+            ],
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+        bare = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "uvicorn",
+                "bare_app:app",
+                "--port",
+                str(bare_port),
+                "--no-access-log",
+                "--log-level",
+                "warning",
+            ],
+            cwd=ROOT / "bench",
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
         try:
             url, bare_url = f"http://127.0.0.1:{port}", f"http://127.0.0.1:{bare_port}"
             wait_for(f"{url}/login", app)
             wait_for(f"{bare_url}/json", bare)
             client = httpx.Client(base_url=url, timeout=60)
             bare_client = httpx.Client(base_url=bare_url, timeout=60)
-            token = client.post("/api/v1/auth/token", data={"username": "student",
-                                                            "password": PASSWORD}).json()
+            token = client.post(
+                "/api/v1/auth/token", data={"username": "student", "password": PASSWORD}
+            ).json()
             auth = {"Authorization": f"Bearer {token['access_token']}"}
-            session = client.post("/api/v1/sessions", headers=auth, json={
-                "title": "bench", "station": {"latitude_deg": 39.93,
-                                              "earth_rate_deg_h": 15.04}}).json()["id"]
-            for part, name in (("heading", "handout_horizontal.csv"),
-                               ("latitude", "handout_vertical.csv")):
-                rows = list(csv.DictReader(open(DATA / name)))
+            session = client.post(
+                "/api/v1/sessions",
+                headers=auth,
+                json={
+                    "title": "bench",
+                    "station": {"latitude_deg": 39.93, "earth_rate_deg_h": 15.04},
+                },
+            ).json()["id"]
+            for part, name in (
+                ("heading", "handout_horizontal.csv"),
+                ("latitude", "handout_vertical.csv"),
+            ):
+                with open(DATA / name) as handle:
+                    rows = list(csv.DictReader(handle))
                 for k in range(1, 5):
-                    client.put(f"/api/v1/sessions/{session}/{part}/positions/{k}", headers=auth,
-                               json={"samples": [float(r[f"position_{k}"]) for r in rows]}
-                               ).raise_for_status()
+                    client.put(
+                        f"/api/v1/sessions/{session}/{part}/positions/{k}",
+                        headers=auth,
+                        json={"samples": [float(r[f"position_{k}"]) for r in rows]},
+                    ).raise_for_status()
             n = args.requests
             ours = rate(client, f"/api/v1/sessions/{session}/results", n, headers=auth)
             ceiling = rate(bare_client, "/json", n)
-            results.append(("results endpoint (req/s)", f"{ours:.0f}",
-                            f"bare JSON {ceiling:.0f} req/s → {ours / ceiling:.2f}×"))
+            results.append(
+                (
+                    "results endpoint (req/s)",
+                    f"{ours:.0f}",
+                    f"bare JSON {ceiling:.0f} req/s → {ours / ceiling:.2f}×",
+                )
+            )
             browser = httpx.Client(base_url=url, timeout=60)
             page = browser.get("/login")
             csrf = page.text.split('name="csrf_token" value="')[1].split('"')[0]
-            browser.post("/login", data={"username": "student", "password": PASSWORD,
-                                         "csrf_token": csrf})
+            browser.post(
+                "/login", data={"username": "student", "password": PASSWORD, "csrf_token": csrf}
+            )
             ours = rate(browser, f"/lab/sessions/{session}", max(n // 3, 30))
             ceiling = rate(bare_client, "/page", max(n // 3, 30))
-            results.append(("lab page with results and charts (req/s)", f"{ours:.0f}",
-                            f"bare Jinja page {ceiling:.0f} req/s → {ours / ceiling:.2f}×"))
+            results.append(
+                (
+                    "lab page with results and charts (req/s)",
+                    f"{ours:.0f}",
+                    f"bare Jinja page {ceiling:.0f} req/s → {ours / ceiling:.2f}×",
+                )
+            )
 
             big = np.random.default_rng(0).normal(10.0, 0.1, 1_000_000)
             start = time.perf_counter()
-            client.put(f"/api/v1/sessions/{session}/heading/positions/1", headers=auth,
-                       json={"samples": big.tolist()}).raise_for_status()
+            client.put(
+                f"/api/v1/sessions/{session}/heading/positions/1",
+                headers=auth,
+                json={"samples": big.tolist()},
+            ).raise_for_status()
             client.get(f"/api/v1/sessions/{session}/results", headers=auth).raise_for_status()
             ours = time.perf_counter() - start
             raw = Path(var) / "raw.db"
@@ -166,39 +230,56 @@ def main() -> None:
                 connection.execute("INSERT INTO t VALUES (?)", (big.astype("<f8").tobytes(),))
             connection.close()
             ceiling = time.perf_counter() - start
-            results.append(("upload 1e6 samples (JSON) + solve (s)", f"{ours:.2f}",
-                            f"sqlite3 BLOB write {ceiling * 1000:.0f} ms → {ours / ceiling:.0f}×"))
+            results.append(
+                (
+                    "upload 1e6 samples (JSON) + solve (s)",
+                    f"{ours:.2f}",
+                    f"sqlite3 BLOB write {ceiling * 1000:.0f} ms → {ours / ceiling:.0f}×",
+                )
+            )
 
             start = time.perf_counter()
             for _ in range(60):
-                client.post("/api/v1/auth/token", data={"username": "student",
-                                                        "password": PASSWORD}
-                            ).raise_for_status()
+                client.post(
+                    "/api/v1/auth/token", data={"username": "student", "password": PASSWORD}
+                ).raise_for_status()
             seconds = time.perf_counter() - start
-            results.append(("60 logins, sequential (s)", f"{seconds:.2f}",
-                            f"{seconds / 60 * 1000:.0f} ms each (argon2id m=19 MiB, t=2)"))
+            results.append(
+                (
+                    "60 logins, sequential (s)",
+                    f"{seconds:.2f}",
+                    f"{seconds / 60 * 1000:.0f} ms each (argon2id m=19 MiB, t=2)",
+                )
+            )
 
             assignment_id, course_id = seed_dashboard(env, args.students)
             teacher = httpx.Client(base_url=url, timeout=120)
             page = teacher.get("/login")
             csrf = page.text.split('name="csrf_token" value="')[1].split('"')[0]
-            teacher.post("/login", data={"username": "teacher", "password": PASSWORD,
-                                         "csrf_token": csrf})
+            teacher.post(
+                "/login", data={"username": "teacher", "password": PASSWORD, "csrf_token": csrf}
+            )
             path = f"/courses/{course_id}/assignments/{assignment_id}"
             teacher.get(path).raise_for_status()
             start = time.perf_counter()
             for _ in range(3):
                 teacher.get(path).raise_for_status()
             seconds = (time.perf_counter() - start) / 3
-            results.append((f"dashboard of {args.students} submissions (s)", f"{seconds:.2f}",
-                            "one page, class charts included"))
+            results.append(
+                (
+                    f"dashboard of {args.students} submissions (s)",
+                    f"{seconds:.2f}",
+                    "one page, class charts included",
+                )
+            )
         finally:
             app.terminate()
             bare.terminate()
             app.wait(10)
             bare.wait(10)
-    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
-          f"{platform.python_version()}")
+    print(
+        f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
+    )
     width = max(len(r[0]) for r in results)
     for name, value, ceiling in results:
         print(f"{name:<{width}}  {value:>8}  {ceiling}")
