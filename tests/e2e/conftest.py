@@ -40,6 +40,7 @@ class LiveServer:
     url: str
     var_dir: Path
     env: dict
+    process: subprocess.Popen | None = None
 
     def gyrolab(self, *args: str, stdin: str | None = None) -> subprocess.CompletedProcess:
         return subprocess.run(
@@ -73,6 +74,7 @@ def running_server(var_dir: Path, *serve_args: str) -> Iterator[LiveServer]:
             stdout=log,
             stderr=subprocess.STDOUT,
         )
+        server.process = process
         try:
             deadline = time.monotonic() + 60
             while True:
