@@ -300,8 +300,14 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
     stds = {}
     for position, item in sorted(data.items()):
         if item.values.size < session.min_readings:
-            flags.append(flag("flag.too_few", position=position, n=int(item.values.size),
-                              minimum=session.min_readings))
+            flags.append(
+                flag(
+                    "flag.too_few",
+                    position=position,
+                    n=int(item.values.size),
+                    minimum=session.min_readings,
+                )
+            )
         if item.values.size >= 2:
             stds[position] = float(item.values.std(ddof=1))
             median = float(np.median(item.values))
@@ -313,8 +319,7 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
         typical = float(np.median(list(stds.values())))
         for position, std in stds.items():
             if typical > 0 and std > 3 * typical:
-                flags.append(flag("flag.noisy", position=position,
-                                  ratio=round(std / typical, 1)))
+                flags.append(flag("flag.noisy", position=position, ratio=round(std / typical, 1)))
     return flags
 
 

@@ -46,13 +46,14 @@ class Truth:
 def session_truth(db: Session, session: LabSession, assignment: Assignment | None) -> Truth:
     from app.labsim import turn_on_bias
 
-    heading_sources = {t.source for t in current_takes(db, session.id) if t.part == "heading"}
+    takes = current_takes(db, session.id)
+    heading_sources = {t.source for t in takes if t.part == "heading"}
     azimuth, source = None, None
     if heading_sources == {"simulator"}:
         azimuth, source = session.sim_azimuth_deg, "simulator"
     elif assignment is not None and assignment.true_heading_deg is not None:
         azimuth, source = assignment.true_heading_deg, "bench"
-    uses_simulator = any(t.source == "simulator" for t in current_takes(db, session.id))
+    uses_simulator = any(t.source == "simulator" for t in takes)
     return Truth(
         azimuth,
         session.latitude_deg,
@@ -199,6 +200,7 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
     ).all()
     rows = []
     fingerprints: dict[str, list[str]] = {}
+    row_prints: dict[str, tuple[str | None, str | None]] = {}
     for student in students:
         session = db.exec(
             select(LabSession).where(
@@ -231,13 +233,15 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
             any(a.late for a in attempts),
         )
         rows.append(row)
-        for print_ in data_fingerprint(db, session):
+        prints = data_fingerprint(db, session)
+        row_prints[student.username] = prints
+        for print_ in prints:
             if print_:
                 fingerprints.setdefault(print_, []).append(student.username)
     for row in rows:
         if row.session is None:
             continue
-        for print_ in data_fingerprint(db, row.session):
+        for print_ in row_prints[row.student.username]:
             others = [u for u in fingerprints.get(print_, []) if u != row.student.username]
             row.duplicate_of.extend(u for u in others if u not in row.duplicate_of)
     return rows
