@@ -2,7 +2,8 @@
 """GyroLab's two commands, usable on a fresh machine with nothing but Python 3.11+.
 
     python3 dev.py run    create .venv, install, migrate, add demo data, serve on 127.0.0.1:8000
-    python3 dev.py test   the same set-up plus test extras and Debian's Chromium, then pytest
+    python3 dev.py test   the same set-up plus test extras, Debian's Chromium (and in CI,
+                          PostgreSQL), then pytest on SQLite and PostgreSQL
 
 Extra arguments after ``run`` go to ``gyrolab serve`` (e.g. ``--port 8080 --no-demo``);
 after ``test`` they go to pytest (e.g. ``-k auth``).  Uses only the standard library.
@@ -10,6 +11,7 @@ after ``test`` they go to pytest (e.g. ``-k auth``).  Uses only the standard lib
 
 from __future__ import annotations
 
+import glob
 import hashlib
 import os
 import shutil
@@ -82,11 +84,21 @@ def ensure_installed(extras: str) -> None:
     stamp.write_text(digest.hexdigest())
 
 
-def ensure_chromium() -> None:
-    if CHROMIUM.exists():
-        return
-    if not apt_install("chromium", "fonts-wqy-zenhei"):
-        say("Chromium is not installed and cannot be installed here: browser tests will skip")
+def postgres_installed() -> bool:
+    return bool(shutil.which("initdb") or glob.glob("/usr/lib/postgresql/*/bin/initdb"))
+
+
+def ensure_test_programs() -> None:
+    """Debian's Chromium (browser tests) always; PostgreSQL in CI, where its tests must run.
+    The tests start their own PostgreSQL server on loopback (tests/pgserver.py)."""
+    in_ci = os.environ.get("CI", "").lower() == "true"
+    wanted = [] if CHROMIUM.exists() else ["chromium", "fonts-wqy-zenhei"]
+    if in_ci and not postgres_installed():
+        wanted.append("postgresql")
+    if wanted and not apt_install(*wanted):
+        say(f"could not install {' '.join(wanted)}: the tests that need them will skip")
+    if not in_ci and not postgres_installed():
+        say("PostgreSQL is not installed: its tests will skip (CI installs it)")
 
 
 def main(argv: list[str]) -> int:
@@ -100,7 +112,7 @@ def main(argv: list[str]) -> int:
         ensure_installed("")
         return subprocess.call([str(BIN / "gyrolab"), "serve", *rest])
     ensure_installed("test")
-    ensure_chromium()
+    ensure_test_programs()
     return subprocess.call([str(BIN / "python"), "-m", "pytest", *rest])
 
 

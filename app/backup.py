@@ -8,6 +8,7 @@ live database, then migrates it to the current schema.  PostgreSQL installations
 
 from __future__ import annotations
 
+import shlex
 import sqlite3
 from pathlib import Path
 
@@ -28,15 +29,20 @@ def sqlite_path(database_url: str) -> Path | None:
 
 
 def postgres_hint(database_url: str, action: str, target: str) -> str:
+    """The pg_dump / pg_restore command for this database (the password comes from
+    ~/.pgpass or PGPASSWORD, never from the command line)."""
     url = make_url(database_url)
+    server = f"--host={url.host or 'localhost'} --port={url.port or 5432}"
+    if url.username:
+        server += f" --username={shlex.quote(url.username)}"
     if action == "backup":
         return (
-            f"PostgreSQL: pg_dump --format=custom --file={target} "
-            f"--host={url.host or 'localhost'} --username={url.username or ''} {url.database}"
+            f"PostgreSQL: pg_dump --format=custom --file={shlex.quote(target)} {server} "
+            f"{shlex.quote(url.database or '')}"
         )
     return (
-        f"PostgreSQL: pg_restore --clean --if-exists --dbname={url.database} "
-        f"--host={url.host or 'localhost'} --username={url.username or ''} {target}"
+        f"PostgreSQL: pg_restore --clean --if-exists --no-owner "
+        f"--dbname={shlex.quote(url.database or '')} {server} {shlex.quote(target)}"
     )
 
 

@@ -1,9 +1,16 @@
-"""Database engine and sessions.
+"""Database engine and sessions, for SQLite (one server) and PostgreSQL (a department).
 
-SQLite is tuned for a web server with several concurrent requests: WAL journal, a busy
-timeout, foreign keys ON, and ``BEGIN IMMEDIATE`` for write transactions (a deferred
-``BEGIN`` that reads and later writes fails with "database is locked" under concurrency).
-Read-only requests keep a deferred ``BEGIN`` so readers never queue behind writers.
+Write transactions are serialised on both, so that every read-check-write in the app (the
+next sample offset, attempt numbers, throttle windows) is correct without per-site locking:
+
+* SQLite: WAL journal, a busy timeout, foreign keys ON, and ``BEGIN IMMEDIATE`` for write
+  transactions (a deferred ``BEGIN`` that reads and later writes fails with "database is
+  locked" under concurrency). Read-only requests keep a deferred ``BEGIN`` so readers never
+  queue behind writers.
+* PostgreSQL: a write transaction starts by taking one transaction-scoped advisory lock
+  (``pg_advisory_xact_lock``), held until COMMIT/ROLLBACK, across every worker process and
+  host; readers take no lock. Under READ COMMITTED each statement after the lock sees every
+  earlier writer's commit, which is the same guarantee SQLite's single writer gives.
 """
 
 from __future__ import annotations
@@ -16,11 +23,33 @@ from sqlalchemy import Engine, event
 from sqlmodel import Session, create_engine
 
 BUSY_TIMEOUT_MS = 10_000
+WRITE_LOCK_KEY = 0x6779726F  # "gyro": the advisory lock every PostgreSQL writer takes
+WRITER_OPTION = "gyrolab_writer"
+
+
+def is_sqlite(url: str) -> bool:
+    return url.startswith("sqlite")
+
+
+class UnstorableText(ValueError):
+    """Text with a NUL character: PostgreSQL cannot store it, so neither backend takes it."""
 
 
 def make_engine(url: str) -> Engine:
-    if not url.startswith("sqlite"):
-        return create_engine(url, pool_pre_ping=True)
+    engine = _sqlite_engine(url) if is_sqlite(url) else _postgres_engine(url)
+    event.listen(engine, "before_cursor_execute", _refuse_nul_text)
+    return engine
+
+
+def _refuse_nul_text(_conn, _cursor, _statement, parameters, _context, executemany) -> None:
+    rows = parameters if executemany else (parameters,)
+    for row in rows:
+        values = row.values() if isinstance(row, dict) else (row or ())
+        if any(isinstance(value, str) and "\x00" in value for value in values):
+            raise UnstorableText("text may not contain NUL characters")
+
+
+def _sqlite_engine(url: str) -> Engine:
     engine = create_engine(
         url, connect_args={"check_same_thread": False, "timeout": BUSY_TIMEOUT_MS / 1000}
     )
@@ -38,8 +67,21 @@ def make_engine(url: str) -> Engine:
 
     @event.listens_for(engine, "begin")
     def _on_begin(connection) -> None:
-        immediate = connection.get_execution_options().get("sqlite_immediate", False)
+        immediate = connection.get_execution_options().get(WRITER_OPTION, False)
         connection.exec_driver_sql("BEGIN IMMEDIATE" if immediate else "BEGIN")
+
+    return engine
+
+
+def _postgres_engine(url: str) -> Engine:
+    # Each worker runs sync routes on a thread pool of 40; enough connections that a burst
+    # waits on the write lock rather than on the pool.
+    engine = create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=30)
+
+    @event.listens_for(engine, "begin")
+    def _on_begin(connection) -> None:
+        if connection.get_execution_options().get(WRITER_OPTION, False):
+            connection.exec_driver_sql(f"SELECT pg_advisory_xact_lock({WRITE_LOCK_KEY})")
 
     return engine
 
@@ -56,8 +98,8 @@ def get_engine() -> Engine:
 
 
 def writer(engine: Engine) -> Engine:
-    """The same engine, but transactions start with BEGIN IMMEDIATE on SQLite."""
-    return engine.execution_options(sqlite_immediate=True)
+    """The same engine, but its transactions are serialised with every other writer."""
+    return engine.execution_options(**{WRITER_OPTION: True})
 
 
 @contextmanager

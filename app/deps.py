@@ -7,10 +7,11 @@ from datetime import timedelta
 from typing import Annotated
 
 from fastapi import Depends, Path, Request
+from sqlalchemy import inspect
 from sqlmodel import Session, select
 
 from app.config import Settings, get_settings
-from app.db import get_engine, write_session, writer
+from app.db import get_engine, read_session, write_session, writer
 from app.models import AuthSession, Role, User, utcnow
 from app.security import session_is_live, token_digest, tokens_match
 from app.web import CSRF_COOKIE, SESSION_COOKIE
@@ -47,6 +48,17 @@ def get_db(request: Request) -> Iterator[Session]:
 
 SessionDep = Annotated[Session, Depends(get_db)]
 SettingsDep = Annotated[Settings, Depends(get_settings)]
+
+
+def reload_login(request: Request) -> None:
+    """Give the request's user and login session fresh rows after its session rolled back
+    (a failed flush expires every object it had loaded)."""
+    with read_session() as db:
+        for name, table in (("user", User), ("auth", AuthSession)):
+            row = getattr(request.state, name, None)
+            if row is not None:
+                identity = inspect(row).identity
+                setattr(request.state, name, db.get(table, identity[0]) if identity else None)
 
 
 def load_login(request: Request, db: Session, settings: Settings) -> User | None:
@@ -141,5 +153,5 @@ TeacherUser = Annotated[User, Depends(teacher_user)]
 StudentUser = Annotated[User, Depends(student_user)]
 CsrfProtected = Depends(csrf_protect)
 
-MAX_ID = 2**63 - 1  # SQLite's INTEGER: larger ids cannot exist, so they answer 404/422
+MAX_ID = 2**31 - 1  # PostgreSQL's INTEGER ids: larger ids cannot exist, so they answer 422
 ObjectId = Annotated[int, Path(ge=1, le=MAX_ID)]

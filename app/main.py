@@ -15,7 +15,8 @@ from swagger_ui_bundle import swagger_ui_path
 
 from app import __version__
 from app.config import get_settings
-from app.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequired
+from app.db import UnstorableText
+from app.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequired, reload_login
 from app.headers import SecurityHeaders
 from app.paths import STATIC_DIR
 from app.routers import (
@@ -150,6 +151,12 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
         return render(
             request, "error.html", {"status": exc.status_code, "message_key": key}, exc.status_code
         )
+
+    @app.exception_handler(UnstorableText)
+    def _nul_text(request: Request, _exc: UnstorableText):
+        # The failed flush rolled the request's session back and expired its objects.
+        reload_login(request)
+        return _error_page(request, 400, "error.nul_text")
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError):

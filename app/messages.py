@@ -36,6 +36,10 @@ MESSAGES: dict[str, dict[str, str]] = {
         "zh-CN": "此地址不接受这种请求。",
     },
     "error.too_large": {"en": "The upload is too large.", "zh-CN": "上传的内容太大。"},
+    "error.nul_text": {
+        "en": "Text may not contain NUL (\\0) characters; nothing was saved.",
+        "zh-CN": "文本中不能含有 NUL（\\0）字符；未保存任何内容。",
+    },
     "error.bad_request": {
         "en": "The form was incomplete or had invalid values.",
         "zh-CN": "表单不完整或包含无效的值。",

@@ -5,8 +5,11 @@ from __future__ import annotations
 from datetime import UTC, datetime
 from enum import StrEnum
 
-from sqlalchemy import UniqueConstraint
+from sqlalchemy import BigInteger, Integer, UniqueConstraint
 from sqlmodel import Field, SQLModel
+
+# 62-bit simulator seeds: BIGINT on PostgreSQL; SQLite's INTEGER already holds 64 bits.
+SEED_TYPE = BigInteger().with_variant(Integer(), "sqlite")
 
 
 def utcnow() -> datetime:
@@ -131,7 +134,7 @@ class LabSession(SQLModel, table=True):
     latitude_step_deg: float = 90.0
     min_readings: int = 10
     simulator_preset: str = Field(default="teaching-fog", max_length=32)
-    sim_seed: int = 0
+    sim_seed: int = Field(default=0, sa_type=SEED_TYPE)
     sim_azimuth_deg: float = 0.0
     sim_turns: int = 0
     sim_table_heading: int = 1  # position the virtual table is at, per part

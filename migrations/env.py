@@ -1,10 +1,13 @@
-"""Alembic environment: targets SQLModel.metadata; batch mode on SQLite."""
+"""Alembic environment: targets SQLModel.metadata; batch mode on SQLite; on PostgreSQL,
+concurrent upgrades queue on an advisory lock."""
 
 from alembic import context
 from sqlmodel import SQLModel
 
 import app.models  # noqa: F401  (registers the tables)
 from app.db import make_engine
+
+MIGRATION_LOCK_KEY = 0x6D696772  # "migr"
 
 config = context.config
 target_metadata = SQLModel.metadata
@@ -29,6 +32,10 @@ def run_migrations_offline() -> None:
 def run_migrations_online() -> None:
     engine = make_engine(url)
     with engine.connect() as connection:
+        if connection.dialect.name == "postgresql":
+            # Several servers may start at once: one migrates, the others wait and find head.
+            connection.exec_driver_sql(f"SELECT pg_advisory_lock({MIGRATION_LOCK_KEY})")
+            connection.commit()
         context.configure(
             connection=connection,
             target_metadata=target_metadata,
@@ -37,6 +44,9 @@ def run_migrations_online() -> None:
         )
         with context.begin_transaction():
             context.run_migrations()
+        if connection.dialect.name == "postgresql":
+            connection.exec_driver_sql(f"SELECT pg_advisory_unlock({MIGRATION_LOCK_KEY})")
+            connection.commit()
     engine.dispose()
 
 

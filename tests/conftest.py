@@ -1,9 +1,20 @@
-"""Shared fixtures: a fresh migrated SQLite file per test, an HTTP client, login helpers."""
+"""Shared fixtures: a fresh migrated database per test, an HTTP client, login helpers.
+
+Every test that touches the database runs twice: on a SQLite file and on a real PostgreSQL
+server (``tests/pgserver.py``; one throw-away cluster per run, one database per test cloned
+from a migrated template). Mark a test ``sqlite_only`` or ``postgres_only`` when it is
+about one database itself.
+PostgreSQL tests skip with the reason when the server cannot run here -- except in CI
+(CI=true), where they fail instead.
+"""
 
 from __future__ import annotations
 
+import itertools
+import os
 import re
 from collections.abc import Iterator
+from dataclasses import dataclass
 
 import pytest
 from fastapi.testclient import TestClient
@@ -11,16 +22,78 @@ from fastapi.testclient import TestClient
 from app.config import get_settings
 from app.db import engine_for, write_session
 from app.models import Role, User
+from tests.pgserver import ADMIN_URL_ENV, PostgresServer, PostgresUnavailable
 
 CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
 PASSWORD = "correct-horse-42"
+BACKENDS = ("sqlite", "postgresql")
+IN_CI = os.environ.get("CI", "").lower() == "true"
+
+
+def pytest_generate_tests(metafunc) -> None:
+    """Run every database test on each backend (``sqlite_only`` tests on SQLite alone)."""
+    if "backend" in metafunc.fixturenames:
+        backends = BACKENDS
+        if metafunc.definition.get_closest_marker("sqlite_only"):
+            backends = ("sqlite",)
+        if metafunc.definition.get_closest_marker("postgres_only"):
+            backends = ("postgresql",)
+        metafunc.parametrize("backend", backends, indirect=True)
+
+
+@dataclass
+class PostgresForTests:
+    server: PostgresServer
+    template: str
+    names: itertools.count
+
+    def new_database(self) -> tuple[str, str]:
+        """A fresh database at the newest schema: (name, SQLAlchemy URL)."""
+        name = f"gyrolab_test_{os.getpid()}_{next(self.names)}"
+        return name, self.server.create_database(name, template=self.template)
+
+
+@pytest.fixture(scope="session")
+def postgres() -> Iterator[PostgresForTests]:
+    """A PostgreSQL server for this test run, with a migrated template database."""
+    from app.migrate import upgrade_to_head
+
+    server = PostgresServer(os.environ.get(ADMIN_URL_ENV))
+    try:
+        server.start()
+    except PostgresUnavailable as error:
+        if IN_CI:
+            pytest.fail(f"CI=true but PostgreSQL cannot run, and its tests must: {error}")
+        pytest.skip(
+            f"PostgreSQL tests skipped: {error}. `python3 dev.py test` installs Debian's "
+            f"postgresql package when it may; or set {ADMIN_URL_ENV} to a server's admin URL."
+        )
+    template = f"gyrolab_template_{os.getpid()}"
+    try:
+        upgrade_to_head(server.create_database(template))
+        yield PostgresForTests(server, template, itertools.count())
+    finally:
+        try:
+            server.drop_database(template)
+        finally:
+            server.stop()
 
 
 @pytest.fixture
-def var_dir(tmp_path, monkeypatch) -> Iterator:
+def backend(request) -> str:
+    return request.param
+
+
+@pytest.fixture
+def var_dir(tmp_path, monkeypatch, backend, request) -> Iterator:
     monkeypatch.setenv("GYROLAB_VAR_DIR", str(tmp_path / "var"))
     for name in ("GYROLAB_DATABASE_URL", "GYROLAB_SECRET_KEY"):
         monkeypatch.delenv(name, raising=False)
+    database = None
+    if backend == "postgresql":
+        pg: PostgresForTests = request.getfixturevalue("postgres")
+        database, url = pg.new_database()
+        monkeypatch.setenv("GYROLAB_DATABASE_URL", url)
     get_settings.cache_clear()
     engine_for.cache_clear()
     yield tmp_path / "var"
@@ -28,6 +101,8 @@ def var_dir(tmp_path, monkeypatch) -> Iterator:
         engine_for(get_settings().database_url).dispose()
     get_settings.cache_clear()
     engine_for.cache_clear()
+    if database:
+        pg.server.drop_database(database)
 
 
 @pytest.fixture

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 from sqlmodel import select
 
 from app.cli import main
@@ -15,6 +16,7 @@ def course_names() -> list[str]:
         return sorted(db.exec(select(Course.name)).all())
 
 
+@pytest.mark.sqlite_only
 def test_backup_and_restore(app, tmp_path, capsys):
     teacher = make_user("t", Role.teacher)
     make_course(teacher, "Before the backup")
@@ -31,6 +33,7 @@ def test_backup_and_restore(app, tmp_path, capsys):
     assert course_names() == ["Before the backup"]
 
 
+@pytest.mark.sqlite_only
 def test_restore_refuses_bad_files(app, tmp_path, capsys):
     junk = tmp_path / "junk.db"
     junk.write_bytes(b"not a database at all" * 100)

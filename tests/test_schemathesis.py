@@ -9,28 +9,36 @@ from hypothesis import HealthCheck, settings
 from schemathesis.specs.openapi.checks import positive_data_acceptance
 
 from app.models import Role
-from tests.conftest import make_user
+from tests.conftest import BACKENDS, make_user
 
 pytestmark = pytest.mark.slow
 
 
-@pytest.fixture(scope="module")
-def api_schema(tmp_path_factory):
-    import os
-
+@pytest.fixture(scope="module", params=BACKENDS)
+def api_schema(request, tmp_path_factory):
     from app.config import get_settings
     from app.db import engine_for
     from app.main import create_app
     from app.migrate import upgrade_to_head
 
-    os.environ["GYROLAB_VAR_DIR"] = str(tmp_path_factory.mktemp("schemathesis"))
-    get_settings.cache_clear()
-    engine_for.cache_clear()
-    upgrade_to_head()
-    app = create_app(migrate_on_start=False)
-    yield schemathesis.openapi.from_asgi("/openapi.json", app)
-    get_settings.cache_clear()
-    engine_for.cache_clear()
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("GYROLAB_VAR_DIR", str(tmp_path_factory.mktemp("schemathesis")))
+        patch.delenv("GYROLAB_DATABASE_URL", raising=False)
+        database = None
+        if request.param == "postgresql":
+            pg = request.getfixturevalue("postgres")
+            database, url = pg.new_database()
+            patch.setenv("GYROLAB_DATABASE_URL", url)
+        get_settings.cache_clear()
+        engine_for.cache_clear()
+        upgrade_to_head()
+        app = create_app(migrate_on_start=False)
+        yield schemathesis.openapi.from_asgi("/openapi.json", app)
+        engine_for(get_settings().database_url).dispose()
+        get_settings.cache_clear()
+        engine_for.cache_clear()
+        if database:
+            pg.server.drop_database(database)
 
 
 @pytest.fixture(scope="module")

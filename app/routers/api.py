@@ -26,7 +26,7 @@ from app.apitokens import LOGIN_TOKEN_LIFETIME, check_token, new_token
 from app.core.exceptions import GyroInputError
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.db import write_session
-from app.deps import SAFE_METHODS, ObjectId, SessionDep, SettingsDep, load_login
+from app.deps import MAX_ID, SAFE_METHODS, ObjectId, SessionDep, SettingsDep, load_login
 from app.jsonsafe import json_safe
 from app.labsim import nominal_angle
 from app.labstore import (
@@ -209,7 +209,7 @@ class SessionCreate(BaseModel):
         },
     )
     title: str = Field(default="", max_length=200)
-    assignment_id: int | None = Field(default=None, ge=1, le=2**63 - 1)
+    assignment_id: int | None = Field(default=None, ge=1, le=MAX_ID)
     station: Station | None = None
     heading: HeadingSettings = HeadingSettings()
     latitude: LatitudeSettings = LatitudeSettings()

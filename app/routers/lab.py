@@ -19,7 +19,7 @@ from app.core.exceptions import GyroInputError
 from app.core.readings import parse_readings_csv
 from app.core.simulate import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS, canonical_unit, to_deg_per_hour
-from app.deps import CsrfProtected, CurrentUser, ObjectId, SessionDep
+from app.deps import MAX_ID, CsrfProtected, CurrentUser, ObjectId, SessionDep
 from app.i18n import translator
 from app.jsonsafe import json_safe
 from app.labsim import nominal_angle
@@ -123,7 +123,7 @@ def create_session(
     user: CurrentUser,
     db: SessionDep,
     title: Annotated[str, Form(max_length=200)] = "",
-    assignment_id: Annotated[int | None, Form(ge=1, le=2**63 - 1)] = None,
+    assignment_id: Annotated[int | None, Form(ge=1, le=MAX_ID)] = None,
     station: Annotated[str, Form(max_length=32)] = "handout",
     latitude_deg: Annotated[float | None, Form()] = None,
     earth_rate_deg_h: Annotated[float | None, Form()] = None,

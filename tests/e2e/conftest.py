@@ -1,5 +1,8 @@
 """A real uvicorn server on a free loopback port and Debian's Chromium driven by Playwright.
 
+``live_server`` is one worker on a SQLite file; ``pg_live_server`` is two workers on a
+PostgreSQL database (from the session's test server), the way a department runs it.
+
 Browser tests skip when /usr/bin/chromium is missing -- except in CI (CI=true), where
 they fail instead, so that CI can never pass without running them.
 """
@@ -7,12 +10,13 @@ they fail instead, so that CI can never pass without running them.
 from __future__ import annotations
 
 import os
+import signal
 import socket
 import subprocess
 import sys
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -41,6 +45,18 @@ class LiveServer:
     var_dir: Path
     env: dict
     process: subprocess.Popen | None = None
+    database_url: str | None = None
+    serve_args: tuple[str, ...] = ()
+
+    def kill_9(self) -> None:
+        """SIGKILL the server and all its workers at once (no shutdown code runs)."""
+        assert self.process is not None
+        os.killpg(self.process.pid, signal.SIGKILL)
+        self.process.wait(10)
+
+    def restarted(self):
+        """The same installation served again (a context manager)."""
+        return running_server(self.var_dir, *self.serve_args, database_url=self.database_url)
 
     def gyrolab(self, *args: str, stdin: str | None = None) -> subprocess.CompletedProcess:
         return subprocess.run(
@@ -59,20 +75,31 @@ def free_port() -> int:
         return sock.getsockname()[1]
 
 
-@contextmanager
-def running_server(var_dir: Path, *serve_args: str) -> Iterator[LiveServer]:
-    """``gyrolab serve`` in a subprocess on a free loopback port, stopped afterwards."""
-    port = free_port()
+def server_env(var_dir: Path, database_url: str | None = None) -> dict:
     env = {**os.environ, "GYROLAB_VAR_DIR": str(var_dir)}
     env.pop("GYROLAB_DATABASE_URL", None)
-    server = LiveServer(f"http://127.0.0.1:{port}", var_dir, env)
+    if database_url:
+        env["GYROLAB_DATABASE_URL"] = database_url
+    return env
+
+
+@contextmanager
+def running_server(
+    var_dir: Path, *serve_args: str, database_url: str | None = None
+) -> Iterator[LiveServer]:
+    """``gyrolab serve`` in a subprocess (its own process group) on a free loopback port,
+    stopped afterwards."""
+    port = free_port()
+    env = server_env(var_dir, database_url)
+    server = LiveServer(f"http://127.0.0.1:{port}", var_dir, env, None, database_url, serve_args)
     yield_server = server
-    with open(var_dir / "server.log", "w") as log:
+    with open(var_dir / "server.log", "a") as log:
         process = subprocess.Popen(
             [sys.executable, "-m", "app.cli", "serve", "--port", str(port), *serve_args],
             env=env,
             stdout=log,
             stderr=subprocess.STDOUT,
+            start_new_session=True,
         )
         server.process = process
         try:
@@ -89,19 +116,14 @@ def running_server(var_dir: Path, *serve_args: str) -> Iterator[LiveServer]:
             yield yield_server
         finally:
             process.terminate()
-            try:
+            with suppress(subprocess.TimeoutExpired):
                 process.wait(10)
-            except subprocess.TimeoutExpired:
-                process.kill()
+            with suppress(ProcessLookupError):  # workers the supervisor left behind
+                os.killpg(process.pid, signal.SIGKILL)
 
 
-@pytest.fixture(scope="module")
-def live_server(tmp_path_factory) -> Iterator[LiveServer]:
-    """An empty installation with one teacher and one student."""
-    var_dir = tmp_path_factory.mktemp("live-var")
-    env = {**os.environ, "GYROLAB_VAR_DIR": str(var_dir)}
-    env.pop("GYROLAB_DATABASE_URL", None)
-    setup = LiveServer("", var_dir, env)
+def add_teacher_and_student(var_dir: Path, database_url: str | None = None) -> None:
+    setup = LiveServer("", var_dir, server_env(var_dir, database_url))
     setup.gyrolab(
         "create-user",
         "--role",
@@ -122,8 +144,34 @@ def live_server(tmp_path_factory) -> Iterator[LiveServer]:
         "E2E 学生",
         stdin=STUDENT_PASSWORD + "\n",
     )
+
+
+@pytest.fixture(scope="module")
+def live_server(tmp_path_factory) -> Iterator[LiveServer]:
+    """An empty installation on SQLite with one teacher and one student."""
+    var_dir = tmp_path_factory.mktemp("live-var")
+    add_teacher_and_student(var_dir)
     with running_server(var_dir, "--no-demo") as server:
         yield server
+
+
+@pytest.fixture(scope="module")
+def pg_live_server(tmp_path_factory, postgres) -> Iterator[LiveServer]:
+    """The same on PostgreSQL, served by two uvicorn workers."""
+    var_dir = tmp_path_factory.mktemp("pg-live-var")
+    name, url = postgres.new_database()
+    add_teacher_and_student(var_dir, url)
+    try:
+        with running_server(var_dir, "--no-demo", "--workers", "2", database_url=url) as server:
+            yield server
+    finally:
+        postgres.server.drop_database(name)
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def any_live_server(request) -> LiveServer:
+    """``live_server`` and ``pg_live_server`` in turn."""
+    return request.getfixturevalue("live_server" if request.param == "sqlite" else "pg_live_server")
 
 
 @pytest.fixture(scope="module")

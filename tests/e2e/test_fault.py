@@ -1,19 +1,21 @@
 """Fault test: kill -9 the server in the middle of uploads and streams, restart it, and show
-the database is intact, holds every acknowledged write and no half-written position."""
+the database is intact, holds every acknowledged write and no half-written position.
+
+Runs on SQLite (one worker) and on PostgreSQL (two workers, both killed at once)."""
 
 from __future__ import annotations
 
-import os
-import signal
 import sqlite3
 import threading
 import time
 
 import httpx
+import numpy as np
 import pytest
 import websockets.sync.client as ws_client
+from sqlalchemy import create_engine, text
 
-from tests.e2e.conftest import STUDENT_PASSWORD, running_server
+from tests.e2e.conftest import STUDENT_PASSWORD, LiveServer
 
 pytestmark = pytest.mark.e2e
 
@@ -27,7 +29,8 @@ def login(url: str) -> httpx.Client:
     return client
 
 
-def test_kill_9_loses_no_acknowledged_write(live_server, tmp_path):
+def test_kill_9_loses_no_acknowledged_write(any_live_server: LiveServer):
+    live_server = any_live_server
     url = live_server.url
     api = login(url)
     sessions = [
@@ -40,7 +43,7 @@ def test_kill_9_loses_no_acknowledged_write(live_server, tmp_path):
         ).json()["id"]
         for i in range(3)
     ]
-    acknowledged: list[tuple[int, int, int]] = []  # (session, position, n_samples)
+    acknowledged: list[tuple[int, int, int]] = []  # (session, position, batch)
     stop = threading.Event()
 
     def uploader(session_id: int) -> None:
@@ -90,19 +93,17 @@ def test_kill_9_loses_no_acknowledged_write(live_server, tmp_path):
     for thread in threads:
         thread.start()
     time.sleep(3.0)
-    assert live_server.process is not None
-    os.kill(live_server.process.pid, signal.SIGKILL)
-    time.sleep(0.5)
+    live_server.kill_9()
     stop.set()
     for thread in threads:
         thread.join(15)
     assert len(acknowledged) >= 3, "too few uploads finished before the kill"
 
-    database = live_server.var_dir / "gyrolab.db"
-    connection = sqlite3.connect(database)
-    assert connection.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
-    connection.close()
-    with running_server(live_server.var_dir, "--no-demo") as restarted:
+    if live_server.database_url is None:
+        connection = sqlite3.connect(live_server.var_dir / "gyrolab.db")
+        assert connection.execute("PRAGMA integrity_check").fetchone()[0] == "ok"
+        connection.close()
+    with live_server.restarted() as restarted:
         check = login(restarted.url)
         for session_id in sessions:
             detail = check.get(f"/api/v1/sessions/{session_id}").json()
@@ -117,15 +118,50 @@ def test_kill_9_loses_no_acknowledged_write(live_server, tmp_path):
         assert "was interrupted and not saved" in page.text  # the stream died mid-position
         streamed = check.get(f"/api/v1/sessions/{stream_session}").json()["positions"]
         assert not [p for p in streamed if p["part"] == "latitude"]  # nothing half-saved
-    connection = sqlite3.connect(database)
-    # no half-written position: every take's samples add up to its count
-    rows = connection.execute(
-        'SELECT take.id, take.n_samples, SUM(LENGTH(sample_chunk."values")) / 8 '
-        "FROM take JOIN sample_chunk ON sample_chunk.take_id = take.id GROUP BY take.id"
-    ).fetchall()
-    orphans = connection.execute(
-        "SELECT COUNT(*) FROM take WHERE id NOT IN (SELECT take_id FROM sample_chunk)"
-    ).fetchone()[0]
-    connection.close()
+    assert_no_half_written_take(live_server)
+    assert_latest_acknowledged_batches_stored(live_server, acknowledged)
+
+
+def database_engine(server: LiveServer):
+    return create_engine(server.database_url or f"sqlite:///{server.var_dir / 'gyrolab.db'}")
+
+
+def assert_no_half_written_take(server: LiveServer) -> None:
+    """Every take's chunks add up to its sample count, and no take is without chunks."""
+    engine = database_engine(server)
+    with engine.connect() as connection:
+        rows = connection.execute(
+            text(
+                'SELECT take.id, take.n_samples, SUM(LENGTH(sample_chunk."values")) / 8 '
+                "FROM take JOIN sample_chunk ON sample_chunk.take_id = take.id GROUP BY take.id"
+            )
+        ).all()
+        orphans = connection.execute(
+            text("SELECT COUNT(*) FROM take WHERE id NOT IN (SELECT take_id FROM sample_chunk)")
+        ).scalar_one()
+    engine.dispose()
     assert rows and all(n == total for _, n, total in rows)
     assert orphans == 0
+
+
+def assert_latest_acknowledged_batches_stored(server: LiveServer, acknowledged) -> None:
+    """The current take of each position holds the last acknowledged upload (or a later one
+    whose reply was cut off by the kill), never an older one."""
+    latest: dict[tuple[int, int], int] = {}
+    for session_id, position, batch in acknowledged:
+        latest[session_id, position] = max(batch, latest.get((session_id, position), -1))
+    engine = database_engine(server)
+    with engine.connect() as connection:
+        for (session_id, position), batch in latest.items():
+            first_chunk = connection.execute(
+                text(
+                    'SELECT sample_chunk."values" FROM take JOIN sample_chunk'
+                    " ON sample_chunk.take_id = take.id WHERE take.session_id = :s"
+                    " AND take.part = 'heading' AND take.position = :p"
+                    " AND take.superseded_at IS NULL AND sample_chunk.seq = 0"
+                ),
+                {"s": session_id, "p": position},
+            ).scalar_one()
+            stored_batch = round(np.frombuffer(first_chunk, "<f8")[0] - 10.0)
+            assert stored_batch >= batch
+    engine.dispose()

@@ -28,7 +28,8 @@ def start_practice(page, url: str) -> None:
     page.wait_for_load_state("load")
 
 
-def test_student_types_the_handout_tables(live_server, new_page):
+def test_student_types_the_handout_tables(any_live_server, new_page):
+    live_server = any_live_server
     page = new_page()
     log_in(page, live_server.url, "student", STUDENT_PASSWORD)
     start_practice(page, live_server.url)
@@ -74,7 +75,8 @@ def test_student_types_the_handout_tables(live_server, new_page):
     expect(page.locator(".chart[data-figure='heading-compass'] .main-svg").first).to_be_visible()
 
 
-def test_student_records_everything_from_the_simulated_gyro_and_submits(live_server, new_page):
+def test_student_records_everything_from_the_simulated_gyro_and_submits(any_live_server, new_page):
+    live_server = any_live_server
     page = new_page()
     log_in(page, live_server.url, "student", STUDENT_PASSWORD)
     start_practice(page, live_server.url)

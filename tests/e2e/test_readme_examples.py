@@ -51,11 +51,11 @@ def test_curl_example(live_server):
     assert '"theta_deg":-10.75' in done.stdout.replace(" ", "")
 
 
-def test_python_example(live_server):
+def test_python_example(any_live_server):
     done = subprocess.run(
         [sys.executable, "-c", example("python")],
         cwd=DATA,
-        env=environment(live_server),
+        env=environment(any_live_server),
         capture_output=True,
         text=True,
         timeout=60,

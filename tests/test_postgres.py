@@ -1,0 +1,202 @@
+"""What PostgreSQL needs beyond "the same tests pass on it": migrations from empty and from
+old rows, servers that start together, writers serialised across connections, NUL text,
+and the pg_dump / pg_restore commands that ``gyrolab backup`` prints."""
+
+from __future__ import annotations
+
+import os
+import shlex
+import subprocess
+import sys
+import threading
+
+import pytest
+from alembic import command
+from alembic.autogenerate import compare_metadata
+from alembic.migration import MigrationContext
+from alembic.script import ScriptDirectory
+from sqlalchemy import text
+from sqlmodel import SQLModel, select
+
+import app.models  # noqa: F401
+from app.db import make_engine, read_session, write_session
+from app.migrate import alembic_config, upgrade_to_head
+from app.models import Course, LabSession, Role
+from tests.conftest import login, make_course, make_user, post_form
+
+
+@pytest.fixture
+def empty_database(postgres):
+    name = f"gyrolab_empty_{id(object())}"
+    url = postgres.server.create_database(name)
+    yield url
+    postgres.server.drop_database(name)
+
+
+def head_revision(url: str) -> str:
+    return ScriptDirectory.from_config(alembic_config(url)).get_current_head()
+
+
+def test_the_backend_is_the_one_named(app, backend):
+    with read_session() as db:
+        assert db.get_bind().dialect.name == backend
+
+
+def test_empty_postgres_database_upgrades_with_no_pending_changes(empty_database):
+    upgrade_to_head(empty_database)
+    engine = make_engine(empty_database)
+    with engine.connect() as connection:
+        context = MigrationContext.configure(connection, opts={"compare_type": True})
+        assert compare_metadata(context, SQLModel.metadata) == []
+        assert context.get_current_revision() == head_revision(empty_database)
+    engine.dispose()
+    upgrade_to_head(empty_database)  # a second run is a no-op
+
+
+def test_servers_starting_together_migrate_once(empty_database):
+    """Several servers run ``gyrolab migrate`` at once: one migrates, the rest wait."""
+    env = {**os.environ, "GYROLAB_DATABASE_URL": empty_database}
+    processes = [
+        subprocess.Popen(
+            [sys.executable, "-m", "app.cli", "migrate"],
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
+        for _ in range(4)
+    ]
+    outputs = [process.communicate(timeout=120)[0] for process in processes]
+    assert [process.returncode for process in processes] == [0] * 4, outputs
+    engine = make_engine(empty_database)
+    with engine.connect() as connection:
+        assert MigrationContext.configure(connection).get_current_revision() == head_revision(
+            empty_database
+        )
+    engine.dispose()
+
+
+def test_rows_from_an_old_schema_survive_and_seeds_become_64_bit(empty_database):
+    command.upgrade(alembic_config(empty_database), "0002")
+    engine = make_engine(empty_database)
+    with engine.begin() as connection:
+        connection.execute(
+            text(
+                'INSERT INTO "user" (username, display_name, role, password_hash,'
+                " must_change_password, created_at) VALUES ('s', 'S', 'student', 'x', false,"
+                " now())"
+            )
+        )
+        connection.execute(
+            text(
+                "INSERT INTO lab_session (owner_id, title, latitude_deg, earth_rate_deg_h,"
+                " heading_rotation, heading_start_deg, latitude_start_deg, latitude_step_deg,"
+                " min_readings, simulator_preset, sim_seed, sim_azimuth_deg, sim_turns,"
+                " sim_table_heading, sim_table_latitude, status, created_at, updated_at)"
+                " VALUES (1, 'old', 40, 15.041, 'ccw', 0, 0, 90, 10, 'teaching-fog', 12345,"
+                " 30, 0, 1, 1, 'in_progress', now(), now())"
+            )
+        )
+    engine.dispose()
+    upgrade_to_head(empty_database)
+    engine = make_engine(empty_database)
+    with engine.begin() as connection:
+        connection.execute(text("UPDATE lab_session SET sim_seed = :seed"), {"seed": 2**62 + 7})
+        row = connection.execute(text("SELECT title, sim_seed, feedback FROM lab_session")).one()
+    engine.dispose()
+    assert tuple(row) == ("old", 2**62 + 7, "")
+
+
+@pytest.mark.postgres_only
+def test_writers_queue_and_readers_do_not(app):
+    """A write transaction holds the write lock until it commits; reads go straight through
+    (SQLite's BEGIN IMMEDIATE has its own test in test_migrations)."""
+    teacher = make_user("t", Role.teacher)
+    course_id = make_course(teacher, "Queue")
+    order: list[str] = []
+    first_holds_lock = threading.Event()
+    reader_done = threading.Event()
+
+    def first_writer() -> None:
+        with write_session() as db:
+            db.get(Course, course_id)  # the transaction has begun: the lock is held
+            first_holds_lock.set()
+            reader_done.wait(10)
+            db.get(Course, course_id).name = "first"
+            order.append("first commits")
+
+    def second_writer() -> None:
+        first_holds_lock.wait(10)
+        with write_session() as db:
+            course = db.get(Course, course_id)
+            order.append(f"second sees {course.name!r}")
+            course.name = "second"
+
+    def reader() -> None:
+        first_holds_lock.wait(10)
+        with read_session() as db:
+            order.append(f"reader sees {db.get(Course, course_id).name!r}")
+        reader_done.set()
+
+    threads = [threading.Thread(target=f) for f in (first_writer, second_writer, reader)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join(30)
+    assert order == ["reader sees 'Queue'", "first commits", "second sees 'first'"]
+
+
+def test_text_with_nul_is_refused_and_nothing_is_saved(app, client, backend):
+    make_user("t", Role.teacher)
+    assert login(client, "t").status_code == 303
+    response = post_form(client, "/courses", {"name": "Lab\x00 1"})
+    assert response.status_code == 400
+    assert "NUL" in response.text
+    with read_session() as db:
+        assert db.exec(select(Course)).all() == []
+    token = client.post("/api/v1/auth/token", data={"username": "\x00", "password": "x"})
+    assert token.status_code == 400
+    assert token.json() == {"detail": "error.nul_text"}
+
+
+@pytest.mark.postgres_only
+def test_printed_pg_dump_and_pg_restore_commands_work(app, postgres, tmp_path, capsys):
+    """``gyrolab backup`` on PostgreSQL prints pg_dump; running it and the printed
+    pg_restore into a fresh database brings the data back (SQLite: test_backup)."""
+    from app.cli import main
+    from app.config import get_settings
+    from tests.pgserver import find_bindir
+
+    bindir = find_bindir()
+    if bindir is None:
+        pytest.skip("pg_dump is not installed beside this server")
+    teacher = make_user("t", Role.teacher)
+    make_course(teacher, "Backed up 备份")
+    with write_session() as db:
+        db.add(LabSession(owner_id=teacher.id, title="x", latitude_deg=40, sim_seed=2**62))
+    dump = tmp_path / "gyrolab.dump"
+    assert main(["backup", str(dump)]) == 2
+    backup_command = capsys.readouterr().out.strip().removeprefix("PostgreSQL: ")
+    subprocess.run([str(bindir / "pg_dump"), *shlex.split(backup_command)[1:]], check=True)
+    assert dump.stat().st_size > 0
+
+    name = f"gyrolab_restored_{id(dump)}"
+    restored_url = postgres.server.create_database(name)
+    try:
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setenv("GYROLAB_DATABASE_URL", restored_url)
+            get_settings.cache_clear()
+            assert main(["restore", str(dump)]) == 2
+            restore_command = capsys.readouterr().out.strip().removeprefix("PostgreSQL: ")
+            subprocess.run(
+                [str(bindir / "pg_restore"), *shlex.split(restore_command)[1:]], check=True
+            )
+            engine = make_engine(restored_url)
+            with engine.connect() as connection:
+                names = connection.execute(text("SELECT name FROM course")).scalars().all()
+                seeds = connection.execute(text("SELECT sim_seed FROM lab_session")).scalars()
+                assert (names, list(seeds)) == (["Backed up 备份"], [2**62])
+            engine.dispose()
+    finally:
+        get_settings.cache_clear()
+        postgres.server.drop_database(name)
