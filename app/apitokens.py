@@ -11,6 +11,7 @@ import secrets
 from dataclasses import dataclass
 from datetime import timedelta
 
+from sqlalchemy import case, or_, update
 from sqlmodel import Session, select
 
 from app.models import ApiToken, User, utcnow
@@ -45,31 +46,56 @@ def new_token(
 
 
 @dataclass
+class TokenUse:
+    id: int
+    user_id: int
+    scopes: str
+
+
+@dataclass
 class TokenCheck:
-    token: ApiToken | None
+    token: TokenUse | None
     problem: str | None = None  # "invalid" | "rate"
     retry_after: int = 0
 
 
 def check_token(db: Session, raw: str, rate_per_minute: int) -> TokenCheck:
-    """Find a live token, count this request in its window (caller commits)."""
-    record = db.exec(select(ApiToken).where(ApiToken.token_hash == token_digest(raw))).first()
+    """Find a live token and count this request in its one-minute window (caller commits).
+
+    One ``UPDATE ... RETURNING`` statement: atomic on its own (a row lock on PostgreSQL),
+    so it needs no serialised write transaction -- every SET expression reads the row as it
+    was, whichever request gets there first."""
     now = utcnow()
-    if (
-        record is None
-        or record.revoked_at is not None
-        or (record.expires_at is not None and record.expires_at <= now)
-    ):
+    window_over = or_(
+        ApiToken.window_start.is_(None), ApiToken.window_start <= now - timedelta(minutes=1)
+    )
+    counted = db.execute(
+        update(ApiToken)
+        .where(
+            ApiToken.token_hash == token_digest(raw),
+            ApiToken.revoked_at.is_(None),
+            or_(ApiToken.expires_at.is_(None), ApiToken.expires_at > now),
+        )
+        .values(
+            window_start=case((window_over, now), else_=ApiToken.window_start),
+            window_count=case((window_over, 1), else_=ApiToken.window_count + 1),
+            last_used_at=now,
+        )
+        .returning(
+            ApiToken.id,
+            ApiToken.user_id,
+            ApiToken.scopes,
+            ApiToken.window_start,
+            ApiToken.window_count,
+        )
+    ).first()
+    if counted is None:
         return TokenCheck(None, "invalid")
-    if record.window_start is None or now - record.window_start >= timedelta(minutes=1):
-        record.window_start, record.window_count = now, 0
-    record.window_count += 1
-    record.last_used_at = now
-    db.add(record)
-    if record.window_count > rate_per_minute:
-        wait = 60 - int((now - record.window_start).total_seconds())
-        return TokenCheck(record, "rate", max(wait, 1))
-    return TokenCheck(record)
+    token = TokenUse(counted.id, counted.user_id, counted.scopes)
+    if counted.window_count > rate_per_minute:
+        wait = 60 - int((now - counted.window_start).total_seconds())
+        return TokenCheck(token, "rate", max(wait, 1))
+    return TokenCheck(token)
 
 
 def user_tokens(db: Session, user: User) -> list[ApiToken]:

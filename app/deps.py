@@ -9,6 +9,7 @@ from typing import Annotated
 from fastapi import Depends, Path, Request
 from sqlalchemy import inspect
 from sqlmodel import Session, select
+from starlette.datastructures import FormData
 
 from app.config import Settings, get_settings
 from app.db import get_engine, read_session, write_session, writer
@@ -99,21 +100,43 @@ def _touch(session_id: int) -> None:
             db.add(record)
 
 
-async def csrf_protect(request: Request, db: SessionDep, settings: SettingsDep) -> None:
+async def read_form(request: Request) -> FormData:
+    """The request's form (parsed once; Starlette keeps it on the request).
+
+    Reading the body is the only async step: route handlers and dependencies that touch the
+    database are plain ``def`` so that FastAPI runs them on its thread pool -- a database
+    call in an ``async def`` would stop the event loop, and with it every other request and
+    stream of this worker, while it waits for the write lock."""
+    return await request.form()
+
+
+FormDep = Annotated[FormData, Depends(read_form)]
+
+
+async def given_csrf_token(request: Request) -> str | None:
+    """The CSRF token sent: the ``X-CSRF-Token`` header or the form's ``csrf_token``."""
+    given = request.headers.get("x-csrf-token")
+    if given is None and request.method not in SAFE_METHODS:
+        content_type = request.headers.get("content-type", "")
+        if content_type.startswith(("application/x-www-form-urlencoded", "multipart/form-data")):
+            value = (await read_form(request)).get("csrf_token")
+            given = value if isinstance(value, str) else None
+    return given
+
+
+def csrf_protect(
+    request: Request,
+    db: SessionDep,
+    settings: SettingsDep,
+    given: Annotated[str | None, Depends(given_csrf_token)],
+) -> None:
     """Check the CSRF token of every state-changing cookie-authenticated (or anonymous) form.
 
     Logged in: the token stored with the server-side session.  Not logged in (login form):
-    a double-submit cookie.  Token from the ``X-CSRF-Token`` header or ``csrf_token`` field.
+    a double-submit cookie.
     """
     if request.method in SAFE_METHODS:
         return
-    given = request.headers.get("x-csrf-token")
-    if given is None:
-        content_type = request.headers.get("content-type", "")
-        if content_type.startswith(("application/x-www-form-urlencoded", "multipart/form-data")):
-            form = await request.form()
-            value = form.get("csrf_token")
-            given = value if isinstance(value, str) else None
     user = load_login(request, db, settings)
     expected = request.state.auth.csrf_token if user else request.cookies.get(CSRF_COOKIE)
     if not tokens_match(expected, given):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import hmac
 import secrets
+from dataclasses import dataclass
 from datetime import timedelta
 from functools import lru_cache
 
@@ -57,10 +58,15 @@ def _dummy_hash() -> str:
 def authenticate(db: Session, username: str, password: str) -> User | None:
     """The user whose password matches, or None; costs one hash either way (no timing oracle)."""
     user = db.exec(select(User).where(User.username == normalise_username(username))).first()
+    return user if password_matches(user, password) else None
+
+
+def password_matches(user: User | None, password: str) -> bool:
+    """Check a password without the database; one hash either way (no timing oracle)."""
     if user is None:
         verify_password(password, _dummy_hash())
-        return None
-    return user if verify_password(password, user.password_hash) else None
+        return False
+    return verify_password(password, user.password_hash)
 
 
 def generate_password(length: int = 12) -> str:
@@ -157,9 +163,41 @@ def login_throttled(db: Session, username: str, address: str, settings: Settings
     )
 
 
-def record_login_failure(db: Session, username: str, address: str) -> None:
+def record_login_failure(db: Session, username: str, address: str) -> LoginFailure:
+    """Count a failure for the account and the address; returns the address's row."""
     db.add(LoginFailure(scope="account", key=username.strip().lower()[:128]))
-    db.add(LoginFailure(scope="address", key=address[:128]))
+    by_address = LoginFailure(scope="address", key=address[:128])
+    db.add(by_address)
+    return by_address
+
+
+@dataclass
+class LoginAttempt:
+    user: User | None
+    address_failure_id: int
+
+
+def begin_login(
+    db: Session, username: str, address: str, settings: Settings
+) -> LoginAttempt | None:
+    """First step of a log-in, in a short write transaction: None when throttled; otherwise
+    the attempt is counted as a failure *before* the password is checked, so that guesses
+    sent in parallel cannot slip past the limit while the slow hash runs -- which the
+    caller does after committing, outside the write lock (``password_matches``), then
+    ``finish_login`` on success."""
+    if login_throttled(db, username, address, settings):
+        return None
+    failure = record_login_failure(db, username, address)
+    db.flush()
+    user = db.exec(select(User).where(User.username == normalise_username(username))).first()
+    return LoginAttempt(user, failure.id)
+
+
+def finish_login(db: Session, attempt: LoginAttempt) -> None:
+    """The password matched: take back the failure counted in advance, clear the account's."""
+    assert attempt.user is not None
+    clear_login_failures(db, attempt.user.username)
+    db.exec(delete(LoginFailure).where(LoginFailure.id == attempt.address_failure_id))
 
 
 def clear_login_failures(db: Session, username: str) -> None:

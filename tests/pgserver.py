@@ -56,7 +56,8 @@ class PostgresServer:
         self._bindir: Path | None = None
 
     # -- lifecycle -------------------------------------------------------------------------
-    def start(self) -> PostgresServer:
+    def start(self, *, durable: bool = False) -> PostgresServer:
+        """Start the cluster; ``durable`` keeps fsync on (benchmarks), tests turn it off."""
         if self.admin_url:
             return self
         bindir = find_bindir()
@@ -89,9 +90,10 @@ class PostgresServer:
         )
         options = (
             f"-c listen_addresses=127.0.0.1 -p {self.port} -c unix_socket_directories={self.root}"
-            " -c fsync=off -c synchronous_commit=off -c full_page_writes=off"
             " -c max_connections=300 -c shared_buffers=128MB"
         )
+        if not durable:
+            options += " -c fsync=off -c synchronous_commit=off -c full_page_writes=off"
         self._run(
             "pg_ctl",
             "-D",

@@ -25,7 +25,7 @@ from app import labsessions
 from app.apitokens import LOGIN_TOKEN_LIFETIME, check_token, new_token
 from app.core.exceptions import GyroInputError
 from app.core.units import canonical_unit, to_deg_per_hour
-from app.db import write_session
+from app.db import read_session
 from app.deps import MAX_ID, SAFE_METHODS, ObjectId, SessionDep, SettingsDep, load_login
 from app.jsonsafe import json_safe
 from app.labsim import nominal_angle
@@ -41,10 +41,9 @@ from app.labstore import (
 from app.models import Assignment, Course, LabSession, Role, User
 from app.review import class_rows, export_rows
 from app.security import (
-    authenticate,
-    clear_login_failures,
-    login_throttled,
-    record_login_failure,
+    begin_login,
+    finish_login,
+    password_matches,
     tokens_match,
 )
 
@@ -81,11 +80,13 @@ class Caller:
     via: str  # token | cookie
 
 
-async def api_caller(request: Request, db: SessionDep, settings: SettingsDep) -> Caller:
+def api_caller(request: Request, db: SessionDep, settings: SettingsDep) -> Caller:
     header = request.headers.get("authorization", "")
     if header.lower().startswith("bearer "):
-        with write_session() as counter_db:
+        # Not a serialised writer: the count is one atomic UPDATE (see check_token).
+        with read_session() as counter_db:
             check = check_token(counter_db, header[7:].strip(), settings.api_rate_per_minute)
+            counter_db.commit()
             user_id = check.token.user_id if check.token else None
             scopes = set(check.token.scopes.split(",")) if check.token else set()
         if check.problem == "invalid":
@@ -144,22 +145,23 @@ def login_for_token(
     """OAuth2 password flow: a one-hour bearer token (read and upload), throttled like the
     log-in page."""
     address = request.client.host if request.client else "unknown"
-    if login_throttled(db, username, address, settings):
+    attempt = begin_login(db, username, address, settings)
+    db.commit()  # the password hash below runs outside the write lock
+    if attempt is None:
         raise HTTPException(
             429,
             "Too many failed log-in attempts; wait and try again.",
             headers={"Retry-After": str(settings.login_window_minutes * 60)},
         )
-    user = authenticate(db, username, password)
-    if user is None:
-        record_login_failure(db, username, address)
-        db.commit()
+    if not password_matches(attempt.user, password):
         raise HTTPException(
             401, "Wrong username or password.", headers={"WWW-Authenticate": "Bearer"}
         )
+    user = attempt.user
+    finish_login(db, attempt)
     if user.must_change_password:
+        db.commit()
         raise HTTPException(403, "Change your initial password in the browser first.")
-    clear_login_failures(db, user.username)
     raw, _ = new_token(db, user, kind="login", lifetime=LOGIN_TOKEN_LIFETIME)
     db.commit()
     return TokenOut(access_token=raw, expires_in=int(LOGIN_TOKEN_LIFETIME.total_seconds()))
@@ -405,11 +407,20 @@ def bad_input(error: GyroInputError) -> HTTPException:
     return HTTPException(400, str(error))
 
 
-async def read_upload(request: Request) -> PositionUpload:
-    """A JSON PositionUpload, or text/csv: one value per line, or ``time_s,value``."""
+async def upload_body(request: Request) -> bytes:
+    """The raw body (the only async step of an upload; parsing and storing run on the
+    thread pool so that a 20 MB JSON body never stops the event loop)."""
     body = await request.body()
     if len(body) > MAX_UPLOAD_BYTES:
         raise HTTPException(413, f"The body is larger than {MAX_UPLOAD_BYTES} bytes.")
+    return body
+
+
+UploadBody = Annotated[bytes, Depends(upload_body)]
+
+
+def read_upload(request: Request, body: bytes) -> PositionUpload:
+    """A JSON PositionUpload, or text/csv: one value per line, or ``time_s,value``."""
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if content_type == "text/csv":
         return parse_csv_upload(
@@ -492,14 +503,20 @@ def require_api_method(db: Session, session: LabSession) -> None:
         raise HTTPException(403, "This assignment does not allow uploaded readings.")
 
 
-async def prepare_upload(
-    request: Request, db: Session, caller: Caller, session_id: int, part: str, position: int
+def prepare_upload(
+    request: Request,
+    body: bytes,
+    db: Session,
+    caller: Caller,
+    session_id: int,
+    part: str,
+    position: int,
 ):
     """The checks and parsing shared by replacing and appending a position's readings."""
     need(caller, "upload")
     session = own(db, caller, session_id)
     require_api_method(db, session)
-    upload = await read_upload(request)
+    upload = read_upload(request, body)
     values, times = upload_arrays(upload)
     angle = (
         upload.angle_deg if upload.angle_deg is not None else nominal_angle(session, part, position)
@@ -597,18 +614,19 @@ def get_session(session_id: ObjectId, caller: CallerDep, db: SessionDep):
     response_model=UploadOut,
     openapi_extra=UPLOAD_BODY,
 )
-async def put_position(
+def put_position(
     request: Request,
     session_id: ObjectId,
     part: PartPath,
     position: PositionPath,
+    body: UploadBody,  # read before the caller's lookup starts the write transaction
     caller: CallerDep,
     db: SessionDep,
 ):
     """Replace this position's readings (the previous take stays in the history).
     Atomic: on any error nothing is stored."""
-    session, upload, values, times, angle = await prepare_upload(
-        request, db, caller, session_id, part, position
+    session, upload, values, times, angle = prepare_upload(
+        request, body, db, caller, session_id, part, position
     )
     try:
         take = store_take(
@@ -640,18 +658,19 @@ async def put_position(
     response_model=UploadOut,
     openapi_extra=UPLOAD_BODY,
 )
-async def append_position(
+def append_position(
     request: Request,
     session_id: ObjectId,
     part: PartPath,
     position: PositionPath,
+    body: UploadBody,  # read before the caller's lookup starts the write transaction
     caller: CallerDep,
     db: SessionDep,
 ):
     """Append readings to this position (streaming devices).  With ``offset`` (the index
     of the first sample) a retried batch is stored once; a gap answers 409."""
-    session, upload, values, times, angle = await prepare_upload(
-        request, db, caller, session_id, part, position
+    session, upload, values, times, angle = prepare_upload(
+        request, body, db, caller, session_id, part, position
     )
     try:
         take, added = append_samples(

@@ -8,7 +8,7 @@ from datetime import UTC, datetime
 from fastapi import APIRouter, Request
 
 from app.core.simulate import PRESETS
-from app.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
+from app.deps import CsrfProtected, FormDep, ObjectId, SessionDep, TeacherUser
 from app.models import Assignment
 from app.routers.courses import course_context, own_course
 from app.web import flash, redirect, render
@@ -142,12 +142,11 @@ def assignment_form_values(assignment: Assignment) -> dict:
 
 
 @router.post("/{course_id}/assignments", dependencies=[CsrfProtected])
-async def create_assignment(
-    request: Request, course_id: ObjectId, teacher: TeacherUser, db: SessionDep
+def create_assignment(
+    request: Request, course_id: ObjectId, teacher: TeacherUser, db: SessionDep, raw: FormDep
 ):
     """A teacher sets a lab: station, recording methods, gyro, truth ranges, rules."""
     course = own_course(db, teacher, course_id)
-    raw = await request.form()
     form = {key: str(raw.get(key, "")) for key in raw if key not in ("methods", "csrf_token")}
     form["methods"] = raw.getlist("methods")
     try:

@@ -11,13 +11,12 @@ from app.deps import CsrfProtected, CurrentUser, OptionalUser, SessionDep, Setti
 from app.i18n import normalise
 from app.models import AuthSession, User, utcnow
 from app.security import (
-    authenticate,
-    clear_login_failures,
+    begin_login,
     create_session,
+    finish_login,
     hash_password,
-    login_throttled,
+    password_matches,
     password_problem,
-    record_login_failure,
     revoke_sessions,
     verify_password,
 )
@@ -58,17 +57,17 @@ def login(
 ):
     address = client_address(request)
     context = {"next": safe_next(next), "username": username}
-    if login_throttled(db, username, address, settings):
+    attempt = begin_login(db, username, address, settings)
+    db.commit()  # the password hash below runs outside the write lock
+    if attempt is None:
         context["error"] = "login.throttled"
         context["minutes"] = settings.login_window_minutes
         return render(request, "auth/login.html", context, 429)
-    user = authenticate(db, username, password)
-    if user is None:
-        record_login_failure(db, username, address)
-        db.commit()
+    if not password_matches(attempt.user, password):
         context["error"] = "login.failed"
         return render(request, "auth/login.html", context, 401)
-    clear_login_failures(db, user.username)
+    user = attempt.user
+    finish_login(db, attempt)
     token = create_session(db, user, settings)
     db.commit()
     response = redirect("/account/password" if user.must_change_password else safe_next(next))

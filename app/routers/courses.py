@@ -196,7 +196,7 @@ def add_student_by_hand(
 
 
 @router.post("/{course_id}/import", dependencies=[CsrfProtected])
-async def import_students(
+def import_students(
     request: Request,
     course_id: ObjectId,
     teacher: TeacherUser,
@@ -204,7 +204,7 @@ async def import_students(
     roster_file: Annotated[UploadFile | None, File()] = None,
 ):
     course = own_course(db, teacher, course_id)
-    data = await roster_file.read(MAX_ROSTER_BYTES + 1) if roster_file else b""
+    data = roster_file.file.read(MAX_ROSTER_BYTES + 1) if roster_file else b""
     parsed = parse_roster(data)
     problems = parsed.problems or check_roster_against_accounts(db, parsed.rows)
     if problems or not parsed.rows:

@@ -13,7 +13,7 @@ from sqlmodel import Session, select
 
 from app.charts import class_error_figure, class_histogram_figure
 from app.core.simulate import PRESETS
-from app.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
+from app.deps import CsrfProtected, FormDep, ObjectId, SessionDep, TeacherUser
 from app.i18n import translator
 from app.labstore import export_csv, export_json
 from app.models import Assignment, Attempt, Course, LabSession, User
@@ -94,15 +94,15 @@ def assignment_dashboard(
 @router.post(
     "/courses/{course_id}/assignments/{assignment_id}/settings", dependencies=[CsrfProtected]
 )
-async def update_settings(
+def update_settings(
     request: Request,
     course_id: ObjectId,
     assignment_id: ObjectId,
     teacher: TeacherUser,
     db: SessionDep,
+    form: FormDep,
 ):
     course, assignment = own_assignment(db, teacher, course_id, assignment_id)
-    form = await request.form()
     values = {key: form.get(key, "") for key in form if key != "methods"}
     values["methods"] = form.getlist("methods")
     try:
@@ -208,12 +208,11 @@ def submission_page(request: Request, session_id: ObjectId, teacher: TeacherUser
 
 
 @router.post("/review/sessions/{session_id}/feedback", dependencies=[CsrfProtected])
-async def save_feedback(
-    request: Request, session_id: ObjectId, teacher: TeacherUser, db: SessionDep
+def save_feedback(
+    request: Request, session_id: ObjectId, teacher: TeacherUser, db: SessionDep, form: FormDep
 ):
     """Comments (overall and per position) and the grade; 'action' may return or release."""
     session, _, _ = reviewable_session(db, teacher, session_id)
-    form = await request.form()
     session.feedback = str(form.get("feedback", ""))[:20_000]
     comments = {
         key.removeprefix("comment-"): str(value)[:2000]

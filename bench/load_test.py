@@ -1,0 +1,419 @@
+"""Load test on loopback: a class of simulated students working at once, with a teacher.
+
+    .venv/bin/python bench/load_test.py [--students 60] [--backend sqlite|postgresql|both]
+
+Each student logs in, opens the lab, starts the assignment's session, turns the virtual
+table and streams all eight positions from the simulated gyro over one WebSocket, then
+starts a practice session and uploads the handout's two CSV tables (preview, then save),
+reads the results of both sessions (JSON and the page) and submits the assignment.  Meanwhile
+the teacher refreshes the class dashboard.  Everything runs at once in one asyncio client.
+
+Reported per backend: throughput, p50/p95/p99 latency per route, the lag of stream frames
+behind the simulated clock, errors, and lost samples: what the server acknowledged
+(``saved`` frames, CSV replies) counted against what the database holds afterwards.
+SQLite runs one uvicorn worker; PostgreSQL (a durable server started for the run,
+``fsync`` on) runs two.  Exit status 1 on any error or lost sample.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import os
+import platform
+import random
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from collections import defaultdict
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import httpx
+import numpy as np
+from websockets.asyncio.client import connect
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from tests.e2e.conftest import running_server  # noqa: E402
+from tests.pgserver import PostgresServer  # noqa: E402
+
+DATA = ROOT / "tests" / "data"
+PASSWORD = "load-test-pass-1"
+CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
+PARTS = ("heading", "latitude")
+SEED_SCRIPT = """
+import sys
+from sqlmodel import select
+from app.db import write_session
+from app.migrate import upgrade_to_head
+from app.models import Assignment, Course, Enrollment, User
+from app.security import hash_password
+upgrade_to_head()
+students, password = int(sys.argv[1]), sys.argv[2]
+digest = hash_password(password)
+with write_session() as db:
+    teacher = User(username='teacher', display_name='Load teacher', role='teacher',
+                   password_hash=digest)
+    db.add(teacher); db.flush()
+    course = Course(name='Load class', teacher_id=teacher.id); db.add(course); db.flush()
+    assignment = Assignment(course_id=course.id, title='North finding', latitude_deg=39.93,
+                            earth_rate_deg_h=15.04, allowed_methods='manual,csv,simulator')
+    db.add(assignment); db.flush()
+    for i in range(students):
+        user = User(username=f's{i:03d}', display_name=f'学生 {i}', role='student',
+                    password_hash=digest)
+        db.add(user); db.flush()
+        db.add(Enrollment(course_id=course.id, student_id=user.id))
+    print(course.id, assignment.id)
+"""
+
+
+@dataclass
+class Tally:
+    """Latencies per route, frame lags, errors, and acknowledged samples per session."""
+
+    latencies: dict[str, list[float]] = field(default_factory=lambda: defaultdict(list))
+    frame_lags: list[float] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)
+    acknowledged: dict[tuple[int, str, int], int] = field(default_factory=dict)
+    frames: int = 0
+    streamed_samples: int = 0
+
+    async def request(
+        self, client: httpx.AsyncClient, method: str, url: str, route: str, ok=(200,), **kw
+    ) -> httpx.Response:
+        start = time.perf_counter()
+        try:
+            response = await client.request(method, url, **kw)
+        except httpx.HTTPError as error:
+            self.errors.append(f"{route}: {error!r}")
+            raise
+        self.latencies[route].append(time.perf_counter() - start)
+        if response.status_code not in ok:
+            self.errors.append(f"{route}: HTTP {response.status_code} {response.text[:200]}")
+            raise RuntimeError(f"{route} answered {response.status_code}")
+        return response
+
+
+def csrf(html: str) -> str:
+    match = CSRF_RE.search(html)
+    assert match, "no CSRF token on the page"
+    return match.group(1)
+
+
+def session_id_of(response: httpx.Response) -> int:
+    return int(response.headers["location"].rstrip("/").rsplit("/", 1)[1])
+
+
+async def stream_all_positions(
+    base: str, cookie: str, session: int, token: str, client, tally: Tally, args
+) -> None:
+    """Turn the table and stream each position in turn, as the lab page does."""
+    ws_url = base.replace("http://", "ws://") + f"/lab/sessions/{session}/stream"
+    headers = {"Cookie": f"gyrolab_session={cookie}"}
+    start = time.perf_counter()
+    async with connect(ws_url, additional_headers=headers, max_size=2**22) as ws:
+        tally.latencies["WS connect"].append(time.perf_counter() - start)
+        for part in PARTS:
+            for position in range(1, 5):
+                if position > 1:
+                    await tally.request(
+                        client,
+                        "POST",
+                        f"/lab/sessions/{session}/turn",
+                        "POST /lab/sessions/{id}/turn",
+                        json={"part": part, "position": position},
+                        headers={"X-CSRF-Token": token},
+                    )
+                await ws.send(
+                    json.dumps(
+                        {
+                            "action": "start",
+                            "part": part,
+                            "position": position,
+                            "dwell_s": args.dwell,
+                            "speed": args.speed,
+                        }
+                    )
+                )
+                started_at = None
+                rate_hz = 1.0
+                while True:
+                    message = json.loads(await asyncio.wait_for(ws.recv(), timeout=60))
+                    now = time.perf_counter()
+                    if message["type"] == "started":
+                        started_at, rate_hz = now, message["rate_hz"]
+                    elif message["type"] == "samples":
+                        tally.frames += 1
+                        tally.streamed_samples += len(message["v"])
+                        due = started_at + message["done"] / rate_hz / args.speed
+                        tally.frame_lags.append(now - due)
+                    elif message["type"] == "saved":
+                        tally.latencies["WS save (last frame → saved)"].append(
+                            now - (started_at + message["n"] / rate_hz / args.speed)
+                        )
+                        tally.acknowledged[session, part, position] = message["n"]
+                        break
+                    else:
+                        tally.errors.append(f"stream: {message}")
+                        return
+
+
+def handout_csv(name: str) -> tuple[str, list[int]]:
+    text = (DATA / name).read_text(encoding="utf-8")
+    rows = text.strip().splitlines()
+    counts = [len(rows) - 1] * 4
+    return text, counts
+
+
+async def student(index: int, base: str, assignment: int, tally: Tally, args) -> None:
+    await asyncio.sleep(random.Random(index).uniform(0, args.ramp))
+    async with httpx.AsyncClient(base_url=base, timeout=120) as client:
+        page = await tally.request(client, "GET", "/login", "GET /login")
+        await tally.request(
+            client,
+            "POST",
+            "/login",
+            "POST /login",
+            ok=(303,),
+            data={"username": f"s{index:03d}", "password": PASSWORD, "csrf_token": csrf(page.text)},
+        )
+        home = await tally.request(client, "GET", "/lab", "GET /lab")
+        created = await tally.request(
+            client,
+            "POST",
+            "/lab/sessions",
+            "POST /lab/sessions",
+            ok=(303,),
+            data={"assignment_id": str(assignment), "csrf_token": csrf(home.text)},
+        )
+        session = session_id_of(created)
+        page = await tally.request(
+            client, "GET", f"/lab/sessions/{session}", "GET /lab/sessions/{id}"
+        )
+        token = csrf(page.text)
+        cookie = client.cookies.get("gyrolab_session")
+        await stream_all_positions(base, cookie, session, token, client, tally, args)
+
+        practice = await tally.request(
+            client,
+            "POST",
+            "/lab/sessions",
+            "POST /lab/sessions",
+            ok=(303,),
+            data={"station": "handout", "csrf_token": token},
+        )
+        practice_id = session_id_of(practice)
+        for part, name in (
+            ("heading", "handout_horizontal.csv"),
+            ("latitude", "handout_vertical.csv"),
+        ):
+            text, counts = handout_csv(name)
+            body = {"part": part, "unit": "deg/h", "text": text}
+            headers = {"X-CSRF-Token": token}
+            await tally.request(
+                client,
+                "POST",
+                f"/lab/sessions/{practice_id}/csv/preview",
+                "POST /lab/sessions/{id}/csv/preview",
+                json=body,
+                headers=headers,
+            )
+            await tally.request(
+                client,
+                "POST",
+                f"/lab/sessions/{practice_id}/csv",
+                "POST /lab/sessions/{id}/csv",
+                json=body,
+                headers=headers,
+            )
+            for position, n in enumerate(counts, start=1):
+                tally.acknowledged[practice_id, part, position] = n
+        for sid in (session, practice_id):
+            await tally.request(
+                client,
+                "GET",
+                f"/lab/sessions/{sid}/results.json",
+                "GET /lab/sessions/{id}/results.json",
+            )
+        await tally.request(client, "GET", f"/lab/sessions/{session}", "GET /lab/sessions/{id}")
+        await tally.request(
+            client,
+            "POST",
+            f"/lab/sessions/{session}/submit",
+            "POST /lab/sessions/{id}/submit",
+            ok=(303,),
+            data={"csrf_token": token},
+        )
+
+
+async def teacher(base: str, course: int, assignment: int, tally: Tally, done: asyncio.Event):
+    async with httpx.AsyncClient(base_url=base, timeout=120) as client:
+        page = await tally.request(client, "GET", "/login", "GET /login")
+        await tally.request(
+            client,
+            "POST",
+            "/login",
+            "POST /login",
+            ok=(303,),
+            data={"username": "teacher", "password": PASSWORD, "csrf_token": csrf(page.text)},
+        )
+        path = f"/courses/{course}/assignments/{assignment}"
+        while not done.is_set():
+            await tally.request(client, "GET", path, "GET dashboard (teacher)")
+            try:
+                await asyncio.wait_for(done.wait(), timeout=2.0)
+            except TimeoutError:
+                pass
+
+
+async def run_class(base: str, course: int, assignment: int, args) -> tuple[Tally, float]:
+    tally = Tally()
+    done = asyncio.Event()
+    watcher = asyncio.create_task(teacher(base, course, assignment, tally, done))
+    start = time.perf_counter()
+    results = await asyncio.gather(
+        *(student(i, base, assignment, tally, args) for i in range(args.students)),
+        return_exceptions=True,
+    )
+    wall = time.perf_counter() - start
+    done.set()
+    await watcher
+    for result in results:
+        if isinstance(result, BaseException):
+            tally.errors.append(f"student failed: {result!r}")
+    return tally, wall
+
+
+def stored_counts(database_url: str) -> dict[tuple[int, str, int], tuple[int, int]]:
+    """(session, part, position) → (take.n_samples, samples in its chunks) of current takes."""
+    from sqlalchemy import create_engine, text
+
+    engine = create_engine(database_url)
+    with engine.connect() as connection:
+        rows = connection.execute(
+            text(
+                "SELECT take.session_id, take.part, take.position, take.n_samples,"
+                ' COALESCE(SUM(LENGTH(sample_chunk."values")), 0) / 8'
+                " FROM take LEFT JOIN sample_chunk ON sample_chunk.take_id = take.id"
+                " WHERE take.superseded_at IS NULL"
+                " GROUP BY take.id, take.session_id, take.part, take.position, take.n_samples"
+            )
+        ).all()
+    engine.dispose()
+    return {(s, part, p): (n, int(chunks)) for s, part, p, n, chunks in rows}
+
+
+def seed(env: dict, students: int) -> tuple[int, int]:
+    done = subprocess.run(
+        [sys.executable, "-c", SEED_SCRIPT, str(students), PASSWORD],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        cwd=ROOT,
+    )
+    course, assignment = (int(x) for x in done.stdout.split())
+    return course, assignment
+
+
+def percentile_ms(values: list[float], q: float) -> str:
+    return f"{np.percentile(values, q) * 1000:.0f}" if values else "-"
+
+
+def report(name: str, tally: Tally, wall: float, lost: int, checked: int, workers: int) -> str:
+    requests = sum(len(v) for k, v in tally.latencies.items() if not k.startswith("WS"))
+    lines = [
+        f"### {name} ({workers} worker{'s' if workers > 1 else ''})",
+        "",
+        f"- wall time {wall:.1f} s; {requests} HTTP requests → {requests / wall:.1f} req/s;"
+        f" {tally.frames} stream frames, {tally.streamed_samples} streamed samples",
+        f"- errors: {len(tally.errors)}; lost samples: {lost} of {checked} positions checked"
+        " (acknowledged against stored)",
+        f"- stream frame lag behind the simulated clock: p50 {percentile_ms(tally.frame_lags, 50)}"
+        f" ms, p95 {percentile_ms(tally.frame_lags, 95)} ms, p99"
+        f" {percentile_ms(tally.frame_lags, 99)} ms, max {percentile_ms(tally.frame_lags, 100)} ms",
+        "",
+        "| route | count | p50 ms | p95 ms | p99 ms | max ms |",
+        "|---|---:|---:|---:|---:|---:|",
+    ]
+    for route, values in sorted(tally.latencies.items()):
+        lines.append(
+            f"| {route} | {len(values)} | {percentile_ms(values, 50)} | "
+            f"{percentile_ms(values, 95)} | {percentile_ms(values, 99)} | "
+            f"{percentile_ms(values, 100)} |"
+        )
+    for error in tally.errors[:10]:
+        lines.append(f"\nerror: {error}")
+    return "\n".join(lines)
+
+
+def lost_samples(tally: Tally, database_url: str) -> tuple[int, int]:
+    stored = stored_counts(database_url)
+    lost = 0
+    for key, acknowledged in tally.acknowledged.items():
+        n, in_chunks = stored.get(key, (0, 0))
+        lost += max(0, acknowledged - n) + abs(n - in_chunks)
+    return lost, len(tally.acknowledged)
+
+
+def run_backend(backend: str, args) -> tuple[str, bool]:
+    with tempfile.TemporaryDirectory(prefix="gyrolab-load-") as var:
+        var_dir = Path(var)
+        pg = None
+        database_url = f"sqlite:///{var_dir / 'gyrolab.db'}"
+        serve_args = ["--no-demo", "--no-access-log"]
+        workers = 1
+        if backend == "postgresql":
+            pg = PostgresServer().start(durable=True)
+            database_url = pg.create_database("gyrolab_load")
+            workers = args.pg_workers
+            serve_args += ["--workers", str(workers)]
+        try:
+            env = {**os.environ, "GYROLAB_VAR_DIR": var, "GYROLAB_DATABASE_URL": database_url}
+            course, assignment = seed(env, args.students)
+            url = database_url if backend == "postgresql" else None
+            with running_server(var_dir, *serve_args, database_url=url) as server:
+                tally, wall = asyncio.run(run_class(server.url, course, assignment, args))
+            lost, checked = lost_samples(tally, database_url)
+        finally:
+            if pg is not None:
+                pg.stop()
+    expected_positions = args.students * 16
+    if checked != expected_positions:
+        tally.errors.append(f"only {checked} of {expected_positions} positions acknowledged")
+    name = "SQLite" if backend == "sqlite" else "PostgreSQL"
+    text = report(name, tally, wall, lost, checked, workers)
+    return text, not tally.errors and lost == 0
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--students", type=int, default=60)
+    parser.add_argument("--backend", choices=("sqlite", "postgresql", "both"), default="both")
+    parser.add_argument("--pg-workers", type=int, default=2)
+    parser.add_argument("--dwell", type=float, default=60.0, help="simulated seconds/position")
+    parser.add_argument("--speed", type=float, default=20.0, help="simulated time speed-up")
+    parser.add_argument("--ramp", type=float, default=3.0, help="students start within (s)")
+    args = parser.parse_args()
+    backends = ("sqlite", "postgresql") if args.backend == "both" else (args.backend,)
+    print(
+        f"machine: {platform.machine()}, {os.cpu_count()} cores, Python"
+        f" {platform.python_version()}; {args.students} students, {args.dwell:g} s per position"
+        f" at {args.speed:g}× → {args.dwell / args.speed:g} s of streaming per position\n"
+    )
+    ok = True
+    for backend in backends:
+        text, passed = run_backend(backend, args)
+        print(text, "\n", flush=True)
+        ok = ok and passed
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,128 @@
+"""Concurrency on a real server, SQLite (one worker) and PostgreSQL (two workers):
+
+* a writer waiting for the database's write lock never stops the event loop, so pages and
+  streams of other users go on (found by the load test: database calls in ``async def``
+  dependencies froze the whole worker until SQLite's busy timeout);
+* guesses sent in parallel cannot get past the log-in throttle while passwords are hashed
+  outside the write lock;
+* the per-token rate limit counts every request exactly once across workers.
+"""
+
+from __future__ import annotations
+
+import sqlite3
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
+
+import httpx
+import pytest
+from sqlalchemy import create_engine, text
+
+from app.db import WRITE_LOCK_KEY
+from tests.e2e.conftest import STUDENT_PASSWORD, LiveServer
+
+pytestmark = pytest.mark.e2e
+
+
+@contextmanager
+def write_lock_held(server: LiveServer):
+    """Hold the app's write lock from outside, as a long write transaction would."""
+    if server.database_url is None:
+        connection = sqlite3.connect(server.var_dir / "gyrolab.db", isolation_level=None)
+        connection.execute("BEGIN IMMEDIATE")
+        try:
+            yield
+        finally:
+            connection.execute("ROLLBACK")
+            connection.close()
+        return
+    engine = create_engine(server.database_url)
+    with engine.connect() as connection:
+        connection.execute(text(f"SELECT pg_advisory_xact_lock({WRITE_LOCK_KEY})"))
+        try:
+            yield
+        finally:
+            connection.rollback()
+    engine.dispose()
+
+
+def cookie_login(url: str, username: str, password: str) -> tuple[httpx.Client, str]:
+    client = httpx.Client(base_url=url, timeout=30)
+    page = client.get("/login")
+    token = page.text.split('name="csrf_token" value="')[1].split('"')[0]
+    reply = client.post(
+        "/login", data={"username": username, "password": password, "csrf_token": token}
+    )
+    assert reply.status_code == 303
+    lab = client.get("/lab")
+    return client, lab.text.split('name="csrf_token" value="')[1].split('"')[0]
+
+
+def bearer(url: str) -> httpx.Client:
+    client = httpx.Client(base_url=url, timeout=30)
+    reply = client.post(
+        "/api/v1/auth/token", data={"username": "student", "password": STUDENT_PASSWORD}
+    )
+    client.headers["Authorization"] = f"Bearer {reply.json()['access_token']}"
+    return client
+
+
+def test_waiting_writers_do_not_stop_other_requests(any_live_server: LiveServer):
+    url = any_live_server.url
+    browser, csrf = cookie_login(url, "student", STUDENT_PASSWORD)
+    api = bearer(url)
+    session_id = api.post(
+        "/api/v1/sessions",
+        json={"title": "lock", "station": {"latitude_deg": 39.93, "earth_rate_deg_h": 15.04}},
+    ).json()["id"]
+    finished: dict[str, int] = {}
+
+    def form_post() -> None:  # cookie + CSRF form: the CSRF check reads the login
+        reply = browser.post("/lab/sessions", data={"station": "handout", "csrf_token": csrf})
+        finished["form"] = reply.status_code
+
+    def upload() -> None:  # bearer token + body: the token check and the store
+        reply = api.put(
+            f"/api/v1/sessions/{session_id}/heading/positions/1",
+            json={"samples": [10.0 + i / 100 for i in range(20)]},
+        )
+        finished["upload"] = reply.status_code
+
+    with write_lock_held(any_live_server):
+        writers = [threading.Thread(target=form_post), threading.Thread(target=upload)]
+        for writer in writers:
+            writer.start()
+        writers[0].join(1.0)  # give them time to reach the lock
+        # Every worker must still answer while both writers wait for the lock.
+        for _ in range(4):
+            assert httpx.get(f"{url}/login", timeout=5).status_code == 200
+        assert finished == {}, "a write got through while the lock was held"
+    for writer in writers:
+        writer.join(30)
+    assert finished == {"form": 303, "upload": 200}
+
+
+def test_parallel_guesses_cannot_pass_the_throttle(any_live_server: LiveServer):
+    """Five failures per account: twelve wrong passwords at once get five 401s, the rest 429."""
+    url = any_live_server.url
+
+    def guess(i: int) -> int:
+        return httpx.post(
+            f"{url}/api/v1/auth/token",
+            data={"username": "teacher", "password": f"wrong-guess-{i}"},
+            timeout=60,
+        ).status_code
+
+    with ThreadPoolExecutor(12) as pool:
+        statuses = sorted(pool.map(guess, range(12)))
+    assert statuses == [401] * 5 + [429] * 7
+
+
+def test_token_rate_limit_counts_each_request_once(any_live_server: LiveServer):
+    """600 requests per minute per token, counted in the database by both workers."""
+    api = bearer(any_live_server.url)
+    with ThreadPoolExecutor(8) as pool:
+        statuses = list(pool.map(lambda _: api.get("/api/v1/me").status_code, range(620)))
+    assert statuses.count(200) == 600
+    assert statuses.count(429) == 20
