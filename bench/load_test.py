@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import json
 import os
 import platform
@@ -265,11 +266,10 @@ async def teacher(base: str, course: int, assignment: int, tally: Tally, done: a
         )
         path = f"/courses/{course}/assignments/{assignment}"
         while not done.is_set():
-            await tally.request(client, "GET", path, "GET dashboard (teacher)")
-            try:
+            with contextlib.suppress(RuntimeError, httpx.HTTPError):  # counted in the tally
+                await tally.request(client, "GET", path, "GET dashboard (teacher)")
+            with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(done.wait(), timeout=2.0)
-            except TimeoutError:
-                pass
 
 
 async def run_class(base: str, course: int, assignment: int, args) -> tuple[Tally, float]:
