@@ -69,6 +69,23 @@ def load_login(request: Request, db: Session, settings: Settings) -> User | None
     request.state.auth_loaded = True
     request.state.user = None
     request.state.auth = None
+    user = _resolve_login(request, db, settings)
+    release_write_lock(request, db)
+    return user
+
+
+def release_write_lock(request: Request, db: Session) -> None:
+    """End a dependency's write transaction before the route handler runs.
+
+    Dependencies and the handler run on different trips to the thread pool.  A write
+    transaction left open across that gap could wait for a free thread while every pool
+    thread waits for its lock -- a stall until SQLite's busy timeout (seen in the load
+    test).  The handler's first query starts a new transaction in its own thread."""
+    if request.method not in SAFE_METHODS:
+        db.commit()
+
+
+def _resolve_login(request: Request, db: Session, settings: Settings) -> User | None:
     token = request.cookies.get(SESSION_COOKIE)
     if not token:
         return None
@@ -83,7 +100,7 @@ def load_login(request: Request, db: Session, settings: Settings) -> User | None
     if utcnow() - record.last_seen_at > TOUCH_INTERVAL:
         if request.method in SAFE_METHODS:
             _touch(record.id)
-        else:  # this request already holds the write lock; its commit saves the touch
+        else:  # this request holds the write lock; release_write_lock commits the touch
             record.last_seen_at = utcnow()
             db.add(record)
     request.state.user = user

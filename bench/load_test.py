@@ -381,6 +381,10 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
             with running_server(var_dir, *serve_args, database_url=url) as server:
                 tally, wall = asyncio.run(run_class(server.url, course, assignment, args))
             lost, checked = lost_samples(tally, database_url)
+            if tally.errors:  # keep the server's log for the post-mortem
+                kept = Path(tempfile.gettempdir()) / f"gyrolab-load-{backend}-server.log"
+                kept.write_text((var_dir / "server.log").read_text())
+                tally.errors.append(f"server log kept in {kept}")
         finally:
             if pg is not None:
                 pg.stop()

@@ -26,7 +26,15 @@ from app.apitokens import LOGIN_TOKEN_LIFETIME, check_token, new_token
 from app.core.exceptions import GyroInputError
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.db import read_session
-from app.deps import MAX_ID, SAFE_METHODS, ObjectId, SessionDep, SettingsDep, load_login
+from app.deps import (
+    MAX_ID,
+    SAFE_METHODS,
+    ObjectId,
+    SessionDep,
+    SettingsDep,
+    load_login,
+    release_write_lock,
+)
 from app.jsonsafe import json_safe
 from app.labsim import nominal_angle
 from app.labstore import (
@@ -100,6 +108,7 @@ def api_caller(request: Request, db: SessionDep, settings: SettingsDep) -> Calle
                 headers={"Retry-After": str(check.retry_after)},
             )
         user = db.get(User, user_id)
+        release_write_lock(request, db)
         if user is None:
             raise HTTPException(401, "Invalid token.", headers={"WWW-Authenticate": "Bearer"})
         return Caller(user, scopes, "token")
