@@ -41,12 +41,20 @@ def make_engine(url: str) -> Engine:
     return engine
 
 
-def _refuse_nul_text(_conn, _cursor, _statement, parameters, _context, executemany) -> None:
-    rows = parameters if executemany else (parameters,)
-    for row in rows:
-        values = row.values() if isinstance(row, dict) else (row or ())
-        if any(isinstance(value, str) and "\x00" in value for value in values):
-            raise UnstorableText("text may not contain NUL characters")
+def _refuse_nul_text(_conn, _cursor, _statement, parameters, _context, _executemany) -> None:
+    if _has_nul(parameters):
+        raise UnstorableText("text may not contain NUL characters")
+
+
+def _has_nul(value) -> bool:
+    """Any text with NUL in statement parameters: one row (dict or tuple) or many."""
+    if isinstance(value, str):
+        return "\x00" in value
+    if isinstance(value, dict):
+        return any(_has_nul(item) for item in value.values())
+    if isinstance(value, list | tuple):
+        return any(_has_nul(item) for item in value)
+    return False
 
 
 def _sqlite_engine(url: str) -> Engine:

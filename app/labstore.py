@@ -6,6 +6,7 @@ Every number comes from ``app.core``; this module only moves data in and out.
 from __future__ import annotations
 
 import json
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -248,13 +249,68 @@ def _check_values(session: LabSession, position: int, values: np.ndarray) -> Non
         )
 
 
+SessionData = dict[str, dict[int, PositionData]]  # part → position → data
+
+
+def _assemble(take: Take, rows: list[SampleChunk]) -> PositionData:
+    values = np.concatenate([unpack(r.values) for r in rows]) if rows else np.empty(0)
+    times = None
+    if rows and all(r.times is not None for r in rows):
+        times = np.concatenate([unpack(r.times) for r in rows])
+    return PositionData(take, values, times)
+
+
+def iter_current_data(db: Session, *where) -> Iterator[tuple[int, SessionData]]:
+    """(session id, its current data) for the sessions matching ``where`` (conditions on
+    LabSession), in two queries whatever the number of sessions.  Chunks are streamed in
+    order, so only one session's samples are in memory at a time.  (Every take has at
+    least one chunk: ``store_take`` writes one even for no samples.)"""
+    takes = db.exec(
+        select(Take)
+        .join(LabSession, LabSession.id == Take.session_id)
+        .where(Take.superseded_at.is_(None), *where)
+        .order_by(Take.session_id, Take.part, Take.position)
+    ).all()
+    if not takes:
+        return
+    by_id = {take.id: take for take in takes}
+    chunk_rows = db.exec(
+        select(SampleChunk)
+        .join(Take, Take.id == SampleChunk.take_id)
+        .join(LabSession, LabSession.id == Take.session_id)
+        .where(Take.superseded_at.is_(None), *where)
+        .order_by(Take.session_id, Take.part, Take.position, SampleChunk.seq)
+        .execution_options(yield_per=64)
+    )
+    current: tuple[int, SessionData] | None = None
+    pending: list[SampleChunk] = []
+
+    def flush() -> None:
+        take = by_id[pending[0].take_id]
+        current[1].setdefault(take.part, {})[take.position] = _assemble(take, pending)
+
+    for row in chunk_rows:
+        if pending and row.take_id != pending[0].take_id:
+            flush()
+            pending = []
+            if by_id[row.take_id].session_id != current[0]:
+                yield current
+                current = None
+        if current is None:
+            current = (by_id[row.take_id].session_id, {})
+        pending.append(row)
+    if pending:
+        flush()
+        yield current
+
+
+def current_data(db: Session, session: LabSession) -> SessionData:
+    """All current positions of one session with their samples (two queries)."""
+    return dict(iter_current_data(db, LabSession.id == session.id)).get(session.id, {})
+
+
 def part_data(db: Session, session: LabSession, part: str) -> dict[int, PositionData]:
-    data = {}
-    for take in current_takes(db, session.id):
-        if take.part == part:
-            values, times = load_samples(db, take)
-            data[take.position] = PositionData(take, values, times)
-    return data
+    return current_data(db, session).get(part, {})
 
 
 def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) -> PartResult:
@@ -324,7 +380,8 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
 
 
 def session_results(db: Session, session: LabSession) -> dict[str, PartResult]:
-    return {part: solve_part(session, part, part_data(db, session, part)) for part in PARTS}
+    data = current_data(db, session)
+    return {part: solve_part(session, part, data.get(part, {})) for part in PARTS}
 
 
 def results_json(results: dict[str, PartResult]) -> dict:

@@ -17,8 +17,8 @@ from datetime import datetime
 from sqlmodel import Session, select
 
 from app.core.solve import percent_error, wrap180
-from app.labstore import current_takes, load_samples
-from app.models import Assignment, Attempt, Enrollment, LabSession, User, utcnow
+from app.labstore import PARTS, SessionData, current_takes, iter_current_data, quality_flags
+from app.models import Assignment, Attempt, Enrollment, LabSession, Take, User, utcnow
 
 STATUSES = ("not_started", "in_progress", "submitted", "returned", "graded")
 
@@ -43,10 +43,17 @@ class Truth:
     azimuth_source: str | None  # "simulator" | "bench" | None
 
 
-def session_truth(db: Session, session: LabSession, assignment: Assignment | None) -> Truth:
+def session_truth(
+    db: Session,
+    session: LabSession,
+    assignment: Assignment | None,
+    takes: list[Take] | None = None,
+) -> Truth:
+    """The session's truth; ``takes`` (its current takes) saves a query when known."""
     from app.labsim import turn_on_bias
 
-    takes = current_takes(db, session.id)
+    if takes is None:
+        takes = current_takes(db, session.id)
     heading_sources = {t.source for t in takes if t.part == "heading"}
     azimuth, source = None, None
     if heading_sources == {"simulator"}:
@@ -148,17 +155,31 @@ def is_late(assignment: Assignment | None, when: datetime) -> bool:
     return bool(assignment and assignment.due_at and when > assignment.due_at)
 
 
-def data_fingerprint(db: Session, session: LabSession) -> tuple[str | None, str | None]:
+def data_fingerprint(data: SessionData) -> tuple[str | None, str | None]:
     """(hash of the exact samples, hash of the position means to 0.001 °/h) of current data."""
-    takes = sorted(current_takes(db, session.id), key=lambda t: (t.part, t.position))
-    if not takes:
+    items = sorted(
+        (item for positions in data.values() for item in positions.values()),
+        key=lambda item: (item.take.part, item.take.position),
+    )
+    if not items:
         return None, None
     exact, rounded = hashlib.sha256(), hashlib.sha256()
-    for take in takes:
-        values, _ = load_samples(db, take)
+    for item in items:
+        take, values = item.take, item.values
         exact.update(f"{take.part}{take.position}".encode() + values.tobytes())
-        rounded.update(f"{take.part}{take.position}:{values.mean():.3f};".encode())
+        mean = values.mean() if values.size else math.nan
+        rounded.update(f"{take.part}{take.position}:{mean:.3f};".encode())
     return exact.hexdigest(), rounded.hexdigest()
+
+
+def data_flags(session: LabSession, data: SessionData) -> list[dict]:
+    """The data-quality flags the student sees, for every part with a result to flag."""
+    flags = []
+    for part in PARTS:
+        positions = data.get(part, {})
+        if len(positions) >= 3:
+            flags.extend(quality_flags(session, positions))
+    return flags
 
 
 @dataclass
@@ -173,6 +194,7 @@ class StudentRow:
     flags: list[dict]
     late: bool
     duplicate_of: list[str] = field(default_factory=list)
+    prints: tuple[str | None, str | None] = (None, None)  # data_fingerprint of current data
 
     @property
     def submitted_at(self) -> datetime | None:
@@ -189,60 +211,64 @@ def latest_results(attempts: list[Attempt]) -> dict:
 
 
 def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
-    """One row per enrolled student, with their submitted (latest attempt) results."""
-    from app.labstore import session_results
+    """One row per enrolled student, with their submitted (latest attempt) results.
 
+    A fixed number of queries whatever the class size: students, sessions, attempts, then
+    every current position's samples streamed once (flags, fingerprints and truths are
+    computed from them; nothing is re-solved -- results come from the attempts)."""
     students = db.exec(
         select(User)
         .join(Enrollment, Enrollment.student_id == User.id)
         .where(Enrollment.course_id == assignment.course_id)
         .order_by(User.username)
     ).all()
+    in_assignment = LabSession.assignment_id == assignment.id
+    sessions = {s.owner_id: s for s in db.exec(select(LabSession).where(in_assignment)).all()}
+    attempts: dict[int, list[Attempt]] = {}
+    for attempt in db.exec(
+        select(Attempt)
+        .join(LabSession, LabSession.id == Attempt.session_id)
+        .where(in_assignment)
+        .order_by(Attempt.session_id, Attempt.number)
+    ).all():
+        attempts.setdefault(attempt.session_id, []).append(attempt)
+    by_id = {session.id: session for session in sessions.values()}
+    summaries: dict[int, tuple[list[dict], tuple[str | None, str | None], list[Take]]] = {}
+    for session_id, data in iter_current_data(db, in_assignment):
+        takes = [item.take for positions in data.values() for item in positions.values()]
+        summaries[session_id] = (data_flags(by_id[session_id], data), data_fingerprint(data), takes)
+
     rows = []
     fingerprints: dict[str, list[str]] = {}
-    row_prints: dict[str, tuple[str | None, str | None]] = {}
     for student in students:
-        session = db.exec(
-            select(LabSession).where(
-                LabSession.assignment_id == assignment.id, LabSession.owner_id == student.id
-            )
-        ).first()
+        session = sessions.get(student.id)
         if session is None:
             rows.append(StudentRow(student, None, [], "not_started", {}, None, None, [], False))
             continue
-        attempts = list(
-            db.exec(
-                select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
-            ).all()
-        )
-        results = latest_results(attempts)
-        truth = session_truth(db, session, assignment)
-        check = auto_check(results, truth, assignment) if attempts else None
-        flags = []
-        for outcome in session_results(db, session).values():
-            flags.extend(outcome.flags)
+        history = attempts.get(session.id, [])
+        flags, prints, takes = summaries.get(session.id, ([], (None, None), []))
+        results = latest_results(history)
+        truth = session_truth(db, session, assignment, takes)
+        check = auto_check(results, truth, assignment) if history else None
         row = StudentRow(
             student,
             session,
-            attempts,
+            history,
             session.status,
             results,
             truth,
             check,
-            flags,
-            any(a.late for a in attempts),
+            list(flags),
+            any(a.late for a in history),
+            prints=prints,
         )
         rows.append(row)
-        prints = data_fingerprint(db, session)
-        row_prints[student.username] = prints
         for print_ in prints:
             if print_:
                 fingerprints.setdefault(print_, []).append(student.username)
     for row in rows:
-        if row.session is None:
-            continue
-        for print_ in row_prints[row.student.username]:
-            others = [u for u in fingerprints.get(print_, []) if u != row.student.username]
+        for print_ in row.prints:
+            others = [u for u in fingerprints.get(print_ or "", []) if u != row.student.username]
             row.duplicate_of.extend(u for u in others if u not in row.duplicate_of)
     return rows
 

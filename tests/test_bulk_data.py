@@ -1,0 +1,125 @@
+"""Current data loaded in bulk: the same arrays as take by take, and a dashboard whose query
+count does not grow with the class (it used to re-read and re-solve every student)."""
+
+from __future__ import annotations
+
+import numpy as np
+from sqlalchemy import event
+from sqlmodel import select
+
+from app.db import get_engine, read_session, write_session
+from app.labstore import current_data, iter_current_data, load_samples, store_take
+from app.models import Assignment, Enrollment, LabSession, Role, Take
+from app.review import class_rows
+from app.samples import CHUNK_SAMPLES
+from tests.conftest import make_course, make_user
+
+
+def add_session(owner_id: int, assignment_id: int | None, seed: int) -> int:
+    """A session with both parts recorded; heading 1 twice (the first take superseded) and
+    one position longer than a chunk, with times."""
+    rng = np.random.default_rng(seed)
+    with write_session() as db:
+        session = LabSession(
+            owner_id=owner_id, assignment_id=assignment_id, title="t", latitude_deg=40.0
+        )
+        db.add(session)
+        db.flush()
+        for part in ("heading", "latitude"):
+            for position in range(1, 5):
+                size = CHUNK_SAMPLES + 17 if (part, position) == ("latitude", 2) else 12
+                times = np.arange(size) * 0.1 if position == 3 else None
+                store_take(
+                    db,
+                    session,
+                    part=part,
+                    position=position,
+                    angle_deg=90.0 * position,
+                    values=rng.normal(10.0, 0.1, size),
+                    times=times,
+                    source="api",
+                )
+        store_take(
+            db,
+            session,
+            part="heading",
+            position=1,
+            angle_deg=0.0,
+            values=rng.normal(11.0, 0.1, 15),
+            times=None,
+            source="api",
+        )
+        return session.id
+
+
+def test_bulk_loading_gives_the_same_arrays_as_take_by_take(app):
+    student = make_user("s", Role.student)
+    ids = [add_session(student.id, None, seed) for seed in range(3)]
+    with read_session() as db:
+        bulk = dict(iter_current_data(db, LabSession.id.in_(ids)))
+        assert sorted(bulk) == sorted(ids)
+        for session_id in ids:
+            takes = db.exec(
+                select(Take).where(Take.session_id == session_id, Take.superseded_at.is_(None))
+            ).all()
+            assert len(takes) == 8
+            for take in takes:
+                item = bulk[session_id][take.part][take.position]
+                values, times = load_samples(db, take)
+                assert item.take.id == take.id
+                np.testing.assert_array_equal(item.values, values)
+                assert (item.times is None) == (times is None)
+                if times is not None:
+                    np.testing.assert_array_equal(item.times, times)
+            assert bulk[session_id]["heading"][1].values.size == 15  # the newer take
+            assert bulk[session_id]["latitude"][2].values.size == CHUNK_SAMPLES + 17
+        session = db.get(LabSession, ids[1])
+        assert current_data(db, session).keys() == bulk[ids[1]].keys()
+
+
+def count_queries(run) -> int:
+    statements: list[str] = []
+
+    def count(_conn, _cursor, statement, *_args) -> None:
+        statements.append(statement)
+
+    engine = get_engine()
+    event.listen(engine, "before_cursor_execute", count)
+    try:
+        run()
+    finally:
+        event.remove(engine, "before_cursor_execute", count)
+    return len(statements)
+
+
+def test_dashboard_queries_do_not_grow_with_the_class(app):
+    teacher = make_user("t", Role.teacher)
+    course_id = make_course(teacher, "Big class")
+    with write_session() as db:
+        assignment = Assignment(
+            course_id=course_id, title="A", latitude_deg=40.0, earth_rate_deg_h=15.04
+        )
+        db.add(assignment)
+        db.flush()
+        assignment_id = assignment.id
+
+    def enrol(count: int, start: int) -> None:
+        for i in range(start, start + count):
+            student = make_user(f"s{i:02d}", Role.student)
+            with write_session() as db:
+                db.add(Enrollment(course_id=course_id, student_id=student.id))
+            add_session(student.id, assignment_id, seed=i)
+
+    def dashboard() -> list:
+        with read_session() as db:
+            return class_rows(db, db.get(Assignment, assignment_id))
+
+    enrol(2, 0)
+    small = count_queries(dashboard)
+    enrol(6, 2)
+    large = count_queries(dashboard)
+    rows = dashboard()
+    assert len(rows) == 8
+    assert large == small
+    # identical data shows up as duplicates (the fingerprints are still computed)
+    assert all(row.duplicate_of == [] for row in rows)
