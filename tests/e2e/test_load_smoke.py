@@ -1,0 +1,42 @@
+"""The load test (bench/load_test.py) in miniature, so that it keeps working: a few students
+on SQLite and on PostgreSQL with two workers, no errors and no lost samples."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytestmark = pytest.mark.e2e
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.parametrize("database", ["sqlite", "postgresql"])
+def test_load_test_runs_clean(database, request):
+    if database == "postgresql":
+        request.getfixturevalue("postgres")  # skips (or fails in CI) without PostgreSQL
+    done = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "bench" / "load_test.py"),
+            "--students",
+            "3",
+            "--backend",
+            database,
+            "--dwell",
+            "20",
+            "--speed",
+            "20",
+            "--ramp",
+            "0.5",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+    )
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "errors: 0; lost samples: 0 of 48 positions checked" in done.stdout
+    assert "| POST /lab/sessions/{id}/submit | 3 |" in done.stdout
