@@ -7,7 +7,8 @@ next sample offset, attempt numbers, throttle windows) is correct without per-si
   transactions (a deferred ``BEGIN`` that reads and later writes fails with "database is
   locked" under concurrency). Read-only requests keep a deferred ``BEGIN`` so readers never
   queue behind writers.
-* PostgreSQL: a write transaction starts by taking one transaction-scoped advisory lock
+* PostgreSQL: reads run in REPEATABLE READ (one snapshot per request, like SQLite);
+  a write transaction starts by taking one transaction-scoped advisory lock
   (``pg_advisory_xact_lock``), held until COMMIT/ROLLBACK, across every worker process and
   host; readers take no lock. Under READ COMMITTED each statement after the lock sees every
   earlier writer's commit, which is the same guarantee SQLite's single writer gives.
@@ -105,6 +106,15 @@ def get_engine() -> Engine:
     return engine_for(get_settings().database_url)
 
 
+def reader(engine: Engine) -> Engine:
+    """The engine for read-only requests: on PostgreSQL, REPEATABLE READ, so that a page
+    built from several queries sees one snapshot (as SQLite's WAL read transaction does);
+    a transaction that only reads never fails to serialise."""
+    if engine.dialect.name == "postgresql":
+        return engine.execution_options(isolation_level="REPEATABLE READ")
+    return engine
+
+
 def writer(engine: Engine) -> Engine:
     """The same engine, but its transactions are serialised with every other writer."""
     return engine.execution_options(**{WRITER_OPTION: True})
@@ -123,6 +133,16 @@ def write_session(engine: Engine | None = None) -> Iterator[Session]:
 
 
 @contextmanager
-def read_session(engine: Engine | None = None) -> Iterator[Session]:
+def statement_session(engine: Engine | None = None) -> Iterator[Session]:
+    """A session for single self-contained statements (an atomic UPDATE ... RETURNING) in
+    the database's default isolation: READ COMMITTED on PostgreSQL, where concurrent
+    updates of one row wait for each other instead of failing to serialise."""
     with Session(engine or get_engine(), expire_on_commit=False) as session:
+        yield session
+
+
+@contextmanager
+def read_session(engine: Engine | None = None) -> Iterator[Session]:
+    """A session for reading (one snapshot per transaction)."""
+    with Session(reader(engine or get_engine()), expire_on_commit=False) as session:
         yield session

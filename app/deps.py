@@ -12,7 +12,7 @@ from sqlmodel import Session, select
 from starlette.datastructures import FormData
 
 from app.config import Settings, get_settings
-from app.db import get_engine, read_session, write_session, writer
+from app.db import get_engine, read_session, reader, write_session, writer
 from app.models import AuthSession, Role, User, utcnow
 from app.security import session_is_live, token_digest, tokens_match
 from app.web import CSRF_COOKIE, SESSION_COOKIE
@@ -42,7 +42,7 @@ class PasswordChangeRequired(Exception):
 def get_db(request: Request) -> Iterator[Session]:
     """One session per request; writes (POST, PUT, ...) start with BEGIN IMMEDIATE."""
     engine = get_engine()
-    bind = engine if request.method in SAFE_METHODS else writer(engine)
+    bind = reader(engine) if request.method in SAFE_METHODS else writer(engine)
     with Session(bind, expire_on_commit=False) as session:
         yield session
 

@@ -262,46 +262,34 @@ def _assemble(take: Take, rows: list[SampleChunk]) -> PositionData:
 
 def iter_current_data(db: Session, *where) -> Iterator[tuple[int, SessionData]]:
     """(session id, its current data) for the sessions matching ``where`` (conditions on
-    LabSession), in two queries whatever the number of sessions.  Chunks are streamed in
-    order, so only one session's samples are in memory at a time.  (Every take has at
-    least one chunk: ``store_take`` writes one even for no samples.)"""
-    takes = db.exec(
-        select(Take)
-        .join(LabSession, LabSession.id == Take.session_id)
-        .where(Take.superseded_at.is_(None), *where)
-        .order_by(Take.session_id, Take.part, Take.position)
-    ).all()
-    if not takes:
-        return
-    by_id = {take.id: take for take in takes}
-    chunk_rows = db.exec(
-        select(SampleChunk)
-        .join(Take, Take.id == SampleChunk.take_id)
+    LabSession), in one query whatever the number of sessions -- one statement, so it sees
+    one consistent snapshot even under PostgreSQL's READ COMMITTED while students save.
+    Rows are streamed in order, so only one session's samples are in memory at a time.
+    (Every take has at least one chunk: ``store_take`` writes one even for no samples.)"""
+    rows = db.exec(
+        select(Take, SampleChunk)
+        .join(SampleChunk, SampleChunk.take_id == Take.id)
         .join(LabSession, LabSession.id == Take.session_id)
         .where(Take.superseded_at.is_(None), *where)
         .order_by(Take.session_id, Take.part, Take.position, SampleChunk.seq)
         .execution_options(yield_per=64)
     )
-    current: tuple[int, SessionData] | None = None
+    session_id: int | None = None
+    data: SessionData = {}
+    take: Take | None = None
     pending: list[SampleChunk] = []
-
-    def flush() -> None:
-        take = by_id[pending[0].take_id]
-        current[1].setdefault(take.part, {})[take.position] = _assemble(take, pending)
-
-    for row in chunk_rows:
-        if pending and row.take_id != pending[0].take_id:
-            flush()
+    for row_take, chunk in rows:
+        if take is not None and row_take.id != take.id:
+            data.setdefault(take.part, {})[take.position] = _assemble(take, pending)
             pending = []
-            if by_id[row.take_id].session_id != current[0]:
-                yield current
-                current = None
-        if current is None:
-            current = (by_id[row.take_id].session_id, {})
-        pending.append(row)
-    if pending:
-        flush()
-        yield current
+            if row_take.session_id != session_id:
+                yield session_id, data
+                data = {}
+        take, session_id = row_take, row_take.session_id
+        pending.append(chunk)
+    if take is not None:
+        data.setdefault(take.part, {})[take.position] = _assemble(take, pending)
+        yield session_id, data
 
 
 def current_data(db: Session, session: LabSession) -> SessionData:

@@ -235,6 +235,8 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
     by_id = {session.id: session for session in sessions.values()}
     summaries: dict[int, tuple[list[dict], tuple[str | None, str | None], list[Take]]] = {}
     for session_id, data in iter_current_data(db, in_assignment):
+        if session_id not in by_id:  # started after the sessions were read
+            continue
         takes = [item.take for positions in data.values() for item in positions.values()]
         summaries[session_id] = (data_flags(by_id[session_id], data), data_fingerprint(data), takes)
 

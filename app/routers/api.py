@@ -25,7 +25,7 @@ from app import labsessions
 from app.apitokens import LOGIN_TOKEN_LIFETIME, check_token, new_token
 from app.core.exceptions import GyroInputError
 from app.core.units import canonical_unit, to_deg_per_hour
-from app.db import read_session
+from app.db import statement_session
 from app.deps import (
     MAX_ID,
     SAFE_METHODS,
@@ -92,7 +92,7 @@ def api_caller(request: Request, db: SessionDep, settings: SettingsDep) -> Calle
     header = request.headers.get("authorization", "")
     if header.lower().startswith("bearer "):
         # Not a serialised writer: the count is one atomic UPDATE (see check_token).
-        with read_session() as counter_db:
+        with statement_session() as counter_db:
             check = check_token(counter_db, header[7:].strip(), settings.api_rate_per_minute)
             counter_db.commit()
             user_id = check.token.user_id if check.token else None
