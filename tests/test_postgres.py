@@ -200,3 +200,16 @@ def test_printed_pg_dump_and_pg_restore_commands_work(app, postgres, tmp_path, c
     finally:
         get_settings.cache_clear()
         postgres.server.drop_database(name)
+
+
+def test_a_read_request_sees_one_snapshot(app, backend):
+    """A page built from several queries never mixes two states of the database (the load
+    test caught the dashboard reading a take saved between two of its queries)."""
+    teacher = make_user("t", Role.teacher)
+    make_course(teacher, "First")
+    with read_session() as db:
+        before = db.exec(select(Course.name)).all()
+        make_course(teacher, "Second")  # committed by another connection meanwhile
+        assert db.exec(select(Course.name)).all() == before == ["First"]
+    with read_session() as db:
+        assert sorted(db.exec(select(Course.name)).all()) == ["First", "Second"]
