@@ -103,6 +103,27 @@ def test_waiting_writers_do_not_stop_other_requests(any_live_server: LiveServer)
     assert finished == {"form": 303, "upload": 200}
 
 
+def test_more_waiting_writers_than_pool_threads_all_get_through(any_live_server: LiveServer):
+    """Fifty form posts (more than the 40 pool threads) queue on the write lock; when it
+    is released every one completes.  A transaction held from the CSRF check into the
+    handler used to need a free pool thread while all of them waited for its lock: SQLite
+    answered 500 after its busy timeout, PostgreSQL would have waited for ever."""
+    url = any_live_server.url
+    browser, csrf = cookie_login(url, "student", STUDENT_PASSWORD)
+    browser.timeout = httpx.Timeout(60)
+
+    def form_post(_: int) -> int:
+        reply = browser.post("/lab/sessions", data={"station": "handout", "csrf_token": csrf})
+        return reply.status_code
+
+    with ThreadPoolExecutor(50) as pool:
+        with write_lock_held(any_live_server):
+            replies = [pool.submit(form_post, i) for i in range(50)]
+            threading.Event().wait(1.5)  # let every request reach the lock
+        statuses = [reply.result(timeout=90) for reply in replies]
+    assert statuses == [303] * 50
+
+
 def test_parallel_guesses_cannot_pass_the_throttle(any_live_server: LiveServer):
     """Five failures per account: twelve wrong passwords at once get five 401s, the rest 429."""
     url = any_live_server.url
