@@ -153,8 +153,12 @@ def _recent_failures(db: Session, scope: str, key: str, settings: Settings) -> i
     ).one()
 
 
+def _account_key(username: str) -> str:
+    return username.strip().lower()[:128]
+
+
 def login_throttled(db: Session, username: str, address: str, settings: Settings) -> bool:
-    account = username.strip().lower()
+    account = _account_key(username)
     return (
         _recent_failures(db, "account", account, settings)
         >= settings.login_max_failures_per_account
@@ -163,46 +167,44 @@ def login_throttled(db: Session, username: str, address: str, settings: Settings
     )
 
 
-def record_login_failure(db: Session, username: str, address: str) -> LoginFailure:
-    """Count a failure for the account and the address; returns the address's row."""
-    db.add(LoginFailure(scope="account", key=username.strip().lower()[:128]))
-    by_address = LoginFailure(scope="address", key=address[:128])
-    db.add(by_address)
-    return by_address
-
-
 @dataclass
 class LoginAttempt:
     user: User | None
-    address_failure_id: int
+    address: str
 
 
 def begin_login(
     db: Session, username: str, address: str, settings: Settings
 ) -> LoginAttempt | None:
-    """First step of a log-in, in a short write transaction: None when throttled; otherwise
-    the attempt is counted as a failure *before* the password is checked, so that guesses
-    sent in parallel cannot slip past the limit while the slow hash runs -- which the
-    caller does after committing, outside the write lock (``password_matches``), then
-    ``finish_login`` on success."""
+    """First step of a log-in, in a short write transaction: None when throttled.
+
+    Otherwise the attempt is charged to the *account* before the password is checked, so
+    that guesses at one account sent in parallel cannot slip past its limit while the slow
+    hash runs -- which the caller does after committing, outside the write lock
+    (``password_matches``), then ``finish_login`` or ``fail_login``.  The *address* is
+    charged only for a wrong password: a class logging in at once from behind one address
+    must not be throttled by its own log-ins in flight."""
     if login_throttled(db, username, address, settings):
         return None
-    failure = record_login_failure(db, username, address)
-    db.flush()
+    db.add(LoginFailure(scope="account", key=_account_key(username)))
     user = db.exec(select(User).where(User.username == normalise_username(username))).first()
-    return LoginAttempt(user, failure.id)
+    return LoginAttempt(user, address)
+
+
+def fail_login(db: Session, attempt: LoginAttempt) -> None:
+    """A wrong password: the account was charged in advance; now the address too."""
+    db.add(LoginFailure(scope="address", key=attempt.address[:128]))
 
 
 def finish_login(db: Session, attempt: LoginAttempt) -> None:
-    """The password matched: take back the failure counted in advance, clear the account's."""
+    """The password matched: clear the account's failures (the advance charge included)."""
     assert attempt.user is not None
     clear_login_failures(db, attempt.user.username)
-    db.exec(delete(LoginFailure).where(LoginFailure.id == attempt.address_failure_id))
 
 
 def clear_login_failures(db: Session, username: str) -> None:
     db.exec(
         delete(LoginFailure).where(
-            LoginFailure.scope == "account", LoginFailure.key == username.strip().lower()
+            LoginFailure.scope == "account", LoginFailure.key == _account_key(username)
         )
     )

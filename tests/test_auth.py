@@ -255,3 +255,24 @@ def test_argon2id_parameters():
     encoded = hash_password("x" * 12)
     assert encoded.startswith("$argon2id$")
     assert "m=19456,t=2,p=1" in encoded
+
+
+def test_successful_log_ins_leave_no_failure_and_failures_charge_both(client, teacher):
+    """The account is charged before the hash (parallel guesses cannot pass its limit) and
+    uncharged on success; the address only for wrong passwords, so a class logging in at
+    once behind one address is never throttled by its own log-ins."""
+    from app.db import read_session
+    from app.models import LoginFailure
+
+    def failures() -> list[tuple[str, str]]:
+        with read_session() as db:
+            return sorted((f.scope, f.key) for f in db.exec(select(LoginFailure)).all())
+
+    assert login(client, "teacher1").status_code == 303
+    assert failures() == []
+    client.cookies.clear()
+    assert login(client, "Teacher1", "wrong-password").status_code == 401
+    assert failures() == [("account", "teacher1"), ("address", "testclient")]
+    token = client.post("/api/v1/auth/token", data={"username": "teacher1", "password": PASSWORD})
+    assert token.status_code == 200
+    assert failures() == [("address", "testclient")]  # a success clears the account's

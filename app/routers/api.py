@@ -50,6 +50,7 @@ from app.models import Assignment, Course, LabSession, Role, User
 from app.review import class_rows, export_rows
 from app.security import (
     begin_login,
+    fail_login,
     finish_login,
     password_matches,
     tokens_match,
@@ -163,6 +164,8 @@ def login_for_token(
             headers={"Retry-After": str(settings.login_window_minutes * 60)},
         )
     if not password_matches(attempt.user, password):
+        fail_login(db, attempt)
+        db.commit()
         raise HTTPException(
             401, "Wrong username or password.", headers={"WWW-Authenticate": "Bearer"}
         )

@@ -13,6 +13,7 @@ from app.models import AuthSession, User, utcnow
 from app.security import (
     begin_login,
     create_session,
+    fail_login,
     finish_login,
     hash_password,
     password_matches,
@@ -64,6 +65,8 @@ def login(
         context["minutes"] = settings.login_window_minutes
         return render(request, "auth/login.html", context, 429)
     if not password_matches(attempt.user, password):
+        fail_login(db, attempt)
+        db.commit()
         context["error"] = "login.failed"
         return render(request, "auth/login.html", context, 401)
     user = attempt.user
