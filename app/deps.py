@@ -40,14 +40,21 @@ class PasswordChangeRequired(Exception):
 
 
 def get_db(request: Request) -> Iterator[Session]:
-    """One session per request; writes (POST, PUT, ...) start with BEGIN IMMEDIATE."""
+    """One session per request; writes (POST, PUT, ...) take the write lock (db.writer)."""
     engine = get_engine()
     bind = reader(engine) if request.method in SAFE_METHODS else writer(engine)
     with Session(bind, expire_on_commit=False) as session:
         yield session
 
 
+def get_read_db() -> Iterator[Session]:
+    """For a POST that only reads (it carries a body, but stores nothing): no write lock."""
+    with Session(reader(get_engine()), expire_on_commit=False) as session:
+        yield session
+
+
 SessionDep = Annotated[Session, Depends(get_db)]
+ReadOnlySessionDep = Annotated[Session, Depends(get_read_db)]
 SettingsDep = Annotated[Settings, Depends(get_settings)]
 
 

@@ -526,10 +526,15 @@ def prepare_upload(
 ):
     """The checks and parsing shared by replacing and appending a position's readings."""
     need(caller, "upload")
+    try:  # parsed before the first query takes the write lock; reported after the checks
+        upload, problem = read_upload(request, body), None
+        values, times = upload_arrays(upload)
+    except (HTTPException, GyroInputError) as error:
+        problem = error
     session = own(db, caller, session_id)
     require_api_method(db, session)
-    upload = read_upload(request, body)
-    values, times = upload_arrays(upload)
+    if problem is not None:
+        raise problem
     angle = (
         upload.angle_deg if upload.angle_deg is not None else nominal_angle(session, part, position)
     )

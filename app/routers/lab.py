@@ -19,7 +19,14 @@ from app.core.exceptions import GyroInputError
 from app.core.readings import parse_readings_csv
 from app.core.simulate import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS, canonical_unit, to_deg_per_hour
-from app.deps import MAX_ID, CsrfProtected, CurrentUser, ObjectId, SessionDep
+from app.deps import (
+    MAX_ID,
+    CsrfProtected,
+    CurrentUser,
+    ObjectId,
+    ReadOnlySessionDep,
+    SessionDep,
+)
 from app.i18n import translator
 from app.jsonsafe import json_safe
 from app.labsim import nominal_angle
@@ -417,7 +424,7 @@ def preview_csv(
     request: Request,
     session_id: ObjectId,
     user: CurrentUser,
-    db: SessionDep,
+    db: ReadOnlySessionDep,
     body: Annotated[CsvUpload, Body()],
 ):
     session = own_session(db, user, session_id)
@@ -454,10 +461,16 @@ def save_csv(
     db: SessionDep,
     body: Annotated[CsvUpload, Body()],
 ):
+    try:  # parsed before the first query takes the write lock; reported after the checks
+        readings, problem = _parse_upload(body), None
+    except GyroInputError as error:
+        readings, problem = None, error
     session = own_session(db, user, session_id)
     require_method(db, session, "csv")
+    if problem is not None:
+        db.rollback()
+        return _json_error(problem, request)
     try:
-        readings = _parse_upload(body)
         columns = dict(enumerate(readings.positions, start=1))
         angles = (
             dict(enumerate(readings.angles_deg, start=1))
