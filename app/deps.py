@@ -76,8 +76,16 @@ def load_login(request: Request, db: Session, settings: Settings) -> User | None
     request.state.auth_loaded = True
     request.state.user = None
     request.state.auth = None
-    user = _resolve_login(request, db, settings)
-    release_write_lock(request, db)
+    if request.method in SAFE_METHODS:
+        return _resolve_login(request, db, settings)
+    # A write request: look the login up without the write lock, then hand the rows to the
+    # request's session without SQL, so that the lock is taken by the handler's first
+    # query, in the handler's own thread (see release_write_lock), and held no longer.
+    with read_session() as lookup:
+        user = _resolve_login(request, lookup, settings)
+    if user is not None:
+        request.state.user = user = db.merge(user, load=False)
+        request.state.auth = db.merge(request.state.auth, load=False)
     return user
 
 
@@ -105,11 +113,7 @@ def _resolve_login(request: Request, db: Session, settings: Settings) -> User | 
     if user is None:
         return None
     if utcnow() - record.last_seen_at > TOUCH_INTERVAL:
-        if request.method in SAFE_METHODS:
-            _touch(record.id)
-        else:  # this request holds the write lock; release_write_lock commits the touch
-            record.last_seen_at = utcnow()
-            db.add(record)
+        _touch(record.id)
     request.state.user = user
     request.state.auth = record
     return user
