@@ -29,7 +29,8 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections import defaultdict
+import traceback
+from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -286,7 +287,10 @@ async def run_class(base: str, course: int, assignment: int, args) -> tuple[Tall
     await watcher
     for result in results:
         if isinstance(result, BaseException):
-            tally.errors.append(f"student failed: {result!r}")
+            where = traceback.extract_tb(result.__traceback__)[-1]
+            tally.errors.append(
+                f"student failed: {result!r} at {Path(where.filename).name}:{where.lineno}"
+            )
     return tally, wall
 
 
@@ -348,8 +352,8 @@ def report(name: str, tally: Tally, wall: float, lost: int, checked: int, worker
             f"{percentile_ms(values, 95)} | {percentile_ms(values, 99)} | "
             f"{percentile_ms(values, 100)} |"
         )
-    for error in tally.errors[:10]:
-        lines.append(f"\nerror: {error}")
+    for error, count in Counter(tally.errors).most_common():
+        lines.append(f"\nerror ({count}×): {error}")
     return "\n".join(lines)
 
 
