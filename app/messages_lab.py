@@ -533,6 +533,10 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     "csv.file": {"en": "CSV file", "zh-CN": "CSV 文件"},
     "csv.accept": {"en": "Use these readings", "zh-CN": "使用这些读数"},
     "csv.empty": {"en": "The file has no readings.", "zh-CN": "文件中没有读数。"},
+    "csv.unreadable": {
+        "en": "The file cannot be read as CSV: {detail}.",
+        "zh-CN": "无法按 CSV 格式读取该文件：{detail}。",
+    },
     "csv.not_a_number": {
         "en": "Line {line}, column {column}: '{value}' is not a number.",
         "zh-CN": "第 {line} 行 {column} 列：“{value}”不是数字。",

@@ -129,6 +129,14 @@ def test_csv_bodies(client, auth):
     assert response.status_code == 200
     bad = client.put(url, content="1\n2\nthree\n", headers={**auth, "Content-Type": "text/csv"})
     assert bad.status_code == 400 and "Line 3" in bad.json()["detail"]
+    # old Mac line ends (a bare CR) are lines too; an unreadable file is a 400, not a 500
+    mac = client.put(
+        url, content="\r".join(["1.5"] * 10), headers={**auth, "Content-Type": "text/csv"}
+    )
+    assert mac.status_code == 200 and mac.json()["n_samples"] == 10
+    huge = '"' + "9" * 200_000 + '"\n'
+    unreadable = client.put(url, content=huge, headers={**auth, "Content-Type": "text/csv"})
+    assert unreadable.status_code == 400 and "cannot be read" in unreadable.json()["detail"]
 
 
 @pytest.mark.parametrize(

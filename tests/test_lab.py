@@ -242,6 +242,7 @@ def test_csv_long_layout_keeps_angles_and_times(student_client):
         ),
         ("position_1\n" + "1\n" * 3, "at least 10"),
         ("x" * 5_000_001, "larger than 5 MB"),
+        ('position_1\n"' + "9" * 200_000 + '"\n', "cannot be read as CSV"),
     ],
 )
 def test_bad_csv_stores_nothing(student_client, text, message):
@@ -441,3 +442,15 @@ def test_data_quality_flags_are_shown(student_client):
     assert page.status_code == 200
     assert "Position 2 has 1 spike(s)" in page.text
     assert "Position 4 is" in page.text and "noisier than the others" in page.text
+
+
+def test_csv_with_old_mac_line_ends_is_read(student_client):
+    """Files saved with bare CR line ends (old Mac Excel) are lines, not one bad field."""
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    text = "position_1,position_2\r" + "10.5,2.7\r" * 10
+    response = post_json(
+        student_client, page + "/csv", {"part": "heading", "unit": "deg/h", "text": text}, page
+    )
+    assert response.status_code == 200
+    assert count(Take) == 2

@@ -58,7 +58,12 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     session export) keeps only the rows of ``part`` when one is given.
     """
     text = text.lstrip("\ufeff")
-    rows = list(csv.reader(io.StringIO(text)))
+    try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
+        rows = list(csv.reader(io.StringIO(text, newline="")))
+    except csv.Error as error:
+        raise GyroInputError(
+            "csv.unreadable", f"The file cannot be read as CSV: {error}.", detail=str(error)
+        ) from None
     rows = [
         (number, row)
         for number, row in enumerate(rows, start=1)

@@ -460,9 +460,13 @@ def parse_csv_upload(body: bytes, unit: str, angle: str | None) -> PositionUploa
         text = body.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise HTTPException(400, "The CSV is not UTF-8 text.") from None
+    try:  # newline="": lines may end in \n, \r\n or a bare \r
+        rows = list(csv.reader(io.StringIO(text, newline="")))
+    except csv.Error as error:
+        raise HTTPException(400, f"The CSV cannot be read: {error}.") from None
     values: list[float] = []
     times: list[float] = []
-    for number, row in enumerate(csv.reader(io.StringIO(text)), start=1):
+    for number, row in enumerate(rows, start=1):
         cells = [c.strip() for c in row if c.strip()]
         if not cells or cells[0].startswith("#"):
             continue
