@@ -21,6 +21,7 @@ from contextlib import contextmanager
 from functools import lru_cache
 
 from sqlalchemy import Engine, event
+from sqlalchemy.engine import make_url
 from sqlmodel import Session, create_engine
 
 BUSY_TIMEOUT_MS = 10_000
@@ -59,8 +60,13 @@ def _has_nul(value) -> bool:
 
 
 def _sqlite_engine(url: str) -> Engine:
+    # A file database gets as many connections as the thread pool has threads (40), so
+    # requests never queue for a connection as well as for the write lock.
+    in_memory = make_url(url).database in (None, "", ":memory:")
     engine = create_engine(
-        url, connect_args={"check_same_thread": False, "timeout": BUSY_TIMEOUT_MS / 1000}
+        url,
+        connect_args={"check_same_thread": False, "timeout": BUSY_TIMEOUT_MS / 1000},
+        **({} if in_memory else {"pool_size": 10, "max_overflow": 30}),
     )
 
     @event.listens_for(engine, "connect")

@@ -113,6 +113,9 @@ def _resolve_login(request: Request, db: Session, settings: Settings) -> User | 
     if user is None:
         return None
     if utcnow() - record.last_seen_at > TOUCH_INTERVAL:
+        # End this read first: a request never holds one pooled connection while it waits
+        # for another (a full pool would otherwise stall until its timeout).
+        db.commit()
         _touch(record.id)
     request.state.user = user
     request.state.auth = record

@@ -83,3 +83,15 @@ def test_populated_database_upgrades_across_revisions(tmp_path):
     ).fetchone()
     connection.close()
     assert row == (360.0, 2.0, 3, "accept", "after_grading")
+
+
+def test_a_file_database_has_a_connection_per_pool_thread(tmp_path):
+    """40 connections (the thread pool's size), so requests never also queue for one;
+    an in-memory database keeps SQLAlchemy's single-connection pool."""
+    engine = make_engine(f"sqlite:///{tmp_path / 'pool.db'}")
+    assert engine.pool.size() + engine.pool._max_overflow == 40
+    engine.dispose()
+    memory = make_engine("sqlite://")
+    with memory.connect() as connection:
+        assert connection.exec_driver_sql("SELECT 1").scalar() == 1
+    memory.dispose()
