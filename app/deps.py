@@ -80,24 +80,15 @@ def load_login(request: Request, db: Session, settings: Settings) -> User | None
         return _resolve_login(request, db, settings)
     # A write request: look the login up without the write lock, then hand the rows to the
     # request's session without SQL, so that the lock is taken by the handler's first
-    # query, in the handler's own thread (see release_write_lock), and held no longer.
+    # query, in the handler's own thread.  (Dependencies and the handler run on different
+    # trips to the thread pool; a write transaction held across that gap could wait for a
+    # free thread while every pool thread waits for its lock -- seen in the load test.)
     with read_session() as lookup:
         user = _resolve_login(request, lookup, settings)
     if user is not None:
         request.state.user = user = db.merge(user, load=False)
         request.state.auth = db.merge(request.state.auth, load=False)
     return user
-
-
-def release_write_lock(request: Request, db: Session) -> None:
-    """End a dependency's write transaction before the route handler runs.
-
-    Dependencies and the handler run on different trips to the thread pool.  A write
-    transaction left open across that gap could wait for a free thread while every pool
-    thread waits for its lock -- a stall until SQLite's busy timeout (seen in the load
-    test).  The handler's first query starts a new transaction in its own thread."""
-    if request.method not in SAFE_METHODS:
-        db.commit()
 
 
 def _resolve_login(request: Request, db: Session, settings: Settings) -> User | None:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import hashlib
 import hmac
 import secrets
-from dataclasses import dataclass
 from datetime import timedelta
 from functools import lru_cache
 
@@ -53,12 +52,6 @@ def normalise_username(username: str) -> str:
 @lru_cache
 def _dummy_hash() -> str:
     return hash_password(secrets.token_urlsafe(16))
-
-
-def authenticate(db: Session, username: str, password: str) -> User | None:
-    """The user whose password matches, or None; costs one hash either way (no timing oracle)."""
-    user = db.exec(select(User).where(User.username == normalise_username(username))).first()
-    return user if password_matches(user, password) else None
 
 
 def password_matches(user: User | None, password: str) -> bool:
@@ -167,39 +160,29 @@ def login_throttled(db: Session, username: str, address: str, settings: Settings
     )
 
 
-@dataclass
-class LoginAttempt:
-    user: User | None
-    address: str
+def log_in(
+    db: Session, username: str, password: str, address: str, settings: Settings
+) -> tuple[User | None, str | None]:
+    """Check a log-in: ``(user, None)`` when the password matches (the account's failures
+    are cleared; the caller adds its session or token and commits), otherwise
+    ``(None, "throttled" | "failed")`` with the failure already committed.
 
-
-def begin_login(
-    db: Session, username: str, address: str, settings: Settings
-) -> LoginAttempt | None:
-    """First step of a log-in, in a short write transaction: None when throttled.
-
-    Otherwise the attempt is charged to the *account* before the password is checked, so
-    that guesses at one account sent in parallel cannot slip past its limit while the slow
-    hash runs -- which the caller does after committing, outside the write lock
-    (``password_matches``), then ``finish_login`` or ``fail_login``.  The *address* is
-    charged only for a wrong password: a class logging in at once from behind one address
-    must not be throttled by its own log-ins in flight."""
+    The attempt is charged to the *account* before the password is checked, so that
+    guesses at one account sent in parallel cannot slip past its limit while the slow hash
+    runs -- outside the write lock, after a commit.  The *address* is charged only for a
+    wrong password: a class logging in at once from behind one address must not be
+    throttled by its own log-ins in flight."""
     if login_throttled(db, username, address, settings):
-        return None
+        return None, "throttled"
     db.add(LoginFailure(scope="account", key=_account_key(username)))
     user = db.exec(select(User).where(User.username == normalise_username(username))).first()
-    return LoginAttempt(user, address)
-
-
-def fail_login(db: Session, attempt: LoginAttempt) -> None:
-    """A wrong password: the account was charged in advance; now the address too."""
-    db.add(LoginFailure(scope="address", key=attempt.address[:128]))
-
-
-def finish_login(db: Session, attempt: LoginAttempt) -> None:
-    """The password matched: clear the account's failures (the advance charge included)."""
-    assert attempt.user is not None
-    clear_login_failures(db, attempt.user.username)
+    db.commit()
+    if not password_matches(user, password):
+        db.add(LoginFailure(scope="address", key=address[:128]))
+        db.commit()
+        return None, "failed"
+    clear_login_failures(db, user.username)
+    return user, None
 
 
 def clear_login_failures(db: Session, username: str) -> None:

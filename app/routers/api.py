@@ -33,7 +33,6 @@ from app.deps import (
     SessionDep,
     SettingsDep,
     load_login,
-    release_write_lock,
 )
 from app.jsonsafe import json_safe
 from app.labsim import nominal_angle
@@ -49,10 +48,7 @@ from app.labstore import (
 from app.models import Assignment, Course, LabSession, Role, User
 from app.review import class_rows, export_rows
 from app.security import (
-    begin_login,
-    fail_login,
-    finish_login,
-    password_matches,
+    log_in,
     tokens_match,
 )
 
@@ -92,11 +88,13 @@ class Caller:
 def api_caller(request: Request, db: SessionDep, settings: SettingsDep) -> Caller:
     header = request.headers.get("authorization", "")
     if header.lower().startswith("bearer "):
-        # Not a serialised writer: the count is one atomic UPDATE (see check_token).
+        # Not a serialised writer: the count is one atomic UPDATE (see check_token); the
+        # user is read alongside and handed to the request's session like a cookie login
+        # (deps.load_login), so the write lock is taken by the handler alone.
         with statement_session() as counter_db:
             check = check_token(counter_db, header[7:].strip(), settings.api_rate_per_minute)
             counter_db.commit()
-            user_id = check.token.user_id if check.token else None
+            found = counter_db.get(User, check.token.user_id) if check.token else None
             scopes = set(check.token.scopes.split(",")) if check.token else set()
         if check.problem == "invalid":
             raise HTTPException(
@@ -108,11 +106,9 @@ def api_caller(request: Request, db: SessionDep, settings: SettingsDep) -> Calle
                 "Too many requests with this token; slow down.",
                 headers={"Retry-After": str(check.retry_after)},
             )
-        user = db.get(User, user_id)
-        release_write_lock(request, db)
-        if user is None:
+        if found is None:
             raise HTTPException(401, "Invalid token.", headers={"WWW-Authenticate": "Bearer"})
-        return Caller(user, scopes, "token")
+        return Caller(db.merge(found, load=False), scopes, "token")
     user = load_login(request, db, settings)
     if user is None:
         raise HTTPException(401, "Not authenticated.", headers={"WWW-Authenticate": "Bearer"})
@@ -155,22 +151,17 @@ def login_for_token(
     """OAuth2 password flow: a one-hour bearer token (read and upload), throttled like the
     log-in page."""
     address = request.client.host if request.client else "unknown"
-    attempt = begin_login(db, username, address, settings)
-    db.commit()  # the password hash below runs outside the write lock
-    if attempt is None:
+    user, problem = log_in(db, username, password, address, settings)
+    if problem == "throttled":
         raise HTTPException(
             429,
             "Too many failed log-in attempts; wait and try again.",
             headers={"Retry-After": str(settings.login_window_minutes * 60)},
         )
-    if not password_matches(attempt.user, password):
-        fail_login(db, attempt)
-        db.commit()
+    if user is None:
         raise HTTPException(
             401, "Wrong username or password.", headers={"WWW-Authenticate": "Bearer"}
         )
-    user = attempt.user
-    finish_login(db, attempt)
     if user.must_change_password:
         db.commit()
         raise HTTPException(403, "Change your initial password in the browser first.")

@@ -11,12 +11,9 @@ from app.deps import CsrfProtected, CurrentUser, OptionalUser, SessionDep, Setti
 from app.i18n import normalise
 from app.models import AuthSession, User, utcnow
 from app.security import (
-    begin_login,
     create_session,
-    fail_login,
-    finish_login,
     hash_password,
-    password_matches,
+    log_in,
     password_problem,
     revoke_sessions,
     verify_password,
@@ -58,19 +55,14 @@ def login(
 ):
     address = client_address(request)
     context = {"next": safe_next(next), "username": username}
-    attempt = begin_login(db, username, address, settings)
-    db.commit()  # the password hash below runs outside the write lock
-    if attempt is None:
+    user, problem = log_in(db, username, password, address, settings)
+    if problem == "throttled":
         context["error"] = "login.throttled"
         context["minutes"] = settings.login_window_minutes
         return render(request, "auth/login.html", context, 429)
-    if not password_matches(attempt.user, password):
-        fail_login(db, attempt)
-        db.commit()
+    if user is None:
         context["error"] = "login.failed"
         return render(request, "auth/login.html", context, 401)
-    user = attempt.user
-    finish_login(db, attempt)
     token = create_session(db, user, settings)
     db.commit()
     response = redirect("/account/password" if user.must_change_password else safe_next(next))
