@@ -210,7 +210,7 @@ def build_parser() -> argparse.ArgumentParser:
     migrate.set_defaults(handler=_migrate)
 
     create = commands.add_parser("create-user", help="create a teacher (or student) account")
-    create.add_argument("--role", choices=["teacher", "student"], default="teacher")
+    create.add_argument("--role", choices=["admin", "teacher", "student"], default="teacher")
     create.add_argument("--username", required=True)
     create.add_argument("--display-name")
     create.add_argument("--email")

@@ -56,7 +56,12 @@ def create_demo_data(db: Session) -> list[tuple[str, str, str]]:
     for username, name in DEMO_STUDENTS:
         password = generate_password()
         student = create_user(
-            db, username=username, display_name=name, role=Role.student, password=password
+            db,
+            username=username,
+            display_name=name,
+            role=Role.student,
+            password=password,
+            created_by=teacher,
         )
         enroll(db, course, student)
         students.append(student)

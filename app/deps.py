@@ -194,7 +194,14 @@ def student_user(user: CurrentUser) -> User:
     return user
 
 
+def admin_user(user: CurrentUser) -> User:
+    if user.role != Role.admin:
+        raise Forbidden()
+    return user
+
+
 TeacherUser = Annotated[User, Depends(teacher_user)]
+AdminUser = Annotated[User, Depends(admin_user)]
 StudentUser = Annotated[User, Depends(student_user)]
 CsrfProtected = Depends(csrf_protect)
 

@@ -20,12 +20,14 @@ from app.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequire
 from app.headers import SecurityHeaders
 from app.paths import STATIC_DIR
 from app.routers import (
+    admin,
     api,
     assignments,
     auth,
     courses,
     explore,
     home,
+    join,
     lab,
     review,
     stream,
@@ -169,6 +171,8 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(auth.router)
     app.include_router(home.router)
     app.include_router(courses.router)
+    app.include_router(join.router)
+    app.include_router(admin.router)
     app.include_router(assignments.router)
     app.include_router(lab.router)
     app.include_router(review.router)

@@ -14,6 +14,7 @@ MESSAGES: dict[str, dict[str, str]] = {
     "nav.logout": {"en": "Log out", "zh-CN": "退出登录"},
     "role.teacher": {"en": "teacher", "zh-CN": "教师"},
     "role.student": {"en": "student", "zh-CN": "学生"},
+    "role.admin": {"en": "administrator", "zh-CN": "管理员"},
     "common.optional": {"en": "optional", "zh-CN": "可选"},
     # errors
     "error.title": {"en": "Something is not right", "zh-CN": "出了点问题"},
@@ -102,8 +103,9 @@ MESSAGES: dict[str, dict[str, str]] = {
     "dashboard.student_title": {"en": "Welcome, {name}", "zh-CN": "欢迎，{name}"},
     "dashboard.my_courses": {"en": "My courses", "zh-CN": "我的课程"},
     "dashboard.no_courses": {
-        "en": "You are not enrolled in any course yet. Your teacher adds you.",
-        "zh-CN": "您还没有加入任何课程，请等待老师添加。",
+        "en": "You are not enrolled in any course yet. Enter the course code your teacher "
+        "gives you, or open their join link.",
+        "zh-CN": "您还没有加入任何课程。请输入老师给您的课程代码，或打开老师发的加入链接。",
     },
     # courses
     "course.list_title": {"en": "My courses", "zh-CN": "我的课程"},
@@ -247,6 +249,94 @@ MESSAGES: dict[str, dict[str, str]] = {
         "zh-CN": "已有账号已加入课程",
     },
     "credentials.back": {"en": "Back to the course", "zh-CN": "返回课程"},
+    "credentials.back_admin": {"en": "Back to the accounts", "zh-CN": "返回账号列表"},
+    "credentials.needs_code_title": {
+        "en": "Existing accounts not enrolled",
+        "zh-CN": "已有账号，尚未加入课程",
+    },
+    "credentials.needs_code_help": {
+        "en": "These students already have an account that another teacher or an "
+        "administrator created. They join themselves with the course code {code} (or your "
+        "join link); you cannot add them or reset their passwords.",
+        "zh-CN": "这些学生已有其他老师或管理员创建的账号，需要自己用课程代码 {code}（或加入链接）"
+        "加入课程；您不能直接添加他们，也不能重置他们的密码。",
+    },
+    "roster.needs_consent": {
+        "en": "“{username}” already has an account that you did not create. The student "
+        "joins this course with the code {code} (or your join link).",
+        "zh-CN": "“{username}”已有账号，但不是您创建的。请学生用课程代码 {code}（或加入链接）"
+        "自己加入本课程。",
+    },
+    "roster.reset_needs_admin": {
+        "en": "You may reset only the passwords of accounts your roster created and that no "
+        "other teacher's course holds. Ask an administrator to reset {username}'s password.",
+        "zh-CN": "您只能重置由您的名单创建、且不在其他老师课程中的账号的密码。"
+        "请联系管理员重置 {username} 的密码。",
+    },
+    "roster.reset_by_admin": {"en": "reset: administrator", "zh-CN": "重置：找管理员"},
+    "roster.reset_by_admin_hint": {
+        "en": "This account was not created by your roster, or another teacher's course "
+        "holds it: only an administrator may reset its password.",
+        "zh-CN": "此账号不是您的名单创建的，或也在其他老师的课程中：只有管理员可以重置其密码。",
+    },
+    # joining a course
+    "join.title": {"en": "Join a course", "zh-CN": "加入课程"},
+    "join.help": {
+        "en": "Your teacher gives you an 8-character course code or a join link.",
+        "zh-CN": "老师会给您一个 8 位课程代码或一个加入链接。",
+    },
+    "join.code": {"en": "Course code", "zh-CN": "课程代码"},
+    "join.submit": {"en": "Join", "zh-CN": "加入"},
+    "join.confirm": {
+        "en": "Join the course “{name}”?",
+        "zh-CN": "加入课程“{name}”？",
+    },
+    "join.joined": {"en": "You joined “{name}”.", "zh-CN": "您已加入“{name}”。"},
+    "join.bad_code": {
+        "en": "No open course has this code. Check it with your teacher.",
+        "zh-CN": "没有使用此代码的开放课程，请向老师核对。",
+    },
+    "join.students_only": {
+        "en": "Only student accounts join courses.",
+        "zh-CN": "只有学生账号可以加入课程。",
+    },
+    "join.card_title": {"en": "Students join with", "zh-CN": "学生加入方式"},
+    "join.card_help": {
+        "en": "Students who already have an account join with this code or link. Students "
+        "your roster creates are enrolled at once.",
+        "zh-CN": "已有账号的学生用此代码或链接加入；由您的名单新建的学生会直接加入。",
+    },
+    "join.link": {"en": "Join link", "zh-CN": "加入链接"},
+    "join.rotate": {"en": "New code", "zh-CN": "更换代码"},
+    "join.rotate_confirm": {
+        "en": "Make a new code? The old code and link stop working.",
+        "zh-CN": "更换代码？旧代码和旧链接将失效。",
+    },
+    "join.code_rotated": {
+        "en": "The new course code is {code}.",
+        "zh-CN": "新的课程代码是 {code}。",
+    },
+    # administrators
+    "nav.admin": {"en": "Accounts", "zh-CN": "账号管理"},
+    "admin.title": {"en": "Accounts", "zh-CN": "账号管理"},
+    "admin.accounts": {"en": "All accounts", "zh-CN": "全部账号"},
+    "admin.search": {"en": "Username or name", "zh-CN": "用户名或姓名"},
+    "admin.search_button": {"en": "Search", "zh-CN": "搜索"},
+    "admin.role": {"en": "Role", "zh-CN": "角色"},
+    "admin.created_by": {"en": "Created by", "zh-CN": "创建者"},
+    "admin.courses": {"en": "Courses", "zh-CN": "课程数"},
+    "admin.first_n": {
+        "en": "Only the first {n} accounts are shown: search to narrow the list.",
+        "zh-CN": "只显示前 {n} 个账号，请搜索以缩小范围。",
+    },
+    "admin.create_title": {"en": "New account", "zh-CN": "新建账号"},
+    "admin.create": {"en": "Create with a one-time password", "zh-CN": "创建（一次性密码）"},
+    "admin.created_title": {"en": "New account", "zh-CN": "新账号"},
+    "admin.bad_role": {"en": "Choose a role.", "zh-CN": "请选择角色。"},
+    "admin.reset_refused": {
+        "en": "Administrators' passwords are changed by their owners only.",
+        "zh-CN": "管理员的密码只能由本人修改。",
+    },
 }
 
 from app.messages_lab import LAB_MESSAGES  # noqa: E402

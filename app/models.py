@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import secrets
 from datetime import UTC, datetime
 from enum import StrEnum
 
@@ -17,8 +18,17 @@ def utcnow() -> datetime:
 
 
 class Role(StrEnum):
+    admin = "admin"
     teacher = "teacher"
     student = "student"
+
+
+JOIN_CODE_ALPHABET = "ABCDEFGHJKLMNPQRSTUVWXYZ23456789"  # no 0/O/1/I confusion
+
+
+def new_join_code() -> str:
+    """A course's enrolment code: 8 characters, 40 bits, typed or sent as a join link."""
+    return "".join(secrets.choice(JOIN_CODE_ALPHABET) for _ in range(8))
 
 
 class User(SQLModel, table=True):
@@ -31,6 +41,9 @@ class User(SQLModel, table=True):
     must_change_password: bool = False
     language: str | None = Field(default=None, max_length=8)
     created_at: datetime = Field(default_factory=utcnow)
+    # the teacher whose roster created this account (may reset its password); None for
+    # accounts made by the CLI or an administrator
+    created_by_id: int | None = Field(default=None, foreign_key="user.id", ondelete="SET NULL")
 
 
 class AuthSession(SQLModel, table=True):
@@ -62,6 +75,8 @@ class Course(SQLModel, table=True):
     name: str = Field(max_length=200)
     teacher_id: int = Field(foreign_key="user.id", index=True)
     archived: bool = False
+    # students join with this code (or the join link): the student's consent to enrolment
+    join_code: str = Field(default_factory=new_join_code, max_length=16, unique=True, index=True)
     created_at: datetime = Field(default_factory=utcnow)
 
 
@@ -167,6 +182,7 @@ class Take(SQLModel, table=True):
     n_samples: int
     created_at: datetime = Field(default_factory=utcnow)
     superseded_at: datetime | None = None
+    frozen: bool = False  # an attempt refers to it: its samples never change again
 
 
 class SampleChunk(SQLModel, table=True):

@@ -10,11 +10,11 @@ from functools import lru_cache
 
 from pwdlib import PasswordHash
 from pwdlib.hashers.argon2 import Argon2Hasher
-from sqlalchemy import delete, func
+from sqlalchemy import delete, func, update
 from sqlmodel import Session, select
 
 from app.config import Settings
-from app.models import AuthSession, LoginFailure, User, utcnow
+from app.models import ApiToken, AuthSession, LoginFailure, User, utcnow
 
 # OWASP's minimum for argon2id (m=19 MiB, t=2, p=1): ~30 ms per verify on 2 cores,
 # against ~250 ms for the library default, so a whole class can log in at once.
@@ -116,6 +116,17 @@ def revoke_sessions(db: Session, user_id: int, keep_id: int | None = None) -> No
         if record.id != keep_id:
             record.revoked_at = utcnow()
             db.add(record)
+
+
+def revoke_credentials(db: Session, user_id: int, keep_session_id: int | None = None) -> None:
+    """Credentials changed: end every login session (but ``keep_session_id``) and revoke
+    every API token -- personal and one-hour -- of the user."""
+    revoke_sessions(db, user_id, keep_session_id)
+    db.exec(
+        update(ApiToken)
+        .where(ApiToken.user_id == user_id, ApiToken.revoked_at.is_(None))
+        .values(revoked_at=utcnow())
+    )
 
 
 def tokens_match(expected: str | None, given: str | None) -> bool:

@@ -106,6 +106,7 @@ def render(
         "user": getattr(request.state, "user", None),
         "csrf_token": csrf_token_for(request),
         "flashes": flashes,
+        "base_url": str(request.base_url),
     }
     response = templates.TemplateResponse(
         request, template, {**base, **(context or {})}, status_code=status_code

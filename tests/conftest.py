@@ -121,8 +121,14 @@ def client(app) -> Iterator[TestClient]:
 
 
 def make_user(
-    username: str, role: Role = Role.student, *, must_change: bool = False, name: str = ""
+    username: str,
+    role: Role = Role.student,
+    *,
+    must_change: bool = False,
+    name: str = "",
+    created_by: User | None = None,
 ) -> User:
+    """An account with the password PASSWORD (``created_by``: the teacher whose roster made it)."""
     from app.accounts import create_user
 
     with write_session() as db:
@@ -133,6 +139,7 @@ def make_user(
             role=role,
             password=PASSWORD,
             must_change_password=must_change,
+            created_by=created_by,
         )
 
 

@@ -17,6 +17,12 @@ from tests.conftest import login, make_course, make_user, post_form
 ROSTER = "学号,姓名,邮箱\n2024001,张三,zhangsan@example.edu\n2024002,李四,\n"
 
 
+def section(page: str, element_id: str) -> str:
+    """The text of the element with this id (its opening tag up to the next </section>)."""
+    start = page.index(f'id="{element_id}"')
+    return page[start : page.index("</section>", start)]
+
+
 def user_count() -> int:
     with read_session() as db:
         return db.exec(select(func.count()).select_from(User)).one()
@@ -127,7 +133,11 @@ def test_import_without_header_and_existing_student(teacher_client):
     response = import_file(teacher_client, course_id, "2024100,Old\n2024101,新同学\n".encode())
     assert response.status_code == 200
     assert set(credentials_from(response.text)) == {"2024101"}
-    assert "2024100" in response.text  # listed as enrolled, no new password
+    # someone else's account: listed with the course code to join by, never enrolled
+    assert "2024100" in section(response.text, "needs-code")
+    with read_session() as db:
+        old = db.exec(select(User).where(User.username == "2024100")).one()
+        assert db.exec(select(Enrollment).where(Enrollment.student_id == old.id)).first() is None
 
 
 def test_add_student_by_hand_and_reset_and_remove(teacher_client, client):

@@ -14,6 +14,7 @@ from tests.test_review import world  # noqa: F401  (fixture)
 
 # rule: public | user (any log-in) | teacher (own course) | owner (own session)
 #       | review (teacher of the session's course) | token (own API token)
+#       | admin (administrators only)
 ACCESS = {
     "GET /docs": "public",
     "GET /docs/openapi.json": "public",
@@ -42,6 +43,13 @@ ACCESS = {
     "POST /courses/{course_id}/import": "teacher",
     "POST /courses/{course_id}/students/{student_id}/reset-password": "teacher",
     "POST /courses/{course_id}/students/{student_id}/remove": "teacher",
+    "POST /courses/{course_id}/join-code": "teacher",
+    "GET /join": "user",
+    "POST /join": "user",
+    "GET /admin/accounts": "admin",
+    "POST /admin/accounts": "admin",
+    "POST /admin/accounts/{user_id}/reset-password": "admin",
+    "POST /api/v1/users/{user_id}/reset-password": "teacher",
     "POST /courses/{course_id}/assignments": "teacher",
     "GET /courses/{course_id}/assignments/{assignment_id}": "teacher",
     "POST /courses/{course_id}/assignments/{assignment_id}/settings": "teacher",
@@ -122,6 +130,7 @@ def ids(world):  # noqa: F811
         "assignment_id": world["assignment"],
         "session_id": session_id,
         "student_id": student_id,
+        "user_id": student_id,
         "token_id": token_id,
         "part": "heading",
         "position": 1,
@@ -195,6 +204,20 @@ def test_students_are_refused_teacher_routes(ids, route):
         response = request(student, method, path, headers)
     assert response.status_code == 403, route
     assert "学生2" not in response.text  # no classmate's data on the refusal
+
+
+@pytest.mark.parametrize("route", sorted(r for r, rule in ACCESS.items() if rule == "admin"))
+def test_only_administrators_reach_admin_routes(ids, route):
+    method, path = concrete(route, ids)
+    make_user("root", Role.admin)
+    for username in ("s1", "teacher1", "root"):
+        with TestClient(ids["app"], follow_redirects=False) as caller:
+            login(caller, username)
+            response = request(caller, method, path)
+        if username == "root":  # reached (an empty form may be a 400, never a refusal)
+            assert response.status_code not in (401, 403, 404), (route, response.status_code)
+        else:
+            assert response.status_code == 403, (route, username)
 
 
 @pytest.mark.parametrize(

@@ -22,6 +22,7 @@ from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt
 from sqlmodel import Session, select
 
 from app import labsessions
+from app.accounts import may_reset_password, reset_password, teaches_student
 from app.apitokens import LOGIN_TOKEN_LIFETIME, check_token, new_token
 from app.core.exceptions import GyroInputError
 from app.core.units import canonical_unit, to_deg_per_hour
@@ -108,6 +109,10 @@ def api_caller(request: Request, db: SessionDep, settings: SettingsDep) -> Calle
             )
         if found is None:
             raise HTTPException(401, "Invalid token.", headers={"WWW-Authenticate": "Bearer"})
+        if found.must_change_password:
+            raise HTTPException(
+                403, "This account must change its initial password in the browser first."
+            )
         return Caller(db.merge(found, load=False), scopes, "token")
     user = load_login(request, db, settings)
     if user is None:
@@ -769,6 +774,37 @@ def list_courses(caller: CallerDep, db: SessionDep):
             )
         )
     return out
+
+
+class NewPasswordOut(BaseModel):
+    username: str
+    initial_password: str = Field(description="one-time: the user must change it at log-in")
+
+
+@router.post(
+    "/users/{user_id}/reset-password", response_model=NewPasswordOut, tags=["api: teachers"]
+)
+def reset_user_password(user_id: ObjectId, caller: CallerDep, db: SessionDep):
+    """Teachers and administrators: a new one-time password; every session and token of
+    that user ends.  A teacher may reset only a student their own roster created and that
+    no other teacher's course holds (anyone else: an administrator)."""
+    need(caller, "upload")
+    if caller.user.role not in (Role.teacher, Role.admin):
+        raise HTTPException(403, "Only teachers and administrators may do this.")
+    user = db.get(User, user_id)
+    if user is None or (
+        caller.user.role == Role.teacher and not teaches_student(db, caller.user, user)
+    ):
+        raise HTTPException(404, "No such user.")
+    if not may_reset_password(db, caller.user, user):
+        raise HTTPException(
+            403,
+            "You may reset only accounts your roster created and that no other teacher's "
+            "course holds; ask an administrator.",
+        )
+    password = reset_password(db, user)
+    db.commit()
+    return NewPasswordOut(username=user.username, initial_password=password)
 
 
 def teacher_assignment(db: Session, caller: Caller, assignment_id: int) -> Assignment:

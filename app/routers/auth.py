@@ -15,7 +15,7 @@ from app.security import (
     hash_password,
     log_in,
     password_problem,
-    revoke_sessions,
+    revoke_credentials,
     verify_password,
 )
 from app.web import LANG_COOKIE, SESSION_COOKIE, flash, redirect, render, set_cookie
@@ -114,7 +114,7 @@ def change_password(
     db_user.password_hash = hash_password(new_password)
     db_user.must_change_password = False
     db.add(db_user)
-    revoke_sessions(db, user.id)  # every session, this one too: a fresh one follows
+    revoke_credentials(db, user.id)  # every session and token; a fresh session follows
     token = create_session(db, db_user, settings)
     db.commit()
     response = redirect("/")

@@ -16,7 +16,9 @@ from app.accounts import (
     add_student,
     check_roster_against_accounts,
     import_roster,
+    may_reset_password,
     reset_password,
+    rotate_join_code,
 )
 from app.core.simulate import PRESETS
 from app.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
@@ -49,7 +51,9 @@ def enrolled_student(db: Session, course: Course, student_id: int) -> User:
 
 
 def roster(db: Session, course: Course) -> list[User]:
-    return list(
+    """The course's students, each with ``may_reset`` (may this course's teacher give them a
+    one-time password?)."""
+    students = list(
         db.exec(
             select(User)
             .join(Enrollment, Enrollment.student_id == User.id)
@@ -57,6 +61,8 @@ def roster(db: Session, course: Course) -> list[User]:
             .order_by(User.username)
         ).all()
     )
+    teacher = db.get(User, course.teacher_id)
+    return [(student, may_reset_password(db, teacher, student)) for student in students]
 
 
 def credentials_csv_href(credentials) -> str:
@@ -175,8 +181,9 @@ def add_student_by_hand(
         )
     except AccountError as error:
         db.rollback()
+        context = course_context(db, course, form=context["form"])
         context["add_error"] = error.key
-        context["add_error_params"] = error.params
+        context["add_error_params"] = {**error.params, "code": course.join_code}
         return render(request, "courses/detail.html", context, 400)
     db.commit()
     if credential is None:
@@ -214,16 +221,17 @@ def import_students(
             course_context(db, course, import_problems=problems),
             400,
         )
-    created, enrolled = import_roster(db, course, parsed.rows)
+    outcome = import_roster(db, course, parsed.rows)
     db.commit()
     return render(
         request,
         "courses/credentials.html",
         {
             "course": course,
-            "credentials": created,
-            "enrolled": enrolled,
-            "csv_href": credentials_csv_href(created),
+            "credentials": outcome.created,
+            "enrolled": outcome.enrolled,
+            "needs_code": outcome.needs_code,
+            "csv_href": credentials_csv_href(outcome.created),
         },
     )
 
@@ -238,6 +246,10 @@ def reset_student_password(
 ):
     course = own_course(db, teacher, course_id)
     student = enrolled_student(db, course, student_id)
+    if not may_reset_password(db, teacher, student):
+        response = redirect(f"/courses/{course.id}")
+        flash(response, request, "roster.reset_needs_admin", "error", username=student.username)
+        return response
     password = reset_password(db, student)
     db.commit()
     credential = NewCredential(student.username, student.display_name, password)
@@ -252,6 +264,17 @@ def reset_student_password(
             "csv_href": credentials_csv_href([credential]),
         },
     )
+
+
+@router.post("/{course_id}/join-code", dependencies=[CsrfProtected])
+def new_join_code(request: Request, course_id: ObjectId, teacher: TeacherUser, db: SessionDep):
+    """Replace the course's join code (the old code and links stop working)."""
+    course = own_course(db, teacher, course_id)
+    rotate_join_code(db, course)
+    db.commit()
+    response = redirect(f"/courses/{course.id}#join")
+    flash(response, request, "join.code_rotated", "success", code=course.join_code)
+    return response
 
 
 @router.post("/{course_id}/students/{student_id}/remove", dependencies=[CsrfProtected])

@@ -7,13 +7,15 @@ from sqlmodel import select
 
 from app.deps import CurrentUser, SessionDep
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User
-from app.web import render
+from app.web import redirect, render
 
 router = APIRouter(tags=["pages: home"], include_in_schema=False)
 
 
 @router.get("/")
 def dashboard(request: Request, user: CurrentUser, db: SessionDep):
+    if user.role == Role.admin:
+        return redirect("/admin/accounts")
     if user.role == Role.teacher:
         courses = db.exec(
             select(Course)
