@@ -217,12 +217,16 @@ def append_samples(
             limit=MAX_SAMPLES_PER_POSITION,
         )
     _check_values(session, position, values)
-    existing = db.exec(select(SampleChunk).where(SampleChunk.take_id == take.id)).all()
+    existing = db.exec(
+        select(SampleChunk).where(SampleChunk.take_id == take.id).order_by(SampleChunk.seq)
+    ).all()
     has_times = all(chunk.times is not None for chunk in existing)
     if has_times != (times is not None):
         raise GyroInputError(
             "lab.times_mismatch", "Send times with every batch of a position, or with none."
         )
+    if take.frozen:  # submitted data never changes: continue in a copy of the take
+        take, existing = _copy_take(db, take, existing)
     next_seq = max(chunk.seq for chunk in existing) + 1
     for seq, value_blob, time_blob in chunks(values, times):
         db.add(SampleChunk(take_id=take.id, seq=next_seq + seq, values=value_blob, times=time_blob))
@@ -233,6 +237,31 @@ def append_samples(
     db.add(take)
     db.add(session)
     return take, int(values.size)
+
+
+def _copy_take(db: Session, take: Take, rows: list[SampleChunk]) -> tuple[Take, list[SampleChunk]]:
+    """A new current take with the same samples; ``take`` (frozen) is superseded."""
+    now = utcnow()
+    copy = Take(
+        session_id=take.session_id,
+        part=take.part,
+        position=take.position,
+        angle_deg=take.angle_deg,
+        source=take.source,
+        unit=take.unit,
+        n_samples=take.n_samples,
+        created_at=now,
+    )
+    take.superseded_at = now
+    db.add(take)
+    db.add(copy)
+    db.flush()
+    copied = [
+        SampleChunk(take_id=copy.id, seq=row.seq, values=row.values, times=row.times)
+        for row in rows
+    ]
+    db.add_all(copied)
+    return copy, copied
 
 
 def _check_values(session: LabSession, position: int, values: np.ndarray) -> None:
@@ -410,6 +439,9 @@ def submit(db: Session, session: LabSession) -> Attempt:
             "lab.nothing_to_submit", "There is no result to submit yet: record the positions first."
         )
     takes = current_takes(db, session.id)
+    for take in takes:  # an attempt's takes never change again (appends copy them)
+        take.frozen = True
+        db.add(take)
     attempt = Attempt(
         session_id=session.id,
         number=len(previous) + 1,
@@ -448,44 +480,3 @@ def export_metadata(session: LabSession) -> dict:
         "status": session.status,
         "exported_at": utcnow().isoformat(),
     }
-
-
-def export_json(db: Session, session: LabSession) -> dict:
-    results = session_results(db, session)
-    takes = []
-    for part in PARTS:
-        for position, item in sorted(results[part].positions.items()):
-            takes.append(
-                {
-                    "part": part,
-                    "position": position,
-                    "angle_deg": item.take.angle_deg,
-                    "source": item.take.source,
-                    "recorded_at": item.take.created_at.isoformat(),
-                    "values_deg_h": item.values.tolist(),
-                    "times_s": None if item.times is None else item.times.tolist(),
-                }
-            )
-    return json_safe(
-        {"metadata": export_metadata(session), "positions": takes, "results": results_json(results)}
-    )
-
-
-def export_csv(db: Session, session: LabSession) -> str:
-    meta = export_metadata(session)
-    lines = [
-        f"# {meta['software']}; session {session.id}: {session.title}",
-        f"# station latitude {session.latitude_deg} deg, Earth rate "
-        f"{session.earth_rate_deg_h} deg/h; heading rotation {session.heading_rotation}; "
-        "values in deg/h",
-        "part,position,angle_deg,source,time_s,value",
-    ]
-    for part in PARTS:
-        for position, item in sorted(part_data(db, session, part).items()):
-            times = item.times if item.times is not None else np.arange(item.values.size)
-            for time, value in zip(times, item.values, strict=True):
-                lines.append(
-                    f"{part},{position},{item.take.angle_deg:g},{item.take.source},"
-                    f"{time:.3f},{value:.6f}"
-                )
-    return "\n".join(lines) + "\n"

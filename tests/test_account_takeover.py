@@ -121,7 +121,8 @@ def test_join_by_code_and_link(app):
     assert link.status_code == 200 and "“B”" in link.text
     assert post_form(pupil, "/join", {"code": "NOPE1234"}).status_code == 400
     assert not enrolled("student1", course_b)
-    assert post_form(pupil, "/join", {"code": f" {code[:4]} {code[4:].lower()} "}).status_code == 303
+    spaced = f" {code[:4]} {code[4:].lower()} "
+    assert post_form(pupil, "/join", {"code": spaced}).status_code == 303
     assert enrolled("student1", course_b)
     # a new code ends the old one
     teacher2 = signed_in(app, "teacher2")
@@ -173,9 +174,7 @@ def test_admin_page_lists_creates_and_resets(app):
     assert user_named("wang").role == "teacher" and user_named("wang").must_change_password
     assert verify_password(first, user_named("wang").password_hash)
     student = user_named("student1")
-    reset = post_form(
-        admin, f"/admin/accounts/{student.id}/reset-password", page="/admin/accounts"
-    )
+    reset = post_form(admin, f"/admin/accounts/{student.id}/reset-password", page="/admin/accounts")
     assert reset.status_code == 200
     new = re.search(r'class="secret">([^<]+)<', reset.text).group(1)
     assert verify_password(new, user_named("student1").password_hash)

@@ -289,11 +289,13 @@ def test_csv_export_opens_in_excel_with_chinese_names(world):
     assert rows[1]["status"] == "not_started" and rows[1]["azimuth_deg"] == ""
     archive = zipfile.ZipFile(io.BytesIO(teacher.get(f"{base}/export.zip").content))
     names = set(archive.namelist())
-    assert {"class.csv", "s1/readings.csv", "s1/session.json"} <= names
-    document = json.loads(archive.read("s1/session.json"))
+    assert {"class.csv", "s1/attempt-1.csv", "s1/attempt-1.json"} <= names
+    document = json.loads(archive.read("s1/attempt-1.json"))
     assert document["attempts"][0]["results"]["heading"]["theta_deg"] == pytest.approx(
         -10.753, abs=1e-3
     )
+    assert document["results"] == document["attempts"][0]["results"]
+    assert len(document["positions"]) == 8 and document["metadata"]["attempt"]["number"] == 1
 
 
 def test_settings_form_updates_the_rules(world):

@@ -17,7 +17,7 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 from fastapi import APIRouter, Depends, Form, HTTPException, Path, Request
-from fastapi.responses import JSONResponse, Response
+from fastapi.responses import JSONResponse, Response, StreamingResponse
 from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt
 from sqlmodel import Session, select
 
@@ -35,6 +35,7 @@ from app.deps import (
     SettingsDep,
     load_login,
 )
+from app.exports import csv_table
 from app.jsonsafe import json_safe
 from app.labsim import nominal_angle
 from app.labstore import (
@@ -856,6 +857,6 @@ def list_submissions(assignment_id: ObjectId, caller: CallerDep, db: SessionDep)
 def export_submissions(assignment_id: ObjectId, caller: CallerDep, db: SessionDep):
     """Teachers: the class table as CSV (UTF-8 with BOM)."""
     assignment = teacher_assignment(db, caller, assignment_id)
-    buffer = io.StringIO()
-    csv.writer(buffer).writerows(export_rows(class_rows(db, assignment)))
-    return Response("\ufeff" + buffer.getvalue(), media_type="text/csv; charset=utf-8")
+    return StreamingResponse(
+        csv_table(export_rows(class_rows(db, assignment))), media_type="text/csv; charset=utf-8"
+    )

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
 from typing import Annotated
 from urllib.parse import quote
 
@@ -22,6 +20,7 @@ from app.accounts import (
 )
 from app.core.simulate import PRESETS
 from app.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
+from app.exports import csv_table
 from app.models import Assignment, Course, Enrollment, User
 from app.roster import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
 from app.web import flash, redirect, render
@@ -67,12 +66,9 @@ def roster(db: Session, course: Course) -> list[User]:
 
 def credentials_csv_href(credentials) -> str:
     """A data: URL holding the one-time passwords as CSV (UTF-8 with BOM for Excel)."""
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    writer.writerow(["username", "display_name", "initial_password"])
-    for item in credentials:
-        writer.writerow([item.username, item.display_name, item.password])
-    return "data:text/csv;charset=utf-8," + quote("\ufeff" + buffer.getvalue())
+    rows = [["username", "display_name", "initial_password"]]
+    rows += [[item.username, item.display_name, item.password] for item in credentials]
+    return "data:text/csv;charset=utf-8," + quote("".join(csv_table(rows)))
 
 
 @router.get("")

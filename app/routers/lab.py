@@ -9,7 +9,7 @@ from typing import Annotated, Literal
 
 import numpy as np
 from fastapi import APIRouter, Body, Form, HTTPException, Request
-from fastapi.responses import JSONResponse, PlainTextResponse, Response
+from fastapi.responses import JSONResponse, Response, StreamingResponse
 from pydantic import BaseModel, Field, StrictFloat, StrictInt
 from sqlmodel import Session, select
 
@@ -27,14 +27,13 @@ from app.deps import (
     ReadOnlySessionDep,
     SessionDep,
 )
+from app.exports import Selection, readings_csv, session_json
 from app.i18n import translator
 from app.jsonsafe import json_safe
 from app.labsim import nominal_angle
 from app.labstore import (
     PARTS,
     POSITIONS,
-    export_csv,
-    export_json,
     session_results,
     store_take,
     submit,
@@ -537,16 +536,18 @@ def submit_session(request: Request, session_id: ObjectId, user: CurrentUser, db
 @router.get("/sessions/{session_id}/export.csv")
 def export_session_csv(session_id: ObjectId, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
-    return PlainTextResponse(
-        "\ufeff" + export_csv(db, session), media_type="text/csv", headers=_download(session, "csv")
+    return StreamingResponse(
+        readings_csv(Selection(session.id)),
+        media_type="text/csv; charset=utf-8",
+        headers=_download(session, "csv"),
     )
 
 
 @router.get("/sessions/{session_id}/export.json")
 def export_session_json(session_id: ObjectId, user: CurrentUser, db: SessionDep):
     session = own_session(db, user, session_id)
-    return Response(
-        json.dumps(export_json(db, session), ensure_ascii=False, indent=1),
+    return StreamingResponse(
+        session_json(Selection(session.id)),
         media_type="application/json",
         headers=_download(session, "json"),
     )

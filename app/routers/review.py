@@ -2,20 +2,17 @@
 
 from __future__ import annotations
 
-import csv
-import io
 import json
-import zipfile
 
 from fastapi import APIRouter, HTTPException, Request
-from fastapi.responses import Response
+from fastapi.responses import StreamingResponse
 from sqlmodel import Session, select
 
 from app.charts import class_error_figure, class_histogram_figure
 from app.core.simulate import PRESETS
 from app.deps import CsrfProtected, FormDep, ObjectId, SessionDep, TeacherUser
+from app.exports import SubmittedWork, assignment_zip, csv_table
 from app.i18n import translator
-from app.labstore import export_csv, export_json
 from app.models import Assignment, Attempt, Course, LabSession, User
 from app.review import (
     auto_check,
@@ -125,10 +122,8 @@ def export_assignment_csv(
     course_id: ObjectId, assignment_id: ObjectId, teacher: TeacherUser, db: SessionDep
 ):
     _, assignment = own_assignment(db, teacher, course_id, assignment_id)
-    buffer = io.StringIO()
-    csv.writer(buffer).writerows(export_rows(class_rows(db, assignment)))
-    return Response(
-        "\ufeff" + buffer.getvalue(),
+    return StreamingResponse(
+        csv_table(export_rows(class_rows(db, assignment))),
         media_type="text/csv; charset=utf-8",
         headers={"Content-Disposition": f'attachment; filename="assignment-{assignment.id}.csv"'},
     )
@@ -138,34 +133,17 @@ def export_assignment_csv(
 def export_assignment_zip(
     course_id: ObjectId, assignment_id: ObjectId, teacher: TeacherUser, db: SessionDep
 ):
-    """Every student's submitted data (CSV and JSON with results) plus the class table."""
+    """The class table plus every submitted attempt's own data (CSV and JSON with its
+    results): what the students submitted, never what they changed afterwards."""
     _, assignment = own_assignment(db, teacher, course_id, assignment_id)
     rows = class_rows(db, assignment)
-    buffer = io.BytesIO()
-    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
-        table = io.StringIO()
-        csv.writer(table).writerows(export_rows(rows))
-        archive.writestr("class.csv", "\ufeff" + table.getvalue())
-        for row in rows:
-            if row.session is None or not row.attempts:
-                continue
-            stem = f"{row.student.username}"
-            archive.writestr(f"{stem}/readings.csv", "\ufeff" + export_csv(db, row.session))
-            document = export_json(db, row.session)
-            document["attempts"] = [
-                {
-                    "number": a.number,
-                    "submitted_at": a.submitted_at.isoformat(),
-                    "late": a.late,
-                    "results": json.loads(a.results_json),
-                }
-                for a in row.attempts
-            ]
-            archive.writestr(
-                f"{stem}/session.json", json.dumps(document, ensure_ascii=False, indent=1)
-            )
-    return Response(
-        buffer.getvalue(),
+    work = [
+        SubmittedWork(row.student.username, row.session.id, list(row.attempts))
+        for row in rows
+        if row.session is not None and row.attempts
+    ]
+    return StreamingResponse(
+        assignment_zip(export_rows(rows), work),
         media_type="application/zip",
         headers={"Content-Disposition": f'attachment; filename="assignment-{assignment.id}.zip"'},
     )

