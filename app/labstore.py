@@ -6,6 +6,7 @@ Every number comes from ``app.core``; this module only moves data in and out.
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
@@ -108,6 +109,7 @@ def store_take(
             limit=MAX_SAMPLES_PER_POSITION,
         )
     _check_values(session, position, values)
+    _check_angle_and_times(position, angle_deg, times, values.size)
     if check_minimum and values.size < session.min_readings:
         raise GyroInputError(
             "lab.too_few_readings",
@@ -217,6 +219,7 @@ def append_samples(
             limit=MAX_SAMPLES_PER_POSITION,
         )
     _check_values(session, position, values)
+    _check_angle_and_times(position, angle_deg, times, values.size)
     existing = db.exec(
         select(SampleChunk).where(SampleChunk.take_id == take.id).order_by(SampleChunk.seq)
     ).all()
@@ -262,6 +265,28 @@ def _copy_take(db: Session, take: Take, rows: list[SampleChunk]) -> tuple[Take, 
     ]
     db.add_all(copied)
     return copy, copied
+
+
+MAX_ANGLE_DEG = 3600.0  # ten turns of the dial: anything beyond is a typing mistake
+
+
+def _check_angle_and_times(
+    position: int, angle_deg: float, times: np.ndarray | None, n_values: int
+) -> None:
+    if not math.isfinite(angle_deg) or abs(angle_deg) > MAX_ANGLE_DEG:
+        raise GyroInputError(
+            "lab.bad_angle",
+            f"The angle of position {position} must be a finite number of degrees "
+            f"(at most ±{MAX_ANGLE_DEG:g}).",
+            position=position,
+            limit=MAX_ANGLE_DEG,
+        )
+    if times is not None and (times.size != n_values or not np.all(np.isfinite(times))):
+        raise GyroInputError(
+            "lab.bad_times",
+            f"Position {position}: give one finite time per reading.",
+            position=position,
+        )
 
 
 def _check_values(session: LabSession, position: int, values: np.ndarray) -> None:

@@ -351,6 +351,14 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "en": "Position {position} has {n} readings; at least {minimum} are required.",
         "zh-CN": "位置 {position} 只有 {n} 个读数，至少需要 {minimum} 个。",
     },
+    "lab.bad_angle": {
+        "en": "The angle of position {position} must be a finite number of degrees (at most ±{limit:g}).",
+        "zh-CN": "位置 {position} 的角度必须是有限的度数（绝对值不超过 {limit:g}）。",
+    },
+    "lab.bad_times": {
+        "en": "Position {position}: give one finite time per reading.",
+        "zh-CN": "位置 {position}：每个读数需要一个有限的时间值。",
+    },
     "lab.implausible_rate": {
         "en": "Position {position} has readings far larger than a gyro at rest can read: check the unit.",
         "zh-CN": "位置 {position} 的读数远大于静止陀螺可能的读数，请检查单位。",

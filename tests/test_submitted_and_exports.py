@@ -170,3 +170,100 @@ def test_streamed_json_export_is_valid_and_complete(world):  # noqa: F811
     assert values[("heading", 2)] == pytest.approx(HEADING[2])
     assert values[("latitude", 4)] == pytest.approx(VERTICAL[4])
     assert document["results"]["heading"]["theta_deg"] == pytest.approx(-10.753, abs=1e-3)
+
+
+# --- API input that used to answer 500 ------------------------------------------------------
+
+
+@pytest.fixture
+def api_session(client, student):
+    from tests.test_api import new_api_session
+
+    auth = token_for(client, "student1")
+    return client, auth, new_api_session(client, auth)
+
+
+def stored_takes() -> int:
+    with read_session() as db:
+        return len(db.exec(select(Take)).all())
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        '{"samples": [1,2,3,4,5,6,7,8,9,10], "angle_deg": NaN}',
+        '{"samples": [1,2,3,4,5,6,7,8,9,10], "angle_deg": Infinity}',
+        '{"samples": [1,2,3,4,5,6,7,8,9,10], "angle_deg": -Infinity}',
+        '{"samples": [1,2,3,4,5,6,7,8,9,10], "angle_deg": 1e309}',
+        '{"samples": [1,2,3,4,5,6,7,8,9,10], "angle_deg": 1e20}',
+        '{"samples": [1,2,3,4,5,6,7,8,9,1e309]}',
+        '{"samples": [1,2,3,4,5,6,7,8,9,NaN]}',
+        '{"samples": [1,2,3,4,5,6,7,8,9,' + "1" + "0" * 400 + "]}",
+        '{"samples": [1,2,3,4,5,6,7,8,9,10], "times_s": [0,1,2,3,4,5,6,7,8,1e309]}',
+        "[" * 100_000 + "]" * 100_000,
+        '{"samples": ' + "[" * 50_000 + "]" * 50_000 + "}",
+    ],
+    ids=[
+        "nan-angle",
+        "inf-angle",
+        "minus-inf-angle",
+        "overflow-angle",
+        "huge-angle",
+        "overflow-sample",
+        "nan-sample",
+        "10**400",
+        "overflow-time",
+        "deep-array",
+        "deep-samples",
+    ],
+)
+def test_pathological_upload_bodies_are_4xx_and_store_nothing(api_session, body):
+    client, auth, session_id = api_session
+    headers = {**auth, "Content-Type": "application/json"}
+    for path in ("heading/positions/1", "heading/positions/1/samples"):
+        method = client.put if path.endswith("/1") else client.post
+        response = method(f"{API}/sessions/{session_id}/{path}", content=body, headers=headers)
+        assert 400 <= response.status_code < 500, (path, response.status_code, response.text)
+        assert isinstance(response.json()["detail"], str | list)
+    assert stored_takes() == 0
+
+
+@pytest.mark.parametrize("angle", ["inf", "nan", "-inf", "1e400", "5000"])
+def test_csv_upload_angle_in_the_url_must_be_finite(api_session, angle):
+    client, auth, session_id = api_session
+    response = client.put(
+        f"{API}/sessions/{session_id}/heading/positions/1?angle_deg={angle}",
+        content="\n".join(["10.5"] * 10),
+        headers={**auth, "Content-Type": "text/csv"},
+    )
+    assert response.status_code == 400, response.text
+    assert stored_takes() == 0
+
+
+@pytest.mark.parametrize("value", ["inf", "nan", "1e400"])
+def test_csv_upload_values_must_be_finite(api_session, value):
+    client, auth, session_id = api_session
+    response = client.put(
+        f"{API}/sessions/{session_id}/heading/positions/1",
+        content="\n".join(["10.5"] * 9 + [value]),
+        headers={**auth, "Content-Type": "text/csv"},
+    )
+    assert response.status_code == 400, response.text
+    assert stored_takes() == 0
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        '{"station": {"latitude_deg": NaN}}',
+        '{"station": {"latitude_deg": 40}, "heading": {"start_angle_deg": Infinity}}',
+        '{"station": {"latitude_deg": 40}, "latitude": {"step_deg": NaN}}',
+        '{"title": ' + "[" * 100_000 + "]" * 100_000 + "}",
+    ],
+)
+def test_session_settings_must_be_finite(api_session, body):
+    client, auth, _ = api_session
+    response = client.post(
+        f"{API}/sessions", content=body, headers={**auth, "Content-Type": "application/json"}
+    )
+    assert 400 <= response.status_code < 500, response.text

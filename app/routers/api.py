@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import csv
 import io
-import json
+import math
 from dataclasses import dataclass
 from datetime import datetime
 from typing import Annotated, Any, Literal
@@ -18,7 +18,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from fastapi import APIRouter, Depends, Form, HTTPException, Path, Request
 from fastapi.responses import JSONResponse, Response, StreamingResponse
-from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt
+from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt, ValidationError
 from sqlmodel import Session, select
 
 from app import labsessions
@@ -36,7 +36,7 @@ from app.deps import (
     load_login,
 )
 from app.exports import csv_table
-from app.jsonsafe import json_safe
+from app.jsonsafe import UnsafeJson, json_safe, loads_finite
 from app.labsim import nominal_angle
 from app.labstore import (
     MAX_SAMPLES_PER_POSITION,
@@ -188,19 +188,19 @@ class MeOut(BaseModel):
 
 
 class Station(BaseModel):
-    model_config = ConfigDict(strict=True)
+    model_config = ConfigDict(strict=True, allow_inf_nan=False)
     latitude_deg: float = Field(ge=-90, le=90)
     earth_rate_deg_h: float = Field(gt=0, lt=1000, default=15.041)
 
 
 class HeadingSettings(BaseModel):
-    model_config = ConfigDict(strict=True)
+    model_config = ConfigDict(strict=True, allow_inf_nan=False)
     rotation: Literal["ccw", "cw"] = "ccw"
     start_angle_deg: float = 0.0
 
 
 class LatitudeSettings(BaseModel):
-    model_config = ConfigDict(strict=True)
+    model_config = ConfigDict(strict=True, allow_inf_nan=False)
     start_angle_deg: float = 0.0
     step_deg: float = 90.0
 
@@ -208,6 +208,7 @@ class LatitudeSettings(BaseModel):
 class SessionCreate(BaseModel):
     model_config = ConfigDict(
         strict=True,
+        allow_inf_nan=False,
         json_schema_extra={
             "examples": [
                 {
@@ -253,6 +254,7 @@ class SessionOut(BaseModel):
 class PositionUpload(BaseModel):
     model_config = ConfigDict(
         strict=True,
+        allow_inf_nan=False,
         json_schema_extra={
             "examples": [
                 {
@@ -438,10 +440,9 @@ def read_upload(request: Request, body: bytes) -> PositionUpload:
     if content_type not in ("application/json", ""):
         raise HTTPException(415, "Send application/json or text/csv.")
     try:
-        data = json.loads(body)
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        raise HTTPException(400, "The body is not valid JSON.") from None
-    from pydantic import ValidationError
+        data = loads_finite(body)
+    except UnsafeJson as error:
+        raise HTTPException(400, str(error)) from None
 
     try:
         return PositionUpload.model_validate(data)
@@ -469,6 +470,8 @@ def parse_csv_upload(body: bytes, unit: str, angle: str | None) -> PositionUploa
             continue
         try:
             numbers = [float(c) for c in cells]
+            if not all(math.isfinite(x) for x in numbers):
+                raise ValueError("not finite")
         except ValueError:
             if number == 1 and not values:
                 continue  # a header such as "time_s,value"
@@ -491,6 +494,8 @@ def parse_csv_upload(body: bytes, unit: str, angle: str | None) -> PositionUploa
         angle_value = float(angle) if angle is not None else None
     except (GyroInputError, ValueError) as error:
         raise HTTPException(400, str(error)) from None
+    if angle_value is not None and not math.isfinite(angle_value):
+        raise HTTPException(400, "angle_deg must be a finite number.")
     return PositionUpload(samples=values, unit=unit, times_s=times or None, angle_deg=angle_value)
 
 
