@@ -15,7 +15,7 @@ from app.config import Settings, get_settings
 from app.db import get_engine, read_session, reader, write_session, writer
 from app.models import AuthSession, Role, User, utcnow
 from app.security import session_is_live, token_digest, tokens_match
-from app.web import CSRF_COOKIE, SESSION_COOKIE
+from app.web import SESSION_COOKIE, csrf_cookie_name
 
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 TOUCH_INTERVAL = timedelta(seconds=60)
@@ -160,7 +160,9 @@ def csrf_protect(
     if request.method in SAFE_METHODS:
         return
     user = load_login(request, db, settings)
-    expected = request.state.auth.csrf_token if user else request.cookies.get(CSRF_COOKIE)
+    expected = (
+        request.state.auth.csrf_token if user else request.cookies.get(csrf_cookie_name(request))
+    )
     if not tokens_match(expected, given):
         raise CsrfFailed()
 

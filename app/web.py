@@ -19,6 +19,10 @@ from app.security import signed, unsigned
 
 SESSION_COOKIE = "gyrolab_session"
 CSRF_COOKIE = "gyrolab_csrf"
+# Over https the pre-login CSRF cookie carries the __Host- prefix: browsers accept it only
+# from this very host (Secure, Path=/, no Domain), so a sibling subdomain cannot plant a
+# known token for a log-in CSRF.  Plain http (development) keeps the plain name.
+HOST_CSRF_COOKIE = "__Host-" + CSRF_COOKIE
 FLASH_COOKIE = "gyrolab_flash"
 LANG_COOKIE = "gyrolab_lang"
 
@@ -39,6 +43,10 @@ def request_language(request: Request) -> str:
 
 def is_https(request: Request) -> bool:
     return request.url.scheme == "https"
+
+
+def csrf_cookie_name(request: Request) -> str:
+    return HOST_CSRF_COOKIE if is_https(request) else CSRF_COOKIE
 
 
 def set_cookie(response, request: Request, name: str, value: str, max_age: int | None = None):
@@ -84,7 +92,9 @@ def csrf_token_for(request: Request) -> str:
     auth = getattr(request.state, "auth", None)
     if auth is not None:
         return auth.csrf_token
-    existing = getattr(request.state, "anon_csrf", None) or request.cookies.get(CSRF_COOKIE)
+    existing = getattr(request.state, "anon_csrf", None) or request.cookies.get(
+        csrf_cookie_name(request)
+    )
     if not existing:
         existing = request.state.anon_csrf = secrets.token_urlsafe(32)
     return existing
@@ -115,6 +125,6 @@ def render(
     if flashes:
         response.delete_cookie(FLASH_COOKIE, path="/")
     anon = getattr(request.state, "anon_csrf", None)
-    if anon and request.cookies.get(CSRF_COOKIE) != anon:
-        set_cookie(response, request, CSRF_COOKIE, anon)
+    if anon and request.cookies.get(csrf_cookie_name(request)) != anon:
+        set_cookie(response, request, csrf_cookie_name(request), anon)
     return response

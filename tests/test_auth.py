@@ -276,3 +276,31 @@ def test_successful_log_ins_leave_no_failure_and_failures_charge_both(client, te
     token = client.post("/api/v1/auth/token", data={"username": "teacher1", "password": PASSWORD})
     assert token.status_code == 200
     assert failures() == [("address", "testclient")]  # a success clears the account's
+
+
+def test_pre_login_csrf_cookie_is_host_only_over_https(app, teacher):
+    """A sibling subdomain cannot plant the log-in form's CSRF cookie: over https it is a
+    __Host- cookie, and the plain-named cookie it could plant is ignored."""
+    from fastapi.testclient import TestClient
+
+    with TestClient(app, base_url="https://testserver", follow_redirects=False) as secure:
+        page = secure.get("/login")
+        header = page.headers["set-cookie"]
+        assert header.startswith("__Host-gyrolab_csrf=")
+        assert "secure" in header.lower() and "path=/" in header.lower()
+        assert "domain" not in header.lower()
+        token = csrf_from(secure, "/login")
+        planted = "planted-token-123456789"
+        secure.cookies.clear()
+        secure.cookies.set("gyrolab_csrf", planted)
+        refused = secure.post(
+            "/login",
+            data={"username": "teacher1", "password": PASSWORD, "csrf_token": planted},
+        )
+        assert refused.status_code == 403
+        secure.cookies.clear()
+        secure.cookies.set("__Host-gyrolab_csrf", token)
+        accepted = secure.post(
+            "/login", data={"username": "teacher1", "password": PASSWORD, "csrf_token": token}
+        )
+        assert accepted.status_code == 303
