@@ -209,3 +209,26 @@ def test_strangers_and_other_origins_are_refused(client, student, app):
     anonymous = TestClient(app)
     with pytest.raises(WebSocketDisconnect), connect(anonymous, session_id) as ws:
         ws.receive_json()
+
+
+def test_client_frames_cannot_speed_up_a_recording(student_client):
+    """60 samples at 1 Hz and the top speed-up (60×) take one second of the server's clock,
+    however many frames the client sends meanwhile (a flood of {} once finished an 1800 s
+    recording in 0.2 s)."""
+    import time
+
+    session_id = new_session(student_client)
+    with connect(student_client, session_id) as ws:
+        start = time.monotonic()
+        ws.send_json(
+            {"action": "start", "part": "heading", "position": 1, "dwell_s": 60, "speed": 60}
+        )
+        for _ in range(3000):
+            ws.send_text("{}")
+        while True:
+            frame = ws.receive_json()
+            if frame["type"] in ("saved", "error"):
+                break
+        elapsed = time.monotonic() - start
+    assert frame["type"] == "saved" and frame["n"] == 60
+    assert elapsed >= 0.9

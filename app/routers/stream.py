@@ -40,6 +40,7 @@ router = APIRouter(tags=["streams"])
 
 FRAME_SECONDS = 0.2
 MAX_SPEED = 60.0
+INBOX_FRAMES = 64
 
 
 def _same_origin(websocket: WebSocket) -> bool:
@@ -146,7 +147,7 @@ async def stream(websocket: WebSocket, session_id: ObjectId) -> None:
         return
     language = request_language(websocket)
     await websocket.accept()
-    inbox: asyncio.Queue = asyncio.Queue()
+    inbox: asyncio.Queue = asyncio.Queue(maxsize=INBOX_FRAMES)  # a flood waits in the socket
     reader = asyncio.create_task(_read_into(websocket, inbox))
     try:
         while True:
@@ -220,24 +221,32 @@ async def _record(
         }
     )
     values, times = [], []
-    per_frame = take.rate_hz * speed * FRAME_SECONDS
-    owed = 0.0
+    # The server alone paces a recording: samples are due by the clock (rate × speed ×
+    # elapsed time), so frames a client sends in between change nothing.
+    loop = asyncio.get_running_loop()
+    started = loop.time()
+    next_tick = started + FRAME_SECONDS
     stopped = False
     while len(values) < total and not stopped:
         try:
-            incoming = await asyncio.wait_for(inbox.get(), timeout=FRAME_SECONDS)
+            incoming = await asyncio.wait_for(
+                inbox.get(), timeout=max(0.0, next_tick - loop.time())
+            )
         except TimeoutError:
             incoming = {}
         if incoming is None:
             raise _Closed()
         stopped = incoming.get("action") == "stop"
-        owed += per_frame
-        count = min(int(owed), total - len(values))
+        now = loop.time()
+        if not stopped and now < next_tick:
+            continue  # any other client frame: not a reason to send samples
+        next_tick = max(next_tick + FRAME_SECONDS, now)
+        due = min(total, int(take.rate_hz * speed * (now - started)))
+        count = due - len(values)
         if stopped and not values:
             count = max(count, 1)
         if count <= 0:
             continue
-        owed -= count
         batch, batch_times = take.next(count)
         values.extend(batch.tolist())
         times.extend(batch_times.tolist())
