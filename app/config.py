@@ -31,9 +31,11 @@ class Settings(BaseSettings):
     session_lifetime_hours: int = Field(default=12, ge=1)
     host: str = "127.0.0.1"
     port: int = Field(default=8000, ge=1, le=65535)
-    login_max_failures_per_account: int = Field(default=5, ge=1)
-    login_max_failures_per_address: int = Field(default=30, ge=1)
+    login_max_failures_per_pair: int = Field(default=5, ge=2)
+    login_max_failures_per_account: int = Field(default=10, ge=1)
+    login_max_failures_per_address: int = Field(default=100, ge=1)
     login_window_minutes: int = Field(default=15, ge=1)
+    login_hash_slots: int = Field(default=4, ge=1)
     api_rate_per_minute: int = Field(default=600, ge=1)
     max_body_bytes: int = Field(default=32 * 1024 * 1024, ge=1024)
 

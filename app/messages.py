@@ -61,6 +61,14 @@ MESSAGES: dict[str, dict[str, str]] = {
         "try again, or ask your teacher to reset your password.",
         "zh-CN": "登录失败次数过多。请等待 {minutes} 分钟后再试，或请老师重置密码。",
     },
+    "login.slow_down": {
+        "en": "Wrong passwords slow down log-in: wait {seconds} seconds and try again.",
+        "zh-CN": "密码错误次数较多，登录已放慢：请等待 {seconds} 秒后再试。",
+    },
+    "login.busy": {
+        "en": "The server is busy checking passwords. Try again in a moment.",
+        "zh-CN": "服务器正忙于验证密码，请稍后再试。",
+    },
     "login.logged_out": {"en": "You have logged out.", "zh-CN": "您已退出登录。"},
     # password
     "password.title": {"en": "Change password", "zh-CN": "修改密码"},

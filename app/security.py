@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import hashlib
 import hmac
+import math
 import secrets
+import threading
+from dataclasses import dataclass
 from datetime import timedelta
 from functools import lru_cache
 
 from pwdlib import PasswordHash
 from pwdlib.hashers.argon2 import Argon2Hasher
-from sqlalchemy import delete, func, update
+from sqlalchemy import delete, update
 from sqlmodel import Session, select
 
 from app.config import Settings
@@ -146,59 +149,146 @@ def unsigned(value: str | None, secret: str) -> str | None:
 
 
 # --- login throttling (in the database: survives restarts, shared by workers) --------------
+#
+# Failures are counted in four ways, so that an attacker cannot turn the throttle against
+# the user it protects (OWASP's "device cookies"):
+#   pair     account + client address: growing delays, then a pause (the user who mistypes)
+#   account  all untrusted attempts at one account, from anywhere: brute force stays slow
+#   address  all untrusted failures from one address: password spraying stays slow
+#   device   attempts from a browser that logged in to this account before (a signed
+#            cookie): they skip the account and address limits, so guesses from elsewhere
+#            never lock the real user out, nor a class behind one NAT.
+# Each attempt is charged before its password is hashed (outside the write lock), so
+# guesses sent in parallel cannot slip past a limit; at most ``login_hash_slots`` hashes
+# run at once per process (argon2id takes 19 MiB each).
+
+HASH_WAIT_SECONDS = 5.0
 
 
-def _recent_failures(db: Session, scope: str, key: str, settings: Settings) -> int:
-    since = utcnow() - timedelta(minutes=settings.login_window_minutes)
-    return db.exec(
-        select(func.count())
-        .select_from(LoginFailure)
-        .where(LoginFailure.scope == scope, LoginFailure.key == key, LoginFailure.at >= since)
-    ).one()
+@dataclass
+class LoginOutcome:
+    user: User | None
+    problem: str | None = None  # "throttled" | "failed" | "busy"
+    retry_after: int = 0  # seconds, for "throttled" and "busy"
+    device_cookie: str | None = None  # on success: remember this browser for the account
+
+
+@lru_cache
+def _hash_slots(count: int) -> threading.BoundedSemaphore:
+    return threading.BoundedSemaphore(count)
 
 
 def _account_key(username: str) -> str:
     return username.strip().lower()[:128]
 
 
-def login_throttled(db: Session, username: str, address: str, settings: Settings) -> bool:
-    account = _account_key(username)
-    return (
-        _recent_failures(db, "account", account, settings)
-        >= settings.login_max_failures_per_account
-        or _recent_failures(db, "address", address, settings)
-        >= settings.login_max_failures_per_address
+def _pair_key(account: str, address: str) -> str:
+    return hashlib.sha256(f"{account}|{address}".encode()).hexdigest()
+
+
+def device_cookie_value(account: str, secret: str) -> str:
+    return signed(f"{account}:{secrets.token_urlsafe(12)}", secret)
+
+
+def trusted_device(cookie: str | None, account: str, secret: str) -> str | None:
+    """The device key when the signed cookie was issued to this account, else None."""
+    value = unsigned(cookie, secret)
+    if not value or ":" not in value:
+        return None
+    owner, nonce = value.rsplit(":", 1)
+    return nonce[:64] if owner == account else None
+
+
+def _failure_times(db: Session, scope: str, key: str, since) -> list:
+    return list(
+        db.exec(
+            select(LoginFailure.at)
+            .where(LoginFailure.scope == scope, LoginFailure.key == key, LoginFailure.at >= since)
+            .order_by(LoginFailure.at)
+        ).all()
     )
+
+
+def _wait_for_limit(times: list, limit: int, window: timedelta, now) -> float:
+    """Seconds until fewer than ``limit`` failures are left in the window."""
+    if len(times) < limit:
+        return 0.0
+    return (times[len(times) - limit] + window - now).total_seconds()
+
+
+def login_wait(
+    db: Session, account: str, address: str, device: str | None, settings: Settings
+) -> tuple[int, bool]:
+    """(seconds this attempt must wait, whether it counts as from a trusted device)."""
+    now = utcnow()
+    window = timedelta(minutes=settings.login_window_minutes)
+    since = now - window
+    pair = _failure_times(db, "pair", _pair_key(account, address), since)
+    waits = [_wait_for_limit(pair, settings.login_max_failures_per_pair, window, now)]
+    if 2 <= len(pair) < settings.login_max_failures_per_pair:  # 2 s, 4 s, 8 s, ...
+        delay = timedelta(seconds=2 ** (len(pair) - 1))
+        waits.append((pair[-1] + delay - now).total_seconds())
+    trusted = device is not None and (
+        len(_failure_times(db, "device", device, since)) < settings.login_max_failures_per_pair
+    )
+    if not trusted:
+        account_times = _failure_times(db, "account", account, since)
+        address_times = _failure_times(db, "address", address, since)
+        waits.append(
+            _wait_for_limit(account_times, settings.login_max_failures_per_account, window, now)
+        )
+        waits.append(
+            _wait_for_limit(address_times, settings.login_max_failures_per_address, window, now)
+        )
+    wait = max(waits)
+    return (math.ceil(wait) if wait > 0 else 0), trusted
 
 
 def log_in(
-    db: Session, username: str, password: str, address: str, settings: Settings
-) -> tuple[User | None, str | None]:
-    """Check a log-in: ``(user, None)`` when the password matches (the account's failures
-    are cleared; the caller adds its session or token and commits), otherwise
-    ``(None, "throttled" | "failed")`` with the failure already committed.
-
-    The attempt is charged to the *account* before the password is checked, so that
-    guesses at one account sent in parallel cannot slip past its limit while the slow hash
-    runs -- outside the write lock, after a commit.  The *address* is charged only for a
-    wrong password: a class logging in at once from behind one address must not be
-    throttled by its own log-ins in flight."""
-    if login_throttled(db, username, address, settings):
-        return None, "throttled"
-    db.add(LoginFailure(scope="account", key=_account_key(username)))
+    db: Session,
+    username: str,
+    password: str,
+    address: str,
+    settings: Settings,
+    device_cookie: str | None = None,
+) -> LoginOutcome:
+    """Check a log-in.  On success the caller adds its session or token and commits (and
+    sets ``device_cookie`` where it can); every failure is already committed."""
+    account = _account_key(username)
+    address = address[:128]
+    device = trusted_device(device_cookie, account, settings.secret_key)
+    wait, trusted = login_wait(db, account, address, device, settings)
+    if wait:
+        return LoginOutcome(None, "throttled", wait)
+    charges = [LoginFailure(scope="pair", key=_pair_key(account, address))]
+    charges.append(
+        LoginFailure(scope="device", key=device)
+        if trusted
+        else LoginFailure(scope="account", key=account)
+    )
+    db.add_all(charges)
     user = db.exec(select(User).where(User.username == normalise_username(username))).first()
     db.commit()
-    if not password_matches(user, password):
-        db.add(LoginFailure(scope="address", key=address[:128]))
-        db.commit()
-        return None, "failed"
-    clear_login_failures(db, user.username)
-    return user, None
-
-
-def clear_login_failures(db: Session, username: str) -> None:
+    slots = _hash_slots(settings.login_hash_slots)
+    if not slots.acquire(timeout=HASH_WAIT_SECONDS):
+        _uncharge(db, charges)
+        return LoginOutcome(None, "busy", 1)
+    try:
+        matches = password_matches(user, password)
+    finally:
+        slots.release()
+    if not matches:
+        if not trusted:
+            db.add(LoginFailure(scope="address", key=address))
+            db.commit()
+        return LoginOutcome(None, "failed")
+    _uncharge(db, charges)
     db.exec(
-        delete(LoginFailure).where(
-            LoginFailure.scope == "account", LoginFailure.key == _account_key(username)
-        )
+        delete(LoginFailure).where(LoginFailure.scope == "pair", LoginFailure.key == charges[0].key)
     )
+    return LoginOutcome(user, device_cookie=device_cookie_value(account, settings.secret_key))
+
+
+def _uncharge(db: Session, charges: list[LoginFailure]) -> None:
+    db.exec(delete(LoginFailure).where(LoginFailure.id.in_([c.id for c in charges])))
+    db.commit()

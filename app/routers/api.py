@@ -157,17 +157,22 @@ def login_for_token(
     """OAuth2 password flow: a one-hour bearer token (read and upload), throttled like the
     log-in page."""
     address = request.client.host if request.client else "unknown"
-    user, problem = log_in(db, username, password, address, settings)
-    if problem == "throttled":
+    outcome = log_in(db, username, password, address, settings)
+    if outcome.problem == "throttled":
         raise HTTPException(
             429,
             "Too many failed log-in attempts; wait and try again.",
-            headers={"Retry-After": str(settings.login_window_minutes * 60)},
+            headers={"Retry-After": str(outcome.retry_after)},
         )
-    if user is None:
+    if outcome.problem == "busy":
+        raise HTTPException(
+            503, "The server is busy checking passwords; try again.", headers={"Retry-After": "1"}
+        )
+    if outcome.user is None:
         raise HTTPException(
             401, "Wrong username or password.", headers={"WWW-Authenticate": "Bearer"}
         )
+    user = outcome.user
     if user.must_change_password:
         db.commit()
         raise HTTPException(403, "Change your initial password in the browser first.")

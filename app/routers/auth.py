@@ -20,6 +20,11 @@ from app.security import (
 )
 from app.web import LANG_COOKIE, SESSION_COOKIE, flash, redirect, render, set_cookie
 
+# A browser that logged in to an account before: its attempts skip the limits that
+# strangers' guesses fill (app.security); a signed value, kept for 180 days.
+DEVICE_COOKIE = "gyrolab_device"
+DEVICE_COOKIE_SECONDS = 180 * 24 * 3600
+
 router = APIRouter(tags=["pages: account"], include_in_schema=False)
 
 
@@ -55,19 +60,32 @@ def login(
 ):
     address = client_address(request)
     context = {"next": safe_next(next), "username": username}
-    user, problem = log_in(db, username, password, address, settings)
-    if problem == "throttled":
-        context["error"] = "login.throttled"
-        context["minutes"] = settings.login_window_minutes
-        return render(request, "auth/login.html", context, 429)
-    if user is None:
+    outcome = log_in(db, username, password, address, settings, request.cookies.get(DEVICE_COOKIE))
+    if outcome.problem in ("throttled", "busy"):
+        context.update(login_wait_message(outcome))
+        status = 429 if outcome.problem == "throttled" else 503
+        response = render(request, "auth/login.html", context, status)
+        response.headers["Retry-After"] = str(outcome.retry_after)
+        return response
+    if outcome.user is None:
         context["error"] = "login.failed"
         return render(request, "auth/login.html", context, 401)
+    user = outcome.user
     token = create_session(db, user, settings)
     db.commit()
     response = redirect("/account/password" if user.must_change_password else safe_next(next))
     set_cookie(response, request, SESSION_COOKIE, token, settings.session_lifetime_hours * 3600)
+    set_cookie(response, request, DEVICE_COOKIE, outcome.device_cookie, DEVICE_COOKIE_SECONDS)
     return response
+
+
+def login_wait_message(outcome) -> dict:
+    """The log-in page's words for a refused attempt: how long to wait."""
+    if outcome.problem == "busy":
+        return {"error": "login.busy"}
+    if outcome.retry_after < 120:
+        return {"error": "login.slow_down", "seconds": outcome.retry_after}
+    return {"error": "login.throttled", "minutes": -(-outcome.retry_after // 60)}
 
 
 @router.post("/logout", dependencies=[CsrfProtected])
