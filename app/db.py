@@ -37,6 +37,28 @@ class UnstorableText(ValueError):
     """Text with a NUL character: PostgreSQL cannot store it, so neither backend takes it."""
 
 
+STORAGE_FAULTS = (
+    "readonly database",  # SQLite: the file or its folder is not writable
+    "read-only",  # PostgreSQL: default_transaction_read_only, a hot standby
+    "read only",
+    "disk is full",  # SQLite: SQLITE_FULL
+    "no space left",  # PostgreSQL: ENOSPC
+    "disk full",
+    "unable to open database file",  # SQLite: the folder lost its permissions
+)
+
+
+def storage_unavailable(error: BaseException) -> bool:
+    """Whether a database error means "cannot write now" (read-only or full storage)
+    rather than a bug: the app answers 503 and recovers once the storage is writable."""
+    from sqlalchemy.exc import DBAPIError
+
+    if not isinstance(error, DBAPIError):
+        return False
+    text = str(error.orig if error.orig is not None else error).lower()
+    return any(fault in text for fault in STORAGE_FAULTS)
+
+
 def make_engine(url: str) -> Engine:
     engine = _sqlite_engine(url) if is_sqlite(url) else _postgres_engine(url)
     event.listen(engine, "before_cursor_execute", _refuse_nul_text)

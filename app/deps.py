@@ -8,11 +8,19 @@ from typing import Annotated
 
 from fastapi import Depends, Path, Request
 from sqlalchemy import inspect
+from sqlalchemy.exc import DBAPIError
 from sqlmodel import Session, select
 from starlette.datastructures import FormData
 
 from app.config import Settings, get_settings
-from app.db import get_engine, read_session, reader, write_session, writer
+from app.db import (
+    get_engine,
+    read_session,
+    reader,
+    storage_unavailable,
+    write_session,
+    writer,
+)
 from app.models import AuthSession, Role, User, utcnow
 from app.security import session_is_live, token_digest, tokens_match
 from app.web import SESSION_COOKIE, csrf_cookie_name
@@ -114,12 +122,17 @@ def _resolve_login(request: Request, db: Session, settings: Settings) -> User | 
 
 
 def _touch(session_id: int) -> None:
-    """Extend the idle timer in its own short write transaction."""
-    with write_session() as db:
-        record = db.get(AuthSession, session_id)
-        if record is not None:
-            record.last_seen_at = utcnow()
-            db.add(record)
+    """Extend the idle timer in its own short write transaction (skipped while the
+    database cannot be written: reading pages goes on)."""
+    try:
+        with write_session() as db:
+            record = db.get(AuthSession, session_id)
+            if record is not None:
+                record.last_seen_at = utcnow()
+                db.add(record)
+    except DBAPIError as error:
+        if not storage_unavailable(error):
+            raise
 
 
 async def read_form(request: Request) -> FormData:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import logging
+import time
 from contextlib import asynccontextmanager
 from pathlib import Path
 
@@ -10,14 +12,16 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import FileResponse, HTMLResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
+from sqlalchemy.exc import DBAPIError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from swagger_ui_bundle import swagger_ui_path
 
 from app import __version__
 from app.config import get_settings
-from app.db import UnstorableText
+from app.db import UnstorableText, get_engine, storage_unavailable
 from app.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequired, reload_login
 from app.headers import SecurityHeaders
+from app.i18n import translate
 from app.paths import STATIC_DIR
 from app.routers import (
     admin,
@@ -33,7 +37,21 @@ from app.routers import (
     stream,
     tokens,
 )
-from app.web import redirect, render
+from app.web import redirect, render, request_language
+
+log = logging.getLogger("gyrolab")
+STORAGE_LOG_INTERVAL_S = 600.0
+_storage_logged_at = [-STORAGE_LOG_INTERVAL_S]
+
+
+def report_storage_fault(error: DBAPIError) -> None:
+    """Log a read-only or full database once, not once per request (again every ten
+    minutes while it lasts)."""
+    now = time.monotonic()
+    if now - _storage_logged_at[0] >= STORAGE_LOG_INTERVAL_S:
+        _storage_logged_at[0] = now
+        log.error("the database cannot be written; answering 503 until it can: %s", error.orig)
+
 
 API_DESCRIPTION = """REST API of GyroLab, the FOG north-finding teaching lab.
 
@@ -159,6 +177,24 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
         # The failed flush rolled the request's session back and expired its objects.
         reload_login(request)
         return _error_page(request, 400, "error.nul_text")
+
+    @app.exception_handler(DBAPIError)
+    def _database_error(request: Request, exc: DBAPIError):
+        if not storage_unavailable(exc):
+            raise exc
+        report_storage_fault(exc)
+        get_engine().dispose()  # connections opened read-only stay so: start afresh
+        reload_login(request)
+        if _wants_json(request):
+            language = request_language(request)
+            return JSONResponse(
+                {"detail": translate("error.storage", language)},
+                status_code=503,
+                headers={"Retry-After": "30"},
+            )
+        response = _error_page(request, 503, "error.storage")
+        response.headers["Retry-After"] = "30"
+        return response
 
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError):

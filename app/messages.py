@@ -37,6 +37,12 @@ MESSAGES: dict[str, dict[str, str]] = {
         "zh-CN": "此地址不接受这种请求。",
     },
     "error.too_large": {"en": "The upload is too large.", "zh-CN": "上传的内容太大。"},
+    "error.storage": {
+        "en": "The database cannot be written just now (read-only or full storage), so "
+        "nothing was saved. Try again in a minute; if it persists, tell the administrator.",
+        "zh-CN": "数据库暂时无法写入（只读或存储空间已满），本次内容未保存。请稍后再试；"
+        "如果持续出现，请联系管理员。",
+    },
     "error.nul_text": {
         "en": "Text may not contain NUL (\\0) characters; nothing was saved.",
         "zh-CN": "文本中不能含有 NUL（\\0）字符；未保存任何内容。",

@@ -1,0 +1,95 @@
+"""A database that cannot be written answers 503 with a clear message and recovers by
+itself once it can (the file made read-only, then writable again)."""
+
+from __future__ import annotations
+
+import logging
+import os
+import stat
+
+import pytest
+from sqlmodel import select
+
+from app.db import read_session
+from app.models import LabSession
+from tests.conftest import post_form
+from tests.test_api import API, new_api_session, token_for
+
+pytestmark = pytest.mark.sqlite_only
+
+
+@pytest.fixture
+def read_only_database(var_dir):
+    """Make the SQLite file and its folder read-only (yield), then writable again."""
+    database = var_dir / "gyrolab.db"
+    paths = [var_dir, database] + [var_dir / f"gyrolab.db-{s}" for s in ("wal", "shm")]
+    modes = {p: p.stat().st_mode for p in paths if p.exists()}
+
+    def make(read_only: bool) -> None:
+        for path, mode in modes.items():
+            os.chmod(path, stat.S_IMODE(mode) & ~0o222 if read_only else mode)
+
+    yield make
+    make(False)
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes to read-only files")
+def test_read_only_database_answers_503_and_recovers(student_client, read_only_database, caplog):
+    _check(student_client, read_only_database, caplog)
+
+
+def test_read_only_database_answers_503_and_recovers_as_root(
+    student_client, read_only_database, caplog, monkeypatch
+):
+    """As root (CI) file modes do not stop writes: SQLite's query_only pragma makes every
+    connection refuse writes exactly as a read-only file does."""
+    from sqlalchemy import event
+
+    from app.db import get_engine
+
+    engine = get_engine()
+    state = {"read_only": False}
+
+    def on_connect(dbapi_connection, _record) -> None:
+        if state["read_only"]:
+            dbapi_connection.execute("PRAGMA query_only = ON")
+
+    event.listen(engine, "connect", on_connect)
+
+    def make(read_only: bool) -> None:
+        state["read_only"] = read_only
+        engine.dispose()
+
+    try:
+        _check(student_client, make, caplog)
+    finally:
+        event.remove(engine, "connect", on_connect)
+
+
+def _check(client, make_read_only, caplog) -> None:
+    auth = token_for(client, "student1")
+    session_id = new_api_session(client, auth)
+    make_read_only(True)
+    with caplog.at_level(logging.ERROR, logger="gyrolab"):
+        for _ in range(3):
+            reply = client.post(
+                f"{API}/sessions", json={"station": {"latitude_deg": 40}}, headers=auth
+            )
+            assert reply.status_code == 503, reply.text
+            assert "cannot be written" in reply.json()["detail"]
+            assert reply.headers["Retry-After"] == "30"
+        page = post_form(client, "/lab/sessions", {"station": "handout"}, page="/lab")
+        assert page.status_code == 503 and "cannot be written" in page.text
+        zh = client.post(
+            f"{API}/sessions",
+            json={"station": {"latitude_deg": 40}},
+            headers={**auth, "Accept-Language": "zh-CN"},
+        )
+        assert zh.status_code == 503 and "数据库暂时无法写入" in zh.json()["detail"]
+        assert client.get(f"/lab/sessions/{session_id}").status_code == 200  # reading goes on
+    assert len([r for r in caplog.records if "cannot be written" in r.getMessage()]) <= 1
+    make_read_only(False)
+    again = client.post(f"{API}/sessions", json={"station": {"latitude_deg": 40}}, headers=auth)
+    assert again.status_code == 201, again.text
+    with read_session() as db:
+        assert len(db.exec(select(LabSession)).all()) == 2
