@@ -558,9 +558,13 @@ UPLOAD_BODY = {
     "requestBody": {
         "required": True,
         "content": {
-            "application/json": {"schema": {"$ref": "#/components/schemas/PositionUpload"}},
+            "application/json": {"schema": PositionUpload.model_json_schema()},
             "text/csv": {
-                "schema": {"type": "string"},
+                "schema": {
+                    "type": "string",
+                    "description": "one value per line, or time_s,value per line; an "
+                    "optional header; ?unit= and ?angle_deg= in the URL",
+                },
                 "example": "time_s,value\n0,10.74\n1,10.65\n2,10.84\n",
             },
         },
