@@ -11,10 +11,10 @@ import secrets
 from dataclasses import dataclass
 from datetime import timedelta
 
-from sqlalchemy import case, or_, update
+from sqlalchemy import and_, case, or_, update
 from sqlmodel import Session, select
 
-from app.models import ApiToken, User, utcnow
+from app.models import ApiToken, AuthSession, User, utcnow
 from app.security import token_digest
 
 LOGIN_TOKEN_LIFETIME = timedelta(hours=1)
@@ -59,43 +59,54 @@ class TokenCheck:
     retry_after: int = 0
 
 
-def check_token(db: Session, raw: str, rate_per_minute: int) -> TokenCheck:
-    """Find a live token and count this request in its one-minute window (caller commits).
-
-    One ``UPDATE ... RETURNING`` statement: atomic on its own (a row lock on PostgreSQL),
-    so it needs no serialised write transaction -- every SET expression reads the row as it
-    was, whichever request gets there first."""
-    now = utcnow()
+def _counted(model, condition, now):
+    """``UPDATE model SET <this request counted in its one-minute window> WHERE condition
+    RETURNING ...``: atomic on its own (a row lock on PostgreSQL), so it needs no
+    serialised write transaction -- every SET expression reads the row as it was."""
     window_over = or_(
-        ApiToken.window_start.is_(None), ApiToken.window_start <= now - timedelta(minutes=1)
+        model.window_start.is_(None), model.window_start <= now - timedelta(minutes=1)
+    )
+    return (
+        update(model)
+        .where(condition)
+        .values(
+            window_start=case((window_over, now), else_=model.window_start),
+            window_count=case((window_over, 1), else_=model.window_count + 1),
+        )
+        .returning(model.id, model.user_id, model.window_start, model.window_count)
+    )
+
+
+def _retry_after(row, now) -> int:
+    return max(60 - int((now - row.window_start).total_seconds()), 1)
+
+
+def check_token(db: Session, raw: str, rate_per_minute: int) -> TokenCheck:
+    """Find a live token and count this request in its one-minute window (caller commits)."""
+    now = utcnow()
+    live = and_(
+        ApiToken.token_hash == token_digest(raw),
+        ApiToken.revoked_at.is_(None),
+        or_(ApiToken.expires_at.is_(None), ApiToken.expires_at > now),
     )
     counted = db.execute(
-        update(ApiToken)
-        .where(
-            ApiToken.token_hash == token_digest(raw),
-            ApiToken.revoked_at.is_(None),
-            or_(ApiToken.expires_at.is_(None), ApiToken.expires_at > now),
-        )
-        .values(
-            window_start=case((window_over, now), else_=ApiToken.window_start),
-            window_count=case((window_over, 1), else_=ApiToken.window_count + 1),
-            last_used_at=now,
-        )
-        .returning(
-            ApiToken.id,
-            ApiToken.user_id,
-            ApiToken.scopes,
-            ApiToken.window_start,
-            ApiToken.window_count,
-        )
+        _counted(ApiToken, live, now).values(last_used_at=now).returning(ApiToken.scopes)
     ).first()
     if counted is None:
         return TokenCheck(None, "invalid")
     token = TokenUse(counted.id, counted.user_id, counted.scopes)
     if counted.window_count > rate_per_minute:
-        wait = 60 - int((now - counted.window_start).total_seconds())
-        return TokenCheck(token, "rate", max(wait, 1))
+        return TokenCheck(token, "rate", _retry_after(counted, now))
     return TokenCheck(token)
+
+
+def count_cookie_request(db: Session, auth_session_id: int, rate_per_minute: int) -> int:
+    """Count an API call made with a browser session; 0, or seconds to wait past the rate."""
+    now = utcnow()
+    counted = db.execute(_counted(AuthSession, AuthSession.id == auth_session_id, now)).first()
+    if counted is not None and counted.window_count > rate_per_minute:
+        return _retry_after(counted, now)
+    return 0
 
 
 def user_tokens(db: Session, user: User) -> list[ApiToken]:

@@ -142,6 +142,21 @@ def _bridge(args: argparse.Namespace) -> int:
     return 0
 
 
+def _prune(args: argparse.Namespace) -> int:
+    from app.db import write_session
+    from app.migrate import upgrade_to_head
+    from app.prune import prune_takes
+
+    upgrade_to_head()
+    with write_session() as db:
+        pruned = prune_takes(db, args.days)
+    print(
+        f"removed {pruned.takes} re-recording(s) superseded more than {args.days} days ago "
+        f"({pruned.bytes / 1e6:.1f} MB); submitted data is never removed"
+    )
+    return 0
+
+
 def _backup(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -209,7 +224,9 @@ def build_parser() -> argparse.ArgumentParser:
     migrate = commands.add_parser("migrate", help="apply database migrations")
     migrate.set_defaults(handler=_migrate)
 
-    create = commands.add_parser("create-user", help="create a teacher (or student) account")
+    create = commands.add_parser(
+        "create-user", help="create an administrator, teacher or student account"
+    )
     create.add_argument("--role", choices=["admin", "teacher", "student"], default="teacher")
     create.add_argument("--username", required=True)
     create.add_argument("--display-name")
@@ -217,6 +234,11 @@ def build_parser() -> argparse.ArgumentParser:
     create.add_argument("--password", help="default: asked for (or one line of stdin)")
     create.set_defaults(handler=_create_user)
 
+    prune = commands.add_parser(
+        "prune", help="remove old re-recordings that no submitted attempt refers to"
+    )
+    prune.add_argument("--days", type=int, default=30, help="superseded more than N days ago")
+    prune.set_defaults(handler=_prune)
     backup = commands.add_parser("backup", help="copy the database (safe while serving)")
     backup.add_argument("file", help="new file to write, e.g. gyrolab-2026-11-21.db")
     backup.set_defaults(handler=_backup)

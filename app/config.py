@@ -37,6 +37,7 @@ class Settings(BaseSettings):
     login_window_minutes: int = Field(default=15, ge=1)
     login_hash_slots: int = Field(default=4, ge=1)
     api_rate_per_minute: int = Field(default=600, ge=1)
+    student_storage_mb: int = Field(default=200, ge=1)
     max_body_bytes: int = Field(default=32 * 1024 * 1024, ge=1024)
 
     @field_validator("secret_key")

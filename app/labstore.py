@@ -11,9 +11,10 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
-from sqlmodel import Session, select
+from sqlmodel import Session, func, select
 
 from app import __version__
+from app.config import get_settings
 from app.core.exceptions import GyroInputError
 from app.core.explain import explain_heading, explain_latitude
 from app.core.solve import solve_heading, solve_latitude
@@ -110,6 +111,7 @@ def store_take(
         )
     _check_values(session, position, values)
     _check_angle_and_times(position, angle_deg, times, values.size)
+    _check_storage(db, session, values, times)
     if check_minimum and values.size < session.min_readings:
         raise GyroInputError(
             "lab.too_few_readings",
@@ -228,6 +230,7 @@ def append_samples(
         raise GyroInputError(
             "lab.times_mismatch", "Send times with every batch of a position, or with none."
         )
+    _check_storage(db, session, values, times, copying=take if take.frozen else None)
     if take.frozen:  # submitted data never changes: continue in a copy of the take
         take, existing = _copy_take(db, take, existing)
     next_seq = max(chunk.seq for chunk in existing) + 1
@@ -265,6 +268,40 @@ def _copy_take(db: Session, take: Take, rows: list[SampleChunk]) -> tuple[Take, 
     ]
     db.add_all(copied)
     return copy, copied
+
+
+def storage_used(db: Session, owner_id: int) -> int:
+    """Bytes of samples (and times) stored in every take of one student's sessions."""
+    size = func.length(SampleChunk.values) + func.coalesce(func.length(SampleChunk.times), 0)
+    return int(
+        db.exec(
+            select(func.coalesce(func.sum(size), 0))
+            .join(Take, Take.id == SampleChunk.take_id)
+            .join(LabSession, LabSession.id == Take.session_id)
+            .where(LabSession.owner_id == owner_id)
+        ).one()
+    )
+
+
+def _check_storage(
+    db: Session,
+    session: LabSession,
+    values: np.ndarray,
+    times: np.ndarray | None,
+    copying: Take | None = None,
+) -> None:
+    """Refuse a recording that would take the student past their storage quota."""
+    limit = get_settings().student_storage_mb * 1024 * 1024
+    adding = values.nbytes + (times.nbytes if times is not None else 0)
+    if copying is not None:
+        adding += copying.n_samples * 16
+    if storage_used(db, session.owner_id) + adding > limit:
+        raise GyroInputError(
+            "lab.storage_full",
+            f"Your recordings would use more than your {limit // 2**20} MB of storage. "
+            "Ask your teacher to remove old re-recordings.",
+            limit_mb=limit // 2**20,
+        )
 
 
 MAX_ANGLE_DEG = 3600.0  # ten turns of the dial: anything beyond is a typing mistake

@@ -347,6 +347,22 @@ MESSAGES: dict[str, dict[str, str]] = {
     "admin.create": {"en": "Create with a one-time password", "zh-CN": "创建（一次性密码）"},
     "admin.created_title": {"en": "New account", "zh-CN": "新账号"},
     "admin.bad_role": {"en": "Choose a role.", "zh-CN": "请选择角色。"},
+    "admin.prune_title": {"en": "Old re-recordings", "zh-CN": "旧的重复记录"},
+    "admin.prune_help": {
+        "en": "Remove recordings that were replaced by a newer take long ago and that no "
+        "submission refers to. Submitted data is never removed.",
+        "zh-CN": "删除早已被新记录取代、且未被任何提交引用的记录。已提交的数据永远不会被删除。",
+    },
+    "admin.prune_days": {"en": "Replaced more than (days) ago", "zh-CN": "被取代超过（天）"},
+    "admin.prune": {"en": "Remove", "zh-CN": "删除"},
+    "admin.prune_confirm": {
+        "en": "Remove these old recordings for good?",
+        "zh-CN": "确定永久删除这些旧记录？",
+    },
+    "admin.pruned": {
+        "en": "Removed {n} old recording(s) replaced more than {days} days ago ({mb} MB).",
+        "zh-CN": "已删除 {n} 条被取代超过 {days} 天的旧记录（{mb} MB）。",
+    },
     "admin.reset_refused": {
         "en": "Administrators' passwords are changed by their owners only.",
         "zh-CN": "管理员的密码只能由本人修改。",

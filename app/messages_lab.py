@@ -351,6 +351,10 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "en": "Position {position} has {n} readings; at least {minimum} are required.",
         "zh-CN": "位置 {position} 只有 {n} 个读数，至少需要 {minimum} 个。",
     },
+    "lab.storage_full": {
+        "en": "Your recordings would use more than your {limit_mb} MB of storage. Ask your teacher to remove old re-recordings.",
+        "zh-CN": "您的记录将超过 {limit_mb} MB 的存储配额。请老师清理旧的重复记录。",
+    },
     "lab.bad_angle": {
         "en": "The angle of position {position} must be a finite number of degrees (at most ±{limit:g}).",
         "zh-CN": "位置 {position} 的角度必须是有限的度数（绝对值不超过 {limit:g}）。",

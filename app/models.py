@@ -58,6 +58,8 @@ class AuthSession(SQLModel, table=True):
     last_seen_at: datetime = Field(default_factory=utcnow)
     expires_at: datetime
     revoked_at: datetime | None = None
+    window_start: datetime | None = None  # API calls with this cookie: one-minute windows
+    window_count: int = 0
 
 
 class LoginFailure(SQLModel, table=True):

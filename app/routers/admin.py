@@ -12,9 +12,10 @@ from app.accounts import AccountError, NewCredential, create_user, may_reset_pas
 from app.accounts import reset_password as give_new_password
 from app.deps import AdminUser, CsrfProtected, ObjectId, SessionDep
 from app.models import Course, Enrollment, Role, User
+from app.prune import prune_takes
 from app.roster import USERNAME_RE
 from app.security import generate_password
-from app.web import render
+from app.web import flash, redirect, render
 
 router = APIRouter(prefix="/admin", tags=["pages: admin"], include_in_schema=False)
 PAGE_SIZE = 200
@@ -108,3 +109,26 @@ def reset_account_password(request: Request, user_id: ObjectId, admin: AdminUser
     db.commit()
     credential = NewCredential(user.username, user.display_name, password)
     return render(request, "admin/credentials.html", {"credentials": [credential], "reset": True})
+
+
+@router.post("/prune", dependencies=[CsrfProtected])
+def prune_old_takes(
+    request: Request,
+    admin: AdminUser,
+    db: SessionDep,
+    days: Annotated[int, Form(ge=1, le=3650)] = 30,
+):
+    """Remove re-recordings superseded more than ``days`` ago that no attempt refers to."""
+    pruned = prune_takes(db, days)
+    db.commit()
+    response = redirect("/admin/accounts")
+    flash(
+        response,
+        request,
+        "admin.pruned",
+        "success",
+        n=pruned.takes,
+        mb=f"{pruned.bytes / 1e6:.1f}",
+        days=days,
+    )
+    return response

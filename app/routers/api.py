@@ -23,7 +23,7 @@ from sqlmodel import Session, select
 
 from app import labsessions
 from app.accounts import may_reset_password, reset_password, teaches_student
-from app.apitokens import LOGIN_TOKEN_LIFETIME, check_token, new_token
+from app.apitokens import LOGIN_TOKEN_LIFETIME, check_token, count_cookie_request, new_token
 from app.core.exceptions import GyroInputError
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.db import statement_session
@@ -124,6 +124,15 @@ def api_caller(request: Request, db: SessionDep, settings: SettingsDep) -> Calle
         raise HTTPException(403, "Missing or wrong X-CSRF-Token header.")
     if user.must_change_password:
         raise HTTPException(403, "Change your initial password first.")
+    with statement_session() as counter_db:  # the same per-minute rate as a token
+        wait = count_cookie_request(counter_db, request.state.auth.id, settings.api_rate_per_minute)
+        counter_db.commit()
+    if wait:
+        raise HTTPException(
+            429,
+            "Too many requests from this session; slow down.",
+            headers={"Retry-After": str(wait)},
+        )
     return Caller(user, {"read", "upload"}, "cookie")
 
 
@@ -420,7 +429,7 @@ def session_out(db: Session, session: LabSession) -> SessionOut:
 
 
 def bad_input(error: GyroInputError) -> HTTPException:
-    return HTTPException(400, str(error))
+    return HTTPException(413 if error.key == "lab.storage_full" else 400, str(error))
 
 
 async def upload_body(request: Request) -> bytes:
@@ -718,8 +727,9 @@ def append_position(
         )
     except GyroInputError as error:
         db.rollback()
-        status = 409 if error.key == "lab.offset_gap" else 400
-        raise HTTPException(status, str(error)) from None
+        if error.key == "lab.offset_gap":
+            raise HTTPException(409, str(error)) from None
+        raise bad_input(error) from None
     db.commit()
     return UploadOut(
         session_id=session.id, part=part, position=position, n_samples=take.n_samples, added=added

@@ -328,6 +328,8 @@ def _json_error(error: GyroInputError, request: Request, status: int = 400) -> J
 
     language = request_language(request)
     message = translate(error.key, language, **error.params) if _known(error.key) else str(error)
+    if error.key == "lab.storage_full":
+        status = 413
     return JSONResponse(
         {"detail": message, "key": error.key, "params": error.params}, status_code=status
     )

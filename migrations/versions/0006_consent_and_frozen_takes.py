@@ -1,4 +1,5 @@
-"""who created an account, course join codes, frozen (submitted) takes
+"""who created an account, course join codes, frozen (submitted) takes, request windows
+for cookie-authenticated API calls
 
 Revision ID: 0006
 Revises: 0005
@@ -32,6 +33,12 @@ def upgrade() -> None:
         batch_op.add_column(sa.Column('frozen', sa.Boolean(), nullable=False,
                                       server_default=sa.false()))
 
+    with op.batch_alter_table('auth_session', schema=None) as batch_op:
+        batch_op.add_column(sa.Column('window_start', sqlmodel.sql.sqltypes.UTCDateTime(),
+                                      nullable=True))
+        batch_op.add_column(sa.Column('window_count', sa.Integer(), nullable=False,
+                                      server_default='0'))
+
     bind = op.get_bind()
     for (course_id,) in bind.execute(sa.text('SELECT id FROM course')).all():
         code = "".join(secrets.choice(JOIN_ALPHABET) for _ in range(8))
@@ -51,6 +58,9 @@ def upgrade() -> None:
 
 
 def downgrade() -> None:
+    with op.batch_alter_table('auth_session', schema=None) as batch_op:
+        batch_op.drop_column('window_count')
+        batch_op.drop_column('window_start')
     with op.batch_alter_table('course', schema=None) as batch_op:
         batch_op.drop_index(batch_op.f('ix_course_join_code'))
         batch_op.drop_column('join_code')
