@@ -19,6 +19,7 @@ import tempfile
 import zipfile
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
+from urllib.parse import quote
 
 import numpy as np
 from sqlmodel import Session, func, select
@@ -70,6 +71,14 @@ def csv_table(rows: Iterable[list]) -> Iterator[str]:
     yield BOM
     for row in rows:
         yield csv_line(row)
+
+
+def credentials_data_url(credentials) -> str:
+    """A ``data:`` URL holding one-time passwords as CSV, so they are downloaded without
+    being stored anywhere (``credentials``: items with username, display_name, password)."""
+    rows = [["username", "display_name", "initial_password"]]
+    rows += [[item.username, item.display_name, item.password] for item in credentials]
+    return "data:text/csv;charset=utf-8," + quote("".join(csv_table(rows)))
 
 
 # --- the takes of an export -----------------------------------------------------------------

@@ -237,6 +237,37 @@ def test_other_teachers_get_404(ids, route):
 
 
 @pytest.mark.parametrize(
+    "route", sorted(r for r, rule in ACCESS.items() if rule in ("teacher", "review"))
+)
+def test_a_teacher_sharing_the_student_reaches_nothing_of_the_other_course(ids, route):
+    """t2's own course holds s1 too (s1 joined it with its code): t2 still reaches none of
+    teacher1's courses, assignments or reviews of s1, and may not reset s1's password
+    (neither teacher's roster created the account: only an administrator may)."""
+    from app.accounts import join_course
+    from app.db import read_session, write_session
+    from app.models import Course, User
+    from tests.conftest import make_course
+
+    t2 = make_user("t2", Role.teacher)
+    course = make_course(t2, "Other course")
+    with write_session() as db:
+        code = db.get(Course, course).join_code
+        join_course(db, db.get(User, ids["student_id"]), code)
+    with read_session() as db:
+        before = db.get(User, ids["student_id"]).password_hash
+    method, path = concrete(route, ids)
+    with TestClient(ids["app"], follow_redirects=False) as other:
+        headers = token_for(other, "t2") if path.startswith("/api/") else {}
+        if not headers:
+            login(other, "t2")
+        response = request(other, method, path, headers)
+    expected = 403 if path.endswith("/reset-password") and path.startswith("/api/") else 404
+    assert response.status_code == expected, route
+    with read_session() as db:
+        assert db.get(User, ids["student_id"]).password_hash == before
+
+
+@pytest.mark.parametrize(
     "route", sorted(r for r, rule in ACCESS.items() if rule in ("owner", "token"))
 )
 def test_other_students_get_404(ids, route):

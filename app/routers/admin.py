@@ -11,6 +11,7 @@ from sqlmodel import select
 from app.accounts import AccountError, NewCredential, create_user, may_reset_password
 from app.accounts import reset_password as give_new_password
 from app.deps import AdminUser, CsrfProtected, ObjectId, SessionDep
+from app.exports import credentials_data_url
 from app.models import Course, Enrollment, Role, User
 from app.prune import prune_takes
 from app.roster import USERNAME_RE
@@ -94,7 +95,7 @@ def create_account(
         return render(request, "admin/accounts.html", context, 400)
     db.commit()
     credential = NewCredential(user.username, user.display_name, password)
-    return render(request, "admin/credentials.html", {"credentials": [credential], "reset": False})
+    return credentials_page(request, credential, reset=False)
 
 
 @router.post("/accounts/{user_id}/reset-password", dependencies=[CsrfProtected])
@@ -108,7 +109,17 @@ def reset_account_password(request: Request, user_id: ObjectId, admin: AdminUser
     password = give_new_password(db, user)
     db.commit()
     credential = NewCredential(user.username, user.display_name, password)
-    return render(request, "admin/credentials.html", {"credentials": [credential], "reset": True})
+    return credentials_page(request, credential, reset=True)
+
+
+def credentials_page(request: Request, credential: NewCredential, *, reset: bool):
+    context = {
+        "credentials": [credential],
+        "reset": reset,
+        "csv_href": credentials_data_url([credential]),
+        "csv_name": f"{credential.username}-initial-password.csv",
+    }
+    return render(request, "admin/credentials.html", context)
 
 
 @router.post("/prune", dependencies=[CsrfProtected])

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from typing import Annotated
-from urllib.parse import quote
 
 from fastapi import APIRouter, File, Form, HTTPException, Request, UploadFile
 from sqlmodel import Session, select
@@ -20,7 +19,7 @@ from app.accounts import (
 )
 from app.core.simulate import PRESETS
 from app.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
-from app.exports import csv_table
+from app.exports import credentials_data_url
 from app.models import Assignment, Course, Enrollment, User
 from app.roster import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
 from app.web import flash, redirect, render
@@ -62,13 +61,6 @@ def roster(db: Session, course: Course) -> list[User]:
     )
     teacher = db.get(User, course.teacher_id)
     return [(student, may_reset_password(db, teacher, student)) for student in students]
-
-
-def credentials_csv_href(credentials) -> str:
-    """A data: URL holding the one-time passwords as CSV (UTF-8 with BOM for Excel)."""
-    rows = [["username", "display_name", "initial_password"]]
-    rows += [[item.username, item.display_name, item.password] for item in credentials]
-    return "data:text/csv;charset=utf-8," + quote("".join(csv_table(rows)))
 
 
 @router.get("")
@@ -193,7 +185,7 @@ def add_student_by_hand(
             "course": course,
             "credentials": [credential],
             "enrolled": [],
-            "csv_href": credentials_csv_href([credential]),
+            "csv_href": credentials_data_url([credential]),
         },
     )
 
@@ -227,7 +219,7 @@ def import_students(
             "credentials": outcome.created,
             "enrolled": outcome.enrolled,
             "needs_code": outcome.needs_code,
-            "csv_href": credentials_csv_href(outcome.created),
+            "csv_href": credentials_data_url(outcome.created),
         },
     )
 
@@ -257,7 +249,7 @@ def reset_student_password(
             "credentials": [credential],
             "enrolled": [],
             "reset": True,
-            "csv_href": credentials_csv_href([credential]),
+            "csv_href": credentials_data_url([credential]),
         },
     )
 
