@@ -81,8 +81,10 @@ def test_populated_database_upgrades_across_revisions(tmp_path):
         "SELECT azimuth_max_deg, tolerance_heading_deg, max_attempts, late_policy, reveal_truth "
         "FROM assignment"
     ).fetchone()
+    (code,) = connection.execute("SELECT join_code FROM course").fetchone()
     connection.close()
     assert row == (360.0, 2.0, 3, "accept", "after_grading")
+    assert len(code) == 8  # an existing course gets its join code
 
 
 def test_a_file_database_has_a_connection_per_pool_thread(tmp_path):
