@@ -54,6 +54,7 @@ def test_no_response_carries_a_secret(world):  # noqa: F811
         "assignment_id": world["assignment"],
         "session_id": session_id,
         "student_id": 1,
+        "user_id": 1,
         "token_id": 1,
         "part": "heading",
         "position": 1,
