@@ -49,6 +49,7 @@ ACCESS = {
     "GET /admin/accounts": "admin",
     "POST /admin/accounts": "admin",
     "POST /admin/accounts/{user_id}/reset-password": "admin",
+    "POST /admin/prune": "admin",
     "POST /api/v1/users/{user_id}/reset-password": "teacher",
     "POST /courses/{course_id}/assignments": "teacher",
     "GET /courses/{course_id}/assignments/{assignment_id}": "teacher",
