@@ -152,7 +152,8 @@ def unsigned(value: str | None, secret: str) -> str | None:
 #
 # Failures are counted in four ways, so that an attacker cannot turn the throttle against
 # the user it protects (OWASP's "device cookies"):
-#   pair     account + client address: growing delays, then a pause (the user who mistypes)
+#   pair     account + client address: growing delays, then a pause (the user who mistypes);
+#            an attempt being checked is "pending" and counts towards the pause only
 #   account  all untrusted attempts at one account, from anywhere: brute force stays slow
 #   address  all untrusted failures from one address: password spraying stays slow
 #   device   attempts from a browser that logged in to this account before (a signed
@@ -223,8 +224,11 @@ def login_wait(
     now = utcnow()
     window = timedelta(minutes=settings.login_window_minutes)
     since = now - window
-    pair = _failure_times(db, "pair", _pair_key(account, address), since)
-    waits = [_wait_for_limit(pair, settings.login_max_failures_per_pair, window, now)]
+    key = _pair_key(account, address)
+    pair = _failure_times(db, "pair", key, since)  # completed failures
+    in_flight = _failure_times(db, "pending", key, since)  # being checked right now
+    tries = sorted(pair + in_flight)
+    waits = [_wait_for_limit(tries, settings.login_max_failures_per_pair, window, now)]
     if 2 <= len(pair) < settings.login_max_failures_per_pair:  # 2 s, 4 s, 8 s, ...
         delay = timedelta(seconds=2 ** (len(pair) - 1))
         waits.append((pair[-1] + delay - now).total_seconds())
@@ -260,7 +264,10 @@ def log_in(
     wait, trusted = login_wait(db, account, address, device, settings)
     if wait:
         return LoginOutcome(None, "throttled", wait)
-    charges = [LoginFailure(scope="pair", key=_pair_key(account, address))]
+    # In flight, an attempt counts against the limits (so parallel guesses cannot pass
+    # them) but not towards the growing delay, which follows failures only: log-ins of one
+    # account from one address at once (scripts, a device's workers) all get through.
+    charges = [LoginFailure(scope="pending", key=_pair_key(account, address))]
     charges.append(
         LoginFailure(scope="device", key=device)
         if trusted
@@ -278,9 +285,13 @@ def log_in(
     finally:
         slots.release()
     if not matches:
+        pending = db.get(LoginFailure, charges[0].id)
+        if pending is not None:  # the attempt is now a failure of this account and address
+            pending.scope = "pair"
+            db.add(pending)
         if not trusted:
             db.add(LoginFailure(scope="address", key=address))
-            db.commit()
+        db.commit()
         return LoginOutcome(None, "failed")
     _uncharge(db, charges)
     db.exec(
