@@ -553,6 +553,22 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "en": "Line {line}, column {column}: '{value}' is not a number.",
         "zh-CN": "第 {line} 行 {column} 列：“{value}”不是数字。",
     },
+    "csv.out_of_range": {
+        "en": "Line {line}, column {column}: '{value}' is out of range.",
+        "zh-CN": "第 {line} 行 {column} 列：“{value}”超出范围。",
+    },
+    "readings.out_of_range": {
+        "en": "A reading is out of range for an angular rate: check the unit.",
+        "zh-CN": "有读数超出角速度的合理范围，请检查单位。",
+    },
+    "angles.start_out_of_range": {
+        "en": "The start angle must be a number of degrees within ±{limit:g}.",
+        "zh-CN": "起始角必须是 ±{limit:g} 度以内的数。",
+    },
+    "angles.step_out_of_range": {
+        "en": "The step between positions must be within ±360°.",
+        "zh-CN": "相邻位置之间的角度步长必须在 ±360° 以内。",
+    },
     "csv.not_finite": {
         "en": "Line {line}, column {column}: '{value}' is not a finite number.",
         "zh-CN": "第 {line} 行 {column} 列：“{value}”不是有限数。",

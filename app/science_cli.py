@@ -16,7 +16,13 @@ import numpy as np
 from app.core.allan import allan_deviation
 from app.core.exceptions import GyroInputError
 from app.core.explain import explain_heading, explain_latitude, render_text
-from app.core.readings import Readings, parse_readings_csv, readings_to_long_csv
+from app.core.readings import (
+    NumberOutOfRange,
+    Readings,
+    parse_decimal,
+    parse_readings_csv,
+    readings_to_long_csv,
+)
 from app.core.simulate import PRESETS, Setup, simulate_run, simulate_static
 from app.core.solve import elevation_angles, heading_angles, solve_heading, solve_latitude
 from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
@@ -160,7 +166,9 @@ def _single_column(text: str) -> np.ndarray:
         if not cell:
             continue
         try:
-            values.append(float(cell))
+            values.append(parse_decimal(cell))
+        except NumberOutOfRange:
+            raise CommandError(f"line {number}: '{cell[:40]}' is out of range") from None
         except ValueError:
             if number == 1:  # a header line
                 continue

@@ -42,6 +42,7 @@ LATITUDE_KEYS = [
     "earth_rate_sigma_deg_h",
     "bias_deg_h",
     "latitude_error_percent",
+    "latitude_error_deg",
     "earth_rate_error_percent",
 ]
 
@@ -90,7 +91,7 @@ def test_solve_text_is_the_worked_calculation(capsys):
     code, out, _ = run(capsys, "solve", "heading", str(DATA / "handout_horizontal.csv"))
     assert code == 0
     assert "tan θ = (ω4 − ω2) / (ω1 − ω3)" in out and "-10.75°" in out
-    assert "Turn the table counter-clockwise by 10.75°: the axis then points north." in out
+    assert "From position 1, turn the table counter-clockwise by 10.75°: the axis then points north." in out
     code, out, _ = run(
         capsys,
         "solve",
@@ -218,7 +219,10 @@ def test_simulate_static_and_allan(capsys, tmp_path):
         (["solve", "heading", "-"], "x,y\n1,2\n", "expected a header"),
         (["solve", "heading", "-"], "position_1,position_2\n1,2\n", "At least 3 different angles"),
         (["solve", "heading", "-"], "position_1,position_2,position_3\n1,abc,3\n", "not a number"),
-        (["solve", "heading", "-"], "position_1,position_2,position_3\n1,nan,3\n", "not a finite"),
+        (["solve", "heading", "-"], "position_1,position_2,position_3\n1,nan,3\n", "not a number"),
+        (["solve", "heading", "-"], "position_1,position_2,position_3\n1,1_000,3\n", "not a number"),
+        (["solve", "heading", "-"], "position_1,position_2,position_3\n1,1e400,3\n", "out of range"),
+        (["solve", "heading", "-", "--start-angle", "1e20"], "position_1\n1\n", "start angle"),
         (["solve", "heading", "-"], "position_1,position_2,position_3\n1,,3\n", "no readings"),
         (["solve", "heading", "-"], "", "no readings"),
         (["solve", "heading", "-", "--start-angle", "nan"], "position_1\n1\n", "finite"),

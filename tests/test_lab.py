@@ -233,7 +233,7 @@ def test_csv_long_layout_keeps_angles_and_times(student_client):
     ("text", "message"),
     [
         ("position_1,position_2\n1,abc\n", "'abc' is not a number"),
-        ("position_1,position_2\n1,nan\n", "not a finite number"),
+        ("position_1,position_2\n1,nan\n", "not a number"),
         ("", "no readings"),
         ("hello,world\n1,2\n", "expected a header"),
         (

@@ -43,6 +43,9 @@ def _means_step(stats) -> Step:
     )
 
 
+_FIT_TITLE = {"en": "Least-squares fit over all readings", "zh-CN": "对全部读数做最小二乘拟合"}
+
+
 def _four_apart(angles: np.ndarray) -> int:
     """+1 for four positions 90° apart clockwise, −1 counter-clockwise, 0 otherwise."""
     if angles.size != 4:
@@ -55,28 +58,60 @@ def _four_apart(angles: np.ndarray) -> int:
     return 0
 
 
+def _handout_ratio(means: np.ndarray, turn: int) -> tuple[str, str, float]:
+    """The handout's tan θ from four position means: its formula, the substituted
+    numerator and denominator, and the value (∞ when ω1 = ω3)."""
+    w1, w2, w3, w4 = means
+    if turn < 0:
+        top, sub_top, numerator = "ω4 − ω2", f"{_p(w4)} − {_p(w2)}", w4 - w2
+    else:
+        top, sub_top, numerator = "ω2 − ω4", f"{_p(w2)} − {_p(w4)}", w2 - w4
+    formula = f"tan θ = ({top}) / (ω1 − ω3) = ({sub_top}) / ({_p(w1)} − {_p(w3)})"
+    return formula, top, numerator / (w1 - w3) if w1 != w3 else math.inf
+
+
+def _equal_counts(stats) -> bool:
+    return len({s.n for s in stats}) == 1
+
+
+WEIGHTED_TITLE = {
+    "en": "Least-squares fit of every reading (the numbers of readings differ, so each "
+    "reading counts once)",
+    "zh-CN": "对全部读数做最小二乘拟合（各位置读数个数不同，每个读数同等计权）",
+}
+UNWEIGHTED_TITLE = {
+    "en": "For comparison, not used: the handout's closed form with the plain means (unweighted)",
+    "zh-CN": "仅供比较，未采用：讲义公式（直接用各位置平均值，不计权）",
+}
+
+
 def explain_heading(result: HeadingResult) -> list[Step]:
+    """The heading worked out with the numbers the result uses.
+
+    With four positions 90° apart and equal numbers of readings the handout's closed form
+    *is* the least-squares fit, so it is shown.  With unequal numbers the fit weights each
+    position by its count and differs from the closed form: the steps then show the fit's
+    x = H·cos A1 and y = H·sin A1 (which give θ, A1 and H exactly as reported) and add the
+    closed form of the plain means as a line labelled "for comparison, not used".
+    """
     fit = result.fit
     steps = [_means_step(fit.stats)]
     w = fit.means
     turn = _four_apart(fit.angles_deg)
-    if turn:
-        w1, w2, w3, w4 = w
-        numerator = (w4 - w2) if turn < 0 else (w2 - w4)
-        top = "ω4 − ω2" if turn < 0 else "ω2 − ω4"
-        sub_top = f"{_p(w4)} − {_p(w2)}" if turn < 0 else f"{_p(w2)} − {_p(w4)}"
-        ratio = numerator / (w1 - w3) if w1 != w3 else math.inf
+    # What the result uses: x and y of position 1 from the fit (lab-reference §3).
+    x_used = result.amplitude_deg_h * math.cos(math.radians(result.azimuth_deg))
+    y_used = result.amplitude_deg_h * math.sin(math.radians(result.azimuth_deg))
+    if turn and _equal_counts(fit.stats):
+        formula, _, ratio = _handout_ratio(w, turn)
         steps.append(
             Step(
                 {"en": "The handout's angle θ", "zh-CN": "讲义中的角度 θ"},
                 (
-                    f"tan θ = ({top}) / (ω1 − ω3) = ({sub_top}) / ({_p(w1)} − {_p(w3)}) = "
-                    f"{_f(ratio, 4)}",
+                    f"{formula} = {_f(ratio, 4)}",
                     f"θ = arctan({_f(ratio, 4)}) = {_f(result.theta_deg, 2)}°",
                 ),
             )
         )
-        x, y = (w1 - w3) / 2, ((w2 - w4) if turn < 0 else (w4 - w2)) / 2
         y_text = "(ω2 − ω4)/2" if turn < 0 else "(ω4 − ω2)/2"
         steps.append(
             Step(
@@ -85,23 +120,46 @@ def explain_heading(result: HeadingResult) -> list[Step]:
                     "zh-CN": "位置 1 的全圆周方位角（无象限模糊）",
                 },
                 (
-                    f"x = (ω1 − ω3)/2 = {_f(x, 4)} °/h,   y = {y_text} = {_f(y, 4)} °/h",
+                    f"x = (ω1 − ω3)/2 = {_f(x_used, 4)} °/h,   y = {y_text} = {_f(y_used, 4)} °/h",
                     f"A1 = atan2(y, x) = {_f(result.azimuth_deg, 2)}°  (clockwise from true north)",
                 ),
             )
         )
     else:
-        steps.append(
-            Step(
-                {"en": "Least-squares fit over all readings", "zh-CN": "对全部读数做最小二乘拟合"},
-                (
-                    "ω = a·cos α + c·sin α + b   (α = position angle, clockwise)",
-                    f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
-                    f"A1 = atan2(−c, a) + α1 = {_f(result.azimuth_deg, 2)}°",
-                    f"θ = {_f(result.theta_deg, 2)}°",
-                ),
+        lines = [
+            "ω = a·cos α + c·sin α + b   (α = position angle, clockwise)",
+            f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
+            f"x = H·cos A1 = {_f(x_used, 4)} °/h,   y = H·sin A1 = {_f(y_used, 4)} °/h",
+            f"A1 = atan2(y, x) = {_f(result.azimuth_deg, 2)}°  (clockwise from true north)",
+        ]
+        if abs(x_used) > 1e-12:
+            ratio = -y_used / x_used
+            lines.append(
+                f"tan θ = −y/x = {_f(ratio, 4)},   θ = arctan({_f(ratio, 4)}) = "
+                f"{_f(result.theta_deg, 2)}°"
             )
-        )
+        else:
+            lines.append(f"θ = {_f(result.theta_deg, 2)}°")
+        steps.append(Step(WEIGHTED_TITLE if turn else _FIT_TITLE, tuple(lines)))
+        if turn and w[0] != w[2]:
+            formula, _, ratio = _handout_ratio(w, turn)
+            closed = math.degrees(math.atan(ratio))
+            steps.append(
+                Step(
+                    UNWEIGHTED_TITLE,
+                    (
+                        f"{formula} = {_f(ratio, 4)}",
+                        f"θ = arctan({_f(ratio, 4)}) = {_f(closed, 2)}°",
+                    ),
+                    {
+                        "en": f"The handout's formula weights the four means equally (θ = "
+                        f"{_f(closed, 2)}°); the result above weights every reading equally "
+                        f"(θ = {_f(result.theta_deg, 2)}°).",
+                        "zh-CN": f"讲义公式对四个平均值同等计权（θ = {_f(closed, 2)}°）；"
+                        f"上面的结果对每个读数同等计权（θ = {_f(result.theta_deg, 2)}°）。",
+                    },
+                )
+            )
     direction = {
         "clockwise": ("clockwise", "顺时针"),
         "counterclockwise": ("counter-clockwise", "逆时针"),
@@ -113,9 +171,10 @@ def explain_heading(result: HeadingResult) -> list[Step]:
             {"en": "Find north on the table", "zh-CN": "在转台上找到北向"},
             (f"θ {'≥' if result.theta_deg >= 0 else '<'} 0,  |θ| = {rotate}°",),
             {
-                "en": f"Turn the table {direction[0]} by {rotate}°: "
+                "en": f"From position 1, turn the table {direction[0]} by {rotate}°: "
                 f"the axis then points {points[0]}.",
-                "zh-CN": f"将转台{direction[1]}转动 {rotate}°，此时陀螺轴指向{points[1]}。",
+                "zh-CN": f"从位置 1 起，将转台{direction[1]}转动 {rotate}°，"
+                f"此时陀螺轴指向{points[1]}。",
             },
         )
     )
@@ -134,6 +193,40 @@ def explain_heading(result: HeadingResult) -> list[Step]:
     return steps
 
 
+def _latitude_closed_form(
+    means: np.ndarray, phi_used: float | None, omega_used: float | None
+) -> list[Step]:
+    """The handout's latitude and Earth rate from four means at e = 0°, 90°, 180°, 270°.
+
+    ``phi_used``/``omega_used`` are the reported values (equal to the closed form when
+    every position has the same number of readings); None computes them from the means."""
+    w1, w2, w3, w4 = means
+    phi = phi_used if phi_used is not None else math.degrees(math.atan2(w2 - w4, w1 - w3))
+    omega = omega_used if omega_used is not None else math.hypot(w1 - w3, w2 - w4) / 2
+    ratio = _f((w2 - w4) / (w1 - w3), 4) if w1 != w3 else "∞"
+    lines = []
+    if abs(math.cos(math.radians(phi))) > 1e-9:
+        lines.append(
+            f"Ω = (ω1 − ω3)/(2 cos φ) = {_f((w1 - w3) / (2 * math.cos(math.radians(phi))))} °/h"
+        )
+    if abs(math.sin(math.radians(phi))) > 1e-9:
+        lines.append(
+            f"Ω = (ω2 − ω4)/(2 sin φ) = {_f((w2 - w4) / (2 * math.sin(math.radians(phi))))} °/h"
+        )
+    lines.append(f"Ω = √((ω1 − ω3)² + (ω2 − ω4)²)/2 = {_f(omega)} °/h")
+    return [
+        Step(
+            {"en": "Latitude from the four positions", "zh-CN": "由四个位置求纬度"},
+            (
+                f"tan φ = (ω2 − ω4)/(ω1 − ω3) = ({_p(w2)} − {_p(w4)}) / "
+                f"({_p(w1)} − {_p(w3)}) = {ratio}",
+                f"φ = {_f(phi, 2)}°",
+            ),
+        ),
+        Step({"en": "Earth's rotation rate", "zh-CN": "地球自转角速度"}, tuple(lines)),
+    ]
+
+
 def explain_latitude(result: LatitudeResult) -> list[Step]:
     fit = result.fit
     steps = [_means_step(fit.stats)]
@@ -141,32 +234,12 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
     standard = fit.angles_deg.size == 4 and np.allclose(
         np.mod(fit.angles_deg, 360), [0, 90, 180, 270]
     )
-    if standard:
-        w1, w2, w3, w4 = fit.means
-        steps.append(
-            Step(
-                {"en": "Latitude from the four positions", "zh-CN": "由四个位置求纬度"},
-                (
-                    f"tan φ = (ω2 − ω4)/(ω1 − ω3) = ({_p(w2)} − {_p(w4)}) / "
-                    f"({_p(w1)} − {_p(w3)}) = "
-                    f"{_f((w2 - w4) / (w1 - w3), 4) if w1 != w3 else '∞'}",
-                    f"φ = {_f(phi, 2)}°",
-                ),
-            )
-        )
-        lines = [
-            f"Ω = (ω1 − ω3)/(2 cos φ) = {_f((w1 - w3) / (2 * math.cos(math.radians(phi))))} °/h"
-        ]
-        if abs(math.sin(math.radians(phi))) > 1e-9:
-            lines.append(
-                f"Ω = (ω2 − ω4)/(2 sin φ) = {_f((w2 - w4) / (2 * math.sin(math.radians(phi))))} °/h"
-            )
-        lines.append(f"Ω = √((ω1 − ω3)² + (ω2 − ω4)²)/2 = {_f(result.earth_rate_deg_h)} °/h")
-        steps.append(Step({"en": "Earth's rotation rate", "zh-CN": "地球自转角速度"}, tuple(lines)))
+    if standard and _equal_counts(fit.stats):
+        steps.extend(_latitude_closed_form(fit.means, phi, result.earth_rate_deg_h))
     else:
         steps.append(
             Step(
-                {"en": "Least-squares fit over all readings", "zh-CN": "对全部读数做最小二乘拟合"},
+                WEIGHTED_TITLE if standard else _FIT_TITLE,
                 (
                     "ω = a·cos e + c·sin e + b   (e = elevation from the north horizon)",
                     f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
@@ -175,6 +248,9 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
                 ),
             )
         )
+        if standard:
+            closed = _latitude_closed_form(fit.means, None, None)
+            steps.append(Step(UNWEIGHTED_TITLE, closed[0].lines + closed[1].lines))
     lines = []
     if result.latitude_error_percent is not None:
         lines.append(
@@ -182,6 +258,8 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
             f" / {_f(result.true_latitude_deg, 2)} × 100% = "
             f"{_f(result.latitude_error_percent, 2)}%"
         )
+    if result.latitude_error_deg is not None:
+        lines.append(f"Δφ = φ − φ0 = {_f(result.latitude_error_deg, 2)}°")
     lines.append(
         f"η_Ω = |Ω − Ω0|/Ω0 × 100% = |{_f(result.earth_rate_deg_h)} − "
         f"{_f(result.true_earth_rate_deg_h)}| / {_f(result.true_earth_rate_deg_h)} × "

@@ -19,6 +19,24 @@ import numpy as np
 from app.core.exceptions import GyroInputError
 
 WIDE_COLUMN = re.compile(r"^position_(\d+)$")
+# A plain decimal number: what a spreadsheet or a gyro writes.  Python's float() also takes
+# "1_000", "nan", "infinity" and " 1 " -- none of them a reading.
+DECIMAL = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+
+
+class NumberOutOfRange(ValueError):
+    """A well-formed number too large for a float (e.g. 1e400)."""
+
+
+def parse_decimal(text: str) -> float:
+    """``text`` as a float when it is a plain decimal number, else ValueError
+    (:class:`NumberOutOfRange` when it is one but overflows)."""
+    if not DECIMAL.fullmatch(text):
+        raise ValueError(f"not a number: {text[:40]!r}")
+    value = float(text)
+    if not math.isfinite(value):
+        raise NumberOutOfRange(f"out of range: {text[:40]!r}")
+    return value
 
 
 @dataclass
@@ -31,7 +49,15 @@ class Readings:
 
 def _number(text: str, line: int, column: str) -> float:
     try:
-        value = float(text)
+        return parse_decimal(text)
+    except NumberOutOfRange as error:
+        raise GyroInputError(
+            "csv.out_of_range",
+            f"Line {line}, column {column}: '{text[:40]}' is out of range.",
+            line=line,
+            column=column,
+            value=text[:40],
+        ) from error
     except ValueError as error:
         raise GyroInputError(
             "csv.not_a_number",
@@ -40,15 +66,6 @@ def _number(text: str, line: int, column: str) -> float:
             column=column,
             value=text[:40],
         ) from error
-    if not math.isfinite(value):
-        raise GyroInputError(
-            "csv.not_finite",
-            f"Line {line}, column {column}: '{text}' is not a finite number.",
-            line=line,
-            column=column,
-            value=text[:40],
-        )
-    return value
 
 
 def parse_readings_csv(text: str, part: str | None = None) -> Readings:

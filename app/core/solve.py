@@ -37,6 +37,8 @@ from app.core.exceptions import GyroInputError
 from app.core.units import EARTH_RATE_DEG_H
 
 SIGNIFICANCE = 3.0  # an amplitude below 3σ is not a measurement of anything
+MAX_RATE_DEG_H = 1e12  # far beyond any gyro; past it sums and squares would overflow
+MAX_ANGLE_DEG = 3600.0  # ten turns of a dial: anything beyond is a typing mistake
 ROTATIONS = ("ccw", "cw")
 
 
@@ -100,14 +102,30 @@ def heading_angles(
             f"Rotation must be 'ccw' or 'cw', not {rotation!r}.",
             rotation=rotation,
         )
+    _check_schedule(start_deg, step_deg)
     sign = -1.0 if rotation == "ccw" else 1.0
     return start_deg + sign * step_deg * np.arange(n_positions)
+
+
+def _check_schedule(start_deg: float, step_deg: float) -> None:
+    """A start angle within ±3600° and a step within ±360° (finite), else a range message."""
+    if not (math.isfinite(start_deg) and abs(start_deg) <= MAX_ANGLE_DEG):
+        raise GyroInputError(
+            "angles.start_out_of_range",
+            f"The start angle must be a number of degrees within ±{MAX_ANGLE_DEG:g}.",
+            limit=MAX_ANGLE_DEG,
+        )
+    if not (math.isfinite(step_deg) and abs(step_deg) <= 360.0):
+        raise GyroInputError(
+            "angles.step_out_of_range", "The step between positions must be within ±360°."
+        )
 
 
 def elevation_angles(
     n_positions: int, start_deg: float = 0.0, step_deg: float = 90.0
 ) -> np.ndarray:
     """Axis elevations in the meridian plane: start, start+step, ... (0° north, 90° up)."""
+    _check_schedule(start_deg, step_deg)
     return start_deg + step_deg * np.arange(n_positions)
 
 
@@ -130,6 +148,12 @@ def _clean_positions(positions: Sequence[Sequence[float]]) -> list[np.ndarray]:
             raise GyroInputError(
                 "readings.not_finite",
                 f"Position {index} has a reading that is not a finite number (NaN or infinity).",
+                position=index,
+            )
+        if np.any(np.abs(array) > MAX_RATE_DEG_H):
+            raise GyroInputError(
+                "readings.out_of_range",
+                "A reading is out of range for an angular rate: check the unit.",
                 position=index,
             )
         arrays.append(array)
@@ -341,6 +365,13 @@ class LatitudeResult:
     def bias_deg_h(self) -> float:
         return self.fit.b
 
+    @property
+    def latitude_error_deg(self) -> float | None:
+        """φ − φ0 in degrees: meaningful near the equator, where the percent explodes."""
+        if self.true_latitude_deg is None:
+            return None
+        return self.latitude_deg - self.true_latitude_deg
+
     def to_json(self) -> dict:
         return {
             "part": "latitude",
@@ -354,6 +385,7 @@ class LatitudeResult:
             "earth_rate_sigma_deg_h": self.earth_rate_sigma_deg_h,
             "bias_deg_h": self.fit.b,
             "latitude_error_percent": self.latitude_error_percent,
+            "latitude_error_deg": self.latitude_error_deg,
             "earth_rate_error_percent": self.earth_rate_error_percent,
         }
 

@@ -43,7 +43,16 @@ def canonical_unit(unit: str) -> str:
 
 
 def to_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:
-    return np.asarray(values, dtype=float) * TO_DEG_PER_HOUR[canonical_unit(unit)]
+    """Rates in °/h; a finite reading too large to convert (1e306 °/s) is out of range."""
+    array = np.asarray(values, dtype=float)
+    with np.errstate(over="ignore"):
+        converted = array * TO_DEG_PER_HOUR[canonical_unit(unit)]
+    if not np.all(np.isfinite(converted)) and np.all(np.isfinite(array)):
+        raise GyroInputError(
+            "readings.out_of_range",
+            "A reading is out of range for an angular rate: check the unit.",
+        )
+    return converted
 
 
 def from_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:

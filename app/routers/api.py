@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 from dataclasses import dataclass
 from datetime import datetime
 from typing import Annotated, Any, Literal
@@ -25,6 +24,7 @@ from app import labsessions
 from app.accounts import may_reset_password, reset_password, teaches_student
 from app.apitokens import LOGIN_TOKEN_LIFETIME, check_token, count_cookie_request, new_token
 from app.core.exceptions import GyroInputError
+from app.core.readings import NumberOutOfRange, parse_decimal
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.db import statement_session
 from app.deps import (
@@ -346,6 +346,7 @@ class LatitudeOut(BaseModel):
     earth_rate_sigma_deg_h: float | None
     bias_deg_h: float
     latitude_error_percent: float | None
+    latitude_error_deg: float | None = Field(description="φ − φ0 (°)")
     earth_rate_error_percent: float
 
 
@@ -483,9 +484,9 @@ def parse_csv_upload(body: bytes, unit: str, angle: str | None) -> PositionUploa
         if not cells or cells[0].startswith("#"):
             continue
         try:
-            numbers = [float(c) for c in cells]
-            if not all(math.isfinite(x) for x in numbers):
-                raise ValueError("not finite")
+            numbers = [parse_decimal(c) for c in cells]
+        except NumberOutOfRange:
+            raise HTTPException(400, f"Line {number}: '{cells[0][:40]}' is out of range.") from None
         except ValueError:
             if number == 1 and not values:
                 continue  # a header such as "time_s,value"
@@ -505,11 +506,12 @@ def parse_csv_upload(body: bytes, unit: str, angle: str | None) -> PositionUploa
         raise HTTPException(400, "The CSV has no readings.")
     try:
         unit = canonical_unit(unit)
-        angle_value = float(angle) if angle is not None else None
-    except (GyroInputError, ValueError) as error:
+    except GyroInputError as error:
         raise HTTPException(400, str(error)) from None
-    if angle_value is not None and not math.isfinite(angle_value):
-        raise HTTPException(400, "angle_deg must be a finite number.")
+    try:
+        angle_value = parse_decimal(angle.strip()) if angle is not None else None
+    except ValueError:
+        raise HTTPException(400, "angle_deg must be a finite number of degrees.") from None
     return PositionUpload(samples=values, unit=unit, times_s=times or None, angle_deg=angle_value)
 
 

@@ -1,0 +1,161 @@
+"""The worked solution shows the numbers the result uses (issue: unequal numbers of readings),
+and small input faults get the right words (out of range, not a number)."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from app.core.exceptions import GyroInputError
+from app.core.explain import explain_heading, explain_latitude, render_text
+from app.core.readings import parse_readings_csv
+from app.core.solve import heading_angles, solve_heading, solve_latitude
+from app.core.units import to_deg_per_hour
+from tests.test_lab import handout
+
+HEADING = handout("handout_horizontal.csv")
+VERTICAL = handout("handout_vertical.csv")
+ANGLES = heading_angles(4, "ccw")
+ELEVATIONS = [0.0, 90.0, 180.0, 270.0]
+
+
+def unequal(table: dict[int, list[float]]) -> list[list[float]]:
+    """The handout's readings with some of positions 1 and 3 missing (the web lab's usual
+    case: a position re-recorded with another dwell)."""
+    return [table[1][:4], table[2], table[3][:7], table[4]]
+
+
+def noisy_unequal() -> list[np.ndarray]:
+    """A teaching gyro's readings (H = 10 °/h, A1 = 10°, 1 °/h noise) with 3, 40, 5 and
+    40 readings: the fit and the handout's closed form differ by tenths of a degree."""
+    rng = np.random.default_rng(7)
+    counts = (3, 40, 5, 40)
+    return [
+        10 * np.cos(np.radians(10 + alpha)) + 0.9 + rng.normal(0, 1.0, n)
+        for alpha, n in zip(ANGLES, counts, strict=True)
+    ]
+
+
+def weighted_fit(positions, angles_deg) -> np.ndarray:
+    """Independent least squares over every sample: ω = a cos α + c sin α + b."""
+    rows, values = [], []
+    for samples, angle in zip(positions, angles_deg, strict=True):
+        alpha = math.radians(angle)
+        for value in samples:
+            rows.append([math.cos(alpha), math.sin(alpha), 1.0])
+            values.append(value)
+    solution, *_ = np.linalg.lstsq(np.array(rows), np.array(values), rcond=None)
+    return solution
+
+
+def numbers_after(text: str, label: str) -> list[float]:
+    """Every number on the lines that contain ``label``."""
+    found = []
+    for line in text.splitlines():
+        if label in line:
+            found += [float(x) for x in re.findall(r"-?\d+\.\d+", line)]
+    return found
+
+
+def test_unequal_counts_show_the_fit_that_is_used():
+    positions = noisy_unequal()
+    result = solve_heading(positions, ANGLES)
+    a, c, _ = weighted_fit(positions, ANGLES)
+    assert result.azimuth_deg == pytest.approx(math.degrees(math.atan2(-c, a)) % 360, abs=1e-9)
+    means = [np.mean(p) for p in positions]
+    closed = math.degrees(math.atan((means[3] - means[1]) / (means[0] - means[2])))
+    assert abs(closed - result.theta_deg) > 0.05  # they differ at the precision shown
+    steps = explain_heading(result)
+    text = render_text(steps, "en")
+    fit_step = next(s for s in steps if "each reading counts once" in s.title["en"])
+    fit_text = "\n".join(fit_step.lines)
+    x, y = numbers_after(fit_text, "x = H·cos A1")
+    assert math.degrees(math.atan2(y, x)) % 360 == pytest.approx(result.azimuth_deg, abs=0.01)
+    ratio, _, theta = numbers_after(fit_text, "tan θ = −y/x")
+    assert ratio == pytest.approx(-y / x, abs=2e-4)
+    assert theta == pytest.approx(result.theta_deg, abs=0.005)
+    assert math.degrees(math.atan(ratio)) == pytest.approx(theta, abs=0.01)
+    # the handout's closed form is there, clearly labelled, with its own (different) θ
+    comparison = next(s for s in steps if s.title["en"].startswith("For comparison, not used"))
+    assert f"{closed:.2f}°" in comparison.lines[-1]
+    assert "未采用" in comparison.title["zh-CN"]
+    # H shown is the H reported
+    assert f"H = √(x² + y²) = {result.amplitude_deg_h:.3f}" in text
+    assert math.hypot(x, y) == pytest.approx(result.amplitude_deg_h, abs=1e-3)
+
+
+def test_equal_counts_keep_the_handout_form():
+    result = solve_heading([HEADING[k] for k in range(1, 5)], ANGLES)
+    text = render_text(explain_heading(result), "en")
+    assert "tan θ = (ω4 − ω2) / (ω1 − ω3)" in text and "θ = arctan(-0.1899) = -10.75°" in text
+    assert "For comparison" not in text
+    assert "From position 1, turn the table counter-clockwise by 10.75°" in text
+    assert "从位置 1 起" in render_text(explain_heading(result), "zh-CN")
+
+
+def test_latitude_with_unequal_counts_shows_the_fit():
+    positions = unequal(VERTICAL)
+    result = solve_latitude(positions, ELEVATIONS, true_latitude_deg=39.93)
+    a, c, _ = weighted_fit(positions, ELEVATIONS)
+    assert result.latitude_deg == pytest.approx(math.degrees(math.atan2(c, a)), abs=1e-9)
+    steps = explain_latitude(result)
+    fit_step = next(s for s in steps if "each reading counts once" in s.title["en"])
+    fit_text = "\n".join(fit_step.lines)
+    assert f"φ = atan2(c, a) = {result.latitude_deg:.2f}°" in fit_text
+    assert f"Ω = √(a² + c²) = {result.earth_rate_deg_h:.3f}" in fit_text
+    means = [np.mean(p) for p in positions]
+    closed = math.degrees(math.atan2(means[1] - means[3], means[0] - means[2]))
+    comparison = next(s for s in steps if s.title["en"].startswith("For comparison, not used"))
+    assert f"φ = {closed:.2f}°" in comparison.lines
+    assert abs(closed - result.latitude_deg) > 0.05
+
+
+def test_latitude_error_in_degrees():
+    result = solve_latitude(
+        [VERTICAL[k] for k in range(1, 5)], ELEVATIONS, true_latitude_deg=39.93
+    )
+    assert result.latitude_error_deg == pytest.approx(result.latitude_deg - 39.93)
+    assert result.to_json()["latitude_error_deg"] == pytest.approx(0.797, abs=1e-3)
+    assert "Δφ = φ − φ0 = 0.80°" in render_text(explain_latitude(result))
+    near_equator = solve_latitude(
+        [VERTICAL[k] for k in range(1, 5)], ELEVATIONS, true_latitude_deg=0.01
+    )
+    assert near_equator.latitude_error_percent > 1e5  # why degrees are shown too
+    assert near_equator.latitude_error_deg == pytest.approx(near_equator.latitude_deg - 0.01)
+
+
+@pytest.mark.parametrize("text", ["1_000", "nan", "inf", "Infinity", " 1 2", "0x10", "1e5e5"])
+def test_only_plain_decimals_are_numbers(text):
+    with pytest.raises(GyroInputError) as caught:
+        parse_readings_csv(f"position_1,position_2,position_3\n1,2,{text}\n")
+    assert caught.value.key == "csv.not_a_number"
+
+
+def test_overflowing_numbers_are_out_of_range():
+    with pytest.raises(GyroInputError) as caught:
+        parse_readings_csv("position_1,position_2,position_3\n1,2,1e400\n")
+    assert caught.value.key == "csv.out_of_range" and "out of range" in str(caught.value)
+    with pytest.raises(GyroInputError) as converted:
+        to_deg_per_hour([1e306, 1.0], "deg/s")
+    assert converted.value.key == "readings.out_of_range"
+    assert "finite" not in str(converted.value)
+
+
+@pytest.mark.parametrize("start", [1e20, -1e20, 3601.0, math.inf, math.nan])
+def test_start_angle_gets_a_range_message(start):
+    with pytest.raises(GyroInputError) as caught:
+        heading_angles(4, "ccw", start)
+    assert caught.value.key == "angles.start_out_of_range"
+    assert "inf" not in str(caught.value) and "nan" not in str(caught.value)
+
+
+def test_huge_readings_never_print_inf_or_nan():
+    positions = [[1e300] * 3, [2.0] * 3, [3.0] * 3, [4.0] * 3]
+    with pytest.raises(GyroInputError) as caught:
+        solve_heading(positions, ANGLES)
+    assert caught.value.key == "readings.out_of_range"
+    message = str(caught.value).lower()
+    assert "inf" not in message and "nan" not in message
