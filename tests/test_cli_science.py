@@ -91,7 +91,8 @@ def test_solve_text_is_the_worked_calculation(capsys):
     code, out, _ = run(capsys, "solve", "heading", str(DATA / "handout_horizontal.csv"))
     assert code == 0
     assert "tan θ = (ω4 − ω2) / (ω1 − ω3)" in out and "-10.75°" in out
-    assert "From position 1, turn the table counter-clockwise by 10.75°: the axis then points north." in out
+    turn = "From position 1, turn the table counter-clockwise by 10.75°: the axis then points north."
+    assert turn in out
     code, out, _ = run(
         capsys,
         "solve",
@@ -220,8 +221,8 @@ def test_simulate_static_and_allan(capsys, tmp_path):
         (["solve", "heading", "-"], "position_1,position_2\n1,2\n", "At least 3 different angles"),
         (["solve", "heading", "-"], "position_1,position_2,position_3\n1,abc,3\n", "not a number"),
         (["solve", "heading", "-"], "position_1,position_2,position_3\n1,nan,3\n", "not a number"),
-        (["solve", "heading", "-"], "position_1,position_2,position_3\n1,1_000,3\n", "not a number"),
-        (["solve", "heading", "-"], "position_1,position_2,position_3\n1,1e400,3\n", "out of range"),
+        (["solve", "heading", "-"], "position_1,position_2\n1,1_000\n", "not a number"),
+        (["solve", "heading", "-"], "position_1,position_2\n1,1e400\n", "out of range"),
         (["solve", "heading", "-", "--start-angle", "1e20"], "position_1\n1\n", "start angle"),
         (["solve", "heading", "-"], "position_1,position_2,position_3\n1,,3\n", "no readings"),
         (["solve", "heading", "-"], "", "no readings"),
