@@ -91,7 +91,7 @@ def test_solve_text_is_the_worked_calculation(capsys):
     code, out, _ = run(capsys, "solve", "heading", str(DATA / "handout_horizontal.csv"))
     assert code == 0
     assert "tan θ = (ω4 − ω2) / (ω1 − ω3)" in out and "-10.75°" in out
-    turn = "From position 1, turn the table counter-clockwise by 10.75°: the axis then points north."
+    turn = "From position 1, turn the table counter-clockwise by 10.75°: the axis then points north"
     assert turn in out
     code, out, _ = run(
         capsys,
