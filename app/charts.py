@@ -71,7 +71,8 @@ def fit_figure(part_result, _: Callable[..., str]) -> dict | None:
         return None
     fit = result.fit
     angles = fit.angles_deg
-    sems = [s.sem if s.sem is not None else 0.0 for s in fit.stats]
+    # error bars: the 1σ of each mean that the result propagates (white, closure or Allan)
+    sems = fit.position_sigmas or [0.0] * len(fit.stats)
     grid = (
         np.linspace(angles.min() - 20, angles.max() + 20, 241)
         if np.ptp(angles) < 360

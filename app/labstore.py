@@ -419,6 +419,14 @@ def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) ->
     except GyroInputError as error:
         outcome.error = error
     outcome.flags = quality_flags(session, data)
+    if outcome.result is not None and outcome.result.fit.closure_consistent is False:
+        fit = outcome.result.fit
+        outcome.flags.append(
+            {
+                "key": "flag.closure",
+                "params": {"d": f"{fit.closure_residual:.3f}", "sigma": f"{fit.closure_sigma:.3f}"},
+            }
+        )
     return outcome
 
 

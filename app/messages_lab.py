@@ -617,6 +617,23 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     "results.mean": {"en": "Mean (°/h)", "zh-CN": "平均值（°/h）"},
     "results.std": {"en": "Std (°/h)", "zh-CN": "标准差（°/h）"},
     "results.sem": {"en": "Std error (°/h)", "zh-CN": "标准误差（°/h）"},
+    "results.sigma_used": {"en": "1σ of mean, used (°/h)", "zh-CN": "平均值 1σ（采用，°/h）"},
+    "uncertainty.white": {
+        "en": "Uncertainties assume white noise: each mean's 1σ is s/√n, widened by Student's t when there are few readings (a 1σ-equivalent). Slow drift of the gyro is not included: compare the closure residual d with its σ_d.",
+        "zh-CN": "不确定度假定白噪声：各平均值的 1σ 为 s/√n，读数较少时按学生 t 分布放宽（等效 1σ）。陀螺的慢漂移未计入：请将闭合残差 d 与其 σ_d 比较。",
+    },
+    "uncertainty.closure": {
+        "en": "One reading per position: the noise is estimated from the closure residual d alone (one degree of freedom, Student's t). The 1σ is rough; record several readings per position for a real one.",
+        "zh-CN": "每个位置只有一个读数：噪声仅由闭合残差 d 估计（一个自由度，学生 t 分布）。该 1σ 只是粗略估计；每个位置记录多个读数才能得到可靠的不确定度。",
+    },
+    "uncertainty.allan": {
+        "en": "Uncertainties from the gyro's noise model: each mean's 1σ is the Allan deviation at that position's dwell, so slow drift is included.",
+        "zh-CN": "不确定度取自陀螺的噪声模型：各平均值的 1σ 为该位置停留时间上的 Allan 偏差，已包含慢漂移。",
+    },
+    "flag.closure": {
+        "en": "The closure residual d = {d} °/h is more than 3σ_d ({sigma} °/h) from zero: the noise is not what the uncertainty assumes (drift, a bump, or a wrong position).",
+        "zh-CN": "闭合残差 d = {d} °/h 超过 3σ_d（{sigma} °/h）：噪声与不确定度的假设不符（漂移、碰撞或位置错误）。",
+    },
     "results.source": {"en": "Source", "zh-CN": "来源"},
     "results.azimuth": {
         "en": "Azimuth of position 1 (from true north, clockwise)",

@@ -18,6 +18,7 @@ HEADING_KEYS = [
     "samples_per_position",
     "position_means_deg_h",
     "position_sems_deg_h",
+    "position_sigmas_deg_h",
     "azimuth_deg",
     "azimuth_sigma_deg",
     "theta_deg",
@@ -28,6 +29,8 @@ HEADING_KEYS = [
     "amplitude_deg_h",
     "amplitude_sigma_deg_h",
     "closure_residual_deg_h",
+    "closure_sigma_deg_h",
+    "uncertainty_model",
     "azimuth_error_deg",
 ]
 LATITUDE_KEYS = [
@@ -36,6 +39,7 @@ LATITUDE_KEYS = [
     "samples_per_position",
     "position_means_deg_h",
     "position_sems_deg_h",
+    "position_sigmas_deg_h",
     "latitude_deg",
     "latitude_sigma_deg",
     "earth_rate_deg_h",
@@ -44,6 +48,9 @@ LATITUDE_KEYS = [
     "latitude_error_percent",
     "latitude_error_deg",
     "earth_rate_error_percent",
+    "closure_residual_deg_h",
+    "closure_sigma_deg_h",
+    "uncertainty_model",
 ]
 
 

@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from scipy.stats import t as student_t
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -51,7 +52,17 @@ def test_handout_heading_from_printed_averages():
     assert math.tan(math.radians(result.theta_deg)) == pytest.approx(
         (-0.94 - 2.79) / (10.71 + 8.95), rel=1e-12
     )
-    assert result.azimuth_sigma_deg is None  # one value per position: no scatter to propagate
+    # One value per position: the closure residual d is a one-degree-of-freedom estimate
+    # of a position's noise; Student's t with 1 dof is Cauchy, whose 68.27 % half-width
+    # is tan(π·0.34134) = 1.837, and four positions give σ_A = σ/(√2·H).
+    w1, w2, w3, w4 = PRINTED_HEADING
+    d = (w1 + w3 - w2 - w4) / 2
+    sigma = math.tan(math.pi * 0.6826894921 / 2) * abs(d)
+    amplitude = math.hypot((w1 - w3) / 2, (w2 - w4) / 2)
+    assert result.fit.uncertainty_model == "closure"
+    assert result.azimuth_sigma_deg == pytest.approx(
+        math.degrees(sigma / (math.sqrt(2) * amplitude)), rel=1e-6
+    )
 
 
 def test_handout_latitude_from_raw_tables():
@@ -105,7 +116,10 @@ def test_least_squares_equals_closed_form(rotation):
     assert result.amplitude_deg_h == pytest.approx(math.hypot(x, y), rel=1e-12)
     assert result.bias_deg_h == pytest.approx((w1 + w2 + w3 + w4) / 4, abs=1e-12)
     assert result.closure_residual_deg_h == pytest.approx((w1 + w3 - w2 - w4) / 2, abs=1e-12)
-    sems = [p.std(ddof=1) / math.sqrt(p.size) for p in positions]
+    # 20 readings: each standard error widened by Student's t with 19 dof (1σ-equivalent)
+    k19 = student_t.ppf(0.5 + 0.6826894921 / 2, 19)
+    assert k19 == pytest.approx(1.0270, abs=1e-4)
+    sems = [k19 * p.std(ddof=1) / math.sqrt(p.size) for p in positions]
     sx2 = (sems[0] ** 2 + sems[2] ** 2) / 4
     sy2 = (sems[1] ** 2 + sems[3] ** 2) / 4
     expected = math.sqrt(y * y * sx2 + x * x * sy2) / (x * x + y * y)

@@ -114,9 +114,7 @@ def test_latitude_with_unequal_counts_shows_the_fit():
 
 
 def test_latitude_error_in_degrees():
-    result = solve_latitude(
-        [VERTICAL[k] for k in range(1, 5)], ELEVATIONS, true_latitude_deg=39.93
-    )
+    result = solve_latitude([VERTICAL[k] for k in range(1, 5)], ELEVATIONS, true_latitude_deg=39.93)
     assert result.latitude_error_deg == pytest.approx(result.latitude_deg - 39.93)
     assert result.to_json()["latitude_error_deg"] == pytest.approx(0.797, abs=1e-3)
     assert "Δφ = φ − φ0 = 0.80°" in render_text(explain_latitude(result))
@@ -159,3 +157,62 @@ def test_huge_readings_never_print_inf_or_nan():
     assert caught.value.key == "readings.out_of_range"
     message = str(caught.value).lower()
     assert "inf" not in message and "nan" not in message
+
+
+# --- honest 1σ (lab-reference §3) ------------------------------------------------------------
+
+
+def test_identical_readings_get_the_quantisation_floor():
+    """All readings of position 2 are the same: its mean is uncertain by LSB/√12, the LSB
+    being the data's own step (0.09 °/h in the other positions), not zero."""
+    positions = [
+        [10.74, 10.65, 10.84, 10.65],
+        [2.79] * 4,
+        [-8.95, -9.04, -8.86, -8.95],
+        [-0.94, -0.85, -1.03, -0.94],
+    ]
+    result = solve_heading(positions, ANGLES)
+    step = 0.09  # 10.74 − 10.65, the smallest gap within a position
+    assert result.fit.position_sigmas[1] == pytest.approx(step / math.sqrt(12), rel=1e-6)
+    assert result.fit.uncertainty_model == "white"
+    every_identical = solve_heading([[v] * 5 for v in (10.71, 2.79, -8.95, -0.94)], ANGLES)
+    # no step in the data: the resolution the numbers were written with (0.01 °/h)
+    assert every_identical.fit.position_sigmas == pytest.approx([0.01 / math.sqrt(12)] * 4)
+    assert every_identical.azimuth_sigma_deg > 0
+
+
+def test_small_n_is_widened_by_student_t():
+    from scipy.stats import t as student_t
+
+    rng = np.random.default_rng(3)
+    positions = [10 * math.cos(math.radians(a + 20)) + rng.normal(0, 0.3, 3) for a in ANGLES]
+    result = solve_heading(positions, ANGLES)
+    k2 = student_t.ppf(0.5 + 0.6826894921 / 2, 2)  # 1.3210
+    for samples, sigma in zip(positions, result.fit.position_sigmas, strict=True):
+        assert sigma == pytest.approx(k2 * samples.std(ddof=1) / math.sqrt(3), rel=1e-9)
+
+
+def test_one_reading_per_position_uses_the_closure_and_refuses_noise():
+    """The handout's four typed averages get a σ from d; when H is not clearly larger than
+    that σ the heading is refused, never printed."""
+    result = solve_heading([[10.71], [2.79], [-8.95], [-0.94]], ANGLES)
+    assert result.fit.uncertainty_model == "closure" and result.azimuth_sigma_deg > 0
+    assert result.to_json()["uncertainty_model"] == "closure"
+    with pytest.raises(GyroInputError) as caught:
+        solve_heading([[0.30], [-0.25], [0.10], [0.35]], ANGLES)  # |d| ≈ H: pure noise
+    assert caught.value.key == "readings.amplitude_too_small"
+
+
+def test_closure_consistency_is_checked_and_flagged():
+    """White-noise σ of 0.01 °/h per mean, but a bump of 1 °/h at position 3: |d| ≫ 3σ_d."""
+    rng = np.random.default_rng(5)
+    true = [10 * math.cos(math.radians(a + 20)) + 1.0 for a in ANGLES]
+    positions = [t + rng.normal(0, 0.03, 9) for t in true]
+    consistent = solve_heading(positions, ANGLES)
+    assert consistent.fit.closure_consistent is True
+    positions[2] = positions[2] + 1.0
+    bumped = solve_heading(positions, ANGLES)
+    assert bumped.fit.closure_consistent is False
+    sigma_d = math.sqrt(sum(s**2 for s in bumped.fit.position_sigmas)) / 2
+    assert bumped.to_json()["closure_sigma_deg_h"] == pytest.approx(sigma_d)
+    assert f"(σ_d = {sigma_d:.3f} °/h)" in render_text(explain_heading(bumped))

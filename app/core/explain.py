@@ -31,15 +31,41 @@ def _p(value: float, digits: int = 3) -> str:
     return f"({text})" if value < 0 else text
 
 
-def _means_step(stats) -> Step:
-    lines = [
-        f"ω{i} = {_f(s.mean)} °/h   (n = {s.n}"
-        + (f", s = {_f(s.std)}, s/√n = {_f(s.sem)})" if s.sem is not None else ")")
-        for i, s in enumerate(stats, start=1)
-    ]
+MODEL_NOTES = {
+    "white": {
+        "en": "1σ of each mean: s/√n, widened by Student's t for few readings "
+        "(a 1σ-equivalent interval); this assumes white noise.",
+        "zh-CN": "各平均值的 1σ：s/√n，读数较少时按学生 t 分布放宽（等效 1σ 区间）；"
+        "此处假定噪声为白噪声。",
+    },
+    "closure": {
+        "en": "One reading per position: the noise is estimated from the closure residual "
+        "d alone (one degree of freedom, Student's t), so the 1σ is rough.",
+        "zh-CN": "每个位置只有一个读数：噪声仅由闭合残差 d 估计（一个自由度，学生 t 分布），"
+        "因此 1σ 只是粗略估计。",
+    },
+    "allan": {
+        "en": "1σ of each mean from the gyro's Allan variance at that position's dwell "
+        "(correlated noise included).",
+        "zh-CN": "各平均值的 1σ 取自陀螺在该位置停留时间上的 Allan 方差（包含相关噪声）。",
+    },
+}
+
+
+def _means_step(fit) -> Step:
+    sigmas = fit.position_sigmas or [None] * len(fit.stats)
+    lines = []
+    for i, (s, sigma) in enumerate(zip(fit.stats, sigmas, strict=True), start=1):
+        line = f"ω{i} = {_f(s.mean)} °/h   (n = {s.n}"
+        if s.sem is not None:
+            line += f", s = {_f(s.std)}, s/√n = {_f(s.sem)}"
+        if sigma is not None and (s.sem is None or abs(sigma - s.sem) > 5e-4):
+            line += f", 1σ used = {_f(sigma)}"
+        lines.append(line + ")")
     return Step(
         {"en": "Average the readings at each position", "zh-CN": "求各位置读数的平均值"},
         tuple(lines),
+        MODEL_NOTES.get(fit.uncertainty_model),
     )
 
 
@@ -95,7 +121,7 @@ def explain_heading(result: HeadingResult) -> list[Step]:
     closed form of the plain means as a line labelled "for comparison, not used".
     """
     fit = result.fit
-    steps = [_means_step(fit.stats)]
+    steps = [_means_step(fit)]
     w = fit.means
     turn = _four_apart(fit.angles_deg)
     # What the result uses: x and y of position 1 from the fit (lab-reference §3).
@@ -180,7 +206,10 @@ def explain_heading(result: HeadingResult) -> list[Step]:
     )
     lines = [f"H = √(x² + y²) = {_f(result.amplitude_deg_h)} °/h,   b = {_f(fit.b)} °/h"]
     if result.closure_residual_deg_h is not None:
-        lines.append(f"closure d = (ω1 + ω3 − ω2 − ω4)/2 = {_f(result.closure_residual_deg_h)} °/h")
+        closure = f"closure d = (ω1 + ω3 − ω2 − ω4)/2 = {_f(result.closure_residual_deg_h)} °/h"
+        if fit.closure_sigma is not None and fit.uncertainty_model != "closure":
+            closure += f"  (σ_d = {_f(fit.closure_sigma)} °/h)"
+        lines.append(closure)
     if result.azimuth_sigma_deg is not None:
         lines.append(f"σ_A = √(y²σx² + x²σy²)/H² = {_f(result.azimuth_sigma_deg, 3)}°")
     if result.azimuth_error_deg is not None:
@@ -229,7 +258,7 @@ def _latitude_closed_form(
 
 def explain_latitude(result: LatitudeResult) -> list[Step]:
     fit = result.fit
-    steps = [_means_step(fit.stats)]
+    steps = [_means_step(fit)]
     phi = result.latitude_deg
     standard = fit.angles_deg.size == 4 and np.allclose(
         np.mod(fit.angles_deg, 360), [0, 90, 180, 270]

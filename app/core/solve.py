@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from app.core.exceptions import GyroInputError
+from app.core.uncertainty import AllanVariance, PositionNoise, closure_residual, position_noise
 from app.core.units import EARTH_RATE_DEG_H
 
 SIGNIFICANCE = 3.0  # an amplitude below 3σ is not a measurement of anything
@@ -57,13 +58,42 @@ class SinusoidFit:
     a: float
     c: float
     b: float
-    cov: np.ndarray | None  # 3×3 covariance of (a, c, b), None without per-position scatter
+    cov: np.ndarray | None  # 3×3 covariance of (a, c, b), None when nothing estimates it
     angles_deg: np.ndarray
     stats: tuple[PositionStats, ...]
+    noise: PositionNoise | None = None  # the position means' 1σ and its model
 
     @property
     def means(self) -> np.ndarray:
         return np.array([s.mean for s in self.stats])
+
+    @property
+    def position_sigmas(self) -> list[float] | None:
+        """The 1σ(-equivalent) of each position mean that the fit propagates."""
+        return None if self.noise is None else [float(x) for x in self.noise.sigmas]
+
+    @property
+    def uncertainty_model(self) -> str | None:
+        return None if self.noise is None else self.noise.model
+
+    @property
+    def closure_residual(self) -> float | None:
+        return closure_residual(self.angles_deg, self.means)
+
+    @property
+    def closure_sigma(self) -> float | None:
+        """σ_d = √(σ1² + σ2² + σ3² + σ4²)/2 (None without four positions 90° apart)."""
+        if self.noise is None or self.closure_residual is None:
+            return None
+        return float(math.sqrt(float(np.sum(self.noise.variances))) / 2)
+
+    @property
+    def closure_consistent(self) -> bool | None:
+        """|d| ≤ 3σ_d: the noise is what the σ assumes (None when d itself gave σ)."""
+        sigma = self.closure_sigma
+        if sigma is None or self.uncertainty_model == "closure" or sigma == 0:
+            return None
+        return abs(self.closure_residual) <= SIGNIFICANCE * sigma
 
 
 def position_stats(samples: np.ndarray) -> PositionStats:
@@ -160,8 +190,16 @@ def _clean_positions(positions: Sequence[Sequence[float]]) -> list[np.ndarray]:
     return arrays
 
 
-def fit_sinusoid(positions: Sequence[Sequence[float]], angles_deg: Sequence[float]) -> SinusoidFit:
-    """Least-squares fit of ω = a·cos α + c·sin α + b over every sample, with covariance."""
+def fit_sinusoid(
+    positions: Sequence[Sequence[float]],
+    angles_deg: Sequence[float],
+    *,
+    allan_variance: AllanVariance | None = None,
+    dwell_s: Sequence[float] | None = None,
+) -> SinusoidFit:
+    """Least-squares fit of ω = a·cos α + c·sin α + b over every sample, with covariance
+    propagated from the position means' variances (:func:`app.core.uncertainty.position_noise`:
+    white noise with Student-t, the closure residual, or the gyro's Allan variance)."""
     arrays = _clean_positions(positions)
     angles = np.asarray(angles_deg, dtype=float)
     if angles.shape != (len(arrays),):
@@ -197,11 +235,9 @@ def fit_sinusoid(positions: Sequence[Sequence[float]], angles_deg: Sequence[floa
         )
     mapping = np.linalg.solve(normal, design.T * counts)  # L = (XᵀNX)⁻¹XᵀN
     a, c, b = mapping @ means
-    cov = None
-    if all(s.sem is not None for s in stats):
-        variances = np.array([s.sem**2 for s in stats])
-        cov = mapping @ np.diag(variances) @ mapping.T
-    return SinusoidFit(float(a), float(c), float(b), cov, angles, stats)
+    noise = position_noise(arrays, angles, allan_variance=allan_variance, dwell_s=dwell_s)
+    cov = None if noise is None else mapping @ np.diag(noise.variances) @ mapping.T
+    return SinusoidFit(float(a), float(c), float(b), cov, angles, stats, noise)
 
 
 def _polar(
@@ -243,16 +279,6 @@ def _scale(fit: SinusoidFit) -> float:
     return float(np.max(np.abs(fit.means))) if fit.means.size else 0.0
 
 
-def _closure(angles: np.ndarray, means: np.ndarray) -> float | None:
-    """(ω1 + ω3 − ω2 − ω4)/2 for four positions 90° apart, else None."""
-    if angles.size != 4:
-        return None
-    steps = np.diff(angles)
-    if not (np.allclose(np.abs(steps), 90.0, atol=1e-6) and np.allclose(steps, steps[0])):
-        return None
-    return float((means[0] + means[2] - means[1] - means[3]) / 2)
-
-
 @dataclass(frozen=True)
 class HeadingResult:
     """Part A.  ``to_json()`` gives exactly the keys of ``gyrolab solve heading --json``."""
@@ -281,6 +307,7 @@ class HeadingResult:
             "samples_per_position": [s.n for s in self.fit.stats],
             "position_means_deg_h": [s.mean for s in self.fit.stats],
             "position_sems_deg_h": [s.sem for s in self.fit.stats],
+            "position_sigmas_deg_h": self.fit.position_sigmas,
             "azimuth_deg": self.azimuth_deg,
             "azimuth_sigma_deg": self.azimuth_sigma_deg,
             "theta_deg": self.theta_deg,
@@ -291,6 +318,8 @@ class HeadingResult:
             "amplitude_deg_h": self.amplitude_deg_h,
             "amplitude_sigma_deg_h": self.amplitude_sigma_deg_h,
             "closure_residual_deg_h": self.closure_residual_deg_h,
+            "closure_sigma_deg_h": self.fit.closure_sigma,
+            "uncertainty_model": self.fit.uncertainty_model,
             "azimuth_error_deg": self.azimuth_error_deg,
         }
 
@@ -319,9 +348,14 @@ def solve_heading(
     angles_deg: Sequence[float],
     *,
     true_azimuth_deg: float | None = None,
+    allan_variance: AllanVariance | None = None,
+    dwell_s: Sequence[float] | None = None,
 ) -> HeadingResult:
-    """Azimuth of position 1 (clockwise from true north, [0°, 360°)) with its 1σ."""
-    fit = fit_sinusoid(positions, angles_deg)
+    """Azimuth of position 1 (clockwise from true north, [0°, 360°)) with its 1σ.
+
+    ``allan_variance`` (τ → σ²_A(τ)) and ``dwell_s`` give the position means' variances
+    when the gyro's noise model is known (see :mod:`app.core.uncertainty`)."""
+    fit = fit_sinusoid(positions, angles_deg, allan_variance=allan_variance, dwell_s=dwell_s)
     cov_xy = None
     if fit.cov is not None:
         # (x, y) = (a, −c): flip the sign of c's covariance terms.
@@ -342,7 +376,7 @@ def solve_heading(
         rotate_direction=direction,
         rotate_deg=rotate,
         then_axis_points=points,
-        closure_residual_deg_h=_closure(fit.angles_deg, fit.means),
+        closure_residual_deg_h=fit.closure_residual,
         azimuth_error_deg=error,
     )
 
@@ -379,6 +413,7 @@ class LatitudeResult:
             "samples_per_position": [s.n for s in self.fit.stats],
             "position_means_deg_h": [s.mean for s in self.fit.stats],
             "position_sems_deg_h": [s.sem for s in self.fit.stats],
+            "position_sigmas_deg_h": self.fit.position_sigmas,
             "latitude_deg": self.latitude_deg,
             "latitude_sigma_deg": self.latitude_sigma_deg,
             "earth_rate_deg_h": self.earth_rate_deg_h,
@@ -387,6 +422,9 @@ class LatitudeResult:
             "latitude_error_percent": self.latitude_error_percent,
             "latitude_error_deg": self.latitude_error_deg,
             "earth_rate_error_percent": self.earth_rate_error_percent,
+            "closure_residual_deg_h": self.fit.closure_residual,
+            "closure_sigma_deg_h": self.fit.closure_sigma,
+            "uncertainty_model": self.fit.uncertainty_model,
         }
 
 
@@ -403,11 +441,13 @@ def solve_latitude(
     *,
     true_latitude_deg: float | None = None,
     true_earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+    allan_variance: AllanVariance | None = None,
+    dwell_s: Sequence[float] | None = None,
 ) -> LatitudeResult:
     """Latitude φ and Earth rate Ω from readings in the meridian plane, with 1σ."""
     if true_earth_rate_deg_h <= 0 or not math.isfinite(true_earth_rate_deg_h):
         raise GyroInputError("station.bad_earth_rate", "The true Earth rate must be positive.")
-    fit = fit_sinusoid(positions, elevations_deg)
+    fit = fit_sinusoid(positions, elevations_deg, allan_variance=allan_variance, dwell_s=dwell_s)
     cov_xy = None if fit.cov is None else fit.cov[:2, :2]
     latitude, omega, sigma_lat, sigma_omega = _polar(fit.a, fit.c, cov_xy)
     _check_significant(omega, sigma_omega, "Earth-rate", _scale(fit))

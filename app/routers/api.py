@@ -321,6 +321,9 @@ class HeadingOut(BaseModel):
     samples_per_position: list[int]
     position_means_deg_h: list[float]
     position_sems_deg_h: list[float | None]
+    position_sigmas_deg_h: list[float] | None = Field(
+        description="the 1σ(-equivalent) of each position mean that the result propagates"
+    )
     azimuth_deg: float
     azimuth_sigma_deg: float | None
     theta_deg: float
@@ -331,6 +334,11 @@ class HeadingOut(BaseModel):
     amplitude_deg_h: float
     amplitude_sigma_deg_h: float | None
     closure_residual_deg_h: float | None
+    closure_sigma_deg_h: float | None
+    uncertainty_model: Literal["white", "closure", "allan"] | None = Field(
+        description="what the 1σ assumes: white noise (Student-t), the closure residual "
+        "(one degree of freedom), or the gyro's Allan variance"
+    )
     azimuth_error_deg: float | None
 
 
@@ -340,6 +348,7 @@ class LatitudeOut(BaseModel):
     samples_per_position: list[int]
     position_means_deg_h: list[float]
     position_sems_deg_h: list[float | None]
+    position_sigmas_deg_h: list[float] | None
     latitude_deg: float
     latitude_sigma_deg: float | None
     earth_rate_deg_h: float
@@ -348,6 +357,9 @@ class LatitudeOut(BaseModel):
     latitude_error_percent: float | None
     latitude_error_deg: float | None = Field(description="φ − φ0 (°)")
     earth_rate_error_percent: float
+    closure_residual_deg_h: float | None
+    closure_sigma_deg_h: float | None
+    uncertainty_model: Literal["white", "closure", "allan"] | None
 
 
 class ResultsOut(BaseModel):

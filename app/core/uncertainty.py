@@ -1,0 +1,136 @@
+"""How uncertain each position mean is: the variances the fit propagates (lab-reference §3,
+"Honest uncertainty beyond white noise").
+
+Three models, named in every result as ``uncertainty_model``:
+
+``"white"``
+    Every position has two or more readings.  The mean of n readings with sample std s has
+    standard error s/√n; with few readings the 68.27 % interval of Student's t with n − 1
+    degrees of freedom is wider than ±s/√n, so the reported "1σ-equivalent" is
+
+        σ_i = k(n_i − 1) · s_i/√n_i,   k(ν) = t_ν⁻¹(0.84134)
+
+    (k(9) = 1.059, k(1) = 1.837, k → 1 for large n).  Readings that are all identical
+    (s = 0) carry the quantisation floor σ_i = LSB/√12, the LSB being the data's step
+    (the smallest gap between distinct readings of a position) or, when every position
+    is constant, the resolution the numbers were written with.
+
+``"closure"``
+    One reading per position (the handout's "type the four averages"): four positions
+    90° apart give the closure residual d = (ω1 + ω3 − ω2 − ω4)/2, whose std is the std
+    σ of one position value -- a one-degree-of-freedom estimate, σ_i = k(1)·|d|.
+
+``"allan"``
+    The gyro's noise model is known (the simulator's preset, or an Allan characterisation):
+    the variance of a position mean over its dwell τ is the Allan variance σ²_A(τ), which
+    holds for correlated noise (bias instability, random walk) where s²/n does not.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from scipy.stats import t as student_t
+
+ONE_SIGMA = 0.6826894921370859  # the probability within ±1σ of a normal distribution
+MAX_DECIMALS = 6
+
+
+@lru_cache(maxsize=256)
+def t_factor(dof: int) -> float:
+    """Half-width, in standard errors, of Student's t central 68.27 % interval.
+
+    ``k(ν) = t_ν⁻¹((1 + 0.68269)/2)``; multiplying a standard error by k gives the
+    "1σ-equivalent" interval for a mean estimated from ν + 1 readings.
+    """
+    if dof < 1:
+        raise ValueError("Student's t needs at least one degree of freedom")
+    return float(student_t.ppf(0.5 + ONE_SIGMA / 2, dof))
+
+
+def reading_step(arrays: Sequence[np.ndarray]) -> float | None:
+    """The smallest gap between distinct readings within any one position (the
+    quantisation step the data show), or None when every position is constant."""
+    gaps = []
+    for array in arrays:
+        distinct = np.unique(array)
+        if distinct.size > 1:
+            gaps.append(float(np.min(np.diff(distinct))))
+    return min(gaps) if gaps else None
+
+
+def written_resolution(arrays: Sequence[np.ndarray]) -> float:
+    """10⁻ᵈ for the fewest decimals d (≤ 6) that write every reading exactly."""
+    values = np.concatenate([np.asarray(a, dtype=float) for a in arrays])
+    for decimals in range(MAX_DECIMALS + 1):
+        scaled = values * 10.0**decimals
+        if np.all(np.abs(scaled - np.round(scaled)) <= 1e-6 * np.maximum(1.0, np.abs(scaled))):
+            return 10.0**-decimals
+    return 10.0**-MAX_DECIMALS
+
+
+def quantisation_floor(arrays: Sequence[np.ndarray]) -> float:
+    """LSB/√12: the std of rounding to the readings' step (or written resolution)."""
+    step = reading_step(arrays)
+    lsb = step if step is not None else written_resolution(arrays)
+    return lsb / math.sqrt(12.0)
+
+
+def closure_residual(angles_deg: np.ndarray, means: np.ndarray) -> float | None:
+    """d = (ω1 + ω3 − ω2 − ω4)/2 for four positions 90° apart (either way), else None."""
+    if angles_deg.size != 4:
+        return None
+    steps = np.diff(angles_deg)
+    if not (np.allclose(np.abs(steps), 90.0, atol=1e-6) and np.allclose(steps, steps[0])):
+        return None
+    return float((means[0] + means[2] - means[1] - means[3]) / 2)
+
+
+@dataclass(frozen=True)
+class PositionNoise:
+    """The 1σ(-equivalent) of each position mean and the model that gave it."""
+
+    sigmas: np.ndarray
+    model: str  # "white" | "closure" | "allan"
+
+    @property
+    def variances(self) -> np.ndarray:
+        return self.sigmas**2
+
+
+AllanVariance = Callable[[float], float]  # τ (s) → σ²_A(τ) in (°/h)²
+
+
+def position_noise(
+    arrays: Sequence[np.ndarray],
+    angles_deg: np.ndarray,
+    *,
+    allan_variance: AllanVariance | None = None,
+    dwell_s: Sequence[float] | None = None,
+) -> PositionNoise | None:
+    """The variance model of the position means (see the module's docstring), or None
+    when nothing estimates it (one reading per position without a closure residual)."""
+    if allan_variance is not None and dwell_s is not None:
+        sigmas = np.array([math.sqrt(max(allan_variance(tau), 0.0)) for tau in dwell_s])
+        return PositionNoise(sigmas, "allan")
+    floor = quantisation_floor(arrays)
+    counts = [array.size for array in arrays]
+    if min(counts) >= 2:
+        sigmas = []
+        for array in arrays:
+            if np.ptp(array) == 0.0:  # all identical: rounding is the only error left
+                sigmas.append(floor)
+            else:
+                std = float(array.std(ddof=1))
+                sigmas.append(t_factor(array.size - 1) * std / math.sqrt(array.size))
+        return PositionNoise(np.array(sigmas), "white")
+    means = np.array([float(array.mean()) for array in arrays])
+    d = closure_residual(angles_deg, means)
+    if d is None:
+        return None
+    sigma = max(t_factor(1) * abs(d), floor)
+    return PositionNoise(np.full(len(arrays), sigma), "closure")
