@@ -7,10 +7,10 @@ import math
 from pathlib import Path
 
 import numpy as np
-from scipy.stats import t as student_t
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.stats import t as student_t
 
 from app.core.exceptions import GyroInputError
 from app.core.solve import (
