@@ -17,8 +17,10 @@ from app import __version__
 from app.config import get_settings
 from app.core.exceptions import GyroInputError
 from app.core.explain import explain_heading, explain_latitude
+from app.core.noise_model import GyroNoise, Window
 from app.core.solve import solve_heading, solve_latitude
 from app.jsonsafe import json_safe
+from app.labsim import preset_for
 from app.models import Assignment, Attempt, LabSession, SampleChunk, Take, utcnow
 from app.samples import chunks, unpack
 
@@ -392,6 +394,21 @@ def part_data(db: Session, session: LabSession, part: str) -> dict[int, Position
     return current_data(db, session).get(part, {})
 
 
+def simulated_noise(session: LabSession, ordered: list[PositionData]) -> dict:
+    """When every position was recorded from the simulated gyro its noise model is known:
+    the position means' covariance (each recording a separate run of the gyro) and the
+    table's indexing σ, for the solver.  Otherwise nothing (the σ assumes white noise)."""
+    if not ordered or any(p.take.source != "simulator" for p in ordered):
+        return {}
+    preset = preset_for(session)
+    noise = GyroNoise.from_preset(preset)
+    windows = [Window(0.0, p.values.size / preset.sample_rate_hz) for p in ordered]
+    return {
+        "position_cov": noise.mean_covariance(windows, continuous=False),
+        "indexing_sigma_deg": noise.indexing_sigma_deg,
+    }
+
+
 def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) -> PartResult:
     outcome = PartResult(part, data)
     if len(data) < 3:
@@ -404,9 +421,10 @@ def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) ->
     ordered = [data[k] for k in sorted(data)]
     values = [p.values for p in ordered]
     angles = [p.take.angle_deg for p in ordered]
+    known = simulated_noise(session, ordered)
     try:
         if part == "heading":
-            outcome.result = solve_heading(values, angles)
+            outcome.result = solve_heading(values, angles, **known)
             outcome.steps = explain_heading(outcome.result)
         else:
             outcome.result = solve_latitude(
@@ -414,6 +432,7 @@ def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) ->
                 angles,
                 true_latitude_deg=session.latitude_deg,
                 true_earth_rate_deg_h=session.earth_rate_deg_h,
+                **known,
             )
             outcome.steps = explain_latitude(outcome.result)
     except GyroInputError as error:

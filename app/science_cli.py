@@ -10,12 +10,14 @@ import json
 import math
 import sys
 from dataclasses import replace
+from itertools import pairwise
 
 import numpy as np
 
 from app.core.allan import allan_deviation
 from app.core.exceptions import GyroInputError
 from app.core.explain import explain_heading, explain_latitude, render_text
+from app.core.noise_model import GyroNoise, Window, back_to_back
 from app.core.readings import (
     NumberOutOfRange,
     Readings,
@@ -65,14 +67,42 @@ def solve_readings(part: str, readings: Readings, args: argparse.Namespace):
             angles = np.asarray(readings.angles_deg)
         else:
             angles = heading_angles(count, args.rotation, args.start_angle, args.step)
-        return solve_heading(positions, angles, true_azimuth_deg=args.true_azimuth)
-    if readings.angles_deg is not None:
+    elif readings.angles_deg is not None:
         angles = np.asarray(readings.angles_deg)
     else:
         angles = elevation_angles(count, args.start_angle, args.step)
+    known = _known_noise(readings, positions, getattr(args, "gyro_preset", None))
+    if part == "heading":
+        return solve_heading(positions, angles, true_azimuth_deg=args.true_azimuth, **known)
     return solve_latitude(
-        positions, angles, true_latitude_deg=args.latitude, true_earth_rate_deg_h=args.earth_rate
+        positions,
+        angles,
+        true_latitude_deg=args.latitude,
+        true_earth_rate_deg_h=args.earth_rate,
+        **known,
     )
+
+
+def _known_noise(readings: Readings, positions, preset_name: str | None) -> dict:
+    """``position_cov`` and ``indexing_sigma_deg`` from a preset's noise model, the windows
+    taken from the readings' times (else one after another at the preset's rate)."""
+    if preset_name is None:
+        return {}
+    preset = PRESETS[preset_name]
+    noise = GyroNoise.from_preset(preset)
+    windows = back_to_back([p.size for p in positions], preset.sample_rate_hz)
+    if readings.times_s is not None:
+        timed = [
+            Window(float(t[0]), float(t[-1] - t[0]) + 1.0 / preset.sample_rate_hz)
+            for t in readings.times_s
+        ]
+        ordered = all(a.end_s <= b.start_s + 1e-9 for a, b in pairwise(timed))
+        if ordered and timed[0].start_s >= 0:
+            windows = timed
+    return {
+        "position_cov": noise.mean_covariance(windows),
+        "indexing_sigma_deg": noise.indexing_sigma_deg,
+    }
 
 
 def _solve(args: argparse.Namespace) -> int:
@@ -214,6 +244,12 @@ def add_science_commands(commands) -> None:
         help="true Earth rate Ω0 in °/h (default 15.041; the handout used 15.04)",
     )
     solve.add_argument("--true-azimuth", type=float, help="true azimuth of position 1 (deg)")
+    solve.add_argument(
+        "--gyro-preset",
+        choices=sorted(PRESETS),
+        help="the gyro's noise model (a simulator preset): the 1σ then includes correlated "
+        "noise (uncertainty_model 'allan') instead of assuming white noise",
+    )
     solve.add_argument("--json", action="store_true")
     solve.add_argument("--language", choices=["en", "zh-CN"], default="en")
     solve.set_defaults(handler=_guarded(_solve))

@@ -257,3 +257,21 @@ def test_real_process_prints_no_traceback(tmp_path):
     assert process.stderr.strip() == (
         "gyrolab solve: Line 2, column position_4: 'oops' is not a number."
     )
+
+
+def test_solve_with_a_gyro_preset_uses_its_noise_model(capsys):
+    code, simulated, _ = run(
+        capsys,
+        "simulate", "heading", "--preset", "teaching-fog", "--latitude", "40",
+        "--azimuth", "200", "--seconds-per-position", "300", "--seed", "3",
+    )  # fmt: skip
+    assert code == 0
+    code, white, _ = run(capsys, "solve", "heading", "-", "--json", stdin=simulated)
+    code, known, _ = run(
+        capsys, "solve", "heading", "-", "--json", "--gyro-preset", "teaching-fog",
+        stdin=simulated,
+    )  # fmt: skip
+    white, known = json.loads(white), json.loads(known)
+    assert white["uncertainty_model"] == "white" and known["uncertainty_model"] == "allan"
+    assert known["azimuth_deg"] == white["azimuth_deg"]  # the same fit, an honest σ
+    assert known["azimuth_sigma_deg"] > 1.5 * white["azimuth_sigma_deg"]

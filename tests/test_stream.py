@@ -78,6 +78,10 @@ def test_stored_samples_equal_streamed_ones_and_no_truth_is_sent(student_client)
     results = student_client.get(f"/lab/sessions/{session_id}/results.json").json()
     error = (results["heading"]["azimuth_deg"] - session.sim_azimuth_deg + 180) % 360 - 180
     assert abs(error) < 5 * results["heading"]["azimuth_sigma_deg"] + 0.2
+    # the simulated gyro's noise model is known: the σ includes its correlated noise
+    assert results["heading"]["uncertainty_model"] == "allan"
+    page = student_client.get(f"/lab/sessions/{session_id}").text
+    assert 'data-model="allan"' in page
 
 
 def GyroTruth(session) -> dict[str, str]:  # noqa: N802

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from app.core.exceptions import GyroInputError
-from app.core.uncertainty import AllanVariance, PositionNoise, closure_residual, position_noise
+from app.core.uncertainty import PositionNoise, closure_residual, position_noise
 from app.core.units import EARTH_RATE_DEG_H
 
 SIGNIFICANCE = 3.0  # an amplitude below 3σ is not a measurement of anything
@@ -194,12 +194,16 @@ def fit_sinusoid(
     positions: Sequence[Sequence[float]],
     angles_deg: Sequence[float],
     *,
-    allan_variance: AllanVariance | None = None,
-    dwell_s: Sequence[float] | None = None,
+    position_cov: np.ndarray | None = None,
+    indexing_sigma_deg: float = 0.0,
 ) -> SinusoidFit:
     """Least-squares fit of ω = a·cos α + c·sin α + b over every sample, with covariance
-    propagated from the position means' variances (:func:`app.core.uncertainty.position_noise`:
-    white noise with Student-t, the closure residual, or the gyro's Allan variance)."""
+    Cov β = L·Σ·Lᵀ propagated from the position means' covariance Σ
+    (:func:`app.core.uncertainty.position_noise`: white noise with Student-t, the closure
+    residual, or a known noise model's ``position_cov``).
+
+    ``indexing_sigma_deg``: each stop after the first lands off by N(0, σ_idx), which moves
+    its reading by ∂ω/∂α·δ = (−a·sin α + c·cos α)·δ; that variance joins Σ's diagonal."""
     arrays = _clean_positions(positions)
     angles = np.asarray(angles_deg, dtype=float)
     if angles.shape != (len(arrays),):
@@ -235,8 +239,13 @@ def fit_sinusoid(
         )
     mapping = np.linalg.solve(normal, design.T * counts)  # L = (XᵀNX)⁻¹XᵀN
     a, c, b = mapping @ means
-    noise = position_noise(arrays, angles, allan_variance=allan_variance, dwell_s=dwell_s)
-    cov = None if noise is None else mapping @ np.diag(noise.variances) @ mapping.T
+    noise = position_noise(arrays, angles, position_cov=position_cov)
+    if noise is not None and indexing_sigma_deg > 0:
+        slope = -a * np.sin(radians) + c * np.cos(radians)  # ∂ω/∂α at each stop, per rad
+        extra = (slope * math.radians(indexing_sigma_deg)) ** 2
+        extra[0] = 0.0  # the first stop is the reference
+        noise = PositionNoise(noise.cov + np.diag(extra), noise.model)
+    cov = None if noise is None else mapping @ noise.cov @ mapping.T
     return SinusoidFit(float(a), float(c), float(b), cov, angles, stats, noise)
 
 
@@ -348,14 +357,16 @@ def solve_heading(
     angles_deg: Sequence[float],
     *,
     true_azimuth_deg: float | None = None,
-    allan_variance: AllanVariance | None = None,
-    dwell_s: Sequence[float] | None = None,
+    position_cov: np.ndarray | None = None,
+    indexing_sigma_deg: float = 0.0,
 ) -> HeadingResult:
     """Azimuth of position 1 (clockwise from true north, [0°, 360°)) with its 1σ.
 
-    ``allan_variance`` (τ → σ²_A(τ)) and ``dwell_s`` give the position means' variances
-    when the gyro's noise model is known (see :mod:`app.core.uncertainty`)."""
-    fit = fit_sinusoid(positions, angles_deg, allan_variance=allan_variance, dwell_s=dwell_s)
+    ``position_cov`` and ``indexing_sigma_deg``: a known noise model (see
+    :func:`fit_sinusoid` and :mod:`app.core.noise_model`)."""
+    fit = fit_sinusoid(
+        positions, angles_deg, position_cov=position_cov, indexing_sigma_deg=indexing_sigma_deg
+    )
     cov_xy = None
     if fit.cov is not None:
         # (x, y) = (a, −c): flip the sign of c's covariance terms.
@@ -441,13 +452,18 @@ def solve_latitude(
     *,
     true_latitude_deg: float | None = None,
     true_earth_rate_deg_h: float = EARTH_RATE_DEG_H,
-    allan_variance: AllanVariance | None = None,
-    dwell_s: Sequence[float] | None = None,
+    position_cov: np.ndarray | None = None,
+    indexing_sigma_deg: float = 0.0,
 ) -> LatitudeResult:
     """Latitude φ and Earth rate Ω from readings in the meridian plane, with 1σ."""
     if true_earth_rate_deg_h <= 0 or not math.isfinite(true_earth_rate_deg_h):
         raise GyroInputError("station.bad_earth_rate", "The true Earth rate must be positive.")
-    fit = fit_sinusoid(positions, elevations_deg, allan_variance=allan_variance, dwell_s=dwell_s)
+    fit = fit_sinusoid(
+        positions,
+        elevations_deg,
+        position_cov=position_cov,
+        indexing_sigma_deg=indexing_sigma_deg,
+    )
     cov_xy = None if fit.cov is None else fit.cov[:2, :2]
     latitude, omega, sigma_lat, sigma_omega = _polar(fit.a, fit.c, cov_xy)
     _check_significant(omega, sigma_omega, "Earth-rate", _scale(fit))

@@ -22,14 +22,15 @@ Three models, named in every result as ``uncertainty_model``:
 
 ``"allan"``
     The gyro's noise model is known (the simulator's preset, or an Allan characterisation):
-    the variance of a position mean over its dwell τ is the Allan variance σ²_A(τ), which
-    holds for correlated noise (bias instability, random walk) where s²/n does not.
+    the covariance of the position means follows from it and the recording schedule
+    (:mod:`app.core.noise_model`), correlated noise (bias instability, random walk)
+    included where s²/n is over-confident.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -92,31 +93,36 @@ def closure_residual(angles_deg: np.ndarray, means: np.ndarray) -> float | None:
 
 @dataclass(frozen=True)
 class PositionNoise:
-    """The 1σ(-equivalent) of each position mean and the model that gave it."""
+    """The covariance of the position means (°/h)² and the model that gave it."""
 
-    sigmas: np.ndarray
+    cov: np.ndarray
     model: str  # "white" | "closure" | "allan"
 
     @property
     def variances(self) -> np.ndarray:
-        return self.sigmas**2
+        return np.diag(self.cov).copy()
 
+    @property
+    def sigmas(self) -> np.ndarray:
+        """The 1σ(-equivalent) of each position mean."""
+        return np.sqrt(np.maximum(self.variances, 0.0))
 
-AllanVariance = Callable[[float], float]  # τ (s) → σ²_A(τ) in (°/h)²
+    @classmethod
+    def independent(cls, sigmas: Sequence[float], model: str) -> PositionNoise:
+        return cls(np.diag(np.asarray(sigmas, dtype=float) ** 2), model)
 
 
 def position_noise(
     arrays: Sequence[np.ndarray],
     angles_deg: np.ndarray,
     *,
-    allan_variance: AllanVariance | None = None,
-    dwell_s: Sequence[float] | None = None,
+    position_cov: np.ndarray | None = None,
 ) -> PositionNoise | None:
-    """The variance model of the position means (see the module's docstring), or None
-    when nothing estimates it (one reading per position without a closure residual)."""
-    if allan_variance is not None and dwell_s is not None:
-        sigmas = np.array([math.sqrt(max(allan_variance(tau), 0.0)) for tau in dwell_s])
-        return PositionNoise(sigmas, "allan")
+    """The covariance model of the position means (see the module's docstring), or None
+    when nothing estimates it (one reading per position without a closure residual).
+    ``position_cov`` is the covariance a known noise model gives (model "allan")."""
+    if position_cov is not None:
+        return PositionNoise(np.asarray(position_cov, dtype=float), "allan")
     floor = quantisation_floor(arrays)
     counts = [array.size for array in arrays]
     if min(counts) >= 2:
@@ -127,10 +133,10 @@ def position_noise(
             else:
                 std = float(array.std(ddof=1))
                 sigmas.append(t_factor(array.size - 1) * std / math.sqrt(array.size))
-        return PositionNoise(np.array(sigmas), "white")
+        return PositionNoise.independent(sigmas, "white")
     means = np.array([float(array.mean()) for array in arrays])
     d = closure_residual(angles_deg, means)
     if d is None:
         return None
     sigma = max(t_factor(1) * abs(d), floor)
-    return PositionNoise(np.full(len(arrays), sigma), "closure")
+    return PositionNoise.independent([sigma] * len(arrays), "closure")
