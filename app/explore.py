@@ -1,11 +1,13 @@
 """The error-analysis explorer: heading error against true azimuth, first order and Monte Carlo,
 and the expected heading σ against dwell time.  Everything comes from ``app.core``.
 
-Dwell view (lab-reference §3): with angle random walk N (°/√h) and bias instability B (°/h)
-the standard error of one position's mean after T seconds is about
-σ_m(T) = √((60·N/√T)² + (0.664·B)²) °/h, and the four-position heading σ is
-σ_A = σ_m / (√2·H) rad, H = Ω cos φ.  The floor 0.664·B/(√2·H) is where averaging stops
-helping.
+Dwell view (lab-reference §3, §6): the heading σ of four back-to-back positions of T seconds
+from the very noise model the simulator generates (:mod:`app.core.noise_model`: angle
+random walk, Gauss–Markov bias instability, rate random walk, quantisation).  With Σ the
+covariance of the four position means, x = (m1 − m3)/2 and y = (m2 − m4)/2 have variances
+v_x, v_y, and averaged over the azimuth σ_A = √((v_x + v_y)/2)/H rad, H = Ω cos φ (for
+white noise alone σ_m/(√2·H)).  A Gauss–Markov bias averages down again past its
+correlation time -- there is no flat floor unless rate random walk makes the curve rise.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from app.core.error_analysis import (
     monte_carlo_heading_errors,
     two_position_first_order,
 )
+from app.core.noise_model import GyroNoise, back_to_back
 from app.core.simulate import PRESETS
 from app.core.units import EARTH_RATE_DEG_H
 
@@ -133,22 +136,41 @@ def heading_error_curves(params: ExplorerInput, seed: int = 1) -> tuple[list[Cur
     return curves, info
 
 
+def heading_sigma_for_dwell(noise: GyroNoise, rate_hz: float, dwell_s: float, amplitude: float):
+    """σ_A (°) of four back-to-back positions of ``dwell_s`` each, averaged over azimuth."""
+    count = max(1, int(round(dwell_s * rate_hz)))
+    cov = noise.mean_covariance(back_to_back([count] * 4, rate_hz))
+    x = np.array([0.5, 0.0, -0.5, 0.0])
+    y = np.array([0.0, 0.5, 0.0, -0.5])
+    variance = (x @ cov @ x + y @ cov @ y) / 2.0
+    return math.degrees(math.sqrt(max(variance, 0.0)) / amplitude)
+
+
 def dwell_curve(preset_name: str, latitude_deg: float) -> dict:
-    """Expected four-position heading σ (°) against dwell per position, and its floor."""
+    """Expected four-position heading σ (°) against dwell per position, from the preset's
+    noise model; the white-noise part alone; the lowest σ and where it is reached; and the
+    dwell where correlated noise starts to outweigh white noise."""
     preset = PRESETS[preset_name]
     amplitude = EARTH_RATE_DEG_H * math.cos(math.radians(latitude_deg))
     dwell = np.geomspace(5.0, 3600.0, 60)
-    white = 60.0 * preset.arw_deg_rt_h / np.sqrt(dwell)
-    floor = 0.664 * preset.bias_instability_deg_h
-    sigma_mean = np.sqrt(white**2 + floor**2)
-    to_heading = np.degrees(1.0 / (math.sqrt(2.0) * amplitude)) if amplitude > 0 else math.nan
-    knee = (preset.arw_deg_rt_h / floor) ** 2 * 3600.0 if floor > 0 else None
+    full = GyroNoise.from_preset(preset)
+    white_only = GyroNoise(arw_deg_rt_h=preset.arw_deg_rt_h)
+    rate = preset.sample_rate_hz
+    if amplitude <= 0:
+        sigma = white = np.full(dwell.size, math.nan)
+    else:
+        sigma = np.array([heading_sigma_for_dwell(full, rate, t, amplitude) for t in dwell])
+        white = np.array([heading_sigma_for_dwell(white_only, rate, t, amplitude) for t in dwell])
+    best = int(np.nanargmin(sigma)) if np.any(np.isfinite(sigma)) else 0
+    correlated = np.sqrt(np.maximum(sigma**2 - white**2, 0.0))
+    crossing = np.nonzero(correlated >= white)[0]
     return {
         "dwell_s": dwell.tolist(),
-        "sigma_deg": (sigma_mean * to_heading).tolist(),
-        "white_only_deg": (white * to_heading).tolist(),
-        "floor_deg": floor * to_heading,
-        "knee_s": knee,
+        "sigma_deg": sigma.tolist(),
+        "white_only_deg": white.tolist(),
+        "floor_deg": float(sigma[best]),
+        "best_dwell_s": float(dwell[best]),
+        "knee_s": float(dwell[crossing[0]]) if crossing.size else None,
         "arw_deg_rt_h": preset.arw_deg_rt_h,
         "bias_instability_deg_h": preset.bias_instability_deg_h,
     }

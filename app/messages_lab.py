@@ -60,10 +60,13 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     },
     "explore.dwell_axis": {"en": "dwell per position (s)", "zh-CN": "每个位置的采样时长（秒）"},
     "explore.sigma_axis": {"en": "heading σ (°)", "zh-CN": "寻北标准差（°）"},
-    "explore.floor": {"en": "bias-instability floor", "zh-CN": "零偏不稳定性下限"},
+    "explore.floor": {"en": "lowest σ in range", "zh-CN": "范围内最小标准差"},
     "explore.white_only": {"en": "white noise only", "zh-CN": "仅白噪声"},
     "explore.expected": {"en": "expected σ", "zh-CN": "期望标准差"},
-    "explore.knee": {"en": "ARW meets the floor", "zh-CN": "白噪声与下限相交"},
+    "explore.knee": {
+        "en": "correlated noise outweighs white noise",
+        "zh-CN": "相关噪声超过白噪声",
+    },
     "scenario.indexing-level": {
         "en": "Paper: indexing error, level table (φ = 60°)",
         "zh-CN": "论文：转位误差，转台水平（φ = 60°）",

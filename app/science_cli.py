@@ -9,7 +9,7 @@ import argparse
 import json
 import math
 import sys
-from dataclasses import replace
+from dataclasses import asdict, replace
 from itertools import pairwise
 
 import numpy as np
@@ -118,7 +118,37 @@ def _solve(args: argparse.Namespace) -> int:
     return 0
 
 
+def preset_table() -> list[dict]:
+    """Every preset's parameters, units in the names, with its source and description."""
+    rows = []
+    for name in sorted(PRESETS):
+        fields = asdict(PRESETS[name])
+        fields["misalignment_deg"] = list(fields["misalignment_deg"])
+        rows.append(fields)
+    return rows
+
+
+def _list_presets(as_json: bool) -> int:
+    rows = preset_table()
+    if as_json:
+        print(to_json_text(rows))
+        return 0
+    for row in rows:
+        print(row["name"])
+        for key, value in row.items():
+            if key not in ("name", "description", "source"):
+                print(f"  {key} = {value}")
+        print(f"  source: {row['source']}")
+    return 0
+
+
 def _simulate(args: argparse.Namespace) -> int:
+    if args.list_presets:
+        return _list_presets(args.json)
+    if args.part is None:
+        raise CommandError("name what to simulate: heading, latitude or static")
+    if args.latitude is None:
+        raise CommandError("--latitude is required")
     preset = PRESETS[args.preset]
     if args.rate:
         preset = replace(preset, sample_rate_hz=args.rate)
@@ -255,9 +285,15 @@ def add_science_commands(commands) -> None:
     solve.set_defaults(handler=_guarded(_solve))
 
     simulate = commands.add_parser("simulate", help="simulated gyro readings as long CSV")
-    simulate.add_argument("part", choices=["heading", "latitude", "static"])
+    simulate.add_argument("part", nargs="?", choices=["heading", "latitude", "static"])
+    simulate.add_argument(
+        "--list-presets",
+        action="store_true",
+        help="print every preset's parameters (with --json: as JSON) and exit",
+    )
+    simulate.add_argument("--json", action="store_true", help="with --list-presets")
     simulate.add_argument("--preset", choices=sorted(PRESETS), default="teaching-fog")
-    simulate.add_argument("--latitude", type=float, required=True)
+    simulate.add_argument("--latitude", type=float)
     simulate.add_argument("--earth-rate", type=float, default=EARTH_RATE_DEG_H)
     simulate.add_argument(
         "--azimuth",

@@ -275,3 +275,17 @@ def test_solve_with_a_gyro_preset_uses_its_noise_model(capsys):
     assert white["uncertainty_model"] == "white" and known["uncertainty_model"] == "allan"
     assert known["azimuth_deg"] == white["azimuth_deg"]  # the same fit, an honest σ
     assert known["azimuth_sigma_deg"] > 1.5 * white["azimuth_sigma_deg"]
+
+
+def test_simulate_lists_every_preset(capsys):
+    from app.core.simulate import PRESETS
+
+    code, out, _ = run(capsys, "simulate", "--list-presets", "--json")
+    assert code == 0
+    rows = {row["name"]: row for row in json.loads(out)}
+    assert set(rows) == set(PRESETS)
+    assert rows["tactical-fog"]["arw_deg_rt_h"] == PRESETS["tactical-fog"].arw_deg_rt_h
+    code, out, _ = run(capsys, "simulate", "--list-presets")
+    assert code == 0 and "bias_instability_deg_h" in out and "source:" in out
+    code, _, err = run(capsys, "simulate", "heading")
+    assert code == 2 and "--latitude is required" in err
