@@ -630,8 +630,8 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "zh-CN": "每个位置只有一个读数：噪声仅由闭合残差 d 估计（一个自由度，学生 t 分布）。该 1σ 只是粗略估计；每个位置记录多个读数才能得到可靠的不确定度。",
     },
     "uncertainty.allan": {
-        "en": "Uncertainties from the gyro's noise model: each mean's 1σ is the Allan deviation at that position's dwell, so slow drift is included.",
-        "zh-CN": "不确定度取自陀螺的噪声模型：各平均值的 1σ 为该位置停留时间上的 Allan 偏差，已包含慢漂移。",
+        "en": "Uncertainties from the simulated gyro's own noise model (white noise, bias instability, random walk, quantisation) over each position's recording time, plus the turntable's indexing error: slow drift is included.",
+        "zh-CN": "不确定度取自模拟陀螺自身的噪声模型（白噪声、零偏不稳定性、随机游走、量化）在各位置记录时长上的结果，并计入转台的分度误差：已包含慢漂移。",
     },
     "flag.closure": {
         "en": "The closure residual d = {d} °/h is more than 3σ_d ({sigma} °/h) from zero: the noise is not what the uncertainty assumes (drift, a bump, or a wrong position).",

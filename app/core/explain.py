@@ -45,9 +45,10 @@ MODEL_NOTES = {
         "因此 1σ 只是粗略估计。",
     },
     "allan": {
-        "en": "1σ of each mean from the gyro's Allan variance at that position's dwell "
-        "(correlated noise included).",
-        "zh-CN": "各平均值的 1σ 取自陀螺在该位置停留时间上的 Allan 方差（包含相关噪声）。",
+        "en": "1σ of each mean from the gyro's noise model over that position's recording "
+        "time (correlated noise and the table's indexing error included).",
+        "zh-CN": "各平均值的 1σ 取自陀螺噪声模型在该位置记录时长上的结果"
+        "（包含相关噪声与转台分度误差）。",
     },
 }
 
