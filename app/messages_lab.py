@@ -51,8 +51,8 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     },
     "explore.dwell_heading": {"en": "What dwell time?", "zh-CN": "每个位置采样多久？"},
     "explore.dwell_help": {
-        "en": "Expected four-position heading σ for the chosen gyro: white noise (ARW) falls as 1/√T until bias instability sets a floor; the dotted line marks where they meet.",
-        "zh-CN": "所选陀螺在四位置法下的期望寻北标准差：白噪声（角度随机游走）按 1/√T 下降，直到零偏不稳定性形成下限；点线标出两者相交处。",
+        "en": "Expected four-position heading σ for the chosen gyro, from the same noise model the simulator generates: white noise (ARW) falls as 1/√T; the slowly wandering bias (bias instability) and rate random walk average down more slowly, or not at all. The dotted line marks where they start to outweigh white noise; the dashed line is the lowest σ in the range.",
+        "zh-CN": "所选陀螺在四位置法下的期望寻北标准差，取自模拟器所用的同一噪声模型：白噪声（角度随机游走）按 1/√T 下降；缓慢游移的零偏（零偏不稳定性）和速率随机游走下降得更慢，甚至不再下降。点线标出它们开始超过白噪声之处；虚线为该范围内的最小标准差。",
     },
     "explore.dwell_title": {
         "en": "Expected heading σ against dwell per position",
