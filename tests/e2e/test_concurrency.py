@@ -143,7 +143,8 @@ def test_parallel_guesses_cannot_pass_the_throttle(any_live_server: LiveServer):
 
 def test_parallel_log_ins_of_one_account_all_get_through(any_live_server: LiveServer):
     """A script's workers logging in to one account at once from one address: attempts
-    in flight are not failures, so none is slowed down."""
+    in flight are not failures, so none is slowed down (up to the five attempts per
+    account and address that may be in flight at once, so parallel guesses stay bounded)."""
     url = any_live_server.url
     password = STUDENT_PASSWORD
 
@@ -154,8 +155,8 @@ def test_parallel_log_ins_of_one_account_all_get_through(any_live_server: LiveSe
             timeout=60,
         ).status_code
 
-    with ThreadPoolExecutor(6) as pool:
-        assert list(pool.map(token, range(6))) == [200] * 6
+    with ThreadPoolExecutor(5) as pool:
+        assert list(pool.map(token, range(5))) == [200] * 5
 
 
 def test_token_rate_limit_counts_each_request_once(any_live_server: LiveServer):
