@@ -216,3 +216,13 @@ def test_closure_consistency_is_checked_and_flagged():
     sigma_d = math.sqrt(sum(s**2 for s in bumped.fit.position_sigmas)) / 2
     assert bumped.to_json()["closure_sigma_deg_h"] == pytest.approx(sigma_d)
     assert f"(σ_d = {sigma_d:.3f} °/h)" in render_text(explain_heading(bumped))
+
+
+def test_a_refusal_never_prints_a_non_finite_sigma():
+    from app.core.solve import _check_significant
+
+    for sigma in (math.nan, math.inf):
+        with pytest.raises(GyroInputError) as caught:
+            _check_significant(0.0, sigma, "horizontal", 1.0)
+        message = str(caught.value).lower()
+        assert "nan" not in message and "inf" not in message

@@ -273,7 +273,7 @@ def _check_significant(amplitude: float, sigma: float | None, what: str, scale: 
     if amplitude <= 1e-9 * max(scale, 1e-300) or (
         sigma is not None and amplitude < SIGNIFICANCE * sigma
     ):
-        sigma_text = f" ± {sigma:.3g}" if sigma is not None else ""
+        sigma_text = f" ± {sigma:.3g}" if sigma is not None and math.isfinite(sigma) else ""
         raise GyroInputError(
             "readings.amplitude_too_small",
             f"The {what} amplitude ({amplitude:.3g}{sigma_text} °/h) is not clearly larger than "
