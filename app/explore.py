@@ -24,7 +24,7 @@ from app.core.error_analysis import (
     monte_carlo_heading_errors,
     two_position_first_order,
 )
-from app.core.noise_model import GyroNoise, back_to_back
+from app.core.noise_model import GyroNoise, four_position_sigma
 from app.core.simulate import PRESETS
 from app.core.units import EARTH_RATE_DEG_H
 
@@ -136,16 +136,6 @@ def heading_error_curves(params: ExplorerInput, seed: int = 1) -> tuple[list[Cur
     return curves, info
 
 
-def heading_sigma_for_dwell(noise: GyroNoise, rate_hz: float, dwell_s: float, amplitude: float):
-    """σ_A (°) of four back-to-back positions of ``dwell_s`` each, averaged over azimuth."""
-    count = max(1, int(round(dwell_s * rate_hz)))
-    cov = noise.mean_covariance(back_to_back([count] * 4, rate_hz))
-    x = np.array([0.5, 0.0, -0.5, 0.0])
-    y = np.array([0.0, 0.5, 0.0, -0.5])
-    variance = (x @ cov @ x + y @ cov @ y) / 2.0
-    return math.degrees(math.sqrt(max(variance, 0.0)) / amplitude)
-
-
 def dwell_curve(preset_name: str, latitude_deg: float) -> dict:
     """Expected four-position heading σ (°) against dwell per position, from the preset's
     noise model; the white-noise part alone; the lowest σ and where it is reached; and the
@@ -159,8 +149,8 @@ def dwell_curve(preset_name: str, latitude_deg: float) -> dict:
     if amplitude <= 0:
         sigma = white = np.full(dwell.size, math.nan)
     else:
-        sigma = np.array([heading_sigma_for_dwell(full, rate, t, amplitude) for t in dwell])
-        white = np.array([heading_sigma_for_dwell(white_only, rate, t, amplitude) for t in dwell])
+        sigma = np.array([four_position_sigma(full, rate, t, amplitude) for t in dwell])
+        white = np.array([four_position_sigma(white_only, rate, t, amplitude) for t in dwell])
     best = int(np.nanargmin(sigma)) if np.any(np.isfinite(sigma)) else 0
     correlated = np.sqrt(np.maximum(sigma**2 - white**2, 0.0))
     crossing = np.nonzero(correlated >= white)[0]

@@ -74,3 +74,24 @@ def test_the_noise_model_sigma_covers_68_percent(name, dwell):
     assert result.solved == 600
     assert 0.64 <= result.model <= 0.72, result
     assert result.white < result.model
+
+
+@pytest.mark.parametrize("name", ["teaching-fog", "tactical-fog", "mems"])
+def test_allan_fit_recovers_n_and_b_with_quantisation_on(name):
+    """Ten 6 h static records of the full preset (quantisation and all): the joint fit of
+    Q, N, B, K, weighted by each τ's degrees of freedom, recovers N within 5 % and B within
+    10 % on average (N from the −½ slope alone read the teaching gyro's N 10.7 % high and
+    its B 22 % low).  navigation-fog's Gauss–Markov hump barely shows above its white
+    noise in 6 h: one record's B scatters from 0 to 3× the truth (mean of 20: 1.11)."""
+    from app.core.allan import allan_deviation
+
+    preset = replace(PRESETS[name], turn_on_bias_sigma_deg_h=0.0)
+    count = int(6 * 3600 * preset.sample_rate_hz)
+    ratios_n, ratios_b = [], []
+    for seed in range(10):
+        record = GyroStream(preset, seed).read(np.full(count, 10.0))
+        result = allan_deviation(record, preset.sample_rate_hz)
+        ratios_n.append(result.arw_deg_rt_h / preset.arw_deg_rt_h)
+        ratios_b.append((result.bias_instability_deg_h or 0.0) / preset.bias_instability_deg_h)
+    assert np.mean(ratios_n) == pytest.approx(1.0, abs=0.05)
+    assert np.mean(ratios_b) == pytest.approx(1.0, abs=0.10)

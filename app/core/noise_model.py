@@ -167,3 +167,18 @@ def _brownian_integral(wi: Window, wj: Window) -> float:
     first, second = (wi, wj) if wi.start_s <= wj.start_s else (wj, wi)
     # every s in the first window is below every u in the second: min = s
     return (first.end_s**2 - first.start_s**2) / 2.0 * second.length_s
+
+
+FOUR_X = np.array([0.5, 0.0, -0.5, 0.0])  # x = (m1 − m3)/2
+FOUR_Y = np.array([0.0, 0.5, 0.0, -0.5])  # y = (m2 − m4)/2
+
+
+def four_position_sigma(
+    noise: GyroNoise, rate_hz: float, dwell_s: float, amplitude: float
+) -> float:
+    """Heading σ (°) of four back-to-back positions of ``dwell_s`` each, averaged over the
+    azimuth: σ_A = √((v_x + v_y)/2)/H rad with v_x, v_y the variances of x and y."""
+    count = max(1, int(round(dwell_s * rate_hz)))
+    cov = noise.mean_covariance(back_to_back([count] * 4, rate_hz))
+    variance = (FOUR_X @ cov @ FOUR_X + FOUR_Y @ cov @ FOUR_Y) / 2.0
+    return math.degrees(math.sqrt(max(variance, 0.0)) / amplitude)
