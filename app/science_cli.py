@@ -72,6 +72,7 @@ def solve_readings(part: str, readings: Readings, args: argparse.Namespace):
     else:
         angles = elevation_angles(count, args.start_angle, args.step)
     known = _known_noise(readings, positions, getattr(args, "gyro_preset", None))
+    known["times_s"] = readings.times_s  # five or more timed positions: drift is fitted
     if part == "heading":
         return solve_heading(positions, angles, true_azimuth_deg=args.true_azimuth, **known)
     return solve_latitude(

@@ -31,6 +31,8 @@ HEADING_KEYS = [
     "closure_residual_deg_h",
     "closure_sigma_deg_h",
     "uncertainty_model",
+    "drift_deg_h_per_h",
+    "drift_sigma_deg_h_per_h",
     "azimuth_error_deg",
 ]
 LATITUDE_KEYS = [
@@ -51,6 +53,8 @@ LATITUDE_KEYS = [
     "closure_residual_deg_h",
     "closure_sigma_deg_h",
     "uncertainty_model",
+    "drift_deg_h_per_h",
+    "drift_sigma_deg_h_per_h",
 ]
 
 

@@ -85,6 +85,14 @@ def _four_apart(angles: np.ndarray) -> int:
     return 0
 
 
+def _drift_lines(fit) -> list[str]:
+    """The fitted linear drift, when the schedule allowed one (five or more timed positions)."""
+    if fit.drift is None:
+        return []
+    sigma = f" ± {_f(fit.drift_sigma, 4)}" if fit.drift_sigma is not None else ""
+    return [f"+ ḃ·(t − t̄):  ḃ = {_f(fit.drift, 4)}{sigma} °/h per hour"]
+
+
 def _handout_ratio(means: np.ndarray, turn: int) -> tuple[str, str, float]:
     """The handout's tan θ from four position means: its formula, the substituted
     numerator and denominator, and the value (∞ when ω1 = ω3)."""
@@ -156,6 +164,7 @@ def explain_heading(result: HeadingResult) -> list[Step]:
         lines = [
             "ω = a·cos α + c·sin α + b   (α = position angle, clockwise)",
             f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
+            *_drift_lines(fit),
             f"x = H·cos A1 = {_f(x_used, 4)} °/h,   y = H·sin A1 = {_f(y_used, 4)} °/h",
             f"A1 = atan2(y, x) = {_f(result.azimuth_deg, 2)}°  (clockwise from true north)",
         ]
@@ -273,6 +282,7 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
                 (
                     "ω = a·cos e + c·sin e + b   (e = elevation from the north horizon)",
                     f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
+                    *_drift_lines(fit),
                     f"φ = atan2(c, a) = {_f(phi, 2)}°,   Ω = √(a² + c²) = "
                     f"{_f(result.earth_rate_deg_h)} °/h",
                 ),

@@ -62,10 +62,17 @@ class SinusoidFit:
     angles_deg: np.ndarray
     stats: tuple[PositionStats, ...]
     noise: PositionNoise | None = None  # the position means' 1σ and its model
+    drift: float | None = None  # ḃ (°/h per hour) when the schedule lets it be fitted
 
     @property
     def means(self) -> np.ndarray:
         return np.array([s.mean for s in self.stats])
+
+    @property
+    def drift_sigma(self) -> float | None:
+        if self.drift is None or self.cov is None or self.cov.shape[0] < 4:
+            return None
+        return float(math.sqrt(max(self.cov[3, 3], 0.0)))
 
     @property
     def position_sigmas(self) -> list[float] | None:
@@ -196,6 +203,7 @@ def fit_sinusoid(
     *,
     position_cov: np.ndarray | None = None,
     indexing_sigma_deg: float = 0.0,
+    times_s: Sequence[Sequence[float]] | None = None,
 ) -> SinusoidFit:
     """Least-squares fit of ω = a·cos α + c·sin α + b over every sample, with covariance
     Cov β = L·Σ·Lᵀ propagated from the position means' covariance Σ
@@ -203,7 +211,12 @@ def fit_sinusoid(
     residual, or a known noise model's ``position_cov``).
 
     ``indexing_sigma_deg``: each stop after the first lands off by N(0, σ_idx), which moves
-    its reading by ∂ω/∂α·δ = (−a·sin α + c·cos α)·δ; that variance joins Σ's diagonal."""
+    its reading by ∂ω/∂α·δ = (−a·sin α + c·cos α)·δ; that variance joins Σ's diagonal.
+
+    ``times_s`` (each sample's time on one clock): with five or more positions (e.g. the
+    symmetric order 1-2-3-4-4-3-2-1) a linear bias drift is fitted too,
+    ω = a·cos α + c·sin α + b + ḃ·(t − t̄); a position's mean is then the model at its
+    mean time, so the fit of the means stays exact (lab-reference §3, drift)."""
     arrays = _clean_positions(positions)
     angles = np.asarray(angles_deg, dtype=float)
     if angles.shape != (len(arrays),):
@@ -229,6 +242,12 @@ def fit_sinusoid(
     means = np.array([s.mean for s in stats])
     radians = np.radians(angles)
     design = np.column_stack([np.cos(radians), np.sin(radians), np.ones_like(radians)])
+    clock = _mean_times_h(times_s, arrays)
+    if clock is not None:
+        with_drift = np.column_stack([design, clock])
+        drift_normal = with_drift.T @ (counts[:, None] * with_drift)
+        if np.linalg.cond(drift_normal) < 1e10:
+            design = with_drift
     normal = design.T @ (counts[:, None] * design)
     if np.linalg.cond(normal) > 1e12:
         raise GyroInputError(
@@ -238,7 +257,7 @@ def fit_sinusoid(
             distinct=int(distinct.size),
         )
     mapping = np.linalg.solve(normal, design.T * counts)  # L = (XᵀNX)⁻¹XᵀN
-    a, c, b = mapping @ means
+    a, c, b, *rest = mapping @ means
     noise = position_noise(arrays, angles, position_cov=position_cov)
     if noise is not None and indexing_sigma_deg > 0:
         slope = -a * np.sin(radians) + c * np.cos(radians)  # ∂ω/∂α at each stop, per rad
@@ -246,7 +265,28 @@ def fit_sinusoid(
         extra[0] = 0.0  # the first stop is the reference
         noise = PositionNoise(noise.cov + np.diag(extra), noise.model)
     cov = None if noise is None else mapping @ noise.cov @ mapping.T
-    return SinusoidFit(float(a), float(c), float(b), cov, angles, stats, noise)
+    drift = float(rest[0]) if rest else None
+    return SinusoidFit(float(a), float(c), float(b), cov, angles, stats, noise, drift)
+
+
+MIN_POSITIONS_FOR_DRIFT = 5
+
+
+def _mean_times_h(
+    times_s: Sequence[Sequence[float]] | None, arrays: list[np.ndarray]
+) -> np.ndarray | None:
+    """Each position's mean time in hours from the schedule's mean (None when the times
+    are missing, do not match the readings, or the schedule is too short for a drift)."""
+    if times_s is None or len(arrays) < MIN_POSITIONS_FOR_DRIFT or len(times_s) != len(arrays):
+        return None
+    means = []
+    for times, values in zip(times_s, arrays, strict=True):
+        stamps = np.asarray(times, dtype=float).ravel()
+        if stamps.size != values.size or not np.all(np.isfinite(stamps)):
+            return None
+        means.append(float(stamps.mean()))
+    hours = np.asarray(means) / 3600.0
+    return hours - hours.mean()
 
 
 def _polar(
@@ -329,6 +369,8 @@ class HeadingResult:
             "closure_residual_deg_h": self.closure_residual_deg_h,
             "closure_sigma_deg_h": self.fit.closure_sigma,
             "uncertainty_model": self.fit.uncertainty_model,
+            "drift_deg_h_per_h": self.fit.drift,
+            "drift_sigma_deg_h_per_h": self.fit.drift_sigma,
             "azimuth_error_deg": self.azimuth_error_deg,
         }
 
@@ -359,13 +401,18 @@ def solve_heading(
     true_azimuth_deg: float | None = None,
     position_cov: np.ndarray | None = None,
     indexing_sigma_deg: float = 0.0,
+    times_s: Sequence[Sequence[float]] | None = None,
 ) -> HeadingResult:
     """Azimuth of position 1 (clockwise from true north, [0°, 360°)) with its 1σ.
 
     ``position_cov`` and ``indexing_sigma_deg``: a known noise model (see
     :func:`fit_sinusoid` and :mod:`app.core.noise_model`)."""
     fit = fit_sinusoid(
-        positions, angles_deg, position_cov=position_cov, indexing_sigma_deg=indexing_sigma_deg
+        positions,
+        angles_deg,
+        position_cov=position_cov,
+        indexing_sigma_deg=indexing_sigma_deg,
+        times_s=times_s,
     )
     cov_xy = None
     if fit.cov is not None:
@@ -436,6 +483,8 @@ class LatitudeResult:
             "closure_residual_deg_h": self.fit.closure_residual,
             "closure_sigma_deg_h": self.fit.closure_sigma,
             "uncertainty_model": self.fit.uncertainty_model,
+            "drift_deg_h_per_h": self.fit.drift,
+            "drift_sigma_deg_h_per_h": self.fit.drift_sigma,
         }
 
 
@@ -454,6 +503,7 @@ def solve_latitude(
     true_earth_rate_deg_h: float = EARTH_RATE_DEG_H,
     position_cov: np.ndarray | None = None,
     indexing_sigma_deg: float = 0.0,
+    times_s: Sequence[Sequence[float]] | None = None,
 ) -> LatitudeResult:
     """Latitude φ and Earth rate Ω from readings in the meridian plane, with 1σ."""
     if true_earth_rate_deg_h <= 0 or not math.isfinite(true_earth_rate_deg_h):
@@ -463,6 +513,7 @@ def solve_latitude(
         elevations_deg,
         position_cov=position_cov,
         indexing_sigma_deg=indexing_sigma_deg,
+        times_s=times_s,
     )
     cov_xy = None if fit.cov is None else fit.cov[:2, :2]
     latitude, omega, sigma_lat, sigma_omega = _polar(fit.a, fit.c, cov_xy)

@@ -337,8 +337,12 @@ class HeadingOut(BaseModel):
     closure_sigma_deg_h: float | None
     uncertainty_model: Literal["white", "closure", "allan"] | None = Field(
         description="what the 1σ assumes: white noise (Student-t), the closure residual "
-        "(one degree of freedom), or the gyro's Allan variance"
+        "(one degree of freedom), or the gyro's noise model"
     )
+    drift_deg_h_per_h: float | None = Field(
+        description="linear bias drift, fitted when 5+ positions have times on one clock"
+    )
+    drift_sigma_deg_h_per_h: float | None
     azimuth_error_deg: float | None
 
 
@@ -360,6 +364,8 @@ class LatitudeOut(BaseModel):
     closure_residual_deg_h: float | None
     closure_sigma_deg_h: float | None
     uncertainty_model: Literal["white", "closure", "allan"] | None
+    drift_deg_h_per_h: float | None
+    drift_sigma_deg_h_per_h: float | None
 
 
 class ResultsOut(BaseModel):
