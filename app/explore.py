@@ -26,6 +26,7 @@ from app.core.error_analysis import (
 )
 from app.core.noise_model import GyroNoise, four_position_sigma
 from app.core.simulate import PRESETS
+from app.core.solve import fit_sinusoid
 from app.core.units import EARTH_RATE_DEG_H
 
 CURVE_STEP_DEG = 2.0
@@ -164,6 +165,33 @@ def dwell_curve(preset_name: str, latitude_deg: float) -> dict:
         "arw_deg_rt_h": preset.arw_deg_rt_h,
         "bias_instability_deg_h": preset.bias_instability_deg_h,
     }
+
+
+ORDERS: dict[str, tuple[float, ...]] = {  # dial angles (ccw turns) in recording order
+    "1234": (0.0, -90.0, -180.0, -270.0),
+    "1324": (0.0, -180.0, -90.0, -270.0),
+    "12344321": (0.0, -90.0, -180.0, -270.0, -270.0, -180.0, -90.0, 0.0),
+}
+
+
+def drift_order_curves(latitude_deg: float, dwell_s: float, bias_drift_deg_h_per_h: float) -> dict:
+    """Heading error (°) against the true azimuth that a linear bias drift ḃ causes for
+    each recording order, positions back to back (lab-reference §3): each position's mean
+    is H·cos A_i + ḃ·t̄_i, solved as the lab does, without a drift term."""
+    amplitude = EARTH_RATE_DEG_H * math.cos(math.radians(latitude_deg))
+    azimuths = np.arange(0.0, 360.0, 5.0)
+    out: dict = {"azimuth_deg": azimuths.tolist(), "orders": {}}
+    for name, angles in ORDERS.items():
+        mean_times_h = (np.arange(len(angles)) + 0.5) * dwell_s / 3600.0
+        errors = []
+        for azimuth in azimuths:
+            means = amplitude * np.cos(np.radians(azimuth + np.asarray(angles)))
+            means = means + bias_drift_deg_h_per_h * mean_times_h
+            fit = fit_sinusoid([[m, m] for m in means], angles)
+            found = math.degrees(math.atan2(-fit.c, fit.a)) + angles[0]
+            errors.append((found - azimuth + 180.0) % 360.0 - 180.0)
+        out["orders"][name] = errors
+    return out
 
 
 # Presets reproducing the papers' figures and the four-position contrasts (lab-reference §4).

@@ -60,6 +60,22 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     },
     "explore.dwell_axis": {"en": "dwell per position (s)", "zh-CN": "每个位置的采样时长（秒）"},
     "explore.sigma_axis": {"en": "heading σ (°)", "zh-CN": "寻北标准差（°）"},
+    "explore.bias_drift": {
+        "en": "Linear bias drift ḃ (order chart)",
+        "zh-CN": "线性零偏漂移 ḃ（顺序图）",
+    },
+    "explore.orders_heading": {"en": "Which order?", "zh-CN": "按什么顺序测量？"},
+    "explore.orders_help": {
+        "en": "A bias that drifts linearly while you record (warm-up, temperature) shifts each position's mean by ḃ·t. In the order 1-2-3-4 that leaks into the heading; 1-3-2-4 halves the worst case; the symmetric order 1-2-3-4-4-3-2-1 visits every position at a mean time in the middle of the run and cancels it.",
+        "zh-CN": "记录期间零偏线性漂移（预热、温度变化）会使各位置平均值偏移 ḃ·t。按 1-2-3-4 顺序测量时，这一偏移会进入方位角；1-3-2-4 将最坏情况减半；对称顺序 1-2-3-4-4-3-2-1 使每个位置的平均时刻都位于整个过程的中点，从而将其抵消。",
+    },
+    "explore.orders_title": {
+        "en": "Heading error from a linear drift, by order",
+        "zh-CN": "线性漂移造成的寻北误差（按测量顺序）",
+    },
+    "explore.order_1234": {"en": "order 1-2-3-4", "zh-CN": "顺序 1-2-3-4"},
+    "explore.order_1324": {"en": "order 1-3-2-4", "zh-CN": "顺序 1-3-2-4"},
+    "explore.order_12344321": {"en": "order 1-2-3-4-4-3-2-1", "zh-CN": "顺序 1-2-3-4-4-3-2-1"},
     "explore.floor": {"en": "lowest σ in range", "zh-CN": "范围内最小标准差"},
     "explore.white_only": {"en": "white noise only", "zh-CN": "仅白噪声"},
     "explore.expected": {"en": "expected σ", "zh-CN": "期望标准差"},

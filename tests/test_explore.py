@@ -139,6 +139,24 @@ def test_explorer_over_http(student_client):
     assert dwell.content.decode("utf-8-sig").startswith("dwell_s,heading_sigma_deg")
     zh = student_client.get("/explore", headers={"Accept-Language": "zh-CN"})
     assert "为什么四位置法优于二位置法" in zh.text
+    orders = student_client.get(
+        "/explore/data.csv", params={"chart": "orders", "bias_drift_deg_h_per_h": 2}
+    )
+    table = list(csv.DictReader(io.StringIO(orders.content.decode("utf-8-sig"))))
+    assert len(table) == 72 and "heading_error_deg_order_12344321" in table[0]
+
+
+def test_drift_orders_against_the_closed_form():
+    """ḃ·T·√2/H is the worst heading error of the order 1-2-3-4 (T the dwell); 1-3-2-4
+    halves it; the symmetric order cancels it (lab-reference §3)."""
+    from app.explore import drift_order_curves
+
+    data = drift_order_curves(40.0, 300.0, 2.0)
+    amplitude = 15.041 * math.cos(math.radians(40.0))
+    worst = math.degrees(2.0 * 300.0 / 3600.0 * math.sqrt(2.0) / amplitude)
+    assert max(np.abs(data["orders"]["1234"])) == pytest.approx(worst, rel=0.01)
+    assert max(np.abs(data["orders"]["1324"])) == pytest.approx(worst / 2, rel=0.01)
+    assert max(np.abs(data["orders"]["12344321"])) < 1e-9
 
 
 def test_explorer_needs_a_log_in(client):

@@ -13,7 +13,13 @@ from pydantic import BaseModel, Field
 
 from app.core.simulate import PRESETS
 from app.deps import CurrentUser
-from app.explore import SCENARIOS, ExplorerInput, dwell_curve, heading_error_curves
+from app.explore import (
+    SCENARIOS,
+    ExplorerInput,
+    drift_order_curves,
+    dwell_curve,
+    heading_error_curves,
+)
 from app.i18n import translator
 from app.web import render, request_language
 
@@ -38,6 +44,11 @@ class ExplorerQuery(BaseModel):
     roll_deg: float = Field(0.0, ge=-30, le=30)
     east_tilt_deg: float = Field(0.0, ge=-10, le=10)
     level_deg: float = Field(0.0, ge=-10, le=10)
+    bias_drift_deg_h_per_h: float = Field(1.0, ge=-20, le=20)
+
+    def explorer_input(self) -> ExplorerInput:
+        """The heading-error chart's inputs (the drift-order chart has its own)."""
+        return ExplorerInput(**self.model_dump(exclude={"bias_drift_deg_h_per_h"}))
 
 
 QueryDep = Annotated[ExplorerQuery, Query()]
@@ -76,16 +87,23 @@ JS_MESSAGES = (
     "explore.chart_title",
     "explore.dwell_title",
     "explore.knee",
+    "explore.orders_title",
+    "explore.order_1234",
+    "explore.order_1324",
+    "explore.order_12344321",
 )
 
 
 @router.get("/data")
 def explorer_data(user: CurrentUser, query: QueryDep):
-    curves, info = heading_error_curves(ExplorerInput(**query.model_dump()))
+    curves, info = heading_error_curves(query.explorer_input())
     return {
         "curves": [c.__dict__ for c in curves],
         "info": info,
         "dwell": dwell_curve(query.preset, query.latitude_deg),
+        "orders": drift_order_curves(
+            query.latitude_deg, query.dwell_s, query.bias_drift_deg_h_per_h
+        ),
     }
 
 
@@ -94,13 +112,22 @@ def explorer_csv(
     request: Request,
     user: CurrentUser,
     query: QueryDep,
-    chart: Literal["heading", "dwell"] = "heading",
+    chart: Literal["heading", "dwell", "orders"] = "heading",
 ):
     """The data behind either chart, as CSV with labelled units."""
     _ = translator(request_language(request))
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    if chart == "dwell":
+    if chart == "orders":
+        data = drift_order_curves(query.latitude_deg, query.dwell_s, query.bias_drift_deg_h_per_h)
+        writer.writerow(
+            ["true_azimuth_deg", *[f"heading_error_deg_order_{k}" for k in data["orders"]]]
+        )
+        for index, azimuth in enumerate(data["azimuth_deg"]):
+            writer.writerow(
+                [f"{azimuth:g}", *[f"{errors[index]:.6f}" for errors in data["orders"].values()]]
+            )
+    elif chart == "dwell":
         data = dwell_curve(query.preset, query.latitude_deg)
         writer.writerow(["dwell_s", "heading_sigma_deg", "white_noise_only_deg", "floor_deg"])
         for row in zip(data["dwell_s"], data["sigma_deg"], data["white_only_deg"], strict=True):
@@ -108,7 +135,7 @@ def explorer_csv(
                 [f"{row[0]:.3f}", f"{row[1]:.6f}", f"{row[2]:.6f}", f"{data['floor_deg']:.6f}"]
             )
     else:
-        curves, info = heading_error_curves(ExplorerInput(**query.model_dump()))
+        curves, info = heading_error_curves(query.explorer_input())
         writer.writerow(
             [
                 "method",

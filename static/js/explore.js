@@ -34,6 +34,7 @@
     const params = query();
     document.getElementById("csv-heading").href = `/explore/data.csv?chart=heading&${params}`;
     document.getElementById("csv-dwell").href = `/explore/data.csv?chart=dwell&${params}`;
+    document.getElementById("csv-orders").href = `/explore/data.csv?chart=orders&${params}`;
     const mine = ++generation;
     const response = await fetch(`/explore/data?${params}`, { headers: { Accept: "application/json" } });
     if (mine !== generation) return;  // a newer request is on its way
@@ -68,6 +69,16 @@
       yaxis: { type: "log", title: { text: t("explore.sigma_axis") } },
       legend: { orientation: "h", y: -0.3 },
       shapes: dwell.knee_s ? [{ type: "line", x0: dwell.knee_s, x1: dwell.knee_s, yref: "paper", y0: 0, y1: 1, line: { color: "#e9a23b", dash: "dot" } }] : [],
+    }, { responsive: true, displaylogo: false });
+    const orderColors = { "1234": "#d1495b", "1324": "#e9a23b", "12344321": "#0b6bcb" };
+    Plotly.react("order-chart", Object.entries(data.orders.orders).map(([order, errors]) => ({
+      x: data.orders.azimuth_deg, y: errors, mode: "lines", name: t(`explore.order_${order}`),
+      line: { color: orderColors[order], width: order === "12344321" ? 3 : 2 },
+    })), {
+      title: { text: t("explore.orders_title") }, height: 340, margin: { l: 60, r: 20, t: 50, b: 60 },
+      xaxis: { title: { text: t("explore.axis_azimuth") }, range: [0, 360], dtick: 45 },
+      yaxis: { title: { text: t("explore.axis_error") }, zeroline: true },
+      legend: { orientation: "h", y: -0.3 },
     }, { responsive: true, displaylogo: false });
   }
 
