@@ -126,7 +126,9 @@ def test_more_waiting_writers_than_pool_threads_all_get_through(any_live_server:
 
 def test_parallel_guesses_cannot_pass_the_throttle(any_live_server: LiveServer):
     """Twelve wrong passwords at once from one address: each is charged before its hash, so
-    five are checked (the per-account-and-address limit, 401) and the rest refused (429)."""
+    at most five are checked (the per-account-and-address limit, 401) and the rest are
+    refused (429).  How many of the five are reached depends on timing: once two have
+    completed as failures the growing delay refuses the rest sooner."""
     url = any_live_server.url
 
     def guess(i: int) -> int:
@@ -138,7 +140,8 @@ def test_parallel_guesses_cannot_pass_the_throttle(any_live_server: LiveServer):
 
     with ThreadPoolExecutor(12) as pool:
         statuses = sorted(pool.map(guess, range(12)))
-    assert statuses == [401] * 5 + [429] * 7
+    assert set(statuses) <= {401, 429}
+    assert 2 <= statuses.count(401) <= 5
 
 
 def test_parallel_log_ins_of_one_account_all_get_through(any_live_server: LiveServer):
