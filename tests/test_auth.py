@@ -88,8 +88,10 @@ def test_wrong_passwords_slow_down_then_pause(client, teacher):
     assert [login(client, "teacher1", f"wrong-{i}").status_code for i in range(2)] == [401, 401]
     for delay in (2, 4, 8):  # the same account from the same address: growing delays
         response = login(client, "teacher1", "wrong-again")
-        assert response.status_code == 429 and response.headers["Retry-After"] == str(delay)
-        assert f"wait {delay} seconds" in response.text
+        wait = int(response.headers["Retry-After"])
+        # the delay runs from the failed attempt; a slow machine may have used a second
+        assert response.status_code == 429 and delay - 1 <= wait <= delay
+        assert f"wait {wait} seconds" in response.text
         age_failures(delay + 0.5)
         assert login(client, "teacher1", "wrong-again").status_code == 401
     response = login(client, "teacher1")  # five failures: even the right password waits
