@@ -28,7 +28,7 @@ from app import __version__
 from app.db import read_session
 from app.jsonsafe import json_safe
 from app.labstore import PARTS, PositionData, export_metadata, results_json, solve_part
-from app.models import Attempt, LabSession, SampleChunk, Take, utcnow
+from app.models import Attempt, LabSession, SampleChunk, Take
 from app.samples import unpack
 
 FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
@@ -271,7 +271,3 @@ def safe_name(text: str) -> str:
     """A file or folder name from a username (which is already [A-Za-z0-9_.-])."""
     cleaned = "".join(ch if ch.isalnum() or ch in "_.-" else "_" for ch in text).lstrip(".")
     return cleaned or "student"
-
-
-def stamp() -> str:
-    return utcnow().strftime("%Y%m%d")

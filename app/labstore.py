@@ -390,10 +390,6 @@ def current_data(db: Session, session: LabSession) -> SessionData:
     return dict(iter_current_data(db, LabSession.id == session.id)).get(session.id, {})
 
 
-def part_data(db: Session, session: LabSession, part: str) -> dict[int, PositionData]:
-    return current_data(db, session).get(part, {})
-
-
 def simulated_noise(session: LabSession, ordered: list[PositionData]) -> dict:
     """When every position was recorded from the simulated gyro its noise model is known:
     the position means' covariance (each recording a separate run of the gyro) and the
