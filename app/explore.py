@@ -18,12 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from app.core.error_analysis import (
-    ErrorSources,
-    four_position_first_order,
-    monte_carlo_heading_errors,
-    two_position_first_order,
-)
+from app.core.error_analysis import ErrorSources, first_order, monte_carlo_heading_errors
 from app.core.noise_model import GyroNoise, four_position_sigma
 from app.core.simulate import PRESETS
 from app.core.solve import fit_sinusoid
@@ -37,7 +32,7 @@ MAX_DWELL_S = 600.0
 
 @dataclass
 class ExplorerInput:
-    method: str = "both"  # two | four | both
+    method: str = "both"  # two | four | both (two and four) | seeker (the tilt paper's)
     latitude_deg: float = 60.0
     preset: str = "navigation-fog"
     noise: bool = True  # simulate the preset's random noise in the Monte Carlo
@@ -81,8 +76,11 @@ def _clean(values) -> list[float | None]:
     return [None if not math.isfinite(v) or abs(v) > 180 else float(v) for v in values]
 
 
-def heading_error_curves(params: ExplorerInput, seed: int = 1) -> tuple[list[Curve], dict]:
-    """Formula curves on a fine azimuth grid and Monte Carlo points on a coarse one."""
+def heading_error_curves(
+    params: ExplorerInput, seed: int = 1, *, formula_at_mc_points: bool = False
+) -> tuple[list[Curve], dict]:
+    """Formula curves on a fine azimuth grid and Monte Carlo points on a coarse one
+    (``formula_at_mc_points``: the formula on the coarse grid too, for tables)."""
     started = time.perf_counter()
     preset = PRESETS[params.preset]
     gyro = preset.ideal()
@@ -94,20 +92,15 @@ def heading_error_curves(params: ExplorerInput, seed: int = 1) -> tuple[list[Cur
             bias_corr_time_s=preset.bias_corr_time_s,
         )
     sources = params.sources()
-    fine = np.arange(0.0, 360.0 + 1e-9, CURVE_STEP_DEG)
     coarse = np.arange(MC_STEP_DEG / 2, 360.0, MC_STEP_DEG)
+    fine = coarse if formula_at_mc_points else np.arange(0.0, 360.0 + 1e-9, CURVE_STEP_DEG)
     methods = ["two", "four"] if params.method == "both" else [params.method]
     runs = max(1, min(params.runs, MAX_RUNS)) if params.noise else 1
     curves = []
     for method in methods:
-        if method == "two":
-            formula = two_position_first_order(
-                sources, fine, params.latitude_deg, stop_spacing_s=params.dwell_s
-            )
-        else:
-            formula = four_position_first_order(
-                sources, fine, params.latitude_deg, stop_spacing_s=params.dwell_s
-            )
+        formula = first_order(
+            method, sources, fine, params.latitude_deg, stop_spacing_s=params.dwell_s
+        )
         mc = monte_carlo_heading_errors(
             method,
             gyro,
@@ -194,36 +187,29 @@ def drift_order_curves(latitude_deg: float, dwell_s: float, bias_drift_deg_h_per
     return out
 
 
-# Presets reproducing the papers' figures and the four-position contrasts (lab-reference §4).
+# Presets reproducing the papers' figures and the contrasts (lab-reference §4).  The tilt
+# paper's presets use its own instrument, the two-axis seeker; "-single-axis" is the
+# handout's FOG under the same tilt, solved with arccos, as a labelled contrast.
+PAPER_TILTS = {"level": (0.0, 0.0), "5": (5.0, -5.0), "10": (-10.0, 10.0), "20": (20.0, 20.0)}
+
 SCENARIOS: dict[str, dict] = {
-    "indexing-level": {
-        "method": "two",
-        "latitude_deg": 60.0,
-        "indexing_arcsec": 900.0,
-        "noise": False,
+    **{
+        f"indexing-{'level' if key == 'level' else 'tilt-' + key}": {
+            "method": "seeker",
+            "latitude_deg": 60.0,
+            "indexing_arcsec": 900.0,
+            "pitch_deg": pitch,
+            "roll_deg": roll,
+            "noise": False,
+        }
+        for key, (pitch, roll) in PAPER_TILTS.items()
     },
-    "indexing-tilt-5": {
+    "indexing-tilt-5-single-axis": {
         "method": "two",
         "latitude_deg": 60.0,
         "indexing_arcsec": 900.0,
         "pitch_deg": 5.0,
         "roll_deg": -5.0,
-        "noise": False,
-    },
-    "indexing-tilt-10": {
-        "method": "two",
-        "latitude_deg": 60.0,
-        "indexing_arcsec": 900.0,
-        "pitch_deg": -10.0,
-        "roll_deg": 10.0,
-        "noise": False,
-    },
-    "indexing-tilt-20": {
-        "method": "two",
-        "latitude_deg": 60.0,
-        "indexing_arcsec": 900.0,
-        "pitch_deg": 20.0,
-        "roll_deg": 20.0,
         "noise": False,
     },
     "drift": {"method": "two", "latitude_deg": 40.0, "drift_deg_h": 0.05, "noise": False},

@@ -11,8 +11,15 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     "explore.scenario": {"en": "Preset", "zh-CN": "预设情景"},
     "explore.custom": {"en": "(your own settings)", "zh-CN": "（自定义设置）"},
     "explore.method": {"en": "Method", "zh-CN": "方法"},
-    "explore.method_two": {"en": "two-position", "zh-CN": "二位置法"},
+    "explore.method_two": {
+        "en": "two-position, single-axis FOG",
+        "zh-CN": "二位置法（单轴光纤陀螺）",
+    },
     "explore.method_four": {"en": "four-position", "zh-CN": "四位置法"},
+    "explore.method_seeker": {
+        "en": "two-position, two-axis seeker (tilt paper)",
+        "zh-CN": "二位置法（双轴寻北仪，倾斜论文）",
+    },
     "explore.method_both": {"en": "both", "zh-CN": "两者对比"},
     "explore.latitude": {"en": "Latitude φ (°)", "zh-CN": "纬度 φ（°）"},
     "explore.noise": {"en": "Simulate the gyro's random noise", "zh-CN": "模拟陀螺随机噪声"},
@@ -99,6 +106,14 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "en": "Paper: indexing error, pitch and roll 20°",
         "zh-CN": "论文：转位误差，俯仰与横滚均为 20°",
     },
+    "scenario.indexing-tilt-5-single-axis": {
+        "en": "Contrast: single-axis FOG, same tilt (not the paper's instrument)",
+        "zh-CN": "对比：单轴光纤陀螺，同样倾斜（并非论文的仪器）",
+    },
+    "scenario_text.indexing-tilt-5-single-axis": {
+        "en": "Not the paper's result: the handout's single-axis FOG in the same two positions and tilt (5°, −5°), solved with the arccos of one axis. The tilt leaks Earth's vertical rate into the axis and the arccos is ill-conditioned near 0° and 180°, so the error swings to several times δ/2 and diverges there. The two-axis seeker avoids both.",
+        "zh-CN": "这不是论文的结果：讲义的单轴光纤陀螺在同样的两个位置和倾角（5°、−5°）下，用单轴的反余弦求解。倾斜使地球自转的垂直分量混入敏感轴，而反余弦在 0° 和 180° 附近病态，因此误差可达 δ/2 的数倍，并在那里发散。双轴寻北仪避免了这两个问题。",
+    },
     "scenario.drift": {
         "en": "Two-position: drift ∝ 1/sin γ",
         "zh-CN": "二位置法：漂移误差 ∝ 1/sin γ",
@@ -124,20 +139,20 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "zh-CN": "仅随机噪声（战术级光纤陀螺，60 秒）",
     },
     "scenario_text.indexing-level": {
-        "en": "The table stops 15′ past 180° for the second reading. On a level table the heading error is a constant δ/2 at every azimuth, as in the paper's first figure.",
-        "zh-CN": "第二次读数时转台多转了 15′。转台水平时，寻北误差在任何方位都是常数 δ/2，与论文的第一幅图一致。",
+        "en": "The paper’s own instrument: a strapdown north seeker with a two-axis gyro (both horizontal body rates), tilt measured by accelerometers, azimuth from an atan of both rates. The table stops 15′ past 180° for the second reading. On a level table the heading error is exactly δ/2 = 7.5′ at every azimuth, as in the paper’s first figure.",
+        "zh-CN": "论文自己的仪器：双轴陀螺（测两个水平体轴角速度）捷联寻北仪，倾角由加速度计测得，方位由两个角速度的反正切求得。第二次读数时转台多转了 15′。转台水平时，寻北误差在任何方位都恰为 δ/2 = 7.5′，与论文的第一幅图一致。",
     },
     "scenario_text.indexing-tilt-5": {
-        "en": "With a small known tilt the error stays near δ/2 but gains a ripple over azimuth. The tilt itself is measured and compensated, as the paper's north seeker does.",
-        "zh-CN": "转台有已知的小倾角时，误差仍接近 δ/2，但随方位出现波动。倾角本身由寻北仪测量并补偿，与论文一致。",
+        "en": "Same seeker, pitch 5° and roll −5°, measured and compensated. The error ripples over azimuth between 0.78 and 1.21 × δ/2: still about δ/2, as the paper finds.",
+        "zh-CN": "同一寻北仪，俯仰 5°、横滚 −5°，倾角已测量并补偿。误差随方位在 0.78 至 1.21 倍 δ/2 之间波动，仍约为 δ/2，与论文结论一致。",
     },
     "scenario_text.indexing-tilt-10": {
-        "en": "At 10° the mean error is still about δ/2 and the ripple is larger than at 5°. The paper's advice: keep the tilt within ±10°.",
-        "zh-CN": "倾角为 10° 时，平均误差仍约为 δ/2，但波动比 5° 时更大。论文的建议是：倾角保持在 ±10° 以内。",
+        "en": "Pitch −10°, roll 10°: the ripple grows to 0.55 … 1.39 × δ/2. The paper’s advice: keep the tilt within ±10°.",
+        "zh-CN": "俯仰 −10°、横滚 10°：波动增大到 0.55 至 1.39 倍 δ/2。论文的建议是：倾角保持在 ±10° 以内。",
     },
     "scenario_text.indexing-tilt-20": {
-        "en": "At 20° the pattern breaks up and the error grows large near 0° and 180°. This is why the paper warns against strong tilts.",
-        "zh-CN": "倾角为 20° 时规律被破坏，在 0° 和 180° 附近误差很大。这就是论文提醒避免大倾角的原因。",
+        "en": "Pitch and roll 20°: the error ranges from 0.07 to 1.70 × δ/2 depending on azimuth, no longer “about δ/2”. This is why the paper warns against strong tilts.",
+        "zh-CN": "俯仰与横滚均为 20°：误差随方位在 0.07 至 1.70 倍 δ/2 之间变化，不再“约为 δ/2”。这就是论文提醒避免大倾角的原因。",
     },
     "scenario_text.drift": {
         "en": "A drift difference ε between the two readings enters as −ε/(2KΩcos φ sin γ). It blows up near 0° and 180°, where the cosine is flat.",

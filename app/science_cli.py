@@ -328,3 +328,7 @@ def add_science_commands(commands) -> None:
     allan.add_argument("--unit", choices=UNITS, default="deg/h")
     allan.add_argument("--json", action="store_true")
     allan.set_defaults(handler=_guarded(_allan))
+
+    from app.errors_cli import add_errors_command
+
+    add_errors_command(commands, _guarded, to_json_text)

@@ -21,6 +21,12 @@
 
 The four-position rows follow from A = atan2(y, x) with δA = (x·δy − y·δx)/H²; the
 Monte Carlo functions reproduce all of them with :func:`app.core.simulate.simulate_run`.
+
+The formula above is for the handout's single-axis FOG solved with arccos.  The tilt
+paper's own instrument is a two-axis gyro solved with atan (method ``"seeker"``,
+:mod:`app.core.two_axis_seeker`): on a tilted table its indexing error stays between
+0.07 and 1.70 × δ/2 at 20° tilt instead of diverging near 0°/180°.  Its curves include the
+indexing error, the known tilt and the gyro's noise; the other sources do not apply to it.
 """
 
 from __future__ import annotations
@@ -32,11 +38,17 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from app.core.exceptions import GyroInputError
-from app.core.simulate import GyroPreset, Setup, simulate_run
+from app.core.simulate import GyroPreset, GyroStream, Setup, simulate_run
 from app.core.solve import heading_angles, solve_heading, solve_two_position, wrap180, wrap360
+from app.core.two_axis_seeker import (
+    body_rates,
+    indexing_error_first_order,
+    solve_seeker,
+    turned_reading,
+)
 from app.core.units import EARTH_RATE_DEG_H
 
-METHODS = ("two", "four")
+METHODS = ("two", "four", "seeker")
 
 
 @dataclass(frozen=True)
@@ -129,6 +141,54 @@ def four_position_first_order(
     return np.degrees(total)
 
 
+def seeker_first_order(
+    sources: ErrorSources,
+    azimuths_deg,
+    latitude_deg: float,
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+) -> np.ndarray:
+    """First-order heading error (°) of the tilt paper's two-axis seeker: the indexing error
+    on its 180° turn with the table's known pitch and roll (the only sources it models)."""
+    azimuths = np.asarray(azimuths_deg, dtype=float)
+    if not sources.indexing_deg:
+        return np.zeros_like(azimuths)
+    return indexing_error_first_order(
+        sources.indexing_deg,
+        azimuths,
+        latitude_deg=latitude_deg,
+        pitch_deg=sources.pitch_deg,
+        roll_deg=sources.roll_deg,
+        earth_rate_deg_h=earth_rate_deg_h,
+    )
+
+
+def first_order(
+    method: str,
+    sources: ErrorSources,
+    azimuths_deg,
+    latitude_deg: float,
+    *,
+    stop_spacing_s: float = 0.0,
+    earth_rate_deg_h: float = EARTH_RATE_DEG_H,
+) -> np.ndarray:
+    """The first-order heading error (°) of ``method`` at each true azimuth."""
+    if method == "two":
+        return two_position_first_order(
+            sources, azimuths_deg, latitude_deg, earth_rate_deg_h, stop_spacing_s
+        )
+    if method == "four":
+        return four_position_first_order(
+            sources,
+            azimuths_deg,
+            latitude_deg,
+            earth_rate_deg_h=earth_rate_deg_h,
+            stop_spacing_s=stop_spacing_s,
+        )
+    if method == "seeker":
+        return seeker_first_order(sources, azimuths_deg, latitude_deg, earth_rate_deg_h)
+    raise ValueError(f"method must be one of {', '.join(METHODS)}")
+
+
 @dataclass(frozen=True)
 class MonteCarloCurve:
     azimuths_deg: np.ndarray
@@ -173,7 +233,11 @@ def monte_carlo_heading_errors(
 ) -> MonteCarloCurve:
     """Heading error (estimate − truth, wrapped) of simulated runs at each true azimuth."""
     if method not in METHODS:
-        raise ValueError("method must be 'two' or 'four'")
+        raise ValueError(f"method must be one of {', '.join(METHODS)}")
+    if method == "seeker":
+        return _seeker_monte_carlo(
+            preset, sources, azimuths_deg, latitude_deg, earth_rate_deg_h, runs, dwell_s, seed
+        )
     gyro = _gyro_for(preset, sources)
     stops = 2 if method == "two" else 4
     angles = heading_angles(stops, rotation, 0.0, 180.0 if method == "two" else 90.0)
@@ -213,12 +277,60 @@ def monte_carlo_heading_errors(
                 )
             except GyroInputError:  # no heading can be found from this run
                 errors[i, run] = np.nan
+    return _curve(azimuths, errors)
+
+
+def _curve(azimuths: np.ndarray, errors: np.ndarray) -> MonteCarloCurve:
+    """Mean and spread over the runs (rows: azimuths; NaN = no heading found)."""
+    runs = errors.shape[1]
     valid = np.isfinite(errors).sum(axis=1)
     with np.errstate(invalid="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         mean = np.nanmean(errors, axis=1)
         std = np.nanstd(errors, axis=1, ddof=1) if runs > 1 else np.zeros(azimuths.size)
     return MonteCarloCurve(azimuths, mean, std, runs, valid)
+
+
+def _seeker_monte_carlo(
+    preset: GyroPreset,
+    sources: ErrorSources,
+    azimuths_deg,
+    latitude_deg: float,
+    earth_rate_deg_h: float,
+    runs: int,
+    dwell_s: float,
+    seed: int,
+) -> MonteCarloCurve:
+    """The two-axis seeker simulated: each gyro axis is its own noisy stream (the preset's
+    noise terms), one position after the other; the table's pitch and roll are known."""
+    azimuths = np.asarray(azimuths_deg, dtype=float)
+    count = max(1, int(round(dwell_s * preset.sample_rate_hz)))
+    errors = np.empty((azimuths.size, runs))
+    for i, azimuth in enumerate(azimuths):
+        first = body_rates(
+            azimuth, latitude_deg, sources.pitch_deg, sources.roll_deg, earth_rate_deg_h
+        )
+        second = turned_reading(first, sources.indexing_deg)
+        for run in range(runs):
+            means = []
+            for axis in range(2):
+                stream = GyroStream(preset, (seed + 7919 * i + run) * 2 + axis)
+                at_zero = stream.read(np.full(count, first[axis])).mean()
+                turned = stream.read(np.full(count, second[axis])).mean()
+                means.append((float(at_zero), float(turned)))
+            try:
+                found = solve_seeker(
+                    (means[0][0], means[1][0]),
+                    (means[0][1], means[1][1]),
+                    pitch_deg=sources.pitch_deg,
+                    roll_deg=sources.roll_deg,
+                    latitude_deg=latitude_deg,
+                    earth_rate_deg_h=earth_rate_deg_h,
+                ).azimuth_deg
+                errors[i, run] = wrap180(found - azimuth)
+            except GyroInputError:
+                errors[i, run] = np.nan
+    return _curve(azimuths, errors)
 
 
 def _estimate(

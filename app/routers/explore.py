@@ -29,7 +29,7 @@ router = APIRouter(prefix="/explore", tags=["pages: explorer"], include_in_schem
 class ExplorerQuery(BaseModel):
     """The explorer's controls, bounded so every request answers in well under a second."""
 
-    method: Literal["two", "four", "both"] = "both"
+    method: Literal["two", "four", "both", "seeker"] = "both"
     latitude_deg: float = Field(60.0, ge=-85, le=85)
     preset: Literal["teaching-fog", "tactical-fog", "navigation-fog", "mems"] = "navigation-fog"
     noise: bool = True
@@ -78,6 +78,7 @@ JS_MESSAGES = (
     "explore.monte_carlo",
     "explore.method_two",
     "explore.method_four",
+    "explore.method_seeker",
     "explore.runs_used",
     "explore.dwell_axis",
     "explore.sigma_axis",

@@ -7,7 +7,7 @@
     (config.messages[key] || key).replace(/\{(\w+)\}/g, (_, name) => params[name] ?? "");
   const form = document.getElementById("explorer-form");
   const info = document.getElementById("run-info");
-  const colors = { two: "#d1495b", four: "#0b6bcb" };
+  const colors = { two: "#d1495b", four: "#0b6bcb", seeker: "#2a9d4b" };
   let timer = null;
   let generation = 0;
 
@@ -46,7 +46,7 @@
       traces.push({ x: curve.azimuths_deg, y: curve.formula_deg, mode: "lines", name: `${name} — ${t("explore.formula")}`,
                     line: { color: colors[curve.method], width: 2 } });
       traces.push({ x: curve.mc_azimuths_deg, y: curve.mc_mean_deg, mode: "markers", name: `${name} — ${t("explore.monte_carlo")}`,
-                    marker: { color: colors[curve.method], size: 8, symbol: curve.method === "two" ? "circle" : "diamond" },
+                    marker: { color: colors[curve.method], size: 8, symbol: { two: "circle", four: "diamond", seeker: "square" }[curve.method] },
                     error_y: { type: "data", array: curve.mc_std_deg, visible: true } });
     });
     Plotly.react("heading-chart", traces, {
