@@ -9,7 +9,8 @@ from pathlib import Path
 from sqlmodel import Session, func, select
 
 from app.accounts import create_user, enroll
-from app.labsim import SimulatedTake
+from app.core.solve import solve_heading
+from app.labsim import SimulatedTake, north_dial_deg, set_gyro_clock
 from app.labstore import store_take, submit
 from app.models import Assignment, Course, LabSession, Role, User
 from app.review import draw_truth
@@ -105,12 +106,20 @@ def add_demo_work(db: Session, assignment: Assignment, students: list[User]) -> 
         draw_truth(assignment, session, rng)
         db.add(session)
         db.flush()
+        clock = 60.0  # the student waits a minute after switch-on, then turns in 20 s
+        recorded: dict[str, list] = {}
         for part in parts:
+            if part == "latitude":  # the table is turned to the north part A found
+                session.sim_plane_dial_deg = round(north_dial(session, recorded["heading"]), 1)
+                session.sim_turns += 1
             for position in range(1, 5):
                 if position > 1:
                     session.sim_turns += 1
-                take = SimulatedTake(session, part, position, 0, settle_s=5.0)
+                setattr(session, f"sim_table_{part}", position)
+                take = SimulatedTake(session, part, position, settle_s=5.0, start_s=clock)
                 values, times = take.next(int(dwell * take.rate_hz))
+                clock = take.end_s + 20.0
+                recorded.setdefault(part, []).append((take.dial_angle_deg, values))
                 store_take(
                     db,
                     session,
@@ -121,8 +130,17 @@ def add_demo_work(db: Session, assignment: Assignment, students: list[User]) -> 
                     times=times,
                     source="simulator",
                 )
+        set_gyro_clock(session, clock)
         if submit_it:
             submit(db, session)
+
+
+def north_dial(session: LabSession, recorded: list[tuple[float, object]]) -> float:
+    """The horizontal dial (° clockwise from position 1) that points the axis north by the
+    student's own part-A result, as the handout's step 4 does."""
+    angles = [angle for angle, _ in recorded]
+    result = solve_heading([values for _, values in recorded], angles)
+    return north_dial_deg(session, result.azimuth_deg, angles[0])
 
 
 def write_credentials_file(path: Path, credentials: list[tuple[str, str, str]]) -> None:

@@ -11,7 +11,7 @@ from sqlmodel import Session, select
 from app.core.exceptions import GyroInputError
 from app.core.simulate import PRESETS
 from app.labsim import new_truth
-from app.models import Assignment, Course, Enrollment, LabSession, Role, User
+from app.models import Assignment, Course, Enrollment, LabSession, Role, User, utcnow
 from app.review import draw_truth
 
 
@@ -96,6 +96,7 @@ def start_session(
         latitude_step_deg=settings.latitude_step_deg,
         sim_seed=seed,
         sim_azimuth_deg=azimuth,
+        sim_clock_at=utcnow(),  # the simulated gyro is switched on with the session
     )
     if assignment is not None:
         draw_truth(assignment, session, random.SystemRandom())

@@ -8,16 +8,21 @@ browser except measured readings.
 from __future__ import annotations
 
 import hashlib
+import math
 import secrets
 from dataclasses import replace
+from datetime import UTC, datetime
 
 import numpy as np
 
 from app.core.simulate import PRESETS, GyroStream, axis_vectors, read_dial, true_rate
-from app.models import LabSession
+from app.models import LabSession, utcnow
 
 MAX_DWELL_S = 1800.0
 MAX_SETTLE_S = 120.0
+MAX_PAUSE_S = 1800.0  # a longer pause between recordings counts as 30 min of gyro time
+POWER_CYCLE_S = 6 * 3600.0  # after 6 h of gyro time the timeline starts a new power cycle
+HISTORY_BLOCK = 200_000
 
 
 def new_truth() -> tuple[int, float]:
@@ -47,8 +52,9 @@ def turn_on_bias(session: LabSession) -> float:
     return GyroStream(preset_for(session), derived_seed(session, "power-on")).turn_on_bias_deg_h
 
 
-def indexing_error_deg(session: LabSession, turn: int) -> float:
-    """The error of the table's stop after turn number ``turn`` (0 = the start, exact)."""
+def indexing_error_deg(session: LabSession, turn: int | str) -> float:
+    """The error of the table's stop after turn number ``turn`` (0 = the start, exact;
+    "plane" = the horizontal dial set for part B)."""
     if turn == 0:
         return 0.0
     preset = preset_for(session)
@@ -63,36 +69,123 @@ def nominal_angle(session: LabSession, part: str, position: int) -> float:
     return session.latitude_start_deg + session.latitude_step_deg * (position - 1)
 
 
+def table_errors(session: LabSession) -> dict[str, float]:
+    """The virtual turntable's pitch and roll and the gyro axis's misalignment from the dial
+    zero (horizontal, vertical), degrees: drawn by an assignment, else from the session's
+    seed and the preset's σ."""
+    preset = preset_for(session)
+    rng = np.random.default_rng(derived_seed(session, "table"))
+    drawn = rng.normal(size=4)
+    tilt, misalignment = preset.table_tilt_sigma_deg, preset.misalignment_sigma_deg
+    values = {
+        "pitch_deg": (session.sim_pitch_deg, drawn[0] * tilt),
+        "roll_deg": (session.sim_roll_deg, drawn[1] * tilt),
+        "misalign_h_deg": (session.sim_misalign_h_deg, drawn[2] * misalignment),
+        "misalign_v_deg": (session.sim_misalign_v_deg, drawn[3] * misalignment),
+    }
+    return {
+        key: float(stored if stored is not None else own) for key, (stored, own) in values.items()
+    }
+
+
+def plane_dial_deg(session: LabSession) -> float:
+    """Part B's vertical plane: where the student set the horizontal dial for it, else where
+    the table stands at the end of part A (° clockwise from heading position 1)."""
+    if session.sim_plane_dial_deg is not None:
+        return session.sim_plane_dial_deg
+    return nominal_angle(session, "heading", session.sim_table_heading) - session.heading_start_deg
+
+
+def north_dial_deg(session: LabSession, azimuth_1_deg: float, angle_1_deg: float) -> float:
+    """The horizontal dial (° clockwise from heading position 1, in (−180, 180]) that points
+    the axis north when position 1, at dial angle ``angle_1_deg``, has azimuth
+    ``azimuth_1_deg`` (the handout's step 4: turn by θ, then the axis points north)."""
+    turn = angle_1_deg - azimuth_1_deg - session.heading_start_deg
+    return -((-turn + 180.0) % 360.0 - 180.0)
+
+
+def gyro_clock_s(session: LabSession, now: datetime | None = None) -> float:
+    """Seconds since the session's simulated gyro was switched on.  The clock runs with the
+    wall clock between recordings (turning the table, waiting), a pause longer than
+    ``MAX_PAUSE_S`` counting as that long: the gyro stays on."""
+    if session.sim_clock_at is None:
+        return session.sim_clock_s
+    now = now or utcnow()
+    at = session.sim_clock_at
+    if at.tzinfo is None:
+        at = at.replace(tzinfo=UTC)
+    elapsed = (now - at).total_seconds()
+    return session.sim_clock_s + min(max(elapsed, 0.0), MAX_PAUSE_S)
+
+
+def set_gyro_clock(session: LabSession, gyro_s: float, now: datetime | None = None) -> None:
+    session.sim_clock_s = float(gyro_s)
+    session.sim_clock_at = now or utcnow()
+
+
 class SimulatedTake:
-    """Samples of one simulated recording, generated block by block on demand."""
+    """Samples of one recording from the session's one simulated gyro.
+
+    The gyro's noise is a single timeline per power cycle (``POWER_CYCLE_S``), generated
+    from the session's seed: a recording that starts at gyro time t regenerates the noise
+    state up to t (slow bias, random walk and warm-up carry over from every earlier
+    recording, the turns and the waits in between), then produces its samples.  Sample
+    times are gyro seconds since switch-on, one clock for every position and both parts.
+    """
 
     def __init__(
-        self, session: LabSession, part: str, position: int, attempt: int, settle_s: float
+        self,
+        session: LabSession,
+        part: str,
+        position: int,
+        settle_s: float = 0.0,
+        *,
+        start_s: float | None = None,
     ) -> None:
         preset = preset_for(session)
-        turn_on = turn_on_bias(session)
         self.preset = preset
-        self.stream = GyroStream(preset, derived_seed(session, part, position, attempt))
-        self.stream.turn_on_bias_deg_h = turn_on  # one power-on per session
+        self.rate_hz = preset.sample_rate_hz
+        clock = gyro_clock_s(session) if start_s is None else start_s
+        begin = int(math.ceil((clock + settle_s) * self.rate_hz - 1e-9))
+        cycle, index = divmod(begin, int(POWER_CYCLE_S * self.rate_hz))
+        self.first_index = begin
+        self.stream = GyroStream(preset, derived_seed(session, "gyro", cycle))
+        self.stream.turn_on_bias_deg_h = turn_on_bias(session)  # one power-on value
+        table = table_errors(session)
         nominal = nominal_angle(session, part, position)
         actual = nominal + indexing_error_deg(session, session.sim_turns)
         self.dial_angle_deg = read_dial(nominal, preset.dial_resolution_deg)
         if part == "heading":
             # dial angles are relative to position 1, which points at the secret azimuth
-            vector = axis_vectors(session.sim_azimuth_deg, actual - session.heading_start_deg, 0.0)
+            horizontal = actual - session.heading_start_deg
+            elevation = 0.0
         else:
-            vector = axis_vectors(0.0, 0.0, actual)
+            plane = plane_dial_deg(session)
+            horizontal = plane + indexing_error_deg(session, f"plane {plane}")
+            elevation = actual
+        vector = axis_vectors(
+            session.sim_azimuth_deg,
+            horizontal + table["misalign_h_deg"],
+            elevation + table["misalign_v_deg"],
+            table["pitch_deg"],
+            table["roll_deg"],
+        )
         self.true_rate = float(true_rate(session.latitude_deg, vector, session.earth_rate_deg_h))
         self.up = float(vector[2])
-        self.rate_hz = preset.sample_rate_hz
-        self.skip = int(round(settle_s * self.rate_hz))
+        while index > 0:  # the gyro's history since switch-on, in bounded blocks
+            block = min(index, HISTORY_BLOCK)
+            self.stream.read(np.zeros(block))
+            index -= block
         self.produced = 0
-        if self.skip:
-            self.stream.read(np.full(self.skip, self.true_rate), self.up)
+
+    @property
+    def end_s(self) -> float:
+        """Gyro time after the last sample produced."""
+        return (self.first_index + self.produced) / self.rate_hz
 
     def next(self, count: int) -> tuple[np.ndarray, np.ndarray]:
-        """The next ``count`` samples and their times (s since recording started)."""
+        """The next ``count`` samples and their gyro times (s since switch-on)."""
         values = self.stream.read(np.full(count, self.true_rate), self.up)
-        times = (self.skip + self.produced + np.arange(count)) / self.rate_hz
+        times = (self.first_index + self.produced + np.arange(count)) / self.rate_hz
         self.produced += count
         return values, times

@@ -9,6 +9,7 @@ import json
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from itertools import pairwise
 
 import numpy as np
 from sqlmodel import Session, func, select
@@ -392,15 +393,25 @@ def current_data(db: Session, session: LabSession) -> SessionData:
 
 def simulated_noise(session: LabSession, ordered: list[PositionData]) -> dict:
     """When every position was recorded from the simulated gyro its noise model is known:
-    the position means' covariance (each recording a separate run of the gyro) and the
-    table's indexing σ, for the solver.  Otherwise nothing (the σ assumes white noise)."""
+    the position means' covariance and the table's indexing σ, for the solver.  Recordings
+    on the session's one gyro timeline (sample times in gyro seconds, not overlapping) are
+    correlated through the slow bias and the random walk; recordings made before the
+    timeline existed are separate runs.  Otherwise nothing (the σ assumes white noise)."""
     if not ordered or any(p.take.source != "simulator" for p in ordered):
         return {}
     preset = preset_for(session)
     noise = GyroNoise.from_preset(preset)
-    windows = [Window(0.0, p.values.size / preset.sample_rate_hz) for p in ordered]
+    length = [p.values.size / preset.sample_rate_hz for p in ordered]
+    windows = [
+        Window(float(p.times[0]) if p.times is not None and p.times.size else 0.0, span)
+        for p, span in zip(ordered, length, strict=True)
+    ]
+    spans = sorted((w.start_s, w.end_s) for w in windows)
+    on_one_clock = all(end <= start + 1e-6 for (_, end), (start, _) in pairwise(spans))
+    if not on_one_clock:
+        windows = [Window(0.0, span) for span in length]
     return {
-        "position_cov": noise.mean_covariance(windows, continuous=False),
+        "position_cov": noise.mean_covariance(windows, continuous=on_one_clock),
         "indexing_sigma_deg": noise.indexing_sigma_deg,
     }
 

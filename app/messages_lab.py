@@ -437,6 +437,14 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "zh-CN": "开机零偏范围 ±（°/h）",
     },
     "assignment.indexing_sigma": {"en": "Indexing error σ (″)", "zh-CN": "转位误差 σ（″）"},
+    "assignment.table_tilt_max": {
+        "en": "Table pitch and roll up to ± (°)",
+        "zh-CN": "转台俯仰、横滚范围 ±（°）",
+    },
+    "assignment.misalignment_max": {
+        "en": "Gyro axis vs dial zero up to ± (°)",
+        "zh-CN": "陀螺敏感轴与刻度零位偏差范围 ±（°）",
+    },
     "assignment.preset_default": {"en": "the gyro's own", "zh-CN": "按陀螺预设"},
     "assignment.true_heading": {
         "en": "Known azimuth of position 1 on a real bench (°, optional)",
@@ -782,6 +790,31 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     "js.connection_lost": {
         "en": "The connection was lost; nothing was saved for this position. Record it again.",
         "zh-CN": "连接已断开，该位置未保存任何数据，请重新记录。",
+    },
+    "js.plane_set": {
+        "en": "The table's horizontal dial is set to {dial}° for part B.",
+        "zh-CN": "B 部分的水平刻度已设为 {dial}°。",
+    },
+    "sim.plane_help": {
+        "en": "Before part B, turn the horizontal dial so the gyro axis points north (the handout's step 4) and lock it: the gyro then turns in that vertical plane. If part A's north was off, so is the plane, and your latitude will show it.",
+        "zh-CN": "B 部分开始前，转动水平刻度使陀螺敏感轴指北（讲义第 4 步）并锁定：陀螺随后在该竖直面内转动。若 A 部分找到的北向有偏差，竖直面也随之偏离，纬度结果会反映出来。",
+    },
+    "sim.plane_dial": {
+        "en": "Horizontal dial for part B (° clockwise from position 1)",
+        "zh-CN": "B 部分的水平刻度（自位置 1 起顺时针，°）",
+    },
+    "sim.plane_set": {"en": "Turn the table here", "zh-CN": "将转台转到此处"},
+    "sim.plane_suggest": {
+        "en": "Your part-A result points the axis north at {dial}°.",
+        "zh-CN": "按你的 A 部分结果，刻度为 {dial}° 时敏感轴指北。",
+    },
+    "sim.plane_now": {
+        "en": "The table's horizontal dial is set to {dial}° for part B.",
+        "zh-CN": "B 部分的水平刻度已设为 {dial}°。",
+    },
+    "sim.plane_unset": {
+        "en": "Not set yet: part B would run in the vertical plane of the table's last part-A position.",
+        "zh-CN": "尚未设置：B 部分将在转台 A 部分最后一个位置所在的竖直面内进行。",
     },
     "js.turned": {"en": "The table is now at position {n}.", "zh-CN": "转台已转到位置 {n}。"},
     "js.turn_needed": {

@@ -116,6 +116,8 @@ class Assignment(SQLModel, table=True):
     azimuth_max_deg: float = 360.0
     turn_on_bias_max_deg_h: float | None = None  # None: the preset's own turn-on bias
     indexing_sigma_arcsec: float | None = None  # None: the preset's own
+    table_tilt_max_deg: float | None = None  # pitch and roll drawn in ±max; None: preset's σ
+    misalignment_max_deg: float | None = None  # gyro axis vs dial zero, ±max; None: preset's σ
     true_heading_deg: float | None = None  # a real bench's known start azimuth, if any
     # auto-check tolerances
     tolerance_heading_deg: float = 2.0
@@ -160,6 +162,16 @@ class LabSession(SQLModel, table=True):
     stream_position: int | None = None
     sim_turn_on_bias_deg_h: float | None = None  # drawn per student by an assignment
     sim_indexing_sigma_arcsec: float | None = None
+    # the virtual turntable, drawn by an assignment (None: from the seed and the preset)
+    sim_pitch_deg: float | None = None
+    sim_roll_deg: float | None = None
+    sim_misalign_h_deg: float | None = None
+    sim_misalign_v_deg: float | None = None
+    # part B's vertical plane: the horizontal dial (° clockwise from heading position 1)
+    sim_plane_dial_deg: float | None = None
+    # one gyro timeline per session: its clock (s since switch-on) at wall time sim_clock_at
+    sim_clock_s: float = 0.0
+    sim_clock_at: datetime | None = None
     # in_progress | submitted | returned | graded
     status: str = Field(default="in_progress", max_length=16)
     grade: str | None = Field(default=None, max_length=32)

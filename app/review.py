@@ -32,6 +32,14 @@ def draw_truth(assignment: Assignment, session: LabSession, rng: random.Random) 
         limit = abs(assignment.turn_on_bias_max_deg_h)
         session.sim_turn_on_bias_deg_h = rng.uniform(-limit, limit)
     session.sim_indexing_sigma_arcsec = assignment.indexing_sigma_arcsec
+    if assignment.table_tilt_max_deg is not None:
+        limit = abs(assignment.table_tilt_max_deg)
+        session.sim_pitch_deg = rng.uniform(-limit, limit)
+        session.sim_roll_deg = rng.uniform(-limit, limit)
+    if assignment.misalignment_max_deg is not None:
+        limit = abs(assignment.misalignment_max_deg)
+        session.sim_misalign_h_deg = rng.uniform(-limit, limit)
+        session.sim_misalign_v_deg = rng.uniform(-limit, limit)
 
 
 @dataclass

@@ -63,6 +63,7 @@ ACCESS = {
     "POST /lab/sessions/{session_id}/csv/preview": "owner",
     "POST /lab/sessions/{session_id}/csv": "owner",
     "POST /lab/sessions/{session_id}/turn": "owner",
+    "POST /lab/sessions/{session_id}/plane": "owner",
     "GET /lab/sessions/{session_id}/results.json": "owner",
     "POST /lab/sessions/{session_id}/submit": "owner",
     "GET /lab/sessions/{session_id}/export.csv": "owner",
@@ -154,6 +155,7 @@ JSON_BODIES = {  # routes of the lab page that take JSON (fetch) rather than for
     "/csv": {"part": "heading", "text": "position_1\n1\n"},
     "/csv/preview": {"part": "heading", "text": "position_1\n1\n"},
     "/turn": {"part": "heading", "position": 2},
+    "/plane": {"dial_deg": -12.5},
 }
 
 

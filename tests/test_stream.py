@@ -66,10 +66,15 @@ def test_stored_samples_equal_streamed_ones_and_no_truth_is_sent(student_client)
         session = db.get(LabSession, session_id)
         takes = db.exec(select(Take).order_by(Take.position)).all()
         stored = [v for take in takes for v in load_samples(db, take)[0].tolist()]
-        times = load_samples(db, takes[0])[1]
+        times = [load_samples(db, take)[1] for take in takes]
     assert len(takes) == 4 and all(t.source == "simulator" and t.n_samples == 20 for t in takes)
     assert stored == streamed
-    assert times[0] == pytest.approx(3.0)  # the settle time was skipped
+    # one gyro clock (s since the session switched it on): the settle time was skipped and
+    # each recording starts after the one before it ended, plus its own settle time
+    assert times[0][0] >= 3.0
+    for before, after in zip(times, times[1:], strict=False):
+        assert after[0] >= before[-1] + 1.0 + 3.0 - 1e-9
+        assert np.all(np.diff(after) == pytest.approx(1.0))
     truth = GyroTruth(session)
     everything = "".join(raw)
     for secret in truth.values():
@@ -85,7 +90,7 @@ def test_stored_samples_equal_streamed_ones_and_no_truth_is_sent(student_client)
 
 
 def GyroTruth(session) -> dict[str, str]:  # noqa: N802
-    take = SimulatedTake(session, "heading", 1, 0, 0.0)
+    take = SimulatedTake(session, "heading", 1)
     bias = take.stream.turn_on_bias_deg_h
     return {
         "azimuth": f"{session.sim_azimuth_deg:.3f}",
@@ -236,3 +241,18 @@ def test_client_frames_cannot_speed_up_a_recording(student_client):
         elapsed = time.monotonic() - start
     assert frame["type"] == "saved" and frame["n"] == 60
     assert elapsed >= 0.9
+
+
+def test_the_plane_for_part_b_is_set_on_the_table_and_validated(student_client):
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    reply = post_json(student_client, f"{page}/plane", {"dial_deg": -12.34567}, page)
+    assert reply.status_code == 200 and reply.json() == {"dial_deg": -12.346}
+    with read_session() as db:
+        stored = db.get(LabSession, session_id)
+        assert stored.sim_plane_dial_deg == -12.346 and stored.sim_turns == 1
+    for bad in (1e9, "north", None):
+        reply = post_json(student_client, f"{page}/plane", {"dial_deg": bad}, page)
+        assert reply.status_code == 422 and "detail" in reply.json()
+    html = student_client.get(page).text
+    assert "-12.346" in html  # the latitude panel shows where the table is set

@@ -65,6 +65,8 @@ class GyroPreset:
     indexing_sigma_arcsec: float
     dial_resolution_deg: float
     drift_deg_h_per_h: float = 0.0  # linear bias drift ḃ (warm-up), °/h per hour
+    table_tilt_sigma_deg: float = 0.0  # lab turntable: pitch and roll ~ N(0, σ) per session
+    misalignment_sigma_deg: float = 0.0  # lab: gyro axis vs dial zero ~ N(0, σ) per session
     source: str = ""
     description: dict[str, str] = field(default_factory=dict)
 
@@ -132,6 +134,8 @@ PRESETS: dict[str, GyroPreset] = {
         g_sensitivity_deg_h_per_g=0.1,
         misalignment_deg=(0.0, 0.0),
         indexing_sigma_arcsec=60.0,
+        table_tilt_sigma_deg=0.1,
+        misalignment_sigma_deg=0.3,
         dial_resolution_deg=0.1,
         source="Tuned to the handout's tables (lab-reference §2): one reading per second, "
         "≈0.1 °/h scatter and 0.1 °/h steps; scale-factor error 500 ppm as for a "
@@ -155,6 +159,8 @@ PRESETS: dict[str, GyroPreset] = {
         g_sensitivity_deg_h_per_g=0.05,
         misalignment_deg=(0.0, 0.0),
         indexing_sigma_arcsec=30.0,
+        table_tilt_sigma_deg=0.05,
+        misalignment_sigma_deg=0.05,
         dial_resolution_deg=0.01,
         source="KVH DSP-1750 class (lab-reference §5): ARW 0.012 °/√h, bias instability "
         "0.05 °/h, scale factor ~100 ppm.",
@@ -178,6 +184,8 @@ PRESETS: dict[str, GyroPreset] = {
         g_sensitivity_deg_h_per_g=0.0,
         misalignment_deg=(0.0, 0.0),
         indexing_sigma_arcsec=10.0,
+        table_tilt_sigma_deg=0.01,
+        misalignment_sigma_deg=0.01,
         dial_resolution_deg=0.001,
         source="Navigation-grade FOG (lab-reference §5): ARW ≈ 0.002 °/√h, B < 0.01 °/h.",
         description={
@@ -199,6 +207,8 @@ PRESETS: dict[str, GyroPreset] = {
         g_sensitivity_deg_h_per_g=36.0,
         misalignment_deg=(0.0, 0.0),
         indexing_sigma_arcsec=60.0,
+        table_tilt_sigma_deg=0.1,
+        misalignment_sigma_deg=0.3,
         dial_resolution_deg=0.1,
         source="Consumer MEMS (lab-reference §5): B ≈ 10 °/h, N ≈ 0.3–1 °/√h; turn-on bias "
         "0.1 °/s; g-sensitivity 0.01 °/s/g.",

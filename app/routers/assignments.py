@@ -26,6 +26,8 @@ class FormProblem(ValueError):
 OPTIONAL_NUMBERS = {  # name: (low, high) for fields that may be left empty
     "turn_on_bias_max_deg_h": (0, 10_000),
     "indexing_sigma_arcsec": (0, 36_000),
+    "table_tilt_max_deg": (0, 30),
+    "misalignment_max_deg": (0, 10),
     "true_heading_deg": (0, 360),
 }
 DEFAULTS = {
@@ -39,6 +41,8 @@ DEFAULTS = {
     "reveal_truth": "after_grading",
     "turn_on_bias_max_deg_h": "",
     "indexing_sigma_arcsec": "",
+    "table_tilt_max_deg": "",
+    "misalignment_max_deg": "",
     "true_heading_deg": "",
     "instructions": "",
     "earth_rate_deg_h": "15.041",
@@ -98,6 +102,8 @@ def parse_assignment_form(form: dict) -> Assignment:
         azimuth_max_deg=number("azimuth_max_deg", 0, 360),
         turn_on_bias_max_deg_h=optional("turn_on_bias_max_deg_h"),
         indexing_sigma_arcsec=optional("indexing_sigma_arcsec"),
+        table_tilt_max_deg=optional("table_tilt_max_deg"),
+        misalignment_max_deg=optional("misalignment_max_deg"),
         true_heading_deg=optional("true_heading_deg"),
         tolerance_heading_deg=number("tolerance_heading_deg", 0, 180),
         tolerance_latitude_pct=number("tolerance_latitude_pct", 0, 1000),
@@ -127,6 +133,8 @@ def assignment_form_values(assignment: Assignment) -> dict:
             "azimuth_max_deg",
             "turn_on_bias_max_deg_h",
             "indexing_sigma_arcsec",
+            "table_tilt_max_deg",
+            "misalignment_max_deg",
             "true_heading_deg",
             "tolerance_heading_deg",
             "tolerance_latitude_pct",

@@ -30,7 +30,7 @@ from app.deps import (
 from app.exports import Selection, readings_csv, session_json
 from app.i18n import translator
 from app.jsonsafe import json_safe
-from app.labsim import nominal_angle
+from app.labsim import nominal_angle, north_dial_deg
 from app.labstore import (
     PARTS,
     POSITIONS,
@@ -201,6 +201,7 @@ def session_page(request: Request, session_id: ObjectId, user: CurrentUser, db: 
         "csrf": csrf_token_for(request),
         "minReadings": session.min_readings,
         "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
+        "plane": session.sim_plane_dial_deg,
         "messages": {key: _(key) for key in JS_MESSAGES},
     }
     editable = session.status != "graded" and not (
@@ -236,8 +237,14 @@ def session_view(db: Session, session: LabSession, assignment, attempts, _) -> d
     check = None
     if truth is not None and assignment is not None and attempts:
         check = auto_check(json.loads(attempts[-1].results_json), truth, assignment)
+    heading = results["heading"]
+    north = None
+    if heading.result is not None:
+        first = heading.positions[min(heading.positions)].take.angle_deg
+        north = north_dial_deg(session, heading.result.azimuth_deg, first)
     return {
         "session": session,
+        "north_dial": north,
         "results": results,
         "figures": _figures(results, _),
         "attempts": attempts,
@@ -273,6 +280,7 @@ JS_MESSAGES = (
     "js.done",
     "js.connection_lost",
     "js.turned",
+    "js.plane_set",
     "js.turn_needed",
     "js.position",
     "js.samples",
@@ -510,6 +518,25 @@ def turn_table(
         "position": body.position,
         "dial_angle_deg": nominal_angle(session, body.part, body.position),
     }
+
+
+class Plane(BaseModel):
+    dial_deg: float = Field(ge=-360, le=360, allow_inf_nan=False)
+
+
+@router.post("/sessions/{session_id}/plane", dependencies=[CsrfProtected])
+def set_plane(
+    session_id: ObjectId, user: CurrentUser, db: SessionDep, body: Annotated[Plane, Body()]
+):
+    """Turn the horizontal dial for part B: the gyro then turns in that vertical plane
+    (north if part A's result was right, as at the real bench)."""
+    session = own_session(db, user, session_id)
+    require_method(db, session, "simulator")
+    session.sim_plane_dial_deg = round(body.dial_deg, 3)
+    session.sim_turns += 1
+    db.add(session)
+    db.commit()
+    return {"dial_deg": session.sim_plane_dial_deg}
 
 
 @router.get("/sessions/{session_id}/results.json")

@@ -30,9 +30,9 @@ from app.core.exceptions import GyroInputError
 from app.db import write_session
 from app.deps import ObjectId
 from app.i18n import translate
-from app.labsim import MAX_DWELL_S, MAX_SETTLE_S, SimulatedTake
+from app.labsim import MAX_DWELL_S, MAX_SETTLE_S, SimulatedTake, set_gyro_clock
 from app.labstore import PARTS, POSITIONS, store_take
-from app.models import Assignment, AuthSession, LabSession, Take, User
+from app.models import Assignment, AuthSession, LabSession, User
 from app.security import session_is_live, token_digest
 from app.web import SESSION_COOKIE, request_language
 
@@ -86,10 +86,13 @@ def _mark_started(session_id: int, part: str, position: int) -> LabSession:
         return session
 
 
-def _save(session_id: int, part: str, position: int, dial: float, values, times) -> int:
+def _save(
+    session_id: int, part: str, position: int, dial: float, values, times, end_s: float
+) -> int:
     with write_session() as db:
         session = db.get(LabSession, session_id)
         session.stream_part = session.stream_position = None
+        set_gyro_clock(session, end_s)  # the gyro ran through the recording
         store_take(
             db,
             session,
@@ -108,17 +111,6 @@ def _clear_mark(session_id: int) -> None:
         session = db.get(LabSession, session_id)
         session.stream_part = session.stream_position = None
         db.add(session)
-
-
-def _attempt_number(session_id: int, part: str, position: int) -> int:
-    with write_session() as db:
-        return len(
-            db.exec(
-                select(Take.id).where(
-                    Take.session_id == session_id, Take.part == part, Take.position == position
-                )
-            ).all()
-        )
 
 
 class StreamError(Exception):
@@ -206,9 +198,8 @@ async def _record(
     _, session = found
     if getattr(session, f"sim_table_{part}") != position:
         raise StreamError("stream.turn_first", position=position)
-    attempt = await run_in_threadpool(_attempt_number, session_id, part, position)
     session = await run_in_threadpool(_mark_started, session_id, part, position)
-    take = SimulatedTake(session, part, position, attempt, settle)
+    take = SimulatedTake(session, part, position, settle)
     total = max(1, int(round(dwell * take.rate_hz)))
     await websocket.send_json(
         {
@@ -261,7 +252,7 @@ async def _record(
         )
     try:
         saved = await run_in_threadpool(
-            _save, session_id, part, position, take.dial_angle_deg, values, times
+            _save, session_id, part, position, take.dial_angle_deg, values, times, take.end_s
         )
     except GyroInputError as error:  # e.g. stopped before the minimum number of readings
         await run_in_threadpool(_clear_mark, session_id)

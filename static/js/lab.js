@@ -262,6 +262,24 @@
       }
     });
 
+    const planeButton = panel.querySelector(".set-plane");
+    if (planeButton) {
+      planeButton.addEventListener("click", async () => {
+        const planeStatus = panel.querySelector(".plane-status");
+        const value = Number(panel.querySelector(".plane-dial").value);
+        if (panel.querySelector(".plane-dial").value.trim() === "" || !Number.isFinite(value)) {
+          planeStatus.textContent = t("js.not_a_number");
+          return;
+        }
+        try {
+          const reply = await postJson("/plane", { dial_deg: value });
+          planeStatus.textContent = t("js.plane_set", { dial: reply.dial_deg });
+        } catch (error) {
+          planeStatus.textContent = error.message;
+        }
+      });
+    }
+
     function finish(message) {
       panel.dataset.busy = "0";
       stopButton.disabled = true;

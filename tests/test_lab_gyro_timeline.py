@@ -1,0 +1,188 @@
+"""One simulated gyro per lab session: one noise timeline, the table's draws, part B's plane
+from part A -- against the stream's own recursion and the noise model's closed forms."""
+
+from __future__ import annotations
+
+import math
+import random
+from datetime import UTC, datetime, timedelta
+
+import numpy as np
+import pytest
+
+from app.core.exceptions import GyroInputError
+from app.core.noise_model import GyroNoise, Window
+from app.core.simulate import PRESETS, GyroStream
+from app.core.solve import solve_heading, solve_latitude
+from app.labsim import (
+    MAX_PAUSE_S,
+    SimulatedTake,
+    derived_seed,
+    gyro_clock_s,
+    north_dial_deg,
+    set_gyro_clock,
+    table_errors,
+    turn_on_bias,
+)
+from app.models import Assignment, LabSession
+from app.review import draw_truth
+
+
+def session(seed: int = 1, preset: str = "teaching-fog", **fields) -> LabSession:
+    values = {
+        "owner_id": 1,
+        "title": "t",
+        "latitude_deg": 39.93,
+        "earth_rate_deg_h": 15.041,
+        "simulator_preset": preset,
+        "sim_seed": seed,
+        "sim_azimuth_deg": 33.0,
+    }
+    return LabSession(**(values | fields))
+
+
+def level(**fields) -> dict:
+    """A table without tilt or misalignment, so only the gyro's noise remains."""
+    return {"sim_pitch_deg": 0.0, "sim_roll_deg": 0.0, "sim_misalign_h_deg": 0.0,
+            "sim_misalign_v_deg": 0.0} | fields  # fmt: skip
+
+
+def test_a_recording_continues_the_sessions_one_noise_timeline():
+    lab = session(7)
+    take = SimulatedTake(lab, "heading", 1, settle_s=2.0, start_s=98.0)
+    values, times = take.next(50)
+    stream = GyroStream(PRESETS["teaching-fog"], derived_seed(lab, "gyro", 0))
+    stream.turn_on_bias_deg_h = turn_on_bias(lab)
+    stream.read(np.zeros(100))  # the gyro ran (at rest, turned, waiting) for 100 s
+    expected = stream.read(np.full(50, take.true_rate), take.up)
+    assert np.array_equal(values, expected)
+    assert times[0] == 100.0 and times[-1] == 149.0 and take.end_s == 150.0
+    again = SimulatedTake(lab, "heading", 1, settle_s=2.0, start_s=98.0).next(50)[0]
+    assert np.array_equal(values, again)  # deterministic from the stored seed and clock
+
+
+def test_slow_bias_carries_across_positions_as_the_noise_model_says():
+    """Means of two recordings 10 s apart, over 400 sessions: their covariance matches the
+    continuous-timeline covariance of app.core.noise_model (closed form), and is far from
+    the zero that separate recordings would give."""
+    windows = [Window(60.0, 60.0), Window(130.0, 60.0)]
+    errors = []
+    for seed in range(400):
+        lab = session(seed, **level())
+        means = []
+        for position, window in zip((1, 2), windows, strict=True):
+            take = SimulatedTake(lab, "heading", position, start_s=window.start_s)
+            values, _ = take.next(60)
+            means.append(values.mean() - take.true_rate * (1 + 500e-6) - turn_on_bias(lab))
+        errors.append(means)
+    measured = np.cov(np.asarray(errors).T)
+    model = GyroNoise.from_preset(PRESETS["teaching-fog"]).mean_covariance(windows)
+    correlation = model[0, 1] / math.sqrt(model[0, 0] * model[1, 1])
+    assert correlation > 0.2
+    found = measured[0, 1] / math.sqrt(measured[0, 0] * measured[1, 1])
+    assert found == pytest.approx(correlation, abs=4 * (1 - correlation**2) / math.sqrt(400))
+    assert np.sqrt(np.diag(measured)) == pytest.approx(np.sqrt(np.diag(model)), rel=0.12)
+
+
+def test_the_clock_runs_between_recordings_and_a_long_pause_is_capped():
+    lab = session(3)
+    start = datetime(2026, 11, 22, 9, 0, tzinfo=UTC)
+    set_gyro_clock(lab, 250.0, start)
+    assert gyro_clock_s(lab, start + timedelta(seconds=95)) == pytest.approx(345.0)
+    assert gyro_clock_s(lab, start + timedelta(days=3)) == pytest.approx(250.0 + MAX_PAUSE_S)
+    assert gyro_clock_s(lab, start - timedelta(seconds=5)) == pytest.approx(250.0)
+    lab.sim_clock_at = start.replace(tzinfo=None)  # as SQLite may hand it back
+    assert gyro_clock_s(lab, start + timedelta(seconds=1)) == pytest.approx(251.0)
+
+
+def _latitude_of(lab: LabSession, seconds: float = 120.0) -> float:
+    clock, positions, angles = 60.0, [], []
+    for position in range(1, 5):
+        lab.sim_table_latitude = position
+        lab.sim_turns += 1
+        take = SimulatedTake(lab, "latitude", position, start_s=clock)
+        values, _ = take.next(int(seconds * take.rate_hz))
+        clock = take.end_s + 20.0
+        positions.append(values)
+        angles.append(take.dial_angle_deg)
+    return solve_latitude(positions, angles).latitude_deg
+
+
+def test_part_b_runs_in_the_plane_the_student_set_after_part_a():
+    """Axis in the vertical plane at azimuth ψ: ω = Ω cos φ cos ψ cos e + Ω sin φ sin e, so the
+    fitted latitude is atan2(sin φ, cos φ cos ψ) (closed form), exact north only at ψ = 0."""
+    phi = math.radians(39.93)
+    for offset in (0.0, 25.0, -40.0):
+        lab = session(11, "navigation-fog", **level())
+        lab.sim_plane_dial_deg = north_dial_deg(lab, lab.sim_azimuth_deg, 0.0) + offset
+        expected = math.degrees(
+            math.atan2(math.sin(phi), math.cos(phi) * math.cos(math.radians(offset)))
+        )
+        assert _latitude_of(lab) == pytest.approx(expected, abs=0.05)
+    # never set: the plane of the table's last part-A stop
+    lab = session(11, "navigation-fog", **level(), sim_azimuth_deg=300.0)
+    lab.sim_table_heading = 4  # ccw: position 4 points 270° anticlockwise = 90° clockwise
+    psi = lab.sim_azimuth_deg + 90.0
+    expected = math.degrees(math.atan2(math.sin(phi), math.cos(phi) * math.cos(math.radians(psi))))
+    assert _latitude_of(lab) == pytest.approx(expected, abs=0.05)
+
+
+def test_north_from_part_a_carries_into_latitude():
+    """The whole bench: part A, turn to the north it found, part B.  The latitude is what the
+    miss in north predicts; turning to south instead (the handout's sign check skipped)
+    puts Earth's axis behind the gyro and the fit lands beyond 90°."""
+    lab = session(5, "navigation-fog", **level(sim_misalign_h_deg=3.0))
+    clock, positions, angles = 60.0, [], []
+    for position in range(1, 5):
+        lab.sim_table_heading = position
+        lab.sim_turns += 1
+        take = SimulatedTake(lab, "heading", position, start_s=clock)
+        values, _ = take.next(3000)
+        clock = take.end_s + 20.0
+        positions.append(values)
+        angles.append(take.dial_angle_deg)
+    heading = solve_heading(positions, angles)
+    # the axis, 3° off the dial zero, is what the gyro finds: it points north in part B too
+    assert heading.azimuth_deg == pytest.approx(lab.sim_azimuth_deg + 3.0, abs=0.05)
+    lab.sim_plane_dial_deg = north_dial_deg(lab, heading.azimuth_deg, angles[0])
+    miss = math.radians(heading.azimuth_deg - 3.0 - lab.sim_azimuth_deg)
+    phi = math.radians(39.93)
+    expected = math.degrees(math.atan2(math.sin(phi), math.cos(phi) * math.cos(miss)))
+    assert _latitude_of(lab) == pytest.approx(expected, abs=0.05)
+    assert expected == pytest.approx(39.93, abs=0.01)
+    lab.sim_plane_dial_deg += 180.0
+    with pytest.raises(GyroInputError) as error:
+        _latitude_of(lab)
+    assert error.value.key == "readings.latitude_out_of_range"
+
+
+def test_turntable_tilt_and_misalignment_come_from_the_assignment_or_the_preset():
+    assignment = Assignment(course_id=1, title="a", latitude_deg=40.0, table_tilt_max_deg=2.0,
+                            misalignment_max_deg=0.5)  # fmt: skip
+    drawn = []
+    for seed in range(50):
+        lab = session(seed)
+        draw_truth(assignment, lab, random.Random(seed))
+        table = table_errors(lab)
+        assert abs(table["pitch_deg"]) <= 2.0 and abs(table["roll_deg"]) <= 2.0
+        assert abs(table["misalign_h_deg"]) <= 0.5 and abs(table["misalign_v_deg"]) <= 0.5
+        drawn.append(table["pitch_deg"])
+    assert np.std(drawn) > 0.5  # really drawn, not all zero
+    own = [table_errors(session(seed))["roll_deg"] for seed in range(200)]
+    assert np.std(own) == pytest.approx(PRESETS["teaching-fog"].table_tilt_sigma_deg, rel=0.2)
+
+
+def test_a_tilted_table_biases_the_heading_as_tan_phi_times_the_east_west_tilt():
+    """lab-reference §4: an east–west tilt t_E of the rotation axis gives ≈ tan φ · t_E."""
+    lab = session(2, "navigation-fog", **level(sim_roll_deg=1.0), sim_azimuth_deg=0.0)
+    positions, angles, clock = [], [], 60.0
+    for position in range(1, 5):
+        lab.sim_turns += 1
+        take = SimulatedTake(lab, "heading", position, start_s=clock)
+        values, _ = take.next(1200)
+        clock = take.end_s + 20.0
+        positions.append(values)
+        angles.append(take.dial_angle_deg)
+    error = solve_heading(positions, angles).azimuth_deg
+    error = (error + 180.0) % 360.0 - 180.0
+    assert abs(error) == pytest.approx(math.tan(math.radians(39.93)) * 1.0, abs=0.08)
