@@ -88,9 +88,9 @@ def add_demo_work(db: Session, assignment: Assignment, students: list[User]) -> 
     newcomer's teacher dashboard shows real data."""
     rng = random.Random(2026)
     plans = [
-        (students[0], ("heading", "latitude"), 30, True),
-        (students[1], ("heading", "latitude"), 20, True),
-        (students[2], ("heading",), 15, False),
+        (students[0], ("heading", "latitude"), 300, True),
+        (students[1], ("heading", "latitude"), 150, True),
+        (students[2], ("heading",), 100, False),
     ]
     for student, parts, dwell, submit_it in plans:
         session = LabSession(
@@ -106,7 +106,7 @@ def add_demo_work(db: Session, assignment: Assignment, students: list[User]) -> 
         draw_truth(assignment, session, rng)
         db.add(session)
         db.flush()
-        clock = 60.0  # the student waits a minute after switch-on, then turns in 20 s
+        clock = 1200.0  # the student lets the gyro warm up for 20 min, then turns in 20 s
         recorded: dict[str, list] = {}
         for part in parts:
             if part == "latitude":  # the table is turned to the north part A found

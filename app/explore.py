@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from app.core.error_analysis import ErrorSources, first_order, monte_carlo_heading_errors
-from app.core.noise_model import GyroNoise, four_position_sigma
+from app.core.noise_model import GyroNoise, recommended_dwell
 from app.core.simulate import PRESETS
 from app.core.solve import fit_sinusoid
 from app.core.units import EARTH_RATE_DEG_H
@@ -132,29 +132,21 @@ def heading_error_curves(
 
 def dwell_curve(preset_name: str, latitude_deg: float) -> dict:
     """Expected four-position heading σ (°) against dwell per position, from the preset's
-    noise model; the white-noise part alone; the lowest σ and where it is reached; and the
-    dwell where correlated noise starts to outweigh white noise."""
+    noise model; the white-noise part alone; the recommended dwell, where correlated noise
+    starts to outweigh white noise (the same rule as the Allan read-out), and its σ."""
     preset = PRESETS[preset_name]
     amplitude = EARTH_RATE_DEG_H * math.cos(math.radians(latitude_deg))
-    dwell = np.geomspace(5.0, 3600.0, 60)
-    full = GyroNoise.from_preset(preset)
-    white_only = GyroNoise(arw_deg_rt_h=preset.arw_deg_rt_h)
-    rate = preset.sample_rate_hz
-    if amplitude <= 0:
-        sigma = white = np.full(dwell.size, math.nan)
-    else:
-        sigma = np.array([four_position_sigma(full, rate, t, amplitude) for t in dwell])
-        white = np.array([four_position_sigma(white_only, rate, t, amplitude) for t in dwell])
-    best = int(np.nanargmin(sigma)) if np.any(np.isfinite(sigma)) else 0
-    correlated = np.sqrt(np.maximum(sigma**2 - white**2, 0.0))
-    crossing = np.nonzero(correlated >= white)[0]
+    advice = recommended_dwell(GyroNoise.from_preset(preset), preset.sample_rate_hz)
+    scale = 1.0 / amplitude if amplitude > 0 else math.nan
+    sigma, white = advice.sigma * scale, advice.white_sigma * scale
+    best = int(np.argmin(np.abs(advice.dwell_s - advice.recommended_s)))
     return {
-        "dwell_s": dwell.tolist(),
+        "dwell_s": advice.dwell_s.tolist(),
         "sigma_deg": sigma.tolist(),
         "white_only_deg": white.tolist(),
         "floor_deg": float(sigma[best]),
-        "best_dwell_s": float(dwell[best]),
-        "knee_s": float(dwell[crossing[0]]) if crossing.size else None,
+        "best_dwell_s": advice.recommended_s,
+        "knee_s": advice.recommended_s if advice.recommended_s < advice.dwell_s[-1] else None,
         "arw_deg_rt_h": preset.arw_deg_rt_h,
         "bias_instability_deg_h": preset.bias_instability_deg_h,
     }

@@ -58,8 +58,8 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     },
     "explore.dwell_heading": {"en": "What dwell time?", "zh-CN": "每个位置采样多久？"},
     "explore.dwell_help": {
-        "en": "Expected four-position heading σ for the chosen gyro, from the same noise model the simulator generates: white noise (ARW) falls as 1/√T; the slowly wandering bias (bias instability) and rate random walk average down more slowly, or not at all. The dotted line marks where they start to outweigh white noise; the dashed line is the lowest σ in the range.",
-        "zh-CN": "所选陀螺在四位置法下的期望寻北标准差，取自模拟器所用的同一噪声模型：白噪声（角度随机游走）按 1/√T 下降；缓慢游移的零偏（零偏不稳定性）和速率随机游走下降得更慢，甚至不再下降。点线标出它们开始超过白噪声之处；虚线为该范围内的最小标准差。",
+        "en": "Expected four-position heading σ for the chosen gyro, from the same noise model the simulator generates: white noise (ARW) falls as 1/√T; the slowly wandering bias (bias instability) and rate random walk average down more slowly, or not at all. The dotted line is the recommended dwell, where they start to outweigh white noise (beyond it a longer dwell pays off more slowly than 1/√T); the dashed line is the σ reached there. The same rule gives the dwell advice of an Allan analysis.",
+        "zh-CN": "所选陀螺在四位置法下的期望寻北标准差，取自模拟器所用的同一噪声模型：白噪声（角度随机游走）按 1/√T 下降；缓慢游移的零偏（零偏不稳定性）和速率随机游走下降得更慢，甚至不再下降。点线为推荐采样时长，即它们开始超过白噪声之处（超过后，延长采样的收益慢于 1/√T）；虚线为该处达到的标准差。Allan 分析给出的采样时长建议也采用同一规则。",
     },
     "explore.dwell_title": {
         "en": "Expected heading σ against dwell per position",
@@ -83,7 +83,7 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     "explore.order_1234": {"en": "order 1-2-3-4", "zh-CN": "顺序 1-2-3-4"},
     "explore.order_1324": {"en": "order 1-3-2-4", "zh-CN": "顺序 1-3-2-4"},
     "explore.order_12344321": {"en": "order 1-2-3-4-4-3-2-1", "zh-CN": "顺序 1-2-3-4-4-3-2-1"},
-    "explore.floor": {"en": "lowest σ in range", "zh-CN": "范围内最小标准差"},
+    "explore.floor": {"en": "σ at the recommended dwell", "zh-CN": "推荐采样时长处的标准差"},
     "explore.white_only": {"en": "white noise only", "zh-CN": "仅白噪声"},
     "explore.expected": {"en": "expected σ", "zh-CN": "期望标准差"},
     "explore.knee": {
@@ -632,8 +632,8 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "zh-CN": "第 {line} 行：位置 {position} 的角度前后不一致。",
     },
     "sim.help": {
-        "en": "The {preset} runs on the server at {rate} readings per second. Turn the virtual table to the selected position, then record.",
-        "zh-CN": "{preset}在服务器上运行，每秒 {rate} 个读数。先把虚拟转台转到所选位置，再开始记录。",
+        "en": "The {preset} runs on the server, one reading every {interval} s. It was switched on with this session and keeps running between recordings: its bias still settles in the first minutes. Turn the virtual table to the selected position, then record.",
+        "zh-CN": "{preset}在服务器上运行，每 {interval} 秒一个读数。它随本次实验开机，并在两次记录之间持续运行：开机后的头几分钟零偏仍在变化。先把虚拟转台转到所选位置，再开始记录。",
     },
     "sim.table_at": {"en": "Table is at position", "zh-CN": "转台当前位置"},
     "sim.turn": {"en": "Turn table to the selected position", "zh-CN": "把转台转到所选位置"},

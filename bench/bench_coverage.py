@@ -38,8 +38,10 @@ class Coverage:
 
 
 def coverage(preset_name: str, dwell_s: float, runs: int, seed: int = 2026) -> Coverage:
-    """Seeded Monte Carlo: random true azimuths, four positions counter-clockwise."""
+    """Seeded Monte Carlo: random true azimuths, four positions counter-clockwise, recorded
+    after the gyro has warmed up (five warm-up time constants after switch-on)."""
     preset = PRESETS[preset_name]
+    warmed_up = 5.0 * preset.warmup_time_constant_s
     noise = GyroNoise.from_preset(preset)
     angles = heading_angles(4, "ccw")
     rng = np.random.default_rng(seed)
@@ -47,10 +49,16 @@ def coverage(preset_name: str, dwell_s: float, runs: int, seed: int = 2026) -> C
     white_hits = model_hits = solved = 0
     for run, azimuth in enumerate(azimuths):
         simulated = simulate_run(
-            preset, Setup(LATITUDE, float(azimuth)), "heading", angles, dwell_s, seed=seed + run
+            preset,
+            Setup(LATITUDE, float(azimuth)),
+            "heading",
+            angles,
+            dwell_s,
+            seed=seed + run,
+            start_s=warmed_up,
         )
         counts = [p.size for p in simulated.positions]
-        cov = noise.mean_covariance(back_to_back(counts, preset.sample_rate_hz))
+        cov = noise.mean_covariance(back_to_back(counts, preset.sample_rate_hz, start_s=warmed_up))
         try:
             white = solve_heading(simulated.positions, angles, true_azimuth_deg=float(azimuth))
             model = solve_heading(

@@ -278,7 +278,7 @@ def test_solve_with_a_gyro_preset_uses_its_noise_model(capsys):
     white, known = json.loads(white), json.loads(known)
     assert white["uncertainty_model"] == "white" and known["uncertainty_model"] == "allan"
     assert known["azimuth_deg"] == white["azimuth_deg"]  # the same fit, an honest σ
-    assert known["azimuth_sigma_deg"] > 1.5 * white["azimuth_sigma_deg"]
+    assert known["azimuth_sigma_deg"] > 1.1 * white["azimuth_sigma_deg"]  # the slow bias
 
 
 def test_simulate_lists_every_preset(capsys):

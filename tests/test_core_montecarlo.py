@@ -86,13 +86,26 @@ def test_allan_white_noise_slope_and_gauss_markov_peak():
     assert x[np.argmax(peak)] == pytest.approx(1.89, rel=0.02)
 
 
-def test_recommended_dwell_is_where_arw_meets_the_floor():
+def test_recommended_dwell_comes_from_the_fitted_noise_model():
+    """The Allan read-out's advice is the noise model's rule applied to the fitted terms:
+    the first dwell where σ² of the four-position heading reaches 1.5× its white part."""
+    from app.core.allan import fit_noise_model, fitted_noise, white_noise_dof
+    from app.core.noise_model import GyroNoise, recommended_dwell
+
     preset = PRESETS["tactical-fog"].without("quantization", "rrw")
     record = simulate_static(preset, Setup(40.0), 300 * preset.bias_corr_time_s, seed=1)
     result = allan_deviation(record, preset.sample_rate_hz)
-    expected = (result.arw_deg_rt_h / (0.664 * result.bias_instability_deg_h)) ** 2 * 3600
-    assert result.recommended_dwell_s == pytest.approx(expected)
-    assert 60 < result.recommended_dwell_s < 3600
+    dof = white_noise_dof(result.taus_s, preset.sample_rate_hz, record.size)
+    fit = fit_noise_model(result.taus_s, result.adev_deg_h, result.adev_error_deg_h, dof)
+    advice = recommended_dwell(fitted_noise(fit), preset.sample_rate_hz)
+    assert result.recommended_dwell_s == advice.recommended_s
+    truth = recommended_dwell(GyroNoise.from_preset(preset), preset.sample_rate_hz)
+    ratio = truth.sigma**2 / truth.white_sigma**2
+    index = int(np.flatnonzero(truth.dwell_s == truth.recommended_s)[0])
+    assert ratio[index] >= 1.5 > ratio[index - 1]
+    white = recommended_dwell(GyroNoise(arw_deg_rt_h=0.01), 10.0)
+    assert white.recommended_s == 1800.0  # white noise always rewards a longer dwell
+    assert np.allclose(white.sigma, white.white_sigma)
 
 
 QUIET = replace(PRESETS["navigation-fog"].ideal(), arw_deg_rt_h=0.00005)

@@ -54,14 +54,16 @@ def test_handout_heading_from_printed_averages():
     )
     # One value per position: the closure residual d is a one-degree-of-freedom estimate
     # of a position's noise; Student's t with 1 dof is Cauchy, whose 68.27 % half-width
-    # is tan(π·0.34134) = 1.837, and four positions give σ_A = σ/(√2·H).
+    # is tan(π·0.34134) = 1.837, and four positions give σ_A = σ/(√2·H_c), with the
+    # Rice-corrected amplitude H_c² = H² − σ²x − σ²y = H² − σ².
     w1, w2, w3, w4 = PRINTED_HEADING
     d = (w1 + w3 - w2 - w4) / 2
     sigma = math.tan(math.pi * 0.6826894921 / 2) * abs(d)
     amplitude = math.hypot((w1 - w3) / 2, (w2 - w4) / 2)
+    corrected = math.sqrt(amplitude**2 - sigma**2)
     assert result.fit.uncertainty_model == "closure"
     assert result.azimuth_sigma_deg == pytest.approx(
-        math.degrees(sigma / (math.sqrt(2) * amplitude)), rel=1e-6
+        math.degrees(sigma / (math.sqrt(2) * corrected)), rel=1e-6
     )
 
 
@@ -122,7 +124,8 @@ def test_least_squares_equals_closed_form(rotation):
     sems = [k19 * p.std(ddof=1) / math.sqrt(p.size) for p in positions]
     sx2 = (sems[0] ** 2 + sems[2] ** 2) / 4
     sy2 = (sems[1] ** 2 + sems[3] ** 2) / 4
-    expected = math.sqrt(y * y * sx2 + x * x * sy2) / (x * x + y * y)
+    corrected = math.sqrt(x * x + y * y - sx2 - sy2)  # the Rice-corrected amplitude
+    expected = math.sqrt(y * y * sx2 + x * x * sy2) / (math.hypot(x, y) * corrected)
     assert result.azimuth_sigma_deg == pytest.approx(math.degrees(expected), rel=1e-9)
 
 

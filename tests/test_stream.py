@@ -9,8 +9,8 @@ import pytest
 from sqlmodel import select
 from starlette.websockets import WebSocketDisconnect
 
-from app.db import read_session
-from app.labsim import SimulatedTake
+from app.db import read_session, write_session
+from app.labsim import SimulatedTake, set_gyro_clock, table_errors
 from app.labstore import load_samples
 from app.models import LabSession, Role, Take
 from tests.conftest import login, make_user
@@ -40,6 +40,10 @@ def turn(client, session_id, part, position):
 
 def test_stored_samples_equal_streamed_ones_and_no_truth_is_sent(student_client):
     session_id = new_session(student_client)
+    with write_session() as db:  # the student let the gyro warm up for half an hour
+        waited = db.get(LabSession, session_id)
+        set_gyro_clock(waited, 1800.0)
+        db.add(waited)
     raw = []
     with connect(student_client, session_id) as ws:
         for position in (1, 2, 3, 4):
@@ -50,8 +54,8 @@ def test_stored_samples_equal_streamed_ones_and_no_truth_is_sent(student_client)
                     "action": "start",
                     "part": "heading",
                     "position": position,
-                    "dwell_s": 20,
-                    "settle_s": 3,
+                    "dwell_s": 100,
+                    "settle_s": 30,
                     "speed": 60,
                 }
             )
@@ -67,21 +71,23 @@ def test_stored_samples_equal_streamed_ones_and_no_truth_is_sent(student_client)
         takes = db.exec(select(Take).order_by(Take.position)).all()
         stored = [v for take in takes for v in load_samples(db, take)[0].tolist()]
         times = [load_samples(db, take)[1] for take in takes]
-    assert len(takes) == 4 and all(t.source == "simulator" and t.n_samples == 20 for t in takes)
+    assert len(takes) == 4 and all(t.source == "simulator" and t.n_samples == 10 for t in takes)
     assert stored == streamed
     # one gyro clock (s since the session switched it on): the settle time was skipped and
     # each recording starts after the one before it ended, plus its own settle time
-    assert times[0][0] >= 3.0
+    assert times[0][0] >= 30.0
     for before, after in zip(times, times[1:], strict=False):
-        assert after[0] >= before[-1] + 1.0 + 3.0 - 1e-9
-        assert np.all(np.diff(after) == pytest.approx(1.0))
+        assert after[0] >= before[-1] + 10.0 + 30.0 - 1e-9  # a reading every 10 s
+        assert np.all(np.diff(after) == pytest.approx(10.0))
     truth = GyroTruth(session)
     everything = "".join(raw)
     for secret in truth.values():
         assert secret not in everything
     assert max(len(f.get("v", [])) for f in frames) > 1  # batched frames
     results = student_client.get(f"/lab/sessions/{session_id}/results.json").json()
-    error = (results["heading"]["azimuth_deg"] - session.sim_azimuth_deg + 180) % 360 - 180
+    # the gyro finds its own axis, off the dial zero by the table's misalignment
+    axis = session.sim_azimuth_deg + table_errors(session)["misalign_h_deg"]
+    error = (results["heading"]["azimuth_deg"] - axis + 180) % 360 - 180
     assert abs(error) < 5 * results["heading"]["azimuth_sigma_deg"] + 0.2
     # the simulated gyro's noise model is known: the σ includes its correlated noise
     assert results["heading"]["uncertainty_model"] == "allan"
@@ -102,7 +108,7 @@ def GyroTruth(session) -> dict[str, str]:  # noqa: N802
 
 
 def test_recording_needs_the_table_turned_first(student_client):
-    session_id = new_session(student_client)
+    session_id = new_session(student_client, preset="tactical-fog")
     with connect(student_client, session_id) as ws:
         frames = record(ws, part="heading", position=2, dwell_s=5, speed=60)
     assert frames[-1]["type"] == "error" and "Turn the table to position 2" in frames[-1]["message"]
@@ -119,14 +125,14 @@ def test_recording_needs_the_table_turned_first(student_client):
     ],
 )
 def test_bad_stream_requests(student_client, message, text):
-    session_id = new_session(student_client)
+    session_id = new_session(student_client, preset="tactical-fog")
     with connect(student_client, session_id) as ws:
         frames = record(ws, **message)
     assert frames[-1]["type"] == "error" and text in frames[-1]["message"]
 
 
 def test_stop_early_keeps_what_was_recorded(student_client):
-    session_id = new_session(student_client)
+    session_id = new_session(student_client, preset="tactical-fog")
     with connect(student_client, session_id) as ws:
         ws.send_json(
             {"action": "start", "part": "latitude", "position": 1, "dwell_s": 600, "speed": 10}
@@ -144,7 +150,7 @@ def test_stop_early_keeps_what_was_recorded(student_client):
 
 
 def test_stopping_before_the_minimum_saves_nothing_and_says_why(student_client):
-    session_id = new_session(student_client)
+    session_id = new_session(student_client, preset="tactical-fog")
     with connect(student_client, session_id) as ws:
         ws.send_json(
             {"action": "start", "part": "latitude", "position": 1, "dwell_s": 600, "speed": 1}
@@ -161,7 +167,7 @@ def test_stopping_before_the_minimum_saves_nothing_and_says_why(student_client):
 
 
 def test_a_dropped_connection_saves_nothing_and_the_page_says_so(student_client):
-    session_id = new_session(student_client)
+    session_id = new_session(student_client, preset="tactical-fog")
     with connect(student_client, session_id) as ws:
         ws.send_json(
             {"action": "start", "part": "heading", "position": 1, "dwell_s": 600, "speed": 1}
@@ -178,7 +184,7 @@ def test_a_dropped_connection_saves_nothing_and_the_page_says_so(student_client)
 
 
 def test_redo_gives_a_new_take_with_new_noise(student_client):
-    session_id = new_session(student_client)
+    session_id = new_session(student_client, preset="tactical-fog")
     with connect(student_client, session_id) as ws:
         record(ws, part="heading", position=1, dwell_s=10, speed=60)
         record(ws, part="heading", position=1, dwell_s=10, speed=60)
@@ -190,7 +196,7 @@ def test_redo_gives_a_new_take_with_new_noise(student_client):
 
 
 def test_each_turn_gets_an_indexing_error(student_client):
-    session_id = new_session(student_client)
+    session_id = new_session(student_client, preset="tactical-fog")
     for position in (2, 3, 2):
         turn(student_client, session_id, "heading", position)
     turn(student_client, session_id, "heading", 2)  # already there: not a turn
@@ -204,7 +210,7 @@ def test_strangers_and_other_origins_are_refused(client, student, app):
     make_user("other", Role.student)
     with TestClient(app, follow_redirects=False) as owner:
         login(owner, "student1")
-        session_id = new_session(owner)
+        session_id = new_session(owner, preset="tactical-fog")
         with (
             pytest.raises(WebSocketDisconnect),
             owner.websocket_connect(
@@ -221,12 +227,12 @@ def test_strangers_and_other_origins_are_refused(client, student, app):
 
 
 def test_client_frames_cannot_speed_up_a_recording(student_client):
-    """60 samples at 1 Hz and the top speed-up (60×) take one second of the server's clock,
+    """600 samples at 10 Hz and the top speed-up (60×) take one second of the server's clock,
     however many frames the client sends meanwhile (a flood of {} once finished an 1800 s
     recording in 0.2 s)."""
     import time
 
-    session_id = new_session(student_client)
+    session_id = new_session(student_client, preset="tactical-fog")
     with connect(student_client, session_id) as ws:
         start = time.monotonic()
         ws.send_json(
@@ -239,12 +245,12 @@ def test_client_frames_cannot_speed_up_a_recording(student_client):
             if frame["type"] in ("saved", "error"):
                 break
         elapsed = time.monotonic() - start
-    assert frame["type"] == "saved" and frame["n"] == 60
+    assert frame["type"] == "saved" and frame["n"] == 600
     assert elapsed >= 0.9
 
 
 def test_the_plane_for_part_b_is_set_on_the_table_and_validated(student_client):
-    session_id = new_session(student_client)
+    session_id = new_session(student_client, preset="tactical-fog")
     page = f"/lab/sessions/{session_id}"
     reply = post_json(student_client, f"{page}/plane", {"dial_deg": -12.34567}, page)
     assert reply.status_code == 200 and reply.json() == {"dial_deg": -12.346}
@@ -256,3 +262,15 @@ def test_the_plane_for_part_b_is_set_on_the_table_and_validated(student_client):
         assert reply.status_code == 422 and "detail" in reply.json()
     html = student_client.get(page).text
     assert "-12.346" in html  # the latitude panel shows where the table is set
+
+
+def test_the_teaching_gyro_streams_one_reading_every_ten_seconds(student_client):
+    """The handout-like preset: ten readings take 100 s of gyro time (1.7 s at 60×)."""
+    session_id = new_session(student_client)
+    with connect(student_client, session_id) as ws:
+        frames = record(ws, part="heading", position=1, dwell_s=100, speed=60)
+    assert frames[0]["rate_hz"] == 0.1 and frames[-1] == {
+        "type": "saved", "part": "heading", "position": 1, "n": 10
+    }  # fmt: skip
+    times = [t for f in frames if f["type"] == "samples" for t in f["t"]]
+    assert np.allclose(np.diff(times), 10.0)

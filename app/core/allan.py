@@ -10,9 +10,10 @@ scanned), reported as B = peak/0.664, the value whose flicker floor 0.664·B equ
 Gauss–Markov peak.  Fitting Q with N keeps quantisation from reading as extra angle random
 walk at short τ (the teaching preset's N read +10.7 % when N came from the −½ slope alone).
 
-Recommended dwell per position: where the ARW line meets the bias-instability floor,
-τ* = (N / 0.664·B)² — averaging longer gains little (lab-reference §6); without a floor,
-the τ of the smallest σ computed.
+Recommended dwell per position (lab-reference §6): from the fitted model itself, where
+correlated noise starts to outweigh white noise in the four-position heading σ
+(:func:`app.core.noise_model.recommended_dwell`) -- the same noise model the simulator
+generates, so the advice does not jump with each estimate of B.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import numpy as np
 from scipy.optimize import nnls
 
 from app.core.exceptions import GyroInputError
+from app.core.noise_model import GyroNoise, recommended_dwell
 
 FLOOR_FACTOR = 0.664  # √(2 ln2 / π)
 GM_PEAK = 0.6178  # peak Allan deviation of a unit-variance Gauss–Markov process
@@ -32,6 +34,7 @@ MIN_SAMPLES = 16
 # A Gauss–Markov term whose correlation time is within a few of the shortest τ looks like
 # white noise over the whole record and would take angle random walk from N.
 MIN_CORR_TAUS = 8.0
+REWEIGHT_PASSES = 3
 
 
 @dataclass(frozen=True)
@@ -45,6 +48,10 @@ class AllanResult:
     tau_min_s: float
     adev_min_deg_h: float
     recommended_dwell_s: float
+    arw_sigma_deg_rt_h: float | None = None
+    bias_instability_sigma_deg_h: float | None = None
+    quantization_deg: float = 0.0
+    bias_corr_time_s: float | None = None
 
     def to_json(self) -> dict:
         return {
@@ -52,7 +59,11 @@ class AllanResult:
             "adev_deg_h": self.adev_deg_h.tolist(),
             "adev_error_deg_h": self.adev_error_deg_h.tolist(),
             "arw_deg_rt_h": self.arw_deg_rt_h,
+            "arw_sigma_deg_rt_h": self.arw_sigma_deg_rt_h,
             "bias_instability_deg_h": self.bias_instability_deg_h,
+            "bias_instability_sigma_deg_h": self.bias_instability_sigma_deg_h,
+            "bias_corr_time_s": self.bias_corr_time_s,
+            "quantization_deg": self.quantization_deg,
             "rrw_deg_h_rt_h": self.rrw_deg_h_rt_h,
             "tau_min_s": self.tau_min_s,
             "adev_min_deg_h": self.adev_min_deg_h,
@@ -67,6 +78,26 @@ class NoiseFit:
     bias_instability_deg_h: float | None
     bias_corr_time_s: float | None
     rrw_deg_h_rt_h: float | None
+    arw_sigma_deg_rt_h: float | None = None  # 1σ of N from the fit's covariance
+    bias_instability_sigma_deg_h: float | None = None  # 1σ of B
+
+
+def _coefficient_sigmas(matrix: np.ndarray, coefficients: np.ndarray, residual: float):
+    """1σ of each fitted coefficient (NaN where the constraint holds it at zero):
+    Cov = s²·(AᵀA)⁻¹ over the free columns of the weighted design A, with
+    s² = max(1, χ²/(n − p)) so a misfit widens the intervals rather than hiding."""
+    free = np.flatnonzero(coefficients > 0)
+    sigmas = np.full(coefficients.size, np.nan)
+    if free.size == 0 or matrix.shape[0] <= free.size:
+        return sigmas
+    design = matrix[:, free]
+    scale2 = max(1.0, residual**2 / (matrix.shape[0] - free.size))
+    try:
+        cov = np.linalg.inv(design.T @ design) * scale2
+    except np.linalg.LinAlgError:
+        return sigmas
+    sigmas[free] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    return sigmas
 
 
 def gauss_markov_avar(tau_h: np.ndarray, corr_time_h: float) -> np.ndarray:
@@ -106,34 +137,64 @@ def fit_noise_model(
     over every τ, the Gauss–Markov correlation time T scanned on a log grid (T ≥ the
     shortest τ, so it cannot pose as white noise).  Fitting Q and N together keeps
     quantisation from passing for angle random walk at short τ.  B = 0.6178·σ_GM/0.664.
-    Weights: 1/(2σ·δσ), the standard error of σ² from allantools' δσ."""
+    Weights: the standard error of each σ², √(2/edf)·σ², first with the measured σ², then
+    (iteratively reweighted) with the model's: weighing by the measured value favours the
+    τ's that happened to come out low and read B 14 % low when its hump dominates.
+    Without degrees of freedom, allantools' δσ gives 1/(2σ·δσ)."""
     tau_h = taus_s / 3600.0
-    if dof is not None:  # Var(σ̂²) ≈ 2σ⁴/edf
-        weight = np.sqrt(dof / 2.0) / np.maximum(adev**2, 1e-300)
-    else:
-        weight = 1.0 / np.maximum(2.0 * adev * np.maximum(error, 1e-12 * adev), 1e-300)
     basis = [3.0 / tau_h**2, 1.0 / tau_h, tau_h / 3.0]
-    target = adev**2 * weight
-    best = None
     grid = np.geomspace(tau_h[0] * MIN_CORR_TAUS, tau_h[-1] * 4.0, 64) if tau_h.size > 3 else [None]
-    for corr in grid:
-        columns = [*basis, gauss_markov_avar(tau_h, corr)] if corr is not None else basis
-        matrix = np.column_stack(columns) * weight[:, None]
-        scale = np.linalg.norm(matrix, axis=0)
-        scale[scale == 0] = 1.0
-        coefficients, residual = nnls(matrix / scale, target)
-        coefficients = coefficients / scale
-        if best is None or residual < best[0]:
-            best = (residual, coefficients, corr)
-    _, c, corr = best
+    expected = adev**2  # the first pass weighs by the measured σ², later ones by the model's
+    for _ in range(REWEIGHT_PASSES):
+        if dof is not None:  # Var(σ̂²) ≈ 2σ⁴/edf
+            weight = np.sqrt(dof / 2.0) / np.maximum(expected, 1e-300)
+        else:
+            weight = 1.0 / np.maximum(2.0 * adev * np.maximum(error, 1e-12 * adev), 1e-300)
+        target = adev**2 * weight
+        best = None
+        for corr in grid:
+            columns = [*basis, gauss_markov_avar(tau_h, corr)] if corr is not None else basis
+            matrix = np.column_stack(columns) * weight[:, None]
+            scale = np.linalg.norm(matrix, axis=0)
+            scale[scale == 0] = 1.0
+            scaled, residual = nnls(matrix / scale, target)
+            if best is None or residual < best[0]:
+                sigmas = _coefficient_sigmas(matrix / scale, scaled, residual) / scale
+                best = (residual, scaled / scale, corr, sigmas, matrix / weight[:, None])
+        model = best[4] @ best[1]
+        if dof is None or not np.all(model > 0):
+            break
+        expected = model
+    _, c, corr, c_sigma, _ = best
     gm_sigma = math.sqrt(c[3]) if len(c) > 3 and c[3] > 0 else 0.0
     arw = math.sqrt(c[1]) if c[1] > 0 else white_noise_arw(taus_s, adev)
+    # δ√c = δc/(2√c): N from the N² coefficient, B ∝ σ_GM from the σ_GM² coefficient
+    arw_sigma = c_sigma[1] / (2.0 * arw) if c[1] > 0 else None
+    bias = GM_PEAK * gm_sigma / FLOOR_FACTOR if gm_sigma else None
+    bias_sigma = GM_PEAK / FLOOR_FACTOR * c_sigma[3] / (2.0 * gm_sigma) if gm_sigma else None
     return NoiseFit(
         quantization_deg=math.sqrt(c[0]),
         arw_deg_rt_h=arw,
-        bias_instability_deg_h=GM_PEAK * gm_sigma / FLOOR_FACTOR if gm_sigma else None,
+        bias_instability_deg_h=bias,
         bias_corr_time_s=corr * 3600.0 if gm_sigma else None,
         rrw_deg_h_rt_h=math.sqrt(c[2]) if c[2] > 0 else None,
+        arw_sigma_deg_rt_h=_finite_or_none(arw_sigma),
+        bias_instability_sigma_deg_h=_finite_or_none(bias_sigma),
+    )
+
+
+def _finite_or_none(value: float | None) -> float | None:
+    return float(value) if value is not None and math.isfinite(value) else None
+
+
+def fitted_noise(fit: NoiseFit) -> GyroNoise:
+    """The fit as a noise model (Q → angle LSB √12·Q; B → the Gauss–Markov σ and T)."""
+    return GyroNoise(
+        arw_deg_rt_h=fit.arw_deg_rt_h,
+        bias_instability_deg_h=fit.bias_instability_deg_h or 0.0,
+        bias_corr_time_s=fit.bias_corr_time_s or 0.0,
+        rrw_deg_h_rt_h=fit.rrw_deg_h_rt_h or 0.0,
+        angle_lsb_deg=fit.quantization_deg * math.sqrt(12.0),
     )
 
 
@@ -162,7 +223,7 @@ def allan_deviation(rates_deg_h, rate_hz: float) -> AllanResult:
     fit = fit_noise_model(taus, adev, error, white_noise_dof(taus, rate_hz, data.size))
     arw, bias, rrw = fit.arw_deg_rt_h, fit.bias_instability_deg_h, fit.rrw_deg_h_rt_h
     smallest = int(np.argmin(adev))
-    dwell = (arw / (FLOOR_FACTOR * bias)) ** 2 * 3600.0 if bias else float(taus[smallest])
+    dwell = recommended_dwell(fitted_noise(fit), rate_hz).recommended_s
     return AllanResult(
         taus,
         adev,
@@ -173,4 +234,8 @@ def allan_deviation(rates_deg_h, rate_hz: float) -> AllanResult:
         float(taus[smallest]),
         float(adev[smallest]),
         float(dwell),
+        fit.arw_sigma_deg_rt_h,
+        fit.bias_instability_sigma_deg_h,
+        fit.quantization_deg,
+        fit.bias_corr_time_s,
     )

@@ -220,8 +220,16 @@ def explain_heading(result: HeadingResult) -> list[Step]:
         if fit.closure_sigma is not None and fit.uncertainty_model != "closure":
             closure += f"  (σ_d = {_f(fit.closure_sigma)} °/h)"
         lines.append(closure)
-    if result.azimuth_sigma_deg is not None:
-        lines.append(f"σ_A = √(y²σx² + x²σy²)/H² = {_f(result.azimuth_sigma_deg, 3)}°")
+    if result.azimuth_sigma_deg is not None and fit.cov is not None:
+        h = result.amplitude_deg_h
+        corrected = math.sqrt(max(h * h - fit.cov[0, 0] - fit.cov[1, 1], 0.25 * h * h))
+        lines.append(
+            f"σx = {_f(math.sqrt(fit.cov[0, 0]), 4)},  σy = {_f(math.sqrt(fit.cov[1, 1]), 4)} °/h,"
+            f"  H_c = √(H² − σx² − σy²) = {_f(corrected)} °/h"
+        )
+        lines.append(
+            f"σ_A = √(y²σx² + x²σy² − 2xy·σxy)/(H·H_c) = {_f(result.azimuth_sigma_deg, 3)}°"
+        )
     if result.azimuth_error_deg is not None:
         lines.append(f"error against the true azimuth = {_f(result.azimuth_error_deg, 2)}°")
     steps.append(

@@ -48,9 +48,12 @@ class Window:
         return self.start_s + self.length_s
 
 
-def back_to_back(counts: Sequence[int], rate_hz: float, gap_s: float = 0.0) -> list[Window]:
-    """Windows of ``counts`` samples recorded one after another (``gap_s`` between)."""
-    windows, clock = [], 0.0
+def back_to_back(
+    counts: Sequence[int], rate_hz: float, gap_s: float = 0.0, start_s: float = 0.0
+) -> list[Window]:
+    """Windows of ``counts`` samples recorded one after another (``gap_s`` between), the
+    first starting ``start_s`` after switch-on."""
+    windows, clock = [], float(start_s)
     for count in counts:
         length = count / rate_hz
         windows.append(Window(clock, length))
@@ -182,3 +185,40 @@ def four_position_sigma(
     cov = noise.mean_covariance(back_to_back([count] * 4, rate_hz))
     variance = (FOUR_X @ cov @ FOUR_X + FOUR_Y @ cov @ FOUR_Y) / 2.0
     return math.degrees(math.sqrt(max(variance, 0.0)) / amplitude)
+
+
+DWELL_RANGE_S = (5.0, 1800.0)  # the lab's shortest sensible and longest allowed dwell
+CORRELATED_SHARE = 1.5  # σ² = 1.5·σ²_white: correlated noise adds half the white variance
+
+
+@dataclass(frozen=True)
+class DwellAdvice:
+    """Four-position heading σ against dwell (for an amplitude H of 1 °/h: divide by H)."""
+
+    dwell_s: np.ndarray
+    sigma: np.ndarray  # the full noise model
+    white_sigma: np.ndarray  # angle random walk alone
+    recommended_s: float
+
+
+def recommended_dwell(noise: GyroNoise, rate_hz: float) -> DwellAdvice:
+    """The dwell per position to recommend for four-position north finding, from the same
+    noise model the simulator generates: where the correlated noise (bias instability, rate
+    random walk, quantisation) has grown to half the white noise's variance in the heading,
+    σ_full² = 1.5·σ_white²; beyond it a longer dwell pays off more slowly than 1/√T.
+    Within 5 s … 30 min (the longest dwell the lab allows when white noise always wins).
+    The threshold sits where σ_full²/σ_white² still rises steeply for every preset, so the
+    crossing does not flip with small changes of a fitted B (at 2·σ²_white the tactical
+    gyro's ratio barely touched the threshold and the advice jumped to 30 min).
+    The heading σ scales as 1/H, so the choice does not depend on the latitude.
+
+    "Where the ARW line meets 0.664·B" (the flicker-floor rule) jumped with every estimate
+    of B (437 … 1880 s for one tactical gyro), and a Gauss–Markov bias has no such floor;
+    this crossing of two smooth curves moves smoothly with the noise terms."""
+    dwell = np.geomspace(*DWELL_RANGE_S, 72)
+    white_noise = GyroNoise(arw_deg_rt_h=noise.arw_deg_rt_h)
+    sigma = np.array([four_position_sigma(noise, rate_hz, t, 1.0) for t in dwell])
+    white = np.array([four_position_sigma(white_noise, rate_hz, t, 1.0) for t in dwell])
+    crossing = np.flatnonzero(sigma**2 >= CORRELATED_SHARE * white**2)
+    recommended = float(dwell[crossing[0]]) if crossing.size else DWELL_RANGE_S[1]
+    return DwellAdvice(dwell, sigma, white, recommended)

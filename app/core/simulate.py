@@ -17,7 +17,9 @@ Measured rate, each term switchable by setting it to zero (IEEE Std 952 error mo
 * x_k bias instability: first-order Gauss–Markov with exact discretisation
   x_k = φ·x_(k−1) + σ_GM·√(1−φ²)·w_k, φ = e^(−Δt/τ_c), σ_GM = 1.075·B, so its Allan
   deviation peaks at ≈ 0.664·B near τ ≈ 1.89·τ_c;
-* ḃ·t linear bias drift (warm-up), °/h per hour;
+* ḃ·t linear bias drift, °/h per hour;
+* warm-up: b_0·e^(−t/τ_w) after switch-on, while the case temperature rises as
+  ambient + ΔT·(1 − e^(−t/τ_w)) (:meth:`GyroStream.temperatures_c`);
 * r_k rate random walk: r_k = r_(k−1) + K·√Δt_h·w_k (K in °/h/√h);
 * quantisation: the angle ∫ω dt is floored to the angle LSB and differenced;
 * turntable: each stop after the first lands at its dial angle plus an indexing error
@@ -44,6 +46,7 @@ from app.core.units import EARTH_RATE_DEG_H
 GM_SIGMA_PER_B = 0.664 / 0.6178  # σ_GM giving an Allan peak of 0.664·B
 GM_PEAK_TAU_PER_TC = 1.89
 SECONDS_PER_HOUR = 3600.0
+AMBIENT_C = 20.0
 
 
 @dataclass(frozen=True)
@@ -67,6 +70,9 @@ class GyroPreset:
     drift_deg_h_per_h: float = 0.0  # linear bias drift ḃ (warm-up), °/h per hour
     table_tilt_sigma_deg: float = 0.0  # lab turntable: pitch and roll ~ N(0, σ) per session
     misalignment_sigma_deg: float = 0.0  # lab: gyro axis vs dial zero ~ N(0, σ) per session
+    warmup_bias_deg_h: float = 0.0  # bias offset at switch-on, decaying as e^(−t/τ_w)
+    warmup_time_constant_s: float = 0.0  # τ_w
+    warmup_temperature_rise_c: float = 0.0  # case temperature rises by ΔT(1 − e^(−t/τ_w))
     source: str = ""
     description: dict[str, str] = field(default_factory=dict)
 
@@ -93,6 +99,7 @@ class GyroPreset:
             "indexing": "indexing_sigma_arcsec",
             "dial": "dial_resolution_deg",
             "drift": "drift_deg_h_per_h",
+            "warmup": "warmup_bias_deg_h",
         }
         changes: dict = {names[e]: 0.0 for e in errors if e in names}
         if "misalignment" in errors:
@@ -116,18 +123,19 @@ class GyroPreset:
             "indexing",
             "dial",
             "drift",
+            "warmup",
         )
 
 
 PRESETS: dict[str, GyroPreset] = {
     "teaching-fog": GyroPreset(
         name="teaching-fog",
-        sample_rate_hz=1.0,
-        arw_deg_rt_h=0.0018,
-        bias_instability_deg_h=0.02,
-        bias_corr_time_s=60.0,
+        sample_rate_hz=0.1,  # one reading every 10 s, each the output averaged over 10 s
+        arw_deg_rt_h=0.005,
+        bias_instability_deg_h=0.03,
+        bias_corr_time_s=300.0,
         rrw_deg_h_rt_h=0.0,
-        angle_lsb_deg=0.1 / SECONDS_PER_HOUR,  # 0.1 °/h steps at 1 Hz, as in the handout
+        angle_lsb_deg=1.0 / SECONDS_PER_HOUR,  # 1″ pulses: 0.1 °/h steps over 10 s
         scale_factor_ppm=500.0,
         constant_bias_deg_h=0.0,
         turn_on_bias_sigma_deg_h=1.0,
@@ -135,14 +143,25 @@ PRESETS: dict[str, GyroPreset] = {
         misalignment_deg=(0.0, 0.0),
         indexing_sigma_arcsec=60.0,
         table_tilt_sigma_deg=0.1,
-        misalignment_sigma_deg=0.3,
+        misalignment_sigma_deg=0.5,
         dial_resolution_deg=0.1,
-        source="Tuned to the handout's tables (lab-reference §2): one reading per second, "
-        "≈0.1 °/h scatter and 0.1 °/h steps; scale-factor error 500 ppm as for a "
-        "low-cost FOG (lab-reference §5).",
+        warmup_bias_deg_h=1.0,
+        warmup_time_constant_s=300.0,
+        warmup_temperature_rise_c=8.0,
+        source="The handout's own data (lab-reference §2, §5). Reading interval: one reading "
+        "every 10 s, each the FOG's output averaged over those 10 s (the '10 s smoothing' of "
+        "FOG data sheets). Per-reading scatter: 60·N/√10 = 0.095 °/h from ARW plus 0.04 °/h "
+        "from the 1″ angle pulses, which make the 0.09–0.11 °/h steps: ≈ 0.1 °/h as in the "
+        "handout. B 0.03 °/h, scale factor 500 ppm, turn-on bias 1 °/h: a mid-grade "
+        "(tactical-class) FOG, never better than the navigation preset. Table: indexing 60″, "
+        "dial 0.1°, level σ 0.1°, axis-to-dial misalignment σ 0.5° (the handout's latitude "
+        "error of 1–2 %). Warm-up: bias 1 °/h decaying with τ = 5 min while the case warms "
+        "by 8 °C.",
         description={
-            "en": "The lab's FOG: readings like the handout's (0.1 °/h steps, ~0.1 °/h scatter).",
-            "zh-CN": "实验用光纤陀螺：读数与讲义相近（0.1 °/h 步进，约 0.1 °/h 抖动）。",
+            "en": "The lab's FOG: readings every 10 s like the handout's (0.1 °/h steps, "
+            "~0.1 °/h scatter); let it warm up for a quarter of an hour.",
+            "zh-CN": "实验用光纤陀螺：每 10 秒一个读数，与讲义相近（0.1 °/h 步进，约 0.1 °/h "
+            "抖动）；开机后请预热约一刻钟。",
         },
     ),
     "tactical-fog": GyroPreset(
@@ -162,8 +181,11 @@ PRESETS: dict[str, GyroPreset] = {
         table_tilt_sigma_deg=0.05,
         misalignment_sigma_deg=0.05,
         dial_resolution_deg=0.01,
+        warmup_bias_deg_h=0.2,
+        warmup_time_constant_s=180.0,
+        warmup_temperature_rise_c=5.0,
         source="KVH DSP-1750 class (lab-reference §5): ARW 0.012 °/√h, bias instability "
-        "0.05 °/h, scale factor ~100 ppm.",
+        "0.05 °/h, scale factor ~100 ppm; warm-up 0.2 °/h with τ = 3 min.",
         description={
             "en": "Tactical-grade FOG (DSP-1750 class): heading to a few tenths of "
             "a degree in minutes.",
@@ -174,7 +196,7 @@ PRESETS: dict[str, GyroPreset] = {
         name="navigation-fog",
         sample_rate_hz=10.0,
         arw_deg_rt_h=0.002,
-        bias_instability_deg_h=0.005,
+        bias_instability_deg_h=0.008,
         bias_corr_time_s=300.0,
         rrw_deg_h_rt_h=0.0,
         angle_lsb_deg=1e-7,
@@ -187,7 +209,12 @@ PRESETS: dict[str, GyroPreset] = {
         table_tilt_sigma_deg=0.01,
         misalignment_sigma_deg=0.01,
         dial_resolution_deg=0.001,
-        source="Navigation-grade FOG (lab-reference §5): ARW ≈ 0.002 °/√h, B < 0.01 °/h.",
+        warmup_bias_deg_h=0.01,
+        warmup_time_constant_s=600.0,
+        warmup_temperature_rise_c=3.0,
+        source="Navigation-grade FOG (lab-reference §5): ARW ≈ 0.002 °/√h, B < 0.01 °/h "
+        "(0.008); "
+        "warm-up 0.01 °/h with τ = 10 min.",
         description={
             "en": "Navigation-grade FOG: heading to a few hundredths of a degree.",
             "zh-CN": "导航级光纤陀螺：寻北精度达百分之几度。",
@@ -200,18 +227,22 @@ PRESETS: dict[str, GyroPreset] = {
         bias_instability_deg_h=10.0,
         bias_corr_time_s=30.0,
         rrw_deg_h_rt_h=5.0,
-        angle_lsb_deg=1e-4,
+        angle_lsb_deg=250.0 / 2**15 * 0.1,  # 16 bits over ±250 °/s, at 10 Hz
         scale_factor_ppm=3000.0,
         constant_bias_deg_h=0.0,
         turn_on_bias_sigma_deg_h=360.0,
         g_sensitivity_deg_h_per_g=36.0,
         misalignment_deg=(0.0, 0.0),
         indexing_sigma_arcsec=60.0,
-        table_tilt_sigma_deg=0.1,
-        misalignment_sigma_deg=0.3,
+        table_tilt_sigma_deg=0.2,
+        misalignment_sigma_deg=1.0,
         dial_resolution_deg=0.1,
+        warmup_bias_deg_h=20.0,
+        warmup_time_constant_s=60.0,
+        warmup_temperature_rise_c=10.0,
         source="Consumer MEMS (lab-reference §5): B ≈ 10 °/h, N ≈ 0.3–1 °/√h; turn-on bias "
-        "0.1 °/s; g-sensitivity 0.01 °/s/g.",
+        "0.1 °/s; g-sensitivity 0.01 °/s/g; 16-bit output over ±250 °/s; warm-up 20 °/h "
+        "with τ = 1 min.",
         description={
             "en": "Consumer MEMS gyro: its noise and drift exceed Earth's rate, so it "
             "cannot find north in a lab period.",
@@ -281,6 +312,20 @@ class GyroStream:
         self._angle = 0.0  # accumulated angle (deg) for quantisation
         self.samples_read = 0
 
+    def _warmup_decay(self, count: int) -> np.ndarray:
+        """e^(−t/τ_w) at the next ``count`` samples, t from switch-on."""
+        seconds = (self.samples_read + np.arange(count)) * self.preset.dt_s
+        return np.exp(-seconds / self.preset.warmup_time_constant_s)
+
+    def temperatures_c(self, count: int, ambient_c: float = AMBIENT_C) -> np.ndarray:
+        """Case temperature (°C) at the next ``count`` samples (call before ``read``):
+        ambient + ΔT·(1 − e^(−t/τ_w)).  The warm-up bias follows it,
+        b_w = −(b_0/ΔT)·(T − T_final) = b_0·e^(−t/τ_w)."""
+        p = self.preset
+        if not p.warmup_temperature_rise_c or p.warmup_time_constant_s <= 0:
+            return np.full(count, ambient_c)
+        return ambient_c + p.warmup_temperature_rise_c * (1.0 - self._warmup_decay(count))
+
     def read(self, true_rates: np.ndarray, g_component: np.ndarray | float = 0.0) -> np.ndarray:
         """Measured rates (°/h) for the next ``len(true_rates)`` samples."""
         p = self.preset
@@ -292,6 +337,8 @@ class GyroStream:
         if p.drift_deg_h_per_h:
             hours = (self.samples_read + np.arange(n)) * p.dt_s / SECONDS_PER_HOUR
             rate = rate + p.drift_deg_h_per_h * hours
+        if p.warmup_bias_deg_h and p.warmup_time_constant_s > 0:
+            rate = rate + p.warmup_bias_deg_h * self._warmup_decay(n)
         white = self._arw.standard_normal(n)
         gm_noise = self._gm.standard_normal(n)
         rrw_noise = self._rrw.standard_normal(n)
@@ -363,10 +410,12 @@ def simulate_run(
     settle_s: float = 0.0,
     seed: int = 0,
     extra_indexing_deg: Sequence[float] | None = None,
+    start_s: float = 0.0,
 ) -> SimulatedRun:
     """Readings at each dial angle: ``part`` 'heading' turns h, 'latitude' turns v.
 
-    ``extra_indexing_deg`` adds a fixed error to each stop (error-analysis experiments).
+    ``extra_indexing_deg`` adds a fixed error to each stop (error-analysis experiments);
+    ``start_s``: the gyro has been on this long when the first stop begins (warm-up).
     """
     if part not in ("heading", "latitude"):
         raise ValueError("part must be 'heading' or 'latitude'")
@@ -378,7 +427,9 @@ def simulate_run(
     settle = int(round(settle_s * preset.sample_rate_hz))
     dh, dv = preset.misalignment_deg
     positions, times, true_angles, dial_read = [], [], [], []
-    clock = 0
+    clock = int(round(start_s * preset.sample_rate_hz))
+    if clock:
+        stream.read(np.zeros(clock))
     for nominal, error in zip(dial_angles_deg, errors, strict=True):
         actual = nominal + error
         if part == "heading":

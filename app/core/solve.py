@@ -292,13 +292,20 @@ def _mean_times_h(
 def _polar(
     x: float, y: float, cov_xy: np.ndarray | None
 ) -> tuple[float, float, float | None, float | None]:
-    """Angle (deg) and amplitude of (x, y) with 1σ uncertainties from their 2×2 covariance."""
+    """Angle (deg) and amplitude of (x, y) with 1σ uncertainties from their 2×2 covariance.
+
+    σ²_angle = (y²σ²x + x²σ²y − 2xy·σxy)/(H²·H_c²), the linearised propagation with one
+    factor H² replaced by the noise-bias-corrected H_c² = H² − σ²x − σ²y (E[Ĥ²] = H² + σ²x +
+    σ²y, the Rice bias), floored at H²/4.  At high signal-to-noise H_c = H; near the
+    significance limit the measured H is inflated by the noise and the plain formula is
+    over-confident (a consumer MEMS at 300 s: 64 % coverage instead of 68 %)."""
     amplitude = math.hypot(x, y)
     angle = math.degrees(math.atan2(y, x))
     if cov_xy is None or amplitude == 0.0:
         return angle, amplitude, None, None
     vx, vy, vxy = cov_xy[0, 0], cov_xy[1, 1], cov_xy[0, 1]
-    var_angle = (y * y * vx + x * x * vy - 2 * x * y * vxy) / amplitude**4
+    corrected = max(amplitude**2 - vx - vy, 0.25 * amplitude**2)
+    var_angle = (y * y * vx + x * x * vy - 2 * x * y * vxy) / (amplitude**2 * corrected)
     var_amp = (x * x * vx + y * y * vy + 2 * x * y * vxy) / amplitude**2
     return (
         angle,
