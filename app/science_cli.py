@@ -26,7 +26,7 @@ from app.core.readings import (
     parse_readings_csv,
     readings_to_long_csv,
 )
-from app.core.simulate import PRESETS, Setup, simulate_run, simulate_static
+from app.core.simulate import PRESETS, GyroStream, Setup, simulate_run, simulate_static
 from app.core.solve import elevation_angles, heading_angles, solve_heading, solve_latitude
 from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
 from app.jsonsafe import json_safe
@@ -112,12 +112,44 @@ def _solve(args: argparse.Namespace) -> int:
         _finite(f"--{name.replace('_', '-')}", getattr(args, name))
     readings = parse_readings_csv(_read_text(args.file), part=args.part)
     result = solve_readings(args.part, readings, args)
+    warm_up = temperature_summary(readings)
     if args.json:
-        print(to_json_text(result.to_json()))
+        payload = result.to_json()
+        if warm_up is not None:
+            payload["temperature_c"] = warm_up
+        print(to_json_text(payload))
         return 0
     steps = explain_heading(result) if args.part == "heading" else explain_latitude(result)
     print(render_text(steps, args.language))
+    if warm_up is not None:
+        print(warm_up["note"][args.language])
     return 0
+
+
+WARM_UP_LIMIT_C = 1.0
+
+
+def temperature_summary(readings: Readings) -> dict | None:
+    """Mean case temperature per position and a warning when it changed by more than
+    1 °C while recording: the bias follows the temperature during warm-up."""
+    if not readings.temperatures_c:
+        return None
+    every = np.concatenate([t for t in readings.temperatures_c if t.size])
+    means = [float(t.mean()) if t.size else None for t in readings.temperatures_c]
+    change = float(every.max() - every.min()) if every.size else 0.0
+    if change > WARM_UP_LIMIT_C:
+        note = {
+            "en": f"Temperature changed by {change:.1f} °C while recording: the gyro was "
+            "still warming up, and its bias drifted with it. Let it warm up and record again.",
+            "zh-CN": f"记录期间温度变化了 {change:.1f} °C：陀螺仍在预热，零偏随之漂移。"
+            "请预热后重新记录。",
+        }
+    else:
+        note = {
+            "en": f"Temperature steady within {change:.1f} °C while recording.",
+            "zh-CN": f"记录期间温度稳定（变化 {change:.1f} °C 以内）。",
+        }
+    return {"mean_by_position": means, "change": change, "note": note}
 
 
 def preset_table() -> list[dict]:
@@ -174,7 +206,12 @@ def _simulate(args: argparse.Namespace) -> int:
             preset, setup, seconds, seed=args.seed, elevation_deg=args.elevation
         )
         times = [np.arange(values.size) / preset.sample_rate_hz]
-        sys.stdout.write(readings_to_long_csv([values], [0.0], times))
+        temperatures = [GyroStream(preset, args.seed).temperatures_c(values.size)]
+        sys.stdout.write(
+            readings_to_long_csv(
+                [values], [0.0], times, temperatures_c=temperatures if args.temperature else None
+            )
+        )
         return 0
     if args.positions < 3:
         raise CommandError("--positions must be at least 3")
@@ -186,10 +223,25 @@ def _simulate(args: argparse.Namespace) -> int:
         dials = heading_angles(args.positions, args.rotation, 0.0, step)
     else:
         dials = elevation_angles(args.positions, 0.0, step)
+    _finite("--warm-up", args.warm_up)
+    if not 0 <= args.warm_up <= 86_400:
+        raise CommandError("--warm-up must be between 0 and 86400 seconds")
     run = simulate_run(
-        preset, setup, args.part, dials, seconds, settle_s=args.settle, seed=args.seed
+        preset,
+        setup,
+        args.part,
+        dials,
+        seconds,
+        settle_s=args.settle,
+        seed=args.seed,
+        start_s=args.warm_up,
     )
-    sys.stdout.write(readings_to_long_csv(run.positions, run.dial_angles_deg, run.times_s))
+    temperatures = run.temperatures_c if args.temperature else None
+    sys.stdout.write(
+        readings_to_long_csv(
+            run.positions, run.dial_angles_deg, run.times_s, temperatures_c=temperatures
+        )
+    )
     return 0
 
 
@@ -334,6 +386,18 @@ def add_science_commands(commands) -> None:
     )
     simulate.add_argument("--indexing-sigma", type=float, help="arcsec per turn (default: preset)")
     simulate.add_argument("--seed", type=int, default=0)
+    simulate.add_argument(
+        "--temperature",
+        action="store_true",
+        help="add the gyro case temperature (temperature_c, °C; rises during warm-up)",
+    )
+    simulate.add_argument(
+        "--warm-up",
+        type=float,
+        default=0.0,
+        metavar="SECONDS",
+        help="the gyro has been on this long before the first position (default 0: cold)",
+    )
     simulate.set_defaults(handler=_guarded(_simulate))
 
     allan = commands.add_parser("allan", help="Allan deviation of a static record")

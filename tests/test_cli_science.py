@@ -293,3 +293,31 @@ def test_simulate_lists_every_preset(capsys):
     assert code == 0 and "bias_instability_deg_h" in out and "source:" in out
     code, _, err = run(capsys, "simulate", "heading")
     assert code == 2 and "--latitude is required" in err
+
+
+def test_a_cold_gyro_shows_its_warm_up_in_the_temperature_column(capsys):
+    """The simulated case warms by ΔT(1 − e^(−t/τ)); solving a cold record warns that the
+    bias drifted with it, and the heading error is larger than after warm-up."""
+    common = ["simulate", "heading", "--preset", "teaching-fog", "--latitude", "40",
+              "--azimuth", "135", "--seconds-per-position", "100", "--temperature",
+              "--seed", "4"]  # fmt: skip
+    errors = {}
+    for warm_up in ("0", "3600"):
+        code, csv_text, _ = run(capsys, *common, "--warm-up", warm_up)
+        assert code == 0 and csv_text.splitlines()[0].endswith(",temperature_c")
+        code, out, _ = run(
+            capsys, "solve", "heading", "-", "--json", "--true-azimuth", "135", stdin=csv_text
+        )
+        result = json.loads(out)
+        errors[warm_up] = abs(result["azimuth_error_deg"])
+        temperature = result["temperature_c"]
+        assert len(temperature["mean_by_position"]) == 4
+        if warm_up == "0":
+            first = float(csv_text.splitlines()[1].split(",")[-1])
+            assert first == pytest.approx(20.0)
+            assert temperature["change"] > 4.0 and "warming up" in temperature["note"]["en"]
+        else:
+            assert temperature["change"] < 0.1 and "steady" in temperature["note"]["en"]
+    assert errors["0"] > 3 * errors["3600"]
+    code, text, _ = run(capsys, "solve", "heading", "-", "--language", "zh-CN", stdin=csv_text)
+    assert "温度稳定" in text

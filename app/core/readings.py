@@ -45,6 +45,7 @@ class Readings:
     angles_deg: list[float] | None  # given by the long layout, else None
     times_s: list[np.ndarray] | None = None
     layout: str = "wide"
+    temperatures_c: list[np.ndarray] | None = None  # long layout's optional temperature_c
 
 
 def _number(text: str, line: int, column: str) -> float:
@@ -134,7 +135,7 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
 def _parse_long(names: list[str], rows) -> Readings:
     index = {
         name: names.index(name)
-        for name in ("position", "angle_deg", "value", "time_s")
+        for name in ("position", "angle_deg", "value", "time_s", "temperature_c")
         if name in names
     }
     labels: list[str] = []
@@ -152,11 +153,13 @@ def _parse_long(names: list[str], rows) -> Readings:
             )
         entry = grouped.get(label)
         if entry is None:
-            entry = grouped[label] = {"values": [], "times": [], "angle": None}
+            entry = grouped[label] = {"values": [], "times": [], "temps": [], "angle": None}
             labels.append(label)
         entry["values"].append(_number(cell("value"), line, "value"))
         if "time_s" in index:
             entry["times"].append(_number(cell("time_s"), line, "time_s"))
+        if "temperature_c" in index:
+            entry["temps"].append(_number(cell("temperature_c"), line, "temperature_c"))
         if "angle_deg" in index:
             angle = _number(cell("angle_deg"), line, "angle_deg")
             if entry["angle"] is None:
@@ -178,15 +181,23 @@ def _parse_long(names: list[str], rows) -> Readings:
         angles = [grouped[label]["angle"] for label in labels]
     times = [np.array(grouped[label]["times"]) for label in labels] if "time_s" in index else None
     positions = [np.array(grouped[label]["values"]) for label in labels]
-    return Readings(positions, angles, times, "long")
+    temperatures = None
+    if "temperature_c" in index:
+        temperatures = [np.array(grouped[label]["temps"]) for label in labels]
+    return Readings(positions, angles, times, "long", temperatures)
 
 
-def readings_to_long_csv(positions, angles_deg, times_s=None, value_format: str = ".6f") -> str:
-    """Write the long layout (position, angle_deg, time_s, value)."""
+def readings_to_long_csv(
+    positions, angles_deg, times_s=None, value_format: str = ".6f", temperatures_c=None
+) -> str:
+    """Write the long layout (position, angle_deg, time_s, value[, temperature_c])."""
     buffer = io.StringIO()
-    buffer.write("position,angle_deg,time_s,value\n")
+    buffer.write("position,angle_deg,time_s,value" + (",temperature_c" if temperatures_c else ""))
+    buffer.write("\n")
     for number, (values, angle) in enumerate(zip(positions, angles_deg, strict=True), start=1):
         times = times_s[number - 1] if times_s is not None else np.arange(len(values), dtype=float)
-        for time, value in zip(times, values, strict=True):
-            buffer.write(f"{number},{angle:.6g},{time:.3f},{value:{value_format}}\n")
+        temps = temperatures_c[number - 1] if temperatures_c else None
+        for index, (time, value) in enumerate(zip(times, values, strict=True)):
+            extra = f",{temps[index]:.3f}" if temps is not None else ""
+            buffer.write(f"{number},{angle:.6g},{time:.3f},{value:{value_format}}{extra}\n")
     return buffer.getvalue()

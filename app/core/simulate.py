@@ -387,6 +387,7 @@ class SimulatedRun:
     true_angles_deg: list[float]  # where the table really stopped
     turn_on_bias_deg_h: float
     indexing_errors_deg: list[float]
+    temperatures_c: list[np.ndarray] = field(default_factory=list)  # case temperature
 
 
 def indexing_errors(preset: GyroPreset, seed: int, n_positions: int) -> np.ndarray:
@@ -426,7 +427,7 @@ def simulate_run(
     per_position = max(1, int(round(seconds_per_position * preset.sample_rate_hz)))
     settle = int(round(settle_s * preset.sample_rate_hz))
     dh, dv = preset.misalignment_deg
-    positions, times, true_angles, dial_read = [], [], [], []
+    positions, times, true_angles, dial_read, temperatures = [], [], [], [], []
     clock = int(round(start_s * preset.sample_rate_hz))
     if clock:
         stream.read(np.zeros(clock))
@@ -446,6 +447,7 @@ def simulate_run(
             )
         rate = float(true_rate(setup.latitude_deg, vector, setup.earth_rate_deg_h))
         count = settle + per_position
+        temperatures.append(stream.temperatures_c(count)[settle:])
         measured = stream.read(np.full(count, rate), float(vector[2]))
         positions.append(measured[settle:])
         times.append((clock + settle + np.arange(per_position)) / preset.sample_rate_hz)
@@ -459,6 +461,7 @@ def simulate_run(
         true_angles,
         stream.turn_on_bias_deg_h,
         [float(e) for e in errors],
+        temperatures,
     )
 
 
