@@ -63,8 +63,10 @@ with write_session() as db:
                    password_hash=digest)
     db.add(teacher); db.flush()
     course = Course(name='Load class', teacher_id=teacher.id); db.add(course); db.flush()
+    # the tactical gyro streams 10 readings a second: the load the test is about
     assignment = Assignment(course_id=course.id, title='North finding', latitude_deg=39.93,
-                            earth_rate_deg_h=15.04, allowed_methods='manual,csv,simulator')
+                            earth_rate_deg_h=15.04, allowed_methods='manual,csv,simulator',
+                            simulator_preset='tactical-fog')
     db.add(assignment); db.flush()
     for i in range(students):
         user = User(username=f's{i:03d}', display_name=f'学生 {i}', role='student',
@@ -208,7 +210,7 @@ async def student(index: int, base: str, assignment: int, tally: Tally, args) ->
             "/lab/sessions",
             "POST /lab/sessions",
             ok=(303,),
-            data={"station": "handout", "csrf_token": token},
+            data={"station": "handout", "preset": "tactical-fog", "csrf_token": token},
         )
         practice_id = session_id_of(practice)
         for part, name in (

@@ -84,12 +84,19 @@ def test_student_records_everything_from_the_simulated_gyro_and_submits(any_live
         for position in (1, 2, 3, 4):
             section = page.locator(f"#part-{part}")
             section.locator(".method-tab[data-method=simulator]").click()
+            if part == "latitude" and position == 1:
+                # turn the horizontal dial to the north part A found (pre-filled), as at
+                # the bench, so part B runs in the meridian plane
+                expect(section.locator(".plane-dial")).not_to_have_value("")
+                section.locator(".set-plane").click()
+                expect(section.locator(".plane-status")).to_contain_text("is set to")
             step = section.locator(f".step[data-position='{position}']")
             step.click()
             if position > 1:
                 section.locator(".turn").click()
                 expect(section.locator(".table-position")).to_have_text(str(position))
-            section.locator(".dwell").fill("12")
+            # the default dwell gives the minimum of 10 readings (teaching gyro: one per 10 s)
+            expect(section.locator(".dwell")).to_have_value("100")
             section.locator(".speed").select_option("60")
             with page.expect_navigation(timeout=20_000):
                 section.locator(".start-sim").click()

@@ -43,7 +43,7 @@ def test_teacher_reviews_returns_and_student_resubmits(demo_server, new_page):
     section.locator(".step[data-position='1']").click()
     if section.locator(".turn").is_enabled():
         section.locator(".turn").click()
-    section.locator(".dwell").fill("20")
+    section.locator(".dwell").fill("120")  # 12 readings of the teaching gyro
     section.locator(".speed").select_option("60")
     with student.expect_navigation(timeout=20_000):
         section.locator(".start-sim").click()
