@@ -56,6 +56,7 @@ class SessionSettings:
     latitude_start_deg: float = 0.0
     latitude_step_deg: float = 90.0
     preset: str = "teaching-fog"
+    symmetric_order: bool = False  # positions 5–8 revisit 4–1
 
 
 def start_session(
@@ -97,6 +98,7 @@ def start_session(
         sim_seed=seed,
         sim_azimuth_deg=azimuth,
         sim_clock_at=utcnow(),  # the simulated gyro is switched on with the session
+        symmetric_order=settings.symmetric_order,
     )
     if assignment is not None:
         draw_truth(assignment, session, random.SystemRandom())

@@ -62,7 +62,19 @@ def indexing_error_deg(session: LabSession, turn: int | str) -> float:
     return float(rng.normal() * preset.indexing_sigma_arcsec / 3600.0)
 
 
+FIRST_PASS = 4  # positions 1–4; with the symmetric order 5–8 revisit 4, 3, 2, 1
+
+
+def position_count(session: LabSession) -> int:
+    """4 positions per part, or 8 in the symmetric order 1-2-3-4-4-3-2-1."""
+    return 2 * FIRST_PASS if session.symmetric_order else FIRST_PASS
+
+
 def nominal_angle(session: LabSession, part: str, position: int) -> float:
+    """The dial angle of ``position``; positions 5–8 of the symmetric order are those of
+    4, 3, 2, 1 again (lab-reference §3: a linear drift then cancels)."""
+    if position > FIRST_PASS:
+        position = 2 * FIRST_PASS + 1 - position
     if part == "heading":
         sign = -1.0 if session.heading_rotation == "ccw" else 1.0
         return session.heading_start_deg + sign * 90.0 * (position - 1)

@@ -21,12 +21,12 @@ from app.core.explain import explain_heading, explain_latitude
 from app.core.noise_model import GyroNoise, Window
 from app.core.solve import solve_heading, solve_latitude
 from app.jsonsafe import json_safe
-from app.labsim import preset_for
+from app.labsim import FIRST_PASS, position_count, preset_for
 from app.models import Assignment, Attempt, LabSession, SampleChunk, Take, utcnow
 from app.samples import chunks, unpack
 
 PARTS = ("heading", "latitude")
-POSITIONS = 4
+POSITIONS = 8  # the most a part can have: the symmetric order 1-2-3-4-4-3-2-1
 MAX_SAMPLES_PER_POSITION = 1_000_000
 PLAUSIBLE_RATE_DEG_H = 7200.0  # 2 °/s: a gyro at rest reads Earth's rate plus its bias
 
@@ -79,6 +79,44 @@ def load_samples(db: Session, take: Take) -> tuple[np.ndarray, np.ndarray | None
     return values, None
 
 
+def check_position(session: LabSession, part: str, position: int) -> None:
+    """A position this session's schedule has (5–8 only in the symmetric order)."""
+    if part not in PARTS or not 1 <= position <= POSITIONS:
+        raise GyroInputError("lab.bad_position", "No such position.")
+    if position > position_count(session):
+        raise GyroInputError(
+            "lab.needs_symmetric",
+            f"Position {position} belongs to the symmetric order 1-2-3-4-4-3-2-1; switch it on "
+            "first.",
+            position=position,
+        )
+
+
+def set_symmetric_order(db: Session, session: LabSession, symmetric: bool) -> None:
+    """Switch the recording order.  Switching back is refused while positions 5–8 hold
+    readings (they would silently drop out of the result)."""
+    if session.status == "graded" or (
+        session.status == "submitted" and session.assignment_id is not None
+    ):
+        raise GyroInputError("lab.awaiting_review", "This work is waiting for review or graded.")
+    if not symmetric and session.symmetric_order:
+        in_return_pass = db.exec(
+            select(Take.id).where(
+                Take.session_id == session.id,
+                Take.position > FIRST_PASS,
+                Take.superseded_at.is_(None),
+            )
+        ).first()
+        if in_return_pass is not None:
+            raise GyroInputError(
+                "lab.return_pass_recorded",
+                "Positions 5–8 already hold readings; the symmetric order stays on.",
+            )
+    session.symmetric_order = symmetric
+    session.updated_at = utcnow()
+    db.add(session)
+
+
 def store_take(
     db: Session,
     session: LabSession,
@@ -100,8 +138,7 @@ def store_take(
         raise GyroInputError(
             "lab.awaiting_review", "Your last attempt is waiting for your teacher's review."
         )
-    if part not in PARTS or not 1 <= position <= POSITIONS:
-        raise GyroInputError("lab.bad_position", "No such position.")
+    check_position(session, part, position)
     if values.size == 0:
         raise GyroInputError(
             "readings.empty_position", f"Position {position} has no readings.", position=position
@@ -177,8 +214,7 @@ def append_samples(
         session.status == "submitted" and session.assignment_id is not None
     ):
         raise GyroInputError("lab.awaiting_review", "This work is waiting for review or graded.")
-    if part not in PARTS or not 1 <= position <= POSITIONS:
-        raise GyroInputError("lab.bad_position", "No such position.")
+    check_position(session, part, position)
     take = db.exec(
         select(Take).where(
             Take.session_id == session.id,
@@ -429,6 +465,9 @@ def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) ->
     values = [p.values for p in ordered]
     angles = [p.take.angle_deg for p in ordered]
     known = simulated_noise(session, ordered)
+    if len(ordered) > FIRST_PASS and all(p.times is not None for p in ordered):
+        # the symmetric order, timed on one clock: the fit adds b + ḃ·(t − t̄)
+        known["times_s"] = [p.times for p in ordered]
     try:
         if part == "heading":
             outcome.result = solve_heading(values, angles, **known)

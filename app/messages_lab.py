@@ -791,6 +791,41 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "en": "The connection was lost; nothing was saved for this position. Record it again.",
         "zh-CN": "连接已断开，该位置未保存任何数据，请重新记录。",
     },
+    "lab.order_title": {"en": "Recording order", "zh-CN": "测量顺序"},
+    "lab.order_now_plain": {
+        "en": "Each part has four positions, recorded 1-2-3-4.",
+        "zh-CN": "每部分 4 个位置，按 1-2-3-4 顺序测量。",
+    },
+    "lab.order_now_symmetric": {
+        "en": "Symmetric order 1-2-3-4-4-3-2-1: positions 5–8 revisit 4, 3, 2, 1.",
+        "zh-CN": "对称顺序 1-2-3-4-4-3-2-1：位置 5–8 依次回到 4、3、2、1。",
+    },
+    "lab.order_help": {
+        "en": "A bias that drifts while you record (warm-up, temperature) shifts later positions. Going back through the positions puts every angle's mean time in the middle of the run, so a linear drift cancels; with the gyro's times the fit also estimates the drift ḃ.",
+        "zh-CN": "记录期间零偏漂移（预热、温度）会使后面的位置产生偏移。按原路返回测量，使每个角度的平均时刻都位于整个过程的中点，线性漂移因此抵消；有陀螺时间时，拟合还会估计漂移率 ḃ。",
+    },
+    "lab.order_switch_on": {
+        "en": "Use the symmetric order 1-2-3-4-4-3-2-1",
+        "zh-CN": "改用对称顺序 1-2-3-4-4-3-2-1",
+    },
+    "lab.order_switch_off": {"en": "Back to four positions", "zh-CN": "改回 4 个位置"},
+    "lab.order_symmetric": {
+        "en": "Symmetric order on: record positions 5–8 after 1–4.",
+        "zh-CN": "已启用对称顺序：测完位置 1–4 后再测位置 5–8。",
+    },
+    "lab.bad_order": {
+        "en": "Choose the recording order: 1-2-3-4 or 1-2-3-4-4-3-2-1.",
+        "zh-CN": "请选择测量顺序：1-2-3-4 或 1-2-3-4-4-3-2-1。",
+    },
+    "lab.order_plain": {"en": "Back to four positions.", "zh-CN": "已改回 4 个位置。"},
+    "lab.needs_symmetric": {
+        "en": "Position {position} belongs to the symmetric order 1-2-3-4-4-3-2-1; switch it on first.",
+        "zh-CN": "位置 {position} 属于对称顺序 1-2-3-4-4-3-2-1，请先启用对称顺序。",
+    },
+    "lab.return_pass_recorded": {
+        "en": "Positions 5–8 already hold readings; the symmetric order stays on.",
+        "zh-CN": "位置 5–8 已有读数，对称顺序保持启用。",
+    },
     "js.plane_set": {
         "en": "The table's horizontal dial is set to {dial}° for part B.",
         "zh-CN": "B 部分的水平刻度已设为 {dial}°。",

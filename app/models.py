@@ -167,6 +167,8 @@ class LabSession(SQLModel, table=True):
     sim_roll_deg: float | None = None
     sim_misalign_h_deg: float | None = None
     sim_misalign_v_deg: float | None = None
+    # 1-2-3-4-4-3-2-1: positions 5–8 revisit 4–1 (a linear drift cancels, and is fitted)
+    symmetric_order: bool = False
     # part B's vertical plane: the horizontal dial (° clockwise from heading position 1)
     sim_plane_dial_deg: float | None = None
     # one gyro timeline per session: its clock (s since switch-on) at wall time sim_clock_at

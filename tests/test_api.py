@@ -354,3 +354,30 @@ def test_oversized_body_is_refused(client, auth):
         headers={**auth, "Content-Type": "application/json"},
     )
     assert response.status_code == 413
+
+
+def test_symmetric_order_over_the_api(client, auth):
+    """Positions 5–8 exist only in the symmetric order; there they revisit 4–1 and, sent
+    with times, let the fit estimate a linear drift."""
+    plain = new_api_session(client, auth)
+    reply = client.put(
+        f"{API}/sessions/{plain}/heading/positions/5", json={"samples": [1.0] * 10}, headers=auth
+    )
+    assert reply.status_code == 400 and "symmetric" in reply.json()["detail"]
+    session_id = new_api_session(client, auth, {**PRACTICE, "symmetric_order": True})
+    assert client.get(f"{API}/sessions/{session_id}", headers=auth).json()["symmetric_order"]
+    drift = 3.0  # °/h per hour
+    truth = [10.71, 2.79, -8.95, -0.94]
+    for k in range(1, 9):
+        times = [120.0 * (k - 1) + t for t in range(10)]
+        mean = truth[k - 1 if k <= 4 else 8 - k] + drift * (sum(times) / 10) / 3600
+        reply = client.put(
+            f"{API}/sessions/{session_id}/heading/positions/{k}",
+            json={"samples": [mean] * 10, "times_s": times},
+            headers=auth,
+        )
+        assert reply.status_code == 200, reply.text
+    heading = client.get(f"{API}/sessions/{session_id}/results", headers=auth).json()["heading"]
+    assert heading["n_positions"] == 8
+    assert heading["drift_deg_h_per_h"] == pytest.approx(drift, rel=1e-6)
+    assert heading["theta_deg"] == pytest.approx(-10.743, abs=1e-3)  # the printed averages

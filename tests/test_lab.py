@@ -454,3 +454,44 @@ def test_csv_with_old_mac_line_ends_is_read(student_client):
     )
     assert response.status_code == 200
     assert count(Take) == 2
+
+
+def test_the_symmetric_order_adds_positions_five_to_eight(student_client):
+    """Off: positions 5–8 do not exist (turning there is refused, readings too).  On: the
+    page has eight positions, 5–8 at the dial angles of 4–1, and the fit uses all eight;
+    switching back is refused once the return pass holds readings."""
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    reply = post_json(student_client, f"{page}/turn", {"part": "heading", "position": 5}, page)
+    assert reply.status_code == 400 and "symmetric" in reply.json()["detail"]
+    rng = np.random.default_rng(8)
+    means = [10.71, 2.79, -8.95, -0.94]
+    columns = {str(k): list(rng.normal(means[k - 1], 0.05, 10)) for k in range(1, 5)}
+    columns["5"] = list(rng.normal(means[3], 0.05, 10))
+    reply = post_json(
+        student_client, f"{page}/manual", {"part": "heading", "columns": columns}, page
+    )
+    assert reply.status_code == 400 and "symmetric order" in reply.json()["detail"]
+    assert "1-2-3-4-4-3-2-1" in student_client.get(page).text
+    reply = post_form(student_client, f"{page}/order", {"symmetric": "on"}, page=page)
+    assert reply.status_code == 303
+    html = student_client.get(page).text
+    assert 'data-position="8"' in html and "Symmetric order on" in html
+    for k in range(5, 9):  # the return pass: 4, 3, 2, 1 again
+        columns[str(k)] = list(rng.normal(means[8 - k], 0.05, 10))
+    reply = post_json(
+        student_client, f"{page}/manual", {"part": "heading", "columns": columns}, page
+    )
+    assert reply.status_code == 200, reply.text
+    results = student_client.get(f"{page}/results.json").json()["heading"]
+    assert results["n_positions"] == 8
+    found = results["position_means_deg_h"]
+    assert found[4:] == pytest.approx(found[3::-1], abs=0.1)  # 5–8 at the angles of 4–1
+    assert results["theta_deg"] == pytest.approx(-10.75, abs=0.1)
+    reply = post_form(student_client, f"{page}/order", {"symmetric": "off"}, page=page)
+    assert reply.status_code == 303
+    html = student_client.get(page).text
+    assert "Positions 5–8 already hold readings" in html and 'data-position="8"' in html
+    reply = post_form(student_client, f"{page}/order", {"symmetric": "sideways"}, page=page)
+    assert reply.status_code == 303
+    assert "Choose the recording order" in student_client.get(page).text

@@ -64,6 +64,7 @@ ACCESS = {
     "POST /lab/sessions/{session_id}/csv": "owner",
     "POST /lab/sessions/{session_id}/turn": "owner",
     "POST /lab/sessions/{session_id}/plane": "owner",
+    "POST /lab/sessions/{session_id}/order": "owner",
     "GET /lab/sessions/{session_id}/results.json": "owner",
     "POST /lab/sessions/{session_id}/submit": "owner",
     "GET /lab/sessions/{session_id}/export.csv": "owner",

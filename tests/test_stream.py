@@ -13,7 +13,7 @@ from app.db import read_session, write_session
 from app.labsim import SimulatedTake, set_gyro_clock, table_errors
 from app.labstore import load_samples
 from app.models import LabSession, Role, Take
-from tests.conftest import login, make_user
+from tests.conftest import login, make_user, post_form
 from tests.test_lab import new_session, post_json
 
 ORIGIN = {"origin": "http://testserver"}
@@ -274,3 +274,19 @@ def test_the_teaching_gyro_streams_one_reading_every_ten_seconds(student_client)
     }  # fmt: skip
     times = [t for f in frames if f["type"] == "samples" for t in f["t"]]
     assert np.allclose(np.diff(times), 10.0)
+
+
+def test_the_return_pass_streams_only_in_the_symmetric_order(student_client):
+    session_id = new_session(student_client, preset="tactical-fog")
+    with connect(student_client, session_id) as ws:
+        frames = record(ws, part="heading", position=5, dwell_s=2, speed=60)
+    assert frames[-1]["type"] == "error" and "symmetric" in frames[-1]["message"]
+    page = f"/lab/sessions/{session_id}"
+    assert (
+        post_form(student_client, f"{page}/order", {"symmetric": "on"}, page=page).status_code
+        == 303
+    )
+    assert turn(student_client, session_id, "heading", 5).status_code == 200
+    with connect(student_client, session_id) as ws:
+        frames = record(ws, part="heading", position=5, dwell_s=2, speed=60)
+    assert frames[0]["dial_angle_deg"] == -270.0 and frames[-1]["type"] == "saved"

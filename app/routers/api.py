@@ -240,6 +240,11 @@ class SessionCreate(BaseModel):
     heading: HeadingSettings = HeadingSettings()
     latitude: LatitudeSettings = LatitudeSettings()
     simulator_preset: str = Field(default="teaching-fog", max_length=32)
+    symmetric_order: bool = Field(
+        default=False,
+        description="Record 1-2-3-4-4-3-2-1: positions 5–8 revisit 4–1, so a linear drift "
+        "cancels (and, with times, is fitted).",
+    )
 
 
 class PositionSummary(BaseModel):
@@ -260,6 +265,7 @@ class SessionOut(BaseModel):
     heading: HeadingSettings
     latitude: LatitudeSettings
     min_readings: int
+    symmetric_order: bool
     positions: list[PositionSummary]
     created_at: datetime
     updated_at: datetime
@@ -297,7 +303,11 @@ class PositionUpload(BaseModel):
         default=None, description="the dial angle; default: from the session's settings"
     )
     times_s: list[StrictFloat | StrictInt] | None = Field(
-        default=None, max_length=MAX_SAMPLES_PER_POSITION
+        default=None,
+        max_length=MAX_SAMPLES_PER_POSITION,
+        description="each sample's time in seconds, on one clock for the whole session "
+        "(e.g. since switch-on): with the symmetric order the fit then estimates a linear "
+        "bias drift",
     )
     offset: StrictInt | None = Field(
         default=None,
@@ -431,6 +441,7 @@ def session_out(db: Session, session: LabSession) -> SessionOut:
             start_angle_deg=session.latitude_start_deg, step_deg=session.latitude_step_deg
         ),
         min_readings=session.min_readings,
+        symmetric_order=session.symmetric_order,
         positions=[
             PositionSummary(
                 part=t.part,
@@ -651,6 +662,7 @@ def create_session(body: SessionCreate, caller: CallerDep, db: SessionDep):
         latitude_start_deg=body.latitude.start_angle_deg,
         latitude_step_deg=body.latitude.step_deg,
         preset=body.simulator_preset,
+        symmetric_order=body.symmetric_order,
     )
     try:
         session, created = labsessions.start_session(

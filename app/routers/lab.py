@@ -30,11 +30,13 @@ from app.deps import (
 from app.exports import Selection, readings_csv, session_json
 from app.i18n import translator
 from app.jsonsafe import json_safe
-from app.labsim import nominal_angle, north_dial_deg
+from app.labsim import FIRST_PASS, nominal_angle, north_dial_deg, position_count
 from app.labstore import (
     PARTS,
     POSITIONS,
+    check_position,
     session_results,
+    set_symmetric_order,
     store_take,
     submit,
     take_history,
@@ -229,7 +231,8 @@ def session_view(db: Session, session: LabSession, assignment, attempts, _) -> d
     """What both the student's page and the teacher's review show of a session."""
     results = session_results(db, session)
     nominal = {
-        part: [nominal_angle(session, part, k) for k in range(1, POSITIONS + 1)] for part in PARTS
+        part: [nominal_angle(session, part, k) for k in range(1, position_count(session) + 1)]
+        for part in PARTS
     }
     shows_feedback = session.status in ("returned", "graded")
     visible = truth_visible(session, assignment, len(attempts))
@@ -251,7 +254,7 @@ def session_view(db: Session, session: LabSession, assignment, attempts, _) -> d
         "assignment": assignment,
         "nominal": nominal,
         "drawing": drawing_coordinates(session),
-        "positions": range(1, POSITIONS + 1),
+        "positions": range(1, position_count(session) + 1),
         "preset": PRESETS.get(session.simulator_preset),
         "error_text": lambda error: error_text(error, _),
         "truth": truth,
@@ -301,7 +304,7 @@ def error_text(error: GyroInputError, _) -> str:
 def drawing_coordinates(session: LabSession) -> dict[str, dict[int, tuple]]:
     """Where each position's axis and label go on the 200×200 drawings."""
     out: dict[str, dict[int, tuple]] = {"heading": {}, "latitude": {}}
-    for k in range(1, POSITIONS + 1):
+    for k in range(1, FIRST_PASS + 1):  # the return pass 5–8 revisits these
         relative = math.radians(nominal_angle(session, "heading", k) - session.heading_start_deg)
         sx, sy = math.sin(relative), -math.cos(relative)  # position 1 drawn pointing up
         out["heading"][k] = (
@@ -362,10 +365,7 @@ def _store_columns(
     unit = canonical_unit(unit)
     saved = []
     for position, values in sorted(columns.items()):
-        if not 1 <= position <= POSITIONS:
-            raise GyroInputError(
-                "lab.bad_position", f"There is no position {position}.", position=position
-            )
+        check_position(session, part, position)
         angle = (angles or {}).get(position, nominal_angle(session, part, position))
         store_take(
             db,
@@ -507,6 +507,10 @@ def turn_table(
     """Turn the virtual turntable; every real turn gets a new indexing error."""
     session = own_session(db, user, session_id)
     require_method(db, session, "simulator")
+    try:
+        check_position(session, body.part, body.position)
+    except GyroInputError as error:
+        raise HTTPException(400, str(error)) from error
     field = f"sim_table_{body.part}"
     if getattr(session, field) != body.position:
         setattr(session, field, body.position)
@@ -537,6 +541,30 @@ def set_plane(
     db.add(session)
     db.commit()
     return {"dial_deg": session.sim_plane_dial_deg}
+
+
+@router.post("/sessions/{session_id}/order", dependencies=[CsrfProtected])
+def set_order(
+    request: Request,
+    session_id: ObjectId,
+    user: CurrentUser,
+    db: SessionDep,
+    symmetric: Annotated[str, Form(max_length=8)] = "",
+):
+    """Record in the order 1-2-3-4 or the symmetric 1-2-3-4-4-3-2-1 (positions 5–8)."""
+    session = own_session(db, user, session_id)
+    response = redirect(f"/lab/sessions/{session.id}")
+    try:
+        if symmetric not in ("on", "off"):
+            raise GyroInputError("lab.bad_order", "Choose the order: on or off.")
+        set_symmetric_order(db, session, symmetric == "on")
+    except GyroInputError as error:
+        db.rollback()
+        flash(response, request, error.key, "error")
+        return response
+    db.commit()
+    flash(response, request, "lab.order_symmetric" if symmetric == "on" else "lab.order_plain")
+    return response
 
 
 @router.get("/sessions/{session_id}/results.json")

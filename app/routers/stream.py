@@ -30,7 +30,13 @@ from app.core.exceptions import GyroInputError
 from app.db import write_session
 from app.deps import ObjectId
 from app.i18n import translate
-from app.labsim import MAX_DWELL_S, MAX_SETTLE_S, SimulatedTake, set_gyro_clock
+from app.labsim import (
+    MAX_DWELL_S,
+    MAX_SETTLE_S,
+    SimulatedTake,
+    position_count,
+    set_gyro_clock,
+)
 from app.labstore import PARTS, POSITIONS, store_take
 from app.models import Assignment, AuthSession, LabSession, User
 from app.security import session_is_live, token_digest
@@ -196,6 +202,8 @@ async def _record(
     if found is None:
         raise StreamError("stream.gone")
     _, session = found
+    if position > position_count(session):
+        raise StreamError("lab.needs_symmetric", position=position)
     if getattr(session, f"sim_table_{part}") != position:
         raise StreamError("stream.turn_first", position=position)
     session = await run_in_threadpool(_mark_started, session_id, part, position)

@@ -1,5 +1,5 @@
 """one simulated gyro timeline per lab session; the virtual turntable's tilt, misalignment
-and part B plane; assignment ranges for the table draws
+and part B plane; assignment ranges for the table draws; the symmetric recording order
 
 Revision ID: 0007
 Revises: 0006
@@ -32,10 +32,13 @@ def upgrade() -> None:
                                       server_default='0'))
         batch_op.add_column(sa.Column('sim_clock_at', sqlmodel.sql.sqltypes.UTCDateTime(),
                                       nullable=True))
+        batch_op.add_column(sa.Column('symmetric_order', sa.Boolean(), nullable=False,
+                                      server_default=sa.false()))
 
 
 def downgrade() -> None:
     with op.batch_alter_table('lab_session', schema=None) as batch_op:
+        batch_op.drop_column('symmetric_order')
         batch_op.drop_column('sim_clock_at')
         batch_op.drop_column('sim_clock_s')
         for name in reversed(SESSION_FLOATS):

@@ -44,7 +44,10 @@
       step.setAttribute("aria-selected", String(Number(step.dataset.position) === position));
     });
     section.querySelectorAll(".axis").forEach((axis) => {
-      axis.classList.toggle("selected", Number(axis.dataset.position) === position);
+      axis.classList.toggle(
+        "selected",
+        Number(axis.dataset.position) === position || Number(axis.dataset.return) === position,
+      );
     });
     updateTurnHint(part);
   }
