@@ -27,7 +27,14 @@ from sqlmodel import Session, func, select
 from app import __version__
 from app.db import read_session
 from app.jsonsafe import json_safe
-from app.labstore import PARTS, PositionData, export_metadata, results_json, solve_part
+from app.labstore import (
+    PARTS,
+    PositionData,
+    export_metadata,
+    results_json,
+    solve_part,
+    station_noise_for,
+)
 from app.models import Attempt, LabSession, SampleChunk, Take
 from app.samples import unpack
 
@@ -126,7 +133,9 @@ def _results(db: Session, session: LabSession, selection: Selection, takes: list
         if blocks and all(t is not None for _, t in blocks):
             times = np.concatenate([t for _, t in blocks])
         data[take.part][take.position] = PositionData(take, values, times)
-    return json_safe(results_json({part: solve_part(session, part, data[part]) for part in PARTS}))
+    station = station_noise_for(db, session)
+    results = {part: solve_part(session, part, data[part], station) for part in PARTS}
+    return json_safe(results_json(results))
 
 
 # --- one session ----------------------------------------------------------------------------

@@ -15,6 +15,7 @@ import numpy as np
 from sqlmodel import Session, func, select
 
 from app import __version__
+from app.characterisation import StationNoise, station_noise
 from app.config import get_settings
 from app.core.exceptions import GyroInputError
 from app.core.explain import explain_heading, explain_latitude
@@ -452,7 +453,28 @@ def simulated_noise(session: LabSession, ordered: list[PositionData]) -> dict:
     }
 
 
-def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) -> PartResult:
+def characterised_noise(station: StationNoise | None, ordered: list[PositionData]) -> dict:
+    """Readings from a real gyro the teacher characterised (typed, CSV, API, bridge): each
+    position mean's variance from its noise model over the position's recording, taken as
+    separate recordings (their timing on the bench is not known)."""
+    if station is None or not ordered or any(p.take.source == "simulator" for p in ordered):
+        return {}
+    windows = [Window(0.0, p.values.size / station.rate_hz) for p in ordered]
+    return {"position_cov": station.noise.mean_covariance(windows, continuous=False)}
+
+
+def station_noise_for(db: Session, session: LabSession) -> StationNoise | None:
+    if session.assignment_id is None:
+        return None
+    return station_noise(db.get(Assignment, session.assignment_id))
+
+
+def solve_part(
+    session: LabSession,
+    part: str,
+    data: dict[int, PositionData],
+    station: StationNoise | None = None,
+) -> PartResult:
     outcome = PartResult(part, data)
     if len(data) < 3:
         outcome.error = GyroInputError(
@@ -464,7 +486,7 @@ def solve_part(session: LabSession, part: str, data: dict[int, PositionData]) ->
     ordered = [data[k] for k in sorted(data)]
     values = [p.values for p in ordered]
     angles = [p.take.angle_deg for p in ordered]
-    known = simulated_noise(session, ordered)
+    known = simulated_noise(session, ordered) or characterised_noise(station, ordered)
     if len(ordered) > FIRST_PASS and all(p.times is not None for p in ordered):
         # the symmetric order, timed on one clock: the fit adds b + ḃ·(t − t̄)
         known["times_s"] = [p.times for p in ordered]
@@ -533,7 +555,8 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
 
 def session_results(db: Session, session: LabSession) -> dict[str, PartResult]:
     data = current_data(db, session)
-    return {part: solve_part(session, part, data.get(part, {})) for part in PARTS}
+    station = station_noise_for(db, session)
+    return {part: solve_part(session, part, data.get(part, {}), station) for part in PARTS}
 
 
 def results_json(results: dict[str, PartResult]) -> dict:

@@ -791,6 +791,76 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "en": "The connection was lost; nothing was saved for this position. Record it again.",
         "zh-CN": "连接已断开，该位置未保存任何数据，请重新记录。",
     },
+    "characterisation.title": {
+        "en": "The bench gyro's noise (real gyros)",
+        "zh-CN": "实验台陀螺的噪声（真实陀螺）",
+    },
+    "characterisation.help": {
+        "en": "Record the bench's gyro at rest for an hour or more after warm-up and upload the record (CSV: one reading per line, or one position in the lab's layouts) with its sample rate. Its Allan deviation is fitted (N, B, K with 68 % intervals), and from then on the readings your students type, upload or send from the bridge get their 1σ from this noise model instead of assuming white noise. Simulated-gyro readings keep the simulator's own model.",
+        "zh-CN": "陀螺预热后静止记录一小时以上，上传该记录（CSV：每行一个读数，或实验格式中的一个位置）及其采样率。系统拟合其 Allan 方差（N、B、K 及 68 % 区间），此后学生手动输入、上传或经串口桥发送的读数，其 1σ 将取自该噪声模型，而不再假设为白噪声。模拟陀螺的读数仍使用模拟器自身的模型。",
+    },
+    "characterisation.current": {
+        "en": "Characterised from {samples} readings ({hours} h at {rate} Hz), uploaded {when} UTC:",
+        "zh-CN": "依据 {samples} 个读数（{hours} 小时，{rate} Hz）标定，上传时间 {when} UTC：",
+    },
+    "characterisation.interval": {
+        "en": "68 % interval {low} … {high}",
+        "zh-CN": "68 % 区间 {low} … {high}",
+    },
+    "characterisation.dwell": {"en": "Recommended dwell", "zh-CN": "推荐采样时长"},
+    "characterisation.none": {
+        "en": "No characterisation yet: the 1σ of real-gyro readings assumes white noise.",
+        "zh-CN": "尚未标定：真实陀螺读数的 1σ 按白噪声估计。",
+    },
+    "characterisation.file": {"en": "Static record (CSV)", "zh-CN": "静止记录（CSV）"},
+    "characterisation.rate": {"en": "Sample rate (Hz)", "zh-CN": "采样率（Hz）"},
+    "characterisation.upload": {"en": "Upload and fit", "zh-CN": "上传并拟合"},
+    "characterisation.remove": {"en": "Remove the characterisation", "zh-CN": "删除标定"},
+    "characterisation.remove_confirm": {
+        "en": "Remove the characterisation? Real-gyro readings will assume white noise again.",
+        "zh-CN": "删除标定？真实陀螺读数将重新按白噪声估计。",
+    },
+    "characterisation.stored": {
+        "en": "Characterisation stored: N = {arw} °/√h, B = {bias} °/h.",
+        "zh-CN": "标定已保存：N = {arw} °/√h，B = {bias} °/h。",
+    },
+    "characterisation.removed": {"en": "Characterisation removed.", "zh-CN": "标定已删除。"},
+    "characterisation.no_file": {
+        "en": "Choose the record's CSV file.",
+        "zh-CN": "请选择记录的 CSV 文件。",
+    },
+    "characterisation.too_large": {
+        "en": "The file is larger than 20 MB.",
+        "zh-CN": "文件超过 20 MB。",
+    },
+    "characterisation.encoding": {
+        "en": "The file is not UTF-8 text.",
+        "zh-CN": "该文件不是 UTF-8 文本。",
+    },
+    "characterisation.bad_rate": {
+        "en": "The sample rate must be a number of readings per second, up to 10000.",
+        "zh-CN": "采样率须为每秒读数个数，不超过 10000。",
+    },
+    "characterisation.too_short": {
+        "en": "The record covers {seconds} s; at least {minimum} s (better: hours) are needed to see the slow terms.",
+        "zh-CN": "该记录仅 {seconds} 秒；至少需要 {minimum} 秒（最好数小时）才能看出慢变项。",
+    },
+    "allan.one_position": {
+        "en": "An Allan analysis needs one static record (one position), not {count}.",
+        "zh-CN": "Allan 分析需要一段静止记录（一个位置），而不是 {count} 个。",
+    },
+    "allan.too_short": {
+        "en": "The Allan deviation needs at least {minimum} readings.",
+        "zh-CN": "Allan 方差至少需要 {minimum} 个读数。",
+    },
+    "allan.bad_rate": {
+        "en": "The sample rate must be a positive number.",
+        "zh-CN": "采样率必须为正数。",
+    },
+    "allan.constant": {
+        "en": "The readings never change; there is no noise to analyse (is the record quantised too coarsely?).",
+        "zh-CN": "读数从不变化，没有可分析的噪声（记录的量化是否过粗？）。",
+    },
     "lab.order_title": {"en": "Recording order", "zh-CN": "测量顺序"},
     "lab.order_now_plain": {
         "en": "Each part has four positions, recorded 1-2-3-4.",

@@ -119,6 +119,9 @@ class Assignment(SQLModel, table=True):
     table_tilt_max_deg: float | None = None  # pitch and roll drawn in ±max; None: preset's σ
     misalignment_max_deg: float | None = None  # gyro axis vs dial zero, ±max; None: preset's σ
     true_heading_deg: float | None = None  # a real bench's known start azimuth, if any
+    # a real gyro's Allan characterisation (JSON: fitted terms and rate), uploaded by the
+    # teacher: readings typed, uploaded or sent by the bridge then get the "allan" σ
+    gyro_characterisation: str | None = Field(default=None, max_length=4000)
     # auto-check tolerances
     tolerance_heading_deg: float = 2.0
     tolerance_latitude_pct: float = 5.0

@@ -20,10 +20,9 @@ from app.core.exceptions import GyroInputError
 from app.core.explain import explain_heading, explain_latitude, render_text
 from app.core.noise_model import GyroNoise, Window, back_to_back
 from app.core.readings import (
-    NumberOutOfRange,
     Readings,
-    parse_decimal,
     parse_readings_csv,
+    parse_static_record,
     readings_to_long_csv,
 )
 from app.core.simulate import PRESETS, GyroStream, Setup, simulate_run, simulate_static
@@ -246,16 +245,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
 
 def _allan(args: argparse.Namespace) -> int:
-    text = _read_text(args.file)
-    try:
-        readings = parse_readings_csv(text)
-        if len(readings.positions) != 1:
-            raise CommandError("the Allan deviation needs one static record (one position)")
-        values = readings.positions[0]
-    except GyroInputError as error:
-        if error.key != "csv.unknown_layout":
-            raise
-        values = _single_column(text)
+    values = parse_static_record(_read_text(args.file))
     _finite("--rate", args.rate)
     result = allan_deviation(to_deg_per_hour(values, args.unit), args.rate)
     intervals = None
@@ -284,23 +274,6 @@ def _allan(args: argparse.Namespace) -> int:
     if intervals is None:
         print("(--intervals 40 adds bootstrap intervals: how far one record can be trusted)")
     return 0
-
-
-def _single_column(text: str) -> np.ndarray:
-    values = []
-    for number, line in enumerate(text.splitlines(), start=1):
-        cell = line.strip().split(",")[-1].strip()
-        if not cell:
-            continue
-        try:
-            values.append(parse_decimal(cell))
-        except NumberOutOfRange:
-            raise CommandError(f"line {number}: '{cell[:40]}' is out of range") from None
-        except ValueError:
-            if number == 1:  # a header line
-                continue
-            raise CommandError(f"line {number}: '{cell[:40]}' is not a number") from None
-    return np.array(values)
 
 
 def _guarded(handler):

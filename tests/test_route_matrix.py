@@ -54,6 +54,7 @@ ACCESS = {
     "POST /courses/{course_id}/assignments": "teacher",
     "GET /courses/{course_id}/assignments/{assignment_id}": "teacher",
     "POST /courses/{course_id}/assignments/{assignment_id}/settings": "teacher",
+    "POST /courses/{course_id}/assignments/{assignment_id}/characterisation": "teacher",
     "GET /courses/{course_id}/assignments/{assignment_id}/export.csv": "teacher",
     "GET /courses/{course_id}/assignments/{assignment_id}/export.zip": "teacher",
     "GET /review/sessions/{session_id}": "review",

@@ -201,3 +201,51 @@ def readings_to_long_csv(
             extra = f",{temps[index]:.3f}" if temps is not None else ""
             buffer.write(f"{number},{angle:.6g},{time:.3f},{value:{value_format}}{extra}\n")
     return buffer.getvalue()
+
+
+def parse_static_record(text: str) -> np.ndarray:
+    """One static record for an Allan analysis: a CSV in either layout with one position,
+    or one number per line (the last comma-separated cell; a header line is skipped)."""
+    try:
+        readings = parse_readings_csv(text)
+    except GyroInputError as error:
+        if error.key != "csv.unknown_layout":
+            raise
+        return _single_column(text)
+    if len(readings.positions) != 1:
+        raise GyroInputError(
+            "allan.one_position",
+            "An Allan analysis needs one static record (one position), not "
+            f"{len(readings.positions)}.",
+            count=len(readings.positions),
+        )
+    return readings.positions[0]
+
+
+def _single_column(text: str) -> np.ndarray:
+    values = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        cell = line.strip().split(",")[-1].strip()
+        if not cell:
+            continue
+        try:
+            values.append(parse_decimal(cell))
+        except NumberOutOfRange:
+            raise GyroInputError(
+                "csv.out_of_range",
+                f"Line {number}: '{cell[:40]}' is out of range.",
+                line=number,
+                column="value",
+                value=cell[:40],
+            ) from None
+        except ValueError:
+            if number == 1:  # a header line
+                continue
+            raise GyroInputError(
+                "csv.not_a_number",
+                f"Line {number}: '{cell[:40]}' is not a number.",
+                line=number,
+                column="value",
+                value=cell[:40],
+            ) from None
+    return np.array(values)

@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import json
+import math
+from typing import Annotated
 
-from fastapi import APIRouter, HTTPException, Request
+from fastapi import APIRouter, File, Form, HTTPException, Request, UploadFile
 from fastapi.responses import StreamingResponse
 from sqlmodel import Session, select
 
+from app import characterisation
 from app.charts import class_error_figure, class_histogram_figure
+from app.core.exceptions import GyroInputError
+from app.core.readings import parse_decimal
 from app.core.simulate import PRESETS
 from app.deps import CsrfProtected, FormDep, ObjectId, SessionDep, TeacherUser
 from app.exports import SubmittedWork, assignment_zip, csv_table
@@ -82,6 +87,7 @@ def assignment_dashboard(
             "figures": figures,
             "status_filter": status,
             "form": assignment_form_values(assignment),
+            "characterisation": characterisation.summary_of(assignment),
             "presets": sorted(PRESETS),
             "plotly_url": request.app.state.plotly_url,
         },
@@ -108,12 +114,74 @@ def update_settings(
         response = redirect(f"/courses/{course.id}/assignments/{assignment.id}#settings")
         flash(response, request, problem.key, "error", **problem.params)
         return response
-    for name, value in updated.model_dump(exclude={"id", "course_id", "created_at"}).items():
+    kept = {"id", "course_id", "created_at", "gyro_characterisation"}  # not on this form
+    for name, value in updated.model_dump(exclude=kept).items():
         setattr(assignment, name, value)
     db.add(assignment)
     db.commit()
     response = redirect(f"/courses/{course.id}/assignments/{assignment.id}")
     flash(response, request, "assignment.updated", "success")
+    return response
+
+
+MAX_RECORD_BYTES = 20_000_000  # about a million readings as text
+
+
+@router.post(
+    "/courses/{course_id}/assignments/{assignment_id}/characterisation",
+    dependencies=[CsrfProtected],
+)
+def upload_characterisation(
+    request: Request,
+    course_id: ObjectId,
+    assignment_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
+    record: Annotated[UploadFile | None, File()] = None,
+    rate_hz: Annotated[str, Form(max_length=40)] = "",
+    unit: Annotated[str, Form(max_length=16)] = "deg/h",
+    remove: Annotated[str, Form(max_length=8)] = "",
+):
+    """The bench gyro's static record → its noise model for this assignment's real data."""
+    course, assignment = own_assignment(db, teacher, course_id, assignment_id)
+    response = redirect(f"/courses/{course.id}/assignments/{assignment.id}#characterisation")
+    if remove:
+        characterisation.store(assignment, None)
+        db.add(assignment)
+        db.commit()
+        flash(response, request, "characterisation.removed", "success")
+        return response
+    try:
+        data = record.file.read(MAX_RECORD_BYTES + 1) if record else b""
+        if not data:
+            raise GyroInputError("characterisation.no_file", "Choose the record's CSV file.")
+        if len(data) > MAX_RECORD_BYTES:
+            raise GyroInputError("characterisation.too_large", "The file is larger than 20 MB.")
+        try:
+            text = data.decode("utf-8-sig")
+        except UnicodeDecodeError:
+            raise GyroInputError(
+                "characterisation.encoding", "The file is not UTF-8 text."
+            ) from None
+        try:
+            rate = parse_decimal(rate_hz.strip())
+        except ValueError:
+            rate = math.nan
+        summary = characterisation.characterise(text, rate, unit)
+    except GyroInputError as error:
+        flash(response, request, error.key, "error", **error.params)
+        return response
+    characterisation.store(assignment, summary)
+    db.add(assignment)
+    db.commit()
+    flash(
+        response,
+        request,
+        "characterisation.stored",
+        "success",
+        arw=f"{summary['arw_deg_rt_h']:.4g}",
+        bias=f"{summary['bias_instability_deg_h']:.3g}",
+    )
     return response
 
 

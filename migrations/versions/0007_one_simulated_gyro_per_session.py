@@ -1,5 +1,6 @@
 """one simulated gyro timeline per lab session; the virtual turntable's tilt, misalignment
-and part B plane; assignment ranges for the table draws; the symmetric recording order
+and part B plane; assignment ranges for the table draws; the symmetric recording order; a
+real gyro's uploaded Allan characterisation per assignment
 
 Revision ID: 0007
 Revises: 0006
@@ -25,6 +26,9 @@ def upgrade() -> None:
     with op.batch_alter_table('assignment', schema=None) as batch_op:
         batch_op.add_column(sa.Column('table_tilt_max_deg', sa.Float(), nullable=True))
         batch_op.add_column(sa.Column('misalignment_max_deg', sa.Float(), nullable=True))
+        batch_op.add_column(sa.Column('gyro_characterisation',
+                                      sqlmodel.sql.sqltypes.AutoString(length=4000),
+                                      nullable=True))
     with op.batch_alter_table('lab_session', schema=None) as batch_op:
         for name in SESSION_FLOATS:
             batch_op.add_column(sa.Column(name, sa.Float(), nullable=True))
@@ -44,5 +48,6 @@ def downgrade() -> None:
         for name in reversed(SESSION_FLOATS):
             batch_op.drop_column(name)
     with op.batch_alter_table('assignment', schema=None) as batch_op:
+        batch_op.drop_column('gyro_characterisation')
         batch_op.drop_column('misalignment_max_deg')
         batch_op.drop_column('table_tilt_max_deg')

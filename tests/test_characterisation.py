@@ -1,0 +1,140 @@
+"""A real gyro's Allan characterisation, uploaded by the teacher for an assignment: fitted,
+stored, used for the σ of real-gyro readings, validated, and only the teacher's."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from app.core.noise_model import GyroNoise, Window
+from app.core.simulate import PRESETS, GyroStream
+from app.core.solve import solve_heading
+from app.db import read_session, write_session
+from app.models import Assignment, Role
+from tests.conftest import make_course, make_user
+from tests.test_lab import save_manual
+from tests.test_review import HEADING, browser, start
+
+
+@pytest.fixture
+def world(app, teacher):
+    """teacher1's course with one student and an assignment for a real bench."""
+    student = make_user("s1", Role.student, name="学生1")
+    course_id = make_course(teacher, "Bench lab", (student,))
+    with write_session() as db:
+        assignment = Assignment(
+            course_id=course_id, title="Bench", latitude_deg=39.93, earth_rate_deg_h=15.04
+        )
+        db.add(assignment)
+        db.flush()
+        return {"course": course_id, "assignment": assignment.id, "app": app}
+
+
+def static_record(hours: float = 2.0, seed: int = 1) -> tuple[str, object]:
+    gyro = replace(PRESETS["tactical-fog"], turn_on_bias_sigma_deg_h=0.0).without("warmup")
+    values = GyroStream(gyro, seed).read(np.full(int(hours * 3600 * gyro.sample_rate_hz), 11.5))
+    return "rate_deg_h\n" + "\n".join(f"{v:.6f}" for v in values) + "\n", gyro
+
+
+def upload(client, world, text: str | bytes, rate: str = "10", **extra):
+    page = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    token = client.get(page).text.split('name="csrf_token" value="')[1].split('"')[0]
+    content = text.encode() if isinstance(text, str) else text
+    return client.post(
+        f"{page}/characterisation",
+        data={"csrf_token": token, "rate_hz": rate, **extra},
+        files={"record": ("bench.csv", content, "text/csv")},
+    )
+
+
+def stored(world) -> dict | None:
+    with read_session() as db:
+        value = db.get(Assignment, world["assignment"]).gyro_characterisation
+    return None if value is None else json.loads(value)
+
+
+def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
+    teacher = browser(world, "teacher1")
+    text, gyro = static_record()
+    reply = upload(teacher, world, text)
+    assert reply.status_code == 303
+    page = teacher.get(reply.headers["location"]).text
+    assert "Characterisation stored: N = " in page
+    summary = stored(world)
+    assert summary["arw_deg_rt_h"] == pytest.approx(gyro.arw_deg_rt_h, rel=0.05)
+    low, high = summary["arw_interval"]
+    assert low < summary["arw_deg_rt_h"] < high
+    assert summary["rate_hz"] == 10.0 and summary["samples"] == 72000
+    assert "68 % interval" in page
+    # the settings form does not touch it
+    dashboard = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    token = teacher.get(dashboard).text.split('name="csrf_token" value="')[1].split('"')[0]
+    form = {"csrf_token": token, "title": "Find north", "latitude_deg": "39.93",
+            "earth_rate_deg_h": "15.04", "simulator_preset": "teaching-fog",
+            "min_readings": "10", "methods": ["manual", "csv", "simulator"]}  # fmt: skip
+    assert teacher.post(f"{dashboard}/settings", data=form).status_code == 303
+    assert stored(world) == summary
+    # a student's typed readings now get the characterised gyro's σ
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    assert save_manual(student, session_id, "heading", HEADING).status_code == 200
+    result = student.get(f"/lab/sessions/{session_id}/results.json").json()["heading"]
+    assert result["uncertainty_model"] == "allan"
+    noise = GyroNoise(
+        arw_deg_rt_h=summary["arw_deg_rt_h"],
+        bias_instability_deg_h=summary["bias_instability_deg_h"],
+        bias_corr_time_s=summary["bias_corr_time_s"],
+        rrw_deg_h_rt_h=summary["rrw_deg_h_rt_h"],
+        angle_lsb_deg=summary["quantization_deg"] * 12**0.5,
+    )
+    positions = [HEADING[k] for k in sorted(HEADING)]
+    windows = [Window(0.0, len(p) / 10.0) for p in positions]
+    expected = solve_heading(
+        positions,
+        [0.0, -90.0, -180.0, -270.0],
+        position_cov=noise.mean_covariance(windows, continuous=False),
+    )
+    assert result["azimuth_sigma_deg"] == pytest.approx(expected.azimuth_sigma_deg, rel=1e-9)
+    # removed: back to white noise
+    assert upload(teacher, world, b"", remove="1").status_code == 303
+    assert stored(world) is None
+    result = student.get(f"/lab/sessions/{session_id}/results.json").json()["heading"]
+    assert result["uncertainty_model"] == "white"
+
+
+@pytest.mark.parametrize(
+    ("content", "rate", "message"),
+    [
+        (b"", "10", "Choose the record"),
+        ("1\n2\n3\n", "10", "at least 600 s"),
+        ("x\n" + "1.0\n" * 7000, "abc", "sample rate must be"),
+        ("x\n" + "1.0\n" * 7000, "0", "sample rate must be"),
+        ("x\n" + "1.0\n" * 7000, "1e9", "sample rate must be"),
+        ("x\n" + "1.0\n" * 7000 + "oops\n", "10", "is not a number"),
+        ("position_1,position_2\n1,2\n", "10", "one static record"),
+        ("x\n" + "1.0\n" * 7000, "10", "never change"),
+        ("\xff\xfe".encode("latin-1") + b"\x00\x81", "10", "not UTF-8"),
+    ],
+)
+def test_bad_records_are_explained_and_nothing_is_stored(world, content, rate, message):
+    teacher = browser(world, "teacher1")
+    reply = upload(teacher, world, content, rate)
+    assert reply.status_code == 303
+    assert message in teacher.get(reply.headers["location"]).text
+    assert stored(world) is None
+
+
+def test_only_the_courses_teacher_may_characterise(world):
+    make_user("teacher2", Role.teacher)
+    other = browser(world, "teacher2")
+    page = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    token = other.get("/").text.split('name="csrf_token" value="')[1].split('"')[0]
+    reply = other.post(
+        f"{page}/characterisation",
+        data={"csrf_token": token, "rate_hz": "10"},
+        files={"record": ("a.csv", b"1\n" * 10, "text/csv")},
+    )
+    assert reply.status_code == 404 and stored(world) is None
