@@ -70,7 +70,7 @@ def characterise(text: str, rate_hz: float, unit: str = "deg/h") -> dict:
         "rrw_deg_h_rt_h": result.rrw_deg_h_rt_h or 0.0,
         "quantization_deg": result.quantization_deg,
         "recommended_dwell_s": result.recommended_dwell_s,
-        "uploaded_at": utcnow().isoformat(timespec="seconds"),
+        "uploaded_at": utcnow().strftime("%Y-%m-%d %H:%M"),
     }
 
 
