@@ -83,7 +83,9 @@ def load_samples(db: Session, take: Take) -> tuple[np.ndarray, np.ndarray | None
 def check_position(session: LabSession, part: str, position: int) -> None:
     """A position this session's schedule has (5–8 only in the symmetric order)."""
     if part not in PARTS or not 1 <= position <= POSITIONS:
-        raise GyroInputError("lab.bad_position", "No such position.")
+        raise GyroInputError(
+            "lab.bad_position", f"There is no position {position}.", position=position
+        )
     if position > position_count(session):
         raise GyroInputError(
             "lab.needs_symmetric",

@@ -354,8 +354,8 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
         "zh-CN": "没有位置 {position}。",
     },
     "lab.too_many_positions": {
-        "en": "The file has {count} positions; at most 4.",
-        "zh-CN": "文件有 {count} 个位置，最多 4 个。",
+        "en": "The file has {count} positions; at most {limit} (8 in the symmetric order 1-2-3-4-4-3-2-1).",
+        "zh-CN": "文件有 {count} 个位置，最多 {limit} 个（对称顺序 1-2-3-4-4-3-2-1 为 8 个）。",
     },
     "lab.already_graded": {
         "en": "This work has been graded; it can no longer be changed.",

@@ -156,7 +156,8 @@ def test_units_are_converted(student_client):
         ({"1": [1.0] * 5}, "deg/h", "has 5 readings; at least 10"),
         ({"1": [10.7] * 10}, "deg/s", "check the unit"),
         ({"1": [1.0] * 10}, "furlongs/h", "Unknown unit"),
-        ({"7": [1.0] * 10}, "deg/h", "no position 7"),
+        ({"9": [1.0] * 10}, "deg/h", "no position 9"),
+        ({"7": [1.0] * 10}, "deg/h", "Position 7 belongs to the symmetric order"),
     ],
 )
 def test_bad_typed_input_stores_nothing(student_client, columns, unit, message):
@@ -238,7 +239,7 @@ def test_csv_long_layout_keeps_angles_and_times(student_client):
         ("hello,world\n1,2\n", "expected a header"),
         (
             "position_1,position_2,position_3,position_4,position_5\n" + "1,2,3,4,5\n" * 10,
-            "at most 4",
+            "at most 4 (8 in the symmetric order",
         ),
         ("position_1\n" + "1\n" * 3, "at least 10"),
         ("x" * 5_000_001, "larger than 5 MB"),

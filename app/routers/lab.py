@@ -418,14 +418,21 @@ def _parse_upload(body: CsvUpload):
             limit_mb=MAX_CSV_CHARS // 1_000_000,
         )
     readings = parse_readings_csv(body.text, part=body.part)
-    if len(readings.positions) > POSITIONS:
-        raise GyroInputError(
-            "lab.too_many_positions",
-            f"The file has {len(readings.positions)} positions; at most {POSITIONS}.",
-            count=len(readings.positions),
-        )
+    _check_position_count(len(readings.positions), POSITIONS)
     canonical_unit(body.unit)
     return readings
+
+
+def _check_position_count(count: int, limit: int) -> None:
+    """A file's positions fit the session: 4, or 8 in the symmetric order."""
+    if count > limit:
+        raise GyroInputError(
+            "lab.too_many_positions",
+            f"The file has {count} positions; at most {limit} "
+            "(8 in the symmetric order 1-2-3-4-4-3-2-1).",
+            count=count,
+            limit=limit,
+        )
 
 
 @router.post("/sessions/{session_id}/csv/preview", dependencies=[CsrfProtected])
@@ -440,6 +447,7 @@ def preview_csv(
     require_method(db, session, "csv")
     try:
         readings = _parse_upload(body)
+        _check_position_count(len(readings.positions), position_count(session))
     except GyroInputError as error:
         return _json_error(error, request)
     rows = []
@@ -480,6 +488,7 @@ def save_csv(
         db.rollback()
         return _json_error(problem, request)
     try:
+        _check_position_count(len(readings.positions), position_count(session))
         columns = dict(enumerate(readings.positions, start=1))
         angles = (
             dict(enumerate(readings.angles_deg, start=1))
