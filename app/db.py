@@ -48,6 +48,25 @@ STORAGE_FAULTS = (
 )
 
 
+BUSY_FAULTS = (
+    "database is locked",  # SQLite: the busy timeout ran out waiting for the write lock
+    "database table is locked",
+    "lock timeout",  # PostgreSQL: lock_timeout
+    "could not obtain lock",
+)
+
+
+def database_busy(error: BaseException) -> bool:
+    """Whether a database error means "the write lock stayed taken longer than the busy
+    timeout" (a very busy moment, not a fault): the app answers 503 with Retry-After."""
+    from sqlalchemy.exc import DBAPIError
+
+    if not isinstance(error, DBAPIError):
+        return False
+    text = str(error.orig if error.orig is not None else error).lower()
+    return any(fault in text for fault in BUSY_FAULTS)
+
+
 def storage_unavailable(error: BaseException) -> bool:
     """Whether a database error means "cannot write now" (read-only or full storage)
     rather than a bug: the app answers 503 and recovers once the storage is writable."""

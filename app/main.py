@@ -18,7 +18,7 @@ from swagger_ui_bundle import swagger_ui_path
 
 from app import __version__
 from app.config import get_settings
-from app.db import UnstorableText, get_engine, storage_unavailable
+from app.db import UnstorableText, database_busy, get_engine, storage_unavailable
 from app.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequired, reload_login
 from app.headers import SecurityHeaders
 from app.i18n import translate
@@ -180,6 +180,18 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
 
     @app.exception_handler(DBAPIError)
     def _database_error(request: Request, exc: DBAPIError):
+        if database_busy(exc):  # nothing was written: the request's transaction rolled back
+            log.warning("database busy: %s %s", request.method, request.url.path)
+            reload_login(request)
+            if _wants_json(request):
+                return JSONResponse(
+                    {"detail": translate("error.busy", request_language(request))},
+                    status_code=503,
+                    headers={"Retry-After": "2"},
+                )
+            response = _error_page(request, 503, "error.busy")
+            response.headers["Retry-After"] = "2"
+            return response
         if not storage_unavailable(exc):
             raise exc
         report_storage_fault(exc)

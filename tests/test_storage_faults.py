@@ -93,3 +93,56 @@ def _check(client, make_read_only, caplog) -> None:
     assert again.status_code == 201, again.text
     with read_session() as db:
         assert len(db.exec(select(LabSession)).all()) == 2
+
+
+def test_a_write_lock_held_past_the_busy_timeout_answers_503_busy(student_client, var_dir):
+    """Another writer holds SQLite's lock longer than the busy timeout (shortened to
+    0.2 s here): pages and JSON answer 503 "busy, try again" with Retry-After, nothing is
+    half-written, and the next request after the lock is released works."""
+    import sqlite3
+
+    from sqlalchemy import event
+
+    from app.db import get_engine
+
+    engine = get_engine()
+
+    def short_timeout(dbapi_connection, _record) -> None:
+        dbapi_connection.execute("PRAGMA busy_timeout = 200")
+
+    event.listen(engine, "connect", short_timeout)
+    engine.dispose()
+    holder = sqlite3.connect(var_dir / "gyrolab.db", isolation_level=None)
+    try:
+        session_id = new_session_id(student_client)
+        page = f"/lab/sessions/{session_id}"
+        token = student_client.get(page).text.split('name="csrf_token" value="')[1].split('"')[0]
+        holder.execute("BEGIN IMMEDIATE")
+        reply = student_client.post(
+            f"{page}/turn",
+            json={"part": "heading", "position": 2},
+            headers={"X-CSRF-Token": token, "Accept": "application/json"},
+        )
+        assert reply.status_code == 503 and reply.headers["Retry-After"] == "2"
+        assert "very busy" in reply.json()["detail"]
+        reply = student_client.post(f"{page}/submit", data={"csrf_token": token})
+        assert reply.status_code == 503 and "very busy" in reply.text
+        holder.execute("ROLLBACK")
+        reply = student_client.post(
+            f"{page}/turn",
+            json={"part": "heading", "position": 2},
+            headers={"X-CSRF-Token": token},
+        )
+        assert reply.status_code == 200
+        with read_session() as db:
+            assert db.get(LabSession, session_id).sim_table_heading == 2
+    finally:
+        holder.close()
+        event.remove(engine, "connect", short_timeout)
+        engine.dispose()
+
+
+def new_session_id(client) -> int:
+    from tests.test_lab import new_session
+
+    return new_session(client)
