@@ -38,8 +38,7 @@ MESSAGES: dict[str, dict[str, str]] = {
     },
     "error.too_large": {"en": "The upload is too large.", "zh-CN": "上传的内容太大。"},
     "error.busy": {
-        "en": "The lab is very busy this moment, so nothing was saved. Try again in a few "
-        "seconds.",
+        "en": "The lab is very busy this moment, so nothing was saved. Try again in a few seconds.",
         "zh-CN": "系统此刻非常繁忙，本次内容未保存。请几秒钟后再试。",
     },
     "error.storage": {

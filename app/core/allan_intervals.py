@@ -44,22 +44,13 @@ class FitIntervals:
 
 def fitted_gyro(result: AllanResult, rate_hz: float) -> GyroPreset:
     """A simulator gyro with exactly the fitted noise terms (nothing else)."""
-    bias = result.bias_instability_deg_h or 0.0
-    return GyroPreset(
-        name="fitted",
-        sample_rate_hz=rate_hz,
+    return GyroPreset.noise_only(
+        rate_hz,
         arw_deg_rt_h=result.arw_deg_rt_h,
-        bias_instability_deg_h=bias,
+        bias_instability_deg_h=result.bias_instability_deg_h or 0.0,
         bias_corr_time_s=result.bias_corr_time_s or 0.0,
         rrw_deg_h_rt_h=result.rrw_deg_h_rt_h or 0.0,
         angle_lsb_deg=result.quantization_deg * np.sqrt(12.0),
-        scale_factor_ppm=0.0,
-        constant_bias_deg_h=0.0,
-        turn_on_bias_sigma_deg_h=0.0,
-        g_sensitivity_deg_h_per_g=0.0,
-        misalignment_deg=(0.0, 0.0),
-        indexing_sigma_arcsec=0.0,
-        dial_resolution_deg=0.0,
     )
 
 

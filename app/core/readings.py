@@ -226,26 +226,17 @@ def _single_column(text: str) -> np.ndarray:
     values = []
     for number, line in enumerate(text.splitlines(), start=1):
         cell = line.strip().split(",")[-1].strip()
-        if not cell:
+        if not cell or (number == 1 and not _is_number(cell)):  # blank, or a header line
             continue
-        try:
-            values.append(parse_decimal(cell))
-        except NumberOutOfRange:
-            raise GyroInputError(
-                "csv.out_of_range",
-                f"Line {number}: '{cell[:40]}' is out of range.",
-                line=number,
-                column="value",
-                value=cell[:40],
-            ) from None
-        except ValueError:
-            if number == 1:  # a header line
-                continue
-            raise GyroInputError(
-                "csv.not_a_number",
-                f"Line {number}: '{cell[:40]}' is not a number.",
-                line=number,
-                column="value",
-                value=cell[:40],
-            ) from None
+        values.append(_number(cell, number, "value"))
     return np.array(values)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        parse_decimal(text)
+    except NumberOutOfRange:
+        return True  # a number, just too large: reported when it is read
+    except ValueError:
+        return False
+    return True

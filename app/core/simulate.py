@@ -76,6 +76,35 @@ class GyroPreset:
     source: str = ""
     description: dict[str, str] = field(default_factory=dict)
 
+    @classmethod
+    def noise_only(
+        cls,
+        rate_hz: float,
+        *,
+        arw_deg_rt_h: float = 0.0,
+        bias_instability_deg_h: float = 0.0,
+        bias_corr_time_s: float = 0.0,
+        rrw_deg_h_rt_h: float = 0.0,
+        angle_lsb_deg: float = 0.0,
+    ) -> GyroPreset:
+        """A gyro with these noise terms and no other error (e.g. a fitted noise model)."""
+        return cls(
+            name="noise model",
+            sample_rate_hz=rate_hz,
+            arw_deg_rt_h=arw_deg_rt_h,
+            bias_instability_deg_h=bias_instability_deg_h,
+            bias_corr_time_s=bias_corr_time_s,
+            rrw_deg_h_rt_h=rrw_deg_h_rt_h,
+            angle_lsb_deg=angle_lsb_deg,
+            scale_factor_ppm=0.0,
+            constant_bias_deg_h=0.0,
+            turn_on_bias_sigma_deg_h=0.0,
+            g_sensitivity_deg_h_per_g=0.0,
+            misalignment_deg=(0.0, 0.0),
+            indexing_sigma_arcsec=0.0,
+            dial_resolution_deg=0.0,
+        )
+
     @property
     def dt_s(self) -> float:
         return 1.0 / self.sample_rate_hz
