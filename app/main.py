@@ -17,27 +17,22 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from swagger_ui_bundle import swagger_ui_path
 
 from app import __version__
+from app.accounts import admin_pages, token_pages
+from app.accounts import pages as account_pages
 from app.config import get_settings
+from app.courses import assignment_pages, join_pages
+from app.courses import pages as course_pages
 from app.db import UnstorableText, database_busy, get_engine, storage_unavailable
-from app.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequired, reload_login
-from app.headers import SecurityHeaders
-from app.i18n import translate
+from app.explore import pages as explore_pages
+from app.lab import api, stream
+from app.lab import pages as lab_pages
 from app.paths import STATIC_DIR
-from app.routers import (
-    admin,
-    api,
-    assignments,
-    auth,
-    courses,
-    explore,
-    home,
-    join,
-    lab,
-    review,
-    stream,
-    tokens,
-)
-from app.web import redirect, render, request_language
+from app.review import pages as review_pages
+from app.web import home
+from app.web.deps import CsrfFailed, Forbidden, LoginRequired, PasswordChangeRequired, reload_login
+from app.web.headers import SecurityHeaders
+from app.web.i18n import translate
+from app.web.render import redirect, render, request_language
 
 log = logging.getLogger("gyrolab")
 STORAGE_LOG_INTERVAL_S = 600.0
@@ -216,17 +211,17 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
             request, "error.html", {"status": 400, "message_key": "error.bad_request"}, 400
         )
 
-    app.include_router(auth.router)
+    app.include_router(account_pages.router)
     app.include_router(home.router)
-    app.include_router(courses.router)
-    app.include_router(join.router)
-    app.include_router(admin.router)
-    app.include_router(assignments.router)
-    app.include_router(lab.router)
-    app.include_router(review.router)
+    app.include_router(course_pages.router)
+    app.include_router(join_pages.router)
+    app.include_router(admin_pages.router)
+    app.include_router(assignment_pages.router)
+    app.include_router(lab_pages.router)
+    app.include_router(review_pages.router)
     app.include_router(stream.router)
-    app.include_router(tokens.router)
-    app.include_router(explore.router)
+    app.include_router(token_pages.router)
+    app.include_router(explore_pages.router)
     app.include_router(api.router)
     return app
 

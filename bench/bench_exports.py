@@ -34,14 +34,14 @@ def _measure(kind: str, session_id: int, attempt_id: int, queue) -> None:
     from sqlmodel import select
 
     from app.db import read_session
-    from app.exports import (
+    from app.models import Attempt, SampleChunk
+    from app.web.exports import (
         Selection,
         SubmittedWork,
         assignment_zip,
         readings_csv,
         session_json,
     )
-    from app.models import Attempt, SampleChunk
 
     with read_session() as db:  # warm imports and the connection outside the measurement
         attempt = db.get(Attempt, attempt_id)
@@ -76,9 +76,9 @@ def main() -> None:
 
     import numpy as np
 
-    from app.accounts import create_user
+    from app.accounts.service import create_user
     from app.db import write_session
-    from app.labstore import store_take, submit
+    from app.lab.store import store_take, submit
     from app.migrate import upgrade_to_head
     from app.models import LabSession, Role
 

@@ -66,8 +66,8 @@ def seed_dashboard(env: dict, students: int) -> None:
 import numpy as np
 from app.db import write_session
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User
-from app.labstore import store_take, submit
-from app.security import hash_password
+from app.lab.store import store_take, submit
+from app.accounts.security import hash_password
 with write_session() as db:
     teacher = db.exec(__import__('sqlmodel').select(User).where(User.username == 'teacher')).one()
     course = Course(name='Bench class', teacher_id=teacher.id); db.add(course); db.flush()
@@ -112,7 +112,7 @@ def main() -> None:
                 [
                     sys.executable,
                     "-m",
-                    "app.cli",
+                    "app.cli.main",
                     "create-user",
                     "--role",
                     role,
@@ -130,7 +130,7 @@ def main() -> None:
             [
                 sys.executable,
                 "-m",
-                "app.cli",
+                "app.cli.main",
                 "serve",
                 "--no-demo",
                 "--no-access-log",

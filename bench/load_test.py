@@ -54,7 +54,7 @@ from sqlmodel import select
 from app.db import write_session
 from app.migrate import upgrade_to_head
 from app.models import Assignment, Course, Enrollment, User
-from app.security import hash_password
+from app.accounts.security import hash_password
 upgrade_to_head()
 students, password = int(sys.argv[1]), sys.argv[2]
 digest = hash_password(password)

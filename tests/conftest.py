@@ -129,7 +129,7 @@ def make_user(
     created_by: User | None = None,
 ) -> User:
     """An account with the password PASSWORD (``created_by``: the teacher whose roster made it)."""
-    from app.accounts import create_user
+    from app.accounts.service import create_user
 
     with write_session() as db:
         return create_user(
@@ -144,7 +144,7 @@ def make_user(
 
 
 def make_course(teacher: User, name: str = "Lab", students: tuple[User, ...] = ()) -> int:
-    from app.accounts import enroll
+    from app.accounts.service import enroll
     from app.models import Course
 
     with write_session() as db:

@@ -10,9 +10,9 @@ import sys
 from fastapi.testclient import TestClient
 from sqlmodel import select
 
+from app.accounts.security import verify_password
 from app.db import read_session
 from app.models import ApiToken, Course, Enrollment, Role, User
-from app.security import verify_password
 from tests.conftest import PASSWORD, csrf_from, login, make_course, make_user, post_form
 from tests.test_api import API, token_for
 from tests.test_courses import credentials_from, import_file, section
@@ -200,7 +200,7 @@ def test_teachers_and_students_are_refused_the_admin_pages(app):
 
 
 def test_cli_creates_an_administrator(var_dir):
-    command = [sys.executable, "-m", "app.cli", "create-user", "--role", "admin"]
+    command = [sys.executable, "-m", "app.cli.main", "create-user", "--role", "admin"]
     result = subprocess.run(
         [*command, "--username", "root", "--display-name", "Root"],
         input="a-long-password-1\n",

@@ -201,7 +201,7 @@ def test_append_with_offsets_is_idempotent(client, auth):
     assert gap.status_code == 409 and "Expected offset 5" in gap.json()["detail"]
     with read_session() as db:
         take = db.exec(select(Take)).one()
-        from app.labstore import load_samples
+        from app.lab.store import load_samples
 
         assert load_samples(db, take)[0].tolist() == [1.0, 2.0, 3.0, 4.0, 5.0]
 

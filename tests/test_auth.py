@@ -6,11 +6,11 @@ from datetime import timedelta
 
 from sqlmodel import select
 
+from app.accounts.security import verify_password
 from app.config import get_settings
 from app.db import read_session, write_session
 from app.models import AuthSession, Role, User, utcnow
-from app.security import verify_password
-from app.web import SESSION_COOKIE
+from app.web.render import SESSION_COOKIE
 from tests.conftest import PASSWORD, csrf_from, iter_routes, login, make_user, post_form
 
 
@@ -155,7 +155,7 @@ def test_a_class_behind_one_address_is_not_locked_out(app, teacher):
 def test_password_hashing_is_bounded(client, teacher, monkeypatch):
     """At most login_hash_slots hashes at once: a flood of log-ins waits briefly, then
     answers 503, and is not charged as a failure."""
-    from app import security
+    from app.accounts import security
     from app.models import LoginFailure
 
     monkeypatch.setattr(security, "HASH_WAIT_SECONDS", 0.05)
@@ -224,7 +224,7 @@ def test_csrf_header_is_accepted(client, teacher):
 def test_every_state_changing_route_checks_csrf(app):
     from fastapi.routing import APIRoute
 
-    from app.deps import csrf_protect
+    from app.web.deps import csrf_protect
 
     unsafe = [
         route
@@ -323,7 +323,7 @@ def test_password_rules(client, teacher):
 
 
 def test_argon2id_parameters():
-    from app.security import hash_password
+    from app.accounts.security import hash_password
 
     encoded = hash_password("x" * 12)
     assert encoded.startswith("$argon2id$")

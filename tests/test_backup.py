@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from sqlmodel import select
 
-from app.cli import main
+from app.cli.main import main
 from app.db import engine_for, read_session
 from app.models import Course, Role
 from tests.conftest import make_course, make_user
@@ -49,7 +49,7 @@ def test_restore_refuses_bad_files(app, tmp_path, capsys):
 
 
 def test_postgres_urls_get_pg_dump_instructions(monkeypatch, capsys):
-    from app.backup import postgres_hint
+    from app.cli.backup import postgres_hint
 
     text = postgres_hint("postgresql+psycopg://lab@db.example/gyrolab", "backup", "x.dump")
     assert text.startswith("PostgreSQL: pg_dump --format=custom --file=x.dump")

@@ -14,7 +14,7 @@ from sqlmodel import select
 
 from app.bridge import BridgeError, LineParser, Uploader, run_bridge, serial_lines
 from app.db import read_session
-from app.labstore import load_samples
+from app.lab.store import load_samples
 from app.models import Take
 from tests.test_api import PRACTICE, token_for
 

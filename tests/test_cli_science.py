@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from app.cli import main
+from app.cli.main import main
 from tests.test_core_solve import DATA
 
 HEADING_KEYS = [
@@ -253,7 +253,7 @@ def test_real_process_prints_no_traceback(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("position_1,position_2,position_3,position_4\n1,2,3,oops\n")
     process = subprocess.run(
-        [sys.executable, "-m", "app.cli", "solve", "heading", str(bad)],
+        [sys.executable, "-m", "app.cli.main", "solve", "heading", str(bad)],
         capture_output=True,
         text=True,
     )

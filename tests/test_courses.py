@@ -9,9 +9,9 @@ from urllib.parse import unquote
 
 from sqlmodel import func, select
 
+from app.accounts.security import verify_password
 from app.db import read_session
 from app.models import Course, Enrollment, Role, User
-from app.security import verify_password
 from tests.conftest import login, make_course, make_user, post_form
 
 ROSTER = "学号,姓名,邮箱\n2024001,张三,zhangsan@example.edu\n2024002,李四,\n"

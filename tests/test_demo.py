@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from sqlmodel import func, select
 
+from app.accounts.security import verify_password
+from app.cli.demo import create_demo_data, database_is_empty
 from app.db import read_session, write_session
-from app.demo import create_demo_data, database_is_empty
 from app.models import Assignment, Course, Enrollment, User
-from app.security import verify_password
 
 
 def test_demo_data(var_dir):

@@ -12,7 +12,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from app.cli import main
+from app.cli.main import main
 from app.core.readings import readings_to_long_csv
 from app.core.simulate import PRESETS, Setup, simulate_run
 from app.core.solve import solve_heading

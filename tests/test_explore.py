@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from app.explore import ExplorerInput, dwell_curve, heading_error_curves, scenario_input
+from app.explore.scenarios import ExplorerInput, dwell_curve, heading_error_curves, scenario_input
 
 
 def curve_of(curves, method):
@@ -154,7 +154,7 @@ def test_explorer_over_http(student_client):
 def test_drift_orders_against_the_closed_form():
     """ḃ·T·√2/H is the worst heading error of the order 1-2-3-4 (T the dwell); 1-3-2-4
     halves it; the symmetric order cancels it (lab-reference §3)."""
-    from app.explore import drift_order_curves
+    from app.explore.scenarios import drift_order_curves
 
     data = drift_order_curves(40.0, 300.0, 2.0)
     amplitude = 15.041 * math.cos(math.radians(40.0))

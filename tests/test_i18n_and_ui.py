@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from app.i18n import negotiate, translate
-from app.messages import MESSAGES
 from app.paths import PROJECT_ROOT, TEMPLATES_DIR
+from app.web.i18n import negotiate, translate
+from app.web.messages import MESSAGES
 from tests.conftest import login, post_form
 
 KEY_IN_TEMPLATE = re.compile(r"""_\(\s*["']([a-z_]+\.[a-z_]+)["']""")

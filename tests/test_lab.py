@@ -13,8 +13,8 @@ from sqlmodel import func, select
 from app.core.readings import parse_readings_csv
 from app.core.solve import elevation_angles, heading_angles, solve_heading, solve_latitude
 from app.db import read_session, write_session
+from app.lab.samples import unpack
 from app.models import Assignment, Attempt, LabSession, Role, SampleChunk, Take
-from app.samples import unpack
 from tests.conftest import csrf_from, login, make_course, make_user, post_form
 
 DATA = Path(__file__).resolve().parent / "data"

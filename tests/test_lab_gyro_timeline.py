@@ -15,7 +15,7 @@ from app.core.exceptions import GyroInputError
 from app.core.noise_model import GyroNoise, Window
 from app.core.simulate import PRESETS, GyroStream
 from app.core.solve import solve_heading, solve_latitude
-from app.labsim import (
+from app.lab.sim import (
     MAX_PAUSE_S,
     SimulatedTake,
     derived_seed,
@@ -27,7 +27,7 @@ from app.labsim import (
     turn_on_bias,
 )
 from app.models import Assignment, LabSession
-from app.review import draw_truth
+from app.review.service import draw_truth
 
 
 def session(seed: int = 1, preset: str = "teaching-fog", **fields) -> LabSession:

@@ -58,7 +58,7 @@ def test_servers_starting_together_migrate_once(empty_database):
     env = {**os.environ, "GYROLAB_DATABASE_URL": empty_database}
     processes = [
         subprocess.Popen(
-            [sys.executable, "-m", "app.cli", "migrate"],
+            [sys.executable, "-m", "app.cli.main", "migrate"],
             env=env,
             stdout=subprocess.PIPE,
             stderr=subprocess.STDOUT,
@@ -163,7 +163,7 @@ def test_text_with_nul_is_refused_and_nothing_is_saved(app, client, backend):
 def test_printed_pg_dump_and_pg_restore_commands_work(app, postgres, tmp_path, capsys):
     """``gyrolab backup`` on PostgreSQL prints pg_dump; running it and the printed
     pg_restore into a fresh database brings the data back (SQLite: test_backup)."""
-    from app.cli import main
+    from app.cli.main import main
     from app.config import get_settings
     from tests.pgserver import find_bindir
 

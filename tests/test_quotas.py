@@ -11,7 +11,7 @@ from sqlmodel import select
 
 from app.config import get_settings
 from app.db import read_session, write_session
-from app.labstore import storage_used
+from app.lab.store import storage_used
 from app.models import Role, SampleChunk, Take, User, utcnow
 from tests.conftest import csrf_from, login, make_user, post_form
 from tests.test_api import API, new_api_session, token_for
@@ -69,7 +69,7 @@ def age_superseded(days: int) -> None:
 
 
 def test_prune_removes_old_re_recordings_but_never_submitted_data(client, student):
-    from app.prune import prune_takes
+    from app.lab.prune import prune_takes
 
     auth = token_for(client, "student1")
     session_id = new_api_session(client, auth)
@@ -100,7 +100,7 @@ def test_prune_from_the_command_line_and_the_admin_page(app, client, student):
     superseded_takes(client, auth, session_id)
     age_superseded(40)
     result = subprocess.run(
-        [sys.executable, "-m", "app.cli", "prune", "--days", "30"],
+        [sys.executable, "-m", "app.cli.main", "prune", "--days", "30"],
         capture_output=True,
         text=True,
     )

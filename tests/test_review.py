@@ -16,7 +16,7 @@ from sqlmodel import select
 
 from app.db import read_session, write_session
 from app.models import Assignment, Attempt, LabSession, Role, utcnow
-from app.review import Truth, auto_check, draw_truth, heading_error
+from app.review.service import Truth, auto_check, draw_truth, heading_error
 from tests.conftest import csrf_from, login, make_course, make_user, post_form
 from tests.test_lab import handout, new_session, save_manual
 

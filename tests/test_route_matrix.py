@@ -248,7 +248,7 @@ def test_a_teacher_sharing_the_student_reaches_nothing_of_the_other_course(ids, 
     """t2's own course holds s1 too (s1 joined it with its code): t2 still reaches none of
     teacher1's courses, assignments or reviews of s1, and may not reset s1's password
     (neither teacher's roster created the account: only an administrator may)."""
-    from app.accounts import join_course
+    from app.accounts.service import join_course
     from app.db import read_session, write_session
     from app.models import Course, User
     from tests.conftest import make_course

@@ -10,8 +10,8 @@ from sqlmodel import select
 from starlette.websockets import WebSocketDisconnect
 
 from app.db import read_session, write_session
-from app.labsim import SimulatedTake, set_gyro_clock, table_errors
-from app.labstore import load_samples
+from app.lab.sim import SimulatedTake, set_gyro_clock, table_errors
+from app.lab.store import load_samples
 from app.models import LabSession, Role, Take
 from tests.conftest import login, make_user, post_form
 from tests.test_lab import new_session, post_json

@@ -13,9 +13,9 @@ import pytest
 from sqlmodel import select
 
 from app.db import read_session, write_session
-from app.exports import comment_line, csv_line, neutralise
-from app.labstore import load_samples
+from app.lab.store import load_samples
 from app.models import Attempt, LabSession, Take, User
+from app.web.exports import comment_line, csv_line, neutralise
 from tests.test_api import API, token_for
 from tests.test_review import (
     HEADING,

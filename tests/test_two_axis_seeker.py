@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from app.cli import main
+from app.cli.main import main
 from app.core.error_analysis import ErrorSources, first_order, monte_carlo_heading_errors
 from app.core.simulate import PRESETS, axis_vectors, earth_rate_vector
 from app.core.two_axis_seeker import (
@@ -18,7 +18,7 @@ from app.core.two_axis_seeker import (
     solve_seeker,
     turned_reading,
 )
-from app.explore import SCENARIOS, heading_error_curves, scenario_input
+from app.explore.scenarios import SCENARIOS, heading_error_curves, scenario_input
 
 DELTA = 0.25  # 15′
 FINE = np.arange(0.25, 360.0, 0.5)

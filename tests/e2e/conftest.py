@@ -60,7 +60,7 @@ class LiveServer:
 
     def gyrolab(self, *args: str, stdin: str | None = None) -> subprocess.CompletedProcess:
         return subprocess.run(
-            [sys.executable, "-m", "app.cli", *args],
+            [sys.executable, "-m", "app.cli.main", *args],
             env=self.env,
             input=stdin,
             capture_output=True,
@@ -95,7 +95,7 @@ def running_server(
     yield_server = server
     with open(var_dir / "server.log", "a") as log:
         process = subprocess.Popen(
-            [sys.executable, "-m", "app.cli", "serve", "--port", str(port), *serve_args],
+            [sys.executable, "-m", "app.cli.main", "serve", "--port", str(port), *serve_args],
             env=env,
             stdout=log,
             stderr=subprocess.STDOUT,

@@ -31,7 +31,7 @@ def test_bridge_moves_a_pty_stream_into_a_session(live_server):
         [
             sys.executable,
             "-m",
-            "app.cli",
+            "app.cli.main",
             "bridge",
             "--serial",
             os.ttyname(slave),

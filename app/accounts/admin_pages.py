@@ -1,0 +1,145 @@
+"""Administrators: every account, new accounts, and password resets teachers may not do."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, Form, HTTPException, Request
+from sqlalchemy import func, or_
+from sqlmodel import select
+
+from app.accounts.security import generate_password
+from app.accounts.service import AccountError, NewCredential, create_user, may_reset_password
+from app.accounts.service import reset_password as give_new_password
+from app.courses.roster_csv import USERNAME_RE
+from app.lab.prune import prune_takes
+from app.models import Course, Enrollment, Role, User
+from app.web.deps import AdminUser, CsrfProtected, ObjectId, SessionDep
+from app.web.exports import credentials_data_url
+from app.web.render import flash, redirect, render
+
+router = APIRouter(prefix="/admin", tags=["pages: admin"], include_in_schema=False)
+PAGE_SIZE = 200
+
+
+def accounts_context(db, query: str, **extra) -> dict:
+    """Accounts matching ``query`` (username or name), with who created them and how many
+    courses hold them."""
+    statement = select(User).order_by(User.role, User.username).limit(PAGE_SIZE)
+    if query:
+        pattern = f"%{query.lower()}%"
+        statement = statement.where(
+            or_(
+                func.lower(User.username).like(pattern), func.lower(User.display_name).like(pattern)
+            )
+        )
+    users = db.exec(statement).all()
+    names = {u.id: u.username for u in db.exec(select(User).where(User.role == Role.teacher))}
+    courses = dict(
+        db.exec(
+            select(Enrollment.student_id, func.count(Enrollment.id)).group_by(Enrollment.student_id)
+        ).all()
+    )
+    taught = dict(
+        db.exec(select(Course.teacher_id, func.count(Course.id)).group_by(Course.teacher_id)).all()
+    )
+    rows = [
+        {
+            "user": user,
+            "created_by": names.get(user.created_by_id, ""),
+            "courses": courses.get(user.id, 0) + taught.get(user.id, 0),
+        }
+        for user in users
+    ]
+    return {"rows": rows, "query": query, "page_size": PAGE_SIZE, "roles": list(Role), **extra}
+
+
+@router.get("/accounts")
+def accounts_page(request: Request, admin: AdminUser, db: SessionDep, q: str = ""):
+    return render(request, "admin/accounts.html", accounts_context(db, q.strip()[:64]))
+
+
+@router.post("/accounts", dependencies=[CsrfProtected])
+def create_account(
+    request: Request,
+    admin: AdminUser,
+    db: SessionDep,
+    username: Annotated[str, Form(max_length=64)] = "",
+    display_name: Annotated[str, Form(max_length=128)] = "",
+    role: Annotated[str, Form(max_length=16)] = "student",
+):
+    form = {"username": username, "display_name": display_name, "role": role}
+    error = None
+    if not USERNAME_RE.match(username.strip()):
+        error, params = "roster.bad_username", {"value": username}
+    elif not display_name.strip():
+        error, params = "roster.no_name", {"value": username}
+    elif role not in set(Role):
+        error, params = "admin.bad_role", {}
+    if error is None:
+        password = generate_password()
+        try:
+            user = create_user(
+                db,
+                username=username.strip(),
+                display_name=display_name.strip(),
+                role=Role(role),
+                password=password,
+                must_change_password=True,
+            )
+        except AccountError as failure:
+            db.rollback()
+            error, params = failure.key, failure.params
+    if error is not None:
+        context = accounts_context(db, "", form=form, error=error, error_params=params)
+        return render(request, "admin/accounts.html", context, 400)
+    db.commit()
+    credential = NewCredential(user.username, user.display_name, password)
+    return credentials_page(request, credential, reset=False)
+
+
+@router.post("/accounts/{user_id}/reset-password", dependencies=[CsrfProtected])
+def reset_account_password(request: Request, user_id: ObjectId, admin: AdminUser, db: SessionDep):
+    user = db.get(User, user_id)
+    if user is None:
+        raise HTTPException(404)
+    if not may_reset_password(db, admin, user):
+        context = accounts_context(db, "", error="admin.reset_refused", error_params={})
+        return render(request, "admin/accounts.html", context, 403)
+    password = give_new_password(db, user)
+    db.commit()
+    credential = NewCredential(user.username, user.display_name, password)
+    return credentials_page(request, credential, reset=True)
+
+
+def credentials_page(request: Request, credential: NewCredential, *, reset: bool):
+    context = {
+        "credentials": [credential],
+        "reset": reset,
+        "csv_href": credentials_data_url([credential]),
+        "csv_name": f"{credential.username}-initial-password.csv",
+    }
+    return render(request, "admin/credentials.html", context)
+
+
+@router.post("/prune", dependencies=[CsrfProtected])
+def prune_old_takes(
+    request: Request,
+    admin: AdminUser,
+    db: SessionDep,
+    days: Annotated[int, Form(ge=1, le=3650)] = 30,
+):
+    """Remove re-recordings superseded more than ``days`` ago that no attempt refers to."""
+    pruned = prune_takes(db, days)
+    db.commit()
+    response = redirect("/admin/accounts")
+    flash(
+        response,
+        request,
+        "admin.pruned",
+        "success",
+        n=pruned.takes,
+        mb=f"{pruned.bytes / 1e6:.1f}",
+        days=days,
+    )
+    return response

@@ -1,0 +1,160 @@
+"""Login, logout, password change and the language switch."""
+
+from __future__ import annotations
+
+from typing import Annotated
+from urllib.parse import urlsplit
+
+from fastapi import APIRouter, Form, Request
+
+from app.accounts.security import (
+    create_session,
+    hash_password,
+    log_in,
+    password_problem,
+    revoke_credentials,
+    verify_password,
+)
+from app.models import AuthSession, User, utcnow
+from app.web.deps import CsrfProtected, CurrentUser, OptionalUser, SessionDep, SettingsDep
+from app.web.i18n import normalise
+from app.web.render import LANG_COOKIE, SESSION_COOKIE, flash, redirect, render, set_cookie
+
+# A browser that logged in to an account before: its attempts skip the limits that
+# strangers' guesses fill (app.accounts.security); a signed value, kept for 180 days.
+DEVICE_COOKIE = "gyrolab_device"
+DEVICE_COOKIE_SECONDS = 180 * 24 * 3600
+
+router = APIRouter(tags=["pages: account"], include_in_schema=False)
+
+
+def safe_next(target: str | None) -> str:
+    """Only same-site relative paths may be redirect targets after login."""
+    if not target:
+        return "/"
+    parts = urlsplit(target)
+    if parts.scheme or parts.netloc or not target.startswith("/") or target.startswith("//"):
+        return "/"
+    return target
+
+
+def client_address(request: Request) -> str:
+    return request.client.host if request.client else "unknown"
+
+
+@router.get("/login")
+def login_page(request: Request, user: OptionalUser, next: str = "/"):
+    if user is not None:
+        return redirect(safe_next(next))
+    return render(request, "auth/login.html", {"next": safe_next(next)})
+
+
+@router.post("/login", dependencies=[CsrfProtected])
+def login(
+    request: Request,
+    db: SessionDep,
+    settings: SettingsDep,
+    username: Annotated[str, Form(max_length=200)] = "",
+    password: Annotated[str, Form(max_length=1000)] = "",
+    next: Annotated[str, Form(max_length=2000)] = "/",
+):
+    address = client_address(request)
+    context = {"next": safe_next(next), "username": username}
+    outcome = log_in(db, username, password, address, settings, request.cookies.get(DEVICE_COOKIE))
+    if outcome.problem in ("throttled", "busy"):
+        context.update(login_wait_message(outcome))
+        status = 429 if outcome.problem == "throttled" else 503
+        response = render(request, "auth/login.html", context, status)
+        response.headers["Retry-After"] = str(outcome.retry_after)
+        return response
+    if outcome.user is None:
+        context["error"] = "login.failed"
+        return render(request, "auth/login.html", context, 401)
+    user = outcome.user
+    token = create_session(db, user, settings)
+    db.commit()
+    response = redirect("/account/password" if user.must_change_password else safe_next(next))
+    set_cookie(response, request, SESSION_COOKIE, token, settings.session_lifetime_hours * 3600)
+    set_cookie(response, request, DEVICE_COOKIE, outcome.device_cookie, DEVICE_COOKIE_SECONDS)
+    return response
+
+
+def login_wait_message(outcome) -> dict:
+    """The log-in page's words for a refused attempt: how long to wait."""
+    if outcome.problem == "busy":
+        return {"error": "login.busy"}
+    if outcome.retry_after < 120:
+        return {"error": "login.slow_down", "seconds": outcome.retry_after}
+    return {"error": "login.throttled", "minutes": -(-outcome.retry_after // 60)}
+
+
+@router.post("/logout", dependencies=[CsrfProtected])
+def logout(request: Request, db: SessionDep):
+    auth: AuthSession | None = getattr(request.state, "auth", None)
+    if auth is not None:
+        auth.revoked_at = utcnow()
+        db.add(auth)
+        db.commit()
+    response = redirect("/login")
+    response.delete_cookie(SESSION_COOKIE, path="/")
+    flash(response, request, "login.logged_out")
+    return response
+
+
+@router.get("/account/password")
+def password_page(request: Request, user: CurrentUser):
+    return render(request, "auth/password.html", {"forced": user.must_change_password})
+
+
+@router.post("/account/password", dependencies=[CsrfProtected])
+def change_password(
+    request: Request,
+    user: CurrentUser,
+    db: SessionDep,
+    settings: SettingsDep,
+    current_password: Annotated[str, Form(max_length=1000)] = "",
+    new_password: Annotated[str, Form(max_length=1000)] = "",
+    confirm_password: Annotated[str, Form(max_length=1000)] = "",
+):
+    error = None
+    if not verify_password(current_password, user.password_hash):
+        error = "password.wrong_current"
+    elif new_password != confirm_password:
+        error = "password.mismatch"
+    elif new_password == current_password:
+        error = "password.unchanged"
+    else:
+        error = password_problem(new_password, user.username)
+    if error:
+        context = {"forced": user.must_change_password, "error": error}
+        return render(request, "auth/password.html", context, 400)
+    db_user = db.get(User, user.id)
+    db_user.password_hash = hash_password(new_password)
+    db_user.must_change_password = False
+    db.add(db_user)
+    revoke_credentials(db, user.id)  # every session and token; a fresh session follows
+    token = create_session(db, db_user, settings)
+    db.commit()
+    response = redirect("/")
+    set_cookie(response, request, SESSION_COOKIE, token, settings.session_lifetime_hours * 3600)
+    flash(response, request, "password.changed", "success")
+    return response
+
+
+@router.post("/lang", dependencies=[CsrfProtected])
+def switch_language(
+    request: Request,
+    user: OptionalUser,
+    db: SessionDep,
+    lang: Annotated[str, Form(max_length=16)] = "en",
+    next: Annotated[str, Form(max_length=2000)] = "/",
+):
+    language = normalise(lang) or "en"
+    if user is not None:
+        db_user = db.get(User, user.id)
+        db_user.language = language
+        db.add(db_user)
+        db.commit()
+    response = redirect(safe_next(next))
+    set_cookie(response, request, LANG_COOKIE, language, 365 * 24 * 3600)
+    return response

@@ -1,0 +1,91 @@
+"""``gyrolab errors``: every error-explorer scenario as a command.
+
+``gyrolab errors --list`` names the scenarios; ``gyrolab errors --scenario NAME`` prints the
+scenario's parameters and, at each Monte Carlo azimuth, the first-order and simulated
+heading errors (°) of each method -- the numbers behind the explorer's chart.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import asdict, replace
+
+from app.core.error_analysis import METHODS
+from app.explore.scenarios import SCENARIOS, heading_error_curves, scenario_input
+from app.web.messages_lab import LAB_MESSAGES
+
+
+def scenario_report(name: str, method: str | None = None, seed: int = 1) -> dict:
+    """The scenario's parameters and its heading errors at the Monte Carlo azimuths."""
+    params = scenario_input(name)
+    if method:
+        params = replace(params, method=method)
+    curves, info = heading_error_curves(params, seed, formula_at_mc_points=True)
+    return {
+        "scenario": name,
+        "title": LAB_MESSAGES[f"scenario.{name}"]["en"],
+        "parameters": asdict(params),
+        "runs_per_azimuth": info["runs"],
+        "methods": [
+            {
+                "method": curve.method,
+                "azimuth_deg": curve.mc_azimuths_deg,
+                "first_order_error_deg": curve.formula_deg,
+                "monte_carlo_mean_error_deg": curve.mc_mean_deg,
+                "monte_carlo_std_error_deg": curve.mc_std_deg,
+            }
+            for curve in curves
+        ],
+    }
+
+
+def _text(value: float | None) -> str:
+    return "—" if value is None else f"{value:+.5f}"
+
+
+def print_report(report: dict) -> None:
+    print(f"{report['scenario']}: {report['title']}")
+    for key, value in report["parameters"].items():
+        print(f"  {key} = {value}")
+    for method in report["methods"]:
+        print(f"\nmethod {method['method']}  (Monte Carlo: {report['runs_per_azimuth']} run(s))")
+        print(f"{'azimuth °':>10} {'first order °':>14} {'simulated °':>12} {'spread °':>10}")
+        rows = zip(
+            method["azimuth_deg"],
+            method["first_order_error_deg"],
+            method["monte_carlo_mean_error_deg"],
+            method["monte_carlo_std_error_deg"],
+            strict=True,
+        )
+        for azimuth, formula, mean, std in rows:
+            print(f"{azimuth:10.1f} {_text(formula):>14} {_text(mean):>12} {_text(std):>10}")
+
+
+def add_errors_command(commands, guarded, to_json_text) -> None:
+    errors = commands.add_parser(
+        "errors", help="heading errors of an error-explorer scenario (first order and simulated)"
+    )
+    errors.add_argument("--list", action="store_true", help="name the scenarios")
+    errors.add_argument("--scenario", choices=sorted(SCENARIOS), metavar="NAME")
+    errors.add_argument(
+        "--method", choices=METHODS, help="override the scenario's method (two|four|seeker)"
+    )
+    errors.add_argument("--json", action="store_true")
+
+    def run(args: argparse.Namespace) -> int:
+        if args.list:
+            for name in SCENARIOS:
+                print(f"{name:30} {LAB_MESSAGES[f'scenario.{name}']['en']}")
+            return 0
+        if not args.scenario:
+            print("gyrolab errors: name a scenario (--scenario NAME) or --list", file=sys.stderr)
+            return 2
+        report = scenario_report(args.scenario, args.method)
+        if args.json:
+            print(to_json_text(report))
+        else:
+            print_report(report)
+        return 0
+
+    errors.set_defaults(handler=guarded(run))

@@ -1,0 +1,284 @@
+"""The ``gyrolab`` command: serve, migrate, create-user, and the science commands."""
+
+from __future__ import annotations
+
+import argparse
+import getpass
+import sys
+
+
+def _serve(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    from app.cli.demo import (
+        create_demo_data,
+        database_is_empty,
+        format_credentials,
+        write_credentials_file,
+    )
+    from app.config import get_settings
+    from app.db import write_session
+    from app.migrate import upgrade_to_head
+
+    settings = get_settings()
+    upgrade_to_head()
+    credentials_file = settings.var_dir / "demo-credentials.txt"
+    if not args.no_demo:
+        with write_session() as db:
+            credentials = create_demo_data(db) if database_is_empty(db) else None
+        if credentials:
+            write_credentials_file(credentials_file, credentials)
+            print(format_credentials(credentials), flush=True)
+            print(f"(also saved in {credentials_file})", flush=True)
+        elif credentials_file.exists():
+            print(f"Demo accounts: see {credentials_file}", flush=True)
+    host = args.host or settings.host
+    port = args.port or settings.port
+    print(f"GyroLab is serving on http://{host}:{port}  (Ctrl+C stops it)", flush=True)
+    uvicorn.run(
+        "app.main:app",
+        host=host,
+        port=port,
+        workers=args.workers,
+        proxy_headers=args.proxy_headers,
+        access_log=not args.no_access_log,
+    )
+    return 0
+
+
+def _migrate(_args: argparse.Namespace) -> int:
+    from app.migrate import upgrade_to_head
+
+    upgrade_to_head()
+    print("database is at the newest schema")
+    return 0
+
+
+def _create_user(args: argparse.Namespace) -> int:
+    from app.accounts.security import password_problem
+    from app.accounts.service import AccountError, create_user
+    from app.db import write_session
+    from app.migrate import upgrade_to_head
+    from app.models import Role
+
+    password = args.password
+    if password is None:
+        if not sys.stdin.isatty():
+            password = sys.stdin.readline().rstrip("\n")
+        else:
+            password = getpass.getpass("Password: ")
+            if getpass.getpass("Password again: ") != password:
+                print("error: the passwords differ", file=sys.stderr)
+                return 2
+    problem = password_problem(password, args.username)
+    if problem:
+        print(f"error: unacceptable password ({problem})", file=sys.stderr)
+        return 2
+    upgrade_to_head()
+    try:
+        with write_session() as db:
+            create_user(
+                db,
+                username=args.username,
+                display_name=args.display_name or args.username,
+                role=Role(args.role),
+                password=password,
+                email=args.email,
+            )
+    except AccountError as error:
+        print(f"error: {error.key}: {args.username}", file=sys.stderr)
+        return 2
+    print(f"created {args.role} {args.username}")
+    return 0
+
+
+def _bridge(args: argparse.Namespace) -> int:
+    import os
+    import re
+
+    import httpx
+
+    from app.bridge import BridgeError, LineParser, Uploader, run_bridge, serial_lines
+
+    token = args.token or os.environ.get("GYROLAB_TOKEN")
+    if not token:
+        print(
+            "gyrolab bridge: give --token or set GYROLAB_TOKEN (a personal access token)",
+            file=sys.stderr,
+        )
+        return 2
+    try:
+        pattern = re.compile(args.regex) if args.regex else None
+    except re.error as error:
+        print(f"gyrolab bridge: bad --regex: {error}", file=sys.stderr)
+        return 2
+    parser = LineParser(regex=pattern, column=args.column, scale=args.scale)
+    if args.serial:
+        try:
+            lines = serial_lines(args.serial, args.baud)
+        except BridgeError as error:
+            print(f"gyrolab bridge: {error}", file=sys.stderr)
+            return 2
+    elif args.file and args.file != "-":
+        try:
+            lines = open(args.file, encoding="utf-8", errors="replace")  # noqa: SIM115
+        except OSError as error:
+            print(f"gyrolab bridge: cannot read {args.file}: {error.strerror}", file=sys.stderr)
+            return 2
+    else:
+        lines = sys.stdin
+    headers = {"Authorization": f"Bearer {token}"}
+    with httpx.Client(base_url=args.url, headers=headers, timeout=30) as client:
+        uploader = Uploader(
+            client, args.session, args.part, args.position, unit=args.unit, batch=args.batch
+        )
+        try:
+            run_bridge(lines, parser, uploader, max_samples=args.max_samples, seconds=args.seconds)
+        except BridgeError as error:
+            print(f"gyrolab bridge: {error}", file=sys.stderr)
+            return 1
+        except KeyboardInterrupt:
+            uploader.flush()
+    return 0
+
+
+def _prune(args: argparse.Namespace) -> int:
+    from app.db import write_session
+    from app.lab.prune import prune_takes
+    from app.migrate import upgrade_to_head
+
+    upgrade_to_head()
+    with write_session() as db:
+        pruned = prune_takes(db, args.days)
+    print(
+        f"removed {pruned.takes} re-recording(s) superseded more than {args.days} days ago "
+        f"({pruned.bytes / 1e6:.1f} MB); submitted data is never removed"
+    )
+    return 0
+
+
+def _backup(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from app.cli.backup import BackupError, backup, postgres_hint, sqlite_path
+    from app.config import get_settings
+
+    url = get_settings().database_url
+    try:
+        database = sqlite_path(url)
+        if database is None:
+            print(postgres_hint(url, "backup", args.file))
+            return 2
+        backup(database, Path(args.file))
+    except BackupError as error:
+        print(f"gyrolab backup: {error}", file=sys.stderr)
+        return 2
+    print(f"backed up {database} to {args.file}")
+    return 0
+
+
+def _restore(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from app.cli.backup import BackupError, postgres_hint, restore, sqlite_path
+    from app.config import get_settings
+    from app.migrate import upgrade_to_head
+
+    url = get_settings().database_url
+    try:
+        database = sqlite_path(url)
+        if database is None:
+            print(postgres_hint(url, "restore", args.file))
+            return 2
+        if not args.yes:
+            print(
+                "gyrolab restore: this replaces the whole database; stop the server and "
+                "repeat with --yes",
+                file=sys.stderr,
+            )
+            return 2
+        restore(Path(args.file), database)
+    except BackupError as error:
+        print(f"gyrolab restore: {error}", file=sys.stderr)
+        return 2
+    upgrade_to_head()
+    print(f"restored {database} from {args.file}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="gyrolab", description=__doc__)
+    commands = parser.add_subparsers(dest="command", required=True)
+
+    serve = commands.add_parser("serve", help="migrate, add demo data if empty, and serve")
+    serve.add_argument("--host", help="default: GYROLAB_HOST or 127.0.0.1")
+    serve.add_argument("--port", type=int, help="default: GYROLAB_PORT or 8000")
+    serve.add_argument("--workers", type=int, default=1)
+    serve.add_argument("--no-demo", action="store_true", help="do not create demo accounts")
+    serve.add_argument(
+        "--proxy-headers", action="store_true", help="trust X-Forwarded-* from a reverse proxy"
+    )
+    serve.add_argument("--no-access-log", action="store_true")
+    serve.set_defaults(handler=_serve)
+
+    migrate = commands.add_parser("migrate", help="apply database migrations")
+    migrate.set_defaults(handler=_migrate)
+
+    create = commands.add_parser(
+        "create-user", help="create an administrator, teacher or student account"
+    )
+    create.add_argument("--role", choices=["admin", "teacher", "student"], default="teacher")
+    create.add_argument("--username", required=True)
+    create.add_argument("--display-name")
+    create.add_argument("--email")
+    create.add_argument("--password", help="default: asked for (or one line of stdin)")
+    create.set_defaults(handler=_create_user)
+
+    prune = commands.add_parser(
+        "prune", help="remove old re-recordings that no submitted attempt refers to"
+    )
+    prune.add_argument("--days", type=int, default=30, help="superseded more than N days ago")
+    prune.set_defaults(handler=_prune)
+    backup = commands.add_parser("backup", help="copy the database (safe while serving)")
+    backup.add_argument("file", help="new file to write, e.g. gyrolab-2026-11-21.db")
+    backup.set_defaults(handler=_backup)
+    restore = commands.add_parser("restore", help="replace the database with a backup")
+    restore.add_argument("file")
+    restore.add_argument("--yes", action="store_true", help="really replace everything")
+    restore.set_defaults(handler=_restore)
+
+    bridge = commands.add_parser("bridge", help="send a gyro's serial output to a session")
+    source = bridge.add_mutually_exclusive_group()
+    source.add_argument("--serial", help="serial port, e.g. /dev/ttyUSB0 or COM3")
+    source.add_argument("--file", help="read lines from a file ('-' or nothing: stdin)")
+    bridge.add_argument("--baud", type=int, default=9600)
+    bridge.add_argument(
+        "--regex",
+        help="regular expression; the first group (or the group named 'value') is the reading",
+    )
+    bridge.add_argument("--column", type=int, help="1-based column of the reading")
+    bridge.add_argument("--scale", type=float, default=1.0, help="multiply readings by this")
+    bridge.add_argument("--unit", choices=["deg/h", "deg/s", "rad/s"], default="deg/h")
+    bridge.add_argument("--url", default="http://127.0.0.1:8000", help="GyroLab server")
+    bridge.add_argument("--token", help="personal access token (or GYROLAB_TOKEN)")
+    bridge.add_argument("--session", type=int, required=True)
+    bridge.add_argument("--part", choices=["heading", "latitude"], required=True)
+    bridge.add_argument("--position", type=int, choices=[1, 2, 3, 4], required=True)
+    bridge.add_argument("--batch", type=int, default=50, help="readings per upload")
+    bridge.add_argument("--max-samples", type=int, help="stop after this many readings")
+    bridge.add_argument("--seconds", type=float, help="stop after this long")
+    bridge.set_defaults(handler=_bridge)
+
+    from app.cli.science import add_science_commands
+
+    add_science_commands(commands)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return args.handler(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

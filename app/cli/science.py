@@ -1,0 +1,393 @@
+"""``gyrolab solve`` / ``simulate`` / ``allan``: the science core on the command line.
+
+Bad input exits with status 2 and one clear line on stderr, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from dataclasses import asdict, replace
+from itertools import pairwise
+
+import numpy as np
+
+from app.core.allan import allan_deviation
+from app.core.allan_intervals import fit_intervals
+from app.core.exceptions import GyroInputError
+from app.core.explain import explain_heading, explain_latitude, render_text
+from app.core.jsonsafe import json_safe
+from app.core.noise_model import GyroNoise, Window, back_to_back
+from app.core.readings import (
+    Readings,
+    parse_readings_csv,
+    parse_static_record,
+    readings_to_long_csv,
+)
+from app.core.simulate import PRESETS, GyroStream, Setup, simulate_run, simulate_static
+from app.core.solve import elevation_angles, heading_angles, solve_heading, solve_latitude
+from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
+
+
+class CommandError(Exception):
+    """A problem with the command's input: printed as one line, exit status 2."""
+
+
+def to_json_text(payload: dict) -> str:
+    return json.dumps(json_safe(payload), indent=2, ensure_ascii=False, allow_nan=False)
+
+
+def _read_text(path: str) -> str:
+    try:
+        if path == "-":
+            return sys.stdin.read()
+        with open(path, encoding="utf-8-sig") as handle:
+            return handle.read()
+    except FileNotFoundError:
+        raise CommandError(f"no such file: {path}") from None
+    except UnicodeDecodeError:
+        raise CommandError(f"{path} is not UTF-8 text") from None
+    except OSError as error:
+        raise CommandError(f"cannot read {path}: {error.strerror}") from None
+
+
+def _finite(name: str, value: float | None) -> None:
+    if value is not None and not math.isfinite(value):
+        raise CommandError(f"{name} must be a finite number")
+
+
+def solve_readings(part: str, readings: Readings, args: argparse.Namespace):
+    """Solve ``readings`` as the ``solve`` command does (shared with tests and the API)."""
+    positions = [to_deg_per_hour(values, args.unit) for values in readings.positions]
+    count = len(positions)
+    if part == "heading":
+        if readings.angles_deg is not None:
+            angles = np.asarray(readings.angles_deg)
+        else:
+            angles = heading_angles(count, args.rotation, args.start_angle, args.step)
+    elif readings.angles_deg is not None:
+        angles = np.asarray(readings.angles_deg)
+    else:
+        angles = elevation_angles(count, args.start_angle, args.step)
+    known = _known_noise(readings, positions, getattr(args, "gyro_preset", None))
+    known["times_s"] = readings.times_s  # five or more timed positions: drift is fitted
+    if part == "heading":
+        return solve_heading(positions, angles, true_azimuth_deg=args.true_azimuth, **known)
+    return solve_latitude(
+        positions,
+        angles,
+        true_latitude_deg=args.latitude,
+        true_earth_rate_deg_h=args.earth_rate,
+        **known,
+    )
+
+
+def _known_noise(readings: Readings, positions, preset_name: str | None) -> dict:
+    """``position_cov`` and ``indexing_sigma_deg`` from a preset's noise model, the windows
+    taken from the readings' times (else one after another at the preset's rate)."""
+    if preset_name is None:
+        return {}
+    preset = PRESETS[preset_name]
+    noise = GyroNoise.from_preset(preset)
+    windows = back_to_back([p.size for p in positions], preset.sample_rate_hz)
+    if readings.times_s is not None:
+        timed = [
+            Window(float(t[0]), float(t[-1] - t[0]) + 1.0 / preset.sample_rate_hz)
+            for t in readings.times_s
+        ]
+        ordered = all(a.end_s <= b.start_s + 1e-9 for a, b in pairwise(timed))
+        if ordered and timed[0].start_s >= 0:
+            windows = timed
+    return {
+        "position_cov": noise.mean_covariance(windows),
+        "indexing_sigma_deg": noise.indexing_sigma_deg,
+    }
+
+
+def _solve(args: argparse.Namespace) -> int:
+    for name in ("start_angle", "step", "latitude", "earth_rate", "true_azimuth"):
+        _finite(f"--{name.replace('_', '-')}", getattr(args, name))
+    readings = parse_readings_csv(_read_text(args.file), part=args.part)
+    result = solve_readings(args.part, readings, args)
+    warm_up = temperature_summary(readings)
+    if args.json:
+        payload = result.to_json()
+        if warm_up is not None:
+            payload["temperature_c"] = warm_up
+        print(to_json_text(payload))
+        return 0
+    steps = explain_heading(result) if args.part == "heading" else explain_latitude(result)
+    print(render_text(steps, args.language))
+    if warm_up is not None:
+        print(warm_up["note"][args.language])
+    return 0
+
+
+WARM_UP_LIMIT_C = 1.0
+
+
+def temperature_summary(readings: Readings) -> dict | None:
+    """Mean case temperature per position and a warning when it changed by more than
+    1 °C while recording: the bias follows the temperature during warm-up."""
+    if not readings.temperatures_c:
+        return None
+    every = np.concatenate([t for t in readings.temperatures_c if t.size])
+    means = [float(t.mean()) if t.size else None for t in readings.temperatures_c]
+    change = float(every.max() - every.min()) if every.size else 0.0
+    if change > WARM_UP_LIMIT_C:
+        note = {
+            "en": f"Temperature changed by {change:.1f} °C while recording: the gyro was "
+            "still warming up, and its bias drifted with it. Let it warm up and record again.",
+            "zh-CN": f"记录期间温度变化了 {change:.1f} °C：陀螺仍在预热，零偏随之漂移。"
+            "请预热后重新记录。",
+        }
+    else:
+        note = {
+            "en": f"Temperature steady within {change:.1f} °C while recording.",
+            "zh-CN": f"记录期间温度稳定（变化 {change:.1f} °C 以内）。",
+        }
+    return {"mean_by_position": means, "change": change, "note": note}
+
+
+def preset_table() -> list[dict]:
+    """Every preset's parameters, units in the names, with its source and description."""
+    rows = []
+    for name in sorted(PRESETS):
+        fields = asdict(PRESETS[name])
+        fields["misalignment_deg"] = list(fields["misalignment_deg"])
+        rows.append(fields)
+    return rows
+
+
+def _list_presets(as_json: bool) -> int:
+    rows = preset_table()
+    if as_json:
+        print(to_json_text(rows))
+        return 0
+    for row in rows:
+        print(row["name"])
+        for key, value in row.items():
+            if key not in ("name", "description", "source"):
+                print(f"  {key} = {value}")
+        print(f"  source: {row['source']}")
+    return 0
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    if args.list_presets:
+        return _list_presets(args.json)
+    if args.part is None:
+        raise CommandError("name what to simulate: heading, latitude or static")
+    if args.latitude is None:
+        raise CommandError("--latitude is required")
+    preset = PRESETS[args.preset]
+    if args.rate:
+        preset = replace(preset, sample_rate_hz=args.rate)
+    if args.indexing_sigma is not None:
+        preset = replace(preset, indexing_sigma_arcsec=args.indexing_sigma)
+    for name in ("latitude", "azimuth", "pitch", "roll", "rate", "seconds", "elevation"):
+        _finite(f"--{name}", getattr(args, name))
+    if not -90 <= args.latitude <= 90:
+        raise CommandError("--latitude must be between -90 and 90 degrees")
+    setup = Setup(
+        args.latitude,
+        args.azimuth,
+        args.earth_rate,
+        args.pitch,
+        args.roll,
+        args.elevation if args.part == "heading" else 0.0,
+    )
+    if args.part == "static":
+        seconds = args.seconds or args.seconds_per_position or 600.0
+        values = simulate_static(
+            preset, setup, seconds, seed=args.seed, elevation_deg=args.elevation
+        )
+        times = [np.arange(values.size) / preset.sample_rate_hz]
+        temperatures = [GyroStream(preset, args.seed).temperatures_c(values.size)]
+        sys.stdout.write(
+            readings_to_long_csv(
+                [values], [0.0], times, temperatures_c=temperatures if args.temperature else None
+            )
+        )
+        return 0
+    if args.positions < 3:
+        raise CommandError("--positions must be at least 3")
+    seconds = args.seconds_per_position or args.seconds or 10.0
+    if seconds <= 0 or seconds * preset.sample_rate_hz > 5_000_000:
+        raise CommandError("the dwell time must be positive and under 5 million samples")
+    step = 360.0 / args.positions
+    if args.part == "heading":
+        dials = heading_angles(args.positions, args.rotation, 0.0, step)
+    else:
+        dials = elevation_angles(args.positions, 0.0, step)
+    _finite("--warm-up", args.warm_up)
+    if not 0 <= args.warm_up <= 86_400:
+        raise CommandError("--warm-up must be between 0 and 86400 seconds")
+    run = simulate_run(
+        preset,
+        setup,
+        args.part,
+        dials,
+        seconds,
+        settle_s=args.settle,
+        seed=args.seed,
+        start_s=args.warm_up,
+    )
+    temperatures = run.temperatures_c if args.temperature else None
+    sys.stdout.write(
+        readings_to_long_csv(
+            run.positions, run.dial_angles_deg, run.times_s, temperatures_c=temperatures
+        )
+    )
+    return 0
+
+
+def _allan(args: argparse.Namespace) -> int:
+    values = parse_static_record(_read_text(args.file))
+    _finite("--rate", args.rate)
+    result = allan_deviation(to_deg_per_hour(values, args.unit), args.rate)
+    intervals = None
+    if args.intervals:
+        intervals = fit_intervals(result, args.rate, len(values), replicates=args.intervals)
+    if args.json:
+        payload = result.to_json()
+        payload["intervals"] = intervals.to_json() if intervals else None
+        print(to_json_text(payload))
+        return 0
+    print(f"{'tau (s)':>12} {'ADEV (°/h)':>14}")
+    for tau, adev in zip(result.taus_s, result.adev_deg_h, strict=True):
+        print(f"{tau:12.3f} {adev:14.6f}")
+
+    def interval(pair) -> str:
+        return f"  ({intervals.level:.0%} interval {pair[0]:.5g} … {pair[1]:.5g})" if pair else ""
+
+    print(f"ARW N = {result.arw_deg_rt_h:.5f} °/√h{interval(intervals and intervals.arw_deg_rt_h)}")
+    if result.bias_instability_deg_h is not None:
+        bias_range = intervals and intervals.bias_instability_deg_h
+        print(f"bias instability B = {result.bias_instability_deg_h:.5f} °/h{interval(bias_range)}")
+    if result.rrw_deg_h_rt_h is not None:
+        print(f"rate random walk K = {result.rrw_deg_h_rt_h:.5f} °/h/√h")
+    print(f"Allan minimum {result.adev_min_deg_h:.5f} °/h at τ = {result.tau_min_s:.1f} s")
+    print(f"recommended dwell per position ≈ {result.recommended_dwell_s:.0f} s")
+    if intervals is None:
+        print("(--intervals 40 adds bootstrap intervals: how far one record can be trusted)")
+    return 0
+
+
+def _guarded(handler):
+    def run(args: argparse.Namespace) -> int:
+        try:
+            return handler(args)
+        except (GyroInputError, CommandError) as error:
+            print(f"gyrolab {args.command}: {error}", file=sys.stderr)
+            return 2
+
+    return run
+
+
+def add_science_commands(commands) -> None:
+    solve = commands.add_parser("solve", help="heading, or latitude and Earth rate, from a CSV")
+    solve.add_argument("part", choices=["heading", "latitude"])
+    solve.add_argument("file", help="CSV file (wide or long layout); '-' reads stdin")
+    solve.add_argument(
+        "--rotation",
+        choices=["ccw", "cw"],
+        default="ccw",
+        help="heading: direction the table was turned (handout: ccw)",
+    )
+    solve.add_argument(
+        "--start-angle",
+        type=float,
+        default=0.0,
+        help="angle of position 1 (heading: relative azimuth; latitude: "
+        "elevation from the north horizon)",
+    )
+    solve.add_argument("--step", type=float, default=90.0, help="step between positions (deg)")
+    solve.add_argument("--unit", choices=UNITS, default="deg/h")
+    solve.add_argument("--latitude", type=float, help="true latitude φ0 (for percent errors)")
+    solve.add_argument(
+        "--earth-rate",
+        type=float,
+        default=EARTH_RATE_DEG_H,
+        help="true Earth rate Ω0 in °/h (default 15.041; the handout used 15.04)",
+    )
+    solve.add_argument("--true-azimuth", type=float, help="true azimuth of position 1 (deg)")
+    solve.add_argument(
+        "--gyro-preset",
+        choices=sorted(PRESETS),
+        help="the gyro's noise model (a simulator preset): the 1σ then includes correlated "
+        "noise (uncertainty_model 'allan') instead of assuming white noise",
+    )
+    solve.add_argument("--json", action="store_true")
+    solve.add_argument("--language", choices=["en", "zh-CN"], default="en")
+    solve.set_defaults(handler=_guarded(_solve))
+
+    simulate = commands.add_parser("simulate", help="simulated gyro readings as long CSV")
+    simulate.add_argument("part", nargs="?", choices=["heading", "latitude", "static"])
+    simulate.add_argument(
+        "--list-presets",
+        action="store_true",
+        help="print every preset's parameters (with --json: as JSON) and exit",
+    )
+    simulate.add_argument("--json", action="store_true", help="with --list-presets")
+    simulate.add_argument("--preset", choices=sorted(PRESETS), default="teaching-fog")
+    simulate.add_argument("--latitude", type=float)
+    simulate.add_argument("--earth-rate", type=float, default=EARTH_RATE_DEG_H)
+    simulate.add_argument(
+        "--azimuth",
+        type=float,
+        default=0.0,
+        help="true azimuth of position 1 (heading) or of the vertical plane",
+    )
+    simulate.add_argument("--seconds-per-position", type=float)
+    simulate.add_argument("--seconds", type=float, help="static: record length")
+    simulate.add_argument(
+        "--settle", type=float, default=0.0, help="seconds discarded after each turn"
+    )
+    simulate.add_argument("--rate", type=float, help="sample rate in Hz (default: the preset's)")
+    simulate.add_argument("--positions", type=int, default=4)
+    simulate.add_argument("--rotation", choices=["ccw", "cw"], default="ccw")
+    simulate.add_argument("--pitch", type=float, default=0.0)
+    simulate.add_argument("--roll", type=float, default=0.0)
+    simulate.add_argument(
+        "--elevation",
+        type=float,
+        default=0.0,
+        help="heading/static: axis elevation above the table plane",
+    )
+    simulate.add_argument("--indexing-sigma", type=float, help="arcsec per turn (default: preset)")
+    simulate.add_argument("--seed", type=int, default=0)
+    simulate.add_argument(
+        "--temperature",
+        action="store_true",
+        help="add the gyro case temperature (temperature_c, °C; rises during warm-up)",
+    )
+    simulate.add_argument(
+        "--warm-up",
+        type=float,
+        default=0.0,
+        metavar="SECONDS",
+        help="the gyro has been on this long before the first position (default 0: cold)",
+    )
+    simulate.set_defaults(handler=_guarded(_simulate))
+
+    allan = commands.add_parser("allan", help="Allan deviation of a static record")
+    allan.add_argument("file", help="CSV (long/wide with one position, or one value per line)")
+    allan.add_argument("--rate", type=float, required=True, help="sample rate in Hz")
+    allan.add_argument("--unit", choices=UNITS, default="deg/h")
+    allan.add_argument(
+        "--intervals",
+        type=int,
+        default=0,
+        metavar="REPLICATES",
+        help="bootstrap 68 %% intervals of N and B from this many "
+        "simulated records of the fitted model (e.g. 40; takes about a second per 10)",
+    )
+    allan.add_argument("--json", action="store_true")
+    allan.set_defaults(handler=_guarded(_allan))
+
+    from app.cli.error_scenarios import add_errors_command
+
+    add_errors_command(commands, _guarded, to_json_text)

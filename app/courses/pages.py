@@ -1,0 +1,288 @@
+"""Teacher pages: courses and their rosters."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import APIRouter, File, Form, HTTPException, Request, UploadFile
+from sqlmodel import Session, select
+
+from app.accounts.service import (
+    AccountError,
+    NewCredential,
+    add_student,
+    check_roster_against_accounts,
+    import_roster,
+    may_reset_password,
+    reset_password,
+    rotate_join_code,
+)
+from app.core.simulate import PRESETS
+from app.courses.roster_csv import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
+from app.models import Assignment, Course, Enrollment, User
+from app.web.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
+from app.web.exports import credentials_data_url
+from app.web.render import flash, redirect, render
+
+router = APIRouter(prefix="/courses", tags=["pages: courses"], include_in_schema=False)
+
+NameField = Annotated[str, Form(max_length=200)]
+
+
+def own_course(db: Session, teacher: User, course_id: int) -> Course:
+    """The teacher's own course, else 404 (never reveal that another teacher's exists)."""
+    course = db.get(Course, course_id)
+    if course is None or course.teacher_id != teacher.id:
+        raise HTTPException(404)
+    return course
+
+
+def enrolled_student(db: Session, course: Course, student_id: int) -> User:
+    enrollment = db.exec(
+        select(Enrollment).where(
+            Enrollment.course_id == course.id, Enrollment.student_id == student_id
+        )
+    ).first()
+    if enrollment is None:
+        raise HTTPException(404)
+    return db.get(User, student_id)
+
+
+def roster(db: Session, course: Course) -> list[User]:
+    """The course's students, each with ``may_reset`` (may this course's teacher give them a
+    one-time password?)."""
+    students = list(
+        db.exec(
+            select(User)
+            .join(Enrollment, Enrollment.student_id == User.id)
+            .where(Enrollment.course_id == course.id)
+            .order_by(User.username)
+        ).all()
+    )
+    teacher = db.get(User, course.teacher_id)
+    return [(student, may_reset_password(db, teacher, student)) for student in students]
+
+
+@router.get("")
+def course_list(teacher: TeacherUser):
+    return redirect("/")
+
+
+@router.post("", dependencies=[CsrfProtected])
+def create_course(request: Request, teacher: TeacherUser, db: SessionDep, name: NameField = ""):
+    if not name.strip():
+        response = redirect("/")
+        flash(response, request, "course.name_required", "error")
+        return response
+    course = Course(name=name.strip(), teacher_id=teacher.id)
+    db.add(course)
+    db.commit()
+    response = redirect(f"/courses/{course.id}")
+    flash(response, request, "course.created", "success", name=course.name)
+    return response
+
+
+def course_context(db: Session, course: Course, **extra) -> dict:
+    """What the course page shows: roster, assignments, and any form errors in ``extra``."""
+    assignments = db.exec(
+        select(Assignment)
+        .where(Assignment.course_id == course.id)
+        .order_by(Assignment.created_at.desc())
+    ).all()
+    return {
+        "course": course,
+        "students": roster(db, course),
+        "assignments": assignments,
+        "presets": sorted(PRESETS),
+        **extra,
+    }
+
+
+@router.get("/{course_id}")
+def course_page(request: Request, course_id: ObjectId, teacher: TeacherUser, db: SessionDep):
+    course = own_course(db, teacher, course_id)
+    return render(request, "courses/detail.html", course_context(db, course))
+
+
+@router.post("/{course_id}/rename", dependencies=[CsrfProtected])
+def rename_course(
+    request: Request,
+    course_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
+    name: NameField = "",
+):
+    course = own_course(db, teacher, course_id)
+    response = redirect(f"/courses/{course.id}")
+    if not name.strip():
+        flash(response, request, "course.name_required", "error")
+        return response
+    course.name = name.strip()
+    db.add(course)
+    db.commit()
+    flash(response, request, "course.renamed", "success", name=course.name)
+    return response
+
+
+@router.post("/{course_id}/archive", dependencies=[CsrfProtected])
+def archive_course(
+    request: Request,
+    course_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
+    archived: Annotated[bool, Form()] = True,
+):
+    course = own_course(db, teacher, course_id)
+    course.archived = archived
+    db.add(course)
+    db.commit()
+    response = redirect(f"/courses/{course.id}")
+    flash(response, request, "course.archived" if archived else "course.unarchived", "success")
+    return response
+
+
+@router.post("/{course_id}/students", dependencies=[CsrfProtected])
+def add_student_by_hand(
+    request: Request,
+    course_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
+    username: Annotated[str, Form(max_length=64)] = "",
+    display_name: NameField = "",
+    email: Annotated[str, Form(max_length=254)] = "",
+):
+    course = own_course(db, teacher, course_id)
+    context = course_context(
+        db, course, form={"username": username, "display_name": display_name, "email": email}
+    )
+    if not USERNAME_RE.match(username.strip()):
+        context["add_error"] = "roster.bad_username"
+        context["add_error_params"] = {"value": username}
+        return render(request, "courses/detail.html", context, 400)
+    if not display_name.strip():
+        context["add_error"] = "roster.no_name"
+        context["add_error_params"] = {"value": username}
+        return render(request, "courses/detail.html", context, 400)
+    try:
+        credential = add_student(
+            db, course, username.strip(), display_name.strip(), email.strip() or None
+        )
+    except AccountError as error:
+        db.rollback()
+        context = course_context(db, course, form=context["form"])
+        context["add_error"] = error.key
+        context["add_error_params"] = {**error.params, "code": course.join_code}
+        return render(request, "courses/detail.html", context, 400)
+    db.commit()
+    if credential is None:
+        response = redirect(f"/courses/{course.id}")
+        flash(response, request, "roster.enrolled_existing", "success", username=username)
+        return response
+    return render(
+        request,
+        "courses/credentials.html",
+        {
+            "course": course,
+            "credentials": [credential],
+            "enrolled": [],
+            "csv_href": credentials_data_url([credential]),
+        },
+    )
+
+
+@router.post("/{course_id}/import", dependencies=[CsrfProtected])
+def import_students(
+    request: Request,
+    course_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
+    roster_file: Annotated[UploadFile | None, File()] = None,
+):
+    course = own_course(db, teacher, course_id)
+    data = roster_file.file.read(MAX_ROSTER_BYTES + 1) if roster_file else b""
+    parsed = parse_roster(data)
+    problems = parsed.problems or check_roster_against_accounts(db, parsed.rows)
+    if problems or not parsed.rows:
+        return render(
+            request,
+            "courses/detail.html",
+            course_context(db, course, import_problems=problems),
+            400,
+        )
+    outcome = import_roster(db, course, parsed.rows)
+    db.commit()
+    return render(
+        request,
+        "courses/credentials.html",
+        {
+            "course": course,
+            "credentials": outcome.created,
+            "enrolled": outcome.enrolled,
+            "needs_code": outcome.needs_code,
+            "csv_href": credentials_data_url(outcome.created),
+        },
+    )
+
+
+@router.post("/{course_id}/students/{student_id}/reset-password", dependencies=[CsrfProtected])
+def reset_student_password(
+    request: Request,
+    course_id: ObjectId,
+    student_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
+):
+    course = own_course(db, teacher, course_id)
+    student = enrolled_student(db, course, student_id)
+    if not may_reset_password(db, teacher, student):
+        response = redirect(f"/courses/{course.id}")
+        flash(response, request, "roster.reset_needs_admin", "error", username=student.username)
+        return response
+    password = reset_password(db, student)
+    db.commit()
+    credential = NewCredential(student.username, student.display_name, password)
+    return render(
+        request,
+        "courses/credentials.html",
+        {
+            "course": course,
+            "credentials": [credential],
+            "enrolled": [],
+            "reset": True,
+            "csv_href": credentials_data_url([credential]),
+        },
+    )
+
+
+@router.post("/{course_id}/join-code", dependencies=[CsrfProtected])
+def new_join_code(request: Request, course_id: ObjectId, teacher: TeacherUser, db: SessionDep):
+    """Replace the course's join code (the old code and links stop working)."""
+    course = own_course(db, teacher, course_id)
+    rotate_join_code(db, course)
+    db.commit()
+    response = redirect(f"/courses/{course.id}#join")
+    flash(response, request, "join.code_rotated", "success", code=course.join_code)
+    return response
+
+
+@router.post("/{course_id}/students/{student_id}/remove", dependencies=[CsrfProtected])
+def remove_student(
+    request: Request,
+    course_id: ObjectId,
+    student_id: ObjectId,
+    teacher: TeacherUser,
+    db: SessionDep,
+):
+    """Take a student off the roster; their account and all their work stay."""
+    course = own_course(db, teacher, course_id)
+    student = enrolled_student(db, course, student_id)
+    enrollment = db.exec(
+        select(Enrollment).where(
+            Enrollment.course_id == course.id, Enrollment.student_id == student.id
+        )
+    ).one()
+    db.delete(enrollment)
+    db.commit()
+    response = redirect(f"/courses/{course.id}")
+    flash(response, request, "roster.removed", "success", username=student.username)
+    return response

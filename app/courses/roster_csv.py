@@ -1,0 +1,142 @@
+"""Parse a class roster CSV: username (or student number), display name, optional email.
+
+Accepts UTF-8 (with or without BOM) and GB18030 (what Excel in a Chinese locale writes),
+comma, semicolon or tab separated, with or without a header row.  Returns every row's
+problems at once so a teacher can fix the file in one go; callers create nothing when any
+row has a problem.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from dataclasses import dataclass, field
+
+MAX_ROSTER_BYTES = 1_000_000
+MAX_ROSTER_ROWS = 2000
+USERNAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}$")
+EMAIL_RE = re.compile(r"^[^@\s]+@[^@\s]+\.[^@\s]+$")
+
+HEADER_NAMES = {
+    "username": {
+        "username",
+        "user",
+        "login",
+        "student_number",
+        "student number",
+        "student_id",
+        "student id",
+        "学号",
+        "用户名",
+        "账号",
+    },
+    "display_name": {"display_name", "display name", "name", "full name", "姓名", "名字"},
+    "email": {"email", "e-mail", "mail", "邮箱", "电子邮件", "电子邮箱"},
+}
+
+
+@dataclass(frozen=True)
+class RosterRow:
+    line: int
+    username: str
+    display_name: str
+    email: str | None
+
+
+@dataclass
+class RosterProblem:
+    line: int
+    key: str  # message key in app.web.messages
+    params: dict = field(default_factory=dict)
+
+
+@dataclass
+class RosterParse:
+    rows: list[RosterRow]
+    problems: list[RosterProblem]
+
+    @property
+    def ok(self) -> bool:
+        return not self.problems and bool(self.rows)
+
+
+def decode_roster(data: bytes) -> str | None:
+    for encoding in ("utf-8-sig", "gb18030"):
+        try:
+            return data.decode(encoding)
+        except UnicodeDecodeError:
+            continue
+    return None
+
+
+def _header_map(cells: list[str]) -> dict[str, int] | None:
+    mapping: dict[str, int] = {}
+    for index, cell in enumerate(cells):
+        name = cell.strip().lower()
+        for column, aliases in HEADER_NAMES.items():
+            if name in aliases and column not in mapping:
+                mapping[column] = index
+    return mapping if "username" in mapping else None
+
+
+def parse_roster(data: bytes) -> RosterParse:
+    if len(data) > MAX_ROSTER_BYTES:
+        return RosterParse(
+            [], [RosterProblem(0, "roster.too_large", {"limit_kb": MAX_ROSTER_BYTES // 1000})]
+        )
+    text = decode_roster(data)
+    if text is None:
+        return RosterParse([], [RosterProblem(0, "roster.encoding")])
+    try:
+        dialect = csv.Sniffer().sniff(text[:4096], delimiters=",;\t")
+    except csv.Error:
+        dialect = csv.excel
+    lines = [
+        (number, cells)
+        for number, cells in enumerate(csv.reader(io.StringIO(text), dialect), start=1)
+        if any(cell.strip() for cell in cells)
+    ]
+    if not lines:
+        return RosterParse([], [RosterProblem(0, "roster.empty_file")])
+    mapping = _header_map(lines[0][1])
+    if mapping is None:
+        mapping = {"username": 0, "display_name": 1, "email": 2}
+    else:
+        lines = lines[1:]
+        if "display_name" not in mapping:
+            return RosterParse([], [RosterProblem(1, "roster.no_name_column")])
+    if len(lines) > MAX_ROSTER_ROWS:
+        return RosterParse([], [RosterProblem(0, "roster.too_many", {"limit": MAX_ROSTER_ROWS})])
+
+    rows: list[RosterRow] = []
+    problems: list[RosterProblem] = []
+    seen: dict[str, int] = {}
+    for number, cells in lines:
+
+        def cell(column: str, cells=cells) -> str:
+            index = mapping.get(column)
+            return cells[index].strip() if index is not None and index < len(cells) else ""
+
+        username, name, email = cell("username"), cell("display_name"), cell("email")
+        if not USERNAME_RE.match(username):
+            problems.append(RosterProblem(number, "roster.bad_username", {"value": username}))
+            continue
+        if not name:
+            problems.append(RosterProblem(number, "roster.no_name", {"value": username}))
+            continue
+        if len(name) > 128:
+            problems.append(RosterProblem(number, "roster.name_too_long", {"value": username}))
+            continue
+        if email and not EMAIL_RE.match(email):
+            problems.append(RosterProblem(number, "roster.bad_email", {"value": email}))
+            continue
+        key = username.lower()
+        if key in seen:
+            problems.append(
+                RosterProblem(number, "roster.duplicate", {"value": username, "other": seen[key]})
+            )
+            continue
+        seen[key] = number
+        rows.append(RosterRow(number, username, name, email or None))
+    return RosterParse(rows, problems)

@@ -1,0 +1,169 @@
+"""The error-analysis explorer pages: heading error against azimuth, and dwell time."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from typing import Annotated, Literal
+
+from fastapi import APIRouter, HTTPException, Query, Request
+from fastapi.responses import Response
+from pydantic import BaseModel, Field
+
+from app.core.simulate import PRESETS
+from app.explore.scenarios import (
+    SCENARIOS,
+    ExplorerInput,
+    drift_order_curves,
+    dwell_curve,
+    heading_error_curves,
+)
+from app.web.deps import CurrentUser
+from app.web.i18n import translator
+from app.web.render import render, request_language
+
+router = APIRouter(prefix="/explore", tags=["pages: explorer"], include_in_schema=False)
+
+
+class ExplorerQuery(BaseModel):
+    """The explorer's controls, bounded so every request answers in well under a second."""
+
+    method: Literal["two", "four", "both", "seeker"] = "both"
+    latitude_deg: float = Field(60.0, ge=-85, le=85)
+    preset: Literal["teaching-fog", "tactical-fog", "navigation-fog", "mems"] = "navigation-fog"
+    noise: bool = True
+    dwell_s: float = Field(30.0, ge=1, le=600)
+    runs: int = Field(8, ge=1, le=40)
+    drift_deg_h: float = Field(0.0, ge=-5, le=5)
+    scale_factor_ppm: float = Field(0.0, ge=-50_000, le=50_000)
+    latitude_error_deg: float = Field(0.0, ge=-5, le=5)
+    indexing_arcsec: float = Field(0.0, ge=-3600, le=3600)
+    indexing_stop: int = Field(2, ge=2, le=4)
+    pitch_deg: float = Field(0.0, ge=-30, le=30)
+    roll_deg: float = Field(0.0, ge=-30, le=30)
+    east_tilt_deg: float = Field(0.0, ge=-10, le=10)
+    level_deg: float = Field(0.0, ge=-10, le=10)
+    bias_drift_deg_h_per_h: float = Field(1.0, ge=-20, le=20)
+
+    def explorer_input(self) -> ExplorerInput:
+        """The heading-error chart's inputs (the drift-order chart has its own)."""
+        return ExplorerInput(**self.model_dump(exclude={"bias_drift_deg_h_per_h"}))
+
+
+QueryDep = Annotated[ExplorerQuery, Query()]
+
+
+@router.get("")
+def explorer_page(request: Request, user: CurrentUser):
+    _ = translator(request_language(request))
+    return render(
+        request,
+        "explore/index.html",
+        {
+            "scenarios": SCENARIOS,
+            "presets": sorted(PRESETS),
+            "defaults": ExplorerQuery().model_dump(),
+            "plotly_url": request.app.state.plotly_url,
+            "messages": {key: _(key) for key in JS_MESSAGES},
+            "scenario_texts": {key: _(f"scenario_text.{key}") for key in SCENARIOS},
+        },
+    )
+
+
+JS_MESSAGES = (
+    "explore.axis_azimuth",
+    "explore.axis_error",
+    "explore.formula",
+    "explore.monte_carlo",
+    "explore.method_two",
+    "explore.method_four",
+    "explore.method_seeker",
+    "explore.runs_used",
+    "explore.dwell_axis",
+    "explore.sigma_axis",
+    "explore.floor",
+    "explore.white_only",
+    "explore.expected",
+    "explore.chart_title",
+    "explore.dwell_title",
+    "explore.knee",
+    "explore.orders_title",
+    "explore.order_1234",
+    "explore.order_1324",
+    "explore.order_12344321",
+)
+
+
+@router.get("/data")
+def explorer_data(user: CurrentUser, query: QueryDep):
+    curves, info = heading_error_curves(query.explorer_input())
+    return {
+        "curves": [c.__dict__ for c in curves],
+        "info": info,
+        "dwell": dwell_curve(query.preset, query.latitude_deg),
+        "orders": drift_order_curves(
+            query.latitude_deg, query.dwell_s, query.bias_drift_deg_h_per_h
+        ),
+    }
+
+
+@router.get("/data.csv")
+def explorer_csv(
+    request: Request,
+    user: CurrentUser,
+    query: QueryDep,
+    chart: Literal["heading", "dwell", "orders"] = "heading",
+):
+    """The data behind either chart, as CSV with labelled units."""
+    _ = translator(request_language(request))
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    if chart == "orders":
+        data = drift_order_curves(query.latitude_deg, query.dwell_s, query.bias_drift_deg_h_per_h)
+        writer.writerow(
+            ["true_azimuth_deg", *[f"heading_error_deg_order_{k}" for k in data["orders"]]]
+        )
+        for index, azimuth in enumerate(data["azimuth_deg"]):
+            writer.writerow(
+                [f"{azimuth:g}", *[f"{errors[index]:.6f}" for errors in data["orders"].values()]]
+            )
+    elif chart == "dwell":
+        data = dwell_curve(query.preset, query.latitude_deg)
+        writer.writerow(["dwell_s", "heading_sigma_deg", "white_noise_only_deg", "floor_deg"])
+        for row in zip(data["dwell_s"], data["sigma_deg"], data["white_only_deg"], strict=True):
+            writer.writerow(
+                [f"{row[0]:.3f}", f"{row[1]:.6f}", f"{row[2]:.6f}", f"{data['floor_deg']:.6f}"]
+            )
+    else:
+        curves, info = heading_error_curves(query.explorer_input())
+        writer.writerow(
+            [
+                "method",
+                "kind",
+                "true_azimuth_deg",
+                "heading_error_deg",
+                "monte_carlo_std_deg",
+                "runs",
+            ]
+        )
+        for curve in curves:
+            for azimuth, value in zip(curve.azimuths_deg, curve.formula_deg, strict=True):
+                writer.writerow([curve.method, "first_order", azimuth, _num(value), "", ""])
+            for azimuth, mean, std in zip(
+                curve.mc_azimuths_deg, curve.mc_mean_deg, curve.mc_std_deg, strict=True
+            ):
+                writer.writerow(
+                    [curve.method, "monte_carlo", azimuth, _num(mean), _num(std), info["runs"]]
+                )
+    if not buffer.getvalue():
+        raise HTTPException(400)
+    return Response(
+        "\ufeff" + buffer.getvalue(),
+        media_type="text/csv; charset=utf-8",
+        headers={"Content-Disposition": f'attachment; filename="gyrolab-explorer-{chart}.csv"'},
+    )
+
+
+def _num(value) -> str:
+    return "" if value is None or not math.isfinite(value) else f"{value:.6f}"

@@ -1,0 +1,127 @@
+"""Creating lab sessions and finding the ones a user may use (shared by pages and the API)."""
+
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass
+
+from sqlmodel import Session, select
+
+from app.core.exceptions import GyroInputError
+from app.core.simulate import PRESETS
+from app.lab.sim import new_truth
+from app.models import Assignment, Course, Enrollment, LabSession, Role, User, utcnow
+from app.review.service import draw_truth
+
+
+class NotVisible(LookupError):
+    """The object does not exist for this user (pages answer 404)."""
+
+
+def own_session(db: Session, user: User, session_id: int) -> LabSession:
+    session = db.get(LabSession, session_id)
+    if session is None or session.owner_id != user.id:
+        raise NotVisible()
+    return session
+
+
+def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignment:
+    """An assignment of a course the student is enrolled in (or the teacher owns)."""
+    assignment = db.get(Assignment, assignment_id)
+    course = db.get(Course, assignment.course_id) if assignment else None
+    if assignment is None or course is None:
+        raise NotVisible()
+    if user.role == Role.teacher:
+        if course.teacher_id != user.id:
+            raise NotVisible()
+        return assignment
+    enrolled = db.exec(
+        select(Enrollment).where(
+            Enrollment.course_id == assignment.course_id, Enrollment.student_id == user.id
+        )
+    ).first()
+    if enrolled is None or course.archived:
+        raise NotVisible()
+    return assignment
+
+
+@dataclass
+class SessionSettings:
+    title: str = ""
+    latitude_deg: float | None = None
+    earth_rate_deg_h: float | None = None
+    rotation: str = "ccw"
+    heading_start_deg: float = 0.0
+    latitude_start_deg: float = 0.0
+    latitude_step_deg: float = 90.0
+    preset: str = "teaching-fog"
+    symmetric_order: bool = False  # positions 5–8 revisit 4–1
+
+
+def start_session(
+    db: Session,
+    user: User,
+    settings: SessionSettings,
+    assignment: Assignment | None,
+    default_title: str,
+) -> tuple[LabSession, bool]:
+    """A new session (added, not committed), or the existing one for this assignment.
+
+    Returns (session, created).  Raises GyroInputError for impossible settings.
+    """
+    angles = (settings.heading_start_deg, settings.latitude_start_deg, settings.latitude_step_deg)
+    if not all(math.isfinite(a) for a in angles) or abs(settings.latitude_step_deg) < 1:
+        raise GyroInputError(
+            "lab.bad_angles",
+            "The start angles and the step must be finite numbers, the step at least 1°.",
+        )
+    if settings.rotation not in ("ccw", "cw"):
+        raise GyroInputError("rotation.unknown", "Rotation must be 'ccw' or 'cw'.")
+    if assignment is not None:
+        existing = db.exec(
+            select(LabSession).where(
+                LabSession.assignment_id == assignment.id, LabSession.owner_id == user.id
+            )
+        ).first()
+        if existing is not None:  # one session per student and assignment
+            return existing, False
+    seed, azimuth = new_truth()
+    session = LabSession(
+        owner_id=user.id,
+        title=settings.title.strip()[:200],
+        latitude_deg=0.0,
+        heading_rotation=settings.rotation,
+        heading_start_deg=settings.heading_start_deg,
+        latitude_start_deg=settings.latitude_start_deg,
+        latitude_step_deg=settings.latitude_step_deg,
+        sim_seed=seed,
+        sim_azimuth_deg=azimuth,
+        sim_clock_at=utcnow(),  # the simulated gyro is switched on with the session
+        symmetric_order=settings.symmetric_order,
+    )
+    if assignment is not None:
+        draw_truth(assignment, session, random.SystemRandom())
+        session.assignment_id = assignment.id
+        session.latitude_deg = assignment.latitude_deg
+        session.earth_rate_deg_h = assignment.earth_rate_deg_h
+        session.simulator_preset = assignment.simulator_preset
+        session.min_readings = assignment.min_readings
+        session.title = session.title or assignment.title
+    else:
+        if settings.latitude_deg is None or settings.earth_rate_deg_h is None:
+            raise GyroInputError(
+                "lab.station_required", "Enter the station's latitude and Earth rate."
+            )
+        if not (math.isfinite(settings.latitude_deg) and -90 <= settings.latitude_deg <= 90):
+            raise GyroInputError("lab.bad_latitude", "The latitude must be between −90° and 90°.")
+        if not (math.isfinite(settings.earth_rate_deg_h) and 0 < settings.earth_rate_deg_h < 1000):
+            raise GyroInputError(
+                "lab.bad_earth_rate", "The Earth rate must be a positive number of °/h."
+            )
+        session.latitude_deg = settings.latitude_deg
+        session.earth_rate_deg_h = settings.earth_rate_deg_h
+        session.simulator_preset = settings.preset if settings.preset in PRESETS else "teaching-fog"
+        session.title = session.title or default_title
+    db.add(session)
+    return session, True

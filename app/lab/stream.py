@@ -1,0 +1,268 @@
+"""Live readings from the simulated gyro over a WebSocket, in batched frames.
+
+Protocol (JSON text frames):
+  client → {"action": "start", "part": "heading", "position": 2, "dwell_s": 30,
+            "settle_s": 5, "speed": 10}
+  server → {"type": "started", "rate_hz": 1.0, "total": 30, "dial_angle_deg": -90}
+  server → {"type": "samples", "t": [...], "v": [...], "done": 12, "total": 30}
+  client → {"action": "stop"}           (ends the dwell early; what was recorded is kept)
+  server → {"type": "saved", "position": 2, "n": 30}  or  {"type": "error", "message": ...}
+
+Only measured readings leave the server: the run's true azimuth, biases and indexing
+errors stay in the database.  A recording is saved in one transaction when it ends; a
+dropped connection saves nothing and the page says the position must be recorded again.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+from urllib.parse import urlsplit
+
+import numpy as np
+from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+from sqlmodel import select
+from starlette.concurrency import run_in_threadpool
+
+from app.accounts.security import session_is_live, token_digest
+from app.config import get_settings
+from app.core.exceptions import GyroInputError
+from app.db import write_session
+from app.lab.sim import (
+    MAX_DWELL_S,
+    MAX_SETTLE_S,
+    SimulatedTake,
+    position_count,
+    set_gyro_clock,
+)
+from app.lab.store import PARTS, POSITIONS, store_take
+from app.models import Assignment, AuthSession, LabSession, User
+from app.web.deps import ObjectId
+from app.web.i18n import translate
+from app.web.render import SESSION_COOKIE, request_language
+
+router = APIRouter(tags=["streams"])
+
+FRAME_SECONDS = 0.2
+MAX_SPEED = 60.0
+INBOX_FRAMES = 64
+
+
+def _same_origin(websocket: WebSocket) -> bool:
+    origin = websocket.headers.get("origin")
+    if not origin:
+        return True  # not a browser (browsers always send Origin on WebSockets)
+    host = websocket.headers.get("host", "")
+    return urlsplit(origin).netloc == host
+
+
+def _owner(websocket: WebSocket, session_id: int) -> tuple[User, LabSession] | None:
+    token = websocket.cookies.get(SESSION_COOKIE)
+    if not token:
+        return None
+    settings = get_settings()
+    with write_session() as db:
+        record = db.exec(
+            select(AuthSession).where(AuthSession.token_hash == token_digest(token))
+        ).first()
+        if record is None or not session_is_live(record, settings):
+            return None
+        user = db.get(User, record.user_id)
+        session = db.get(LabSession, session_id)
+        if (
+            user is None
+            or user.must_change_password
+            or session is None
+            or session.owner_id != user.id
+        ):
+            return None
+        if session.assignment_id is not None:
+            assignment = db.get(Assignment, session.assignment_id)
+            if assignment is None or "simulator" not in assignment.methods:
+                return None
+        return user, session
+
+
+def _mark_started(session_id: int, part: str, position: int) -> LabSession:
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        session.stream_part, session.stream_position = part, position
+        db.add(session)
+        return session
+
+
+def _save(
+    session_id: int, part: str, position: int, dial: float, values, times, end_s: float
+) -> int:
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        session.stream_part = session.stream_position = None
+        set_gyro_clock(session, end_s)  # the gyro ran through the recording
+        store_take(
+            db,
+            session,
+            part=part,
+            position=position,
+            angle_deg=dial,
+            values=np.asarray(values),
+            times=np.asarray(times),
+            source="simulator",
+        )
+        return len(values)
+
+
+def _clear_mark(session_id: int) -> None:
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        session.stream_part = session.stream_position = None
+        db.add(session)
+
+
+class StreamError(Exception):
+    def __init__(self, key: str, **params) -> None:
+        super().__init__(key)
+        self.key, self.params = key, params
+
+
+def _number(message: dict, name: str, default: float, low: float, high: float) -> float:
+    value = message.get(name, default)
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise StreamError("stream.bad_number", name=name)
+    if not low <= value <= high:
+        raise StreamError("stream.out_of_range", name=name, low=low, high=high)
+    return float(value)
+
+
+@router.websocket("/lab/sessions/{session_id}/stream")
+async def stream(websocket: WebSocket, session_id: ObjectId) -> None:
+    if not _same_origin(websocket):
+        await websocket.close(code=4403)
+        return
+    found = await run_in_threadpool(_owner, websocket, session_id)
+    if found is None:
+        await websocket.close(code=4404)
+        return
+    language = request_language(websocket)
+    await websocket.accept()
+    inbox: asyncio.Queue = asyncio.Queue(maxsize=INBOX_FRAMES)  # a flood waits in the socket
+    reader = asyncio.create_task(_read_into(websocket, inbox))
+    try:
+        while True:
+            message = await inbox.get()
+            if message is None:
+                return
+            if message.get("action") != "start":
+                continue
+            try:
+                await _record(websocket, session_id, message, inbox)
+            except StreamError as error:
+                await websocket.send_json(
+                    {
+                        "type": "error",
+                        "key": error.key,
+                        "message": translate(error.key, language, **error.params),
+                    }
+                )
+    except (WebSocketDisconnect, RuntimeError, _Closed):
+        return
+    finally:
+        reader.cancel()
+
+
+class _Closed(Exception):
+    """The client went away during a recording: nothing is saved."""
+
+
+async def _read_into(websocket: WebSocket, inbox: asyncio.Queue) -> None:
+    """Read client frames into a queue (so waiting for a 'stop' never loses a frame)."""
+    try:
+        while True:
+            text = await websocket.receive_text()
+            try:
+                message = json.loads(text)
+            except json.JSONDecodeError:
+                continue
+            if isinstance(message, dict):
+                await inbox.put(message)
+    except (WebSocketDisconnect, RuntimeError):
+        await inbox.put(None)
+
+
+async def _record(
+    websocket: WebSocket, session_id: int, message: dict, inbox: asyncio.Queue
+) -> None:
+    part, position = message.get("part"), message.get("position")
+    if part not in PARTS or not isinstance(position, int) or not 1 <= position <= POSITIONS:
+        raise StreamError("stream.bad_position")
+    dwell = _number(message, "dwell_s", 30.0, 1.0, MAX_DWELL_S)
+    settle = _number(message, "settle_s", 0.0, 0.0, MAX_SETTLE_S)
+    speed = _number(message, "speed", 1.0, 0.1, MAX_SPEED)
+    found = await run_in_threadpool(_owner, websocket, session_id)
+    if found is None:
+        raise StreamError("stream.gone")
+    _, session = found
+    if position > position_count(session):
+        raise StreamError("lab.needs_symmetric", position=position)
+    if getattr(session, f"sim_table_{part}") != position:
+        raise StreamError("stream.turn_first", position=position)
+    session = await run_in_threadpool(_mark_started, session_id, part, position)
+    take = SimulatedTake(session, part, position, settle)
+    total = max(1, int(round(dwell * take.rate_hz)))
+    await websocket.send_json(
+        {
+            "type": "started",
+            "rate_hz": take.rate_hz,
+            "total": total,
+            "dial_angle_deg": take.dial_angle_deg,
+            "part": part,
+            "position": position,
+        }
+    )
+    values, times = [], []
+    # The server alone paces a recording: samples are due by the clock (rate × speed ×
+    # elapsed time), so frames a client sends in between change nothing.
+    loop = asyncio.get_running_loop()
+    started = loop.time()
+    next_tick = started + FRAME_SECONDS
+    stopped = False
+    while len(values) < total and not stopped:
+        try:
+            incoming = await asyncio.wait_for(
+                inbox.get(), timeout=max(0.0, next_tick - loop.time())
+            )
+        except TimeoutError:
+            incoming = {}
+        if incoming is None:
+            raise _Closed()
+        stopped = incoming.get("action") == "stop"
+        now = loop.time()
+        if not stopped and now < next_tick:
+            continue  # any other client frame: not a reason to send samples
+        next_tick = max(next_tick + FRAME_SECONDS, now)
+        due = min(total, int(take.rate_hz * speed * (now - started)))
+        count = due - len(values)
+        if stopped and not values:
+            count = max(count, 1)
+        if count <= 0:
+            continue
+        batch, batch_times = take.next(count)
+        values.extend(batch.tolist())
+        times.extend(batch_times.tolist())
+        await websocket.send_json(
+            {
+                "type": "samples",
+                "t": batch_times.tolist(),
+                "v": batch.tolist(),
+                "done": len(values),
+                "total": total,
+            }
+        )
+    try:
+        saved = await run_in_threadpool(
+            _save, session_id, part, position, take.dial_angle_deg, values, times, take.end_s
+        )
+    except GyroInputError as error:  # e.g. stopped before the minimum number of readings
+        await run_in_threadpool(_clear_mark, session_id)
+        raise StreamError(error.key, **error.params) from error
+    await websocket.send_json({"type": "saved", "part": part, "position": position, "n": saved})

@@ -1,0 +1,45 @@
+"""The dashboard: what a teacher or a student sees after logging in."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Request
+from sqlmodel import select
+
+from app.models import Assignment, Course, Enrollment, LabSession, Role, User
+from app.web.deps import CurrentUser, SessionDep
+from app.web.render import redirect, render
+
+router = APIRouter(tags=["pages: home"], include_in_schema=False)
+
+
+@router.get("/")
+def dashboard(request: Request, user: CurrentUser, db: SessionDep):
+    if user.role == Role.admin:
+        return redirect("/admin/accounts")
+    if user.role == Role.teacher:
+        courses = db.exec(
+            select(Course)
+            .where(Course.teacher_id == user.id)
+            .order_by(Course.archived, Course.name)
+        ).all()
+        counts = {
+            course.id: len(
+                db.exec(select(Enrollment.id).where(Enrollment.course_id == course.id)).all()
+            )
+            for course in courses
+        }
+        return render(request, "dashboard/teacher.html", {"courses": courses, "counts": counts})
+    rows = db.exec(
+        select(Course, User)
+        .join(Enrollment, Enrollment.course_id == Course.id)
+        .join(User, User.id == Course.teacher_id)
+        .where(Enrollment.student_id == user.id, Course.archived == False)  # noqa: E712
+        .order_by(Course.name)
+    ).all()
+    work = db.exec(
+        select(LabSession, Assignment)
+        .join(Assignment, Assignment.id == LabSession.assignment_id)
+        .where(LabSession.owner_id == user.id)
+        .order_by(LabSession.updated_at.desc())
+    ).all()
+    return render(request, "dashboard/student.html", {"courses": rows, "work": work})

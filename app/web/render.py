@@ -1,0 +1,130 @@
+"""Page rendering: one Jinja environment, a shared base context, and flash messages."""
+
+from __future__ import annotations
+
+import base64
+import json
+import secrets
+from typing import Any
+
+from fastapi import Request
+from fastapi.responses import HTMLResponse, RedirectResponse
+from fastapi.templating import Jinja2Templates
+
+from app import __version__
+from app.accounts.security import signed, unsigned
+from app.config import get_settings
+from app.paths import TEMPLATES_DIR
+from app.web.i18n import LANGUAGE_NAMES, LANGUAGES, negotiate, normalise, translator
+
+SESSION_COOKIE = "gyrolab_session"
+CSRF_COOKIE = "gyrolab_csrf"
+# Over https the pre-login CSRF cookie carries the __Host- prefix: browsers accept it only
+# from this very host (Secure, Path=/, no Domain), so a sibling subdomain cannot plant a
+# known token for a log-in CSRF.  Plain http (development) keeps the plain name.
+HOST_CSRF_COOKIE = "__Host-" + CSRF_COOKIE
+FLASH_COOKIE = "gyrolab_flash"
+LANG_COOKIE = "gyrolab_lang"
+
+templates = Jinja2Templates(directory=str(TEMPLATES_DIR))
+templates.env.globals["version"] = __version__
+templates.env.globals["LANGUAGE_NAMES"] = LANGUAGE_NAMES
+templates.env.globals["LANGUAGES"] = LANGUAGES
+
+
+def request_language(request: Request) -> str:
+    user = getattr(request.state, "user", None)
+    return (
+        (user and normalise(user.language))
+        or normalise(request.cookies.get(LANG_COOKIE))
+        or negotiate(request.headers.get("accept-language"))
+    )
+
+
+def is_https(request: Request) -> bool:
+    return request.url.scheme == "https"
+
+
+def csrf_cookie_name(request: Request) -> str:
+    return HOST_CSRF_COOKIE if is_https(request) else CSRF_COOKIE
+
+
+def set_cookie(response, request: Request, name: str, value: str, max_age: int | None = None):
+    response.set_cookie(
+        name,
+        value,
+        max_age=max_age,
+        httponly=True,
+        samesite="lax",
+        secure=is_https(request),
+        path="/",
+    )
+
+
+# --- flash messages: a signed cookie read once by the next page -----------------------------
+
+
+def flash(response, request: Request, key: str, kind: str = "info", **params: Any) -> None:
+    pending = list(getattr(request.state, "flashes_out", []))
+    pending.append({"key": key, "kind": kind, "params": params})
+    request.state.flashes_out = pending
+    raw = base64.urlsafe_b64encode(json.dumps(pending, ensure_ascii=False).encode()).decode()
+    set_cookie(response, request, FLASH_COOKIE, signed(raw, get_settings().secret_key), 300)
+
+
+def _take_flashes(request: Request) -> list[dict]:
+    raw = unsigned(request.cookies.get(FLASH_COOKIE), get_settings().secret_key)
+    if not raw:
+        return []
+    try:
+        items = json.loads(base64.urlsafe_b64decode(raw.encode()))
+    except (ValueError, json.JSONDecodeError):
+        return []
+    return [item for item in items if isinstance(item, dict) and "key" in item]
+
+
+def redirect(url: str) -> RedirectResponse:
+    return RedirectResponse(url, status_code=303)
+
+
+def csrf_token_for(request: Request) -> str:
+    """The session's CSRF token, or for a visitor not logged in a double-submit cookie value."""
+    auth = getattr(request.state, "auth", None)
+    if auth is not None:
+        return auth.csrf_token
+    existing = getattr(request.state, "anon_csrf", None) or request.cookies.get(
+        csrf_cookie_name(request)
+    )
+    if not existing:
+        existing = request.state.anon_csrf = secrets.token_urlsafe(32)
+    return existing
+
+
+def render(
+    request: Request, template: str, context: dict[str, Any] | None = None, status_code: int = 200
+) -> HTMLResponse:
+    language = request_language(request)
+    _ = translator(language)
+    flashes = [
+        {"kind": item.get("kind", "info"), "text": _(item["key"], **item.get("params", {}))}
+        for item in _take_flashes(request)
+    ]
+    base = {
+        "request": request,
+        "_": _,
+        "lang": language,
+        "user": getattr(request.state, "user", None),
+        "csrf_token": csrf_token_for(request),
+        "flashes": flashes,
+        "base_url": str(request.base_url),
+    }
+    response = templates.TemplateResponse(
+        request, template, {**base, **(context or {})}, status_code=status_code
+    )
+    response.headers["Cache-Control"] = "no-store"
+    if flashes:
+        response.delete_cookie(FLASH_COOKIE, path="/")
+    anon = getattr(request.state, "anon_csrf", None)
+    if anon and request.cookies.get(csrf_cookie_name(request)) != anon:
+        set_cookie(response, request, csrf_cookie_name(request), anon)
+    return response
