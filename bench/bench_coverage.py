@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.noise_model import GyroNoise, back_to_back
 from app.core.simulate import PRESETS, Setup, simulate_run
 from app.core.solve import heading_angles, solve_heading
@@ -68,7 +68,7 @@ def coverage(preset_name: str, dwell_s: float, runs: int, seed: int = 2026) -> C
                 position_cov=cov,
                 indexing_sigma_deg=noise.indexing_sigma_deg,
             )
-        except GyroInputError:
+        except UserError:
             continue  # not significant: refused, never printed
         solved += 1
         white_hits += abs(white.azimuth_error_deg) <= white.azimuth_sigma_deg

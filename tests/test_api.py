@@ -58,7 +58,9 @@ def test_token_me_and_errors(client, student, auth):
     me = client.get(f"{API}/me", headers=auth).json()
     assert me["username"] == "student1" and me["role"] == "student"
     assert client.get(f"{API}/me").status_code == 401
-    assert client.get(f"{API}/me").json() == {"detail": "Not authenticated."}
+    assert client.get(f"{API}/me").json()["detail"] == "Not authenticated."
+    chinese = client.get(f"{API}/me", headers={"Accept-Language": "zh-CN"}).json()
+    assert chinese == {"detail": "未认证：请发送“Authorization: Bearer <令牌>”或先登录。", "key": "api.not_authenticated"}
     assert client.get(f"{API}/me", headers={"Authorization": "Bearer nope"}).status_code == 401
     wrong = client.post(f"{API}/auth/token", data={"username": "student1", "password": "x"})
     assert wrong.status_code == 401 and wrong.json()["detail"] == "Wrong username or password."

@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.stats import t as student_t
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.solve import (
     elevation_angles,
     fit_sinusoid,
@@ -234,7 +234,7 @@ def test_azimuth_error_wraps_around_north():
     ],
 )
 def test_bad_input_raises_a_clear_error(positions, angles, key):
-    with pytest.raises(GyroInputError) as info:
+    with pytest.raises(UserError) as info:
         solve_heading(positions, angles)
     assert info.value.key == key
     assert str(info.value)[0].isupper() and str(info.value).endswith(".")
@@ -245,13 +245,13 @@ def test_amplitude_buried_in_noise_is_refused():
     positions = [
         rng.normal(0, 5.0, 10) + 0.5 * math.cos(math.radians(a)) for a in heading_angles(4)
     ]
-    with pytest.raises(GyroInputError, match="not clearly larger"):
+    with pytest.raises(UserError, match="not clearly larger"):
         solve_heading(positions, heading_angles(4))
 
 
 def test_latitude_outside_range_is_explained():
     w = [-11.14, -9.82, 11.82, 9.92]  # started pointing south
-    with pytest.raises(GyroInputError) as info:
+    with pytest.raises(UserError) as info:
         solve_latitude([[v] for v in w], elevation_angles(4))
     assert info.value.key == "readings.latitude_out_of_range"
 
@@ -268,7 +268,7 @@ def test_two_position_method():
         result = solve_two_position(h + 3.0, -h + 3.0, latitude_deg=phi)
         assert result.gamma_deg == pytest.approx(gamma, abs=1e-9)
         assert result.candidates_deg == pytest.approx((gamma, 360 - gamma))
-    with pytest.raises(GyroInputError):
+    with pytest.raises(UserError):
         solve_two_position(30.0, -30.0, latitude_deg=phi)
     clipped = solve_two_position(11.6, -11.6, latitude_deg=phi)
     assert clipped.clipped and clipped.gamma_deg == 0.0

@@ -156,7 +156,7 @@ def test_text_with_nul_is_refused_and_nothing_is_saved(app, client, backend):
         assert db.exec(select(Course)).all() == []
     token = client.post("/api/v1/auth/token", data={"username": "\x00", "password": "x"})
     assert token.status_code == 400
-    assert token.json() == {"detail": "error.nul_text"}
+    assert token.json()["key"] == "error.nul_text" and "NUL" in token.json()["detail"]
 
 
 @pytest.mark.postgres_only

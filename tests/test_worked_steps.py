@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude, render_text
 from app.core.readings import parse_readings_csv
 from app.core.solve import heading_angles, solve_heading, solve_latitude
@@ -127,16 +127,16 @@ def test_latitude_error_in_degrees():
 
 @pytest.mark.parametrize("text", ["1_000", "nan", "inf", "Infinity", " 1 2", "0x10", "1e5e5"])
 def test_only_plain_decimals_are_numbers(text):
-    with pytest.raises(GyroInputError) as caught:
+    with pytest.raises(UserError) as caught:
         parse_readings_csv(f"position_1,position_2,position_3\n1,2,{text}\n")
     assert caught.value.key == "csv.not_a_number"
 
 
 def test_overflowing_numbers_are_out_of_range():
-    with pytest.raises(GyroInputError) as caught:
+    with pytest.raises(UserError) as caught:
         parse_readings_csv("position_1,position_2,position_3\n1,2,1e400\n")
     assert caught.value.key == "csv.out_of_range" and "out of range" in str(caught.value)
-    with pytest.raises(GyroInputError) as converted:
+    with pytest.raises(UserError) as converted:
         to_deg_per_hour([1e306, 1.0], "deg/s")
     assert converted.value.key == "readings.out_of_range"
     assert "finite" not in str(converted.value)
@@ -144,7 +144,7 @@ def test_overflowing_numbers_are_out_of_range():
 
 @pytest.mark.parametrize("start", [1e20, -1e20, 3601.0, math.inf, math.nan])
 def test_start_angle_gets_a_range_message(start):
-    with pytest.raises(GyroInputError) as caught:
+    with pytest.raises(UserError) as caught:
         heading_angles(4, "ccw", start)
     assert caught.value.key == "angles.start_out_of_range"
     assert "inf" not in str(caught.value) and "nan" not in str(caught.value)
@@ -152,7 +152,7 @@ def test_start_angle_gets_a_range_message(start):
 
 def test_huge_readings_never_print_inf_or_nan():
     positions = [[1e300] * 3, [2.0] * 3, [3.0] * 3, [4.0] * 3]
-    with pytest.raises(GyroInputError) as caught:
+    with pytest.raises(UserError) as caught:
         solve_heading(positions, ANGLES)
     assert caught.value.key == "readings.out_of_range"
     message = str(caught.value).lower()
@@ -198,7 +198,7 @@ def test_one_reading_per_position_uses_the_closure_and_refuses_noise():
     result = solve_heading([[10.71], [2.79], [-8.95], [-0.94]], ANGLES)
     assert result.fit.uncertainty_model == "closure" and result.azimuth_sigma_deg > 0
     assert result.to_json()["uncertainty_model"] == "closure"
-    with pytest.raises(GyroInputError) as caught:
+    with pytest.raises(UserError) as caught:
         solve_heading([[0.30], [-0.25], [0.10], [0.35]], ANGLES)  # |d| ≈ H: pure noise
     assert caught.value.key == "readings.amplitude_too_small"
 
@@ -222,7 +222,7 @@ def test_a_refusal_never_prints_a_non_finite_sigma():
     from app.core.solve import _check_significant
 
     for sigma in (math.nan, math.inf):
-        with pytest.raises(GyroInputError) as caught:
+        with pytest.raises(UserError) as caught:
             _check_significant(0.0, sigma, "horizontal", 1.0)
         message = str(caught.value).lower()
         assert "nan" not in message and "inf" not in message

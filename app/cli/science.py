@@ -16,7 +16,7 @@ import numpy as np
 
 from app.core.allan import allan_deviation
 from app.core.allan_intervals import fit_intervals
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude, render_text
 from app.core.jsonsafe import json_safe
 from app.core.noise_model import GyroNoise, Window, back_to_back
@@ -280,7 +280,7 @@ def _guarded(handler):
     def run(args: argparse.Namespace) -> int:
         try:
             return handler(args)
-        except (GyroInputError, CommandError) as error:
+        except (UserError, CommandError) as error:
             print(f"gyrolab {args.command}: {error}", file=sys.stderr)
             return 2
 

@@ -25,7 +25,7 @@ import allantools
 import numpy as np
 from scipy.optimize import nnls
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.noise_model import GyroNoise, recommended_dwell
 
 FLOOR_FACTOR = 0.664  # √(2 ln2 / π)
@@ -202,20 +202,20 @@ def allan_deviation(rates_deg_h, rate_hz: float) -> AllanResult:
     """Overlapping Allan deviation (octave τ) of a rate record in °/h sampled at ``rate_hz``."""
     data = np.asarray(rates_deg_h, dtype=float).ravel()
     if data.size < MIN_SAMPLES:
-        raise GyroInputError(
+        raise UserError(
             "allan.too_short",
             f"The Allan deviation needs at least {MIN_SAMPLES} readings.",
             minimum=MIN_SAMPLES,
         )
     if not np.all(np.isfinite(data)):
-        raise GyroInputError("readings.not_finite", "A reading is not a finite number.")
+        raise UserError("readings.not_finite", "A reading is not a finite number.")
     if not (rate_hz > 0 and math.isfinite(rate_hz)):
-        raise GyroInputError("allan.bad_rate", "The sample rate must be a positive number.")
+        raise UserError("allan.bad_rate", "The sample rate must be a positive number.")
     taus, adev, error, _ = allantools.oadev(data, rate=rate_hz, data_type="freq", taus="octave")
     keep = adev > 0
     taus, adev, error = taus[keep], adev[keep], error[keep]
     if taus.size == 0:
-        raise GyroInputError(
+        raise UserError(
             "allan.constant",
             "The readings never change; there is no noise "
             "to analyse (is the record quantised too coarsely?).",

@@ -37,7 +37,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.simulate import GyroPreset, GyroStream, Setup, simulate_run
 from app.core.solve import heading_angles, solve_heading, solve_two_position, wrap180, wrap360
 from app.core.two_axis_seeker import (
@@ -275,7 +275,7 @@ def monte_carlo_heading_errors(
                     )
                     - azimuth
                 )
-            except GyroInputError:  # no heading can be found from this run
+            except UserError:  # no heading can be found from this run
                 errors[i, run] = np.nan
     return _curve(azimuths, errors)
 
@@ -328,7 +328,7 @@ def _seeker_monte_carlo(
                     earth_rate_deg_h=earth_rate_deg_h,
                 ).azimuth_deg
                 errors[i, run] = wrap180(found - azimuth)
-            except GyroInputError:
+            except UserError:
                 errors[i, run] = np.nan
     return _curve(azimuths, errors)
 

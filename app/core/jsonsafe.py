@@ -7,11 +7,9 @@ import math
 
 import numpy as np
 
+from app.core.exceptions import UserError
+
 LARGEST_NUMBER = 1e300  # anything larger is a mistake (and overflows float64 arithmetic)
-
-
-class UnsafeJson(ValueError):
-    """A body that is not plain finite JSON; the message says why."""
 
 
 def json_safe(value):
@@ -30,23 +28,29 @@ def json_safe(value):
 def _finite_float(text: str) -> float:
     value = float(text)
     if not math.isfinite(value) or abs(value) > LARGEST_NUMBER:
-        raise UnsafeJson(f"The number {text[:40]} is out of range.")
+        raise UserError(
+            "json.out_of_range", f"The number {text[:40]} is out of range.", number=text[:40]
+        )
     return value
 
 
 def _bounded_int(text: str) -> int:
     if len(text.lstrip("-")) > 300:
-        raise UnsafeJson(f"The number {text[:40]}… is out of range.")
+        raise UserError(
+            "json.out_of_range", f"The number {text[:40]}… is out of range.", number=text[:40] + "…"
+        )
     return int(text)
 
 
 def _no_constant(name: str):
-    raise UnsafeJson(f"{name} is not a number JSON allows: send finite numbers only.")
+    raise UserError(
+        "json.constant", f"{name} is not a number JSON allows: send finite numbers only.", name=name
+    )
 
 
 def loads_finite(body: bytes | str):
     """Parse JSON that holds finite numbers only: NaN, Infinity, 1e309 and 10**400 are
-    refused with :class:`UnsafeJson`, and so is nesting too deep to parse."""
+    refused with a :class:`~app.core.exceptions.UserError`, and so is nesting too deep to parse."""
     try:
         return json.loads(
             body,
@@ -55,6 +59,6 @@ def loads_finite(body: bytes | str):
             parse_constant=_no_constant,
         )
     except RecursionError:
-        raise UnsafeJson("The JSON is nested too deeply.") from None
+        raise UserError("json.too_deep", "The JSON is nested too deeply.") from None
     except (json.JSONDecodeError, UnicodeDecodeError):
-        raise UnsafeJson("The body is not valid JSON.") from None
+        raise UserError("json.invalid", "The body is not valid JSON.") from None

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 
 WIDE_COLUMN = re.compile(r"^position_(\d+)$")
 # A plain decimal number: what a spreadsheet or a gyro writes.  Python's float() also takes
@@ -52,7 +52,7 @@ def _number(text: str, line: int, column: str) -> float:
     try:
         return parse_decimal(text)
     except NumberOutOfRange as error:
-        raise GyroInputError(
+        raise UserError(
             "csv.out_of_range",
             f"Line {line}, column {column}: '{text[:40]}' is out of range.",
             line=line,
@@ -60,7 +60,7 @@ def _number(text: str, line: int, column: str) -> float:
             value=text[:40],
         ) from error
     except ValueError as error:
-        raise GyroInputError(
+        raise UserError(
             "csv.not_a_number",
             f"Line {line}, column {column}: '{text}' is not a number.",
             line=line,
@@ -70,7 +70,7 @@ def _number(text: str, line: int, column: str) -> float:
 
 
 def parse_readings_csv(text: str, part: str | None = None) -> Readings:
-    """Parse either layout; raises GyroInputError with the line and column of any problem.
+    """Parse either layout; raises UserError with the line and column of any problem.
 
     Lines starting with ``#`` are comments.  A long file with a ``part`` column (GyroLab's
     session export) keeps only the rows of ``part`` when one is given.
@@ -79,7 +79,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
         rows = list(csv.reader(io.StringIO(text, newline="")))
     except csv.Error as error:
-        raise GyroInputError(
+        raise UserError(
             "csv.unreadable", f"The file cannot be read as CSV: {error}.", detail=str(error)
         ) from None
     rows = [
@@ -88,7 +88,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
         if any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")
     ]
     if not rows:
-        raise GyroInputError("csv.empty", "The file has no readings.")
+        raise UserError("csv.empty", "The file has no readings.")
     header_line, header = rows[0]
     names = [cell.strip().lower() for cell in header]
     if {"position", "value"} <= set(names):
@@ -102,7 +102,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     }
     if wide:
         return _parse_wide(wide, rows[1:])
-    raise GyroInputError(
+    raise UserError(
         "csv.unknown_layout",
         f"Line {header_line}: expected a header 'position_1,position_2,...' (wide) or "
         "'position,angle_deg,value' (long).",
@@ -113,7 +113,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
 def _parse_wide(columns: dict[int, int], rows) -> Readings:
     numbers = sorted(columns.values())
     if numbers != list(range(1, len(numbers) + 1)):
-        raise GyroInputError(
+        raise UserError(
             "csv.position_columns",
             "Position columns must be position_1 ... position_N without gaps.",
         )
@@ -126,7 +126,7 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
                 values[slot].append(_number(cell, line, f"position_{slot + 1}"))
     for slot, column in enumerate(values, start=1):
         if not column:
-            raise GyroInputError(
+            raise UserError(
                 "readings.empty_position", f"Position {slot} has no readings.", position=slot
             )
     return Readings([np.array(v) for v in values], None, None, "wide")
@@ -148,9 +148,7 @@ def _parse_long(names: list[str], rows) -> Readings:
 
         label = cell("position")
         if not label:
-            raise GyroInputError(
-                "csv.no_position", f"Line {line}: the position is missing.", line=line
-            )
+            raise UserError("csv.no_position", f"Line {line}: the position is missing.", line=line)
         entry = grouped.get(label)
         if entry is None:
             entry = grouped[label] = {"values": [], "times": [], "temps": [], "angle": None}
@@ -165,7 +163,7 @@ def _parse_long(names: list[str], rows) -> Readings:
             if entry["angle"] is None:
                 entry["angle"] = angle
             elif abs(entry["angle"] - angle) > 1e-9:
-                raise GyroInputError(
+                raise UserError(
                     "csv.angle_changes",
                     f"Line {line}: position {label} has angle {angle} but earlier rows say "
                     f"{entry['angle']}.",
@@ -173,7 +171,7 @@ def _parse_long(names: list[str], rows) -> Readings:
                     position=label,
                 )
     if not labels:
-        raise GyroInputError("csv.empty", "The file has no readings.")
+        raise UserError("csv.empty", "The file has no readings.")
     if all(label.lstrip("-").isdigit() for label in labels):
         labels.sort(key=int)
     angles = None
@@ -208,12 +206,12 @@ def parse_static_record(text: str) -> np.ndarray:
     or one number per line (the last comma-separated cell; a header line is skipped)."""
     try:
         readings = parse_readings_csv(text)
-    except GyroInputError as error:
+    except UserError as error:
         if error.key != "csv.unknown_layout":
             raise
-        return _single_column(text)
+        return parse_position_csv(text)[0]
     if len(readings.positions) != 1:
-        raise GyroInputError(
+        raise UserError(
             "allan.one_position",
             "An Allan analysis needs one static record (one position), not "
             f"{len(readings.positions)}.",
@@ -222,14 +220,69 @@ def parse_static_record(text: str) -> np.ndarray:
     return readings.positions[0]
 
 
-def _single_column(text: str) -> np.ndarray:
-    values = []
-    for number, line in enumerate(text.splitlines(), start=1):
-        cell = line.strip().split(",")[-1].strip()
-        if not cell or (number == 1 and not _is_number(cell)):  # blank, or a header line
+def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None]:
+    """One position's readings: one value per line, or ``time_s,value`` per line.
+
+    What a device or a script sends (``text/csv`` to the API) and the fallback for a static
+    record.  An optional header on line 1 and ``#`` comment lines are skipped; lines may
+    end in ``\n``, ``\r\n`` or a bare ``\r``.
+
+    Parameters
+    ----------
+    data
+        The CSV, as UTF-8 bytes (a byte-order mark allowed) or text.
+
+    Returns
+    -------
+    values : numpy.ndarray
+        The readings, in the order given (their unit is the caller's to say).
+    times : numpy.ndarray or None
+        Each reading's time in seconds when every line gives one, else None.
+
+    Raises
+    ------
+    UserError
+        ``csv.not_utf8``, ``csv.unreadable``, ``csv.not_a_number`` or ``csv.out_of_range``
+        (with the line), ``csv.one_or_two_columns``, ``csv.times_on_every_line``,
+        ``csv.empty``.
+    """
+    if isinstance(data, bytes):
+        try:
+            data = data.decode("utf-8-sig")
+        except UnicodeDecodeError:
+            raise UserError("csv.not_utf8", "The CSV is not UTF-8 text.") from None
+    try:  # newline="": lines may end in \n, \r\n or a bare \r
+        rows = list(csv.reader(io.StringIO(data.lstrip("\ufeff"), newline="")))
+    except csv.Error as error:
+        raise UserError(
+            "csv.unreadable", f"The file cannot be read as CSV: {error}.", detail=str(error)
+        ) from None
+    values: list[float] = []
+    times: list[float] = []
+    for number, row in enumerate(rows, start=1):
+        cells = [c.strip() for c in row if c.strip()]
+        if not cells or cells[0].startswith("#"):
             continue
-        values.append(_number(cell, number, "value"))
-    return np.array(values)
+        if number == 1 and not all(_is_number(cell) for cell in cells):
+            continue  # a header such as "time_s,value"
+        if len(cells) > 2:
+            raise UserError(
+                "csv.one_or_two_columns",
+                f"Line {number}: expected 'value' or 'time_s,value'.",
+                line=number,
+            )
+        numbers = [
+            _number(cell, number, name)
+            for cell, name in zip(cells, ("time_s", "value")[2 - len(cells) :], strict=True)
+        ]
+        values.append(numbers[-1])
+        if len(numbers) == 2:
+            times.append(numbers[0])
+    if times and len(times) != len(values):
+        raise UserError("csv.times_on_every_line", "Give a time on every line or on none.")
+    if not values:
+        raise UserError("csv.empty", "The file has no readings.")
+    return np.array(values), (np.array(times) if times else None)
 
 
 def _is_number(text: str) -> bool:

@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.uncertainty import PositionNoise, closure_residual, position_noise
 from app.core.units import EARTH_RATE_DEG_H
 
@@ -134,7 +134,7 @@ def heading_angles(
     """Axis azimuths relative to the reference, clockwise positive: counter-clockwise turns
     give start, start−step, ...; clockwise turns give start, start+step, ..."""
     if rotation not in ROTATIONS:
-        raise GyroInputError(
+        raise UserError(
             "rotation.unknown",
             f"Rotation must be 'ccw' or 'cw', not {rotation!r}.",
             rotation=rotation,
@@ -147,13 +147,13 @@ def heading_angles(
 def _check_schedule(start_deg: float, step_deg: float) -> None:
     """A start angle within ±3600° and a step within ±360° (finite), else a range message."""
     if not (math.isfinite(start_deg) and abs(start_deg) <= MAX_ANGLE_DEG):
-        raise GyroInputError(
+        raise UserError(
             "angles.start_out_of_range",
             f"The start angle must be a number of degrees within ±{MAX_ANGLE_DEG:g}.",
             limit=MAX_ANGLE_DEG,
         )
     if not (math.isfinite(step_deg) and abs(step_deg) <= 360.0):
-        raise GyroInputError(
+        raise UserError(
             "angles.step_out_of_range", "The step between positions must be within ±360°."
         )
 
@@ -172,23 +172,23 @@ def _clean_positions(positions: Sequence[Sequence[float]]) -> list[np.ndarray]:
         try:
             array = np.asarray(samples, dtype=float).ravel()
         except (TypeError, ValueError) as error:
-            raise GyroInputError(
+            raise UserError(
                 "readings.not_numbers",
                 f"Position {index} has readings that are not numbers.",
                 position=index,
             ) from error
         if array.size == 0:
-            raise GyroInputError(
+            raise UserError(
                 "readings.empty_position", f"Position {index} has no readings.", position=index
             )
         if not np.all(np.isfinite(array)):
-            raise GyroInputError(
+            raise UserError(
                 "readings.not_finite",
                 f"Position {index} has a reading that is not a finite number (NaN or infinity).",
                 position=index,
             )
         if np.any(np.abs(array) > MAX_RATE_DEG_H):
-            raise GyroInputError(
+            raise UserError(
                 "readings.out_of_range",
                 "A reading is out of range for an angular rate: check the unit.",
                 position=index,
@@ -220,19 +220,17 @@ def fit_sinusoid(
     arrays = _clean_positions(positions)
     angles = np.asarray(angles_deg, dtype=float)
     if angles.shape != (len(arrays),):
-        raise GyroInputError(
+        raise UserError(
             "readings.angle_count",
             f"There are {len(arrays)} positions but {angles.size} angles.",
             positions=len(arrays),
             angles=int(angles.size),
         )
     if not np.all(np.isfinite(angles)):
-        raise GyroInputError(
-            "readings.angle_not_finite", "A position angle is not a finite number."
-        )
+        raise UserError("readings.angle_not_finite", "A position angle is not a finite number.")
     distinct = np.unique(np.round(np.mod(angles, 360.0), 6) % 360.0)
     if distinct.size < 3:
-        raise GyroInputError(
+        raise UserError(
             "readings.too_few_angles",
             f"At least 3 different angles are needed; got {distinct.size}.",
             distinct=int(distinct.size),
@@ -250,7 +248,7 @@ def fit_sinusoid(
             design = with_drift
     normal = design.T @ (counts[:, None] * design)
     if np.linalg.cond(normal) > 1e12:
-        raise GyroInputError(
+        raise UserError(
             "readings.too_few_angles",
             "The angles do not determine a sinusoid; use 3 or more different "
             "angles spread around the circle.",
@@ -321,7 +319,7 @@ def _check_significant(amplitude: float, sigma: float | None, what: str, scale: 
         sigma is not None and amplitude < SIGNIFICANCE * sigma
     ):
         sigma_text = f" ± {sigma:.3g}" if sigma is not None and math.isfinite(sigma) else ""
-        raise GyroInputError(
+        raise UserError(
             "readings.amplitude_too_small",
             f"The {what} amplitude ({amplitude:.3g}{sigma_text} °/h) is not clearly larger than "
             "its uncertainty, so the direction cannot be determined. Take more readings per "
@@ -514,7 +512,7 @@ def solve_latitude(
 ) -> LatitudeResult:
     """Latitude φ and Earth rate Ω from readings in the meridian plane, with 1σ."""
     if true_earth_rate_deg_h <= 0 or not math.isfinite(true_earth_rate_deg_h):
-        raise GyroInputError("station.bad_earth_rate", "The true Earth rate must be positive.")
+        raise UserError("station.bad_earth_rate", "The true Earth rate must be positive.")
     fit = fit_sinusoid(
         positions,
         elevations_deg,
@@ -526,7 +524,7 @@ def solve_latitude(
     latitude, omega, sigma_lat, sigma_omega = _polar(fit.a, fit.c, cov_xy)
     _check_significant(omega, sigma_omega, "Earth-rate", _scale(fit))
     if abs(latitude) > 90.0:
-        raise GyroInputError(
+        raise UserError(
             "readings.latitude_out_of_range",
             f"The fitted latitude {latitude:.1f}° lies outside ±90°: check that position 1 is "
             "the axis pointing north (0°) and that the angles increase towards the zenith.",
@@ -575,7 +573,7 @@ def solve_two_position(
     phi, pitch = math.radians(latitude_deg), math.radians(pitch_deg)
     horizontal = 2.0 * scale_factor * earth_rate_deg_h * math.cos(phi) * math.cos(pitch)
     if horizontal <= 0:
-        raise GyroInputError(
+        raise UserError(
             "two_position.no_horizontal", "K·Ω·cos φ must be positive for the two-position method."
         )
     vertical = 2.0 * scale_factor * earth_rate_deg_h * math.sin(phi) * math.sin(pitch)
@@ -583,7 +581,7 @@ def solve_two_position(
     clipped = False
     if abs(ratio) > 1.0:
         if abs(ratio) > 1.05:
-            raise GyroInputError(
+            raise UserError(
                 "two_position.ratio",
                 f"(U1 − U2)/(2KΩcos φ) = {ratio:.3f} is outside [−1, 1]: the readings do not fit "
                 "the given scale factor, Earth rate and latitude.",

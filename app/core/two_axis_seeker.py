@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.units import EARTH_RATE_DEG_H
 
 
@@ -116,16 +116,16 @@ def solve_seeker(
     L_z = Ω sin φ (module docstring), α̂ = atan2(L_y, L_x)."""
     values = (*first, *second, pitch_deg, roll_deg, latitude_deg, earth_rate_deg_h)
     if not all(math.isfinite(v) for v in values):
-        raise GyroInputError("the seeker needs finite rates and angles")
+        raise UserError("the seeker needs finite rates and angles")
     t, g = math.radians(pitch_deg), math.radians(roll_deg)
     if math.cos(t) < 1e-6 or math.cos(g) < 1e-6:
-        raise GyroInputError("pitch and roll must be well inside ±90°")
+        raise UserError("pitch and roll must be well inside ±90°")
     wx = (first[0] - second[0]) / 2.0
     wy = (first[1] - second[1]) / 2.0
     lz = earth_rate_deg_h * math.sin(math.radians(latitude_deg))
     lx, ly = _undo_tilt(wx, wy, lz, t, g)
     if math.hypot(lx, ly) == 0.0:
-        raise GyroInputError("no horizontal Earth rate: the azimuth is undefined")
+        raise UserError("no horizontal Earth rate: the azimuth is undefined")
     return SeekerResult(math.degrees(math.atan2(ly, lx)) % 360.0, (lx, ly))
 
 

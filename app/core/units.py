@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 
 DEG_PER_HOUR = "deg/h"
 DEG_PER_SECOND = "deg/s"
@@ -36,7 +36,7 @@ HANDOUT_EARTH_RATE_DEG_H = 15.04
 def canonical_unit(unit: str) -> str:
     name = ALIASES.get(unit.strip(), unit.strip())
     if name not in TO_DEG_PER_HOUR:
-        raise GyroInputError(
+        raise UserError(
             "unit.unknown", f"Unknown unit '{unit}': use one of {', '.join(UNITS)}.", unit=unit
         )
     return name
@@ -48,7 +48,7 @@ def to_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:
     with np.errstate(over="ignore"):
         converted = array * TO_DEG_PER_HOUR[canonical_unit(unit)]
     if not np.all(np.isfinite(converted)) and np.all(np.isfinite(array)):
-        raise GyroInputError(
+        raise UserError(
             "readings.out_of_range",
             "A reading is out of range for an angular rate: check the unit.",
         )

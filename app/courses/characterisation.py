@@ -18,7 +18,7 @@ import numpy as np
 
 from app.core.allan import allan_deviation
 from app.core.allan_intervals import fit_intervals
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.noise_model import GyroNoise
 from app.core.readings import parse_static_record
 from app.core.units import canonical_unit, to_deg_per_hour
@@ -42,14 +42,14 @@ def characterise(text: str, rate_hz: float, unit: str = "deg/h") -> dict:
     if not (isinstance(rate_hz, int | float) and math.isfinite(rate_hz)) or not (
         0 < rate_hz <= MAX_RATE_HZ
     ):
-        raise GyroInputError(
+        raise UserError(
             "characterisation.bad_rate",
             "The sample rate must be a number of readings per second, up to 10000.",
         )
     values = to_deg_per_hour(parse_static_record(text), canonical_unit(unit))
     seconds = values.size / rate_hz
     if seconds < MIN_RECORD_S:
-        raise GyroInputError(
+        raise UserError(
             "characterisation.too_short",
             f"The record covers {seconds:.0f} s; at least {MIN_RECORD_S:.0f} s (better: hours) "
             "are needed to see the slow terms.",

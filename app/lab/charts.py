@@ -12,7 +12,7 @@ from collections.abc import Callable
 import numpy as np
 
 from app.core.allan import allan_deviation
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 
 MAX_POINTS = 2000
 COLORS = ["#0b6bcb", "#d1495b", "#2a9d8f", "#e9a23b", "#6d597a", "#264653"]
@@ -170,7 +170,7 @@ def allan_figure(part_result, _: Callable[..., str], minimum_samples: int = 1000
         return None
     try:
         result = allan_deviation(longest.values, rate)
-    except GyroInputError:
+    except UserError:
         return None
     return {
         "data": [

@@ -4,31 +4,22 @@ from __future__ import annotations
 
 import json
 import math
-from datetime import datetime
 from typing import Annotated, Literal
 
-import numpy as np
-from fastapi import APIRouter, Body, Form, HTTPException, Request
-from fastapi.responses import JSONResponse, Response, StreamingResponse
-from pydantic import BaseModel, Field, StrictFloat, StrictInt
+from fastapi import APIRouter, Form, Request
 from sqlmodel import Session, select
 
-from app.core.exceptions import GyroInputError
-from app.core.jsonsafe import json_safe
-from app.core.readings import parse_readings_csv
+from app.core.exceptions import UserError
 from app.core.simulate import PRESETS
-from app.core.units import EARTH_RATE_DEG_H, UNITS, canonical_unit, to_deg_per_hour
+from app.core.units import EARTH_RATE_DEG_H, UNITS
 from app.lab import sessions as labsessions
 from app.lab.charts import allan_figure, compass_figure, fit_figure, readings_figure
+from app.lab.deps import OwnedSession
+from app.lab.service import allowed_methods
 from app.lab.sim import FIRST_PASS, nominal_angle, north_dial_deg, position_count
 from app.lab.store import (
     PARTS,
-    POSITIONS,
-    check_position,
     session_results,
-    set_symmetric_order,
-    store_take,
-    submit,
     take_history,
 )
 from app.models import Assignment, Attempt, Course, Enrollment, LabSession, Role, User, utcnow
@@ -37,17 +28,13 @@ from app.web.deps import (
     MAX_ID,
     CsrfProtected,
     CurrentUser,
-    ObjectId,
-    ReadOnlySessionDep,
     SessionDep,
 )
-from app.web.exports import Selection, readings_csv, session_json
-from app.web.i18n import translator
+from app.web.i18n import is_known, translator
 from app.web.render import csrf_token_for, flash, redirect, render, request_language
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 
-MAX_CSV_CHARS = 5_000_000
 STATIONS = [  # practice presets: (key, latitude, Earth rate)
     ("handout", 39.93, 15.04),
     ("beijing", 39.99, EARTH_RATE_DEG_H),
@@ -59,33 +46,6 @@ STATIONS = [  # practice presets: (key, latitude, Earth rate)
 
 
 STATION_VALUES = {key: (latitude, rate) for key, latitude, rate in STATIONS}
-
-
-def own_session(db: Session, user: User, session_id: int) -> LabSession:
-    """The caller's own session, else 404."""
-    try:
-        return labsessions.own_session(db, user, session_id)
-    except labsessions.NotVisible:
-        raise HTTPException(404) from None
-
-
-def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignment:
-    try:
-        return labsessions.visible_assignment(db, user, assignment_id)
-    except labsessions.NotVisible:
-        raise HTTPException(404) from None
-
-
-def allowed_methods(db: Session, session: LabSession) -> list[str]:
-    if session.assignment_id is None:
-        return ["manual", "csv", "simulator"]
-    assignment = db.get(Assignment, session.assignment_id)
-    return assignment.methods if assignment else []
-
-
-def require_method(db: Session, session: LabSession, method: str) -> None:
-    if method not in allowed_methods(db, session):
-        raise HTTPException(403, "This assignment does not allow that way of recording.")
 
 
 def my_assignments(db: Session, user: User) -> list[tuple[Assignment, Course]]:
@@ -142,7 +102,11 @@ def create_session(
     preset: Annotated[str, Form(max_length=32)] = "teaching-fog",
 ):
     _ = translator(request_language(request))
-    assignment = visible_assignment(db, user, assignment_id) if assignment_id is not None else None
+    assignment = (
+        labsessions.visible_assignment(db, user, assignment_id)
+        if assignment_id is not None
+        else None
+    )
     if assignment is None and station in STATION_VALUES:
         latitude_deg, earth_rate_deg_h = STATION_VALUES[station]
     settings = labsessions.SessionSettings(
@@ -159,7 +123,7 @@ def create_session(
         session, created = labsessions.start_session(
             db, user, settings, assignment, _("lab.practice_title")
         )
-    except GyroInputError as error:
+    except UserError as error:
         return _back_with_error(request, error.key)
     if created:
         db.commit()
@@ -191,8 +155,7 @@ def _figures(results, _) -> dict[str, dict]:
 
 
 @router.get("/sessions/{session_id}")
-def session_page(request: Request, session_id: ObjectId, user: CurrentUser, db: SessionDep):
-    session = own_session(db, user, session_id)
+def session_page(request: Request, session: OwnedSession, db: SessionDep):
     _ = translator(request_language(request))
     attempts = db.exec(
         select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
@@ -296,9 +259,9 @@ JS_MESSAGES = (
 )
 
 
-def error_text(error: GyroInputError, _) -> str:
+def error_text(error: UserError, _) -> str:
     """A core error in the page's language (English text when no translation exists)."""
-    return _(error.key, **error.params) if _known(error.key) else str(error)
+    return _(error.key, **error.params) if is_known(error.key) else str(error)
 
 
 def drawing_coordinates(session: LabSession) -> dict[str, dict[int, tuple]]:
@@ -322,306 +285,3 @@ def drawing_coordinates(session: LabSession) -> dict[str, dict[int, tuple]]:
             round(100 + 90 * cy, 2),
         )
     return out
-
-
-class ManualReadings(BaseModel):
-    """Readings typed into the grid: one list per position (positions left empty are kept)."""
-
-    part: Literal["heading", "latitude"]
-    unit: str = "deg/h"
-    columns: dict[int, Annotated[list[StrictFloat | StrictInt], Field(max_length=100_000)]] = Field(
-        max_length=POSITIONS
-    )
-
-
-def _json_error(error: GyroInputError, request: Request, status: int = 400) -> JSONResponse:
-    from app.web.i18n import translate
-
-    language = request_language(request)
-    message = translate(error.key, language, **error.params) if _known(error.key) else str(error)
-    if error.key == "lab.storage_full":
-        status = 413
-    return JSONResponse(
-        {"detail": message, "key": error.key, "params": error.params}, status_code=status
-    )
-
-
-def _known(key: str) -> bool:
-    from app.web.messages import MESSAGES
-
-    return key in MESSAGES
-
-
-def _store_columns(
-    db: Session,
-    session: LabSession,
-    part: str,
-    unit: str,
-    columns: dict[int, np.ndarray],
-    source: str,
-    angles: dict[int, float] | None = None,
-    times: dict[int, np.ndarray] | None = None,
-) -> list[int]:
-    unit = canonical_unit(unit)
-    saved = []
-    for position, values in sorted(columns.items()):
-        check_position(session, part, position)
-        angle = (angles or {}).get(position, nominal_angle(session, part, position))
-        store_take(
-            db,
-            session,
-            part=part,
-            position=position,
-            angle_deg=angle,
-            values=to_deg_per_hour(values, unit),
-            times=(times or {}).get(position),
-            source=source,
-            unit=unit,
-        )
-        saved.append(position)
-    return saved
-
-
-@router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected])
-def save_manual(
-    request: Request,
-    session_id: ObjectId,
-    user: CurrentUser,
-    db: SessionDep,
-    body: Annotated[ManualReadings, Body()],
-):
-    session = own_session(db, user, session_id)
-    require_method(db, session, "manual")
-    columns = {k: np.asarray(v, dtype=float) for k, v in body.columns.items() if len(v)}
-    try:
-        if not columns:
-            raise GyroInputError("readings.none", "Type at least one reading.")
-        saved = _store_columns(db, session, body.part, body.unit, columns, "manual")
-    except GyroInputError as error:
-        db.rollback()
-        return _json_error(error, request)
-    db.commit()
-    return {"saved": saved}
-
-
-class CsvUpload(BaseModel):
-    part: Literal["heading", "latitude"]
-    unit: str = "deg/h"
-    text: str
-
-
-def _parse_upload(body: CsvUpload):
-    if len(body.text) > MAX_CSV_CHARS:
-        raise GyroInputError(
-            "lab.file_too_large",
-            "The file is larger than 5 MB.",
-            limit_mb=MAX_CSV_CHARS // 1_000_000,
-        )
-    readings = parse_readings_csv(body.text, part=body.part)
-    _check_position_count(len(readings.positions), POSITIONS)
-    canonical_unit(body.unit)
-    return readings
-
-
-def _check_position_count(count: int, limit: int) -> None:
-    """A file's positions fit the session: 4, or 8 in the symmetric order."""
-    if count > limit:
-        raise GyroInputError(
-            "lab.too_many_positions",
-            f"The file has {count} positions; at most {limit} "
-            "(8 in the symmetric order 1-2-3-4-4-3-2-1).",
-            count=count,
-            limit=limit,
-        )
-
-
-@router.post("/sessions/{session_id}/csv/preview", dependencies=[CsrfProtected])
-def preview_csv(
-    request: Request,
-    session_id: ObjectId,
-    user: CurrentUser,
-    db: ReadOnlySessionDep,
-    body: Annotated[CsvUpload, Body()],
-):
-    session = own_session(db, user, session_id)
-    require_method(db, session, "csv")
-    try:
-        readings = _parse_upload(body)
-        _check_position_count(len(readings.positions), position_count(session))
-    except GyroInputError as error:
-        return _json_error(error, request)
-    rows = []
-    for index, values in enumerate(readings.positions, start=1):
-        converted = to_deg_per_hour(values, body.unit)
-        angle = (
-            readings.angles_deg[index - 1]
-            if readings.angles_deg is not None
-            else nominal_angle(session, body.part, index)
-        )
-        rows.append(
-            {
-                "position": index,
-                "n": int(values.size),
-                "angle_deg": angle,
-                "mean_deg_h": float(converted.mean()),
-                "first": [float(v) for v in converted[:5]],
-            }
-        )
-    return {"layout": readings.layout, "positions": rows}
-
-
-@router.post("/sessions/{session_id}/csv", dependencies=[CsrfProtected])
-def save_csv(
-    request: Request,
-    session_id: ObjectId,
-    user: CurrentUser,
-    db: SessionDep,
-    body: Annotated[CsvUpload, Body()],
-):
-    try:  # parsed before the first query takes the write lock; reported after the checks
-        readings, problem = _parse_upload(body), None
-    except GyroInputError as error:
-        readings, problem = None, error
-    session = own_session(db, user, session_id)
-    require_method(db, session, "csv")
-    if problem is not None:
-        db.rollback()
-        return _json_error(problem, request)
-    try:
-        _check_position_count(len(readings.positions), position_count(session))
-        columns = dict(enumerate(readings.positions, start=1))
-        angles = (
-            dict(enumerate(readings.angles_deg, start=1))
-            if readings.angles_deg is not None
-            else None
-        )
-        times = dict(enumerate(readings.times_s, start=1)) if readings.times_s is not None else None
-        saved = _store_columns(db, session, body.part, body.unit, columns, "csv", angles, times)
-    except GyroInputError as error:
-        db.rollback()
-        return _json_error(error, request)
-    db.commit()
-    return {"saved": saved}
-
-
-class Turn(BaseModel):
-    part: Literal["heading", "latitude"]
-    position: int = Field(ge=1, le=POSITIONS)
-
-
-@router.post("/sessions/{session_id}/turn", dependencies=[CsrfProtected])
-def turn_table(
-    session_id: ObjectId, user: CurrentUser, db: SessionDep, body: Annotated[Turn, Body()]
-):
-    """Turn the virtual turntable; every real turn gets a new indexing error."""
-    session = own_session(db, user, session_id)
-    require_method(db, session, "simulator")
-    try:
-        check_position(session, body.part, body.position)
-    except GyroInputError as error:
-        raise HTTPException(400, str(error)) from error
-    field = f"sim_table_{body.part}"
-    if getattr(session, field) != body.position:
-        setattr(session, field, body.position)
-        session.sim_turns += 1
-        db.add(session)
-        db.commit()
-    return {
-        "part": body.part,
-        "position": body.position,
-        "dial_angle_deg": nominal_angle(session, body.part, body.position),
-    }
-
-
-class Plane(BaseModel):
-    dial_deg: float = Field(ge=-360, le=360, allow_inf_nan=False)
-
-
-@router.post("/sessions/{session_id}/plane", dependencies=[CsrfProtected])
-def set_plane(
-    session_id: ObjectId, user: CurrentUser, db: SessionDep, body: Annotated[Plane, Body()]
-):
-    """Turn the horizontal dial for part B: the gyro then turns in that vertical plane
-    (north if part A's result was right, as at the real bench)."""
-    session = own_session(db, user, session_id)
-    require_method(db, session, "simulator")
-    session.sim_plane_dial_deg = round(body.dial_deg, 3)
-    session.sim_turns += 1
-    db.add(session)
-    db.commit()
-    return {"dial_deg": session.sim_plane_dial_deg}
-
-
-@router.post("/sessions/{session_id}/order", dependencies=[CsrfProtected])
-def set_order(
-    request: Request,
-    session_id: ObjectId,
-    user: CurrentUser,
-    db: SessionDep,
-    symmetric: Annotated[str, Form(max_length=8)] = "",
-):
-    """Record in the order 1-2-3-4 or the symmetric 1-2-3-4-4-3-2-1 (positions 5–8)."""
-    session = own_session(db, user, session_id)
-    response = redirect(f"/lab/sessions/{session.id}")
-    try:
-        if symmetric not in ("on", "off"):
-            raise GyroInputError("lab.bad_order", "Choose the order: on or off.")
-        set_symmetric_order(db, session, symmetric == "on")
-    except GyroInputError as error:
-        db.rollback()
-        flash(response, request, error.key, "error")
-        return response
-    db.commit()
-    flash(response, request, "lab.order_symmetric" if symmetric == "on" else "lab.order_plain")
-    return response
-
-
-@router.get("/sessions/{session_id}/results.json")
-def results_endpoint(session_id: ObjectId, user: CurrentUser, db: SessionDep):
-    session = own_session(db, user, session_id)
-    results = session_results(db, session)
-    payload = {part: outcome.to_json() for part, outcome in results.items()}
-    return Response(json.dumps(json_safe(payload)), media_type="application/json")
-
-
-@router.post("/sessions/{session_id}/submit", dependencies=[CsrfProtected])
-def submit_session(request: Request, session_id: ObjectId, user: CurrentUser, db: SessionDep):
-    session = own_session(db, user, session_id)
-    response = redirect(f"/lab/sessions/{session.id}")
-    try:
-        attempt = submit(db, session)
-    except GyroInputError as error:
-        db.rollback()
-        flash(response, request, error.key, "error")
-        return response
-    db.commit()
-    flash(response, request, "lab.submitted", "success", number=attempt.number)
-    return response
-
-
-@router.get("/sessions/{session_id}/export.csv")
-def export_session_csv(session_id: ObjectId, user: CurrentUser, db: SessionDep):
-    session = own_session(db, user, session_id)
-    return StreamingResponse(
-        readings_csv(Selection(session.id)),
-        media_type="text/csv; charset=utf-8",
-        headers=_download(session, "csv"),
-    )
-
-
-@router.get("/sessions/{session_id}/export.json")
-def export_session_json(session_id: ObjectId, user: CurrentUser, db: SessionDep):
-    session = own_session(db, user, session_id)
-    return StreamingResponse(
-        session_json(Selection(session.id)),
-        media_type="application/json",
-        headers=_download(session, "json"),
-    )
-
-
-def _download(session: LabSession, extension: str) -> dict[str, str]:
-    stamp = datetime.now().strftime("%Y%m%d")
-    return {
-        "Content-Disposition": f'attachment; filename="gyrolab-session-{session.id}-'
-        f'{stamp}.{extension}"'
-    }

@@ -8,22 +8,11 @@ from dataclasses import dataclass
 
 from sqlmodel import Session, select
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.simulate import PRESETS
 from app.lab.sim import new_truth
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User, utcnow
 from app.review.service import draw_truth
-
-
-class NotVisible(LookupError):
-    """The object does not exist for this user (pages answer 404)."""
-
-
-def own_session(db: Session, user: User, session_id: int) -> LabSession:
-    session = db.get(LabSession, session_id)
-    if session is None or session.owner_id != user.id:
-        raise NotVisible()
-    return session
 
 
 def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignment:
@@ -31,10 +20,10 @@ def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignmen
     assignment = db.get(Assignment, assignment_id)
     course = db.get(Course, assignment.course_id) if assignment else None
     if assignment is None or course is None:
-        raise NotVisible()
+        raise UserError("lab.no_such_assignment", status=404)
     if user.role == Role.teacher:
         if course.teacher_id != user.id:
-            raise NotVisible()
+            raise UserError("lab.no_such_assignment", status=404)
         return assignment
     enrolled = db.exec(
         select(Enrollment).where(
@@ -42,7 +31,7 @@ def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignmen
         )
     ).first()
     if enrolled is None or course.archived:
-        raise NotVisible()
+        raise UserError("lab.no_such_assignment", status=404)
     return assignment
 
 
@@ -68,16 +57,16 @@ def start_session(
 ) -> tuple[LabSession, bool]:
     """A new session (added, not committed), or the existing one for this assignment.
 
-    Returns (session, created).  Raises GyroInputError for impossible settings.
+    Returns (session, created).  Raises UserError for impossible settings.
     """
     angles = (settings.heading_start_deg, settings.latitude_start_deg, settings.latitude_step_deg)
     if not all(math.isfinite(a) for a in angles) or abs(settings.latitude_step_deg) < 1:
-        raise GyroInputError(
+        raise UserError(
             "lab.bad_angles",
             "The start angles and the step must be finite numbers, the step at least 1°.",
         )
     if settings.rotation not in ("ccw", "cw"):
-        raise GyroInputError("rotation.unknown", "Rotation must be 'ccw' or 'cw'.")
+        raise UserError("rotation.unknown", "Rotation must be 'ccw' or 'cw'.")
     if assignment is not None:
         existing = db.exec(
             select(LabSession).where(
@@ -110,13 +99,11 @@ def start_session(
         session.title = session.title or assignment.title
     else:
         if settings.latitude_deg is None or settings.earth_rate_deg_h is None:
-            raise GyroInputError(
-                "lab.station_required", "Enter the station's latitude and Earth rate."
-            )
+            raise UserError("lab.station_required", "Enter the station's latitude and Earth rate.")
         if not (math.isfinite(settings.latitude_deg) and -90 <= settings.latitude_deg <= 90):
-            raise GyroInputError("lab.bad_latitude", "The latitude must be between −90° and 90°.")
+            raise UserError("lab.bad_latitude", "The latitude must be between −90° and 90°.")
         if not (math.isfinite(settings.earth_rate_deg_h) and 0 < settings.earth_rate_deg_h < 1000):
-            raise GyroInputError(
+            raise UserError(
                 "lab.bad_earth_rate", "The Earth rate must be a positive number of °/h."
             )
         session.latitude_deg = settings.latitude_deg

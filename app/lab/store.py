@@ -16,7 +16,7 @@ from sqlmodel import Session, func, select
 
 from app import __version__
 from app.config import get_settings
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude
 from app.core.jsonsafe import json_safe
 from app.core.noise_model import GyroNoise, Window
@@ -44,7 +44,7 @@ class PartResult:
     part: str
     positions: dict[int, PositionData]
     result: object | None = None  # HeadingResult | LatitudeResult
-    error: GyroInputError | None = None
+    error: UserError | None = None
     steps: list = field(default_factory=list)
     flags: list[dict] = field(default_factory=list)
 
@@ -83,11 +83,9 @@ def load_samples(db: Session, take: Take) -> tuple[np.ndarray, np.ndarray | None
 def check_position(session: LabSession, part: str, position: int) -> None:
     """A position this session's schedule has (5–8 only in the symmetric order)."""
     if part not in PARTS or not 1 <= position <= POSITIONS:
-        raise GyroInputError(
-            "lab.bad_position", f"There is no position {position}.", position=position
-        )
+        raise UserError("lab.bad_position", f"There is no position {position}.", position=position)
     if position > position_count(session):
-        raise GyroInputError(
+        raise UserError(
             "lab.needs_symmetric",
             f"Position {position} belongs to the symmetric order 1-2-3-4-4-3-2-1; switch it on "
             "first.",
@@ -101,7 +99,7 @@ def set_symmetric_order(db: Session, session: LabSession, symmetric: bool) -> No
     if session.status == "graded" or (
         session.status == "submitted" and session.assignment_id is not None
     ):
-        raise GyroInputError("lab.awaiting_review", "This work is waiting for review or graded.")
+        raise UserError("lab.awaiting_review", "This work is waiting for review or graded.")
     if not symmetric and session.symmetric_order:
         in_return_pass = db.exec(
             select(Take.id).where(
@@ -111,7 +109,7 @@ def set_symmetric_order(db: Session, session: LabSession, symmetric: bool) -> No
             )
         ).first()
         if in_return_pass is not None:
-            raise GyroInputError(
+            raise UserError(
                 "lab.return_pass_recorded",
                 "Positions 5–8 already hold readings; the symmetric order stays on.",
             )
@@ -136,18 +134,18 @@ def store_take(
     """Add a take (values in °/h) and supersede the previous one; the caller commits once,
     so the position is either fully saved or not at all."""
     if session.status == "graded":
-        raise GyroInputError("lab.already_graded", "This work has been graded.")
+        raise UserError("lab.already_graded", "This work has been graded.")
     if session.status == "submitted" and session.assignment_id is not None:
-        raise GyroInputError(
+        raise UserError(
             "lab.awaiting_review", "Your last attempt is waiting for your teacher's review."
         )
     check_position(session, part, position)
     if values.size == 0:
-        raise GyroInputError(
+        raise UserError(
             "readings.empty_position", f"Position {position} has no readings.", position=position
         )
     if values.size > MAX_SAMPLES_PER_POSITION:
-        raise GyroInputError(
+        raise UserError(
             "lab.too_many_samples",
             f"At most {MAX_SAMPLES_PER_POSITION} readings per position.",
             limit=MAX_SAMPLES_PER_POSITION,
@@ -156,7 +154,7 @@ def store_take(
     _check_angle_and_times(position, angle_deg, times, values.size)
     _check_storage(db, session, values, times)
     if check_minimum and values.size < session.min_readings:
-        raise GyroInputError(
+        raise UserError(
             "lab.too_few_readings",
             f"Position {position} has {values.size} readings; at least "
             f"{session.min_readings} are required.",
@@ -216,7 +214,7 @@ def append_samples(
     if session.status == "graded" or (
         session.status == "submitted" and session.assignment_id is not None
     ):
-        raise GyroInputError("lab.awaiting_review", "This work is waiting for review or graded.")
+        raise UserError("lab.awaiting_review", "This work is waiting for review or graded.")
     check_position(session, part, position)
     take = db.exec(
         select(Take).where(
@@ -230,9 +228,10 @@ def append_samples(
     stored = take.n_samples if take is not None else 0
     if offset is not None:
         if offset > stored:
-            raise GyroInputError(
+            raise UserError(
                 "lab.offset_gap",
                 f"Expected offset {stored}, got {offset}: some samples are missing.",
+                status=409,
                 expected=stored,
             )
         skip = stored - offset
@@ -241,7 +240,7 @@ def append_samples(
     if take is None or not values.size:
         if take is None:
             if not values.size:
-                raise GyroInputError("readings.empty_position", "No samples to add.")
+                raise UserError("readings.empty_position", "No samples to add.")
             new = store_take(
                 db,
                 session,
@@ -257,7 +256,7 @@ def append_samples(
             return new, int(values.size)
         return take, 0
     if stored + values.size > MAX_SAMPLES_PER_POSITION:
-        raise GyroInputError(
+        raise UserError(
             "lab.too_many_samples",
             f"At most {MAX_SAMPLES_PER_POSITION} readings per position.",
             limit=MAX_SAMPLES_PER_POSITION,
@@ -269,7 +268,7 @@ def append_samples(
     ).all()
     has_times = all(chunk.times is not None for chunk in existing)
     if has_times != (times is not None):
-        raise GyroInputError(
+        raise UserError(
             "lab.times_mismatch", "Send times with every batch of a position, or with none."
         )
     _check_storage(db, session, values, times, copying=take if take.frozen else None)
@@ -338,10 +337,11 @@ def _check_storage(
     if copying is not None:
         adding += copying.n_samples * 16
     if storage_used(db, session.owner_id) + adding > limit:
-        raise GyroInputError(
+        raise UserError(
             "lab.storage_full",
             f"Your recordings would use more than your {limit // 2**20} MB of storage. "
             "Ask your teacher to remove old re-recordings.",
+            status=413,
             limit_mb=limit // 2**20,
         )
 
@@ -353,7 +353,7 @@ def _check_angle_and_times(
     position: int, angle_deg: float, times: np.ndarray | None, n_values: int
 ) -> None:
     if not math.isfinite(angle_deg) or abs(angle_deg) > MAX_ANGLE_DEG:
-        raise GyroInputError(
+        raise UserError(
             "lab.bad_angle",
             f"The angle of position {position} must be a finite number of degrees "
             f"(at most ±{MAX_ANGLE_DEG:g}).",
@@ -361,7 +361,7 @@ def _check_angle_and_times(
             limit=MAX_ANGLE_DEG,
         )
     if times is not None and (times.size != n_values or not np.all(np.isfinite(times))):
-        raise GyroInputError(
+        raise UserError(
             "lab.bad_times",
             f"Position {position}: give one finite time per reading.",
             position=position,
@@ -370,11 +370,11 @@ def _check_angle_and_times(
 
 def _check_values(session: LabSession, position: int, values: np.ndarray) -> None:
     if not np.all(np.isfinite(values)):
-        raise GyroInputError(
+        raise UserError(
             "readings.not_finite", "A reading is not a finite number.", position=position
         )
     if values.size and float(np.max(np.abs(values))) > PLAUSIBLE_RATE_DEG_H:
-        raise GyroInputError(
+        raise UserError(
             "lab.implausible_rate",
             f"Position {position} has readings above {PLAUSIBLE_RATE_DEG_H:g} °/h, far more than "
             "a gyro at rest can read: check the unit.",
@@ -479,7 +479,7 @@ def solve_part(
 ) -> PartResult:
     outcome = PartResult(part, data)
     if len(data) < 3:
-        outcome.error = GyroInputError(
+        outcome.error = UserError(
             "lab.need_positions",
             "Record at least 3 positions to compute a result.",
             recorded=len(data),
@@ -505,7 +505,7 @@ def solve_part(
                 **known,
             )
             outcome.steps = explain_latitude(outcome.result)
-    except GyroInputError as error:
+    except UserError as error:
         outcome.error = error
     outcome.flags = quality_flags(session, data)
     if outcome.result is not None and outcome.result.fit.closure_consistent is False:
@@ -574,28 +574,33 @@ def submit(db: Session, session: LabSession) -> Attempt:
     assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
     previous = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
     if session.status == "graded":
-        raise GyroInputError("lab.already_graded", "This work has been graded.")
+        raise UserError("lab.already_graded", "This work has been graded.", status=409)
     if assignment is not None and session.status == "submitted":
-        raise GyroInputError(
-            "lab.awaiting_review", "Your last attempt is waiting for your teacher's review."
+        raise UserError(
+            "lab.awaiting_review",
+            "Your last attempt is waiting for your teacher's review.",
+            status=409,
         )
     if (
         assignment is not None
         and assignment.max_attempts
         and len(previous) >= assignment.max_attempts
     ):
-        raise GyroInputError(
+        raise UserError(
             "lab.no_attempts_left",
             f"All {assignment.max_attempts} attempts are used.",
+            status=409,
             limit=assignment.max_attempts,
         )
     now = utcnow()
     late = bool(assignment and assignment.due_at and now > assignment.due_at)
     if late and assignment.late_policy == "refuse":
-        raise GyroInputError("lab.past_due", "The due date has passed; submissions are closed.")
+        raise UserError(
+            "lab.past_due", "The due date has passed; submissions are closed.", status=409
+        )
     results = session_results(db, session)
     if all(outcome.result is None for outcome in results.values()):
-        raise GyroInputError(
+        raise UserError(
             "lab.nothing_to_submit", "There is no result to submit yet: record the positions first."
         )
     takes = current_takes(db, session.id)

@@ -22,13 +22,12 @@ from urllib.parse import urlsplit
 
 import numpy as np
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
-from sqlmodel import select
 from starlette.concurrency import run_in_threadpool
 
-from app.accounts.security import session_is_live, token_digest
 from app.config import get_settings
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.db import write_session
+from app.lab.service import Method, record_position, recordable_session
 from app.lab.sim import (
     MAX_DWELL_S,
     MAX_SETTLE_S,
@@ -36,9 +35,9 @@ from app.lab.sim import (
     position_count,
     set_gyro_clock,
 )
-from app.lab.store import PARTS, POSITIONS, store_take
-from app.models import Assignment, AuthSession, LabSession, User
-from app.web.deps import ObjectId
+from app.lab.store import PARTS, POSITIONS
+from app.models import LabSession, User
+from app.web.deps import ObjectId, login_for_cookie
 from app.web.i18n import translate
 from app.web.render import SESSION_COOKIE, request_language
 
@@ -58,30 +57,16 @@ def _same_origin(websocket: WebSocket) -> bool:
 
 
 def _owner(websocket: WebSocket, session_id: int) -> tuple[User, LabSession] | None:
-    token = websocket.cookies.get(SESSION_COOKIE)
-    if not token:
-        return None
-    settings = get_settings()
+    """The cookie's user and their session, when it may be recorded from the simulator."""
     with write_session() as db:
-        record = db.exec(
-            select(AuthSession).where(AuthSession.token_hash == token_digest(token))
-        ).first()
-        if record is None or not session_is_live(record, settings):
+        found = login_for_cookie(db, websocket.cookies.get(SESSION_COOKIE), get_settings())
+        if found is None or found[0].must_change_password:
             return None
-        user = db.get(User, record.user_id)
-        session = db.get(LabSession, session_id)
-        if (
-            user is None
-            or user.must_change_password
-            or session is None
-            or session.owner_id != user.id
-        ):
+        try:
+            session = recordable_session(db, found[0], session_id, Method.simulator)
+        except UserError:
             return None
-        if session.assignment_id is not None:
-            assignment = db.get(Assignment, session.assignment_id)
-            if assignment is None or "simulator" not in assignment.methods:
-                return None
-        return user, session
+        return found[0], session
 
 
 def _mark_started(session_id: int, part: str, position: int) -> LabSession:
@@ -99,14 +84,14 @@ def _save(
         session = db.get(LabSession, session_id)
         session.stream_part = session.stream_position = None
         set_gyro_clock(session, end_s)  # the gyro ran through the recording
-        store_take(
+        record_position(
             db,
             session,
             part=part,
             position=position,
-            angle_deg=dial,
             values=np.asarray(values),
             times=np.asarray(times),
+            angle_deg=dial,
             source="simulator",
         )
         return len(values)
@@ -262,7 +247,7 @@ async def _record(
         saved = await run_in_threadpool(
             _save, session_id, part, position, take.dial_angle_deg, values, times, take.end_s
         )
-    except GyroInputError as error:  # e.g. stopped before the minimum number of readings
+    except UserError as error:  # e.g. stopped before the minimum number of readings
         await run_in_threadpool(_clear_mark, session_id)
         raise StreamError(error.key, **error.params) from error
     await websocket.send_json({"type": "saved", "part": part, "position": position, "n": saved})

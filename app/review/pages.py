@@ -6,70 +6,42 @@ import json
 import math
 from typing import Annotated
 
-from fastapi import APIRouter, File, Form, HTTPException, Request, UploadFile
-from fastapi.responses import StreamingResponse
-from sqlmodel import Session, select
+from fastapi import APIRouter, File, Form, Request, UploadFile
+from sqlmodel import select
 
-from app.core.exceptions import GyroInputError
+from app.core.exceptions import UserError
 from app.core.readings import parse_decimal
 from app.core.simulate import PRESETS
 from app.courses import characterisation
 from app.courses.assignment_pages import FormProblem, assignment_form_values, parse_assignment_form
 from app.lab.charts import class_error_figure, class_histogram_figure
 from app.lab.pages import UNIT_NAMES, session_view
-from app.models import Assignment, Attempt, Course, LabSession, User
+from app.models import Attempt, User
+from app.review.deps import ReviewableSession, TeacherAssignment
+from app.review.exports import class_table_response, class_zip_response
 from app.review.service import (
     auto_check,
     class_rows,
-    export_rows,
     grade_and_release,
     return_for_revision,
     session_truth,
     status_counts,
 )
-from app.web.deps import CsrfProtected, FormDep, ObjectId, SessionDep, TeacherUser
-from app.web.exports import SubmittedWork, assignment_zip, csv_table
+from app.web.deps import CsrfProtected, FormDep, SessionDep
 from app.web.i18n import translator
 from app.web.render import flash, redirect, render, request_language
 
 router = APIRouter(tags=["pages: review"], include_in_schema=False)
 
 
-def own_assignment(db: Session, teacher: User, course_id: int, assignment_id: int):
-    course = db.get(Course, course_id)
-    assignment = db.get(Assignment, assignment_id)
-    if (
-        course is None
-        or course.teacher_id != teacher.id
-        or assignment is None
-        or assignment.course_id != course.id
-    ):
-        raise HTTPException(404)
-    return course, assignment
-
-
-def reviewable_session(db: Session, teacher: User, session_id: int):
-    """A session of an assignment in one of the teacher's courses, else 404."""
-    session = db.get(LabSession, session_id)
-    if session is None or session.assignment_id is None:
-        raise HTTPException(404)
-    assignment = db.get(Assignment, session.assignment_id)
-    course = db.get(Course, assignment.course_id) if assignment else None
-    if course is None or course.teacher_id != teacher.id:
-        raise HTTPException(404)
-    return session, assignment, course
-
-
 @router.get("/courses/{course_id}/assignments/{assignment_id}")
 def assignment_dashboard(
     request: Request,
-    course_id: ObjectId,
-    assignment_id: ObjectId,
-    teacher: TeacherUser,
+    target: TeacherAssignment,
     db: SessionDep,
     status: str = "",
 ):
-    course, assignment = own_assignment(db, teacher, course_id, assignment_id)
+    course, assignment = target.course, target.assignment
     _ = translator(request_language(request))
     rows = class_rows(db, assignment)
     figures = {
@@ -99,13 +71,11 @@ def assignment_dashboard(
 )
 def update_settings(
     request: Request,
-    course_id: ObjectId,
-    assignment_id: ObjectId,
-    teacher: TeacherUser,
+    target: TeacherAssignment,
     db: SessionDep,
     form: FormDep,
 ):
-    course, assignment = own_assignment(db, teacher, course_id, assignment_id)
+    course, assignment = target.course, target.assignment
     values = {key: form.get(key, "") for key in form if key != "methods"}
     values["methods"] = form.getlist("methods")
     try:
@@ -133,9 +103,7 @@ MAX_RECORD_BYTES = 20_000_000  # about a million readings as text
 )
 def upload_characterisation(
     request: Request,
-    course_id: ObjectId,
-    assignment_id: ObjectId,
-    teacher: TeacherUser,
+    target: TeacherAssignment,
     db: SessionDep,
     record: Annotated[UploadFile | None, File()] = None,
     rate_hz: Annotated[str, Form(max_length=40)] = "",
@@ -143,7 +111,7 @@ def upload_characterisation(
     remove: Annotated[str, Form(max_length=8)] = "",
 ):
     """The bench gyro's static record → its noise model for this assignment's real data."""
-    course, assignment = own_assignment(db, teacher, course_id, assignment_id)
+    course, assignment = target.course, target.assignment
     response = redirect(f"/courses/{course.id}/assignments/{assignment.id}#characterisation")
     if remove:
         characterisation.store(assignment, None)
@@ -154,21 +122,19 @@ def upload_characterisation(
     try:
         data = record.file.read(MAX_RECORD_BYTES + 1) if record else b""
         if not data:
-            raise GyroInputError("characterisation.no_file", "Choose the record's CSV file.")
+            raise UserError("characterisation.no_file", "Choose the record's CSV file.")
         if len(data) > MAX_RECORD_BYTES:
-            raise GyroInputError("characterisation.too_large", "The file is larger than 20 MB.")
+            raise UserError("characterisation.too_large", "The file is larger than 20 MB.")
         try:
             text = data.decode("utf-8-sig")
         except UnicodeDecodeError:
-            raise GyroInputError(
-                "characterisation.encoding", "The file is not UTF-8 text."
-            ) from None
+            raise UserError("characterisation.encoding", "The file is not UTF-8 text.") from None
         try:
             rate = parse_decimal(rate_hz.strip())
         except ValueError:
             rate = math.nan
         summary = characterisation.characterise(text, rate, unit)
-    except GyroInputError as error:
+    except UserError as error:
         flash(response, request, error.key, "error", **error.params)
         return response
     characterisation.store(assignment, summary)
@@ -186,40 +152,19 @@ def upload_characterisation(
 
 
 @router.get("/courses/{course_id}/assignments/{assignment_id}/export.csv")
-def export_assignment_csv(
-    course_id: ObjectId, assignment_id: ObjectId, teacher: TeacherUser, db: SessionDep
-):
-    _, assignment = own_assignment(db, teacher, course_id, assignment_id)
-    return StreamingResponse(
-        csv_table(export_rows(class_rows(db, assignment))),
-        media_type="text/csv; charset=utf-8",
-        headers={"Content-Disposition": f'attachment; filename="assignment-{assignment.id}.csv"'},
-    )
+def export_assignment_csv(target: TeacherAssignment, db: SessionDep):
+    return class_table_response(db, target.assignment)
 
 
 @router.get("/courses/{course_id}/assignments/{assignment_id}/export.zip")
-def export_assignment_zip(
-    course_id: ObjectId, assignment_id: ObjectId, teacher: TeacherUser, db: SessionDep
-):
-    """The class table plus every submitted attempt's own data (CSV and JSON with its
-    results): what the students submitted, never what they changed afterwards."""
-    _, assignment = own_assignment(db, teacher, course_id, assignment_id)
-    rows = class_rows(db, assignment)
-    work = [
-        SubmittedWork(row.student.username, row.session.id, list(row.attempts))
-        for row in rows
-        if row.session is not None and row.attempts
-    ]
-    return StreamingResponse(
-        assignment_zip(export_rows(rows), work),
-        media_type="application/zip",
-        headers={"Content-Disposition": f'attachment; filename="assignment-{assignment.id}.zip"'},
-    )
+def export_assignment_zip(target: TeacherAssignment, db: SessionDep):
+    """The class table plus every submitted attempt's own data."""
+    return class_zip_response(db, target.assignment)
 
 
 @router.get("/review/sessions/{session_id}")
-def submission_page(request: Request, session_id: ObjectId, teacher: TeacherUser, db: SessionDep):
-    session, assignment, course = reviewable_session(db, teacher, session_id)
+def submission_page(request: Request, target: ReviewableSession, db: SessionDep):
+    session, assignment, course = target.session, target.assignment, target.course
     _ = translator(request_language(request))
     attempts = db.exec(
         select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
@@ -254,11 +199,9 @@ def submission_page(request: Request, session_id: ObjectId, teacher: TeacherUser
 
 
 @router.post("/review/sessions/{session_id}/feedback", dependencies=[CsrfProtected])
-def save_feedback(
-    request: Request, session_id: ObjectId, teacher: TeacherUser, db: SessionDep, form: FormDep
-):
+def save_feedback(request: Request, target: ReviewableSession, db: SessionDep, form: FormDep):
     """Comments (overall and per position) and the grade; 'action' may return or release."""
-    session, _, _ = reviewable_session(db, teacher, session_id)
+    session = target.session
     session.feedback = str(form.get("feedback", ""))[:20_000]
     comments = {
         key.removeprefix("comment-"): str(value)[:2000]

@@ -14,6 +14,7 @@ from starlette.datastructures import FormData
 
 from app.accounts.security import session_is_live, token_digest, tokens_match
 from app.config import Settings, get_settings
+from app.core.exceptions import UserError
 from app.db import (
     get_engine,
     read_session,
@@ -33,14 +34,6 @@ PASSWORD_CHANGE_PATHS = {"/account/password", "/logout", "/lang"}
 
 class LoginRequired(Exception):
     """No valid session: HTML routes redirect to the login page."""
-
-
-class Forbidden(Exception):
-    """Logged in, but this role may not do this."""
-
-
-class CsrfFailed(Exception):
-    """A state-changing request without the right CSRF token."""
 
 
 class PasswordChangeRequired(Exception):
@@ -99,8 +92,10 @@ def load_login(request: Request, db: Session, settings: Settings) -> User | None
     return user
 
 
-def _resolve_login(request: Request, db: Session, settings: Settings) -> User | None:
-    token = request.cookies.get(SESSION_COOKIE)
+def login_for_cookie(
+    db: Session, token: str | None, settings: Settings
+) -> tuple[User, AuthSession] | None:
+    """The user and live log-in session of a session cookie (pages, API and WebSocket)."""
     if not token:
         return None
     record = db.exec(
@@ -109,8 +104,14 @@ def _resolve_login(request: Request, db: Session, settings: Settings) -> User | 
     if record is None or not session_is_live(record, settings):
         return None
     user = db.get(User, record.user_id)
-    if user is None:
+    return None if user is None else (user, record)
+
+
+def _resolve_login(request: Request, db: Session, settings: Settings) -> User | None:
+    found = login_for_cookie(db, request.cookies.get(SESSION_COOKIE), settings)
+    if found is None:
         return None
+    user, record = found
     if utcnow() - record.last_seen_at > TOUCH_INTERVAL:
         # End this read first: a request never holds one pooled connection while it waits
         # for another (a full pool would otherwise stall until its timeout).
@@ -177,7 +178,7 @@ def csrf_protect(
         request.state.auth.csrf_token if user else request.cookies.get(csrf_cookie_name(request))
     )
     if not tokens_match(expected, given):
-        raise CsrfFailed()
+        raise UserError("error.csrf", status=403)
 
 
 def optional_user(request: Request, db: SessionDep, settings: SettingsDep) -> User | None:
@@ -199,19 +200,19 @@ OptionalUser = Annotated[User | None, Depends(optional_user)]
 
 def teacher_user(user: CurrentUser) -> User:
     if user.role != Role.teacher:
-        raise Forbidden()
+        raise UserError("error.forbidden", status=403)
     return user
 
 
 def student_user(user: CurrentUser) -> User:
     if user.role != Role.student:
-        raise Forbidden()
+        raise UserError("error.forbidden", status=403)
     return user
 
 
 def admin_user(user: CurrentUser) -> User:
     if user.role != Role.admin:
-        raise Forbidden()
+        raise UserError("error.forbidden", status=403)
     return user
 
 

@@ -47,6 +47,10 @@ def negotiate(accept_language: str | None) -> str:
     return min(choices)[2] if choices else DEFAULT_LANGUAGE
 
 
+def is_known(key: str) -> bool:
+    return key in MESSAGES
+
+
 def translate(key: str, language: str, **params: object) -> str:
     entry = MESSAGES.get(key)
     text = key if entry is None else entry.get(language) or entry["en"]

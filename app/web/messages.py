@@ -376,3 +376,7 @@ MESSAGES: dict[str, dict[str, str]] = {
 from app.web.messages_lab import LAB_MESSAGES  # noqa: E402
 
 MESSAGES.update(LAB_MESSAGES)
+
+from app.web.messages_api import API_MESSAGES  # noqa: E402
+
+MESSAGES.update(API_MESSAGES)

@@ -587,6 +587,15 @@ LAB_MESSAGES: dict[str, dict[str, str]] = {
     "csv.file": {"en": "CSV file", "zh-CN": "CSV 文件"},
     "csv.accept": {"en": "Use these readings", "zh-CN": "使用这些读数"},
     "csv.empty": {"en": "The file has no readings.", "zh-CN": "文件中没有读数。"},
+    "csv.not_utf8": {"en": "The CSV is not UTF-8 text.", "zh-CN": "该 CSV 不是 UTF-8 文本。"},
+    "csv.one_or_two_columns": {
+        "en": "Line {line}: expected 'value' or 'time_s,value'.",
+        "zh-CN": "第 {line} 行：应为“读数”或“时间_s,读数”。",
+    },
+    "csv.times_on_every_line": {
+        "en": "Give a time on every line or on none.",
+        "zh-CN": "要么每行都给出时间，要么都不给。",
+    },
     "csv.unreadable": {
         "en": "The file cannot be read as CSV: {detail}.",
         "zh-CN": "无法按 CSV 格式读取该文件：{detail}。",

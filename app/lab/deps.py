@@ -1,0 +1,34 @@
+"""The lab's objects as dependencies: a route's signature says whose session it reaches
+and which way of recording it needs."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Depends
+
+from app.lab.service import Method, own_session, require_method
+from app.models import LabSession
+from app.web.deps import CurrentUser, ObjectId, SessionDep
+
+
+def owned_session(session_id: ObjectId, user: CurrentUser, db: SessionDep) -> LabSession:
+    """The logged-in user's own session (404 for anyone else's)."""
+    return own_session(db, user, session_id)
+
+
+OwnedSession = Annotated[LabSession, Depends(owned_session)]
+
+
+def recordable(method: Method):
+    """A dependency: the user's own session, when its assignment allows ``method``."""
+
+    def dependency(session: OwnedSession, db: SessionDep) -> LabSession:
+        require_method(db, session, method)
+        return session
+
+    return dependency
+
+
+ManualSession = Annotated[LabSession, Depends(recordable(Method.manual))]
+SimulatorSession = Annotated[LabSession, Depends(recordable(Method.simulator))]

@@ -1,0 +1,261 @@
+"""The student lab's actions on a session: record positions (grid, CSV), turn the virtual
+table, choose the order, read results, submit and download.  Each calls the lab service."""
+
+from __future__ import annotations
+
+import json
+from datetime import datetime
+from typing import Annotated, Literal
+
+import numpy as np
+from fastapi import APIRouter, Body, Form, Request
+from fastapi.responses import Response, StreamingResponse
+from pydantic import BaseModel, Field, StrictFloat, StrictInt
+
+from app.core.exceptions import UserError
+from app.core.jsonsafe import json_safe
+from app.core.readings import Readings, parse_readings_csv
+from app.core.units import canonical_unit, to_deg_per_hour
+from app.lab.deps import ManualSession, OwnedSession, SimulatorSession
+from app.lab.service import Method, record_positions, recordable_session
+from app.lab.sim import nominal_angle, position_count
+from app.lab.store import (
+    POSITIONS,
+    check_position,
+    session_results,
+    set_symmetric_order,
+    submit,
+)
+from app.models import LabSession
+from app.web.deps import CsrfProtected, CurrentUser, ObjectId, ReadOnlySessionDep, SessionDep
+from app.web.exports import Selection, readings_csv, session_json
+from app.web.render import flash, redirect
+
+router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
+
+MAX_CSV_CHARS = 5_000_000
+Part = Literal["heading", "latitude"]
+
+
+class ManualReadings(BaseModel):
+    """Readings typed into the grid: one list per position (positions left empty are kept)."""
+
+    part: Part
+    unit: str = "deg/h"
+    columns: dict[int, Annotated[list[StrictFloat | StrictInt], Field(max_length=100_000)]] = Field(
+        max_length=POSITIONS
+    )
+
+
+@router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected])
+def save_manual(session: ManualSession, db: SessionDep, body: Annotated[ManualReadings, Body()]):
+    columns = {k: np.asarray(v, dtype=float) for k, v in body.columns.items() if len(v)}
+    if not columns:
+        raise UserError("readings.none", "Type at least one reading.")
+    saved = record_positions(
+        db, session, part=body.part, unit=body.unit, columns=columns, source="manual"
+    )
+    db.commit()
+    return {"saved": saved}
+
+
+class CsvUpload(BaseModel):
+    part: Part
+    unit: str = "deg/h"
+    text: str
+
+
+def parse_csv_upload(body: CsvUpload) -> Readings:
+    """The file's readings, before any session is looked up (so that no write transaction
+    waits on parsing)."""
+    if len(body.text) > MAX_CSV_CHARS:
+        raise UserError(
+            "lab.file_too_large",
+            "The file is larger than 5 MB.",
+            limit_mb=MAX_CSV_CHARS // 1_000_000,
+        )
+    readings = parse_readings_csv(body.text, part=body.part)
+    check_position_count(len(readings.positions), POSITIONS)
+    canonical_unit(body.unit)
+    return readings
+
+
+def check_position_count(count: int, limit: int) -> None:
+    """A file's positions fit the session: 4, or 8 in the symmetric order."""
+    if count > limit:
+        raise UserError(
+            "lab.too_many_positions",
+            f"The file has {count} positions; at most {limit} "
+            "(8 in the symmetric order 1-2-3-4-4-3-2-1).",
+            count=count,
+            limit=limit,
+        )
+
+
+@router.post("/sessions/{session_id}/csv/preview", dependencies=[CsrfProtected])
+def preview_csv(
+    session_id: ObjectId,
+    user: CurrentUser,
+    db: ReadOnlySessionDep,
+    body: Annotated[CsvUpload, Body()],
+):
+    session = recordable_session(db, user, session_id, Method.csv)
+    readings = parse_csv_upload(body)
+    check_position_count(len(readings.positions), position_count(session))
+    rows = []
+    for index, values in enumerate(readings.positions, start=1):
+        converted = to_deg_per_hour(values, body.unit)
+        angle = (
+            readings.angles_deg[index - 1]
+            if readings.angles_deg is not None
+            else nominal_angle(session, body.part, index)
+        )
+        rows.append(
+            {
+                "position": index,
+                "n": int(values.size),
+                "angle_deg": angle,
+                "mean_deg_h": float(converted.mean()),
+                "first": [float(v) for v in converted[:5]],
+            }
+        )
+    return {"layout": readings.layout, "positions": rows}
+
+
+@router.post("/sessions/{session_id}/csv", dependencies=[CsrfProtected])
+def save_csv(
+    session_id: ObjectId,
+    user: CurrentUser,
+    db: SessionDep,
+    body: Annotated[CsvUpload, Body()],
+):
+    try:  # parsed before the first query takes the write lock; reported after the checks
+        readings, problem = parse_csv_upload(body), None
+    except UserError as error:
+        readings, problem = None, error
+    session = recordable_session(db, user, session_id, Method.csv)
+    if problem is not None:
+        raise problem
+    check_position_count(len(readings.positions), position_count(session))
+
+    def numbered(items):
+        return dict(enumerate(items, start=1)) if items is not None else None
+
+    saved = record_positions(
+        db,
+        session,
+        part=body.part,
+        unit=body.unit,
+        columns=numbered(readings.positions),
+        source="csv",
+        angles=numbered(readings.angles_deg),
+        times=numbered(readings.times_s),
+    )
+    db.commit()
+    return {"saved": saved}
+
+
+class Turn(BaseModel):
+    part: Part
+    position: int = Field(ge=1, le=POSITIONS)
+
+
+@router.post("/sessions/{session_id}/turn", dependencies=[CsrfProtected])
+def turn_table(session: SimulatorSession, db: SessionDep, body: Annotated[Turn, Body()]):
+    """Turn the virtual turntable; every real turn gets a new indexing error."""
+    check_position(session, body.part, body.position)
+    field = f"sim_table_{body.part}"
+    if getattr(session, field) != body.position:
+        setattr(session, field, body.position)
+        session.sim_turns += 1
+        db.add(session)
+        db.commit()
+    return {
+        "part": body.part,
+        "position": body.position,
+        "dial_angle_deg": nominal_angle(session, body.part, body.position),
+    }
+
+
+class Plane(BaseModel):
+    dial_deg: float = Field(ge=-360, le=360, allow_inf_nan=False)
+
+
+@router.post("/sessions/{session_id}/plane", dependencies=[CsrfProtected])
+def set_plane(session: SimulatorSession, db: SessionDep, body: Annotated[Plane, Body()]):
+    """Turn the horizontal dial for part B: the gyro then turns in that vertical plane
+    (north if part A's result was right, as at the real bench)."""
+    session.sim_plane_dial_deg = round(body.dial_deg, 3)
+    session.sim_turns += 1
+    db.add(session)
+    db.commit()
+    return {"dial_deg": session.sim_plane_dial_deg}
+
+
+@router.post("/sessions/{session_id}/order", dependencies=[CsrfProtected])
+def set_order(
+    request: Request,
+    session: OwnedSession,
+    db: SessionDep,
+    symmetric: Annotated[str, Form(max_length=8)] = "",
+):
+    """Record in the order 1-2-3-4 or the symmetric 1-2-3-4-4-3-2-1 (positions 5–8)."""
+    response = redirect(f"/lab/sessions/{session.id}")
+    try:
+        if symmetric not in ("on", "off"):
+            raise UserError("lab.bad_order", "Choose the order: on or off.")
+        set_symmetric_order(db, session, symmetric == "on")
+    except UserError as error:
+        db.rollback()
+        flash(response, request, error.key, "error")
+        return response
+    db.commit()
+    flash(response, request, "lab.order_symmetric" if symmetric == "on" else "lab.order_plain")
+    return response
+
+
+@router.get("/sessions/{session_id}/results.json")
+def results_endpoint(session: OwnedSession, db: SessionDep):
+    results = session_results(db, session)
+    payload = {part: outcome.to_json() for part, outcome in results.items()}
+    return Response(json.dumps(json_safe(payload)), media_type="application/json")
+
+
+@router.post("/sessions/{session_id}/submit", dependencies=[CsrfProtected])
+def submit_session(request: Request, session: OwnedSession, db: SessionDep):
+    response = redirect(f"/lab/sessions/{session.id}")
+    try:
+        attempt = submit(db, session)
+    except UserError as error:
+        db.rollback()
+        flash(response, request, error.key, "error")
+        return response
+    db.commit()
+    flash(response, request, "lab.submitted", "success", number=attempt.number)
+    return response
+
+
+@router.get("/sessions/{session_id}/export.csv")
+def export_session_csv(session: OwnedSession):
+    return StreamingResponse(
+        readings_csv(Selection(session.id)),
+        media_type="text/csv; charset=utf-8",
+        headers=download_headers(session, "csv"),
+    )
+
+
+@router.get("/sessions/{session_id}/export.json")
+def export_session_json(session: OwnedSession):
+    return StreamingResponse(
+        session_json(Selection(session.id)),
+        media_type="application/json",
+        headers=download_headers(session, "json"),
+    )
+
+
+def download_headers(session: LabSession, extension: str) -> dict[str, str]:
+    stamp = datetime.now().strftime("%Y%m%d")
+    return {
+        "Content-Disposition": f'attachment; filename="gyrolab-session-{session.id}-'
+        f'{stamp}.{extension}"'
+    }

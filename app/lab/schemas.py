@@ -1,0 +1,202 @@
+"""The REST API's lab bodies and answers (pydantic models): sessions, uploads, results."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt
+
+from app.lab.store import MAX_SAMPLES_PER_POSITION
+from app.web.deps import MAX_ID
+
+
+class Station(BaseModel):
+    model_config = ConfigDict(strict=True, allow_inf_nan=False)
+    latitude_deg: float = Field(ge=-90, le=90)
+    earth_rate_deg_h: float = Field(gt=0, lt=1000, default=15.041)
+
+
+class HeadingSettings(BaseModel):
+    model_config = ConfigDict(strict=True, allow_inf_nan=False)
+    rotation: Literal["ccw", "cw"] = "ccw"
+    start_angle_deg: float = 0.0
+
+
+class LatitudeSettings(BaseModel):
+    model_config = ConfigDict(strict=True, allow_inf_nan=False)
+    start_angle_deg: float = 0.0
+    step_deg: float = 90.0
+
+
+class SessionCreate(BaseModel):
+    model_config = ConfigDict(
+        strict=True,
+        allow_inf_nan=False,
+        json_schema_extra={
+            "examples": [
+                {
+                    "title": "Bench 3, Tuesday",
+                    "station": {"latitude_deg": 39.93, "earth_rate_deg_h": 15.04},
+                    "heading": {"rotation": "ccw", "start_angle_deg": 0.0},
+                    "latitude": {"start_angle_deg": 0.0, "step_deg": 90.0},
+                }
+            ]
+        },
+    )
+    title: str = Field(default="", max_length=200)
+    assignment_id: int | None = Field(default=None, ge=1, le=MAX_ID)
+    station: Station | None = None
+    heading: HeadingSettings = HeadingSettings()
+    latitude: LatitudeSettings = LatitudeSettings()
+    simulator_preset: str = Field(default="teaching-fog", max_length=32)
+    symmetric_order: bool = Field(
+        default=False,
+        description="Record 1-2-3-4-4-3-2-1: positions 5–8 revisit 4–1, so a linear drift "
+        "cancels (and, with times, is fitted).",
+    )
+
+
+class PositionSummary(BaseModel):
+    part: str
+    position: int
+    angle_deg: float
+    n_samples: int
+    source: str
+    recorded_at: datetime
+
+
+class SessionOut(BaseModel):
+    id: int
+    title: str
+    assignment_id: int | None
+    status: str
+    station: Station
+    heading: HeadingSettings
+    latitude: LatitudeSettings
+    min_readings: int
+    symmetric_order: bool
+    positions: list[PositionSummary]
+    created_at: datetime
+    updated_at: datetime
+
+
+class PositionUpload(BaseModel):
+    model_config = ConfigDict(
+        strict=True,
+        allow_inf_nan=False,
+        json_schema_extra={
+            "examples": [
+                {
+                    "samples": [
+                        10.74,
+                        10.65,
+                        10.84,
+                        10.46,
+                        10.65,
+                        10.65,
+                        10.74,
+                        10.65,
+                        10.84,
+                        10.84,
+                    ],
+                    "unit": "deg/h",
+                }
+            ]
+        },
+    )
+    samples: list[StrictFloat | StrictInt] = Field(
+        min_length=1, max_length=MAX_SAMPLES_PER_POSITION
+    )
+    unit: Literal["deg/h", "deg/s", "rad/s"] = "deg/h"
+    angle_deg: StrictFloat | StrictInt | None = Field(
+        default=None, description="the dial angle; default: from the session's settings"
+    )
+    times_s: list[StrictFloat | StrictInt] | None = Field(
+        default=None,
+        max_length=MAX_SAMPLES_PER_POSITION,
+        description="each sample's time in seconds, on one clock for the whole session "
+        "(e.g. since switch-on): with the symmetric order the fit then estimates a linear "
+        "bias drift",
+    )
+    offset: StrictInt | None = Field(
+        default=None,
+        ge=0,
+        description="append only: index of the first sample, so a "
+        "retried batch is not stored twice",
+    )
+
+
+class UploadOut(BaseModel):
+    session_id: int
+    part: str
+    position: int
+    n_samples: int = Field(description="samples now stored for this position")
+    added: int
+
+
+class HeadingOut(BaseModel):
+    part: Literal["heading"]
+    n_positions: int
+    samples_per_position: list[int]
+    position_means_deg_h: list[float]
+    position_sems_deg_h: list[float | None]
+    position_sigmas_deg_h: list[float] | None = Field(
+        description="the 1σ(-equivalent) of each position mean that the result propagates"
+    )
+    azimuth_deg: float
+    azimuth_sigma_deg: float | None
+    theta_deg: float
+    rotate_direction: Literal["clockwise", "counterclockwise"]
+    rotate_deg: float
+    then_axis_points: Literal["north", "south"]
+    bias_deg_h: float
+    amplitude_deg_h: float
+    amplitude_sigma_deg_h: float | None
+    closure_residual_deg_h: float | None
+    closure_sigma_deg_h: float | None
+    uncertainty_model: Literal["white", "closure", "allan"] | None = Field(
+        description="what the 1σ assumes: white noise (Student-t), the closure residual "
+        "(one degree of freedom), or the gyro's noise model"
+    )
+    drift_deg_h_per_h: float | None = Field(
+        description="linear bias drift, fitted when 5+ positions have times on one clock"
+    )
+    drift_sigma_deg_h_per_h: float | None
+    azimuth_error_deg: float | None
+
+
+class LatitudeOut(BaseModel):
+    part: Literal["latitude"]
+    n_positions: int
+    samples_per_position: list[int]
+    position_means_deg_h: list[float]
+    position_sems_deg_h: list[float | None]
+    position_sigmas_deg_h: list[float] | None
+    latitude_deg: float
+    latitude_sigma_deg: float | None
+    earth_rate_deg_h: float
+    earth_rate_sigma_deg_h: float | None
+    bias_deg_h: float
+    latitude_error_percent: float | None
+    latitude_error_deg: float | None = Field(description="φ − φ0 (°)")
+    earth_rate_error_percent: float
+    closure_residual_deg_h: float | None
+    closure_sigma_deg_h: float | None
+    uncertainty_model: Literal["white", "closure", "allan"] | None
+    drift_deg_h_per_h: float | None
+    drift_sigma_deg_h_per_h: float | None
+
+
+class ResultsOut(BaseModel):
+    heading: HeadingOut | None
+    latitude: LatitudeOut | None
+    problems: dict[str, str] = Field(default_factory=dict, description="why a part has no result")
+
+
+class AttemptOut(BaseModel):
+    session_id: int
+    attempt: int
+    submitted_at: datetime
+    late: bool
+    status: str

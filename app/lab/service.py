@@ -1,0 +1,150 @@
+"""Recording a lab session: the one path shared by the pages, the REST API and the stream.
+
+Who may record how (:func:`recordable_session`), and how readings become a stored take
+(:func:`record_position`, :func:`record_positions`, :func:`append_readings`): the unit
+converted to °/h, the dial angle defaulting to the session's schedule, the position checked
+against the schedule (4, or 8 in the symmetric order).  The caller commits once, so a
+position is saved whole or not at all.
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+
+import numpy as np
+from sqlmodel import Session
+
+from app.core.exceptions import UserError
+from app.core.units import canonical_unit, to_deg_per_hour
+from app.lab.sim import nominal_angle
+from app.lab.store import append_samples, check_position, store_take
+from app.models import Assignment, LabSession, Take, User
+
+
+class Method(StrEnum):
+    """Ways of recording that an assignment may allow."""
+
+    manual = "manual"  # typed into the grid
+    csv = "csv"  # a pasted or uploaded file
+    simulator = "simulator"  # streamed from the simulated gyro
+    api = "api"  # uploaded through the REST API: allowed with manual or csv
+
+
+def allowed_methods(db: Session, session: LabSession) -> list[str]:
+    """What the session's assignment allows (a practice session: everything)."""
+    if session.assignment_id is None:
+        return [Method.manual, Method.csv, Method.simulator]
+    assignment = db.get(Assignment, session.assignment_id)
+    return list(assignment.methods) if assignment else []
+
+
+def own_session(db: Session, user: User, session_id: int) -> LabSession:
+    """The user's own session; anyone else's (or none) answers 404."""
+    session = db.get(LabSession, session_id)
+    if session is None or session.owner_id != user.id:
+        raise UserError("lab.no_such_session", status=404)
+    return session
+
+
+def require_method(db: Session, session: LabSession, method: Method) -> None:
+    allowed = allowed_methods(db, session)
+    permitted = (
+        bool({Method.manual, Method.csv} & set(allowed))
+        if method == Method.api
+        else method in allowed
+    )
+    if not permitted:
+        key = "lab.uploads_not_allowed" if method == Method.api else "lab.method_not_allowed"
+        raise UserError(key, status=403)
+
+
+def recordable_session(db: Session, user: User, session_id: int, method: Method) -> LabSession:
+    """The user's own session, when its assignment allows recording this way."""
+    session = own_session(db, user, session_id)
+    require_method(db, session, method)
+    return session
+
+
+def record_position(
+    db: Session,
+    session: LabSession,
+    *,
+    part: str,
+    position: int,
+    values: np.ndarray,
+    source: str,
+    unit: str = "deg/h",
+    times: np.ndarray | None = None,
+    angle_deg: float | None = None,
+) -> Take:
+    """Store one position's readings (in ``unit``) as a new take, replacing the last."""
+    unit = canonical_unit(unit)
+    check_position(session, part, position)
+    angle = nominal_angle(session, part, position) if angle_deg is None else angle_deg
+    return store_take(
+        db,
+        session,
+        part=part,
+        position=position,
+        angle_deg=float(angle),
+        values=to_deg_per_hour(np.asarray(values, dtype=float), unit),
+        times=times,
+        source=source,
+        unit=unit,
+    )
+
+
+def record_positions(
+    db: Session,
+    session: LabSession,
+    *,
+    part: str,
+    unit: str,
+    columns: dict[int, np.ndarray],
+    source: str,
+    angles: dict[int, float] | None = None,
+    times: dict[int, np.ndarray] | None = None,
+) -> list[int]:
+    """Store several positions at once (a grid or a file); returns the positions saved."""
+    for position, values in sorted(columns.items()):
+        record_position(
+            db,
+            session,
+            part=part,
+            position=position,
+            values=values,
+            source=source,
+            unit=unit,
+            times=(times or {}).get(position),
+            angle_deg=(angles or {}).get(position),
+        )
+    return sorted(columns)
+
+
+def append_readings(
+    db: Session,
+    session: LabSession,
+    *,
+    part: str,
+    position: int,
+    values: np.ndarray,
+    unit: str = "deg/h",
+    times: np.ndarray | None = None,
+    angle_deg: float | None = None,
+    offset: int | None = None,
+) -> tuple[Take, int]:
+    """Append readings to a position's API take (a streaming device); returns the take and
+    how many samples were new (a retried batch with ``offset`` is stored once)."""
+    unit = canonical_unit(unit)
+    angle = nominal_angle(session, part, position) if angle_deg is None else angle_deg
+    return append_samples(
+        db,
+        session,
+        part=part,
+        position=position,
+        angle_deg=float(angle),
+        values=to_deg_per_hour(np.asarray(values, dtype=float), unit),
+        times=times,
+        unit=unit,
+        offset=offset,
+    )
