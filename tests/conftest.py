@@ -1,33 +1,48 @@
-"""Shared fixtures: a fresh migrated database per test, an HTTP client, login helpers.
+"""Shared fixtures: a fresh migrated database per test, an HTTP client, logged-in users.
 
 Every test that touches the database runs twice: on a SQLite file and on a real PostgreSQL
-server (``tests/pgserver.py``; one throw-away cluster per run, one database per test cloned
-from a migrated template). Mark a test ``sqlite_only`` or ``postgres_only`` when it is
-about one database itself.
-PostgreSQL tests skip with the reason when the server cannot run here -- except in CI
-(CI=true), where they fail instead.
+server (``tests/pgserver.py``; one throw-away cluster per run). Either way each test gets
+its own database copied from a template migrated once per run (a file copy on SQLite,
+``CREATE DATABASE … TEMPLATE`` on PostgreSQL); a fixture whose world is expensive to build
+(the route matrix's) builds it once per module and copies that the same way
+(:func:`snapshot`).  Mark a test ``sqlite_only`` or ``postgres_only`` when it is about one
+database itself.  PostgreSQL tests skip with the reason when the server cannot run here --
+except in CI (CI=true), where they fail instead.
+
+Passwords are hashed with argon2id's cheapest parameters here (the production parameters
+are tested once, in test_auth.py): hashing is not what these tests test.
 """
 
 from __future__ import annotations
 
 import itertools
 import os
-import re
+import shutil
+import sqlite3
 from collections.abc import Iterator
 from dataclasses import dataclass
+from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
 
+from app.accounts import security
 from app.config import get_settings
-from app.db import engine_for, write_session
-from app.models import Role, User
+from app.db import engine_for
+from app.models import Role
+from tests.factories import build_world, login, make_user
 from tests.pgserver import ADMIN_URL_ENV, PostgresServer, PostgresUnavailable
 
-CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
-PASSWORD = "correct-horse-42"
 BACKENDS = ("sqlite", "postgresql")
 IN_CI = os.environ.get("CI", "").lower() == "true"
+PRODUCTION_ARGON2 = (
+    security.ARGON2_MEMORY_KIB,
+    security.ARGON2_TIME_COST,
+    security.ARGON2_PARALLELISM,
+)
+# argon2's minimum: 8 KiB, one pass (a hash costs ~0.1 ms instead of ~40 ms)
+security.ARGON2_MEMORY_KIB, security.ARGON2_TIME_COST, security.ARGON2_PARALLELISM = 8, 1, 1
+security.password_hasher.cache_clear()
 
 
 def pytest_generate_tests(metafunc) -> None:
@@ -79,39 +94,122 @@ def postgres() -> Iterator[PostgresForTests]:
             server.stop()
 
 
+@pytest.fixture(scope="session")
+def sqlite_template(tmp_path_factory) -> Path:
+    """A SQLite file migrated to the newest schema, once per run."""
+    from app.migrate import upgrade_to_head
+
+    path = tmp_path_factory.mktemp("template") / "gyrolab.db"
+    upgrade_to_head(f"sqlite:///{path}")
+    with sqlite3.connect(path) as connection:  # everything in the main file, no -wal beside
+        connection.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+    return path
+
+
 @pytest.fixture
 def backend(request) -> str:
     return request.param
 
 
+@dataclass
+class TestDatabase:
+    """The database of one test: a SQLite file, or a PostgreSQL database by name."""
+
+    backend: str
+    path: Path | None = None
+    name: str | None = None
+    pg: PostgresForTests | None = None
+
+    def close_connections(self) -> None:
+        if engine_for.cache_info().currsize:
+            engine_for(get_settings().database_url).dispose()
+        engine_for.cache_clear()
+
+    def copy_from(self, source: str | Path) -> None:
+        """Replace this database by a copy of ``source`` (a file, or a database name)."""
+        self.close_connections()
+        if self.path is not None:
+            for suffix in ("-wal", "-shm"):
+                Path(f"{self.path}{suffix}").unlink(missing_ok=True)
+            shutil.copyfile(source, self.path)
+        else:
+            self.pg.server.drop_database(self.name)
+            self.pg.server.create_database(self.name, template=str(source))
+
+    def copy_to(self, target: str | Path) -> None:
+        """Save a copy of this database as ``target`` (a file, or a new database name)."""
+        self.close_connections()
+        if self.path is not None:
+            with sqlite3.connect(self.path) as source, sqlite3.connect(target) as copy:
+                source.backup(copy)
+        else:
+            self.pg.server.create_database(str(target), template=self.name)
+
+
 @pytest.fixture
-def var_dir(tmp_path, monkeypatch, backend, request) -> Iterator:
+def test_database(tmp_path, monkeypatch, backend, request) -> Iterator[TestDatabase]:
     monkeypatch.setenv("GYROLAB_VAR_DIR", str(tmp_path / "var"))
     for name in ("GYROLAB_DATABASE_URL", "GYROLAB_SECRET_KEY"):
         monkeypatch.delenv(name, raising=False)
-    database = None
     if backend == "postgresql":
         pg: PostgresForTests = request.getfixturevalue("postgres")
-        database, url = pg.new_database()
+        name, url = pg.new_database()
         monkeypatch.setenv("GYROLAB_DATABASE_URL", url)
+        database = TestDatabase(backend, name=name, pg=pg)
+    else:
+        (tmp_path / "var").mkdir()
+        path = tmp_path / "var" / "gyrolab.db"
+        shutil.copyfile(request.getfixturevalue("sqlite_template"), path)
+        database = TestDatabase(backend, path=path)
     get_settings.cache_clear()
     engine_for.cache_clear()
-    yield tmp_path / "var"
-    if engine_for.cache_info().currsize:
-        engine_for(get_settings().database_url).dispose()
+    yield database
+    database.close_connections()
     get_settings.cache_clear()
-    engine_for.cache_clear()
-    if database:
-        pg.server.drop_database(database)
+    if database.name:
+        pg.server.drop_database(database.name)
+
+
+@pytest.fixture
+def var_dir(test_database) -> Path:
+    return get_settings().var_dir
 
 
 @pytest.fixture
 def app(var_dir):
     from app.main import create_app
-    from app.migrate import upgrade_to_head
 
-    upgrade_to_head()
     return create_app(migrate_on_start=False)
+
+
+@pytest.fixture(scope="module")
+def snapshots(request) -> Iterator[dict]:
+    """Worlds built once per module: {(name, backend): (copy, value)} (see snapshot)."""
+    saved: dict = {}
+    yield saved
+    for (_, backend), (copy, _) in saved.items():
+        if backend == "postgresql":
+            request.getfixturevalue("postgres").server.drop_database(copy)
+
+
+def snapshot(request, name: str, build):
+    """``build()``'s value, with the database as ``build`` left it: built in the first test
+    of the module that asks (per backend), copied into the database of every later one."""
+    database: TestDatabase = request.getfixturevalue("test_database")
+    saved = request.getfixturevalue("snapshots")
+    key = (name, database.backend)
+    if key in saved:
+        copy, value = saved[key]
+        database.copy_from(copy)
+        return value
+    value = build()
+    if database.path is not None:
+        copy = request.getfixturevalue("tmp_path_factory").mktemp("snapshot") / "gyrolab.db"
+    else:
+        copy = f"{database.name}_{name}"
+    database.copy_to(copy)
+    saved[key] = (copy, value)
+    return value
 
 
 @pytest.fixture
@@ -120,70 +218,10 @@ def client(app) -> Iterator[TestClient]:
         yield test_client
 
 
-def make_user(
-    username: str,
-    role: Role = Role.student,
-    *,
-    must_change: bool = False,
-    name: str = "",
-    created_by: User | None = None,
-) -> User:
-    """An account with the password PASSWORD (``created_by``: the teacher whose roster made it)."""
-    from app.accounts.service import create_user
-
-    with write_session() as db:
-        return create_user(
-            db,
-            username=username,
-            display_name=name or username.title(),
-            role=role,
-            password=PASSWORD,
-            must_change_password=must_change,
-            created_by=created_by,
-        )
-
-
-def make_course(teacher: User, name: str = "Lab", students: tuple[User, ...] = ()) -> int:
-    from app.accounts.service import enroll
-    from app.models import Course
-
-    with write_session() as db:
-        course = Course(name=name, teacher_id=teacher.id)
-        db.add(course)
-        db.flush()
-        for student in students:
-            enroll(db, course, student)
-        return course.id
-
-
-HIDDEN_INPUT_RE = re.compile(r'<input type="hidden"[^>]*>')
-
-
-def without_tokens(page: str) -> str:
-    """The page without its hidden inputs, where random CSRF tokens live: a test that a
-    short string is absent must not fail when a random token happens to contain it."""
-    return HIDDEN_INPUT_RE.sub("", page)
-
-
-def csrf_from(client: TestClient, path: str) -> str:
-    response = client.get(path)
-    match = CSRF_RE.search(response.text)
-    assert match, f"no CSRF token on {path} ({response.status_code})"
-    return match.group(1)
-
-
-def login(client: TestClient, username: str, password: str = PASSWORD, next: str = "/"):
-    token = csrf_from(client, "/login")
-    return client.post(
-        "/login",
-        data={"username": username, "password": password, "csrf_token": token, "next": next},
-    )
-
-
-def post_form(client: TestClient, path: str, data: dict | None = None, files=None, page="/"):
-    """POST a form the way the browser does: with the CSRF token from a page."""
-    token = csrf_from(client, page)
-    return client.post(path, data={**(data or {}), "csrf_token": token}, files=files)
+@pytest.fixture
+def world(app, teacher) -> dict:
+    """A course of teacher1 with students s1–s3 and an assignment (tests.factories)."""
+    return build_world(app, teacher)
 
 
 @pytest.fixture

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from app.models import Role
-from tests.conftest import csrf_from, login, make_course, make_user, without_tokens
+from tests.factories import csrf_from, login, make_course, make_user, without_tokens
 
 TEACHER_GETS = ["/courses/{course}"]
 TEACHER_POSTS = [

@@ -13,9 +13,19 @@ from sqlmodel import select
 from app.accounts.security import verify_password
 from app.db import read_session
 from app.models import ApiToken, Course, Enrollment, Role, User
-from tests.conftest import PASSWORD, csrf_from, login, make_course, make_user, post_form
-from tests.test_api import API, token_for
-from tests.test_courses import credentials_from, import_file, section
+from tests.factories import (
+    API,
+    PASSWORD,
+    credentials_from,
+    csrf_from,
+    import_file,
+    login,
+    make_course,
+    make_user,
+    post_form,
+    section,
+    token_for,
+)
 
 
 def enrolled(username: str, course_id: int) -> bool:

@@ -11,36 +11,26 @@ from sqlmodel import select
 from app.core.solve import heading_angles, solve_heading
 from app.db import read_session, write_session
 from app.models import ApiToken, Assignment, Role, SampleChunk, Take, utcnow
-from tests.conftest import PASSWORD, csrf_from, login, make_course, make_user, post_form
-from tests.test_cli_science import HEADING_KEYS, LATITUDE_KEYS
-from tests.test_lab import handout
-
-API = "/api/v1"
-PRACTICE = {
-    "title": "Bench 3",
-    "station": {"latitude_deg": 39.93, "earth_rate_deg_h": 15.04},
-    "heading": {"rotation": "ccw", "start_angle_deg": 0.0},
-    "latitude": {"start_angle_deg": 0.0, "step_deg": 90.0},
-}
-
-
-def token_for(client, username, password=PASSWORD) -> dict[str, str]:
-    response = client.post(f"{API}/auth/token", data={"username": username, "password": password})
-    assert response.status_code == 200, response.text
-    body = response.json()
-    assert body["token_type"] == "bearer" and body["expires_in"] == 3600
-    return {"Authorization": f"Bearer {body['access_token']}"}
+from tests.factories import (
+    API,
+    HEADING_KEYS,
+    LATITUDE_KEYS,
+    PASSWORD,
+    PRACTICE,
+    csrf_from,
+    handout,
+    login,
+    make_course,
+    make_user,
+    new_api_session,
+    post_form,
+    token_for,
+)
 
 
 @pytest.fixture
 def auth(client, student):
     return token_for(client, "student1")
-
-
-def new_api_session(client, auth, body=PRACTICE) -> int:
-    response = client.post(f"{API}/sessions", json=body, headers=auth)
-    assert response.status_code == 201, response.text
-    return response.json()["id"]
 
 
 def upload_handout(client, auth, session_id):
@@ -60,7 +50,10 @@ def test_token_me_and_errors(client, student, auth):
     assert client.get(f"{API}/me").status_code == 401
     assert client.get(f"{API}/me").json()["detail"] == "Not authenticated."
     chinese = client.get(f"{API}/me", headers={"Accept-Language": "zh-CN"}).json()
-    assert chinese == {"detail": "未认证：请发送“Authorization: Bearer <令牌>”或先登录。", "key": "api.not_authenticated"}
+    assert chinese == {
+        "detail": "未认证：请发送“Authorization: Bearer <令牌>”或先登录。",
+        "key": "api.not_authenticated",
+    }
     assert client.get(f"{API}/me", headers={"Authorization": "Bearer nope"}).status_code == 401
     wrong = client.post(f"{API}/auth/token", data={"username": "student1", "password": "x"})
     assert wrong.status_code == 401 and wrong.json()["detail"] == "Wrong username or password."

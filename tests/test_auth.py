@@ -11,7 +11,8 @@ from app.config import get_settings
 from app.db import read_session, write_session
 from app.models import AuthSession, Role, User, utcnow
 from app.web.render import SESSION_COOKIE
-from tests.conftest import PASSWORD, csrf_from, iter_routes, login, make_user, post_form
+from tests.conftest import iter_routes
+from tests.factories import PASSWORD, csrf_from, login, make_user, post_form
 
 
 def test_login_page_renders_with_csrf_cookie(client):
@@ -322,14 +323,6 @@ def test_password_rules(client, teacher):
         assert message in response.text
 
 
-def test_argon2id_parameters():
-    from app.accounts.security import hash_password
-
-    encoded = hash_password("x" * 12)
-    assert encoded.startswith("$argon2id$")
-    assert "m=19456,t=2,p=1" in encoded
-
-
 def test_successful_log_ins_leave_no_failure_and_failures_charge_both(client, teacher):
     """The attempt is charged before the hash (parallel guesses cannot pass a limit) and
     uncharged on success; the address only for wrong passwords, so a class logging in at
@@ -378,3 +371,27 @@ def test_pre_login_csrf_cookie_is_host_only_over_https(app, teacher):
             "/login", data={"username": "teacher1", "password": PASSWORD, "csrf_token": token}
         )
         assert accepted.status_code == 303
+
+
+def test_production_passwords_use_owasp_argon2id_parameters(monkeypatch):
+    """The suite hashes with argon2's cheapest parameters (conftest); the app's own are
+    OWASP's minimum for argon2id: m=19 MiB, t=2, p=1."""
+    from app.accounts import security
+    from tests.conftest import PRODUCTION_ARGON2
+
+    assert PRODUCTION_ARGON2 == (19 * 1024, 2, 1)
+    for name, value in zip(
+        ("ARGON2_MEMORY_KIB", "ARGON2_TIME_COST", "ARGON2_PARALLELISM"),
+        PRODUCTION_ARGON2,
+        strict=True,
+    ):
+        monkeypatch.setattr(security, name, value)
+    security.password_hasher.cache_clear()
+    try:
+        digest = security.hash_password("correct-horse-42")
+        assert digest.startswith("$argon2id$v=19$m=19456,t=2,p=1$")
+        assert security.verify_password("correct-horse-42", digest)
+        assert not security.verify_password("wrong-horse-42", digest)
+    finally:
+        monkeypatch.undo()
+        security.password_hasher.cache_clear()

@@ -8,7 +8,7 @@ from sqlmodel import select
 from app.cli.main import main
 from app.db import engine_for, read_session
 from app.models import Course, Role
-from tests.conftest import make_course, make_user
+from tests.factories import make_course, make_user
 
 
 def course_names() -> list[str]:

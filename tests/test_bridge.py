@@ -16,7 +16,7 @@ from app.bridge import BridgeError, LineParser, Uploader, run_bridge, serial_lin
 from app.db import read_session
 from app.lab.store import load_samples
 from app.models import Take
-from tests.test_api import PRACTICE, token_for
+from tests.factories import PRACTICE, token_for
 
 FOG_LINE = re.compile(r"^\$FOG,\d+,(?P<value>[-+0-9.eE]+),")
 

@@ -12,7 +12,7 @@ from app.lab.samples import CHUNK_SAMPLES
 from app.lab.store import current_data, iter_current_data, load_samples, store_take
 from app.models import Assignment, Enrollment, LabSession, Role, Take
 from app.review.service import class_rows
-from tests.conftest import make_course, make_user
+from tests.factories import make_course, make_user
 
 
 def add_session(owner_id: int, assignment_id: int | None, seed: int) -> int:

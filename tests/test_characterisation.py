@@ -14,9 +14,7 @@ from app.core.simulate import PRESETS, GyroStream
 from app.core.solve import solve_heading
 from app.db import read_session, write_session
 from app.models import Assignment, Role
-from tests.conftest import make_course, make_user
-from tests.test_lab import save_manual
-from tests.test_review import HEADING, browser, start
+from tests.factories import HEADING, browser, make_course, make_user, save_manual, start
 
 
 @pytest.fixture

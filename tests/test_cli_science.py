@@ -10,52 +10,7 @@ import sys
 import pytest
 
 from app.cli.main import main
-from tests.test_core_solve import DATA
-
-HEADING_KEYS = [
-    "part",
-    "n_positions",
-    "samples_per_position",
-    "position_means_deg_h",
-    "position_sems_deg_h",
-    "position_sigmas_deg_h",
-    "azimuth_deg",
-    "azimuth_sigma_deg",
-    "theta_deg",
-    "rotate_direction",
-    "rotate_deg",
-    "then_axis_points",
-    "bias_deg_h",
-    "amplitude_deg_h",
-    "amplitude_sigma_deg_h",
-    "closure_residual_deg_h",
-    "closure_sigma_deg_h",
-    "uncertainty_model",
-    "drift_deg_h_per_h",
-    "drift_sigma_deg_h_per_h",
-    "azimuth_error_deg",
-]
-LATITUDE_KEYS = [
-    "part",
-    "n_positions",
-    "samples_per_position",
-    "position_means_deg_h",
-    "position_sems_deg_h",
-    "position_sigmas_deg_h",
-    "latitude_deg",
-    "latitude_sigma_deg",
-    "earth_rate_deg_h",
-    "earth_rate_sigma_deg_h",
-    "bias_deg_h",
-    "latitude_error_percent",
-    "latitude_error_deg",
-    "earth_rate_error_percent",
-    "closure_residual_deg_h",
-    "closure_sigma_deg_h",
-    "uncertainty_model",
-    "drift_deg_h_per_h",
-    "drift_sigma_deg_h_per_h",
-]
+from tests.factories import DATA, HEADING_KEYS, LATITUDE_KEYS
 
 
 def run(capsys, *args: str, stdin: str | None = None):

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import csv
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,9 +22,9 @@ from app.core.solve import (
     solve_two_position,
     wrap180,
 )
+from tests.factories import DATA
 
 # The handout's raw tables (copied from shared/data so the suite runs anywhere).
-DATA = Path(__file__).resolve().parent / "data"
 PRINTED_HEADING = [10.71, 2.79, -8.95, -0.94]
 PRINTED_VERTICAL = [11.14, 9.82, -11.82, -9.92]
 

@@ -2,51 +2,28 @@
 
 from __future__ import annotations
 
-import csv
-import io
-import re
-from urllib.parse import unquote
-
 from sqlmodel import func, select
 
 from app.accounts.security import verify_password
 from app.db import read_session
 from app.models import Course, Enrollment, Role, User
-from tests.conftest import login, make_course, make_user, post_form
+from tests.factories import (
+    create_course,
+    credentials_from,
+    import_file,
+    login,
+    make_course,
+    make_user,
+    post_form,
+    section,
+)
 
 ROSTER = "学号,姓名,邮箱\n2024001,张三,zhangsan@example.edu\n2024002,李四,\n"
-
-
-def section(page: str, element_id: str) -> str:
-    """The text of the element with this id (its opening tag up to the next </section>)."""
-    start = page.index(f'id="{element_id}"')
-    return page[start : page.index("</section>", start)]
 
 
 def user_count() -> int:
     with read_session() as db:
         return db.exec(select(func.count()).select_from(User)).one()
-
-
-def create_course(client, name="Navigation lab") -> int:
-    response = post_form(client, "/courses", {"name": name})
-    assert response.status_code == 303
-    return int(response.headers["location"].rsplit("/", 1)[1])
-
-
-def import_file(client, course_id, content: bytes, name="roster.csv"):
-    return post_form(
-        client,
-        f"/courses/{course_id}/import",
-        files={"roster_file": (name, content, "text/csv")},
-        page=f"/courses/{course_id}",
-    )
-
-
-def credentials_from(page: str) -> dict[str, str]:
-    href = re.search(r'href="data:text/csv;charset=utf-8,([^"]+)"', page).group(1)
-    text = unquote(href.replace("&amp;", "&")).lstrip("\ufeff")
-    return {row["username"]: row["initial_password"] for row in csv.DictReader(io.StringIO(text))}
 
 
 def test_create_rename_archive(teacher_client):

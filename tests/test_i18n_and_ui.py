@@ -10,7 +10,7 @@ import pytest
 from app.paths import PROJECT_ROOT, TEMPLATES_DIR
 from app.web.i18n import negotiate, translate
 from app.web.messages import MESSAGES
-from tests.conftest import login, post_form
+from tests.factories import login, post_form
 
 KEY_IN_TEMPLATE = re.compile(r"""_\(\s*["']([a-z_]+\.[a-z_]+)["']""")
 PREFIXES = "|".join(sorted({key.split(".")[0] for key in MESSAGES}))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import json
 from pathlib import Path
 
@@ -15,40 +14,19 @@ from app.core.solve import elevation_angles, heading_angles, solve_heading, solv
 from app.db import read_session, write_session
 from app.lab.samples import unpack
 from app.models import Assignment, Attempt, LabSession, Role, SampleChunk, Take
-from tests.conftest import csrf_from, login, make_course, make_user, post_form
+from tests.factories import (
+    csrf_from,
+    handout,
+    login,
+    make_course,
+    make_user,
+    new_session,
+    post_form,
+    post_json,
+    save_manual,
+)
 
 DATA = Path(__file__).resolve().parent / "data"
-
-
-def handout(name: str) -> dict[int, list[float]]:
-    with open(DATA / name) as handle:
-        rows = list(csv.DictReader(handle))
-    return {i: [float(r[f"position_{i}"]) for r in rows] for i in range(1, 5)}
-
-
-def new_session(client, **fields) -> int:
-    data = {"station": "handout", "rotation": "ccw", **fields}
-    response = post_form(client, "/lab/sessions", data, page="/lab")
-    assert response.status_code == 303, response.text
-    return int(response.headers["location"].rsplit("/", 1)[1])
-
-
-def post_json(client, path: str, body: dict, page: str):
-    token = csrf_from(client, page)  # json.dumps writes NaN/Infinity as a browser could send
-    return client.post(
-        path,
-        content=json.dumps(body),
-        headers={"X-CSRF-Token": token, "Content-Type": "application/json"},
-    )
-
-
-def save_manual(client, session_id, part, columns, unit="deg/h"):
-    return post_json(
-        client,
-        f"/lab/sessions/{session_id}/manual",
-        {"part": part, "unit": unit, "columns": columns},
-        page=f"/lab/sessions/{session_id}",
-    )
 
 
 def assert_same(actual, expected) -> None:

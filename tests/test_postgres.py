@@ -22,7 +22,7 @@ import app.models  # noqa: F401
 from app.db import make_engine, read_session, write_session
 from app.migrate import alembic_config, upgrade_to_head
 from app.models import Course, LabSession, Role
-from tests.conftest import login, make_course, make_user, post_form
+from tests.factories import login, make_course, make_user, post_form
 
 
 @pytest.fixture

@@ -13,8 +13,7 @@ from app.config import get_settings
 from app.db import read_session, write_session
 from app.lab.store import storage_used
 from app.models import Role, SampleChunk, Take, User, utcnow
-from tests.conftest import csrf_from, login, make_user, post_form
-from tests.test_api import API, new_api_session, token_for
+from tests.factories import API, csrf_from, login, make_user, new_api_session, post_form, token_for
 
 
 def put(client, auth, session_id, k, n, value=10.0):

@@ -11,62 +11,23 @@ import zipfile
 from datetime import timedelta
 
 import pytest
-from fastapi.testclient import TestClient
 from sqlmodel import select
 
 from app.db import read_session, write_session
 from app.models import Assignment, Attempt, LabSession, Role, utcnow
 from app.review.service import Truth, auto_check, draw_truth, heading_error
-from tests.conftest import csrf_from, login, make_course, make_user, post_form
-from tests.test_lab import handout, new_session, save_manual
-
-HEADING = handout("handout_horizontal.csv")
-VERTICAL = handout("handout_vertical.csv")
-
-
-@pytest.fixture
-def world(app, teacher):
-    students = [make_user(f"s{i}", Role.student, name=f"学生{i}") for i in (1, 2, 3)]
-    course_id = make_course(teacher, "Nav lab 惯导", tuple(students))
-    with write_session() as db:
-        assignment = Assignment(
-            course_id=course_id,
-            title="Find north",
-            latitude_deg=39.93,
-            earth_rate_deg_h=15.04,
-            allowed_methods="manual,csv,simulator",
-            true_heading_deg=10.8,
-            max_attempts=3,
-        )
-        db.add(assignment)
-        db.flush()
-        assignment_id = assignment.id
-    return {"course": course_id, "assignment": assignment_id, "app": app}
-
-
-def browser(world, username):
-    client = TestClient(world["app"], follow_redirects=False)
-    login(client, username)
-    return client
-
-
-def start(client, world) -> int:
-    return new_session(client, assignment_id=str(world["assignment"]))
-
-
-def do_lab(client, session_id, heading=HEADING, vertical=VERTICAL):
-    assert save_manual(client, session_id, "heading", heading).status_code == 200
-    assert save_manual(client, session_id, "latitude", vertical).status_code == 200
-
-
-def submit(client, session_id):
-    page = f"/lab/sessions/{session_id}"
-    post_form(client, f"{page}/submit", page=page)
-
-
-def review(client, session_id, **data):
-    page = f"/review/sessions/{session_id}"
-    return post_form(client, f"{page}/feedback", data, page=page)
+from tests.factories import (
+    HEADING,
+    browser,
+    csrf_from,
+    do_lab,
+    make_user,
+    post_form,
+    review,
+    save_manual,
+    start,
+    submit,
+)
 
 
 def grade_cells(page: str) -> list[str]:

@@ -5,87 +5,33 @@ from __future__ import annotations
 import pytest
 from fastapi.routing import APIRoute, APIWebSocketRoute
 from fastapi.testclient import TestClient
+from sqlmodel import select
 from starlette.websockets import WebSocketDisconnect
 
-from app.models import Role
-from tests.conftest import csrf_from, iter_routes, login, make_user
-from tests.test_api import token_for
-from tests.test_review import world  # noqa: F401  (fixture)
+from app.db import read_session
+from app.models import ApiToken, Role, User
+from tests.conftest import iter_routes, snapshot
+from tests.factories import (
+    ACCESS,
+    JSON_BODIES,
+    browser,
+    build_world,
+    concrete,
+    csrf_from,
+    do_lab,
+    login,
+    make_course,
+    make_user,
+    new_session,
+    request,
+    submit,
+    token_for,
+)
+
 
 # rule: public | user (any log-in) | teacher (own course) | owner (own session)
 #       | review (teacher of the session's course) | token (own API token)
 #       | admin (administrators only)
-ACCESS = {
-    "GET /docs": "public",
-    "GET /docs/openapi.json": "public",
-    "GET /vendor/plotly-{version}.min.js": "public",
-    "GET /login": "public",
-    "POST /login": "public",
-    "POST /lang": "public",
-    "POST /logout": "user",
-    "GET /account/password": "user",
-    "POST /account/password": "user",
-    "GET /": "user",
-    "GET /lab": "user",
-    "POST /lab/sessions": "user",
-    "GET /account/tokens": "user",
-    "GET /explore": "user",
-    "GET /explore/data": "user",
-    "GET /explore/data.csv": "user",
-    "POST /account/tokens": "user",
-    "POST /account/tokens/{token_id}/revoke": "token",
-    "GET /courses": "teacher-any",
-    "POST /courses": "teacher-any",
-    "GET /courses/{course_id}": "teacher",
-    "POST /courses/{course_id}/rename": "teacher",
-    "POST /courses/{course_id}/archive": "teacher",
-    "POST /courses/{course_id}/students": "teacher",
-    "POST /courses/{course_id}/import": "teacher",
-    "POST /courses/{course_id}/students/{student_id}/reset-password": "teacher",
-    "POST /courses/{course_id}/students/{student_id}/remove": "teacher",
-    "POST /courses/{course_id}/join-code": "teacher",
-    "GET /join": "user",
-    "POST /join": "user",
-    "GET /admin/accounts": "admin",
-    "POST /admin/accounts": "admin",
-    "POST /admin/accounts/{user_id}/reset-password": "admin",
-    "POST /admin/prune": "admin",
-    "POST /api/v1/users/{user_id}/reset-password": "teacher",
-    "POST /courses/{course_id}/assignments": "teacher",
-    "GET /courses/{course_id}/assignments/{assignment_id}": "teacher",
-    "POST /courses/{course_id}/assignments/{assignment_id}/settings": "teacher",
-    "POST /courses/{course_id}/assignments/{assignment_id}/characterisation": "teacher",
-    "GET /courses/{course_id}/assignments/{assignment_id}/export.csv": "teacher",
-    "GET /courses/{course_id}/assignments/{assignment_id}/export.zip": "teacher",
-    "GET /review/sessions/{session_id}": "review",
-    "POST /review/sessions/{session_id}/feedback": "review",
-    "GET /lab/sessions/{session_id}": "owner",
-    "POST /lab/sessions/{session_id}/manual": "owner",
-    "POST /lab/sessions/{session_id}/csv/preview": "owner",
-    "POST /lab/sessions/{session_id}/csv": "owner",
-    "POST /lab/sessions/{session_id}/turn": "owner",
-    "POST /lab/sessions/{session_id}/plane": "owner",
-    "POST /lab/sessions/{session_id}/order": "owner",
-    "GET /lab/sessions/{session_id}/results.json": "owner",
-    "POST /lab/sessions/{session_id}/submit": "owner",
-    "GET /lab/sessions/{session_id}/export.csv": "owner",
-    "GET /lab/sessions/{session_id}/export.json": "owner",
-    "WS /lab/sessions/{session_id}/stream": "owner",
-    "POST /api/v1/auth/token": "public",
-    "GET /api/v1/me": "user",
-    "GET /api/v1/sessions": "user",
-    "POST /api/v1/sessions": "user",
-    "GET /api/v1/sessions/{session_id}": "owner",
-    "PUT /api/v1/sessions/{session_id}/{part}/positions/{position}": "owner",
-    "POST /api/v1/sessions/{session_id}/{part}/positions/{position}/samples": "owner",
-    "GET /api/v1/sessions/{session_id}/results": "owner",
-    "POST /api/v1/sessions/{session_id}/submit": "owner",
-    "GET /api/v1/courses": "teacher-any",
-    "GET /api/v1/assignments/{assignment_id}/submissions": "teacher",
-    "GET /api/v1/assignments/{assignment_id}/export.csv": "teacher",
-}
-
-
 def app_routes(app) -> set[str]:
     found = set()
     for route in iter_routes(app.routes):
@@ -107,25 +53,23 @@ def test_every_route_is_in_the_matrix(app):
 
 
 @pytest.fixture
-def ids(world):  # noqa: F811
-    from tests.test_lab import new_session, save_manual
-    from tests.test_review import browser, do_lab, submit
+def ids(request, app) -> dict:
+    """The matrix's world: s1's submitted session and API token in teacher1's course; built
+    once per module and database, copied into each test's own database."""
+    return {**snapshot(request, "route-matrix", lambda: build_ids(app)), "app": app}
 
+
+def build_ids(app) -> dict:
+    world = build_world(app, make_user("teacher1", Role.teacher, name="Teacher One"))
     student = browser(world, "s1")
     session_id = new_session(student, assignment_id=str(world["assignment"]))
     do_lab(student, session_id)
     submit(student, session_id)
-    save_manual  # noqa: B018  (imported for side effects of the fixture chain)
     token = csrf_from(student, "/account/tokens")
     page = student.post(
         "/account/tokens", data={"csrf_token": token, "name": "t", "scopes": ["read", "upload"]}
     )
     assert page.status_code == 200
-    from sqlmodel import select
-
-    from app.db import read_session
-    from app.models import ApiToken, User
-
     with read_session() as db:
         token_id = db.exec(select(ApiToken.id)).first()
         student_id = db.exec(select(User.id).where(User.username == "s1")).one()
@@ -139,44 +83,7 @@ def ids(world):  # noqa: F811
         "part": "heading",
         "position": 1,
         "version": "x",
-        "app": world["app"],
     }
-
-
-def concrete(route: str, ids: dict) -> tuple[str, str]:
-    method, path = route.split(" ", 1)
-    if "{version}" in path:
-        from app.main import PLOTLY_URL
-
-        return method, PLOTLY_URL
-    return method, path.format(**ids)
-
-
-JSON_BODIES = {  # routes of the lab page that take JSON (fetch) rather than forms
-    "/manual": {"part": "heading", "columns": {"1": [1.0] * 10}},
-    "/csv": {"part": "heading", "text": "position_1\n1\n"},
-    "/csv/preview": {"part": "heading", "text": "position_1\n1\n"},
-    "/turn": {"part": "heading", "position": 2},
-    "/plane": {"dial_deg": -12.5},
-}
-
-
-def request(client, method, path, headers=None):
-    headers = dict(headers or {})
-    if method in ("POST", "PUT"):
-        if path.startswith("/api/"):
-            return client.request(method, path, json={"samples": [1.0] * 10}, headers=headers)
-        page = "/login" if "gyrolab_session" not in client.cookies else "/lab"
-        token = csrf_from(client, page)
-        suffix = next(
-            (s for s in JSON_BODIES if path.startswith("/lab/") and path.endswith(s)), None
-        )
-        if suffix:
-            return client.request(
-                method, path, json=JSON_BODIES[suffix], headers={**headers, "X-CSRF-Token": token}
-            )
-        return client.request(method, path, data={"csrf_token": token}, headers=headers)
-    return client.request(method, path, headers=headers)
 
 
 @pytest.mark.parametrize("route", sorted(r for r, rule in ACCESS.items() if rule != "public"))
@@ -251,7 +158,6 @@ def test_a_teacher_sharing_the_student_reaches_nothing_of_the_other_course(ids, 
     from app.accounts.service import join_course
     from app.db import read_session, write_session
     from app.models import Course, User
-    from tests.conftest import make_course
 
     t2 = make_user("t2", Role.teacher)
     course = make_course(t2, "Other course")

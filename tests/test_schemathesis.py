@@ -9,7 +9,8 @@ from hypothesis import HealthCheck, settings
 from schemathesis.specs.openapi.checks import positive_data_acceptance
 
 from app.models import Role
-from tests.conftest import BACKENDS, make_user
+from tests.conftest import BACKENDS
+from tests.factories import make_user
 
 pytestmark = pytest.mark.slow
 UPLOADS = {

@@ -9,15 +9,7 @@ from sqlmodel import select
 
 from app.db import read_session, write_session
 from app.models import ApiToken, Assignment, AuthSession, LabSession, User
-from tests.test_api import token_for
-from tests.test_review import (
-    browser,
-    do_lab,
-    start,
-    submit,
-    world,  # noqa: F401
-)
-from tests.test_route_matrix import ACCESS, concrete
+from tests.factories import ACCESS, browser, concrete, do_lab, start, submit, token_for
 
 
 def secrets_in_database() -> dict[str, list[str]]:

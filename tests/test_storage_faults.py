@@ -12,8 +12,7 @@ from sqlmodel import select
 
 from app.db import read_session
 from app.models import LabSession
-from tests.conftest import post_form
-from tests.test_api import API, new_api_session, token_for
+from tests.factories import API, new_api_session, new_session, post_form, token_for
 
 pytestmark = pytest.mark.sqlite_only
 
@@ -143,6 +142,5 @@ def test_a_write_lock_held_past_the_busy_timeout_answers_503_busy(student_client
 
 
 def new_session_id(client) -> int:
-    from tests.test_lab import new_session
 
     return new_session(client)

@@ -13,8 +13,7 @@ from app.db import read_session, write_session
 from app.lab.sim import SimulatedTake, set_gyro_clock, table_errors
 from app.lab.store import load_samples
 from app.models import LabSession, Role, Take
-from tests.conftest import login, make_user, post_form
-from tests.test_lab import new_session, post_json
+from tests.factories import login, make_user, new_session, post_form, post_json
 
 ORIGIN = {"origin": "http://testserver"}
 

@@ -16,16 +16,19 @@ from app.db import read_session, write_session
 from app.lab.store import load_samples
 from app.models import Attempt, LabSession, Take, User
 from app.web.exports import comment_line, csv_line, neutralise
-from tests.test_api import API, token_for
-from tests.test_review import (
+from tests.factories import (
+    API,
     HEADING,
     VERTICAL,
     browser,
+    create_course,
     do_lab,
+    import_file,
+    new_api_session,
     review,
     start,
     submit,
-    world,  # noqa: F401  (fixture)
+    token_for,
 )
 
 HOSTILE = [
@@ -152,7 +155,6 @@ def test_hostile_names_in_every_csv(world):  # noqa: F811
 
 
 def test_roster_password_download_is_neutralised(client, teacher_client):
-    from tests.test_courses import create_course, import_file
 
     course_id = create_course(teacher_client)
     response = import_file(teacher_client, course_id, b"2024001,=1+2\n")
@@ -177,7 +179,6 @@ def test_streamed_json_export_is_valid_and_complete(world):  # noqa: F811
 
 @pytest.fixture
 def api_session(client, student):
-    from tests.test_api import new_api_session
 
     auth = token_for(client, "student1")
     return client, auth, new_api_session(client, auth)

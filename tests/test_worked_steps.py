@@ -14,7 +14,7 @@ from app.core.explain import explain_heading, explain_latitude, render_text
 from app.core.readings import parse_readings_csv
 from app.core.solve import heading_angles, solve_heading, solve_latitude
 from app.core.units import to_deg_per_hour
-from tests.test_lab import handout
+from tests.factories import handout
 
 HEADING = handout("handout_horizontal.csv")
 VERTICAL = handout("handout_vertical.csv")
