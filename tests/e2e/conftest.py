@@ -123,42 +123,39 @@ def running_server(
 
 
 def add_teacher_and_student(var_dir: Path, database_url: str | None = None) -> None:
-    setup = LiveServer("", var_dir, server_env(var_dir, database_url))
-    setup.gyrolab(
-        "create-user",
-        "--role",
-        "teacher",
-        "--username",
-        "teacher",
-        "--display-name",
-        "E2E Teacher 李老师",
-        stdin=TEACHER_PASSWORD + "\n",
-    )
-    setup.gyrolab(
-        "create-user",
-        "--role",
-        "student",
-        "--username",
-        "student",
-        "--display-name",
-        "E2E 学生",
-        stdin=STUDENT_PASSWORD + "\n",
-    )
+    """A migrated installation with the accounts ``teacher`` and ``student`` (written here,
+    in-process, rather than by two ``gyrolab create-user`` runs)."""
+    from sqlmodel import Session
+
+    from app.accounts.service import create_user
+    from app.db import make_engine
+    from app.migrate import upgrade_to_head
+    from app.models import Role
+
+    url = database_url or f"sqlite:///{var_dir / 'gyrolab.db'}"
+    upgrade_to_head(url)
+    engine = make_engine(url)
+    try:
+        with Session(engine) as db:
+            for username, name, role, password in (
+                ("teacher", "E2E Teacher 李老师", Role.teacher, TEACHER_PASSWORD),
+                ("student", "E2E 学生", Role.student, STUDENT_PASSWORD),
+            ):
+                create_user(db, username=username, display_name=name, role=role, password=password)
+            db.commit()
+    finally:
+        engine.dispose()
 
 
-@pytest.fixture(scope="module")
-def live_server(tmp_path_factory) -> Iterator[LiveServer]:
-    """An empty installation on SQLite with one teacher and one student."""
-    var_dir = tmp_path_factory.mktemp("live-var")
-    add_teacher_and_student(var_dir)
-    with running_server(var_dir, "--no-demo") as server:
-        yield server
-
-
-@pytest.fixture(scope="module")
-def pg_live_server(tmp_path_factory, postgres) -> Iterator[LiveServer]:
-    """The same on PostgreSQL, served by two uvicorn workers."""
-    var_dir = tmp_path_factory.mktemp("pg-live-var")
+@contextmanager
+def new_live_server(var_dir: Path, postgres=None) -> Iterator[LiveServer]:
+    """An empty installation with one teacher and one student: one worker on a SQLite file,
+    or (given the test PostgreSQL) two workers on a database of its own."""
+    if postgres is None:
+        add_teacher_and_student(var_dir)
+        with running_server(var_dir, "--no-demo") as server:
+            yield server
+        return
     name, url = postgres.new_database()
     add_teacher_and_student(var_dir, url)
     try:
@@ -168,13 +165,27 @@ def pg_live_server(tmp_path_factory, postgres) -> Iterator[LiveServer]:
         postgres.server.drop_database(name)
 
 
+@pytest.fixture(scope="session")
+def live_server(tmp_path_factory) -> Iterator[LiveServer]:
+    """One installation on SQLite for the whole run (tests add what they need to it)."""
+    with new_live_server(tmp_path_factory.mktemp("live-var")) as server:
+        yield server
+
+
+@pytest.fixture(scope="session")
+def pg_live_server(tmp_path_factory, postgres) -> Iterator[LiveServer]:
+    """The same on PostgreSQL, served by two uvicorn workers, the way a department runs it."""
+    with new_live_server(tmp_path_factory.mktemp("pg-live-var"), postgres) as server:
+        yield server
+
+
 @pytest.fixture(params=["sqlite", "postgresql"])
 def any_live_server(request) -> LiveServer:
     """``live_server`` and ``pg_live_server`` in turn."""
     return request.getfixturevalue("live_server" if request.param == "sqlite" else "pg_live_server")
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def demo_server(tmp_path_factory) -> Iterator[tuple[LiveServer, dict[str, str]]]:
     """What a newcomer gets from the RUN command: demo accounts, class and submissions."""
     var_dir = tmp_path_factory.mktemp("demo-var")

@@ -127,14 +127,16 @@ def test_more_waiting_writers_than_pool_threads_all_get_through(any_live_server:
 def test_parallel_guesses_cannot_pass_the_throttle(any_live_server: LiveServer):
     """Twelve wrong passwords at once from one address: each is charged before its hash, so
     at most five are checked (the per-account-and-address limit, 401) and the rest are
-    refused (429).  How many of the five are reached depends on timing: once two have
-    completed as failures the growing delay refuses the rest sooner."""
+    refused (429).  (An account that does not exist is charged the same way; using one
+    keeps the shared server's real accounts free of the lock.)  How many of the five are
+    reached depends on timing: once two have completed as failures the growing delay
+    refuses the rest sooner."""
     url = any_live_server.url
 
     def guess(i: int) -> int:
         return httpx.post(
             f"{url}/api/v1/auth/token",
-            data={"username": "teacher", "password": f"wrong-guess-{i}"},
+            data={"username": "guessed-teacher", "password": f"wrong-guess-{i}"},
             timeout=60,
         ).status_code
 

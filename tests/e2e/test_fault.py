@@ -8,6 +8,7 @@ from __future__ import annotations
 import sqlite3
 import threading
 import time
+from collections.abc import Iterator
 
 import httpx
 import numpy as np
@@ -15,7 +16,7 @@ import pytest
 import websockets.sync.client as ws_client
 from sqlalchemy import create_engine, text
 
-from tests.e2e.conftest import STUDENT_PASSWORD, LiveServer
+from tests.e2e.conftest import STUDENT_PASSWORD, LiveServer, new_live_server
 
 pytestmark = pytest.mark.e2e
 
@@ -29,8 +30,16 @@ def login(url: str) -> httpx.Client:
     return client
 
 
-def test_kill_9_loses_no_acknowledged_write(any_live_server: LiveServer):
-    live_server = any_live_server
+@pytest.fixture(params=["sqlite", "postgresql"])
+def server_to_kill(request, tmp_path) -> Iterator[LiveServer]:
+    """A server of this test's own (the shared ones must live on)."""
+    postgres = request.getfixturevalue("postgres") if request.param == "postgresql" else None
+    with new_live_server(tmp_path, postgres) as server:
+        yield server
+
+
+def test_kill_9_loses_no_acknowledged_write(server_to_kill: LiveServer):
+    live_server = server_to_kill
     url = live_server.url
     api = login(url)
     sessions = [
