@@ -3,7 +3,10 @@
 
     python3 dev.py run    create .venv, install, migrate, add demo data, serve on 127.0.0.1:8000
     python3 dev.py test   the same set-up plus test extras, Debian's Chromium (and in CI,
-                          PostgreSQL), then pytest on SQLite and PostgreSQL
+                          PostgreSQL), then ruff (lint and format check) and every test on
+                          SQLite and PostgreSQL, in parallel on every core
+    python3 dev.py quick  the quick loop: tests without browser, server or Monte Carlo, on
+                          SQLite only (about a minute)
 
 Extra arguments after ``run`` go to ``gyrolab serve`` (e.g. ``--port 8080 --no-demo``);
 after ``test`` they go to pytest (e.g. ``-k auth``).  Uses only the standard library.
@@ -102,7 +105,7 @@ def ensure_test_programs() -> None:
 
 
 def main(argv: list[str]) -> int:
-    if not argv or argv[0] not in {"run", "test"}:
+    if not argv or argv[0] not in {"run", "test", "quick"}:
         print(__doc__)
         return 2
     command, rest = argv[0], argv[1:]
@@ -112,8 +115,16 @@ def main(argv: list[str]) -> int:
         ensure_installed("")
         return subprocess.call([str(BIN / "gyrolab"), "serve", *rest])
     ensure_installed("test")
+    pytest = [str(BIN / "python"), "-m", "pytest", "-n", "auto", "--dist", "worksteal"]
+    if command == "quick":
+        quick = ["-m", "not e2e and not slow", "--backends", "sqlite"]
+        return subprocess.call([*pytest, *quick, *rest])
     ensure_test_programs()
-    return subprocess.call([str(BIN / "python"), "-m", "pytest", *rest])
+    for check in (["check", "."], ["format", "--check", "."]):
+        say(f"ruff {' '.join(check)}")
+        if subprocess.call([str(BIN / "ruff"), *check]) != 0:
+            return 1
+    return subprocess.call([*pytest, *rest])
 
 
 if __name__ == "__main__":

@@ -45,14 +45,23 @@ security.ARGON2_MEMORY_KIB, security.ARGON2_TIME_COST, security.ARGON2_PARALLELI
 security.password_hasher.cache_clear()
 
 
+def pytest_addoption(parser) -> None:
+    parser.addoption(
+        "--backends",
+        default=",".join(BACKENDS),
+        help="the databases to run database tests on (default: sqlite,postgresql)",
+    )
+
+
 def pytest_generate_tests(metafunc) -> None:
     """Run every database test on each backend (``sqlite_only`` tests on SQLite alone)."""
     if "backend" in metafunc.fixturenames:
-        backends = BACKENDS
+        chosen = metafunc.config.getoption("backends").split(",")
+        backends = [name for name in BACKENDS if name in chosen]
         if metafunc.definition.get_closest_marker("sqlite_only"):
-            backends = ("sqlite",)
+            backends = [name for name in backends if name == "sqlite"]
         if metafunc.definition.get_closest_marker("postgres_only"):
-            backends = ("postgresql",)
+            backends = [name for name in backends if name == "postgresql"]
         metafunc.parametrize("backend", backends, indirect=True)
 
 
@@ -69,10 +78,12 @@ class PostgresForTests:
 
 
 @pytest.fixture(scope="session")
-def postgres() -> Iterator[PostgresForTests]:
+def postgres(request) -> Iterator[PostgresForTests]:
     """A PostgreSQL server for this test run, with a migrated template database."""
     from app.migrate import upgrade_to_head
 
+    if "postgresql" not in request.config.getoption("backends").split(","):
+        pytest.skip("PostgreSQL is not among --backends")
     server = PostgresServer(os.environ.get(ADMIN_URL_ENV))
     try:
         server.start()
@@ -183,13 +194,12 @@ def app(var_dir):
 
 
 @pytest.fixture(scope="module")
-def snapshots(request) -> Iterator[dict]:
-    """Worlds built once per module: {(name, backend): (copy, value)} (see snapshot)."""
+def snapshots() -> Iterator[dict]:
+    """Worlds built once per module: {(name, backend): (copy, value, drop)} (see snapshot)."""
     saved: dict = {}
     yield saved
-    for (_, backend), (copy, _) in saved.items():
-        if backend == "postgresql":
-            request.getfixturevalue("postgres").server.drop_database(copy)
+    for _copy, _value, drop in saved.values():
+        drop()
 
 
 def snapshot(request, name: str, build):
@@ -199,16 +209,18 @@ def snapshot(request, name: str, build):
     saved = request.getfixturevalue("snapshots")
     key = (name, database.backend)
     if key in saved:
-        copy, value = saved[key]
+        copy, value, _ = saved[key]
         database.copy_from(copy)
         return value
     value = build()
     if database.path is not None:
         copy = request.getfixturevalue("tmp_path_factory").mktemp("snapshot") / "gyrolab.db"
+        drop = lambda: None  # noqa: E731  (the file goes with pytest's temporary directory)
     else:
         copy = f"{database.name}_{name}"
+        drop = lambda: database.pg.server.drop_database(copy)  # noqa: E731
     database.copy_to(copy)
-    saved[key] = (copy, value)
+    saved[key] = (copy, value, drop)
     return value
 
 

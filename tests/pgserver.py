@@ -150,7 +150,9 @@ class PostgresServer:
                 connection.execute(statement)
 
     def create_database(self, name: str, template: str | None = None) -> str:
-        suffix = f' TEMPLATE "{template}"' if template else ""
+        # FILE_COPY: a small database is copied faster than through the WAL (PostgreSQL 15+'s
+        # default); tests create one per test.
+        suffix = f' TEMPLATE "{template}" STRATEGY FILE_COPY' if template else ""
         self.execute(
             f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)', f'CREATE DATABASE "{name}"{suffix}'
         )

@@ -7,6 +7,7 @@ import re
 import subprocess
 import sys
 
+import pytest
 from fastapi.testclient import TestClient
 from sqlmodel import select
 
@@ -209,6 +210,7 @@ def test_teachers_and_students_are_refused_the_admin_pages(app):
         assert post_form(client, "/admin/accounts", {"username": "z"}).status_code == 403
 
 
+@pytest.mark.slow
 def test_cli_creates_an_administrator(var_dir):
     command = [sys.executable, "-m", "app.cli.main", "create-user", "--role", "admin"]
     result = subprocess.run(

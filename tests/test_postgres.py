@@ -53,6 +53,7 @@ def test_empty_postgres_database_upgrades_with_no_pending_changes(empty_database
     upgrade_to_head(empty_database)  # a second run is a no-op
 
 
+@pytest.mark.slow
 def test_servers_starting_together_migrate_once(empty_database):
     """Several servers run ``gyrolab migrate`` at once: one migrates, the rest wait."""
     env = {**os.environ, "GYROLAB_DATABASE_URL": empty_database}

@@ -93,6 +93,7 @@ def test_prune_removes_old_re_recordings_but_never_submitted_data(client, studen
     assert results.status_code == 200
 
 
+@pytest.mark.slow
 def test_prune_from_the_command_line_and_the_admin_page(app, client, student):
     auth = token_for(client, "student1")
     session_id = new_api_session(client, auth)

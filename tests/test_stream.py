@@ -37,6 +37,7 @@ def turn(client, session_id, part, position):
     return post_json(client, f"{page}/turn", {"part": part, "position": position}, page)
 
 
+@pytest.mark.slow
 def test_stored_samples_equal_streamed_ones_and_no_truth_is_sent(student_client):
     session_id = new_session(student_client)
     with write_session() as db:  # the student let the gyro warm up for half an hour

@@ -21,9 +21,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import allantools
 import numpy as np
-from scipy.optimize import nnls
 
 from app.core.exceptions import UserError
 from app.core.noise_model import GyroNoise, recommended_dwell
@@ -123,6 +121,8 @@ def white_noise_dof(taus_s: np.ndarray, rate_hz: float, count: int) -> np.ndarra
     noise (NIST SP 1065, table 5, via ``allantools.edf_simple``): about 3N/2m, so a τ
     averaged over few stretches of the record weighs little.  allantools' own δσ = σ/√N
     ignores that and lets the noisy long-τ end steer a fit."""
+    import allantools  # with scipy and matplotlib: imported when first needed
+
     edf = [allantools.edf_simple(count + 1, max(1, int(round(tau * rate_hz))), 0) for tau in taus_s]
     return np.maximum(np.asarray(edf, dtype=float), 1.0)
 
@@ -157,6 +157,8 @@ def fit_noise_model(
             matrix = np.column_stack(columns) * weight[:, None]
             scale = np.linalg.norm(matrix, axis=0)
             scale[scale == 0] = 1.0
+            from scipy.optimize import nnls
+
             scaled, residual = nnls(matrix / scale, target)
             if best is None or residual < best[0]:
                 sigmas = _coefficient_sigmas(matrix / scale, scaled, residual) / scale
@@ -211,6 +213,8 @@ def allan_deviation(rates_deg_h, rate_hz: float) -> AllanResult:
         raise UserError("readings.not_finite", "A reading is not a finite number.")
     if not (rate_hz > 0 and math.isfinite(rate_hz)):
         raise UserError("allan.bad_rate", "The sample rate must be a positive number.")
+    import allantools
+
     taus, adev, error, _ = allantools.oadev(data, rate=rate_hz, data_type="freq", taus="octave")
     keep = adev > 0
     taus, adev, error = taus[keep], adev[keep], error[keep]

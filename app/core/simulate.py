@@ -39,7 +39,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.signal import lfilter
 
 from app.core.units import EARTH_RATE_DEG_H
 
@@ -375,6 +374,8 @@ class GyroStream:
             rate = rate + p.white_sigma_deg_h * white
         if p.bias_instability_deg_h and n:
             drive = self._gm_sigma * math.sqrt(1.0 - self._phi**2) * gm_noise
+            from scipy.signal import lfilter  # imported when first needed: ~1 s
+
             gm, _ = lfilter([1.0], [1.0, -self._phi], drive, zi=[self._phi * self._gm_state])
             self._gm_state = float(gm[-1])
             rate = rate + gm

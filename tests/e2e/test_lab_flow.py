@@ -75,8 +75,9 @@ def test_student_types_the_handout_tables(any_live_server, new_page):
     expect(page.locator(".chart[data-figure='heading-compass'] .main-svg").first).to_be_visible()
 
 
-def test_student_records_everything_from_the_simulated_gyro_and_submits(any_live_server, new_page):
-    live_server = any_live_server
+def test_student_records_everything_from_the_simulated_gyro_and_submits(live_server, new_page):
+    """On SQLite; PostgreSQL's real two-worker server streams in test_fault.py, and the
+    stream's storage runs on both databases in test_stream.py."""
     page = new_page()
     log_in(page, live_server.url, "student", STUDENT_PASSWORD)
     start_practice(page, live_server.url)
