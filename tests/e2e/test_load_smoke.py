@@ -26,7 +26,7 @@ def test_load_test_runs_clean(database, request):
             "--backend",
             database,
             "--dwell",
-            "20",
+            "5",
             "--speed",
             "20",
             "--ramp",
