@@ -91,10 +91,41 @@ class Enrollment(SQLModel, table=True):
 
 
 class InputMethod(StrEnum):
-    manual = "manual"
-    csv = "csv"
-    simulator = "simulator"
-    api = "api"
+    """How a position's readings were recorded (a take's source), and the ways an
+    assignment may allow (``api``: uploads, allowed with manual or csv)."""
+
+    manual = "manual"  # typed into the grid
+    csv = "csv"  # a pasted or uploaded file
+    simulator = "simulator"  # streamed from the simulated gyro
+    api = "api"  # uploaded through the REST API (a script or the serial bridge)
+
+
+class Part(StrEnum):
+    heading = "heading"  # part A: four positions in the horizontal plane
+    latitude = "latitude"  # part B: four positions in the vertical north-south plane
+
+
+class SessionStatus(StrEnum):
+    """A lab session's state; a class row without a session is ``not_started``."""
+
+    not_started = "not_started"
+    in_progress = "in_progress"
+    submitted = "submitted"
+    returned = "returned"  # for revision, with the teacher's feedback
+    graded = "graded"  # the grade released
+
+
+class LatePolicy(StrEnum):
+    accept = "accept"  # and flag the attempt late
+    refuse = "refuse"
+
+
+class RevealTruth(StrEnum):
+    """When students may see their secret truth."""
+
+    never = "never"
+    after_submission = "after_submission"
+    after_grading = "after_grading"
 
 
 class Assignment(SQLModel, table=True):
@@ -127,9 +158,8 @@ class Assignment(SQLModel, table=True):
     tolerance_latitude_pct: float = 5.0
     tolerance_earth_rate_pct: float = 5.0
     max_attempts: int = 3  # 0 = unlimited
-    late_policy: str = Field(default="accept", max_length=8)  # accept (and flag) | refuse
-    # when students may see their truth: never | after_submission | after_grading
-    reveal_truth: str = Field(default="after_grading", max_length=20)
+    late_policy: str = Field(default=LatePolicy.accept, max_length=8)
+    reveal_truth: str = Field(default=RevealTruth.after_grading, max_length=20)
 
     @property
     def methods(self) -> list[str]:
@@ -177,8 +207,7 @@ class LabSession(SQLModel, table=True):
     # one gyro timeline per session: its clock (s since switch-on) at wall time sim_clock_at
     sim_clock_s: float = 0.0
     sim_clock_at: datetime | None = None
-    # in_progress | submitted | returned | graded
-    status: str = Field(default="in_progress", max_length=16)
+    status: str = Field(default=SessionStatus.in_progress, max_length=16)
     grade: str | None = Field(default=None, max_length=32)
     feedback: str = Field(default="", max_length=20_000)
     feedback_positions: str = Field(default="{}", max_length=20_000)  # JSON {"heading-1": "..."}
@@ -193,10 +222,10 @@ class Take(SQLModel, table=True):
 
     id: int | None = Field(default=None, primary_key=True)
     session_id: int = Field(foreign_key="lab_session.id", index=True, ondelete="CASCADE")
-    part: str = Field(max_length=8)  # heading | latitude
+    part: str = Field(max_length=8)  # Part
     position: int
     angle_deg: float
-    source: str = Field(max_length=16)
+    source: str = Field(max_length=16)  # InputMethod
     unit: str = Field(default="deg/h", max_length=8)
     n_samples: int
     created_at: datetime = Field(default_factory=utcnow)

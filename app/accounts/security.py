@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from datetime import timedelta
 from functools import lru_cache
 
+from itsdangerous import BadSignature, URLSafeSerializer
 from pwdlib import PasswordHash
 from pwdlib.hashers.argon2 import Argon2Hasher
 from sqlalchemy import delete, update
@@ -136,16 +137,24 @@ def tokens_match(expected: str | None, given: str | None) -> bool:
     return bool(expected) and bool(given) and hmac.compare_digest(expected, given)
 
 
-def signed(value: str, secret: str) -> str:
-    mac = hmac.new(secret.encode(), value.encode(), hashlib.sha256).hexdigest()[:32]
-    return f"{value}.{mac}"
+def signer(secret: str, purpose: str) -> URLSafeSerializer:
+    """Signs small JSON values for cookies (itsdangerous); ``purpose`` is the salt, so a
+    value signed for one cookie is never accepted by another."""
+    return URLSafeSerializer(secret, salt=f"gyrolab-{purpose}")
 
 
-def unsigned(value: str | None, secret: str) -> str | None:
-    if not value or "." not in value:
+def signed(value: object, secret: str, purpose: str) -> str:
+    return signer(secret, purpose).dumps(value)
+
+
+def unsigned(cookie: str | None, secret: str, purpose: str) -> object | None:
+    """The signed value, or None when the cookie is missing, altered or for another use."""
+    if not cookie:
         return None
-    raw = value.rsplit(".", 1)[0]
-    return raw if hmac.compare_digest(signed(raw, secret), value) else None
+    try:
+        return signer(secret, purpose).loads(cookie)
+    except BadSignature:
+        return None
 
 
 # --- login throttling (in the database: survives restarts, shared by workers) --------------
@@ -188,13 +197,13 @@ def _pair_key(account: str, address: str) -> str:
 
 
 def device_cookie_value(account: str, secret: str) -> str:
-    return signed(f"{account}:{secrets.token_urlsafe(12)}", secret)
+    return signed(f"{account}:{secrets.token_urlsafe(12)}", secret, "device")
 
 
 def trusted_device(cookie: str | None, account: str, secret: str) -> str | None:
     """The device key when the signed cookie was issued to this account, else None."""
-    value = unsigned(cookie, secret)
-    if not value or ":" not in value:
+    value = unsigned(cookie, secret, "device")
+    if not isinstance(value, str) or ":" not in value:
         return None
     owner, nonce = value.rsplit(":", 1)
     return nonce[:64] if owner == account else None

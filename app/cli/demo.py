@@ -13,7 +13,7 @@ from app.accounts.service import create_user, enroll
 from app.core.solve import solve_heading
 from app.lab.sim import SimulatedTake, north_dial_deg, set_gyro_clock
 from app.lab.store import store_take, submit
-from app.models import Assignment, Course, LabSession, Role, User
+from app.models import Assignment, Course, InputMethod, LabSession, Role, User
 from app.review.service import draw_truth
 
 DEMO_TEACHER = ("teacher", "Demo Teacher 王老师")
@@ -128,7 +128,7 @@ def add_demo_work(db: Session, assignment: Assignment, students: list[User]) -> 
                     angle_deg=take.dial_angle_deg,
                     values=values,
                     times=times,
-                    source="simulator",
+                    source=InputMethod.simulator,
                 )
         set_gyro_clock(session, clock)
         if submit_it:

@@ -18,6 +18,7 @@ from app.accounts.service import (
     rotate_join_code,
 )
 from app.core.simulate import PRESETS
+from app.courses.assignment_form import form_values
 from app.courses.roster_csv import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
 from app.models import Assignment, Course, Enrollment, User
 from app.web.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
@@ -94,6 +95,7 @@ def course_context(db: Session, course: Course, **extra) -> dict:
         "students": roster(db, course),
         "assignments": assignments,
         "presets": sorted(PRESETS),
+        "assignment_form": form_values(),
         **extra,
     }
 

@@ -39,7 +39,7 @@ from app.lab.schemas import (
 )
 from app.lab.service import Method, append_readings, own_session, record_position, require_method
 from app.lab.store import POSITIONS, current_takes, session_results, submit
-from app.models import LabSession
+from app.models import InputMethod, LabSession
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS
 
@@ -264,7 +264,7 @@ def put_position(
         times=upload.times,
         unit=upload.upload.unit,
         angle_deg=upload.upload.angle_deg,
-        source="api",
+        source=InputMethod.api,
     )
     db.commit()
     return UploadOut(

@@ -22,7 +22,17 @@ from app.lab.store import (
     session_results,
     take_history,
 )
-from app.models import Assignment, Attempt, Course, Enrollment, LabSession, Role, User, utcnow
+from app.models import (
+    Assignment,
+    Attempt,
+    Course,
+    Enrollment,
+    LabSession,
+    Role,
+    SessionStatus,
+    User,
+    utcnow,
+)
 from app.review.service import auto_check, session_truth, truth_visible
 from app.web.deps import (
     MAX_ID,
@@ -169,8 +179,8 @@ def session_page(request: Request, session: OwnedSession, db: SessionDep):
         "plane": session.sim_plane_dial_deg,
         "messages": {key: _(key) for key in JS_MESSAGES},
     }
-    editable = session.status != "graded" and not (
-        session.assignment_id and session.status == "submitted"
+    editable = session.status != SessionStatus.graded and not (
+        session.assignment_id and session.status == SessionStatus.submitted
     )
     return render(
         request,
@@ -197,7 +207,7 @@ def session_view(db: Session, session: LabSession, assignment, attempts, _) -> d
         part: [nominal_angle(session, part, k) for k in range(1, position_count(session) + 1)]
         for part in PARTS
     }
-    shows_feedback = session.status in ("returned", "graded")
+    shows_feedback = session.status in (SessionStatus.returned, SessionStatus.graded)
     visible = truth_visible(session, assignment, len(attempts))
     truth = session_truth(db, session, assignment) if visible else None
     check = None
@@ -226,7 +236,7 @@ def session_view(db: Session, session: LabSession, assignment, attempts, _) -> d
         "position_feedback": json.loads(session.feedback_positions or "{}")
         if shows_feedback
         else {},
-        "grade": session.grade if session.status == "graded" else None,
+        "grade": session.grade if session.status == SessionStatus.graded else None,
         "attempt_results": [(a, json.loads(a.results_json)) for a in attempts],
     }
 

@@ -26,7 +26,7 @@ from app.lab.store import (
     set_symmetric_order,
     submit,
 )
-from app.models import LabSession
+from app.models import InputMethod, LabSession
 from app.web.deps import CsrfProtected, CurrentUser, ObjectId, ReadOnlySessionDep, SessionDep
 from app.web.exports import Selection, readings_csv, session_json
 from app.web.render import flash, redirect
@@ -53,7 +53,7 @@ def save_manual(session: ManualSession, db: SessionDep, body: Annotated[ManualRe
     if not columns:
         raise UserError("readings.none", "Type at least one reading.")
     saved = record_positions(
-        db, session, part=body.part, unit=body.unit, columns=columns, source="manual"
+        db, session, part=body.part, unit=body.unit, columns=columns, source=InputMethod.manual
     )
     db.commit()
     return {"saved": saved}
@@ -147,7 +147,7 @@ def save_csv(
         part=body.part,
         unit=body.unit,
         columns=numbered(readings.positions),
-        source="csv",
+        source=InputMethod.csv,
         angles=numbered(readings.angles_deg),
         times=numbered(readings.times_s),
     )

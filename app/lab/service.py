@@ -9,8 +9,6 @@ position is saved whole or not at all.
 
 from __future__ import annotations
 
-from enum import StrEnum
-
 import numpy as np
 from sqlmodel import Session
 
@@ -18,16 +16,9 @@ from app.core.exceptions import UserError
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.sim import nominal_angle
 from app.lab.store import append_samples, check_position, store_take
-from app.models import Assignment, LabSession, Take, User
+from app.models import Assignment, InputMethod, LabSession, Take, User
 
-
-class Method(StrEnum):
-    """Ways of recording that an assignment may allow."""
-
-    manual = "manual"  # typed into the grid
-    csv = "csv"  # a pasted or uploaded file
-    simulator = "simulator"  # streamed from the simulated gyro
-    api = "api"  # uploaded through the REST API: allowed with manual or csv
+Method = InputMethod  # the ways an assignment may allow
 
 
 def allowed_methods(db: Session, session: LabSession) -> list[str]:

@@ -24,9 +24,20 @@ from app.core.solve import solve_heading, solve_latitude
 from app.courses.characterisation import StationNoise, station_noise
 from app.lab.samples import chunks, unpack
 from app.lab.sim import FIRST_PASS, position_count, preset_for
-from app.models import Assignment, Attempt, LabSession, SampleChunk, Take, utcnow
+from app.models import (
+    Assignment,
+    Attempt,
+    InputMethod,
+    LabSession,
+    LatePolicy,
+    Part,
+    SampleChunk,
+    SessionStatus,
+    Take,
+    utcnow,
+)
 
-PARTS = ("heading", "latitude")
+PARTS = tuple(Part)
 POSITIONS = 8  # the most a part can have: the symmetric order 1-2-3-4-4-3-2-1
 MAX_SAMPLES_PER_POSITION = 1_000_000
 PLAUSIBLE_RATE_DEG_H = 7200.0  # 2 °/s: a gyro at rest reads Earth's rate plus its bias
@@ -96,8 +107,8 @@ def check_position(session: LabSession, part: str, position: int) -> None:
 def set_symmetric_order(db: Session, session: LabSession, symmetric: bool) -> None:
     """Switch the recording order.  Switching back is refused while positions 5–8 hold
     readings (they would silently drop out of the result)."""
-    if session.status == "graded" or (
-        session.status == "submitted" and session.assignment_id is not None
+    if session.status == SessionStatus.graded or (
+        session.status == SessionStatus.submitted and session.assignment_id is not None
     ):
         raise UserError("lab.awaiting_review", "This work is waiting for review or graded.")
     if not symmetric and session.symmetric_order:
@@ -133,9 +144,9 @@ def store_take(
 ) -> Take:
     """Add a take (values in °/h) and supersede the previous one; the caller commits once,
     so the position is either fully saved or not at all."""
-    if session.status == "graded":
+    if session.status == SessionStatus.graded:
         raise UserError("lab.already_graded", "This work has been graded.")
-    if session.status == "submitted" and session.assignment_id is not None:
+    if session.status == SessionStatus.submitted and session.assignment_id is not None:
         raise UserError(
             "lab.awaiting_review", "Your last attempt is waiting for your teacher's review."
         )
@@ -187,8 +198,8 @@ def store_take(
     for seq, value_blob, time_blob in chunks(values, times):
         db.add(SampleChunk(take_id=take.id, seq=seq, values=value_blob, times=time_blob))
     session.updated_at = now
-    if session.status in ("submitted", "returned"):
-        session.status = "in_progress"  # an edit after submitting starts a new attempt
+    if session.status in (SessionStatus.submitted, SessionStatus.returned):
+        session.status = SessionStatus.in_progress  # an edit after submitting starts a new attempt
     db.add(session)
     return take
 
@@ -211,8 +222,8 @@ def append_samples(
     retried batch is not duplicated); an offset beyond the stored count is a gap.
     Returns (take, number of values added).
     """
-    if session.status == "graded" or (
-        session.status == "submitted" and session.assignment_id is not None
+    if session.status == SessionStatus.graded or (
+        session.status == SessionStatus.submitted and session.assignment_id is not None
     ):
         raise UserError("lab.awaiting_review", "This work is waiting for review or graded.")
     check_position(session, part, position)
@@ -222,7 +233,7 @@ def append_samples(
             Take.part == part,
             Take.position == position,
             Take.superseded_at.is_(None),
-            Take.source == "api",
+            Take.source == InputMethod.api,
         )
     ).first()
     stored = take.n_samples if take is not None else 0
@@ -249,7 +260,7 @@ def append_samples(
                 angle_deg=angle_deg,
                 values=values,
                 times=times,
-                source="api",
+                source=InputMethod.api,
                 unit=unit,
                 check_minimum=False,
             )
@@ -279,8 +290,8 @@ def append_samples(
         db.add(SampleChunk(take_id=take.id, seq=next_seq + seq, values=value_blob, times=time_blob))
     take.n_samples = stored + int(values.size)
     session.updated_at = utcnow()
-    if session.status in ("submitted", "returned"):
-        session.status = "in_progress"
+    if session.status in (SessionStatus.submitted, SessionStatus.returned):
+        session.status = SessionStatus.in_progress
     db.add(take)
     db.add(session)
     return take, int(values.size)
@@ -436,7 +447,7 @@ def simulated_noise(session: LabSession, ordered: list[PositionData]) -> dict:
     on the session's one gyro timeline (sample times in gyro seconds, not overlapping) are
     correlated through the slow bias and the random walk; recordings made before the
     timeline existed are separate runs.  Otherwise nothing (the σ assumes white noise)."""
-    if not ordered or any(p.take.source != "simulator" for p in ordered):
+    if not ordered or any(p.take.source != InputMethod.simulator for p in ordered):
         return {}
     preset = preset_for(session)
     noise = GyroNoise.from_preset(preset)
@@ -459,7 +470,11 @@ def characterised_noise(station: StationNoise | None, ordered: list[PositionData
     """Readings from a real gyro the teacher characterised (typed, CSV, API, bridge): each
     position mean's variance from its noise model over the position's recording, taken as
     separate recordings (their timing on the bench is not known)."""
-    if station is None or not ordered or any(p.take.source == "simulator" for p in ordered):
+    if (
+        station is None
+        or not ordered
+        or any(p.take.source == InputMethod.simulator for p in ordered)
+    ):
         return {}
     windows = [Window(0.0, p.values.size / station.rate_hz) for p in ordered]
     return {"position_cov": station.noise.mean_covariance(windows, continuous=False)}
@@ -573,9 +588,9 @@ def submit(db: Session, session: LabSession) -> Attempt:
     """
     assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
     previous = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
-    if session.status == "graded":
+    if session.status == SessionStatus.graded:
         raise UserError("lab.already_graded", "This work has been graded.", status=409)
-    if assignment is not None and session.status == "submitted":
+    if assignment is not None and session.status == SessionStatus.submitted:
         raise UserError(
             "lab.awaiting_review",
             "Your last attempt is waiting for your teacher's review.",
@@ -594,7 +609,7 @@ def submit(db: Session, session: LabSession) -> Attempt:
         )
     now = utcnow()
     late = bool(assignment and assignment.due_at and now > assignment.due_at)
-    if late and assignment.late_policy == "refuse":
+    if late and assignment.late_policy == LatePolicy.refuse:
         raise UserError(
             "lab.past_due", "The due date has passed; submissions are closed.", status=409
         )
@@ -615,7 +630,7 @@ def submit(db: Session, session: LabSession) -> Attempt:
         submitted_at=now,
         late=late,
     )
-    session.status = "submitted"
+    session.status = SessionStatus.submitted
     session.updated_at = utcnow()
     db.add(attempt)
     db.add(session)

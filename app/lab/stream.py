@@ -36,7 +36,7 @@ from app.lab.sim import (
     set_gyro_clock,
 )
 from app.lab.store import PARTS, POSITIONS
-from app.models import LabSession, User
+from app.models import InputMethod, LabSession, User
 from app.web.deps import ObjectId, login_for_cookie
 from app.web.i18n import translate
 from app.web.render import SESSION_COOKIE, request_language
@@ -92,7 +92,7 @@ def _save(
             values=np.asarray(values),
             times=np.asarray(times),
             angle_deg=dial,
-            source="simulator",
+            source=InputMethod.simulator,
         )
         return len(values)
 

@@ -10,7 +10,7 @@ from pydantic import BaseModel
 from sqlmodel import select
 
 from app.accounts.api_auth import TeacherCaller
-from app.models import Assignment, Course
+from app.models import Assignment, Course, SessionStatus
 from app.review.deps import teachers_assignment
 from app.review.exports import class_table_response
 from app.review.service import class_rows
@@ -93,7 +93,9 @@ def list_submissions(assignment_id: ObjectId, caller: TeacherCaller, db: Session
                 latitude_error_percent=row.check_error("latitude"),
                 earth_rate_error_percent=row.check_error("earth_rate"),
                 auto_check=None if row.check is None else row.check.passed,
-                grade=row.session.grade if row.session and row.session.status == "graded" else None,
+                grade=row.session.grade
+                if row.session and row.session.status == SessionStatus.graded
+                else None,
             )
         )
     return rows

@@ -13,7 +13,7 @@ from app.core.exceptions import UserError
 from app.core.readings import parse_decimal
 from app.core.simulate import PRESETS
 from app.courses import characterisation
-from app.courses.assignment_pages import FormProblem, assignment_form_values, parse_assignment_form
+from app.courses.assignment_form import form_values, parse_assignment_form
 from app.lab.charts import class_error_figure, class_histogram_figure
 from app.lab.pages import UNIT_NAMES, session_view
 from app.models import Attempt, User
@@ -58,7 +58,7 @@ def assignment_dashboard(
             "counts": status_counts(rows),
             "figures": figures,
             "status_filter": status,
-            "form": assignment_form_values(assignment),
+            "form": form_values(assignment),
             "characterisation": characterisation.summary_of(assignment),
             "presets": sorted(PRESETS),
             "plotly_url": request.app.state.plotly_url,
@@ -80,7 +80,7 @@ def update_settings(
     values["methods"] = form.getlist("methods")
     try:
         updated = parse_assignment_form(values)
-    except FormProblem as problem:
+    except UserError as problem:
         response = redirect(f"/courses/{course.id}/assignments/{assignment.id}#settings")
         flash(response, request, problem.key, "error", **problem.params)
         return response

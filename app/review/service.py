@@ -18,9 +18,20 @@ from sqlmodel import Session, select
 
 from app.core.solve import percent_error, wrap180
 from app.lab.store import PARTS, SessionData, current_takes, iter_current_data, quality_flags
-from app.models import Assignment, Attempt, Enrollment, LabSession, Take, User, utcnow
+from app.models import (
+    Assignment,
+    Attempt,
+    Enrollment,
+    InputMethod,
+    LabSession,
+    RevealTruth,
+    SessionStatus,
+    Take,
+    User,
+    utcnow,
+)
 
-STATUSES = ("not_started", "in_progress", "submitted", "returned", "graded")
+STATUSES = tuple(SessionStatus)
 
 
 def draw_truth(assignment: Assignment, session: LabSession, rng: random.Random) -> None:
@@ -64,11 +75,11 @@ def session_truth(
         takes = current_takes(db, session.id)
     heading_sources = {t.source for t in takes if t.part == "heading"}
     azimuth, source = None, None
-    if heading_sources == {"simulator"}:
+    if heading_sources == {InputMethod.simulator}:
         azimuth, source = session.sim_azimuth_deg, "simulator"
     elif assignment is not None and assignment.true_heading_deg is not None:
         azimuth, source = assignment.true_heading_deg, "bench"
-    uses_simulator = any(t.source == "simulator" for t in takes)
+    uses_simulator = any(t.source == InputMethod.simulator for t in takes)
     return Truth(
         azimuth,
         session.latitude_deg,
@@ -152,10 +163,10 @@ def truth_visible(session: LabSession, assignment: Assignment | None, attempts: 
     """May the student see their secret truth now?"""
     if assignment is None:
         return attempts > 0  # practice: after submitting
-    if assignment.reveal_truth == "after_submission":
+    if assignment.reveal_truth == RevealTruth.after_submission:
         return attempts > 0
-    if assignment.reveal_truth == "after_grading":
-        return session.status == "graded"
+    if assignment.reveal_truth == RevealTruth.after_grading:
+        return session.status == SessionStatus.graded
     return False
 
 
@@ -253,7 +264,9 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
     for student in students:
         session = sessions.get(student.id)
         if session is None:
-            rows.append(StudentRow(student, None, [], "not_started", {}, None, None, [], False))
+            rows.append(
+                StudentRow(student, None, [], SessionStatus.not_started, {}, None, None, [], False)
+            )
             continue
         history = attempts.get(session.id, [])
         flags, prints, takes = summaries.get(session.id, ([], (None, None), []))
@@ -332,7 +345,9 @@ def export_rows(rows: list[StudentRow]) -> list[list]:
                 _num(latitude.get("earth_rate_deg_h")),
                 _num(row.check_error("earth_rate")),
                 "" if passed is None else ("pass" if passed else "fail"),
-                (row.session.grade or "") if row.session and row.session.status == "graded" else "",
+                (row.session.grade or "")
+                if row.session and row.session.status == SessionStatus.graded
+                else "",
                 ";".join(sorted({f["key"].split(".")[-1] for f in row.flags})),
                 ";".join(row.duplicate_of),
             ]
@@ -347,11 +362,11 @@ def _num(value: float | None) -> str:
 
 
 def return_for_revision(session: LabSession) -> None:
-    session.status = "returned"
+    session.status = SessionStatus.returned
     session.returned_at = utcnow()
 
 
 def grade_and_release(session: LabSession, grade: str) -> None:
     session.grade = grade
-    session.status = "graded"
+    session.status = SessionStatus.graded
     session.graded_at = utcnow()

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import base64
-import json
 import secrets
 from typing import Any
 
@@ -68,17 +66,13 @@ def flash(response, request: Request, key: str, kind: str = "info", **params: An
     pending = list(getattr(request.state, "flashes_out", []))
     pending.append({"key": key, "kind": kind, "params": params})
     request.state.flashes_out = pending
-    raw = base64.urlsafe_b64encode(json.dumps(pending, ensure_ascii=False).encode()).decode()
-    set_cookie(response, request, FLASH_COOKIE, signed(raw, get_settings().secret_key), 300)
+    value = signed(pending, get_settings().secret_key, "flash")
+    set_cookie(response, request, FLASH_COOKIE, value, 300)
 
 
 def _take_flashes(request: Request) -> list[dict]:
-    raw = unsigned(request.cookies.get(FLASH_COOKIE), get_settings().secret_key)
-    if not raw:
-        return []
-    try:
-        items = json.loads(base64.urlsafe_b64decode(raw.encode()))
-    except (ValueError, json.JSONDecodeError):
+    items = unsigned(request.cookies.get(FLASH_COOKIE), get_settings().secret_key, "flash")
+    if not isinstance(items, list):
         return []
     return [item for item in items if isinstance(item, dict) and "key" in item]
 

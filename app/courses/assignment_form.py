@@ -1,0 +1,151 @@
+"""The assignment form (create and settings): one pydantic model holds every field's
+default, type and range; a wrong field becomes one :class:`UserError` naming it."""
+
+from __future__ import annotations
+
+import math
+from datetime import UTC, datetime
+from typing import Annotated, Any
+
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+)
+
+from app.core.exceptions import UserError
+from app.core.simulate import PRESETS
+from app.models import Assignment, InputMethod, LatePolicy, RevealTruth
+
+RECORDING_METHODS = (InputMethod.manual, InputMethod.csv, InputMethod.simulator)
+HANDOUT_LATITUDE_DEG = 39.93
+
+
+def _blank_is_none(value: Any) -> Any:
+    return None if isinstance(value, str) and not value.strip() else value
+
+
+Optional = Annotated[Any, BeforeValidator(_blank_is_none)]
+
+
+class AssignmentForm(BaseModel):
+    """What a teacher sets: station, ways of recording, gyro, truth ranges, rules."""
+
+    model_config = ConfigDict(str_strip_whitespace=True, allow_inf_nan=False)
+
+    title: str = Field(default="", max_length=200)
+    instructions: str = Field(default="", max_length=20_000)
+    latitude_deg: float = Field(ge=-90, le=90)
+    earth_rate_deg_h: float = Field(default=15.041, ge=1, le=100)
+    methods: list[str] = Field(default_factory=lambda: list(RECORDING_METHODS))
+    simulator_preset: str = "teaching-fog"
+    min_readings: int = Field(default=10, ge=2, le=100_000)
+    due_at: Annotated[datetime | None, BeforeValidator(_blank_is_none)] = None
+    azimuth_min_deg: float = Field(default=0.0, ge=0, le=360)
+    azimuth_max_deg: float = Field(default=360.0, ge=0, le=360)
+    turn_on_bias_max_deg_h: Annotated[float | None, BeforeValidator(_blank_is_none)] = Field(
+        default=None, ge=0, le=10_000
+    )
+    indexing_sigma_arcsec: Annotated[float | None, BeforeValidator(_blank_is_none)] = Field(
+        default=None, ge=0, le=36_000
+    )
+    table_tilt_max_deg: Annotated[float | None, BeforeValidator(_blank_is_none)] = Field(
+        default=None, ge=0, le=30
+    )
+    misalignment_max_deg: Annotated[float | None, BeforeValidator(_blank_is_none)] = Field(
+        default=None, ge=0, le=10
+    )
+    true_heading_deg: Annotated[float | None, BeforeValidator(_blank_is_none)] = Field(
+        default=None, ge=0, le=360
+    )
+    tolerance_heading_deg: float = Field(default=2.0, ge=0, le=180)
+    tolerance_latitude_pct: float = Field(default=5.0, ge=0, le=1000)
+    tolerance_earth_rate_pct: float = Field(default=5.0, ge=0, le=1000)
+    max_attempts: int = Field(default=3, ge=0, le=100)
+    late_policy: LatePolicy = LatePolicy.accept
+    reveal_truth: RevealTruth = RevealTruth.after_grading
+
+    @field_validator("min_readings", "max_attempts", mode="before")
+    @classmethod
+    def _whole_number(cls, value: Any) -> Any:
+        """A count typed as "10.0" is 10 (the part after the point is dropped)."""
+        try:
+            number = float(str(value).strip())
+        except ValueError:
+            return value
+        return int(number) if math.isfinite(number) else value
+
+    @field_validator("due_at")
+    @classmethod
+    def _utc(cls, value: datetime | None) -> datetime | None:
+        return value.replace(tzinfo=UTC) if value and value.tzinfo is None else value
+
+    def assignment(self, course_id: int = 0) -> Assignment:
+        if not self.title:
+            raise UserError("assignment.title_required")
+        methods = [m for m in self.methods if m in RECORDING_METHODS]
+        if not methods:
+            raise UserError("assignment.methods_required")
+        if self.simulator_preset not in PRESETS:
+            raise UserError("assignment.bad_preset")
+        fields = self.model_dump(exclude={"methods"})
+        return Assignment(course_id=course_id, allowed_methods=",".join(methods), **fields)
+
+
+def parse_assignment_form(values: dict[str, Any]) -> Assignment:
+    """The form's values (strings; ``methods`` a list) as an unsaved Assignment, or a
+    UserError naming the first wrong field."""
+    try:
+        form = AssignmentForm.model_validate(values)
+    except ValidationError as error:
+        raise _problem(error) from None
+    return form.assignment()
+
+
+def _problem(error: ValidationError) -> UserError:
+    first = error.errors()[0]
+    field = str(first["loc"][0]) if first["loc"] else ""
+    kind = first["type"]
+    if field == "due_at":
+        return UserError("assignment.bad_due")
+    if field in ("late_policy", "reveal_truth"):
+        return UserError("assignment.bad_choice", field=field)
+    if field == "latitude_deg" and kind == "missing":
+        return UserError("assignment.not_a_number", field=field)
+    metadata = AssignmentForm.model_fields[field].metadata if field else []
+    low = next((m.ge for m in metadata if hasattr(m, "ge")), None)
+    high = next((m.le for m in metadata if hasattr(m, "le")), None)
+    if kind in ("greater_than_equal", "less_than_equal", "finite_number") and low is not None:
+        return UserError("assignment.out_of_range", field=field, low=low, high=high)
+    return UserError("assignment.not_a_number", field=field)
+
+
+def form_values(assignment: Assignment | None = None) -> dict[str, Any]:
+    """The form's fields as the page shows them: an assignment's, or the defaults."""
+
+    def text(value) -> str:
+        if value is None:
+            return ""
+        return f"{value:g}" if isinstance(value, float) else str(value)
+
+    if assignment is None:
+        defaults = {
+            name: field.get_default(call_default_factory=True)
+            for name, field in AssignmentForm.model_fields.items()
+            if name != "latitude_deg"
+        }
+        values = {name: text(value) for name, value in defaults.items() if name != "methods"}
+        values["latitude_deg"] = f"{HANDOUT_LATITUDE_DEG:g}"  # a suggestion: the handout's
+        values["methods"] = list(RECORDING_METHODS)
+        return values
+    values = {
+        name: text(getattr(assignment, name))
+        for name in AssignmentForm.model_fields
+        if name not in ("methods", "due_at")
+    }
+    values["methods"] = assignment.methods
+    values["due_at"] = assignment.due_at.strftime("%Y-%m-%dT%H:%M") if assignment.due_at else ""
+    return values
