@@ -78,7 +78,8 @@ def main() -> None:
 
     from app.accounts.service import create_user
     from app.db import write_session
-    from app.lab.store import store_take, submit
+    from app.lab.store import store_take
+    from app.lab.submissions import submit
     from app.migrate import upgrade_to_head
     from app.models import LabSession, Role
 

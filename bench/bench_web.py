@@ -66,7 +66,8 @@ def seed_dashboard(env: dict, students: int) -> None:
 import numpy as np
 from app.db import write_session
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User
-from app.lab.store import store_take, submit
+from app.lab.store import store_take
+from app.lab.submissions import submit
 from app.accounts.security import hash_password
 with write_session() as db:
     teacher = db.exec(__import__('sqlmodel').select(User).where(User.username == 'teacher')).one()

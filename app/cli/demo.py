@@ -12,7 +12,8 @@ from app.accounts.security import generate_password
 from app.accounts.service import create_user, enroll
 from app.core.solve import solve_heading
 from app.lab.sim import SimulatedTake, north_dial_deg, set_gyro_clock
-from app.lab.store import store_take, submit
+from app.lab.store import store_take
+from app.lab.submissions import submit
 from app.models import Assignment, Course, InputMethod, LabSession, Role, User
 from app.review.service import draw_truth
 

@@ -25,6 +25,7 @@ from app.core.jsonsafe import json_safe, loads_finite
 from app.core.readings import parse_decimal, parse_position_csv
 from app.core.units import canonical_unit
 from app.lab import sessions as labsessions
+from app.lab.results import session_results
 from app.lab.schemas import (
     AttemptOut,
     HeadingSettings,
@@ -38,7 +39,8 @@ from app.lab.schemas import (
     UploadOut,
 )
 from app.lab.service import Method, append_readings, own_session, record_position, require_method
-from app.lab.store import POSITIONS, current_takes, session_results, submit
+from app.lab.store import POSITIONS, current_takes
+from app.lab.submissions import submit
 from app.models import InputMethod, LabSession
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS

@@ -15,13 +15,10 @@ from app.core.units import EARTH_RATE_DEG_H, UNITS
 from app.lab import sessions as labsessions
 from app.lab.charts import allan_figure, compass_figure, fit_figure, readings_figure
 from app.lab.deps import OwnedSession
+from app.lab.results import session_results
 from app.lab.service import allowed_methods
 from app.lab.sim import FIRST_PASS, nominal_angle, north_dial_deg, position_count
-from app.lab.store import (
-    PARTS,
-    session_results,
-    take_history,
-)
+from app.lab.store import PARTS, take_history
 from app.models import (
     Assignment,
     Attempt,

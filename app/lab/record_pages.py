@@ -17,15 +17,11 @@ from app.core.jsonsafe import json_safe
 from app.core.readings import Readings, parse_readings_csv
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.deps import ManualSession, OwnedSession, SimulatorSession
+from app.lab.results import session_results
 from app.lab.service import Method, record_positions, recordable_session
 from app.lab.sim import nominal_angle, position_count
-from app.lab.store import (
-    POSITIONS,
-    check_position,
-    session_results,
-    set_symmetric_order,
-    submit,
-)
+from app.lab.store import POSITIONS, check_position, set_symmetric_order
+from app.lab.submissions import submit
 from app.models import InputMethod, LabSession
 from app.web.deps import CsrfProtected, CurrentUser, ObjectId, ReadOnlySessionDep, SessionDep
 from app.web.exports import Selection, readings_csv, session_json

@@ -27,15 +27,10 @@ from sqlmodel import Session, func, select
 from app import __version__
 from app.core.jsonsafe import json_safe
 from app.db import read_session
+from app.lab.results import PositionData, results_json, solve_part, station_noise_for
 from app.lab.samples import unpack
-from app.lab.store import (
-    PARTS,
-    PositionData,
-    export_metadata,
-    results_json,
-    solve_part,
-    station_noise_for,
-)
+from app.lab.store import PARTS
+from app.lab.submissions import export_metadata
 from app.models import Attempt, LabSession, SampleChunk, Take
 
 FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")

@@ -1,0 +1,104 @@
+"""Submitting a session: its current data and results frozen as an attempt, under the
+assignment's rules (attempts, due date)."""
+
+from __future__ import annotations
+
+import json
+
+from sqlmodel import Session, select
+
+from app import __version__
+from app.core.exceptions import UserError
+from app.core.jsonsafe import json_safe
+from app.lab.results import results_json, session_results
+from app.lab.store import current_takes
+from app.models import (
+    Assignment,
+    Attempt,
+    LabSession,
+    LatePolicy,
+    SessionStatus,
+    utcnow,
+)
+
+
+def submit(db: Session, session: LabSession) -> Attempt:
+    """Freeze the current data and results as a new attempt.
+
+    An assignment's rules apply: no new attempt while the last one awaits review or after
+    grading, at most ``max_attempts``, and after the due date either refused or flagged late.
+    """
+    assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
+    previous = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
+    if session.status == SessionStatus.graded:
+        raise UserError("lab.already_graded", "This work has been graded.", status=409)
+    if assignment is not None and session.status == SessionStatus.submitted:
+        raise UserError(
+            "lab.awaiting_review",
+            "Your last attempt is waiting for your teacher's review.",
+            status=409,
+        )
+    if (
+        assignment is not None
+        and assignment.max_attempts
+        and len(previous) >= assignment.max_attempts
+    ):
+        raise UserError(
+            "lab.no_attempts_left",
+            f"All {assignment.max_attempts} attempts are used.",
+            status=409,
+            limit=assignment.max_attempts,
+        )
+    now = utcnow()
+    late = bool(assignment and assignment.due_at and now > assignment.due_at)
+    if late and assignment.late_policy == LatePolicy.refuse:
+        raise UserError(
+            "lab.past_due", "The due date has passed; submissions are closed.", status=409
+        )
+    results = session_results(db, session)
+    if all(outcome.result is None for outcome in results.values()):
+        raise UserError(
+            "lab.nothing_to_submit", "There is no result to submit yet: record the positions first."
+        )
+    takes = current_takes(db, session.id)
+    for take in takes:  # an attempt's takes never change again (appends copy them)
+        take.frozen = True
+        db.add(take)
+    attempt = Attempt(
+        session_id=session.id,
+        number=len(previous) + 1,
+        take_ids=",".join(str(t.id) for t in takes),
+        results_json=json.dumps(json_safe(results_json(results))),
+        submitted_at=now,
+        late=late,
+    )
+    session.status = SessionStatus.submitted
+    session.updated_at = utcnow()
+    db.add(attempt)
+    db.add(session)
+    return attempt
+
+
+def export_metadata(session: LabSession) -> dict:
+    """What a teacher or a script needs to know about a session (never the secret truth)."""
+    return {
+        "software": f"GyroLab {__version__}",
+        "session_id": session.id,
+        "title": session.title,
+        "assignment_id": session.assignment_id,
+        "station": {
+            "latitude_deg": session.latitude_deg,
+            "earth_rate_deg_h": session.earth_rate_deg_h,
+        },
+        "heading": {
+            "rotation": session.heading_rotation,
+            "start_angle_deg": session.heading_start_deg,
+        },
+        "latitude": {
+            "start_angle_deg": session.latitude_start_deg,
+            "step_deg": session.latitude_step_deg,
+        },
+        "simulator_preset": session.simulator_preset,
+        "status": session.status,
+        "exported_at": utcnow().isoformat(),
+    }
