@@ -14,7 +14,8 @@ import numpy as np
 
 from app.core.allan import allan_deviation
 from app.core.allan_intervals import fit_intervals
-from app.core.simulate import PRESETS, GyroStream
+from app.core.presets import PRESETS
+from app.core.simulate import GyroStream
 
 
 def recovery(name: str, records: int, replicates: int, hours: float) -> str:

@@ -13,8 +13,10 @@ import time
 import numpy as np
 
 from app.core.allan import allan_deviation
-from app.core.simulate import PRESETS, GyroStream, Setup, simulate_static
-from app.core.solve import heading_angles, solve_heading
+from app.core.presets import PRESETS
+from app.core.simulate import GyroStream, Setup, simulate_static
+from app.core.sinusoid import heading_angles
+from app.core.solve import solve_heading
 
 N = 1_000_000
 

@@ -15,8 +15,10 @@ import numpy as np
 
 from app.core.exceptions import UserError
 from app.core.noise_model import GyroNoise, back_to_back
-from app.core.simulate import PRESETS, Setup, simulate_run
-from app.core.solve import heading_angles, solve_heading
+from app.core.presets import PRESETS
+from app.core.simulate import Setup, simulate_run
+from app.core.sinusoid import heading_angles
+from app.core.solve import solve_heading
 
 LATITUDE = 39.93
 

@@ -8,7 +8,8 @@ from datetime import timedelta
 import pytest
 from sqlmodel import select
 
-from app.core.solve import heading_angles, solve_heading
+from app.core.sinusoid import heading_angles
+from app.core.solve import solve_heading
 from app.db import read_session, write_session
 from app.models import ApiToken, Assignment, Role, SampleChunk, Take, utcnow
 from tests.factories import (

@@ -237,7 +237,7 @@ def test_solve_with_a_gyro_preset_uses_its_noise_model(capsys):
 
 
 def test_simulate_lists_every_preset(capsys):
-    from app.core.simulate import PRESETS
+    from app.core.presets import PRESETS
 
     code, out, _ = run(capsys, "simulate", "--list-presets", "--json")
     assert code == 0

@@ -15,8 +15,10 @@ from app.core.error_analysis import (
     monte_carlo_heading_errors,
     two_position_first_order,
 )
-from app.core.simulate import PRESETS, Setup, simulate_run, simulate_static
-from app.core.solve import heading_angles, solve_heading
+from app.core.presets import PRESETS
+from app.core.simulate import Setup, simulate_run, simulate_static
+from app.core.sinusoid import heading_angles
+from app.core.solve import solve_heading
 
 pytestmark = pytest.mark.slow
 LATITUDE = 39.93

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.core.presets import PRESETS
 from app.core.simulate import (
-    PRESETS,
     GyroStream,
     Setup,
     axis_vectors,
@@ -19,7 +19,7 @@ from app.core.simulate import (
     simulate_static,
     true_rate,
 )
-from app.core.solve import heading_angles
+from app.core.sinusoid import heading_angles
 
 OMEGA = 15.041
 

@@ -12,16 +12,8 @@ from hypothesis import strategies as st
 from scipy.stats import t as student_t
 
 from app.core.exceptions import UserError
-from app.core.solve import (
-    elevation_angles,
-    fit_sinusoid,
-    heading_angles,
-    percent_error,
-    solve_heading,
-    solve_latitude,
-    solve_two_position,
-    wrap180,
-)
+from app.core.sinusoid import elevation_angles, fit_sinusoid, heading_angles, wrap180
+from app.core.solve import percent_error, solve_heading, solve_latitude, solve_two_position
 from tests.factories import DATA
 
 # The handout's raw tables (copied from shared/data so the suite runs anywhere).

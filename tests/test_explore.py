@@ -103,8 +103,10 @@ def test_dwell_curve_is_what_the_simulator_does(preset, dwell):
     """The curve against the simulator itself: the RMS heading error of 200 seeded
     four-position runs (indexing errors off: the curve is about the gyro's noise).  The old
     curve's flat 0.664·B floor was 2.3× too pessimistic at 1800 s."""
-    from app.core.simulate import PRESETS, Setup, simulate_run
-    from app.core.solve import heading_angles, solve_heading
+    from app.core.presets import PRESETS
+    from app.core.simulate import Setup, simulate_run
+    from app.core.sinusoid import heading_angles
+    from app.core.solve import solve_heading
 
     gyro = PRESETS[preset].without("indexing", "dial", "warmup")  # a warmed-up gyro
     angles = heading_angles(4, "ccw")

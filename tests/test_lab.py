@@ -10,7 +10,8 @@ import pytest
 from sqlmodel import func, select
 
 from app.core.readings import parse_readings_csv
-from app.core.solve import elevation_angles, heading_angles, solve_heading, solve_latitude
+from app.core.sinusoid import elevation_angles, heading_angles
+from app.core.solve import solve_heading, solve_latitude
 from app.db import read_session, write_session
 from app.lab.samples import unpack
 from app.models import Assignment, Attempt, LabSession, Role, SampleChunk, Take

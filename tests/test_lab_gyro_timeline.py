@@ -13,7 +13,8 @@ import pytest
 
 from app.core.exceptions import UserError
 from app.core.noise_model import GyroNoise, Window
-from app.core.simulate import PRESETS, GyroStream
+from app.core.presets import PRESETS
+from app.core.simulate import GyroStream
 from app.core.solve import solve_heading, solve_latitude
 from app.lab.sim import (
     MAX_PAUSE_S,

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from app.core.noise_model import GyroNoise, Window, back_to_back
-from app.core.simulate import PRESETS, GyroStream
+from app.core.presets import PRESETS
+from app.core.simulate import GyroStream
 
 pytestmark = pytest.mark.slow
 

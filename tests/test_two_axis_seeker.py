@@ -11,7 +11,8 @@ import pytest
 
 from app.cli.main import main
 from app.core.error_analysis import ErrorSources, first_order, monte_carlo_heading_errors
-from app.core.simulate import PRESETS, axis_vectors, earth_rate_vector
+from app.core.presets import PRESETS
+from app.core.simulate import axis_vectors, earth_rate_vector
 from app.core.two_axis_seeker import (
     body_rates,
     indexing_error_first_order,

@@ -12,7 +12,8 @@ import pytest
 from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude, render_text
 from app.core.readings import parse_readings_csv
-from app.core.solve import heading_angles, solve_heading, solve_latitude
+from app.core.sinusoid import heading_angles
+from app.core.solve import solve_heading, solve_latitude
 from app.core.units import to_deg_per_hour
 from tests.factories import handout
 

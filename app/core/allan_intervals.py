@@ -19,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.core.allan import AllanResult, allan_deviation
-from app.core.simulate import GyroPreset, GyroStream
+from app.core.presets import GyroPreset
+from app.core.simulate import GyroStream
 
 LEVEL = 0.683  # 1σ-equivalent, like every other uncertainty the app reports
 

@@ -38,8 +38,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from app.core.exceptions import UserError
-from app.core.simulate import GyroPreset, GyroStream, Setup, simulate_run
-from app.core.solve import heading_angles, solve_heading, solve_two_position, wrap180, wrap360
+from app.core.presets import GyroPreset
+from app.core.simulate import GyroStream, Setup, simulate_run
+from app.core.sinusoid import heading_angles, wrap180, wrap360
+from app.core.solve import solve_heading, solve_two_position
 from app.core.two_axis_seeker import (
     body_rates,
     indexing_error_first_order,

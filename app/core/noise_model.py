@@ -31,7 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.core.simulate import GM_SIGMA_PER_B, GyroPreset
+from app.core.presets import GyroPreset
+from app.core.simulate import GM_SIGMA_PER_B
 
 SECONDS_PER_HOUR = 3600.0
 

@@ -17,7 +17,7 @@ from pydantic import (
 )
 
 from app.core.exceptions import UserError
-from app.core.simulate import PRESETS
+from app.core.presets import PRESETS
 from app.models import Assignment, InputMethod, LatePolicy, RevealTruth
 
 RECORDING_METHODS = (InputMethod.manual, InputMethod.csv, InputMethod.simulator)

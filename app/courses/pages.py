@@ -17,7 +17,7 @@ from app.accounts.service import (
     reset_password,
     rotate_join_code,
 )
-from app.core.simulate import PRESETS
+from app.core.presets import PRESETS
 from app.courses.assignment_form import form_values
 from app.courses.roster_csv import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
 from app.models import Assignment, Course, Enrollment, User

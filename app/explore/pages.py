@@ -11,7 +11,7 @@ from fastapi import APIRouter, HTTPException, Query, Request
 from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
-from app.core.simulate import PRESETS
+from app.core.presets import PRESETS
 from app.explore.scenarios import (
     SCENARIOS,
     ExplorerInput,

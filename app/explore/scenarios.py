@@ -20,8 +20,8 @@ import numpy as np
 
 from app.core.error_analysis import ErrorSources, first_order, monte_carlo_heading_errors
 from app.core.noise_model import GyroNoise, recommended_dwell
-from app.core.simulate import PRESETS
-from app.core.solve import fit_sinusoid
+from app.core.presets import PRESETS
+from app.core.sinusoid import fit_sinusoid
 from app.core.units import EARTH_RATE_DEG_H
 
 CURVE_STEP_DEG = 2.0

@@ -10,7 +10,7 @@ from fastapi import APIRouter, Form, Request
 from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
-from app.core.simulate import PRESETS
+from app.core.presets import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS
 from app.lab import sessions as labsessions
 from app.lab.charts import allan_figure, compass_figure, fit_figure, readings_figure

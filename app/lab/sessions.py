@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
-from app.core.simulate import PRESETS
+from app.core.presets import PRESETS
 from app.lab.sim import new_truth
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User, utcnow
 from app.review.service import draw_truth

@@ -15,7 +15,8 @@ from datetime import UTC, datetime
 
 import numpy as np
 
-from app.core.simulate import PRESETS, GyroStream, axis_vectors, read_dial, true_rate
+from app.core.presets import PRESETS
+from app.core.simulate import GyroStream, axis_vectors, read_dial, true_rate
 from app.models import LabSession, utcnow
 
 MAX_DWELL_S = 1800.0

@@ -10,8 +10,8 @@ from fastapi import APIRouter, File, Form, Request, UploadFile
 from sqlmodel import select
 
 from app.core.exceptions import UserError
+from app.core.presets import PRESETS
 from app.core.readings import parse_decimal
-from app.core.simulate import PRESETS
 from app.courses import characterisation
 from app.courses.assignment_form import form_values, parse_assignment_form
 from app.lab.charts import class_error_figure, class_histogram_figure

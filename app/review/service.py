@@ -16,7 +16,8 @@ from datetime import datetime
 
 from sqlmodel import Session, select
 
-from app.core.solve import percent_error, wrap180
+from app.core.sinusoid import wrap180
+from app.core.solve import percent_error
 from app.lab.results import SessionData, iter_current_data, quality_flags
 from app.lab.store import PARTS, current_takes
 from app.models import (

@@ -1,0 +1,251 @@
+"""The simulated gyros: each preset's error terms (IEEE Std 952) with their sources.
+
+Every term of :class:`GyroPreset` is one of the measured-rate model's in
+:mod:`app.core.simulate`; the values and where they come from are in lab-reference §5.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+from app.core.units import SECONDS_PER_HOUR
+
+
+@dataclass(frozen=True)
+class GyroPreset:
+    """One gyro grade and its turntable.  Units in the field names."""
+
+    name: str
+    sample_rate_hz: float
+    arw_deg_rt_h: float
+    bias_instability_deg_h: float
+    bias_corr_time_s: float
+    rrw_deg_h_rt_h: float
+    angle_lsb_deg: float
+    scale_factor_ppm: float
+    constant_bias_deg_h: float
+    turn_on_bias_sigma_deg_h: float
+    g_sensitivity_deg_h_per_g: float
+    misalignment_deg: tuple[float, float]
+    indexing_sigma_arcsec: float
+    dial_resolution_deg: float
+    drift_deg_h_per_h: float = 0.0  # linear bias drift ḃ (warm-up), °/h per hour
+    table_tilt_sigma_deg: float = 0.0  # lab turntable: pitch and roll ~ N(0, σ) per session
+    misalignment_sigma_deg: float = 0.0  # lab: gyro axis vs dial zero ~ N(0, σ) per session
+    warmup_bias_deg_h: float = 0.0  # bias offset at switch-on, decaying as e^(−t/τ_w)
+    warmup_time_constant_s: float = 0.0  # τ_w
+    warmup_temperature_rise_c: float = 0.0  # case temperature rises by ΔT(1 − e^(−t/τ_w))
+    source: str = ""
+    description: dict[str, str] = field(default_factory=dict)
+
+    @classmethod
+    def noise_only(
+        cls,
+        rate_hz: float,
+        *,
+        arw_deg_rt_h: float = 0.0,
+        bias_instability_deg_h: float = 0.0,
+        bias_corr_time_s: float = 0.0,
+        rrw_deg_h_rt_h: float = 0.0,
+        angle_lsb_deg: float = 0.0,
+    ) -> GyroPreset:
+        """A gyro with these noise terms and no other error (e.g. a fitted noise model)."""
+        return cls(
+            name="noise model",
+            sample_rate_hz=rate_hz,
+            arw_deg_rt_h=arw_deg_rt_h,
+            bias_instability_deg_h=bias_instability_deg_h,
+            bias_corr_time_s=bias_corr_time_s,
+            rrw_deg_h_rt_h=rrw_deg_h_rt_h,
+            angle_lsb_deg=angle_lsb_deg,
+            scale_factor_ppm=0.0,
+            constant_bias_deg_h=0.0,
+            turn_on_bias_sigma_deg_h=0.0,
+            g_sensitivity_deg_h_per_g=0.0,
+            misalignment_deg=(0.0, 0.0),
+            indexing_sigma_arcsec=0.0,
+            dial_resolution_deg=0.0,
+        )
+
+    @property
+    def dt_s(self) -> float:
+        return 1.0 / self.sample_rate_hz
+
+    @property
+    def white_sigma_deg_h(self) -> float:
+        """Per-sample σ of the angle random walk: 60·N/√Δt (°/h)."""
+        return 60.0 * self.arw_deg_rt_h / math.sqrt(self.dt_s)
+
+    def without(self, *errors: str) -> GyroPreset:
+        """The same gyro with some error terms switched off (set to zero)."""
+        names = {
+            "arw": "arw_deg_rt_h",
+            "bias_instability": "bias_instability_deg_h",
+            "rrw": "rrw_deg_h_rt_h",
+            "quantization": "angle_lsb_deg",
+            "scale_factor": "scale_factor_ppm",
+            "constant_bias": "constant_bias_deg_h",
+            "turn_on_bias": "turn_on_bias_sigma_deg_h",
+            "g_sensitivity": "g_sensitivity_deg_h_per_g",
+            "indexing": "indexing_sigma_arcsec",
+            "dial": "dial_resolution_deg",
+            "drift": "drift_deg_h_per_h",
+            "warmup": "warmup_bias_deg_h",
+        }
+        changes: dict = {names[e]: 0.0 for e in errors if e in names}
+        if "misalignment" in errors:
+            changes["misalignment_deg"] = (0.0, 0.0)
+        unknown = set(errors) - set(names) - {"misalignment"}
+        if unknown:
+            raise ValueError(f"unknown error terms: {sorted(unknown)}")
+        return replace(self, **changes)
+
+    def ideal(self) -> GyroPreset:
+        return self.without(
+            "arw",
+            "bias_instability",
+            "rrw",
+            "quantization",
+            "scale_factor",
+            "constant_bias",
+            "turn_on_bias",
+            "g_sensitivity",
+            "misalignment",
+            "indexing",
+            "dial",
+            "drift",
+            "warmup",
+        )
+
+
+PRESETS: dict[str, GyroPreset] = {
+    "teaching-fog": GyroPreset(
+        name="teaching-fog",
+        sample_rate_hz=0.1,  # one reading every 10 s, each the output averaged over 10 s
+        arw_deg_rt_h=0.005,
+        bias_instability_deg_h=0.03,
+        bias_corr_time_s=300.0,
+        rrw_deg_h_rt_h=0.0,
+        angle_lsb_deg=1.0 / SECONDS_PER_HOUR,  # 1″ pulses: 0.1 °/h steps over 10 s
+        scale_factor_ppm=500.0,
+        constant_bias_deg_h=0.0,
+        turn_on_bias_sigma_deg_h=1.0,
+        g_sensitivity_deg_h_per_g=0.1,
+        misalignment_deg=(0.0, 0.0),
+        indexing_sigma_arcsec=60.0,
+        table_tilt_sigma_deg=0.1,
+        misalignment_sigma_deg=0.5,
+        dial_resolution_deg=0.1,
+        warmup_bias_deg_h=1.0,
+        warmup_time_constant_s=300.0,
+        warmup_temperature_rise_c=8.0,
+        source="The handout's own data (lab-reference §2, §5). Reading interval: one reading "
+        "every 10 s, each the FOG's output averaged over those 10 s (the '10 s smoothing' of "
+        "FOG data sheets). Per-reading scatter: 60·N/√10 = 0.095 °/h from ARW plus 0.04 °/h "
+        "from the 1″ angle pulses, which make the 0.09–0.11 °/h steps: ≈ 0.1 °/h as in the "
+        "handout. B 0.03 °/h, scale factor 500 ppm, turn-on bias 1 °/h: a mid-grade "
+        "(tactical-class) FOG, never better than the navigation preset. Table: indexing 60″, "
+        "dial 0.1°, level σ 0.1°, axis-to-dial misalignment σ 0.5° (the handout's latitude "
+        "error of 1–2 %). Warm-up: bias 1 °/h decaying with τ = 5 min while the case warms "
+        "by 8 °C.",
+        description={
+            "en": "The lab's FOG: readings every 10 s like the handout's (0.1 °/h steps, "
+            "~0.1 °/h scatter); let it warm up for a quarter of an hour.",
+            "zh-CN": "实验用光纤陀螺：每 10 秒一个读数，与讲义相近（0.1 °/h 步进，约 0.1 °/h "
+            "抖动）；开机后请预热约一刻钟。",
+        },
+    ),
+    "tactical-fog": GyroPreset(
+        name="tactical-fog",
+        sample_rate_hz=10.0,
+        arw_deg_rt_h=0.012,
+        bias_instability_deg_h=0.05,
+        bias_corr_time_s=100.0,
+        rrw_deg_h_rt_h=0.0,
+        angle_lsb_deg=1e-6,
+        scale_factor_ppm=100.0,
+        constant_bias_deg_h=0.0,
+        turn_on_bias_sigma_deg_h=0.5,
+        g_sensitivity_deg_h_per_g=0.05,
+        misalignment_deg=(0.0, 0.0),
+        indexing_sigma_arcsec=30.0,
+        table_tilt_sigma_deg=0.05,
+        misalignment_sigma_deg=0.05,
+        dial_resolution_deg=0.01,
+        warmup_bias_deg_h=0.2,
+        warmup_time_constant_s=180.0,
+        warmup_temperature_rise_c=5.0,
+        source="KVH DSP-1750 class (lab-reference §5): ARW 0.012 °/√h, bias instability "
+        "0.05 °/h, scale factor ~100 ppm; warm-up 0.2 °/h with τ = 3 min.",
+        description={
+            "en": "Tactical-grade FOG (DSP-1750 class): heading to a few tenths of "
+            "a degree in minutes.",
+            "zh-CN": "战术级光纤陀螺（DSP-1750 级）：几分钟内寻北精度达零点几度。",
+        },
+    ),
+    "navigation-fog": GyroPreset(
+        name="navigation-fog",
+        sample_rate_hz=10.0,
+        arw_deg_rt_h=0.002,
+        bias_instability_deg_h=0.008,
+        bias_corr_time_s=300.0,
+        rrw_deg_h_rt_h=0.0,
+        angle_lsb_deg=1e-7,
+        scale_factor_ppm=10.0,
+        constant_bias_deg_h=0.0,
+        turn_on_bias_sigma_deg_h=0.01,
+        g_sensitivity_deg_h_per_g=0.0,
+        misalignment_deg=(0.0, 0.0),
+        indexing_sigma_arcsec=10.0,
+        table_tilt_sigma_deg=0.01,
+        misalignment_sigma_deg=0.01,
+        dial_resolution_deg=0.001,
+        warmup_bias_deg_h=0.01,
+        warmup_time_constant_s=600.0,
+        warmup_temperature_rise_c=3.0,
+        source="Navigation-grade FOG (lab-reference §5): ARW ≈ 0.002 °/√h, B < 0.01 °/h "
+        "(0.008); "
+        "warm-up 0.01 °/h with τ = 10 min.",
+        description={
+            "en": "Navigation-grade FOG: heading to a few hundredths of a degree.",
+            "zh-CN": "导航级光纤陀螺：寻北精度达百分之几度。",
+        },
+    ),
+    "mems": GyroPreset(
+        name="mems",
+        sample_rate_hz=10.0,
+        arw_deg_rt_h=0.5,
+        bias_instability_deg_h=10.0,
+        bias_corr_time_s=30.0,
+        rrw_deg_h_rt_h=5.0,
+        angle_lsb_deg=250.0 / 2**15 * 0.1,  # 16 bits over ±250 °/s, at 10 Hz
+        scale_factor_ppm=3000.0,
+        constant_bias_deg_h=0.0,
+        turn_on_bias_sigma_deg_h=360.0,
+        g_sensitivity_deg_h_per_g=36.0,
+        misalignment_deg=(0.0, 0.0),
+        indexing_sigma_arcsec=60.0,
+        table_tilt_sigma_deg=0.2,
+        misalignment_sigma_deg=1.0,
+        dial_resolution_deg=0.1,
+        warmup_bias_deg_h=20.0,
+        warmup_time_constant_s=60.0,
+        warmup_temperature_rise_c=10.0,
+        source="Consumer MEMS (lab-reference §5): B ≈ 10 °/h, N ≈ 0.3–1 °/√h; turn-on bias "
+        "0.1 °/s; g-sensitivity 0.01 °/s/g; 16-bit output over ±250 °/s; warm-up 20 °/h "
+        "with τ = 1 min.",
+        description={
+            "en": "Consumer MEMS gyro: its noise and drift exceed Earth's rate, so it "
+            "cannot find north in a lab period.",
+            "zh-CN": "消费级 MEMS 陀螺：噪声和漂移超过地球自转角速度，一节实验课内无法寻北。",
+        },
+    ),
+}
+
+
+def get_preset(name: str) -> GyroPreset:
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise ValueError(f"unknown preset {name!r}; choose from {', '.join(PRESETS)}") from None
