@@ -6,8 +6,9 @@ from fastapi import APIRouter, Request
 
 from app.core.exceptions import UserError
 from app.courses.assignment_form import form_values, parse_assignment_form
-from app.courses.pages import course_context, own_course
-from app.web.deps import CsrfProtected, FormDep, ObjectId, SessionDep, TeacherUser
+from app.courses.deps import TeacherCourse
+from app.courses.pages import course_context
+from app.web.deps import CsrfProtected, FormDep, SessionDep, TeacherUser
 from app.web.render import flash, redirect, render
 
 router = APIRouter(prefix="/courses", tags=["pages: assignments"], include_in_schema=False)
@@ -15,10 +16,9 @@ router = APIRouter(prefix="/courses", tags=["pages: assignments"], include_in_sc
 
 @router.post("/{course_id}/assignments", dependencies=[CsrfProtected])
 def create_assignment(
-    request: Request, course_id: ObjectId, teacher: TeacherUser, db: SessionDep, raw: FormDep
+    request: Request, course: TeacherCourse, teacher: TeacherUser, db: SessionDep, raw: FormDep
 ):
     """A teacher sets a lab: station, recording methods, gyro, truth ranges, rules."""
-    course = own_course(db, teacher, course_id)
     form = {key: str(raw.get(key, "")) for key in raw if key not in ("methods", "csrf_token")}
     form["methods"] = raw.getlist("methods")
     try:

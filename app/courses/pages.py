@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, File, Form, HTTPException, Request, UploadFile
+from fastapi import APIRouter, File, Form, Request, UploadFile
 from sqlmodel import Session, select
 
 from app.accounts.service import (
@@ -17,8 +17,10 @@ from app.accounts.service import (
     reset_password,
     rotate_join_code,
 )
+from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.courses.assignment_form import form_values
+from app.courses.deps import TeacherCourse
 from app.courses.roster_csv import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
 from app.models import Assignment, Course, Enrollment, User
 from app.web.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
@@ -30,14 +32,6 @@ router = APIRouter(prefix="/courses", tags=["pages: courses"], include_in_schema
 NameField = Annotated[str, Form(max_length=200)]
 
 
-def own_course(db: Session, teacher: User, course_id: int) -> Course:
-    """The teacher's own course, else 404 (never reveal that another teacher's exists)."""
-    course = db.get(Course, course_id)
-    if course is None or course.teacher_id != teacher.id:
-        raise HTTPException(404)
-    return course
-
-
 def enrolled_student(db: Session, course: Course, student_id: int) -> User:
     enrollment = db.exec(
         select(Enrollment).where(
@@ -45,7 +39,7 @@ def enrolled_student(db: Session, course: Course, student_id: int) -> User:
         )
     ).first()
     if enrollment is None:
-        raise HTTPException(404)
+        raise UserError("course.no_such_student", status=404)
     return db.get(User, student_id)
 
 
@@ -101,20 +95,18 @@ def course_context(db: Session, course: Course, **extra) -> dict:
 
 
 @router.get("/{course_id}")
-def course_page(request: Request, course_id: ObjectId, teacher: TeacherUser, db: SessionDep):
-    course = own_course(db, teacher, course_id)
+def course_page(request: Request, course: TeacherCourse, teacher: TeacherUser, db: SessionDep):
     return render(request, "courses/detail.html", course_context(db, course))
 
 
 @router.post("/{course_id}/rename", dependencies=[CsrfProtected])
 def rename_course(
     request: Request,
-    course_id: ObjectId,
+    course: TeacherCourse,
     teacher: TeacherUser,
     db: SessionDep,
     name: NameField = "",
 ):
-    course = own_course(db, teacher, course_id)
     response = redirect(f"/courses/{course.id}")
     if not name.strip():
         flash(response, request, "course.name_required", "error")
@@ -129,12 +121,11 @@ def rename_course(
 @router.post("/{course_id}/archive", dependencies=[CsrfProtected])
 def archive_course(
     request: Request,
-    course_id: ObjectId,
+    course: TeacherCourse,
     teacher: TeacherUser,
     db: SessionDep,
     archived: Annotated[bool, Form()] = True,
 ):
-    course = own_course(db, teacher, course_id)
     course.archived = archived
     db.add(course)
     db.commit()
@@ -146,14 +137,13 @@ def archive_course(
 @router.post("/{course_id}/students", dependencies=[CsrfProtected])
 def add_student_by_hand(
     request: Request,
-    course_id: ObjectId,
+    course: TeacherCourse,
     teacher: TeacherUser,
     db: SessionDep,
     username: Annotated[str, Form(max_length=64)] = "",
     display_name: NameField = "",
     email: Annotated[str, Form(max_length=254)] = "",
 ):
-    course = own_course(db, teacher, course_id)
     context = course_context(
         db, course, form={"username": username, "display_name": display_name, "email": email}
     )
@@ -195,12 +185,11 @@ def add_student_by_hand(
 @router.post("/{course_id}/import", dependencies=[CsrfProtected])
 def import_students(
     request: Request,
-    course_id: ObjectId,
+    course: TeacherCourse,
     teacher: TeacherUser,
     db: SessionDep,
     roster_file: Annotated[UploadFile | None, File()] = None,
 ):
-    course = own_course(db, teacher, course_id)
     data = roster_file.file.read(MAX_ROSTER_BYTES + 1) if roster_file else b""
     parsed = parse_roster(data)
     problems = parsed.problems or check_roster_against_accounts(db, parsed.rows)
@@ -229,12 +218,11 @@ def import_students(
 @router.post("/{course_id}/students/{student_id}/reset-password", dependencies=[CsrfProtected])
 def reset_student_password(
     request: Request,
-    course_id: ObjectId,
+    course: TeacherCourse,
     student_id: ObjectId,
     teacher: TeacherUser,
     db: SessionDep,
 ):
-    course = own_course(db, teacher, course_id)
     student = enrolled_student(db, course, student_id)
     if not may_reset_password(db, teacher, student):
         response = redirect(f"/courses/{course.id}")
@@ -257,9 +245,8 @@ def reset_student_password(
 
 
 @router.post("/{course_id}/join-code", dependencies=[CsrfProtected])
-def new_join_code(request: Request, course_id: ObjectId, teacher: TeacherUser, db: SessionDep):
+def new_join_code(request: Request, course: TeacherCourse, teacher: TeacherUser, db: SessionDep):
     """Replace the course's join code (the old code and links stop working)."""
-    course = own_course(db, teacher, course_id)
     rotate_join_code(db, course)
     db.commit()
     response = redirect(f"/courses/{course.id}#join")
@@ -270,13 +257,12 @@ def new_join_code(request: Request, course_id: ObjectId, teacher: TeacherUser, d
 @router.post("/{course_id}/students/{student_id}/remove", dependencies=[CsrfProtected])
 def remove_student(
     request: Request,
-    course_id: ObjectId,
+    course: TeacherCourse,
     student_id: ObjectId,
     teacher: TeacherUser,
     db: SessionDep,
 ):
     """Take a student off the roster; their account and all their work stay."""
-    course = own_course(db, teacher, course_id)
     student = enrolled_student(db, course, student_id)
     enrollment = db.exec(
         select(Enrollment).where(

@@ -102,6 +102,11 @@ API_MESSAGES: dict[str, dict[str, str]] = {
         "en": "This assignment does not allow that way of recording.",
         "zh-CN": "该作业不允许这种记录方式。",
     },
+    "course.no_such_course": {"en": "No such course.", "zh-CN": "没有这门课程。"},
+    "course.no_such_student": {
+        "en": "No such student in this course.",
+        "zh-CN": "本课程中没有这名学生。",
+    },
     "review.no_such_assignment": {"en": "No such assignment.", "zh-CN": "没有这个作业。"},
     "review.no_such_session": {"en": "No such submission.", "zh-CN": "没有这份提交。"},
 }
