@@ -1,15 +1,6 @@
 """N-position solver: heading (part A), latitude and Earth rate (part B), two-position method.
 
-Model (lab-reference §3).  Position i has a known angle α_i (heading part: axis azimuth
-relative to position 1, clockwise positive seen from above; latitude part: axis elevation
-e_i in the meridian plane, 0° = north horizon, 90° = up).  Every reading is
-
-    ω = a·cos α + c·sin α + b + noise
-
-and (a, c, b) come from least squares over all samples.  With n_i samples and mean m_i at
-position i this is the weighted fit of the means, β = (XᵀNX)⁻¹XᵀN·m, N = diag(n_i), so
-the 1σ covariance propagated from the positions' standard errors s_i/√n_i is
-Cov β = L·diag(s_i²/n_i)·Lᵀ with L = (XᵀNX)⁻¹XᵀN.
+Model (lab-reference §3) and the least-squares fit: :mod:`app.core.sinusoid`.
 
 Heading: ω_i = H·cos(A_1 + α_i) + b  ⇒  a = H cos A_1, c = −H sin A_1, so
 A_1 = atan2(−c, a) mod 360° (no quadrant ambiguity), H = hypot(a, c).  For four positions

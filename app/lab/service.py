@@ -9,6 +9,8 @@ position is saved whole or not at all.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from sqlmodel import Session
 
@@ -56,6 +58,22 @@ def recordable_session(db: Session, user: User, session_id: int, method: Method)
     return session
 
 
+@dataclass(frozen=True)
+class Reading:
+    """Readings as stored: in °/h, with the unit they came in and the dial angle (the
+    session's schedule unless given)."""
+
+    values: np.ndarray
+    unit: str
+    angle_deg: float
+
+    @classmethod
+    def of(cls, session, part, position, values, unit, angle_deg) -> Reading:
+        unit = canonical_unit(unit)
+        angle = nominal_angle(session, part, position) if angle_deg is None else angle_deg
+        return cls(to_deg_per_hour(np.asarray(values, dtype=float), unit), unit, float(angle))
+
+
 def record_position(
     db: Session,
     session: LabSession,
@@ -69,19 +87,18 @@ def record_position(
     angle_deg: float | None = None,
 ) -> Take:
     """Store one position's readings (in ``unit``) as a new take, replacing the last."""
-    unit = canonical_unit(unit)
     check_position(session, part, position)
-    angle = nominal_angle(session, part, position) if angle_deg is None else angle_deg
+    reading = Reading.of(session, part, position, values, unit, angle_deg)
     return store_take(
         db,
         session,
         part=part,
         position=position,
-        angle_deg=float(angle),
-        values=to_deg_per_hour(np.asarray(values, dtype=float), unit),
+        angle_deg=reading.angle_deg,
+        values=reading.values,
         times=times,
         source=source,
-        unit=unit,
+        unit=reading.unit,
     )
 
 
@@ -126,16 +143,15 @@ def append_readings(
 ) -> tuple[Take, int]:
     """Append readings to a position's API take (a streaming device); returns the take and
     how many samples were new (a retried batch with ``offset`` is stored once)."""
-    unit = canonical_unit(unit)
-    angle = nominal_angle(session, part, position) if angle_deg is None else angle_deg
+    reading = Reading.of(session, part, position, values, unit, angle_deg)
     return append_samples(
         db,
         session,
         part=part,
         position=position,
-        angle_deg=float(angle),
-        values=to_deg_per_hour(np.asarray(values, dtype=float), unit),
+        angle_deg=reading.angle_deg,
+        values=reading.values,
         times=times,
-        unit=unit,
+        unit=reading.unit,
         offset=offset,
     )
