@@ -99,15 +99,50 @@ def _coefficient_sigmas(matrix: np.ndarray, coefficients: np.ndarray, residual: 
 
 
 def gauss_markov_avar(tau_h: np.ndarray, corr_time_h: float) -> np.ndarray:
-    """Allan variance of a unit-variance first-order Gauss–Markov process:
-    (2T/τ)·[1 − (T/2τ)(3 − 4e^(−τ/T) + e^(−2τ/T))]; its deviation peaks at 0.6178 near τ=1.89T.
+    """Allan variance of a unit-variance first-order Gauss–Markov process.
+
+    σ²(τ) = (2T/τ)·[1 − (T/2τ)(3 − 4e^(−τ/T) + e^(−2τ/T))]; its deviation peaks at 0.6178
+    near τ = 1.89·T.
+
+    Parameters
+    ----------
+    tau_h : numpy.ndarray
+        Averaging times τ (h).
+    corr_time_h : float
+        The correlation time T (h).
+
+    Returns
+    -------
+    numpy.ndarray
+        σ²(τ) for unit process variance.
+
+    References
+    ----------
+    IEEE Std 952-1997, annex C (exponentially correlated noise).
     """
     x = tau_h / corr_time_h
     return (2.0 / x) * (1.0 - (3.0 - 4.0 * np.exp(-x) + np.exp(-2.0 * x)) / (2.0 * x))
 
 
 def white_noise_arw(taus_s: np.ndarray, adev: np.ndarray) -> float:
-    """N = σ(τ)·√τ (τ in hours) at the shortest τ on the −½ slope (else the shortest τ)."""
+    """Angle random walk N = σ(τ)·√τ (τ in hours), read where the curve has slope −½.
+
+    Parameters
+    ----------
+    taus_s : numpy.ndarray
+        Averaging times τ (s).
+    adev : numpy.ndarray
+        Allan deviation σ(τ) (°/h).
+
+    Returns
+    -------
+    float
+        N (°/√h) at the shortest τ on the −½ slope (else at the shortest τ).
+
+    References
+    ----------
+    IEEE Std 952-1997, annex C (angle random walk: σ(τ) = N/√τ).
+    """
     if taus_s.size < 2:
         return float(adev[0] * math.sqrt(taus_s[0] / 3600.0))
     slopes = np.gradient(np.log(adev), np.log(taus_s))
@@ -117,10 +152,30 @@ def white_noise_arw(taus_s: np.ndarray, adev: np.ndarray) -> float:
 
 
 def white_noise_dof(taus_s: np.ndarray, rate_hz: float, count: int) -> np.ndarray:
-    """Equivalent degrees of freedom of each overlapping Allan variance for white rate
-    noise (NIST SP 1065, table 5, via ``allantools.edf_simple``): about 3N/2m, so a τ
-    averaged over few stretches of the record weighs little.  allantools' own δσ = σ/√N
-    ignores that and lets the noisy long-τ end steer a fit."""
+    """Equivalent degrees of freedom of each overlapping Allan variance for white rate noise.
+
+    About 3N/2m (N samples, m = τ·rate), so a τ averaged over few stretches of the record
+    weighs little; allantools' own δσ = σ/√N ignores that and lets the noisy long-τ end
+    steer a fit.
+
+    Parameters
+    ----------
+    taus_s : numpy.ndarray
+        Averaging times τ (s).
+    rate_hz : float
+        Sample rate (Hz).
+    count : int
+        Samples in the record.
+
+    Returns
+    -------
+    numpy.ndarray
+        edf for each τ.
+
+    References
+    ----------
+    NIST SP 1065 (2008), table 5, via ``allantools.edf_simple``.
+    """
     import allantools  # with scipy and matplotlib: imported when first needed
 
     edf = [allantools.edf_simple(count + 1, max(1, int(round(tau * rate_hz))), 0) for tau in taus_s]
@@ -130,7 +185,7 @@ def white_noise_dof(taus_s: np.ndarray, rate_hz: float, count: int) -> np.ndarra
 def fit_noise_model(
     taus_s: np.ndarray, adev: np.ndarray, error: np.ndarray, dof: np.ndarray | None = None
 ) -> NoiseFit:
-    """All IEEE 952 terms at once: weighted non-negative least squares of
+    """All IEEE 952 terms at once, by weighted non-negative least squares of
 
         σ²(τ) = 3Q²/τ² + N²/τ + σ_GM²·g(τ/T) + K²τ/3      (τ in hours)
 
@@ -140,7 +195,29 @@ def fit_noise_model(
     Weights: the standard error of each σ², √(2/edf)·σ², first with the measured σ², then
     (iteratively reweighted) with the model's: weighing by the measured value favours the
     τ's that happened to come out low and read B 14 % low when its hump dominates.
-    Without degrees of freedom, allantools' δσ gives 1/(2σ·δσ)."""
+    Without degrees of freedom, allantools' δσ gives 1/(2σ·δσ).
+
+    Parameters
+    ----------
+    taus_s : numpy.ndarray
+        Averaging times τ (s).
+    adev : numpy.ndarray
+        Allan deviation σ(τ) (°/h).
+    error : numpy.ndarray
+        allantools' δσ(τ) (°/h), used without ``dof``.
+    dof : numpy.ndarray, optional
+        Equivalent degrees of freedom of each σ²(τ) (:func:`white_noise_dof`).
+
+    Returns
+    -------
+    NoiseFit
+        Q (°), N (°/√h), B (°/h) with its correlation time T (s), K (°/h/√h), and the 1σ
+    of N and B from the fit's covariance.
+
+    References
+    ----------
+    IEEE Std 952-1997, annex C; lab-reference §6 (the Allan fit).
+    """
     tau_h = taus_s / 3600.0
     basis = [3.0 / tau_h**2, 1.0 / tau_h, tau_h / 3.0]
     grid = np.geomspace(tau_h[0] * MIN_CORR_TAUS, tau_h[-1] * 4.0, 64) if tau_h.size > 3 else [None]
@@ -190,7 +267,22 @@ def _finite_or_none(value: float | None) -> float | None:
 
 
 def fitted_noise(fit: NoiseFit) -> GyroNoise:
-    """The fit as a noise model (Q → angle LSB √12·Q; B → the Gauss–Markov σ and T)."""
+    """The fit as a noise model for :mod:`app.core.noise_model`.
+
+    Parameters
+    ----------
+    fit : NoiseFit
+        A fit from :func:`fit_noise_model`.
+
+    Returns
+    -------
+    GyroNoise
+        The same terms: Q → an angle LSB of √12·Q; B → the Gauss–Markov σ and T.
+
+    References
+    ----------
+    IEEE Std 952-1997, annex C.
+    """
     return GyroNoise(
         arw_deg_rt_h=fit.arw_deg_rt_h,
         bias_instability_deg_h=fit.bias_instability_deg_h or 0.0,
@@ -201,7 +293,31 @@ def fitted_noise(fit: NoiseFit) -> GyroNoise:
 
 
 def allan_deviation(rates_deg_h, rate_hz: float) -> AllanResult:
-    """Overlapping Allan deviation (octave τ) of a rate record in °/h sampled at ``rate_hz``."""
+    """Overlapping Allan deviation (octave-spaced τ) of a rate record, with read-outs.
+
+    Parameters
+    ----------
+    rates_deg_h : array_like
+        The rate record (°/h), equally spaced.
+    rate_hz : float
+        The sample rate (Hz).
+
+    Returns
+    -------
+    AllanResult
+        τ (s), σ(τ) (°/h) with its error, and the fitted IEEE 952 terms: angle random walk N
+        (°/√h), bias instability B (°/h), rate random walk K (°/h/√h), quantisation Q (°)
+    and the dwell to recommend (s).
+
+    Raises
+    ------
+    UserError
+        Too short a record, a non-positive rate, or non-finite readings.
+
+    References
+    ----------
+    IEEE Std 952-1997, annex C; allantools ``oadev``; NIST SP 1065 (edf).
+    """
     data = np.asarray(rates_deg_h, dtype=float).ravel()
     if data.size < MIN_SAMPLES:
         raise UserError(

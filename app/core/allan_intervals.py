@@ -44,7 +44,20 @@ class FitIntervals:
 
 
 def fitted_gyro(result: AllanResult, rate_hz: float) -> GyroPreset:
-    """A simulator gyro with exactly the fitted noise terms (nothing else)."""
+    """A simulator gyro with exactly the fitted noise terms (nothing else).
+
+    Parameters
+    ----------
+    result : AllanResult
+        An Allan analysis with its fitted terms.
+    rate_hz : float
+        The record's sample rate (Hz).
+
+    Returns
+    -------
+    GyroPreset
+        N, B with T, K and the quantisation of the fit; no bias, scale-factor or table terms.
+    """
     return GyroPreset.noise_only(
         rate_hz,
         arw_deg_rt_h=result.arw_deg_rt_h,
@@ -69,10 +82,37 @@ def fit_intervals(
     level: float = LEVEL,
     seed: int = 0,
 ) -> FitIntervals:
-    """Bootstrap intervals of N and B for a fit of a ``count``-sample record at ``rate_hz``.
+    """Parametric bootstrap intervals of N and B for a fit of a record.
 
-    Each replicate is a record of the fitted model, fitted as the data were.  The gyro is
-    simulated at a constant true rate (the Allan deviation ignores a constant)."""
+    Each replicate is a record of the fitted model (:func:`fitted_gyro`) of the same length,
+    fitted as the data were; the intervals are the replicates' central quantiles.  The gyro
+    is simulated at a constant true rate (the Allan deviation ignores a constant).
+
+    Parameters
+    ----------
+    result : AllanResult
+        The fit to bootstrap.
+    rate_hz : float
+        Sample rate (Hz).
+    count : int
+        Samples in the record.
+    replicates : int
+        How many simulated records.
+    level : float
+        The intervals' coverage (default 0.68).
+    seed : int
+        Seed of the replicates.
+
+    Returns
+    -------
+    FitIntervals
+        (low, high) for N (°/√h) and for B (°/h; None when B was not fitted).
+
+    References
+    ----------
+    Efron & Tibshirani, *An Introduction to the Bootstrap* (1993), ch. 6 (parametric
+    bootstrap); lab-reference §6.
+    """
     gyro = fitted_gyro(result, rate_hz)
     arw, bias = [], []
     for index in range(replicates):

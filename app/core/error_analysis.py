@@ -80,7 +80,31 @@ def two_position_first_order(
     earth_rate_deg_h: float = EARTH_RATE_DEG_H,
     stop_spacing_s: float = 0.0,
 ) -> np.ndarray:
-    """Sum of the first-order two-position heading errors (degrees) at each azimuth."""
+    """Sum of the first-order heading errors of the two-position method (0° and 180°) at
+    each true azimuth.
+
+    Parameters
+    ----------
+    sources : ErrorSources
+        The error terms (bias, drift, scale factor, indexing, tilt, misalignment ...).
+    azimuths_deg : array_like
+        True azimuths of position 1 (°).
+    latitude_deg : float
+        φ (°).
+    earth_rate_deg_h : float
+        Ω (°/h).
+    stop_spacing_s : float
+        Time between successive stops (s), for the drift term.
+
+    Returns
+    -------
+    numpy.ndarray
+        Heading error (°) at each azimuth.
+
+    References
+    ----------
+    lab-reference §4 (first-order error analysis of the indexing methods).
+    """
     g = _rad(np.asarray(azimuths_deg, dtype=float))
     phi = math.radians(latitude_deg)
     horizontal = 2.0 * earth_rate_deg_h * math.cos(phi)
@@ -127,7 +151,34 @@ def four_position_first_order(
     rotation: str = "ccw",
     stop_spacing_s: float = 0.0,
 ) -> np.ndarray:
-    """Sum of the first-order four-position heading errors (degrees) at each azimuth."""
+    """Sum of the first-order heading errors of the four-position method at each true azimuth.
+
+    Parameters
+    ----------
+    sources : ErrorSources
+        The error terms (bias, drift, scale factor, indexing, tilt, misalignment ...).
+    azimuths_deg : array_like
+        True azimuths of position 1 (°).
+    latitude_deg : float
+        φ (°).
+    amplitude_deg_h : float, optional
+        H = Ω cos φ (°/h); default from the latitude.
+    earth_rate_deg_h : float
+        Ω (°/h).
+    rotation : {"ccw", "cw"}
+        The way the table turns.
+    stop_spacing_s : float
+        Time between successive stops (s), for the drift term.
+
+    Returns
+    -------
+    numpy.ndarray
+        Heading error (°) at each azimuth.
+
+    References
+    ----------
+    lab-reference §4 (first-order error analysis of the indexing methods).
+    """
     a = _rad(np.asarray(azimuths_deg, dtype=float))
     phi = math.radians(latitude_deg)
     h = amplitude_deg_h or earth_rate_deg_h * math.cos(phi)
@@ -149,8 +200,31 @@ def seeker_first_order(
     latitude_deg: float,
     earth_rate_deg_h: float = EARTH_RATE_DEG_H,
 ) -> np.ndarray:
-    """First-order heading error (°) of the tilt paper's two-axis seeker: the indexing error
-    on its 180° turn with the table's known pitch and roll (the only sources it models)."""
+    """First-order heading error of the tilt paper's two-axis seeker.
+
+    Its only modelled sources: the indexing error on its 180° turn, with the table's known
+    pitch and roll (:func:`app.core.two_axis_seeker.indexing_error_first_order`).
+
+    Parameters
+    ----------
+    sources : ErrorSources
+        The error terms (its indexing σ, pitch and roll are used).
+    azimuths_deg : array_like
+        True azimuths of the body x axis (°).
+    latitude_deg : float
+        φ (°).
+    earth_rate_deg_h : float
+        Ω (°/h).
+
+    Returns
+    -------
+    numpy.ndarray
+        Heading error (°) at each azimuth.
+
+    References
+    ----------
+    lab-reference §4 (the tilt paper's instrument).
+    """
     azimuths = np.asarray(azimuths_deg, dtype=float)
     if not sources.indexing_deg:
         return np.zeros_like(azimuths)
@@ -173,7 +247,32 @@ def first_order(
     stop_spacing_s: float = 0.0,
     earth_rate_deg_h: float = EARTH_RATE_DEG_H,
 ) -> np.ndarray:
-    """The first-order heading error (°) of ``method`` at each true azimuth."""
+    """The first-order heading error of ``method`` at each true azimuth.
+
+    Parameters
+    ----------
+    method : {"two", "four", "seeker"}
+        Two-position, four-position, or the tilt paper's two-axis seeker.
+    sources : ErrorSources
+        The error terms.
+    azimuths_deg : array_like
+        True azimuths (°).
+    latitude_deg : float
+        φ (°).
+    stop_spacing_s : float
+        Time between stops (s).
+    earth_rate_deg_h : float
+        Ω (°/h).
+
+    Returns
+    -------
+    numpy.ndarray
+        Heading error (°) at each azimuth.
+
+    References
+    ----------
+    lab-reference §4.
+    """
     if method == "two":
         return two_position_first_order(
             sources, azimuths_deg, latitude_deg, earth_rate_deg_h, stop_spacing_s
@@ -233,7 +332,40 @@ def monte_carlo_heading_errors(
     rotation: str = "ccw",
     seed: int = 0,
 ) -> MonteCarloCurve:
-    """Heading error (estimate − truth, wrapped) of simulated runs at each true azimuth."""
+    """Heading error (estimate − truth, wrapped to ±180°) of simulated runs at each azimuth.
+
+    Parameters
+    ----------
+    method : {"two", "four", "seeker"}
+        The north-finding method.
+    preset : GyroPreset
+        The simulated gyro.
+    sources : ErrorSources
+        Extra error terms on top of the preset's noise.
+    azimuths_deg : array_like
+        True azimuths (°).
+    latitude_deg : float
+        φ (°).
+    earth_rate_deg_h : float
+        Ω (°/h).
+    runs : int
+        Seeded runs per azimuth.
+    dwell_s : float
+        Recording time per position (s).
+    rotation : {"ccw", "cw"}
+        The way the table turns.
+    seed : int
+        Seed of the runs.
+
+    Returns
+    -------
+    MonteCarloCurve
+        Mean and spread of the error at each azimuth.
+
+    References
+    ----------
+    lab-reference §4 (checked against the first-order curves).
+    """
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(METHODS)}")
     if method == "seeker":

@@ -121,13 +121,27 @@ UNWEIGHTED_TITLE = {
 
 
 def explain_heading(result: HeadingResult) -> list[Step]:
-    """The heading worked out with the numbers the result uses.
+    """The heading worked out step by step with the numbers the result uses.
 
     With four positions 90° apart and equal numbers of readings the handout's closed form
     *is* the least-squares fit, so it is shown.  With unequal numbers the fit weights each
     position by its count and differs from the closed form: the steps then show the fit's
     x = H·cos A1 and y = H·sin A1 (which give θ, A1 and H exactly as reported) and add the
     closed form of the plain means as a line labelled "for comparison, not used".
+
+    Parameters
+    ----------
+    result : HeadingResult
+        A solved part A.
+
+    Returns
+    -------
+    list of Step
+        Message keys with the numbers to fill in (rendered in either language).
+
+    References
+    ----------
+    The handout, part A; lab-reference §3.
     """
     fit = result.fit
     steps = [_means_step(fit)]
@@ -275,6 +289,22 @@ def _latitude_closed_form(
 
 
 def explain_latitude(result: LatitudeResult) -> list[Step]:
+    """Latitude and Earth rate worked out step by step with the numbers the result uses.
+
+    Parameters
+    ----------
+    result : LatitudeResult
+        A solved part B.
+
+    Returns
+    -------
+    list of Step
+        Message keys with the numbers to fill in, ending with η_φ and η_Ω.
+
+    References
+    ----------
+    The handout, part B; lab-reference §3.
+    """
     fit = result.fit
     steps = [_means_step(fit)]
     phi = result.latitude_deg
@@ -327,6 +357,20 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
 
 
 def render_text(steps: list[Step], language: str = "en") -> str:
+    """The steps as plain text (the command line's ``--explain``).
+
+    Parameters
+    ----------
+    steps : list of Step
+        From :func:`explain_heading` or :func:`explain_latitude`.
+    language : {"en", "zh-CN"}
+        The language of the words.
+
+    Returns
+    -------
+    str
+        One line per step.
+    """
     out = []
     for number, step in enumerate(steps, start=1):
         out.append(f"{number}. {step.title.get(language, step.title['en'])}")

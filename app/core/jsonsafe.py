@@ -13,7 +13,18 @@ LARGEST_NUMBER = 1e300  # anything larger is a mistake (and overflows float64 ar
 
 
 def json_safe(value):
-    """A copy with NaN/±inf replaced by None and numpy scalars by Python numbers."""
+    """A copy that JSON can carry: NaN and ±inf become None, numpy scalars Python numbers.
+
+    Parameters
+    ----------
+    value : object
+        Nested dicts, lists and tuples of numbers, strings and None.
+
+    Returns
+    -------
+    object
+        The same structure, safe for ``json.dumps(..., allow_nan=False)``.
+    """
     if isinstance(value, dict):
         return {key: json_safe(item) for key, item in value.items()}
     if isinstance(value, list | tuple):
@@ -49,8 +60,25 @@ def _no_constant(name: str):
 
 
 def loads_finite(body: bytes | str):
-    """Parse JSON that holds finite numbers only: NaN, Infinity, 1e309 and 10**400 are
-    refused with a :class:`~app.core.exceptions.UserError`, and so is nesting too deep to parse."""
+    """Parse JSON that holds finite numbers only.
+
+    NaN, Infinity, 1e309 and 10**400 are refused, and so is nesting too deep to parse.
+
+    Parameters
+    ----------
+    body : bytes or str
+        The JSON text.
+
+    Returns
+    -------
+    object
+        The parsed value.
+
+    Raises
+    ------
+    UserError
+        ``json.out_of_range``, ``json.constant``, ``json.too_deep`` or ``json.invalid``.
+    """
     try:
         return json.loads(
             body,

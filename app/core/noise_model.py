@@ -52,8 +52,24 @@ class Window:
 def back_to_back(
     counts: Sequence[int], rate_hz: float, gap_s: float = 0.0, start_s: float = 0.0
 ) -> list[Window]:
-    """Windows of ``counts`` samples recorded one after another (``gap_s`` between), the
-    first starting ``start_s`` after switch-on."""
+    """Windows of ``counts`` samples recorded one after another.
+
+    Parameters
+    ----------
+    counts : sequence of int
+        Samples in each window.
+    rate_hz : float
+        Sample rate (Hz).
+    gap_s : float
+        Time between windows (s).
+    start_s : float
+        When the first window starts, after switch-on (s).
+
+    Returns
+    -------
+    list of Window
+        Each window's start and end (s).
+    """
     windows, clock = [], float(start_s)
     for count in counts:
         length = count / rate_hz
@@ -180,8 +196,31 @@ FOUR_Y = np.array([0.0, 0.5, 0.0, -0.5])  # y = (m2 − m4)/2
 def four_position_sigma(
     noise: GyroNoise, rate_hz: float, dwell_s: float, amplitude: float
 ) -> float:
-    """Heading σ (°) of four back-to-back positions of ``dwell_s`` each, averaged over the
-    azimuth: σ_A = √((v_x + v_y)/2)/H rad with v_x, v_y the variances of x and y."""
+    """Heading σ of four back-to-back positions of ``dwell_s`` each, averaged over the azimuth.
+
+    σ_A = √((v_x + v_y)/2)/H rad, v_x and v_y the variances of x = (ω1 − ω3)/2 and
+    y = (ω2 − ω4)/2 from the noise model's covariance of the four windows' means.
+
+    Parameters
+    ----------
+    noise : GyroNoise
+        The gyro's noise terms (IEEE 952).
+    rate_hz : float
+        Sample rate (Hz).
+    dwell_s : float
+        Recording time per position (s).
+    amplitude : float
+        H = Ω cos φ (°/h).
+
+    Returns
+    -------
+    float
+        σ_A (°).
+
+    References
+    ----------
+    lab-reference §3 and §6; IEEE Std 952-1997.
+    """
     count = max(1, int(round(dwell_s * rate_hz)))
     cov = noise.mean_covariance(back_to_back([count] * 4, rate_hz))
     variance = (FOUR_X @ cov @ FOUR_X + FOUR_Y @ cov @ FOUR_Y) / 2.0
@@ -203,19 +242,35 @@ class DwellAdvice:
 
 
 def recommended_dwell(noise: GyroNoise, rate_hz: float) -> DwellAdvice:
-    """The dwell per position to recommend for four-position north finding, from the same
-    noise model the simulator generates: where the correlated noise (bias instability, rate
-    random walk, quantisation) has grown to half the white noise's variance in the heading,
-    σ_full² = 1.5·σ_white²; beyond it a longer dwell pays off more slowly than 1/√T.
-    Within 5 s … 30 min (the longest dwell the lab allows when white noise always wins).
-    The threshold sits where σ_full²/σ_white² still rises steeply for every preset, so the
-    crossing does not flip with small changes of a fitted B (at 2·σ²_white the tactical
-    gyro's ratio barely touched the threshold and the advice jumped to 30 min).
-    The heading σ scales as 1/H, so the choice does not depend on the latitude.
+    """The dwell per position to recommend for four-position north finding.
 
-    "Where the ARW line meets 0.664·B" (the flicker-floor rule) jumped with every estimate
-    of B (437 … 1880 s for one tactical gyro), and a Gauss–Markov bias has no such floor;
-    this crossing of two smooth curves moves smoothly with the noise terms."""
+    From the same noise model the simulator generates: where the correlated noise (bias
+    instability, rate random walk, quantisation) has grown to half the white noise's variance
+    in the heading, σ_full² = 1.5·σ_white²; beyond it a longer dwell pays off more slowly
+    than 1/√T.  Within 5 s … 30 min (the longest dwell the lab allows when white noise
+    always wins).  The threshold sits where σ_full²/σ_white² still rises steeply for every
+    preset, so the crossing does not flip with small changes of a fitted B.  The heading σ
+    scales as 1/H, so the choice does not depend on the latitude.  ("Where the ARW line
+    meets 0.664·B" jumped with every estimate of B, and a Gauss–Markov bias has no such
+    floor; this crossing of two smooth curves moves smoothly with the noise terms.)
+
+    Parameters
+    ----------
+    noise : GyroNoise
+        The gyro's noise terms.
+    rate_hz : float
+        Sample rate (Hz).
+
+    Returns
+    -------
+    DwellAdvice
+        The heading σ against dwell (s), with the full noise model and with white noise
+    alone, and the recommended dwell (s).
+
+    References
+    ----------
+    lab-reference §6; IEEE Std 952-1997, annex C.
+    """
     dwell = np.geomspace(*DWELL_RANGE_S, 72)
     white_noise = GyroNoise(arw_deg_rt_h=noise.arw_deg_rt_h)
     sigma = np.array([four_position_sigma(noise, rate_hz, t, 1.0) for t in dwell])

@@ -245,6 +245,23 @@ PRESETS: dict[str, GyroPreset] = {
 
 
 def get_preset(name: str) -> GyroPreset:
+    """The preset called ``name``.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`PRESETS`' keys.
+
+    Returns
+    -------
+    GyroPreset
+        The preset.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (the message lists the known ones).
+    """
     try:
         return PRESETS[name]
     except KeyError:

@@ -29,8 +29,27 @@ class NumberOutOfRange(ValueError):
 
 
 def parse_decimal(text: str) -> float:
-    """``text`` as a float when it is a plain decimal number, else ValueError
-    (:class:`NumberOutOfRange` when it is one but overflows)."""
+    """``text`` as a float when it is a plain decimal number.
+
+    Python's ``float`` also takes "1_000", "nan", "infinity" and " 1 " -- none of them a
+    reading.
+
+    Parameters
+    ----------
+    text : str
+        A cell of a file or a form.
+
+    Returns
+    -------
+    float
+        The number.
+
+    Raises
+    ------
+    ValueError
+        When it is not a plain decimal number (:class:`NumberOutOfRange` when it is one
+        but overflows).
+    """
     if not DECIMAL.fullmatch(text):
         raise ValueError(f"not a number: {text[:40]!r}")
     value = float(text)
@@ -70,10 +89,27 @@ def _number(text: str, line: int, column: str) -> float:
 
 
 def parse_readings_csv(text: str, part: str | None = None) -> Readings:
-    """Parse either layout; raises UserError with the line and column of any problem.
+    """Parse either readings layout (see the module's docstring).
 
     Lines starting with ``#`` are comments.  A long file with a ``part`` column (GyroLab's
     session export) keeps only the rows of ``part`` when one is given.
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+    part : {"heading", "latitude"}, optional
+        Which part's rows to keep from a session export.
+
+    Returns
+    -------
+    Readings
+        Each position's readings, and (long layout) its angle, times and temperatures.
+
+    Raises
+    ------
+    UserError
+        With the line and column of the first problem.
     """
     text = text.lstrip("\ufeff")
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
@@ -188,7 +224,26 @@ def _parse_long(names: list[str], rows) -> Readings:
 def readings_to_long_csv(
     positions, angles_deg, times_s=None, value_format: str = ".6f", temperatures_c=None
 ) -> str:
-    """Write the long layout (position, angle_deg, time_s, value[, temperature_c])."""
+    """Write the long layout: ``position,angle_deg,time_s,value[,temperature_c]``.
+
+    Parameters
+    ----------
+    positions : sequence of numpy.ndarray
+        Each position's readings (°/h).
+    angles_deg : sequence of float
+        Each position's angle (°).
+    times_s : sequence of numpy.ndarray, optional
+        Each reading's time (s); default 0, 1, 2 ... within each position.
+    value_format : str
+        Format of the readings.
+    temperatures_c : sequence of numpy.ndarray, optional
+        Each reading's case temperature (°C).
+
+    Returns
+    -------
+    str
+        The CSV text.
+    """
     buffer = io.StringIO()
     buffer.write("position,angle_deg,time_s,value" + (",temperature_c" if temperatures_c else ""))
     buffer.write("\n")
@@ -202,8 +257,24 @@ def readings_to_long_csv(
 
 
 def parse_static_record(text: str) -> np.ndarray:
-    """One static record for an Allan analysis: a CSV in either layout with one position,
-    or one number per line (the last comma-separated cell; a header line is skipped)."""
+    """One static record for an Allan analysis.
+
+    Parameters
+    ----------
+    text : str
+        A CSV in either layout with one position, or one value (or ``time_s,value``) per
+        line with an optional header.
+
+    Returns
+    -------
+    numpy.ndarray
+        The readings, in the unit the record was written in.
+
+    Raises
+    ------
+    UserError
+        More than one position (``allan.one_position``) or a bad cell.
+    """
     try:
         readings = parse_readings_csv(text)
     except UserError as error:
@@ -221,7 +292,7 @@ def parse_static_record(text: str) -> np.ndarray:
 
 
 def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None]:
-    """One position's readings: one value per line, or ``time_s,value`` per line.
+    r"""One position's readings: one value per line, or ``time_s,value`` per line.
 
     What a device or a script sends (``text/csv`` to the API) and the fallback for a static
     record.  An optional header on line 1 and ``#`` comment lines are skipped; lines may
@@ -229,7 +300,7 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
 
     Parameters
     ----------
-    data
+    data : bytes or str
         The CSV, as UTF-8 bytes (a byte-order mark allowed) or text.
 
     Returns

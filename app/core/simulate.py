@@ -54,7 +54,24 @@ AMBIENT_C = 20.0
 def earth_rate_vector(
     latitude_deg: float, earth_rate_deg_h: float = EARTH_RATE_DEG_H
 ) -> np.ndarray:
-    """Earth's rotation in north-east-up: (Ω cos φ, 0, Ω sin φ) °/h."""
+    """Earth's rotation in the local north-east-up frame: (Ω cos φ, 0, Ω sin φ).
+
+    Parameters
+    ----------
+    latitude_deg : float
+        φ (°).
+    earth_rate_deg_h : float
+        Ω (°/h).
+
+    Returns
+    -------
+    numpy.ndarray
+        The vector (°/h).
+
+    References
+    ----------
+    lab-reference §1.
+    """
     phi = math.radians(latitude_deg)
     return np.array([earth_rate_deg_h * math.cos(phi), 0.0, earth_rate_deg_h * math.sin(phi)])
 
@@ -62,7 +79,28 @@ def earth_rate_vector(
 def axis_vectors(
     yaw_deg: float, h_deg, v_deg, pitch_deg: float = 0.0, roll_deg: float = 0.0
 ) -> np.ndarray:
-    """Unit vectors (…, 3) in north-east-up of the gyro axis for dial angles h, v."""
+    """Unit vectors of the gyro axis in north-east-up for dial angles h, v.
+
+    u = R_yaw(ψ)·R_pitch(p)·R_roll(r)·u_t with u_t = (cos v cos h, cos v sin h, sin v).
+
+    Parameters
+    ----------
+    yaw_deg : float
+        ψ, the true azimuth of the table's reference direction (°).
+    h_deg, v_deg : array_like
+        Horizontal (clockwise) and vertical (elevation) dial angles (°).
+    pitch_deg, roll_deg : float
+        The table's pitch and roll (°).
+
+    Returns
+    -------
+    numpy.ndarray
+        Unit vectors, shape (…, 3).
+
+    References
+    ----------
+    lab-reference §1.
+    """
     h, v = np.radians(np.asarray(h_deg, dtype=float)), np.radians(np.asarray(v_deg, dtype=float))
     h, v = np.broadcast_arrays(h, v)
     x, y, z = np.cos(v) * np.cos(h), np.cos(v) * np.sin(h), np.sin(v)
@@ -76,6 +114,26 @@ def axis_vectors(
 def true_rate(
     latitude_deg: float, vectors: np.ndarray, earth_rate_deg_h: float = EARTH_RATE_DEG_H
 ) -> np.ndarray:
+    """The rate each sensitive axis sees: Ω_vec·u.
+
+    Parameters
+    ----------
+    latitude_deg : float
+        φ (°).
+    vectors : numpy.ndarray
+        Unit axis vectors in north-east-up, one per row.
+    earth_rate_deg_h : float
+        Ω (°/h).
+
+    Returns
+    -------
+    numpy.ndarray
+        The true rates (°/h).
+
+    References
+    ----------
+    lab-reference §1.
+    """
     return vectors @ earth_rate_vector(latitude_deg, earth_rate_deg_h)
 
 
@@ -182,7 +240,22 @@ class SimulatedRun:
 
 
 def indexing_errors(preset: GyroPreset, seed: int, n_positions: int) -> np.ndarray:
-    """Stop k (k ≥ 2) lands off by N(0, σ_idx); stop 1 defines the reference (0)."""
+    """Where each stop really lands: stop k ≥ 2 off by N(0, σ_idx); stop 1 is the reference.
+
+    Parameters
+    ----------
+    preset : GyroPreset
+        Its ``indexing_sigma_arcsec`` is σ_idx.
+    seed : int
+        Seed of the draw.
+    n_positions : int
+        How many stops.
+
+    Returns
+    -------
+    numpy.ndarray
+        The errors (°), the first 0.
+    """
     errors = np.zeros(n_positions)
     for move in range(1, n_positions):
         rng = np.random.Generator(
@@ -204,10 +277,41 @@ def simulate_run(
     extra_indexing_deg: Sequence[float] | None = None,
     start_s: float = 0.0,
 ) -> SimulatedRun:
-    """Readings at each dial angle: ``part`` 'heading' turns h, 'latitude' turns v.
+    """Readings at each dial angle of one part, as the simulated gyro on its turntable gives them.
 
-    ``extra_indexing_deg`` adds a fixed error to each stop (error-analysis experiments);
-    ``start_s``: the gyro has been on this long when the first stop begins (warm-up).
+    ``part`` "heading" turns the horizontal dial h, "latitude" the vertical dial v; every
+    stop after the first lands off by the preset's indexing error.
+
+    Parameters
+    ----------
+    preset : GyroPreset
+        The gyro and its turntable (:mod:`app.core.presets`).
+    setup : Setup
+        Station and table: latitude, Earth rate, true azimuth, pitch and roll.
+    part : {"heading", "latitude"}
+        Which dial turns.
+    dial_angles_deg : sequence of float
+        The dial angles (°).
+    seconds_per_position : float
+        Recording time per position (s).
+    settle_s : float
+        Time skipped after each turn (s).
+    seed : int
+        Seed of every random stream.
+    extra_indexing_deg : sequence of float, optional
+        A fixed extra error at each stop (°; error-analysis experiments).
+    start_s : float
+        How long the gyro has been on when the first stop begins (s; warm-up).
+
+    Returns
+    -------
+    SimulatedRun
+        Each position's readings (°/h) and times (s), the dial and true angles, the
+        turn-on bias and the indexing errors (the run's truth).
+
+    References
+    ----------
+    lab-reference §1 and §5; IEEE Std 952-1997 (the error model).
     """
     if part not in ("heading", "latitude"):
         raise ValueError("part must be 'heading' or 'latitude'")
@@ -257,6 +361,20 @@ def simulate_run(
 
 
 def read_dial(angle_deg: float, resolution_deg: float) -> float:
+    """What a student reads on a dial with the given resolution.
+
+    Parameters
+    ----------
+    angle_deg : float
+        The true angle (°).
+    resolution_deg : float
+        The dial's smallest division (°); 0 reads exactly.
+
+    Returns
+    -------
+    float
+        The angle rounded to the resolution (°).
+    """
     if resolution_deg <= 0:
         return float(angle_deg)
     return float(np.round(angle_deg / resolution_deg) * resolution_deg)
@@ -265,7 +383,30 @@ def read_dial(angle_deg: float, resolution_deg: float) -> float:
 def simulate_static(
     preset: GyroPreset, setup: Setup, seconds: float, *, seed: int = 0, elevation_deg: float = 0.0
 ) -> np.ndarray:
-    """A long record at one fixed orientation (for the Allan deviation)."""
+    """A long record at one fixed orientation (for the Allan deviation).
+
+    Parameters
+    ----------
+    preset : GyroPreset
+        The simulated gyro.
+    setup : Setup
+        Station and table.
+    seconds : float
+        Record length (s).
+    seed : int
+        Seed of the noise.
+    elevation_deg : float
+        Axis elevation (°).
+
+    Returns
+    -------
+    numpy.ndarray
+        The readings (°/h) at the preset's sample rate.
+
+    References
+    ----------
+    IEEE Std 952-1997 (the error model).
+    """
     stream = GyroStream(preset, seed)
     vector = axis_vectors(setup.azimuth_deg, 0.0, elevation_deg, setup.pitch_deg, setup.roll_deg)
     rate = float(true_rate(setup.latitude_deg, vector, setup.earth_rate_deg_h))

@@ -93,6 +93,18 @@ class SinusoidFit:
 
 
 def position_stats(samples: np.ndarray) -> PositionStats:
+    """One position's count, mean, sample standard deviation and standard error.
+
+    Parameters
+    ----------
+    samples : numpy.ndarray
+        The position's readings (°/h).
+
+    Returns
+    -------
+    PositionStats
+        n, mean m = Σω/n, s (ddof = 1; None for one reading) and s/√n.
+    """
     n = int(samples.size)
     mean = float(samples.mean())
     if n < 2:
@@ -102,7 +114,18 @@ def position_stats(samples: np.ndarray) -> PositionStats:
 
 
 def wrap180(angle_deg: float) -> float:
-    """Wrap an angle to (−180°, 180°]."""
+    """Wrap an angle to (−180°, 180°].
+
+    Parameters
+    ----------
+    angle_deg : float
+        Any angle (°).
+
+    Returns
+    -------
+    float
+        The same direction in (−180°, 180°].
+    """
     wrapped = math.fmod(angle_deg, 360.0)
     if wrapped <= -180.0:
         wrapped += 360.0
@@ -112,7 +135,18 @@ def wrap180(angle_deg: float) -> float:
 
 
 def wrap360(angle_deg: float) -> float:
-    """Wrap an angle to [0°, 360°) (a tiny negative rounds to 0, never to 360)."""
+    """Wrap an angle to [0°, 360°) (a tiny negative rounds to 0, never to 360).
+
+    Parameters
+    ----------
+    angle_deg : float
+        Any angle (°).
+
+    Returns
+    -------
+    float
+        The same direction in [0°, 360°).
+    """
     wrapped = angle_deg % 360.0
     return 0.0 if wrapped >= 360.0 else wrapped
 
@@ -120,8 +154,27 @@ def wrap360(angle_deg: float) -> float:
 def heading_angles(
     n_positions: int, rotation: str = "ccw", start_deg: float = 0.0, step_deg: float = 90.0
 ) -> np.ndarray:
-    """Axis azimuths relative to the reference, clockwise positive: counter-clockwise turns
-    give start, start−step, ...; clockwise turns give start, start+step, ..."""
+    """Axis azimuths relative to the reference, clockwise positive.
+
+    Counter-clockwise turns give start, start − step, ...; clockwise turns give start,
+    start + step, ... (the handout turns counter-clockwise by 90°).
+
+    Parameters
+    ----------
+    n_positions : int
+        How many positions.
+    rotation : {"ccw", "cw"}
+        The way the table is turned between positions.
+    start_deg : float
+        The dial angle of position 1 (°).
+    step_deg : float
+        The turn between positions (°), not a multiple of 360°.
+
+    Returns
+    -------
+    numpy.ndarray
+        α_i (°), one per position.
+    """
     if rotation not in ROTATIONS:
         raise UserError(
             "rotation.unknown",
@@ -150,7 +203,22 @@ def _check_schedule(start_deg: float, step_deg: float) -> None:
 def elevation_angles(
     n_positions: int, start_deg: float = 0.0, step_deg: float = 90.0
 ) -> np.ndarray:
-    """Axis elevations in the meridian plane: start, start+step, ... (0° north, 90° up)."""
+    """Axis elevations in the meridian plane: start, start + step, ... (0° north, 90° up).
+
+    Parameters
+    ----------
+    n_positions : int
+        How many positions.
+    start_deg : float
+        Elevation of position 1 (°).
+    step_deg : float
+        The turn between positions (°), not a multiple of 360°.
+
+    Returns
+    -------
+    numpy.ndarray
+        e_i (°), one per position.
+    """
     _check_schedule(start_deg, step_deg)
     return start_deg + step_deg * np.arange(n_positions)
 
@@ -194,18 +262,46 @@ def fit_sinusoid(
     indexing_sigma_deg: float = 0.0,
     times_s: Sequence[Sequence[float]] | None = None,
 ) -> SinusoidFit:
-    """Least-squares fit of ω = a·cos α + c·sin α + b over every sample, with covariance
-    Cov β = L·Σ·Lᵀ propagated from the position means' covariance Σ
-    (:func:`app.core.uncertainty.position_noise`: white noise with Student-t, the closure
-    residual, or a known noise model's ``position_cov``).
+    """Least-squares fit of ω = a·cos α + c·sin α + b over every sample.
 
-    ``indexing_sigma_deg``: each stop after the first lands off by N(0, σ_idx), which moves
-    its reading by ∂ω/∂α·δ = (−a·sin α + c·cos α)·δ; that variance joins Σ's diagonal.
+    The weighted fit of the position means, β = (XᵀNX)⁻¹XᵀN·m with N = diag(n_i), and its
+    covariance Cov β = L·Σ·Lᵀ, L = (XᵀNX)⁻¹XᵀN, propagated from the position means'
+    covariance Σ (:func:`app.core.uncertainty.position_noise`: white noise with Student-t,
+    the closure residual, or a known noise model's ``position_cov``).  An indexing error
+    δ ~ N(0, σ_idx) at each stop after the first moves its reading by
+    ∂ω/∂α·δ = (−a·sin α + c·cos α)·δ; that variance joins Σ's diagonal.  With ``times_s``
+    and five or more positions a linear drift is fitted too,
+    ω = a·cos α + c·sin α + b + ḃ·(t − t̄).
 
-    ``times_s`` (each sample's time on one clock): with five or more positions (e.g. the
-    symmetric order 1-2-3-4-4-3-2-1) a linear bias drift is fitted too,
-    ω = a·cos α + c·sin α + b + ḃ·(t − t̄); a position's mean is then the model at its
-    mean time, so the fit of the means stays exact (lab-reference §3, drift)."""
+    Parameters
+    ----------
+    positions : sequence of sequences of float
+        Each position's readings (°/h).
+    angles_deg : sequence of float
+        Each position's angle α_i (°); at least three different ones.
+    position_cov : numpy.ndarray, optional
+        Σ from a known noise model ((°/h)², one row per position).
+    indexing_sigma_deg : float
+        σ_idx (°).
+    times_s : sequence of sequences of float, optional
+        Each reading's time (s, one clock for the whole schedule).
+
+    Returns
+    -------
+    SinusoidFit
+        a, c, b (°/h), their covariance (None when nothing estimates it), the angles, each
+        position's statistics and noise, and the drift ḃ (°/h per hour) when fitted.
+
+    Raises
+    ------
+    UserError
+        Empty or non-finite readings, too few or repeated angles, mismatched counts.
+
+    References
+    ----------
+    lab-reference §3 (model, drift); Press et al., *Numerical Recipes*, §15.4 (linear least
+    squares and the covariance of its parameters).
+    """
     arrays = _clean_positions(positions)
     angles = np.asarray(angles_deg, dtype=float)
     if angles.shape != (len(arrays),):

@@ -128,6 +128,26 @@ def handout_theta(azimuth_deg: float) -> tuple[float, str, float, str]:
     θ = arctan(−y/x) with x = H cos A_1, y = H sin A_1 (for four counter-clockwise
     positions: arctan((ω4−ω2)/(ω1−ω3))).  Turning the table by θ (clockwise positive)
     brings the axis to A_1 + θ ∈ {0°, 180°}: north when x > 0, south when x < 0.
+
+    Parameters
+    ----------
+    azimuth_deg : float
+        A_1, the azimuth of position 1 (°, clockwise from true north).
+
+    Returns
+    -------
+    theta_deg : float
+        θ in (−90°, 90°].
+    direction : {"clockwise", "counterclockwise"}
+        Which way to turn the table by |θ|.
+    turn_deg : float
+        |θ| (°).
+    axis : {"north", "south"}
+        Where the sensitive axis then points.
+
+    References
+    ----------
+    The handout, part A (``../shared/seeds``); lab-reference §3.
     """
     x = math.cos(math.radians(azimuth_deg))
     y = math.sin(math.radians(azimuth_deg))
@@ -152,8 +172,41 @@ def solve_heading(
 ) -> HeadingResult:
     """Azimuth of position 1 (clockwise from true north, [0°, 360°)) with its 1σ.
 
-    ``position_cov`` and ``indexing_sigma_deg``: a known noise model (see
-    :func:`fit_sinusoid` and :mod:`app.core.noise_model`)."""
+    Fits ω_i = H·cos(A_1 + α_i) + b (:func:`app.core.sinusoid.fit_sinusoid`):
+    A_1 = atan2(−c, a) mod 360°, H = hypot(a, c), and
+    σ_A = √(y²σx² + x²σy² − 2xy·cov)/H_c² with the Rice-corrected amplitude
+    H_c² = H² − σx² − σy² (floored at H²/4).
+
+    Parameters
+    ----------
+    positions : sequence of sequences of float
+        Each position's readings (°/h), in the order recorded.
+    angles_deg : sequence of float
+        Each position's axis azimuth relative to position 1 (°, clockwise positive).
+    true_azimuth_deg : float, optional
+        The known azimuth of position 1 (°), for the error.
+    position_cov : numpy.ndarray, optional
+        The position means' covariance from a known noise model ((°/h)²); default: from the
+        readings (white noise with Student-t, or the closure residual).
+    indexing_sigma_deg : float
+        The turntable's indexing error, 1σ (°), added for every stop after the first.
+    times_s : sequence of sequences of float, optional
+        Each reading's time (s, one clock): with 5+ positions a linear drift is fitted.
+
+    Returns
+    -------
+    HeadingResult
+        Azimuth, θ and turn, bias, amplitude H, 1σ of each, closure and drift.
+
+    Raises
+    ------
+    UserError
+        Too few readings or positions, non-finite values, or an amplitude below 3σ.
+
+    References
+    ----------
+    lab-reference §3; the handout's four-position method (part A).
+    """
     fit = fit_sinusoid(
         positions,
         angles_deg,
@@ -236,7 +289,24 @@ class LatitudeResult:
 
 
 def percent_error(value: float, true_value: float | None) -> float | None:
-    """The handout's η = |value − true| / |true| × 100 % (None when true is 0 or unknown)."""
+    """The handout's η = |value − true| / |true| × 100 %.
+
+    Parameters
+    ----------
+    value : float
+        The measured value (latitude in °, or Earth rate in °/h).
+    true_value : float or None
+        The true value in the same unit.
+
+    Returns
+    -------
+    float or None
+        η in percent; None when the true value is 0 or unknown.
+
+    References
+    ----------
+    The handout, part B: η_φ = |φ − φ0|/φ0 × 100 %, η_Ω = |Ω − Ω0|/Ω0 × 100 %.
+    """
     if true_value is None or true_value == 0:
         return None
     return abs(value - true_value) / abs(true_value) * 100.0
@@ -252,7 +322,38 @@ def solve_latitude(
     indexing_sigma_deg: float = 0.0,
     times_s: Sequence[Sequence[float]] | None = None,
 ) -> LatitudeResult:
-    """Latitude φ and Earth rate Ω from readings in the meridian plane, with 1σ."""
+    """Latitude φ and Earth rate Ω from readings in the meridian plane, with 1σ.
+
+    Fits ω_i = Ω·cos(e_i − φ) + b: φ = atan2(c, a), Ω = hypot(a, c); for elevations
+    0°, 90°, 180°, 270°: φ = atan2(ω2 − ω4, ω1 − ω3), Ω = hypot(ω1 − ω3, ω2 − ω4)/2.
+
+    Parameters
+    ----------
+    positions : sequence of sequences of float
+        Each position's readings (°/h).
+    elevations_deg : sequence of float
+        Each position's axis elevation in the meridian plane (°; 0° north horizon, 90° up).
+    true_latitude_deg : float, optional
+        The station's latitude φ0 (°), for η_φ.
+    true_earth_rate_deg_h : float
+        Ω0 (°/h), for η_Ω; default the sidereal rate 15.041 °/h.
+    position_cov, indexing_sigma_deg, times_s
+        As for :func:`solve_heading`.
+
+    Returns
+    -------
+    LatitudeResult
+        φ, Ω, bias, their 1σ, percent errors η_φ and η_Ω, closure and drift.
+
+    Raises
+    ------
+    UserError
+        Too few readings or positions, non-finite values, or Ω below 3σ.
+
+    References
+    ----------
+    lab-reference §3; the handout, part B.
+    """
     if true_earth_rate_deg_h <= 0 or not math.isfinite(true_earth_rate_deg_h):
         raise UserError("station.bad_earth_rate", "The true Earth rate must be positive.")
     fit = fit_sinusoid(
@@ -304,13 +405,35 @@ def solve_two_position(
     latitude_deg: float,
     pitch_deg: float = 0.0,
 ) -> TwoPositionResult:
-    """γ = arccos((U1 − U2) / (2 K Ω cos φ)) (lab-reference §4).
+    """The two-position method: γ = arccos((U1 − U2) / (2 K Ω cos φ)).
 
     With a measured table pitch p (the reference direction raised by p, as a north seeker's
     accelerometers report it) the vertical rate is compensated:
     cos γ = ((U1 − U2)/2K − Ω sin φ sin p) / (Ω cos φ cos p); roll cancels in U1 − U2.
-    Needs K, Ω and φ; cannot tell east from west (γ and 360° − γ fit equally); the
+    It needs K, Ω and φ; it cannot tell east from west (γ and 360° − γ fit equally); the
     derivative 1/sin γ makes it ill-conditioned near 0° and 180°.
+
+    Parameters
+    ----------
+    u1, u2 : float
+        The gyro's outputs at 0° and 180° (its own unit; ``scale_factor`` per °/h).
+    scale_factor : float
+        K, output per °/h.
+    earth_rate_deg_h : float
+        Ω (°/h).
+    latitude_deg : float
+        φ (°).
+    pitch_deg : float
+        The table's pitch p (°).
+
+    Returns
+    -------
+    TwoPositionResult
+        γ, both candidates (γ, 360° − γ), the cosine and whether it was clipped to ±1.
+
+    References
+    ----------
+    lab-reference §4 (the tilt paper's two-position comparison).
     """
     phi, pitch = math.radians(latitude_deg), math.radians(pitch_deg)
     horizontal = 2.0 * scale_factor * earth_rate_deg_h * math.cos(phi) * math.cos(pitch)

@@ -49,7 +49,24 @@ from app.core.units import EARTH_RATE_DEG_H
 
 
 def body_matrix(pitch_deg: float, roll_deg: float) -> np.ndarray:
-    """C = R_x(γ)·R_y(θ): level-frame vectors to body-frame coordinates."""
+    """C = R_x(γ)·R_y(θ): level-frame vectors to body-frame coordinates.
+
+    Parameters
+    ----------
+    pitch_deg : float
+        θ (°).
+    roll_deg : float
+        γ (°).
+
+    Returns
+    -------
+    numpy.ndarray
+        The 3×3 matrix C.
+
+    References
+    ----------
+    lab-reference §4 (the tilt paper's two-axis strapdown seeker).
+    """
     t, g = math.radians(pitch_deg), math.radians(roll_deg)
     pitch = np.array(
         [[math.cos(t), 0.0, math.sin(t)], [0.0, 1.0, 0.0], [-math.sin(t), 0.0, math.cos(t)]]
@@ -63,7 +80,28 @@ def body_matrix(pitch_deg: float, roll_deg: float) -> np.ndarray:
 def level_earth_rate(
     azimuth_deg, latitude_deg: float, earth_rate_deg_h: float = EARTH_RATE_DEG_H
 ) -> np.ndarray:
-    """Earth's rate (…, 3) in the level frame of a body x axis at ``azimuth_deg``."""
+    """Earth's rate in the level frame of a body x axis at ``azimuth_deg``.
+
+    L = (Ω cos φ cos α, Ω cos φ sin α, Ω sin φ).
+
+    Parameters
+    ----------
+    azimuth_deg : array_like
+        α, azimuth of the body x axis (°).
+    latitude_deg : float
+        φ (°).
+    earth_rate_deg_h : float
+        Ω (°/h).
+
+    Returns
+    -------
+    numpy.ndarray
+        L (°/h), shape (…, 3).
+
+    References
+    ----------
+    lab-reference §4.
+    """
     a = np.radians(np.asarray(azimuth_deg, dtype=float))
     phi = math.radians(latitude_deg)
     horizontal = earth_rate_deg_h * math.cos(phi)
@@ -78,7 +116,28 @@ def body_rates(
     roll_deg: float,
     earth_rate_deg_h: float = EARTH_RATE_DEG_H,
 ) -> np.ndarray:
-    """Earth's rate (…, 3) in the body frame: ω_b = C·L."""
+    """Earth's rate in the body frame: ω_b = C·L.
+
+    Parameters
+    ----------
+    azimuth_deg : array_like
+        α (°).
+    latitude_deg : float
+        φ (°).
+    pitch_deg, roll_deg : float
+        The table's pitch and roll (°).
+    earth_rate_deg_h : float
+        Ω (°/h).
+
+    Returns
+    -------
+    numpy.ndarray
+        ω_b (°/h), shape (…, 3).
+
+    References
+    ----------
+    lab-reference §4.
+    """
     return (
         level_earth_rate(azimuth_deg, latitude_deg, earth_rate_deg_h)
         @ body_matrix(pitch_deg, roll_deg).T
@@ -86,7 +145,20 @@ def body_rates(
 
 
 def turned_reading(body: np.ndarray, indexing_deg: float) -> np.ndarray:
-    """What the gyro's x, y axes read after turning 180° + δ about the body z axis."""
+    """What the gyro's x and y axes read after turning 180° + δ about the body z axis.
+
+    Parameters
+    ----------
+    body : numpy.ndarray
+        ω_b before the turn (°/h), shape (…, 3).
+    indexing_deg : float
+        δ, the turn's error (°).
+
+    Returns
+    -------
+    numpy.ndarray
+        (ω_x, ω_y) after the turn (°/h), shape (…, 2).
+    """
     d = math.radians(indexing_deg)
     wx, wy = body[..., 0], body[..., 1]
     # the gyro axes turned clockwise by 180° + δ: x' = −cos δ·x + sin δ·y … in body terms
@@ -112,8 +184,29 @@ def solve_seeker(
 ) -> SeekerResult:
     """Azimuth of the body x axis from the mean (ω_x, ω_y) at 0° and at 180°.
 
-    Differences halved, then pitch and roll undone with the known vertical rate
-    L_z = Ω sin φ (module docstring), α̂ = atan2(L_y, L_x)."""
+    The differences are halved (the biases cancel), then pitch and roll are undone with the
+    known vertical rate L_z = Ω sin φ (see the module's docstring): α̂ = atan2(L_y, L_x).
+
+    Parameters
+    ----------
+    first, second : tuple of float
+        Mean (ω_x, ω_y) at 0° and after the 180° turn (°/h).
+    pitch_deg, roll_deg : float
+        The table's pitch and roll, as its accelerometers give them (°).
+    latitude_deg : float
+        φ (°).
+    earth_rate_deg_h : float
+        Ω (°/h).
+
+    Returns
+    -------
+    SeekerResult
+        α̂ (°) and the level-frame components.
+
+    References
+    ----------
+    lab-reference §4 (the tilt paper's instrument).
+    """
     values = (*first, *second, pitch_deg, roll_deg, latitude_deg, earth_rate_deg_h)
     if not all(math.isfinite(v) for v in values):
         raise UserError("the seeker needs finite rates and angles")
@@ -144,10 +237,33 @@ def indexing_error_first_order(
     roll_deg: float,
     earth_rate_deg_h: float = EARTH_RATE_DEG_H,
 ) -> np.ndarray:
-    """First-order heading error (°) of the seeker from an indexing error δ on the 180° turn.
+    """First-order heading error of the seeker from an indexing error δ on the 180° turn.
 
     Δα = (L_x·δL_y − L_y·δL_x)/(L_x² + L_y²), (δL_x, δL_y) the tilt solver applied without
-    L_z to the body-rate error (δ/2)·(−ω_y, ω_x); exactly δ/2 on a level table."""
+    L_z to the body-rate error (δ/2)·(−ω_y, ω_x); exactly δ/2 on a level table.
+
+    Parameters
+    ----------
+    indexing_deg : float
+        δ (°).
+    azimuths_deg : array_like
+        True azimuths (°).
+    latitude_deg : float
+        φ (°).
+    pitch_deg, roll_deg : float
+        The table's pitch and roll (°).
+    earth_rate_deg_h : float
+        Ω (°/h).
+
+    Returns
+    -------
+    numpy.ndarray
+        Δα (°) at each azimuth (0.07 … 1.70 × δ/2 over the paper's tilts).
+
+    References
+    ----------
+    lab-reference §4.
+    """
     body = body_rates(azimuths_deg, latitude_deg, pitch_deg, roll_deg, earth_rate_deg_h)
     level = level_earth_rate(azimuths_deg, latitude_deg, earth_rate_deg_h)
     half = math.radians(indexing_deg) / 2.0

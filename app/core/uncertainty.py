@@ -45,8 +45,22 @@ MAX_DECIMALS = 6
 def t_factor(dof: int) -> float:
     """Half-width, in standard errors, of Student's t central 68.27 % interval.
 
-    ``k(ν) = t_ν⁻¹((1 + 0.68269)/2)``; multiplying a standard error by k gives the
-    "1σ-equivalent" interval for a mean estimated from ν + 1 readings.
+    k(ν) = t_ν⁻¹((1 + 0.68269)/2); a standard error times k is the "1σ-equivalent" interval
+    of a mean estimated from ν + 1 readings (k(9) = 1.06, k(1) = 1.84).
+
+    Parameters
+    ----------
+    dof : int
+        ν, the degrees of freedom (readings − 1), at least 1.
+
+    Returns
+    -------
+    float
+        k(ν).
+
+    References
+    ----------
+    lab-reference §3 (honest uncertainty); GUM (JCGM 100:2008) G.3.
     """
     if dof < 1:
         raise ValueError("Student's t needs at least one degree of freedom")
@@ -56,8 +70,19 @@ def t_factor(dof: int) -> float:
 
 
 def reading_step(arrays: Sequence[np.ndarray]) -> float | None:
-    """The smallest gap between distinct readings within any one position (the
-    quantisation step the data show), or None when every position is constant."""
+    """The quantisation step the data show.
+
+    Parameters
+    ----------
+    arrays : sequence of numpy.ndarray
+        Every position's readings (°/h).
+
+    Returns
+    -------
+    float or None
+        The smallest gap between distinct readings within any one position; None when
+        every position is constant.
+    """
     gaps = []
     for array in arrays:
         distinct = np.unique(array)
@@ -67,7 +92,19 @@ def reading_step(arrays: Sequence[np.ndarray]) -> float | None:
 
 
 def written_resolution(arrays: Sequence[np.ndarray]) -> float:
-    """10⁻ᵈ for the fewest decimals d (≤ 6) that write every reading exactly."""
+    """The resolution the readings were written to: 10⁻ᵈ for the fewest decimals d (≤ 6)
+    that write every reading exactly.
+
+    Parameters
+    ----------
+    arrays : sequence of numpy.ndarray
+        Every position's readings (°/h).
+
+    Returns
+    -------
+    float
+        10⁻ᵈ (°/h).
+    """
     values = np.concatenate([np.asarray(a, dtype=float) for a in arrays])
     for decimals in range(MAX_DECIMALS + 1):
         scaled = values * 10.0**decimals
@@ -77,14 +114,49 @@ def written_resolution(arrays: Sequence[np.ndarray]) -> float:
 
 
 def quantisation_floor(arrays: Sequence[np.ndarray]) -> float:
-    """LSB/√12: the std of rounding to the readings' step (or written resolution)."""
+    """The floor of a position mean's σ set by the readings' resolution: LSB/√12.
+
+    Parameters
+    ----------
+    arrays : sequence of numpy.ndarray
+        Every position's readings (°/h).
+
+    Returns
+    -------
+    float
+        LSB/√12 (°/h), LSB the step between the readings (or their written resolution).
+
+    References
+    ----------
+    lab-reference §3; GUM (JCGM 100:2008) F.2.2.1 (resolution of a digital indication).
+    """
     step = reading_step(arrays)
     lsb = step if step is not None else written_resolution(arrays)
     return lsb / math.sqrt(12.0)
 
 
 def closure_residual(angles_deg: np.ndarray, means: np.ndarray) -> float | None:
-    """d = (ω1 + ω3 − ω2 − ω4)/2 for four positions 90° apart (either way), else None."""
+    """The four-position closure d = (ω1 + ω3 − ω2 − ω4)/2.
+
+    For four positions 90° apart the sinusoid predicts ω1 + ω3 = ω2 + ω4 = 2b, so d is
+    pure noise: its spread estimates the means' σ when each position has one reading.
+
+    Parameters
+    ----------
+    angles_deg : numpy.ndarray
+        The positions' angles (°).
+    means : numpy.ndarray
+        The positions' mean readings (°/h).
+
+    Returns
+    -------
+    float or None
+        d (°/h); None unless there are four positions 90° apart (either way round).
+
+    References
+    ----------
+    lab-reference §3 (closure).
+    """
     if angles_deg.size != 4:
         return None
     steps = np.diff(angles_deg)
@@ -120,9 +192,31 @@ def position_noise(
     *,
     position_cov: np.ndarray | None = None,
 ) -> PositionNoise | None:
-    """The covariance model of the position means (see the module's docstring), or None
-    when nothing estimates it (one reading per position without a closure residual).
-    ``position_cov`` is the covariance a known noise model gives (model "allan")."""
+    """The covariance model of the position means, or None when nothing estimates it.
+
+    In order of preference: a known noise model's ``position_cov`` (model "allan"); the
+    readings' own scatter, s_i²/n_i scaled by Student's k(n_i − 1)² and floored at LSB²/12
+    (model "white"); for one reading per position, the closure residual's d² on the
+    diagonal (model "closure").  See the module's docstring.
+
+    Parameters
+    ----------
+    arrays : sequence of numpy.ndarray
+        Every position's readings (°/h).
+    angles_deg : numpy.ndarray
+        The positions' angles (°).
+    position_cov : numpy.ndarray, optional
+        Σ from a known noise model ((°/h)²).
+
+    Returns
+    -------
+    PositionNoise or None
+        Σ ((°/h)²) and the name of its model.
+
+    References
+    ----------
+    lab-reference §3; IEEE Std 952-1997 (the noise terms behind ``position_cov``).
+    """
     if position_cov is not None:
         return PositionNoise(np.asarray(position_cov, dtype=float), "allan")
     floor = quantisation_floor(arrays)

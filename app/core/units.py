@@ -35,6 +35,23 @@ HANDOUT_EARTH_RATE_DEG_H = 15.04
 
 
 def canonical_unit(unit: str) -> str:
+    """The unit's canonical name: "deg/h", "deg/s" or "rad/s" (aliases such as "°/h" accepted).
+
+    Parameters
+    ----------
+    unit : str
+        A rate unit as typed.
+
+    Returns
+    -------
+    str
+        Its canonical name.
+
+    Raises
+    ------
+    UserError
+        ``unit.unknown`` for anything else.
+    """
     name = ALIASES.get(unit.strip(), unit.strip())
     if name not in TO_DEG_PER_HOUR:
         raise UserError(
@@ -44,7 +61,25 @@ def canonical_unit(unit: str) -> str:
 
 
 def to_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:
-    """Rates in °/h; a finite reading too large to convert (1e306 °/s) is out of range."""
+    """Rates in °/h (1 °/s = 3600 °/h; 1 rad/s = 3600·180/π °/h).
+
+    Parameters
+    ----------
+    values : array_like
+        Rates in ``unit``.
+    unit : str
+        Their unit.
+
+    Returns
+    -------
+    numpy.ndarray
+        The rates in °/h.
+
+    Raises
+    ------
+    UserError
+        ``readings.out_of_range`` when a finite reading overflows on conversion (1e306 °/s).
+    """
     array = np.asarray(values, dtype=float)
     with np.errstate(over="ignore"):
         converted = array * TO_DEG_PER_HOUR[canonical_unit(unit)]
@@ -57,4 +92,18 @@ def to_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:
 
 
 def from_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:
+    """Rates in °/h converted to ``unit`` (the inverse of :func:`to_deg_per_hour`).
+
+    Parameters
+    ----------
+    values : array_like
+        Rates in °/h.
+    unit : str
+        The unit wanted.
+
+    Returns
+    -------
+    numpy.ndarray
+        The rates in ``unit``.
+    """
     return np.asarray(values, dtype=float) / TO_DEG_PER_HOUR[canonical_unit(unit)]
