@@ -114,7 +114,7 @@ def test_prune_from_the_command_line_and_the_admin_page(app, client, student):
         login(admin, "root")
         response = post_form(admin, "/admin/prune", {"days": "30"}, page="/admin/accounts")
         assert response.status_code == 303
-        assert "Removed 3 old recording(s)" in admin.get("/admin/accounts").text
+        assert "Removed 3 old recordings replaced" in admin.get("/admin/accounts").text
         teacher = make_user("t9", Role.teacher)
         assert teacher
     with TestClient(app, follow_redirects=False) as other:

@@ -13,7 +13,7 @@ from dataclasses import asdict, replace
 
 from app.core.error_analysis import METHODS
 from app.explore.scenarios import SCENARIOS, heading_error_curves, scenario_input
-from app.web.messages_lab import LAB_MESSAGES
+from app.web.i18n import translate
 
 
 def scenario_report(name: str, method: str | None = None, seed: int = 1) -> dict:
@@ -24,7 +24,7 @@ def scenario_report(name: str, method: str | None = None, seed: int = 1) -> dict
     curves, info = heading_error_curves(params, seed, formula_at_mc_points=True)
     return {
         "scenario": name,
-        "title": LAB_MESSAGES[f"scenario.{name}"]["en"],
+        "title": translate(f"scenario.{name}", "en"),
         "parameters": asdict(params),
         "runs_per_azimuth": info["runs"],
         "methods": [
@@ -76,7 +76,7 @@ def add_errors_command(commands, guarded, to_json_text) -> None:
     def run(args: argparse.Namespace) -> int:
         if args.list:
             for name in SCENARIOS:
-                print(f"{name:30} {LAB_MESSAGES[f'scenario.{name}']['en']}")
+                print(f"{name:30} {translate(f'scenario.{name}', 'en')}")
             return 0
         if not args.scenario:
             print("gyrolab errors: name a scenario (--scenario NAME) or --list", file=sys.stderr)

@@ -19,6 +19,27 @@ class Step:
     title: dict[str, str]
     lines: tuple[str, ...]
     sentence: dict[str, str] | None = None  # a conclusion in words, per language
+    legend: dict[str, str] | None = None  # what the symbols of the lines mean, per language
+
+
+AZIMUTH_LEGEND = {
+    "en": "A1: the azimuth of position 1, clockwise from true north.",
+    "zh-CN": "A1：位置 1 的方位角，自真北顺时针计。",
+}
+FIT_LEGEND = {
+    "en": "α: each position's angle, clockwise; A1: the azimuth of position 1, clockwise "
+    "from true north.",
+    "zh-CN": "α：各位置的转角（顺时针）；A1：位置 1 的方位角，自真北顺时针计。",
+}
+AMPLITUDE_LEGEND = {
+    "en": "d: the closure (ω1 + ω3 − ω2 − ω4)/2, zero but for noise; ΔA1: the error "
+    "against the true azimuth.",
+    "zh-CN": "d：闭合差 (ω1 + ω3 − ω2 − ω4)/2，除噪声外应为零；ΔA1：相对真方位角的误差。",
+}
+ELEVATION_LEGEND = {
+    "en": "e: each position's elevation above the north horizon.",
+    "zh-CN": "e：各位置相对北向水平线的仰角。",
+}
 
 
 def _f(value: float, digits: int = 3) -> str:
@@ -90,7 +111,7 @@ def _drift_lines(fit) -> list[str]:
     if fit.drift is None:
         return []
     sigma = f" ± {_f(fit.drift_sigma, 4)}" if fit.drift_sigma is not None else ""
-    return [f"+ ḃ·(t − t̄):  ḃ = {_f(fit.drift, 4)}{sigma} °/h per hour"]
+    return [f"+ ḃ·(t − t̄):  ḃ = {_f(fit.drift, 4)}{sigma} °/h²"]
 
 
 def _handout_ratio(means: np.ndarray, turn: int) -> tuple[str, str, float]:
@@ -170,17 +191,18 @@ def explain_heading(result: HeadingResult) -> list[Step]:
                 },
                 (
                     f"x = (ω1 − ω3)/2 = {_f(x_used, 4)} °/h,   y = {y_text} = {_f(y_used, 4)} °/h",
-                    f"A1 = atan2(y, x) = {_f(result.azimuth_deg, 2)}°  (clockwise from true north)",
+                    f"A1 = atan2(y, x) = {_f(result.azimuth_deg, 2)}°",
                 ),
+                legend=AZIMUTH_LEGEND,
             )
         )
     else:
         lines = [
-            "ω = a·cos α + c·sin α + b   (α = position angle, clockwise)",
+            "ω = a·cos α + c·sin α + b",
             f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
             *_drift_lines(fit),
             f"x = H·cos A1 = {_f(x_used, 4)} °/h,   y = H·sin A1 = {_f(y_used, 4)} °/h",
-            f"A1 = atan2(y, x) = {_f(result.azimuth_deg, 2)}°  (clockwise from true north)",
+            f"A1 = atan2(y, x) = {_f(result.azimuth_deg, 2)}°",
         ]
         if abs(x_used) > 1e-12:
             ratio = -y_used / x_used
@@ -190,7 +212,7 @@ def explain_heading(result: HeadingResult) -> list[Step]:
             )
         else:
             lines.append(f"θ = {_f(result.theta_deg, 2)}°")
-        steps.append(Step(WEIGHTED_TITLE if turn else _FIT_TITLE, tuple(lines)))
+        steps.append(Step(WEIGHTED_TITLE if turn else _FIT_TITLE, tuple(lines), legend=FIT_LEGEND))
         if turn and w[0] != w[2]:
             formula, _, ratio = _handout_ratio(w, turn)
             closed = math.degrees(math.atan(ratio))
@@ -230,7 +252,7 @@ def explain_heading(result: HeadingResult) -> list[Step]:
     )
     lines = [f"H = √(x² + y²) = {_f(result.amplitude_deg_h)} °/h,   b = {_f(fit.b)} °/h"]
     if result.closure_residual_deg_h is not None:
-        closure = f"closure d = (ω1 + ω3 − ω2 − ω4)/2 = {_f(result.closure_residual_deg_h)} °/h"
+        closure = f"d = (ω1 + ω3 − ω2 − ω4)/2 = {_f(result.closure_residual_deg_h)} °/h"
         if fit.closure_sigma is not None and fit.uncertainty_model != "closure":
             closure += f"  (σ_d = {_f(fit.closure_sigma)} °/h)"
         lines.append(closure)
@@ -245,10 +267,12 @@ def explain_heading(result: HeadingResult) -> list[Step]:
             f"σ_A = √(y²σx² + x²σy² − 2xy·σxy)/(H·H_c) = {_f(result.azimuth_sigma_deg, 3)}°"
         )
     if result.azimuth_error_deg is not None:
-        lines.append(f"error against the true azimuth = {_f(result.azimuth_error_deg, 2)}°")
+        lines.append(f"ΔA1 = A1 − A1,true = {_f(result.azimuth_error_deg, 2)}°")
     steps.append(
         Step(
-            {"en": "Amplitude, bias and uncertainty", "zh-CN": "幅值、零偏与不确定度"}, tuple(lines)
+            {"en": "Amplitude, bias and uncertainty", "zh-CN": "幅值、零偏与不确定度"},
+            tuple(lines),
+            legend=AMPLITUDE_LEGEND,
         )
     )
     return steps
@@ -318,12 +342,13 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
             Step(
                 WEIGHTED_TITLE if standard else _FIT_TITLE,
                 (
-                    "ω = a·cos e + c·sin e + b   (e = elevation from the north horizon)",
+                    "ω = a·cos e + c·sin e + b",
                     f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
                     *_drift_lines(fit),
                     f"φ = atan2(c, a) = {_f(phi, 2)}°,   Ω = √(a² + c²) = "
                     f"{_f(result.earth_rate_deg_h)} °/h",
                 ),
+                legend=ELEVATION_LEGEND,
             )
         )
         if standard:
@@ -375,6 +400,8 @@ def render_text(steps: list[Step], language: str = "en") -> str:
     for number, step in enumerate(steps, start=1):
         out.append(f"{number}. {step.title.get(language, step.title['en'])}")
         out.extend(f"   {line}" for line in step.lines)
+        if step.legend:
+            out.append(f"   {step.legend.get(language, step.legend['en'])}")
         if step.sentence:
             out.append(f"   {step.sentence.get(language, step.sentence['en'])}")
     return "\n".join(out)

@@ -1,19 +1,63 @@
 """Translations: every user-facing string exists in English and Simplified Chinese.
 
-Strings are looked up by key in :data:`app.web.messages.MESSAGES`; templates call
-``_(key, **params)``.
+The catalogues are gettext ``.po`` files, ``locales/<locale>/LC_MESSAGES/messages.po``,
+whose msgids are message keys (``"lab.submitted"``) and msgstrs the text with ``{name}``
+placeholders; they are compiled (Babel) when the app starts.  Code and templates call
+``_(key, **params)``; a key with plural forms takes its count from ``n``.  Dates and
+numbers are formatted by Babel for the reader's locale (:func:`format_datetime`).
 The language is the user's saved choice, else the ``lang`` cookie, else Accept-Language.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from datetime import datetime
+from functools import lru_cache
+from io import BytesIO
 
-from app.web.messages import MESSAGES
+from babel import Locale
+from babel.dates import format_skeleton
+from babel.messages.mofile import write_mo
+from babel.messages.pofile import read_po
+from babel.numbers import format_decimal
+from babel.support import Translations
+
+from app.paths import LOCALES_DIR
 
 LANGUAGES = ("en", "zh-CN")
 DEFAULT_LANGUAGE = "en"
 LANGUAGE_NAMES = {"en": "English", "zh-CN": "中文"}
+LOCALES = {"en": "en", "zh-CN": "zh_CN"}  # language tag → gettext locale
+
+
+@lru_cache
+def catalogue(language: str):
+    """The language's ``.po`` file as read by Babel."""
+    path = LOCALES_DIR / LOCALES[language] / "LC_MESSAGES" / "messages.po"
+    with path.open("rb") as handle:
+        return read_po(handle, locale=LOCALES[language])
+
+
+@lru_cache
+def translations(language: str) -> Translations:
+    """The language's catalogue compiled to gettext's binary form (in memory)."""
+    compiled = BytesIO()
+    write_mo(compiled, catalogue(language))
+    compiled.seek(0)
+    return Translations(compiled)
+
+
+def messages() -> dict[str, dict[str, str]]:
+    """Every key with its text in each language (plural keys: their first form)."""
+    out: dict[str, dict[str, str]] = {}
+    for language in LANGUAGES:
+        for message in catalogue(language):
+            if not message.id:
+                continue
+            key = message.id[0] if isinstance(message.id, tuple) else message.id
+            text = message.string[0] if isinstance(message.string, tuple) else message.string
+            out.setdefault(key, {})[language] = text
+    return out
 
 
 def normalise(code: str | None) -> str | None:
@@ -48,13 +92,45 @@ def negotiate(accept_language: str | None) -> str:
 
 
 def is_known(key: str) -> bool:
-    return key in MESSAGES
+    return key in catalogue(DEFAULT_LANGUAGE)
 
 
 def translate(key: str, language: str, **params: object) -> str:
-    entry = MESSAGES.get(key)
-    text = key if entry is None else entry.get(language) or entry["en"]
+    """The message ``key`` in ``language`` (English when missing there; the key itself
+    when unknown), its placeholders filled from ``params``."""
+    if language not in LANGUAGES:
+        language = DEFAULT_LANGUAGE
+    entry = catalogue(language).get(key)
+    if entry is None or not entry.string:
+        language = DEFAULT_LANGUAGE
+        entry = catalogue(language).get(key)
+    if entry is None:
+        return key
+    if entry.pluralizable:
+        count = params.get("n", 1)
+        text = translations(language).ngettext(key, key, int(count) if count else 0)
+    else:
+        text = translations(language).gettext(key)
     return text.format(**params) if params else text
+
+
+def format_datetime(
+    value: datetime | None, language: str, date: str | None = "yMMMd", time: str | None = "Hm"
+) -> str:
+    """A date and time the way the reader's locale writes them, from CLDR skeletons
+    (Babel): "Nov 22, 2026 20:05" / "2026年11月22日 20:05"; "" for None."""
+    if value is None:
+        return ""
+    locale = Locale.parse(LOCALES[language])
+    parts = [
+        format_skeleton(skeleton, value, locale=locale) for skeleton in (date, time) if skeleton
+    ]
+    return " ".join(parts)
+
+
+def format_number(value: float, language: str, digits: int = 3) -> str:
+    """A number with the locale's separators (Babel), at most ``digits`` decimals."""
+    return format_decimal(round(value, digits), locale=Locale.parse(LOCALES[language]))
 
 
 def translator(language: str) -> Callable[..., str]:

@@ -13,7 +13,14 @@ from app import __version__
 from app.accounts.security import signed, unsigned
 from app.config import get_settings
 from app.paths import TEMPLATES_DIR
-from app.web.i18n import LANGUAGE_NAMES, LANGUAGES, negotiate, normalise, translator
+from app.web.i18n import (
+    LANGUAGE_NAMES,
+    LANGUAGES,
+    format_datetime,
+    negotiate,
+    normalise,
+    translator,
+)
 
 SESSION_COOKIE = "gyrolab_session"
 CSRF_COOKIE = "gyrolab_csrf"
@@ -25,6 +32,9 @@ FLASH_COOKIE = "gyrolab_flash"
 LANG_COOKIE = "gyrolab_lang"
 
 templates = Jinja2Templates(directory=str(TEMPLATES_DIR))
+# gettext extraction (pybabel, babel.cfg) reads the templates' _("key") calls through
+# Jinja's i18n extension; each page's _ is the reader's translator (render()).
+templates.env.add_extension("jinja2.ext.i18n")
 templates.env.globals["version"] = __version__
 templates.env.globals["LANGUAGE_NAMES"] = LANGUAGE_NAMES
 templates.env.globals["LANGUAGES"] = LANGUAGES
@@ -107,6 +117,7 @@ def render(
         "request": request,
         "_": _,
         "lang": language,
+        "when": lambda value, date="yMMMd", time="Hm": format_datetime(value, language, date, time),
         "user": getattr(request.state, "user", None),
         "csrf_token": csrf_token_for(request),
         "flashes": flashes,
