@@ -77,18 +77,27 @@ MODEL_NOTES = {
 def _means_step(fit) -> Step:
     sigmas = fit.position_sigmas or [None] * len(fit.stats)
     lines = []
+    shows_sigma = False
     for i, (s, sigma) in enumerate(zip(fit.stats, sigmas, strict=True), start=1):
         line = f"ω{i} = {_f(s.mean)} °/h   (n = {s.n}"
         if s.sem is not None:
             line += f", s = {_f(s.std)}, s/√n = {_f(s.sem)}"
         if sigma is not None and (s.sem is None or abs(sigma - s.sem) > 5e-4):
-            line += f", 1σ used = {_f(sigma)}"
+            line += f", σ{i} = {_f(sigma)}"
+            shows_sigma = True
         lines.append(line + ")")
     return Step(
         {"en": "Average the readings at each position", "zh-CN": "求各位置读数的平均值"},
         tuple(lines),
         MODEL_NOTES.get(fit.uncertainty_model),
+        legend=MEANS_LEGEND if shows_sigma else None,
     )
+
+
+MEANS_LEGEND = {
+    "en": "s: the readings' standard deviation; σi: the 1σ of mean ωi that the result uses.",
+    "zh-CN": "s：读数的标准差；σi：结果所用的平均值 ωi 的 1σ。",
+}
 
 
 _FIT_TITLE = {"en": "Least-squares fit over all readings", "zh-CN": "对全部读数做最小二乘拟合"}

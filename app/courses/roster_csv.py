@@ -47,7 +47,7 @@ class RosterRow:
 @dataclass
 class RosterProblem:
     line: int
-    key: str  # message key in app.web.messages
+    key: str  # message key (locales/*/LC_MESSAGES/messages.po)
     params: dict = field(default_factory=dict)
 
 
