@@ -12,9 +12,9 @@ from app.core.allan import allan_deviation, gauss_markov_avar
 from app.core.error_analysis import (
     ErrorSources,
     four_position_first_order,
-    monte_carlo_heading_errors,
     two_position_first_order,
 )
+from app.core.error_monte_carlo import monte_carlo_heading_errors
 from app.core.presets import PRESETS
 from app.core.simulate import Setup, simulate_run, simulate_static
 from app.core.sinusoid import heading_angles

@@ -13,7 +13,8 @@ from scipy.stats import t as student_t
 
 from app.core.exceptions import UserError
 from app.core.sinusoid import elevation_angles, fit_sinusoid, heading_angles, wrap180
-from app.core.solve import percent_error, solve_heading, solve_latitude, solve_two_position
+from app.core.solve import percent_error, solve_heading, solve_latitude
+from app.core.two_position import solve_two_position
 from tests.factories import DATA
 
 # The handout's raw tables (copied from shared/data so the suite runs anywhere).

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from app.cli.main import main
-from app.core.error_analysis import ErrorSources, first_order, monte_carlo_heading_errors
+from app.core.error_analysis import ErrorSources, first_order
+from app.core.error_monte_carlo import monte_carlo_heading_errors
 from app.core.presets import PRESETS
 from app.core.simulate import axis_vectors, earth_rate_vector
 from app.core.two_axis_seeker import (

@@ -4,13 +4,14 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Form, HTTPException, Request
+from fastapi import APIRouter, Form, Request
 from sqlalchemy import func, or_
 from sqlmodel import select
 
 from app.accounts.security import generate_password
-from app.accounts.service import AccountError, NewCredential, create_user, may_reset_password
+from app.accounts.service import NewCredential, create_user, may_reset_password
 from app.accounts.service import reset_password as give_new_password
+from app.core.exceptions import UserError
 from app.courses.roster_csv import USERNAME_RE
 from app.lab.prune import prune_takes
 from app.models import Course, Enrollment, Role, User
@@ -87,7 +88,7 @@ def create_account(
                 password=password,
                 must_change_password=True,
             )
-        except AccountError as failure:
+        except UserError as failure:
             db.rollback()
             error, params = failure.key, failure.params
     if error is not None:
@@ -102,7 +103,7 @@ def create_account(
 def reset_account_password(request: Request, user_id: ObjectId, admin: AdminUser, db: SessionDep):
     user = db.get(User, user_id)
     if user is None:
-        raise HTTPException(404)
+        raise UserError("error.not_found", status=404)
     if not may_reset_password(db, admin, user):
         context = accounts_context(db, "", error="admin.reset_refused", error_params={})
         return render(request, "admin/accounts.html", context, 403)

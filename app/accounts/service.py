@@ -12,17 +12,9 @@ from app.accounts.security import (
     normalise_username,
     revoke_credentials,
 )
+from app.core.exceptions import UserError
 from app.courses.roster_csv import RosterProblem, RosterRow
 from app.models import Course, Enrollment, Role, User, new_join_code
-
-
-class AccountError(ValueError):
-    """A message key explaining why an account operation was refused."""
-
-    def __init__(self, key: str, **params: object) -> None:
-        super().__init__(key)
-        self.key = key
-        self.params = params
 
 
 @dataclass
@@ -48,7 +40,7 @@ def create_user(
     created_by: User | None = None,
 ) -> User:
     if find_user(db, username) is not None:
-        raise AccountError("account.exists", username=username)
+        raise UserError("account.exists", username=username)
     user = User(
         username=normalise_username(username),
         display_name=display_name.strip(),
@@ -93,9 +85,9 @@ def add_student(
     user = find_user(db, username)
     if user is not None:
         if user.role != Role.student:
-            raise AccountError("account.not_student", username=username)
+            raise UserError("account.not_student", username=username)
         if user.created_by_id != course.teacher_id:
-            raise AccountError("roster.needs_consent", username=user.username)
+            raise UserError("roster.needs_consent", username=user.username)
         enroll(db, course, user)
         return None
     password = generate_password()
@@ -136,7 +128,7 @@ def import_roster(db: Session, course: Course, rows: list[RosterRow]) -> RosterI
     for row in rows:
         try:
             credential = add_student(db, course, row.username, row.display_name, row.email)
-        except AccountError as error:
+        except UserError as error:
             if error.key != "roster.needs_consent":
                 raise
             outcome.needs_code.append(normalise_username(row.username))
@@ -151,11 +143,11 @@ def import_roster(db: Session, course: Course, rows: list[RosterRow]) -> RosterI
 def join_course(db: Session, student: User, code: str) -> Course:
     """The student's own consent: enroll with a course's join code (case and spaces ignored)."""
     if student.role != Role.student:
-        raise AccountError("join.students_only")
+        raise UserError("join.students_only")
     wanted = "".join(code.split()).upper()[:16]
     course = db.exec(select(Course).where(Course.join_code == wanted)).first() if wanted else None
     if course is None or course.archived:
-        raise AccountError("join.bad_code")
+        raise UserError("join.bad_code")
     enroll(db, course, student)
     return course
 

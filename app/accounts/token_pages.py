@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Form, HTTPException, Request
+from fastapi import APIRouter, Form, Request
 
 from app.accounts.tokens import new_token, user_tokens
+from app.core.exceptions import UserError
 from app.models import ApiToken, utcnow
 from app.web.deps import CsrfProtected, CurrentUser, ObjectId, SessionDep
 from app.web.render import flash, redirect, render
@@ -44,7 +45,7 @@ def create_token(
 def revoke_token(request: Request, token_id: ObjectId, user: CurrentUser, db: SessionDep):
     record = db.get(ApiToken, token_id)
     if record is None or record.user_id != user.id or record.kind != "personal":
-        raise HTTPException(404)
+        raise UserError("error.not_found", status=404)
     record.revoked_at = record.revoked_at or utcnow()
     db.add(record)
     db.commit()

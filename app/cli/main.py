@@ -56,7 +56,8 @@ def _migrate(_args: argparse.Namespace) -> int:
 
 def _create_user(args: argparse.Namespace) -> int:
     from app.accounts.security import password_problem
-    from app.accounts.service import AccountError, create_user
+    from app.accounts.service import create_user
+    from app.core.exceptions import UserError
     from app.db import write_session
     from app.migrate import upgrade_to_head
     from app.models import Role
@@ -85,8 +86,10 @@ def _create_user(args: argparse.Namespace) -> int:
                 password=password,
                 email=args.email,
             )
-    except AccountError as error:
-        print(f"error: {error.key}: {args.username}", file=sys.stderr)
+    except UserError as error:
+        from app.web.i18n import translate
+
+        print(f"error: {translate(error.key, 'en', **error.params)}", file=sys.stderr)
         return 2
     print(f"created {args.role} {args.username}")
     return 0

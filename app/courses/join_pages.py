@@ -6,7 +6,8 @@ from typing import Annotated
 
 from fastapi import APIRouter, Form, Request
 
-from app.accounts.service import AccountError, course_by_code, join_course
+from app.accounts.service import course_by_code, join_course
+from app.core.exceptions import UserError
 from app.web.deps import CsrfProtected, SessionDep, StudentUser
 from app.web.render import flash, redirect, render
 
@@ -32,7 +33,7 @@ def join(
 ):
     try:
         course = join_course(db, student, code)
-    except AccountError as error:
+    except UserError as error:
         db.rollback()
         return render(request, "join.html", {"code": code[:16], "error": error.key}, 400)
     db.commit()

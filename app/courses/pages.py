@@ -8,7 +8,6 @@ from fastapi import APIRouter, File, Form, Request, UploadFile
 from sqlmodel import Session, select
 
 from app.accounts.service import (
-    AccountError,
     NewCredential,
     add_student,
     check_roster_against_accounts,
@@ -159,7 +158,7 @@ def add_student_by_hand(
         credential = add_student(
             db, course, username.strip(), display_name.strip(), email.strip() or None
         )
-    except AccountError as error:
+    except UserError as error:
         db.rollback()
         context = course_context(db, course, form=context["form"])
         context["add_error"] = error.key

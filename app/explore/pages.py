@@ -7,10 +7,11 @@ import io
 import math
 from typing import Annotated, Literal
 
-from fastapi import APIRouter, HTTPException, Query, Request
+from fastapi import APIRouter, Query, Request
 from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
+from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.explore.scenarios import (
     SCENARIOS,
@@ -157,7 +158,7 @@ def explorer_csv(
                     [curve.method, "monte_carlo", azimuth, _num(mean), _num(std), info["runs"]]
                 )
     if not buffer.getvalue():
-        raise HTTPException(400)
+        raise UserError("error.bad_request")
     return Response(
         "\ufeff" + buffer.getvalue(),
         media_type="text/csv; charset=utf-8",

@@ -18,7 +18,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from app.core.error_analysis import ErrorSources, first_order, monte_carlo_heading_errors
+from app.core.error_analysis import ErrorSources, first_order
+from app.core.error_monte_carlo import monte_carlo_heading_errors
 from app.core.noise_model import GyroNoise, recommended_dwell
 from app.core.presets import PRESETS
 from app.core.sinusoid import fit_sinusoid

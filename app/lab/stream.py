@@ -38,7 +38,7 @@ from app.lab.sim import (
 from app.lab.store import PARTS, POSITIONS
 from app.models import InputMethod, LabSession, User
 from app.web.deps import ObjectId, login_for_cookie
-from app.web.i18n import translate
+from app.web.errors import message_for
 from app.web.render import SESSION_COOKIE, request_language
 
 router = APIRouter(tags=["streams"])
@@ -104,18 +104,12 @@ def _clear_mark(session_id: int) -> None:
         db.add(session)
 
 
-class StreamError(Exception):
-    def __init__(self, key: str, **params) -> None:
-        super().__init__(key)
-        self.key, self.params = key, params
-
-
 def _number(message: dict, name: str, default: float, low: float, high: float) -> float:
     value = message.get(name, default)
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise StreamError("stream.bad_number", name=name)
+        raise UserError("stream.bad_number", name=name)
     if not low <= value <= high:
-        raise StreamError("stream.out_of_range", name=name, low=low, high=high)
+        raise UserError("stream.out_of_range", name=name, low=low, high=high)
     return float(value)
 
 
@@ -141,12 +135,12 @@ async def stream(websocket: WebSocket, session_id: ObjectId) -> None:
                 continue
             try:
                 await _record(websocket, session_id, message, inbox)
-            except StreamError as error:
+            except UserError as error:
                 await websocket.send_json(
                     {
                         "type": "error",
                         "key": error.key,
-                        "message": translate(error.key, language, **error.params),
+                        "message": message_for(error, language),
                     }
                 )
     except (WebSocketDisconnect, RuntimeError, _Closed):
@@ -179,18 +173,18 @@ async def _record(
 ) -> None:
     part, position = message.get("part"), message.get("position")
     if part not in PARTS or not isinstance(position, int) or not 1 <= position <= POSITIONS:
-        raise StreamError("stream.bad_position")
+        raise UserError("stream.bad_position")
     dwell = _number(message, "dwell_s", 30.0, 1.0, MAX_DWELL_S)
     settle = _number(message, "settle_s", 0.0, 0.0, MAX_SETTLE_S)
     speed = _number(message, "speed", 1.0, 0.1, MAX_SPEED)
     found = await run_in_threadpool(_owner, websocket, session_id)
     if found is None:
-        raise StreamError("stream.gone")
+        raise UserError("stream.gone")
     _, session = found
     if position > position_count(session):
-        raise StreamError("lab.needs_symmetric", position=position)
+        raise UserError("lab.needs_symmetric", position=position)
     if getattr(session, f"sim_table_{part}") != position:
-        raise StreamError("stream.turn_first", position=position)
+        raise UserError("stream.turn_first", position=position)
     session = await run_in_threadpool(_mark_started, session_id, part, position)
     take = SimulatedTake(session, part, position, settle)
     total = max(1, int(round(dwell * take.rate_hz)))
@@ -247,7 +241,7 @@ async def _record(
         saved = await run_in_threadpool(
             _save, session_id, part, position, take.dial_angle_deg, values, times, take.end_s
         )
-    except UserError as error:  # e.g. stopped before the minimum number of readings
+    except UserError:  # e.g. stopped before the minimum number of readings
         await run_in_threadpool(_clear_mark, session_id)
-        raise StreamError(error.key, **error.params) from error
+        raise
     await websocket.send_json({"type": "saved", "part": part, "position": position, "n": saved})
