@@ -21,8 +21,10 @@ def table(name: str) -> list[list[str]]:
     return [[row[f"position_{i}"] for i in range(1, 5)] for row in rows]
 
 
-def start_practice(page, url: str) -> None:
+def start_practice(page, url: str, preset: str | None = None) -> None:
     page.goto(f"{url}/lab")
+    if preset:
+        page.locator("#new-session select[name=preset]").select_option(preset)
     page.locator("#new-session button.primary").click()
     page.wait_for_url(re.compile(r".*/lab/sessions/\d+$"))
     page.wait_for_load_state("load")
@@ -80,7 +82,7 @@ def test_student_records_everything_from_the_simulated_gyro_and_submits(live_ser
     stream's storage runs on both databases in test_stream.py."""
     page = new_page()
     log_in(page, live_server.url, "student", STUDENT_PASSWORD)
-    start_practice(page, live_server.url)
+    start_practice(page, live_server.url, preset="tactical-fog")  # 10 Hz: short dwells
     for part in ("heading", "latitude"):
         for position in (1, 2, 3, 4):
             section = page.locator(f"#part-{part}")
@@ -96,8 +98,8 @@ def test_student_records_everything_from_the_simulated_gyro_and_submits(live_ser
             if position > 1:
                 section.locator(".turn").click()
                 expect(section.locator(".table-position")).to_have_text(str(position))
-            # the default dwell gives the minimum of 10 readings (teaching gyro: one per 10 s)
-            expect(section.locator(".dwell")).to_have_value("100")
+            # the default dwell: 30 s, or longer when the minimum of readings needs it
+            expect(section.locator(".dwell")).to_have_value("30")
             section.locator(".speed").select_option("60")
             with page.expect_navigation(timeout=20_000):
                 section.locator(".start-sim").click()
@@ -121,6 +123,8 @@ def test_session_page_in_chinese(live_server, new_page):
     expect(page.locator("#part-heading h2")).to_have_text("A 部分 — 寻北")
     expect(page.locator("#part-latitude h2")).to_contain_text("纬度与地球自转角速度")
     expect(page.locator("#part-heading .method-tab[data-method=manual]")).to_have_text("手动输入")
+    # the teaching gyro reads once every 10 s: the default dwell gives the 10 readings needed
+    expect(page.locator("#part-heading .dwell")).to_have_value("100")
     page.locator("#part-heading .readings-grid tbody input").first.fill("abc")
     expect(page.locator("#part-heading .grid-status")).to_contain_text("不是数字")
     ARTIFACTS.mkdir(exist_ok=True)
