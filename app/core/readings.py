@@ -1,7 +1,11 @@
 """Readings files: the two CSV layouts shared by ``gyrolab solve``, uploads and exports.
 
-* wide — like the handout's tables: a header ``position_1,...,position_N`` and one reading
-  per row; other columns (``sample``, ``time``...) are ignored and blank cells allowed.
+* wide — like the handout's tables: a header ``position_1,...,position_N`` (or "位置1",
+  "Position 1") and one reading per row; other columns (``sample``, 序号, ``time``...) are
+  ignored and blank cells allowed.
+
+Either may be separated by semicolons or tabs instead of commas, with decimal commas
+("10,74"), as spreadsheets in many European locales write them.
 * long — header ``position,angle_deg,value`` with optional ``time_s``; one reading per row,
   the angle of each position used as given.
 """
@@ -112,21 +116,22 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
         With the line and column of the first problem.
     """
     text = text.lstrip("\ufeff")
+    delimiter = _delimiter(text)
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
-        rows = list(csv.reader(io.StringIO(text, newline="")))
+        rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))
     except csv.Error as error:
         raise UserError(
             "csv.unreadable", f"The file cannot be read as CSV: {error}.", detail=str(error)
         ) from None
     rows = [
-        (number, row)
+        (number, row if delimiter == "," else [_point(cell) for cell in row])
         for number, row in enumerate(rows, start=1)
         if any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")
     ]
     if not rows:
         raise UserError("csv.empty", "The file has no readings.")
     header_line, header = rows[0]
-    names = [cell.strip().lower() for cell in header]
+    names = [_column_name(cell) for cell in header]
     if {"position", "value"} <= set(names):
         body = rows[1:]
         if part is not None and "part" in names:
@@ -144,6 +149,39 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
         "'position,angle_deg,value' (long).",
         line=header_line,
     )
+
+
+DECIMAL_COMMA = re.compile(r"([+-]?\d*),(\d+(?:[eE][+-]?\d+)?)")
+CHINESE_POSITION = re.compile(r"^位置\s*_?\s*(\d+)$")
+
+
+def _delimiter(text: str) -> str:
+    """``;`` or a tab when the first line that is not a comment uses it and no comma (what
+    spreadsheets in Europe write, with decimal commas), else ``,``."""
+    first = next(
+        (line for line in text.splitlines() if line.strip() and not line.startswith("#")), ""
+    )
+    for candidate in (";", "\t"):
+        if candidate in first and "," not in first:
+            return candidate
+    return ","
+
+
+def _point(cell: str) -> str:
+    """A decimal comma as a decimal point ("10,74" → "10.74"), in files whose separator is
+    not the comma."""
+    match = DECIMAL_COMMA.fullmatch(cell.strip())
+    return f"{match.group(1)}.{match.group(2)}" if match else cell
+
+
+def _column_name(cell: str) -> str:
+    """A header cell as the layouts name it: "位置1", "Position 1" → "position_1"."""
+    name = cell.strip().lower()
+    chinese = CHINESE_POSITION.match(name)
+    if chinese:
+        return f"position_{chinese.group(1)}"
+    spaced = re.fullmatch(r"position\s+(\d+)", name)
+    return f"position_{spaced.group(1)}" if spaced else name
 
 
 def _parse_wide(columns: dict[int, int], rows) -> Readings:

@@ -1,0 +1,46 @@
+"""Readings files as spreadsheets in other locales write them: semicolons or tabs with
+decimal commas, Chinese or spaced headers, a row-number column."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.core.exceptions import UserError
+from app.core.readings import parse_readings_csv
+
+
+def expected() -> list[np.ndarray]:
+    return [np.array([10.74, 10.65]), np.array([-0.5, -0.4])]
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "position_1,position_2\n10.74,-0.50\n10.65,-0.40\n",
+        "sample,position_1,position_2\n1,10.74,-0.50\n2,10.65,-0.40\n",
+        "序号;位置1;位置2\n1;10,74;-0,50\n2;10,65;-0,40\n",
+        "\ufeff序号,位置 1,位置 2\r\n1,10.74,-0.50\r\n2,10.65,-0.40\r\n",
+        "Position 1\tPosition 2\n10,74\t-0,50\n10,65\t-0,40\n",
+        "# exported by a spreadsheet\nposition_1;position_2\n10,74;-0,5\n10,65;-0,4\n",
+    ],
+    ids=["plain", "row-numbers", "semicolons-chinese", "chinese-bom-crlf", "tabs", "comment"],
+)
+def test_the_same_table_in_every_spelling(text):
+    readings = parse_readings_csv(text)
+    assert readings.layout == "wide"
+    for got, want in zip(readings.positions, expected(), strict=True):
+        np.testing.assert_allclose(got, want)
+
+
+def test_long_layout_with_semicolons_and_decimal_commas():
+    text = "position;angle_deg;value\n1;0;10,74\n1;0;10,65\n2;-90;-0,5\n"
+    readings = parse_readings_csv(text)
+    assert readings.angles_deg == [0.0, -90.0]
+    np.testing.assert_allclose(readings.positions[0], [10.74, 10.65])
+
+
+def test_a_decimal_comma_in_a_comma_separated_file_is_still_two_cells():
+    with pytest.raises(UserError) as caught:
+        parse_readings_csv("position_1\n10,74\nabc\n")
+    assert caught.value.key == "csv.not_a_number" and caught.value.params["line"] == 3
