@@ -38,7 +38,7 @@ from app.lab.schemas import (
     Station,
     UploadOut,
 )
-from app.lab.service import Method, append_readings, own_session, record_position, require_method
+from app.lab.service import append_readings, own_session, record_position, require_method
 from app.lab.store import POSITIONS, current_takes
 from app.lab.submissions import submit
 from app.models import InputMethod, LabSession
@@ -162,7 +162,7 @@ Upload = Annotated[ParsedUpload, Depends(parsed_upload)]
 def uploadable_session(session_id: ObjectId, caller: UploadCaller, db: SessionDep) -> LabSession:
     """The caller's own session, when its assignment allows uploaded readings."""
     session = own_session(db, caller.user, session_id)
-    require_method(db, session, Method.api)
+    require_method(db, session, InputMethod.api)
     return session
 
 

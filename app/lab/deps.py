@@ -7,8 +7,8 @@ from typing import Annotated
 
 from fastapi import Depends
 
-from app.lab.service import Method, own_session, require_method
-from app.models import LabSession
+from app.lab.service import own_session, require_method
+from app.models import InputMethod, LabSession
 from app.web.deps import CurrentUser, ObjectId, SessionDep
 
 
@@ -20,7 +20,7 @@ def owned_session(session_id: ObjectId, user: CurrentUser, db: SessionDep) -> La
 OwnedSession = Annotated[LabSession, Depends(owned_session)]
 
 
-def recordable(method: Method):
+def recordable(method: InputMethod):
     """A dependency: the user's own session, when its assignment allows ``method``."""
 
     def dependency(session: OwnedSession, db: SessionDep) -> LabSession:
@@ -30,5 +30,5 @@ def recordable(method: Method):
     return dependency
 
 
-ManualSession = Annotated[LabSession, Depends(recordable(Method.manual))]
-SimulatorSession = Annotated[LabSession, Depends(recordable(Method.simulator))]
+ManualSession = Annotated[LabSession, Depends(recordable(InputMethod.manual))]
+SimulatorSession = Annotated[LabSession, Depends(recordable(InputMethod.simulator))]

@@ -18,7 +18,7 @@ from app.core.readings import Readings, parse_readings_csv
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.deps import ManualSession, OwnedSession, SimulatorSession
 from app.lab.results import session_results
-from app.lab.service import Method, record_positions, recordable_session
+from app.lab.service import record_positions, recordable_session
 from app.lab.sim import nominal_angle, position_count
 from app.lab.store import POSITIONS, check_position, set_symmetric_order
 from app.lab.submissions import submit
@@ -95,7 +95,7 @@ def preview_csv(
     db: ReadOnlySessionDep,
     body: Annotated[CsvUpload, Body()],
 ):
-    session = recordable_session(db, user, session_id, Method.csv)
+    session = recordable_session(db, user, session_id, InputMethod.csv)
     readings = parse_csv_upload(body)
     check_position_count(len(readings.positions), position_count(session))
     rows = []
@@ -129,7 +129,7 @@ def save_csv(
         readings, problem = parse_csv_upload(body), None
     except UserError as error:
         readings, problem = None, error
-    session = recordable_session(db, user, session_id, Method.csv)
+    session = recordable_session(db, user, session_id, InputMethod.csv)
     if problem is not None:
         raise problem
     check_position_count(len(readings.positions), position_count(session))

@@ -20,13 +20,11 @@ from app.lab.sim import nominal_angle
 from app.lab.store import append_samples, check_position, store_take
 from app.models import Assignment, InputMethod, LabSession, Take, User
 
-Method = InputMethod  # the ways an assignment may allow
-
 
 def allowed_methods(db: Session, session: LabSession) -> list[str]:
     """What the session's assignment allows (a practice session: everything)."""
     if session.assignment_id is None:
-        return [Method.manual, Method.csv, Method.simulator]
+        return [InputMethod.manual, InputMethod.csv, InputMethod.simulator]
     assignment = db.get(Assignment, session.assignment_id)
     return list(assignment.methods) if assignment else []
 
@@ -39,19 +37,19 @@ def own_session(db: Session, user: User, session_id: int) -> LabSession:
     return session
 
 
-def require_method(db: Session, session: LabSession, method: Method) -> None:
+def require_method(db: Session, session: LabSession, method: InputMethod) -> None:
     allowed = allowed_methods(db, session)
     permitted = (
-        bool({Method.manual, Method.csv} & set(allowed))
-        if method == Method.api
+        bool({InputMethod.manual, InputMethod.csv} & set(allowed))
+        if method == InputMethod.api
         else method in allowed
     )
     if not permitted:
-        key = "lab.uploads_not_allowed" if method == Method.api else "lab.method_not_allowed"
+        key = "lab.uploads_not_allowed" if method == InputMethod.api else "lab.method_not_allowed"
         raise UserError(key, status=403)
 
 
-def recordable_session(db: Session, user: User, session_id: int, method: Method) -> LabSession:
+def recordable_session(db: Session, user: User, session_id: int, method: InputMethod) -> LabSession:
     """The user's own session, when its assignment allows recording this way."""
     session = own_session(db, user, session_id)
     require_method(db, session, method)

@@ -27,7 +27,7 @@ from starlette.concurrency import run_in_threadpool
 from app.config import get_settings
 from app.core.exceptions import UserError
 from app.db import write_session
-from app.lab.service import Method, record_position, recordable_session
+from app.lab.service import record_position, recordable_session
 from app.lab.sim import (
     MAX_DWELL_S,
     MAX_SETTLE_S,
@@ -63,7 +63,7 @@ def _owner(websocket: WebSocket, session_id: int) -> tuple[User, LabSession] | N
         if found is None or found[0].must_change_password:
             return None
         try:
-            session = recordable_session(db, found[0], session_id, Method.simulator)
+            session = recordable_session(db, found[0], session_id, InputMethod.simulator)
         except UserError:
             return None
         return found[0], session
