@@ -8,6 +8,7 @@
 | GYROLAB_SESSION_IDLE_MINUTES | 120 |
 | GYROLAB_SESSION_LIFETIME_HOURS | 12 |
 | GYROLAB_HOST / GYROLAB_PORT | 127.0.0.1 / 8000 |
+| GYROLAB_TIMEZONE | ``Asia/Shanghai`` (a course's default zone for due dates) |
 """
 
 from __future__ import annotations
@@ -39,6 +40,16 @@ class Settings(BaseSettings):
     api_rate_per_minute: int = Field(default=600, ge=1)
     student_storage_mb: int = Field(default=200, ge=1)
     max_body_bytes: int = Field(default=32 * 1024 * 1024, ge=1024)
+    timezone: str = "Asia/Shanghai"  # a course's default zone for due dates and times
+
+    @field_validator("timezone")
+    @classmethod
+    def _known_zone(cls, value: str) -> str:
+        from zoneinfo import available_timezones
+
+        if value not in available_timezones():
+            raise ValueError(f"GYROLAB_TIMEZONE {value!r} is not an IANA time zone")
+        return value
 
     @field_validator("secret_key")
     @classmethod

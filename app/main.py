@@ -23,6 +23,7 @@ from app.lab import api, record_pages, stream
 from app.lab import pages as lab_pages
 from app.paths import STATIC_DIR
 from app.review import api as review_api
+from app.review import desk_pages
 from app.review import pages as review_pages
 from app.web import home
 from app.web.errors import register_error_handlers
@@ -104,6 +105,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(lab_pages.router)
     app.include_router(record_pages.router)
     app.include_router(review_pages.router)
+    app.include_router(desk_pages.router)
     app.include_router(stream.router)
     app.include_router(token_pages.router)
     app.include_router(explore_pages.router)

@@ -79,6 +79,9 @@ class Course(SQLModel, table=True):
     archived: bool = False
     # students join with this code (or the join link): the student's consent to enrolment
     join_code: str = Field(default_factory=new_join_code, max_length=16, unique=True, index=True)
+    # due dates are typed and shown in this IANA zone (None: the server's GYROLAB_TIMEZONE);
+    # every datetime is stored in UTC
+    timezone: str | None = Field(default=None, max_length=64)
     created_at: datetime = Field(default_factory=utcnow)
 
 
@@ -160,6 +163,9 @@ class Assignment(SQLModel, table=True):
     max_attempts: int = 3  # 0 = unlimited
     late_policy: str = Field(default=LatePolicy.accept, max_length=8)
     reveal_truth: str = Field(default=RevealTruth.after_grading, max_length=20)
+    max_points: float = 100.0
+    # optional rubric: JSON [{"name": "...", "points": 40}, ...] adding up to max_points
+    rubric: str = Field(default="[]", max_length=20_000)
 
     @property
     def methods(self) -> list[str]:
@@ -208,11 +214,6 @@ class LabSession(SQLModel, table=True):
     sim_clock_s: float = 0.0
     sim_clock_at: datetime | None = None
     status: str = Field(default=SessionStatus.in_progress, max_length=16)
-    grade: str | None = Field(default=None, max_length=32)
-    feedback: str = Field(default="", max_length=20_000)
-    feedback_positions: str = Field(default="{}", max_length=20_000)  # JSON {"heading-1": "..."}
-    graded_at: datetime | None = None
-    returned_at: datetime | None = None
     created_at: datetime = Field(default_factory=utcnow)
     updated_at: datetime = Field(default_factory=utcnow)
 
@@ -230,6 +231,8 @@ class Take(SQLModel, table=True):
     n_samples: int
     created_at: datetime = Field(default_factory=utcnow)
     superseded_at: datetime | None = None
+    # samples before this index are the transient after turning the table: kept, not used
+    trim_start: int = 0
     frozen: bool = False  # an attempt refers to it: its samples never change again
 
 
@@ -255,6 +258,26 @@ class Attempt(SQLModel, table=True):
     results_json: str
     submitted_at: datetime = Field(default_factory=utcnow)
     late: bool = False
+    # the teacher's review of this attempt: it stays with the attempt it was written on
+    feedback: str = Field(default="", max_length=20_000)
+    feedback_positions: str = Field(default="{}", max_length=20_000)  # JSON {"heading-1": "..."}
+    points: float | None = None  # out of the assignment's max_points
+    rubric_points: str = Field(default="{}", max_length=4000)  # JSON {"0": 35, "1": 20}
+    letter: str | None = Field(default=None, max_length=32)  # optional letter grade
+    returned_at: datetime | None = None  # returned for revision
+    released_at: datetime | None = None  # graded and released
+    seen_at: datetime | None = None  # the student opened the work after either
+
+
+class Extension(SQLModel, table=True):
+    """A later due date for one student of one assignment."""
+
+    __table_args__ = (UniqueConstraint("assignment_id", "student_id"),)
+    id: int | None = Field(default=None, primary_key=True)
+    assignment_id: int = Field(foreign_key="assignment.id", index=True, ondelete="CASCADE")
+    student_id: int = Field(foreign_key="user.id", index=True, ondelete="CASCADE")
+    due_at: datetime
+    created_at: datetime = Field(default_factory=utcnow)
 
 
 class ApiToken(SQLModel, table=True):

@@ -28,7 +28,8 @@ def test_values_round_trip_through_the_settings_form():
         {**GOOD, "min_readings": "12.0", "due_at": "2030-05-01T09:30", "table_tilt_max_deg": "2"}
     )
     assert assignment.min_readings == 12 and assignment.table_tilt_max_deg == 2.0
-    assert assignment.due_at.tzinfo == UTC and assignment.due_at.hour == 9
+    # typed in the server's default zone, Asia/Shanghai (UTC+8), stored in UTC
+    assert assignment.due_at.tzinfo == UTC and assignment.due_at.hour == 1
     again = parse_assignment_form(form_values(assignment))
     assert again.model_dump(exclude={"id", "created_at"}) == assignment.model_dump(
         exclude={"id", "created_at"}

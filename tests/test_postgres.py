@@ -103,9 +103,9 @@ def test_rows_from_an_old_schema_survive_and_seeds_become_64_bit(empty_database)
     engine = make_engine(empty_database)
     with engine.begin() as connection:
         connection.execute(text("UPDATE lab_session SET sim_seed = :seed"), {"seed": 2**62 + 7})
-        row = connection.execute(text("SELECT title, sim_seed, feedback FROM lab_session")).one()
+        row = connection.execute(text("SELECT title, sim_seed, status FROM lab_session")).one()
     engine.dispose()
-    assert tuple(row) == ("old", 2**62 + 7, "")
+    assert tuple(row) == ("old", 2**62 + 7, "in_progress")
 
 
 @pytest.mark.postgres_only

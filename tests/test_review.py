@@ -110,22 +110,41 @@ def test_full_cycle_submit_return_resubmit_grade_release(world):
     page = student.get(f"/lab/sessions/{session_id}").text
     assert "Position 3 looks noisy." in page and "Wait until the table settles." in page
     assert "returned" in student.get("/").text
-    # the student revises and resubmits
+    # the student revises one position: the feedback stays on the page during the fix
     assert save_manual(student, session_id, "heading", HEADING).status_code == 200
     assert session_of(session_id).status == "in_progress"
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert "Position 3 looks noisy." in page and "Wait until the table settles." in page
+    assert 'id="revising-notice"' in page
     submit(student, session_id)
     with read_session() as db:
         assert [a.number for a in db.exec(select(Attempt).order_by(Attempt.number))] == [1, 2]
+    # after the next submission attempt 1's review is listed with attempt 1 only
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert (
+        'id="overall-feedback"' not in page
+        and 'class="flash flash-info position-comment"' not in page
+    )
+    assert 'data-attempt="1"' in page and "Position 3 looks noisy." in page
+    # the teacher's next review starts empty: attempt 1's comment is not carried over
+    form = teacher.get(f"/review/sessions/{session_id}").text
+    assert 'value="Wait until the table settles."' not in form
+    assert "Review of attempt 1" in form
     # draft grades are not shown; released ones are
-    review(teacher, session_id, feedback="Good.", grade="A-", action="save")
+    review(teacher, session_id, feedback="Good.", points="87", letter="A-", action="save")
     assert grade_cells(student.get("/").text) == ["—"]
     assert (
-        review(teacher, session_id, feedback="Good.", grade="A-", action="release").status_code
+        review(
+            teacher, session_id, feedback="Good.", points="87", letter="A-", action="release"
+        ).status_code
         == 303
     )
     assert session_of(session_id).status == "graded"
     dashboard = student.get("/").text
-    assert grade_cells(dashboard) == ["A-"] and "Good." in dashboard
+    assert grade_cells(dashboard) == ["87 / 100 (A-)"] and "Good." in dashboard
+    # attempt 1's position comment is not released again with attempt 2's grade
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert page.count("Wait until the table settles.") == 1  # in attempt 1's entry only
     assert save_manual(student, session_id, "heading", HEADING).status_code == 400  # frozen
     submission = teacher.get(f"/review/sessions/{session_id}").text
     assert "Attempt 2" in submission and "Attempt 1" in submission
@@ -135,13 +154,13 @@ def test_release_needs_a_grade_and_a_submission(world):
     teacher = browser(world, "teacher1")
     student = browser(world, "s1")
     session_id = start(student, world)
-    review(teacher, session_id, grade="B", action="release")
+    review(teacher, session_id, points="80", action="release")
     assert session_of(session_id).status == "in_progress"
     do_lab(student, session_id)
     submit(student, session_id)
-    review(teacher, session_id, grade="", action="release")
+    review(teacher, session_id, points="", action="release")
     assert session_of(session_id).status == "submitted"
-    assert "Enter a grade" in teacher.get(f"/review/sessions/{session_id}").text
+    assert "Enter the points" in teacher.get(f"/review/sessions/{session_id}").text
 
 
 def set_assignment(world, **fields):
@@ -208,7 +227,7 @@ def test_truth_is_revealed_only_when_the_rule_allows(world, policy, after_submit
     submit(student, session_id)
     page = student.get(f"/lab/sessions/{session_id}").text
     assert ("True values and auto-check" in page) is after_submit
-    review(teacher, session_id, grade="B", action="release")
+    review(teacher, session_id, points="80", action="release")
     page = student.get(f"/lab/sessions/{session_id}").text
     assert ("True values and auto-check" in page) is after_grade
     # JSON and exports never carry the simulator's secrets

@@ -3,8 +3,10 @@ default, type and range; a wrong field becomes one :class:`UserError` naming it.
 
 from __future__ import annotations
 
+import json
 import math
-from datetime import UTC, datetime
+import re
+from datetime import datetime
 from typing import Annotated, Any
 
 from pydantic import (
@@ -18,6 +20,8 @@ from pydantic import (
 
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
+from app.core.readings import parse_decimal
+from app.courses.local_time import local_input_to_utc, utc_to_local_input
 from app.models import Assignment, InputMethod, LatePolicy, RevealTruth
 
 RECORDING_METHODS = (InputMethod.manual, InputMethod.csv, InputMethod.simulator)
@@ -67,6 +71,9 @@ class AssignmentForm(BaseModel):
     max_attempts: int = Field(default=3, ge=0, le=100)
     late_policy: LatePolicy = LatePolicy.accept
     reveal_truth: RevealTruth = RevealTruth.after_grading
+    max_points: float = Field(default=100.0, gt=0, le=100_000)
+    # one criterion per line, "name | points" (a rubric is optional)
+    rubric: str = Field(default="", max_length=20_000)
 
     @field_validator("min_readings", "max_attempts", mode="before")
     @classmethod
@@ -78,12 +85,7 @@ class AssignmentForm(BaseModel):
             return value
         return int(number) if math.isfinite(number) else value
 
-    @field_validator("due_at")
-    @classmethod
-    def _utc(cls, value: datetime | None) -> datetime | None:
-        return value.replace(tzinfo=UTC) if value and value.tzinfo is None else value
-
-    def assignment(self, course_id: int = 0) -> Assignment:
+    def assignment(self, course_id: int = 0, zone_name: str | None = None) -> Assignment:
         if not self.title:
             raise UserError("assignment.title_required")
         methods = [m for m in self.methods if m in RECORDING_METHODS]
@@ -91,18 +93,67 @@ class AssignmentForm(BaseModel):
             raise UserError("assignment.methods_required")
         if self.simulator_preset not in PRESETS:
             raise UserError("assignment.bad_preset")
-        fields = self.model_dump(exclude={"methods"})
-        return Assignment(course_id=course_id, allowed_methods=",".join(methods), **fields)
+        criteria = parse_rubric(self.rubric)
+        total = sum(c["points"] for c in criteria)
+        if criteria and abs(total - self.max_points) > 1e-9:
+            raise UserError(
+                "assignment.rubric_total", total=f"{total:g}", max=f"{self.max_points:g}"
+            )
+        fields = self.model_dump(exclude={"methods", "rubric", "due_at"})
+        due = local_input_to_utc(self.due_at, zone_name) if self.due_at else None
+        return Assignment(
+            course_id=course_id,
+            allowed_methods=",".join(methods),
+            rubric=json.dumps(criteria, ensure_ascii=False),
+            due_at=due,
+            **fields,
+        )
 
 
-def parse_assignment_form(values: dict[str, Any]) -> Assignment:
+RUBRIC_LINE = re.compile(r"^(?P<name>.+?)\s*[|｜]\s*(?P<points>[^|｜]+)$")
+
+
+def parse_rubric(text: str) -> list[dict]:
+    """Rubric lines ``name | points`` → ``[{"name", "points"}]``; a wrong line raises a
+    UserError naming it."""
+    criteria = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        line = line.strip()
+        if not line:
+            continue
+        match = RUBRIC_LINE.match(line)
+        points = math.nan
+        if match:
+            try:
+                points = parse_decimal(match["points"].strip())
+            except ValueError:
+                points = math.nan
+        if not match or not math.isfinite(points) or not 0 < points <= 100_000:
+            raise UserError("assignment.bad_rubric", line=number)
+        criteria.append({"name": match["name"].strip()[:200], "points": points})
+    if len(criteria) > 50:
+        raise UserError("assignment.rubric_too_long", limit=50)
+    return criteria
+
+
+def rubric_text(rubric_json: str) -> str:
+    """A stored rubric as the form's lines."""
+    try:
+        criteria = json.loads(rubric_json or "[]")
+    except ValueError:
+        return ""
+    return "\n".join(f"{c['name']} | {c['points']:g}" for c in criteria if isinstance(c, dict))
+
+
+def parse_assignment_form(values: dict[str, Any], zone_name: str | None = None) -> Assignment:
     """The form's values (strings; ``methods`` a list) as an unsaved Assignment, or a
-    UserError naming the first wrong field."""
+    UserError naming the first wrong field.  The due date is typed in ``zone_name`` (the
+    course's time zone) and stored in UTC."""
     try:
         form = AssignmentForm.model_validate(values)
     except ValidationError as error:
         raise _problem(error) from None
-    return form.assignment()
+    return form.assignment(zone_name=zone_name)
 
 
 def _problem(error: ValidationError) -> UserError:
@@ -123,7 +174,9 @@ def _problem(error: ValidationError) -> UserError:
     return UserError("assignment.not_a_number", field=field)
 
 
-def form_values(assignment: Assignment | None = None) -> dict[str, Any]:
+def form_values(
+    assignment: Assignment | None = None, zone_name: str | None = None
+) -> dict[str, Any]:
     """The form's fields as the page shows them: an assignment's, or the defaults."""
 
     def text(value) -> str:
@@ -144,8 +197,9 @@ def form_values(assignment: Assignment | None = None) -> dict[str, Any]:
     values = {
         name: text(getattr(assignment, name))
         for name in AssignmentForm.model_fields
-        if name not in ("methods", "due_at")
+        if name not in ("methods", "due_at", "rubric")
     }
     values["methods"] = assignment.methods
-    values["due_at"] = assignment.due_at.strftime("%Y-%m-%dT%H:%M") if assignment.due_at else ""
+    values["due_at"] = utc_to_local_input(assignment.due_at, zone_name)
+    values["rubric"] = rubric_text(assignment.rubric)
     return values

@@ -22,7 +22,7 @@ def create_assignment(
     form = {key: str(raw.get(key, "")) for key in raw if key not in ("methods", "csrf_token")}
     form["methods"] = raw.getlist("methods")
     try:
-        assignment = parse_assignment_form(form)
+        assignment = parse_assignment_form(form, course.timezone)
     except UserError as problem:
         context = course_context(
             db,

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import dataclass
+from datetime import UTC, datetime
 
 import numpy as np
 
@@ -78,10 +79,19 @@ def store(assignment: Assignment, summary: dict | None) -> None:
     assignment.gyro_characterisation = None if summary is None else json.dumps(summary)
 
 
-def summary_of(assignment: Assignment | None) -> dict | None:
+def summary_of(assignment: Assignment | None, with_time: bool = False) -> dict | None:
+    """The stored characterisation; ``with_time`` adds ``uploaded``, the upload's aware UTC
+    datetime (stored as "YYYY-MM-DD HH:MM" UTC) for pages that show it in local time."""
     if assignment is None or not assignment.gyro_characterisation:
         return None
-    return json.loads(assignment.gyro_characterisation)
+    summary = json.loads(assignment.gyro_characterisation)
+    if with_time:
+        try:
+            uploaded = datetime.strptime(summary.get("uploaded_at", ""), "%Y-%m-%d %H:%M")
+            summary["uploaded"] = uploaded.replace(tzinfo=UTC)
+        except ValueError:
+            summary["uploaded"] = None
+    return summary
 
 
 def station_noise(assignment: Assignment | None) -> StationNoise | None:

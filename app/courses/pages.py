@@ -20,6 +20,7 @@ from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.courses.assignment_form import form_values
 from app.courses.deps import TeacherCourse
+from app.courses.local_time import valid_zone_name, zone_choices
 from app.courses.roster_csv import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
 from app.models import Assignment, Course, Enrollment, User
 from app.web.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
@@ -89,6 +90,8 @@ def course_context(db: Session, course: Course, **extra) -> dict:
         "assignments": assignments,
         "presets": sorted(PRESETS),
         "assignment_form": form_values(),
+        "timezone": course.timezone,
+        "zones": zone_choices(),
         **extra,
     }
 
@@ -114,6 +117,27 @@ def rename_course(
     db.add(course)
     db.commit()
     flash(response, request, "course.renamed", "success", name=course.name)
+    return response
+
+
+@router.post("/{course_id}/timezone", dependencies=[CsrfProtected])
+def set_course_timezone(
+    request: Request,
+    course: TeacherCourse,
+    teacher: TeacherUser,
+    db: SessionDep,
+    timezone: Annotated[str, Form(max_length=64)] = "",
+):
+    """The zone due dates are typed and shown in (stored times stay UTC)."""
+    response = redirect(f"/courses/{course.id}")
+    try:
+        course.timezone = valid_zone_name(timezone)
+    except UserError as problem:
+        flash(response, request, problem.key, "error", **problem.params)
+        return response
+    db.add(course)
+    db.commit()
+    flash(response, request, "course.timezone_saved", "success", zone=course.timezone)
     return response
 
 

@@ -7,6 +7,7 @@ import math
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, Form, Request
+from sqlalchemy.exc import OperationalError
 from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
@@ -24,12 +25,14 @@ from app.models import (
     Attempt,
     Course,
     Enrollment,
+    Extension,
     LabSession,
     Role,
     SessionStatus,
     User,
     utcnow,
 )
+from app.review import grading
 from app.review.service import auto_check, session_truth, truth_visible
 from app.web.deps import (
     MAX_ID,
@@ -79,12 +82,26 @@ def lab_home(request: Request, user: CurrentUser, db: SessionDep):
         .where(LabSession.owner_id == user.id)
         .order_by(LabSession.updated_at.desc())
     ).all()
+    mine = {s.assignment_id: s for s in sessions if s.assignment_id is not None}
+    extensions = {
+        row.assignment_id: row.due_at
+        for row in db.exec(select(Extension).where(Extension.student_id == user.id))
+    }
+    assignments = [
+        {
+            "assignment": assignment,
+            "course": course,
+            "session": mine.get(assignment.id),
+            "due": extensions.get(assignment.id, assignment.due_at),
+        }
+        for assignment, course in my_assignments(db, user)
+    ]
     return render(
         request,
         "lab/home.html",
         {
             "sessions": sessions,
-            "assignments": my_assignments(db, user),
+            "assignments": assignments,
             "stations": STATIONS,
             "presets": sorted(PRESETS),
             "now": utcnow(),
@@ -179,11 +196,19 @@ def session_page(request: Request, session: OwnedSession, db: SessionDep):
     editable = session.status != SessionStatus.graded and not (
         session.assignment_id and session.status == SessionStatus.submitted
     )
+    if grading.mark_seen(db, attempts):  # the dashboard's notice has been read
+        try:
+            db.commit()
+        except OperationalError:  # a read-only database: the notice simply stays
+            db.rollback()
+    course = db.get(Course, assignment.course_id) if assignment else None
     return render(
         request,
         "lab/session.html",
         {
             **session_view(db, session, assignment, attempts, _),
+            "due": grading.due_for(db, assignment, session.owner_id),
+            "timezone": course.timezone if course else None,
             "history": take_history(db, session.id),
             "methods": allowed_methods(db, session),
             "units": UNITS,
@@ -197,14 +222,21 @@ def session_page(request: Request, session: OwnedSession, db: SessionDep):
     )
 
 
-def session_view(db: Session, session: LabSession, assignment, attempts, _) -> dict:
-    """What both the student's page and the teacher's review show of a session."""
+def session_view(
+    db: Session, session: LabSession, assignment, attempts, _, *, reviewer: bool = False
+) -> dict:
+    """What both the student's page and the teacher's review show of a session.
+
+    A review belongs to its attempt: the student sees the latest attempt's review once the
+    teacher returned or released it -- also while re-recording, until the next submission
+    -- and earlier attempts' reviews with those attempts."""
     results = session_results(db, session)
     nominal = {
         part: [nominal_angle(session, part, k) for k in range(1, position_count(session) + 1)]
         for part in PARTS
     }
-    shows_feedback = session.status in (SessionStatus.returned, SessionStatus.graded)
+    latest = attempts[-1] if attempts else None
+    given = latest is not None and (reviewer or grading.shown_to_student(latest))
     visible = truth_visible(session, assignment, len(attempts))
     truth = session_truth(db, session, assignment) if visible else None
     check = None
@@ -229,12 +261,16 @@ def session_view(db: Session, session: LabSession, assignment, attempts, _) -> d
         "error_text": lambda error: error_text(error, _),
         "truth": truth,
         "check": check,
-        "feedback": session.feedback if shows_feedback else "",
-        "position_feedback": json.loads(session.feedback_positions or "{}")
-        if shows_feedback
-        else {},
-        "grade": session.grade if session.status == SessionStatus.graded else None,
+        "feedback": latest.feedback if given else "",
+        "feedback_attempt": latest if given else None,
+        "position_feedback": grading.comments_of(latest) if given else {},
+        "grade": grading.released_grade(session, attempts, assignment) or None,
         "attempt_results": [(a, json.loads(a.results_json)) for a in attempts],
+        "attempt_reviews": {
+            a.number: {"feedback": a.feedback, "comments": grading.comments_of(a)}
+            for a in attempts
+            if (reviewer or grading.shown_to_student(a)) and (a.feedback or a.feedback_positions)
+        },
     }
 
 

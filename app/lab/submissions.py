@@ -20,6 +20,7 @@ from app.models import (
     SessionStatus,
     utcnow,
 )
+from app.review.grading import due_for
 
 
 def submit(db: Session, session: LabSession) -> Attempt:
@@ -50,7 +51,8 @@ def submit(db: Session, session: LabSession) -> Attempt:
             limit=assignment.max_attempts,
         )
     now = utcnow()
-    late = bool(assignment and assignment.due_at and now > assignment.due_at)
+    due = due_for(db, assignment, session.owner_id)
+    late = bool(due and now > due)
     if late and assignment.late_policy == LatePolicy.refuse:
         raise UserError(
             "lab.past_due", "The due date has passed; submissions are closed.", status=409

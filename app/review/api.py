@@ -10,9 +10,10 @@ from pydantic import BaseModel
 from sqlmodel import select
 
 from app.accounts.api_auth import TeacherCaller
-from app.models import Assignment, Course, SessionStatus
+from app.models import Assignment, Course
 from app.review.deps import teachers_assignment
 from app.review.exports import class_table_response
+from app.review.grading import grade_text
 from app.review.service import class_rows
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS
@@ -40,7 +41,10 @@ class SubmissionRow(BaseModel):
     latitude_error_percent: float | None
     earth_rate_error_percent: float | None
     auto_check: bool | None
-    grade: str | None
+    grade: str | None  # "85 / 100 (B+)": the teacher's, released or not
+    points: float | None
+    max_points: float
+    released: bool
 
 
 @router.get("/courses", response_model=list[CourseOut])
@@ -93,9 +97,10 @@ def list_submissions(assignment_id: ObjectId, caller: TeacherCaller, db: Session
                 latitude_error_percent=row.check_error("latitude"),
                 earth_rate_error_percent=row.check_error("earth_rate"),
                 auto_check=None if row.check is None else row.check.passed,
-                grade=row.session.grade
-                if row.session and row.session.status == SessionStatus.graded
-                else None,
+                grade=grade_text(row.latest, assignment) or None,
+                points=row.points,
+                max_points=assignment.max_points,
+                released=row.released,
             )
         )
     return rows

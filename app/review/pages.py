@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import json
 import math
 from typing import Annotated
 
 from fastapi import APIRouter, File, Form, Request, UploadFile
-from sqlmodel import select
 
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
@@ -15,18 +13,9 @@ from app.core.readings import parse_decimal
 from app.courses import characterisation
 from app.courses.assignment_form import form_values, parse_assignment_form
 from app.lab.charts import class_error_figure, class_histogram_figure
-from app.lab.pages import UNIT_NAMES, session_view
-from app.models import Attempt, User
-from app.review.deps import ReviewableSession, TeacherAssignment
+from app.review.deps import TeacherAssignment
 from app.review.exports import class_table_response, class_zip_response
-from app.review.service import (
-    auto_check,
-    class_rows,
-    grade_and_release,
-    return_for_revision,
-    session_truth,
-    status_counts,
-)
+from app.review.service import class_rows, status_counts
 from app.web.deps import CsrfProtected, FormDep, SessionDep
 from app.web.i18n import translator
 from app.web.render import flash, redirect, render, request_language
@@ -58,8 +47,9 @@ def assignment_dashboard(
             "counts": status_counts(rows),
             "figures": figures,
             "status_filter": status,
-            "form": form_values(assignment),
-            "characterisation": characterisation.summary_of(assignment),
+            "timezone": course.timezone,
+            "form": form_values(assignment, course.timezone),
+            "characterisation": characterisation.summary_of(assignment, with_time=True),
             "presets": sorted(PRESETS),
             "plotly_url": request.app.state.plotly_url,
         },
@@ -79,7 +69,7 @@ def update_settings(
     values = {key: form.get(key, "") for key in form if key != "methods"}
     values["methods"] = form.getlist("methods")
     try:
-        updated = parse_assignment_form(values)
+        updated = parse_assignment_form(values, course.timezone)
     except UserError as problem:
         response = redirect(f"/courses/{course.id}/assignments/{assignment.id}#settings")
         flash(response, request, problem.key, "error", **problem.params)
@@ -160,75 +150,3 @@ def export_assignment_csv(target: TeacherAssignment, db: SessionDep):
 def export_assignment_zip(target: TeacherAssignment, db: SessionDep):
     """The class table plus every submitted attempt's own data."""
     return class_zip_response(db, target.assignment)
-
-
-@router.get("/review/sessions/{session_id}")
-def submission_page(request: Request, target: ReviewableSession, db: SessionDep):
-    session, assignment, course = target.session, target.assignment, target.course
-    _ = translator(request_language(request))
-    attempts = db.exec(
-        select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
-    ).all()
-    view = session_view(db, session, assignment, attempts, _)
-    # the teacher always sees the truth, the auto-check and the unreleased feedback
-    truth = session_truth(db, session, assignment)
-    check = (
-        auto_check(json.loads(attempts[-1].results_json), truth, assignment) if attempts else None
-    )
-    student = db.get(User, session.owner_id)
-    view.update(
-        {
-            "truth": truth,
-            "check": check,
-            "feedback": session.feedback,
-            "position_feedback": json.loads(session.feedback_positions or "{}"),
-            "grade": session.grade,
-            "student": student,
-            "course": course,
-            "editable": False,
-            "reviewer": True,
-            "history": [],
-            "methods": [],
-            "units": [],
-            "unit_names": UNIT_NAMES,
-            "plotly_url": request.app.state.plotly_url,
-            "interrupted": None,
-        }
-    )
-    return render(request, "review/submission.html", view)
-
-
-@router.post("/review/sessions/{session_id}/feedback", dependencies=[CsrfProtected])
-def save_feedback(request: Request, target: ReviewableSession, db: SessionDep, form: FormDep):
-    """Comments (overall and per position) and the grade; 'action' may return or release."""
-    session = target.session
-    session.feedback = str(form.get("feedback", ""))[:20_000]
-    comments = {
-        key.removeprefix("comment-"): str(value)[:2000]
-        for key, value in form.items()
-        if key.startswith("comment-") and str(value).strip()
-    }
-    session.feedback_positions = json.dumps(comments, ensure_ascii=False)
-    grade = str(form.get("grade", "")).strip()[:32]
-    action = form.get("action", "save")
-    has_attempt = db.exec(select(Attempt).where(Attempt.session_id == session.id)).first()
-    response = redirect(f"/review/sessions/{session.id}")
-    if action in ("return", "release") and has_attempt is None:
-        flash(response, request, "review.nothing_submitted", "error")
-        return response
-    if action == "release" and not grade:
-        flash(response, request, "review.grade_required", "error")
-        return response
-    session.grade = grade or session.grade
-    if action == "return":
-        return_for_revision(session)
-        key = "review.returned"
-    elif action == "release":
-        grade_and_release(session, grade)
-        key = "review.released"
-    else:
-        key = "review.saved"
-    db.add(session)
-    db.commit()
-    flash(response, request, key, "success")
-    return response

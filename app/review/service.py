@@ -24,13 +24,13 @@ from app.models import (
     Assignment,
     Attempt,
     Enrollment,
+    Extension,
     InputMethod,
     LabSession,
     RevealTruth,
     SessionStatus,
     Take,
     User,
-    utcnow,
 )
 
 STATUSES = tuple(SessionStatus)
@@ -172,10 +172,6 @@ def truth_visible(session: LabSession, assignment: Assignment | None, attempts: 
     return False
 
 
-def is_late(assignment: Assignment | None, when: datetime) -> bool:
-    return bool(assignment and assignment.due_at and when > assignment.due_at)
-
-
 def data_fingerprint(data: SessionData) -> tuple[str | None, str | None]:
     """(hash of the exact samples, hash of the position means to 0.001 °/h) of current data."""
     items = sorted(
@@ -216,10 +212,37 @@ class StudentRow:
     late: bool
     duplicate_of: list[str] = field(default_factory=list)
     prints: tuple[str | None, str | None] = (None, None)  # data_fingerprint of current data
+    max_points: float = 100.0
+    due_at: datetime | None = None  # this student's due date (an extension, or the class's)
+    extended: bool = False
 
     @property
     def submitted_at(self) -> datetime | None:
         return self.attempts[-1].submitted_at if self.attempts else None
+
+    @property
+    def latest(self) -> Attempt | None:
+        return self.attempts[-1] if self.attempts else None
+
+    @property
+    def points(self) -> float | None:
+        return self.latest.points if self.latest else None
+
+    @property
+    def letter(self) -> str:
+        return (self.latest.letter or "") if self.latest else ""
+
+    @property
+    def released(self) -> bool:
+        return self.status == SessionStatus.graded
+
+    @property
+    def releasable(self) -> bool:
+        """Graded (points entered) but not yet released."""
+        return self.points is not None and self.status in (
+            SessionStatus.submitted,
+            SessionStatus.returned,
+        )
 
     def check_error(self, name: str) -> float | None:
         if self.check is None:
@@ -263,11 +286,22 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
 
     rows = []
     fingerprints: dict[str, list[str]] = {}
+    extensions = {
+        row.student_id: row.due_at
+        for row in db.exec(select(Extension).where(Extension.assignment_id == assignment.id))
+    }
     for student in students:
         session = sessions.get(student.id)
+        due = {
+            "max_points": assignment.max_points,
+            "due_at": extensions.get(student.id, assignment.due_at),
+            "extended": student.id in extensions,
+        }
         if session is None:
             rows.append(
-                StudentRow(student, None, [], SessionStatus.not_started, {}, None, None, [], False)
+                StudentRow(
+                    student, None, [], SessionStatus.not_started, {}, None, None, [], False, **due
+                )
             )
             continue
         history = attempts.get(session.id, [])
@@ -286,6 +320,7 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
             list(flags),
             any(a.late for a in history),
             prints=prints,
+            **due,
         )
         rows.append(row)
         for print_ in prints:
@@ -322,7 +357,10 @@ def export_rows(rows: list[StudentRow]) -> list[list]:
         "earth_rate_deg_h",
         "earth_rate_error_percent",
         "auto_check",
-        "grade",
+        "points",
+        "max_points",
+        "letter_grade",
+        "released",
         "flags",
         "identical_data_with",
     ]
@@ -347,9 +385,10 @@ def export_rows(rows: list[StudentRow]) -> list[list]:
                 _num(latitude.get("earth_rate_deg_h")),
                 _num(row.check_error("earth_rate")),
                 "" if passed is None else ("pass" if passed else "fail"),
-                (row.session.grade or "")
-                if row.session and row.session.status == SessionStatus.graded
-                else "",
+                _num(row.points),
+                f"{row.max_points:g}",
+                row.letter,
+                "yes" if row.released else "no",
                 ";".join(sorted({f["key"].split(".")[-1] for f in row.flags})),
                 ";".join(row.duplicate_of),
             ]
@@ -361,14 +400,3 @@ def _num(value: float | None) -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return ""
     return f"{value:.4f}"
-
-
-def return_for_revision(session: LabSession) -> None:
-    session.status = SessionStatus.returned
-    session.returned_at = utcnow()
-
-
-def grade_and_release(session: LabSession, grade: str) -> None:
-    session.grade = grade
-    session.status = SessionStatus.graded
-    session.graded_at = utcnow()

@@ -6,6 +6,7 @@ from fastapi import APIRouter, Request
 from sqlmodel import select
 
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User
+from app.review import grading
 from app.web.deps import CurrentUser, SessionDep
 from app.web.render import redirect, render
 
@@ -36,10 +37,25 @@ def dashboard(request: Request, user: CurrentUser, db: SessionDep):
         .where(Enrollment.student_id == user.id, Course.archived == False)  # noqa: E712
         .order_by(Course.name)
     ).all()
-    work = db.exec(
+    work = []
+    for session, assignment in db.exec(
         select(LabSession, Assignment)
         .join(Assignment, Assignment.id == LabSession.assignment_id)
         .where(LabSession.owner_id == user.id)
         .order_by(LabSession.updated_at.desc())
-    ).all()
-    return render(request, "dashboard/student.html", {"courses": rows, "work": work})
+    ).all():
+        latest = grading.latest_attempt(db, session.id)
+        given = latest is not None and grading.shown_to_student(latest)
+        work.append(
+            {
+                "session": session,
+                "assignment": assignment,
+                "grade": grading.released_grade(session, [latest] if latest else [], assignment),
+                "feedback": latest.feedback if given else "",
+            }
+        )
+    return render(
+        request,
+        "dashboard/student.html",
+        {"courses": rows, "work": work, "notices": grading.notices(db, user)},
+    )

@@ -11,7 +11,7 @@ The language is the user's saved choice, else the ``lang`` cookie, else Accept-L
 from __future__ import annotations
 
 from collections.abc import Callable
-from datetime import datetime
+from datetime import UTC, datetime, tzinfo
 from functools import lru_cache
 from io import BytesIO
 
@@ -115,12 +115,19 @@ def translate(key: str, language: str, **params: object) -> str:
 
 
 def format_datetime(
-    value: datetime | None, language: str, date: str | None = "yMMMd", time: str | None = "Hm"
+    value: datetime | None,
+    language: str,
+    date: str | None = "yMMMd",
+    time: str | None = "Hm",
+    zone: tzinfo | None = None,
 ) -> str:
     """A date and time the way the reader's locale writes them, from CLDR skeletons
-    (Babel): "Nov 22, 2026 20:05" / "2026年11月22日 20:05"; "" for None."""
+    (Babel): "Nov 22, 2026 20:05" / "2026年11月22日 20:05"; "" for None.  Stored times
+    are UTC; ``zone`` (the course's) gives the wall clock shown."""
     if value is None:
         return ""
+    if zone is not None:
+        value = (value if value.tzinfo else value.replace(tzinfo=UTC)).astimezone(zone)
     locale = Locale.parse(LOCALES[language])
     parts = [
         format_skeleton(skeleton, value, locale=locale) for skeleton in (date, time) if skeleton

@@ -12,6 +12,7 @@ from fastapi.templating import Jinja2Templates
 from app import __version__
 from app.accounts.security import signed, unsigned
 from app.config import get_settings
+from app.courses.local_time import zone
 from app.paths import TEMPLATES_DIR
 from app.web.i18n import (
     LANGUAGE_NAMES,
@@ -110,6 +111,8 @@ def render(
 ) -> HTMLResponse:
     language = request_language(request)
     _ = translator(language)
+    # times are shown in the page's course's zone, else the server's (never "UTC" to a user)
+    shown_zone = zone((context or {}).get("timezone"))
     flashes = [
         {"kind": item.get("kind", "info"), "text": _(item["key"], **item.get("params", {}))}
         for item in _take_flashes(request)
@@ -118,7 +121,10 @@ def render(
         "request": request,
         "_": _,
         "lang": language,
-        "when": lambda value, date="yMMMd", time="Hm": format_datetime(value, language, date, time),
+        "when": lambda value, date="yMMMd", time="Hm", tz=None: format_datetime(
+            value, language, date, time, zone(tz) if tz else shown_zone
+        ),
+        "zone_name": shown_zone.key,
         "num": lambda value, digits=3: format_number(value, language, digits),
         "user": getattr(request.state, "user", None),
         "csrf_token": csrf_token_for(request),

@@ -47,6 +47,10 @@ def test_teacher_reviews_returns_and_student_resubmits(demo_server, new_page):
     section.locator(".speed").select_option("60")
     with student.expect_navigation(timeout=20_000):
         section.locator(".start-sim").click()
+    # halfway through the fix (in progress again) the teacher's comments are still there
+    expect(student.locator("#revising-notice")).to_be_visible()
+    expect(student.locator("#overall-feedback")).to_contain_text("longer dwell")
+    expect(student.locator(".position-comment")).to_contain_text("Too short")
     student.once("dialog", lambda dialog: dialog.accept())
     with student.expect_navigation():
         student.locator("#submit-session").click()
@@ -54,9 +58,10 @@ def test_teacher_reviews_returns_and_student_resubmits(demo_server, new_page):
 
     teacher.reload()
     expect(teacher.locator("#attempts")).to_contain_text("Attempt 2")
-    teacher.fill("input[name=grade]", "92")
+    teacher.fill("input[name=points]", "92")
     with teacher.expect_navigation():
         teacher.locator("#release-button").click()
     expect(teacher.locator("#session-status")).to_have_text("graded")
     student.goto(f"{server.url}/")
-    expect(student.locator("#my-work .grade")).to_contain_text("92")
+    expect(student.locator("#my-work .grade")).to_contain_text("92 / 100")
+    expect(student.locator("#notices")).to_contain_text("attempt 2 graded")

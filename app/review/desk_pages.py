@@ -1,0 +1,150 @@
+"""The grading desk's pages: one submission (with next/previous student), saving a review,
+returning or releasing it, bulk release from the class dashboard, per-student extensions."""
+
+from __future__ import annotations
+
+import json
+from datetime import datetime
+
+from fastapi import APIRouter, Request
+from sqlmodel import select
+
+from app.core.exceptions import UserError
+from app.courses.local_time import local_input_to_utc, utc_to_local_input
+from app.lab.pages import UNIT_NAMES, session_view
+from app.models import Attempt, SessionStatus, User
+from app.review import grading
+from app.review.deps import ReviewableSession, TeacherAssignment
+from app.review.service import auto_check, session_truth
+from app.web.deps import CsrfProtected, FormDep, SessionDep
+from app.web.i18n import translator
+from app.web.render import flash, redirect, render, request_language
+
+router = APIRouter(tags=["pages: review"], include_in_schema=False)
+
+
+@router.get("/review/sessions/{session_id}")
+def submission_page(request: Request, target: ReviewableSession, db: SessionDep):
+    session, assignment, course = target.session, target.assignment, target.course
+    _ = translator(request_language(request))
+    attempts = db.exec(
+        select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
+    ).all()
+    view = session_view(db, session, assignment, attempts, _, reviewer=True)
+    # the teacher always sees the truth, the auto-check and the unreleased review
+    truth = session_truth(db, session, assignment)
+    latest = attempts[-1] if attempts else None
+    check = auto_check(json.loads(latest.results_json), truth, assignment) if latest else None
+    due = grading.due_for(db, assignment, session.owner_id)
+    view.update(
+        {
+            "truth": truth,
+            "check": check,
+            "latest": latest,
+            "feedback": latest.feedback if latest else "",
+            "position_feedback": grading.comments_of(latest),
+            "rubric": grading.rubric_of(assignment),
+            "rubric_scores": grading.rubric_scores_of(latest),
+            "grade": grading.grade_text(latest, assignment),
+            "student": db.get(User, session.owner_id),
+            "course": course,
+            "timezone": course.timezone,
+            "neighbours": grading.neighbours(db, session),
+            "due": due,
+            "extension_value": utc_to_local_input(due, course.timezone),
+            "extended": due is not None and due != assignment.due_at,
+            "editable": False,
+            "reviewer": True,
+            "history": [],
+            "methods": [],
+            "units": [],
+            "unit_names": UNIT_NAMES,
+            "plotly_url": request.app.state.plotly_url,
+            "interrupted": None,
+        }
+    )
+    return render(request, "review/submission.html", view)
+
+
+@router.post("/review/sessions/{session_id}/feedback", dependencies=[CsrfProtected])
+def save_review(request: Request, target: ReviewableSession, db: SessionDep, form: FormDep):
+    """The review of the latest attempt (feedback, comments, points, rubric, letter);
+    ``action`` = save | return | release; ``go`` = next | previous after saving."""
+    session, assignment = target.session, target.assignment
+    response = redirect(f"/review/sessions/{session.id}")
+    attempt = grading.latest_attempt(db, session.id)
+    action = str(form.get("action", "save"))
+    try:
+        if attempt is None:
+            raise UserError("review.nothing_submitted", status=409)
+        if session.status == SessionStatus.graded:
+            raise UserError("review.already_released", status=409)
+        review = grading.parse_review({k: str(v) for k, v in form.items()}, assignment)
+        grading.store_review(attempt, review)
+        if action == "return":
+            grading.return_for_revision(session, attempt)
+        elif action == "release":
+            grading.release(session, attempt)
+    except UserError as problem:
+        db.rollback()
+        flash(response, request, problem.key, "error", **problem.params)
+        return response
+    db.add(attempt)
+    db.add(session)
+    db.commit()
+    key = {"return": "review.returned", "release": "review.released"}.get(action, "review.saved")
+    step = grading.neighbours(db, session)
+    go = str(form.get("go", ""))
+    target_id = None
+    if go == "next" and step.next:
+        target_id = step.next[0]
+    elif go == "previous" and step.previous:
+        target_id = step.previous[0]
+    if target_id is not None:
+        response = redirect(f"/review/sessions/{target_id}")
+    flash(response, request, key, "success")
+    return response
+
+
+@router.post("/review/sessions/{session_id}/extension", dependencies=[CsrfProtected])
+def save_extension(request: Request, target: ReviewableSession, db: SessionDep, form: FormDep):
+    """A later due date for this student, typed in the course's time zone (blank removes)."""
+    session, assignment, course = target.session, target.assignment, target.course
+    response = redirect(f"/review/sessions/{session.id}#extension")
+    text = str(form.get("due_at", "")).strip()
+    due = None
+    if text and not form.get("remove"):
+        try:
+            due = local_input_to_utc(datetime.fromisoformat(text[:32]), course.timezone)
+        except ValueError:
+            flash(response, request, "assignment.bad_due", "error")
+            return response
+    grading.set_extension(db, assignment, session.owner_id, due)
+    db.commit()
+    flash(
+        response,
+        request,
+        "review.extension_saved" if due else "review.extension_removed",
+        "success",
+    )
+    return response
+
+
+@router.post(
+    "/courses/{course_id}/assignments/{assignment_id}/release", dependencies=[CsrfProtected]
+)
+def release_selected(request: Request, target: TeacherAssignment, db: SessionDep, form: FormDep):
+    """Bulk release: every ticked submission that has points."""
+    course, assignment = target.course, target.assignment
+    chosen = []
+    for value in form.getlist("session"):
+        try:
+            chosen.append(int(str(value)))
+        except ValueError:
+            continue
+    released, skipped = grading.bulk_release(db, assignment, chosen[:10_000])
+    db.commit()
+    response = redirect(f"/courses/{course.id}/assignments/{assignment.id}")
+    kind = "success" if released and not skipped else ("warning" if released else "error")
+    flash(response, request, "review.bulk_released", kind, released=released, skipped=skipped)
+    return response
