@@ -115,7 +115,7 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
         ("x\n" + "1.0\n" * 7000 + "oops\n", "10", "is not a number"),
         ("position_1,position_2\n1,2\n", "10", "one static record"),
         ("x\n" + "1.0\n" * 7000, "10", "never change"),
-        ("\xff\xfe".encode("latin-1") + b"\x00\x81", "10", "not UTF-8"),
+        (b"\x00\x01\x81\x00", "10", "not text (UTF-8 or GB18030)"),
     ],
 )
 def test_bad_records_are_explained_and_nothing_is_stored(world, content, rate, message):

@@ -183,7 +183,7 @@ def test_simulate_static_and_allan(capsys, tmp_path):
     ("args", "stdin", "message"),
     [
         (["solve", "heading", "/no/such/file.csv"], None, "no such file"),
-        (["solve", "heading", "-"], "x,y\n1,2\n", "expected a header"),
+        (["solve", "heading", "-"], "x,y\n1,2\n", "expected column names"),
         (["solve", "heading", "-"], "position_1,position_2\n1,2\n", "At least 3 different angles"),
         (["solve", "heading", "-"], "position_1,position_2,position_3\n1,abc,3\n", "not a number"),
         (["solve", "heading", "-"], "position_1,position_2,position_3\n1,nan,3\n", "not a number"),

@@ -215,7 +215,7 @@ def test_csv_long_layout_keeps_angles_and_times(student_client):
         ("position_1,position_2\n1,abc\n", "'abc' is not a number"),
         ("position_1,position_2\n1,nan\n", "not a number"),
         ("", "no readings"),
-        ("hello,world\n1,2\n", "expected a header"),
+        ("hello,world\n1,2\n", "reads 'hello | world'"),
         (
             "position_1,position_2,position_3,position_4,position_5\n" + "1,2,3,4,5\n" * 10,
             "at most 4 (8 in the symmetric order",

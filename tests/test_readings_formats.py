@@ -44,3 +44,46 @@ def test_a_decimal_comma_in_a_comma_separated_file_is_still_two_cells():
     with pytest.raises(UserError) as caught:
         parse_readings_csv("position_1\n10,74\nabc\n")
     assert caught.value.key == "csv.not_a_number" and caught.value.params["line"] == 3
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "10.74,-0.50,1.0\n10.65,-0.40,1.1\n",
+        "1,10.74,-0.50,1.0\n2,10.65,-0.40,1.1\n",
+        "0;10,74;-0,50;1,0\n1;10,65;-0,40;1,1\n",
+    ],
+    ids=["numbers-only", "row-numbers", "zero-based-semicolons"],
+)
+def test_a_table_without_a_header_is_read_without_its_row_numbers(text):
+    readings = parse_readings_csv(text)
+    assert len(readings.positions) == 3  # the counting column is not position 1
+    np.testing.assert_allclose(readings.positions[0], [10.74, 10.65])
+    np.testing.assert_allclose(readings.positions[2], [1.0, 1.1])
+
+
+def test_two_headerless_columns_stay_a_time_value_record():
+    with pytest.raises(UserError) as error:
+        parse_readings_csv("0.0,10.74\n0.1,10.65\n")
+    assert error.value.key == "csv.unknown_layout"
+    from app.core.position_records import parse_static_record
+
+    np.testing.assert_allclose(parse_static_record("0.0,10.74\n0.1,10.65\n"), [10.74, 10.65])
+
+
+@pytest.mark.parametrize("encoding", ["utf-8", "utf-8-sig", "gb18030", "utf-16"])
+def test_chinese_headers_in_every_encoding_excel_writes(encoding):
+    from app.core.text_files import decode_text
+
+    data = "序号,位置1,位置2\n1,10.74,-0.50\n2,10.65,-0.40\n".encode(encoding)
+    readings = parse_readings_csv(decode_text(data))
+    for got, want in zip(readings.positions, expected(), strict=True):
+        np.testing.assert_allclose(got, want)
+
+
+def test_binary_is_not_text():
+    from app.core.text_files import decode_text
+
+    with pytest.raises(UserError) as error:
+        decode_text(bytes(range(256)) * 4)
+    assert error.value.key == "csv.encoding"

@@ -21,12 +21,8 @@ from app.core.explain import explain_heading, explain_latitude, render_text
 from app.core.jsonsafe import json_safe
 from app.core.noise_model import GyroNoise, Window, back_to_back
 from app.core.presets import PRESETS
-from app.core.readings import (
-    Readings,
-    parse_readings_csv,
-    parse_static_record,
-    readings_to_long_csv,
-)
+from app.core.position_records import parse_static_record
+from app.core.readings import Readings, parse_readings_csv, readings_to_long_csv
 from app.core.simulate import GyroStream, Setup, simulate_run, simulate_static
 from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.solve import solve_heading, solve_latitude

@@ -6,6 +6,8 @@
 
 Either may be separated by semicolons or tabs instead of commas, with decimal commas
 ("10,74"), as spreadsheets in many European locales write them.
+  A table of numbers only (no header) is read the same way when it has three or more
+  position columns; a first column counting 1, 2, 3… is taken as row numbers.
 * long — header ``position,angle_deg,value`` with optional ``time_s``; one reading per row,
   the angle of each position used as given.
 """
@@ -143,11 +145,17 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     }
     if wide:
         return _parse_wide(wide, rows[1:])
+    headerless = _headerless_columns(rows)
+    if headerless is not None:
+        return _parse_wide(headerless, rows)
+    found = " | ".join(cell.strip() for cell in header)[:80]
     raise UserError(
         "csv.unknown_layout",
-        f"Line {header_line}: expected a header 'position_1,position_2,...' (wide) or "
-        "'position,angle_deg,value' (long).",
+        f"Line {header_line} reads '{found}': expected column names position_1, position_2, "
+        "… (or 位置1, 位置2 …; one column per position), position,angle_deg,value (one "
+        "reading per row), or a table of three or more columns of numbers.",
         line=header_line,
+        found=found,
     )
 
 
@@ -155,14 +163,30 @@ DECIMAL_COMMA = re.compile(r"([+-]?\d*),(\d+(?:[eE][+-]?\d+)?)")
 CHINESE_POSITION = re.compile(r"^位置\s*_?\s*(\d+)$")
 
 
+def _headerless_columns(rows) -> dict[int, int] | None:
+    """Position columns of a wide table without a header: every row numbers only, at least
+    three positions (two columns may be ``time_s,value``); a first column counting 1, 2, 3…
+    (or 0, 1, 2…) is a row number, not position 1."""
+    width = len(rows[0][1])
+    if any(len(row) != width or not all(_is_number(c) for c in row) for _, row in rows):
+        return None
+    first = [row[0].strip() for _, row in rows]
+    start = first[0]
+    counting = start in ("0", "1") and first == [str(int(start) + k) for k in range(len(rows))]
+    skip = 1 if counting and width > 1 else 0
+    if width - skip < 3:
+        return None
+    return {index: index - skip + 1 for index in range(skip, width)}
+
+
 def _delimiter(text: str) -> str:
-    """``;`` or a tab when the first line that is not a comment uses it and no comma (what
-    spreadsheets in Europe write, with decimal commas), else ``,``."""
+    """A tab or ``;`` when the first line that is not a comment uses it (what spreadsheets
+    in Europe write, with decimal commas), else ``,``."""
     first = next(
         (line for line in text.splitlines() if line.strip() and not line.startswith("#")), ""
     )
-    for candidate in (";", "\t"):
-        if candidate in first and "," not in first:
+    for candidate in ("\t", ";"):
+        if candidate in first:
             return candidate
     return ","
 
@@ -292,106 +316,6 @@ def readings_to_long_csv(
             extra = f",{temps[index]:.3f}" if temps is not None else ""
             buffer.write(f"{number},{angle:.6g},{time:.3f},{value:{value_format}}{extra}\n")
     return buffer.getvalue()
-
-
-def parse_static_record(text: str) -> np.ndarray:
-    """One static record for an Allan analysis.
-
-    Parameters
-    ----------
-    text : str
-        A CSV in either layout with one position, or one value (or ``time_s,value``) per
-        line with an optional header.
-
-    Returns
-    -------
-    numpy.ndarray
-        The readings, in the unit the record was written in.
-
-    Raises
-    ------
-    UserError
-        More than one position (``allan.one_position``) or a bad cell.
-    """
-    try:
-        readings = parse_readings_csv(text)
-    except UserError as error:
-        if error.key != "csv.unknown_layout":
-            raise
-        return parse_position_csv(text)[0]
-    if len(readings.positions) != 1:
-        raise UserError(
-            "allan.one_position",
-            "An Allan analysis needs one static record (one position), not "
-            f"{len(readings.positions)}.",
-            count=len(readings.positions),
-        )
-    return readings.positions[0]
-
-
-def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None]:
-    r"""One position's readings: one value per line, or ``time_s,value`` per line.
-
-    What a device or a script sends (``text/csv`` to the API) and the fallback for a static
-    record.  An optional header on line 1 and ``#`` comment lines are skipped; lines may
-    end in ``\n``, ``\r\n`` or a bare ``\r``.
-
-    Parameters
-    ----------
-    data : bytes or str
-        The CSV, as UTF-8 bytes (a byte-order mark allowed) or text.
-
-    Returns
-    -------
-    values : numpy.ndarray
-        The readings, in the order given (their unit is the caller's to say).
-    times : numpy.ndarray or None
-        Each reading's time in seconds when every line gives one, else None.
-
-    Raises
-    ------
-    UserError
-        ``csv.not_utf8``, ``csv.unreadable``, ``csv.not_a_number`` or ``csv.out_of_range``
-        (with the line), ``csv.one_or_two_columns``, ``csv.times_on_every_line``,
-        ``csv.empty``.
-    """
-    if isinstance(data, bytes):
-        try:
-            data = data.decode("utf-8-sig")
-        except UnicodeDecodeError:
-            raise UserError("csv.not_utf8", "The CSV is not UTF-8 text.") from None
-    try:  # newline="": lines may end in \n, \r\n or a bare \r
-        rows = list(csv.reader(io.StringIO(data.lstrip("\ufeff"), newline="")))
-    except csv.Error as error:
-        raise UserError(
-            "csv.unreadable", f"The file cannot be read as CSV: {error}.", detail=str(error)
-        ) from None
-    values: list[float] = []
-    times: list[float] = []
-    for number, row in enumerate(rows, start=1):
-        cells = [c.strip() for c in row if c.strip()]
-        if not cells or cells[0].startswith("#"):
-            continue
-        if number == 1 and not all(_is_number(cell) for cell in cells):
-            continue  # a header such as "time_s,value"
-        if len(cells) > 2:
-            raise UserError(
-                "csv.one_or_two_columns",
-                f"Line {number}: expected 'value' or 'time_s,value'.",
-                line=number,
-            )
-        numbers = [
-            _number(cell, number, name)
-            for cell, name in zip(cells, ("time_s", "value")[2 - len(cells) :], strict=True)
-        ]
-        values.append(numbers[-1])
-        if len(numbers) == 2:
-            times.append(numbers[0])
-    if times and len(times) != len(values):
-        raise UserError("csv.times_on_every_line", "Give a time on every line or on none.")
-    if not values:
-        raise UserError("csv.empty", "The file has no readings.")
-    return np.array(values), (np.array(times) if times else None)
 
 
 def _is_number(text: str) -> bool:

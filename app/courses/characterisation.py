@@ -21,7 +21,7 @@ from app.core.allan import allan_deviation
 from app.core.allan_intervals import fit_intervals
 from app.core.exceptions import UserError
 from app.core.noise_model import GyroNoise
-from app.core.readings import parse_static_record
+from app.core.position_records import parse_static_record
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.models import Assignment, utcnow
 

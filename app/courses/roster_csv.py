@@ -13,6 +13,9 @@ import io
 import re
 from dataclasses import dataclass, field
 
+from app.core.exceptions import UserError
+from app.core.text_files import decode_text
+
 MAX_ROSTER_BYTES = 1_000_000
 MAX_ROSTER_ROWS = 2000
 USERNAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}$")
@@ -61,15 +64,6 @@ class RosterParse:
         return not self.problems and bool(self.rows)
 
 
-def decode_roster(data: bytes) -> str | None:
-    for encoding in ("utf-8-sig", "gb18030"):
-        try:
-            return data.decode(encoding)
-        except UnicodeDecodeError:
-            continue
-    return None
-
-
 def _header_map(cells: list[str]) -> dict[str, int] | None:
     mapping: dict[str, int] = {}
     for index, cell in enumerate(cells):
@@ -85,8 +79,9 @@ def parse_roster(data: bytes) -> RosterParse:
         return RosterParse(
             [], [RosterProblem(0, "roster.too_large", {"limit_kb": MAX_ROSTER_BYTES // 1000})]
         )
-    text = decode_roster(data)
-    if text is None:
+    try:
+        text = decode_text(data)
+    except UserError:
         return RosterParse([], [RosterProblem(0, "roster.encoding")])
     try:
         dialect = csv.Sniffer().sniff(text[:4096], delimiters=",;\t")

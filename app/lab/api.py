@@ -22,7 +22,8 @@ from sqlmodel import Session, select
 from app.accounts.api_auth import ReadCaller, UploadCaller
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe, loads_finite
-from app.core.readings import parse_decimal, parse_position_csv
+from app.core.position_records import parse_position_csv
+from app.core.readings import parse_decimal
 from app.core.units import canonical_unit
 from app.lab import sessions as labsessions
 from app.lab.results import session_results

@@ -299,6 +299,9 @@ JS_MESSAGES = (
     "chart.time_s",
     "chart.rate_deg_h",
     "js.pasted",
+    "js.header_skipped",
+    "js.row_numbers_skipped",
+    "js.cells_dropped",
 )
 
 

@@ -10,6 +10,7 @@ from fastapi import APIRouter, File, Form, Request, UploadFile
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.core.readings import parse_decimal
+from app.core.text_files import decode_text
 from app.courses import characterisation
 from app.courses.assignment_form import form_values, parse_assignment_form
 from app.lab.charts import class_error_figure, class_histogram_figure
@@ -115,10 +116,7 @@ def upload_characterisation(
             raise UserError("characterisation.no_file", "Choose the record's CSV file.")
         if len(data) > MAX_RECORD_BYTES:
             raise UserError("characterisation.too_large", "The file is larger than 20 MB.")
-        try:
-            text = data.decode("utf-8-sig")
-        except UnicodeDecodeError:
-            raise UserError("characterisation.encoding", "The file is not UTF-8 text.") from None
+        text = decode_text(data)
         try:
             rate = parse_decimal(rate_hz.strip())
         except ValueError:

@@ -83,13 +83,53 @@
   });
 
   // --- typed grid -------------------------------------------------------------------------
+  // A number as typed or pasted: "10.74", "-1e-3", or with a decimal comma "10,74".
   function parseCell(text) {
-    const value = text.trim();
+    let value = text.trim();
     if (value === "") return { empty: true };
+    if (/^[-+]?\d*,\d+([eE][-+]?\d+)?$/.test(value)) value = value.replace(",", ".");
     if (!/^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/.test(value)) return { error: "js.not_a_number" };
     const number = Number(value);
     if (!Number.isFinite(number)) return { error: "js.not_finite" };
     return { value: number };
+  }
+
+  // A block copied from a spreadsheet or a handout table → rows of cells.  Recognises a
+  // header row (position_1, 位置1, sample, 序号 …) and a row-number column, which are
+  // dropped and reported, never read as readings.
+  const ROW_NUMBER_NAMES = new Set(["sample", "n", "#", "no", "no.", "index", "序号", "编号", "次数", "row", "i"]);
+  function parseBlock(text) {
+    const lines = text.replace(/\r\n?/g, "\n").split("\n").filter((line) => line.trim() !== "");
+    const rows = splitLines(lines);
+    const notes = [];
+    let header = null;
+    let body = rows;
+    if (body.length && rows[0].some((cell) => cell !== "" && parseCell(cell).error)) {
+      header = body[0];
+      body = body.slice(1);
+      notes.push("js.header_skipped");
+    }
+    const firstColumn = body.map((row) => row[0]);
+    const headerSaysRow = header && ROW_NUMBER_NAMES.has((header[0] || "").toLowerCase());
+    const counts = body.length > 1 && body[0].length > 1 && /^[01]$/.test(firstColumn[0]) &&
+      firstColumn.every((cell, i) => cell === String(i + Number(firstColumn[0])));
+    if (headerSaysRow || counts) {
+      body = body.map((row) => row.slice(1));
+      notes.push("js.row_numbers_skipped");
+    }
+    return { rows: body, notes };
+  }
+
+  // Cells of each line: tabs (a spreadsheet's copy), else semicolons, else commas -- unless
+  // every line has one comma and no point ("10,74": a decimal comma) -- else blanks.
+  function splitLines(lines) {
+    const all = lines.join("\n");
+    let split;
+    if (all.includes("\t")) split = (line) => line.split("\t");
+    else if (all.includes(";")) split = (line) => line.split(";");
+    else if (all.includes(",") && !(lines.every((line) => (line.match(/,/g) || []).length === 1) && !all.includes("."))) split = (line) => line.split(",");
+    else split = (line) => line.trim().split(/\s+/);
+    return lines.map((line) => split(line).map((cell) => cell.trim()));
   }
 
   function setupGrid(panel) {
@@ -108,6 +148,7 @@
           const input = document.createElement("input");
           input.inputMode = "decimal";
           input.autocomplete = "off";
+          input.enterKeyHint = "next";
           input.dataset.column = String(c + 1);
           input.setAttribute("aria-label", `${t("js.position", { n: c + 1 })} #${body.rows.length + 1}`);
           cell.appendChild(input);
@@ -117,12 +158,17 @@
       }
     }
 
+    function cellAt(row, column) {
+      return body.rows[row]?.querySelectorAll("input")[column] || null;
+    }
+
     function validate() {
       let problem = null;
       let count = 0;
       body.querySelectorAll("input").forEach((input) => {
         const parsed = parseCell(input.value);
         input.classList.toggle("invalid", Boolean(parsed.error));
+        input.setAttribute("aria-invalid", String(Boolean(parsed.error)));
         input.title = parsed.error ? t(parsed.error, { value: input.value }) : "";
         if (parsed.error && !problem) {
           problem = `${t("js.position", { n: input.dataset.column })}, #${input.closest("tr").rowIndex}: ${t(parsed.error, { value: input.value.trim() })}`;
@@ -135,25 +181,56 @@
     }
 
     body.addEventListener("input", validate);
+    // Enter and the arrow keys move like a spreadsheet: Enter (and ↓) down a column, ↑ up,
+    // ← → across when the caret is at the edge of the cell.  A new row appears at the end.
+    body.addEventListener("keydown", (event) => {
+      const input = event.target.closest("input");
+      if (!input || event.altKey || event.ctrlKey || event.metaKey) return;
+      const row = input.closest("tr").sectionRowIndex;
+      const column = Number(input.dataset.column) - 1;
+      let target = null;
+      if (event.key === "Enter" || event.key === "ArrowDown") {
+        const step = event.key === "Enter" && event.shiftKey ? -1 : 1;
+        if (step > 0 && row + 1 >= body.rows.length) addRows(1);
+        target = cellAt(row + step, column);
+      } else if (event.key === "ArrowUp") {
+        target = cellAt(row - 1, column);
+      } else if (event.key === "ArrowLeft" && input.selectionStart === 0 && (input.selectionEnd === 0 || input.selectionEnd === input.value.length)) {
+        target = cellAt(row, column - 1); // caret at the start, or the cell just entered (all selected)
+      } else if (event.key === "ArrowRight" && input.selectionEnd === input.value.length && (input.selectionStart === 0 || input.selectionStart === input.value.length)) {
+        target = cellAt(row, column + 1);
+      } else {
+        return;
+      }
+      event.preventDefault();
+      if (target) {
+        target.focus();
+        target.select();
+      }
+    });
     body.addEventListener("paste", (event) => {
       const target = event.target.closest("input");
       const text = (event.clipboardData || window.clipboardData).getData("text");
-      if (!target || !/[\t\n,;]/.test(text.trim())) return;
+      if (!target || !/[\t\n;]|,.*,|\s\S/.test(text.trim())) return;
       event.preventDefault();
-      const lines = text.replace(/\r/g, "").split("\n").filter((line, i, all) => line.trim() !== "" || i < all.length - 1);
-      const separator = text.includes("\t") ? "\t" : /[;]/.test(text) ? ";" : ",";
+      const { rows, notes } = parseBlock(text);
       const startRow = target.closest("tr").sectionRowIndex;
       const startColumn = Number(target.dataset.column) - 1;
-      const needed = startRow + lines.length - body.rows.length;
+      const needed = startRow + rows.length - body.rows.length;
       if (needed > 0) addRows(needed);
-      lines.forEach((line, r) => {
-        line.split(separator).forEach((value, c) => {
-          const input = body.rows[startRow + r]?.querySelectorAll("input")[startColumn + c];
-          if (input) input.value = value.trim();
+      let dropped = 0;
+      rows.forEach((cells, r) => {
+        cells.forEach((value, c) => {
+          const input = cellAt(startRow + r, startColumn + c);
+          if (input) input.value = value;
+          else if (value !== "") dropped += 1;
         });
       });
       validate();
-      status.textContent = `${t("js.pasted", { rows: lines.length })} ${status.textContent}`;
+      const extra = notes.map((key) => t(key));
+      if (dropped) extra.push(t("js.cells_dropped", { n: dropped, columns }));
+      status.textContent = `${t("js.pasted", { rows: rows.length })} ${extra.join(" ")} ${status.textContent}`.trim();
+      status.classList.toggle("error-text", Boolean(dropped) || status.classList.contains("error-text"));
     });
     panel.querySelector(".add-rows").addEventListener("click", () => addRows(5));
     panel.querySelector(".clear-grid").addEventListener("click", () => {
@@ -188,6 +265,18 @@
   document.querySelectorAll('.method-panel[data-method="manual"]').forEach(setupGrid);
 
   // --- CSV file ---------------------------------------------------------------------------
+  // UTF-8 first, then GB18030 (what a Chinese-locale Excel saves); UTF-16 by its mark.
+  function decodeFile(buffer) {
+    const bytes = new Uint8Array(buffer);
+    if (bytes[0] === 0xff && bytes[1] === 0xfe) return new TextDecoder("utf-16le").decode(bytes);
+    if (bytes[0] === 0xfe && bytes[1] === 0xff) return new TextDecoder("utf-16be").decode(bytes);
+    try {
+      return new TextDecoder("utf-8", { fatal: true }).decode(bytes);
+    } catch (error) {
+      return new TextDecoder("gb18030").decode(bytes);
+    }
+  }
+
   function setupCsv(panel) {
     const input = panel.querySelector(".csv-file");
     const preview = panel.querySelector(".csv-preview");
@@ -203,7 +292,7 @@
         preview.innerHTML = `<p class="error-text">${t("js.too_large")}</p>`;
         return;
       }
-      text = await file.text();
+      text = decodeFile(await file.arrayBuffer());
       try {
         const result = await postJson("/csv/preview", { part: panel.dataset.part, unit: panel.querySelector(".unit").value, text });
         const rows = result.positions.map((p) =>

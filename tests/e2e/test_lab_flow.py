@@ -36,12 +36,19 @@ def test_student_types_the_handout_tables(any_live_server, new_page):
     log_in(page, live_server.url, "student", STUDENT_PASSWORD)
     start_practice(page, live_server.url)
 
-    # Part A: typed cell by cell, as a student would
+    # Part A: typed down each column, Enter after each reading, as a student would
     cells = page.locator("#part-heading .readings-grid tbody tr")
-    for r, row in enumerate(table("handout_horizontal.csv")):
-        inputs = cells.nth(r).locator("input")
-        for c, value in enumerate(row):
-            inputs.nth(c).fill(value)
+    rows = table("handout_horizontal.csv")
+    for c in range(4):
+        cells.nth(0).locator("input").nth(c).click()
+        for row in rows:
+            page.keyboard.type(row[c])
+            page.keyboard.press("Enter")
+    assert cells.nth(1).locator("input").nth(0).input_value() == rows[1][0]  # not "10.7410.65"
+    page.keyboard.press("ArrowUp")  # the arrows move between cells
+    page.keyboard.press("ArrowLeft")
+    focused = page.evaluate("document.activeElement.dataset.column")
+    assert focused == "3"
     status = page.locator("#part-heading .grid-status")
     expect(status).to_contain_text("40 readings")
     page.locator("#part-heading .readings-grid tbody input").first.fill("10.7x")
@@ -50,8 +57,10 @@ def test_student_types_the_handout_tables(any_live_server, new_page):
     with page.expect_navigation():
         page.locator("#part-heading .save-manual").click()
 
-    # Part B: a whole block pasted from a spreadsheet
-    text = "\n".join("\t".join(row) for row in table("handout_vertical.csv"))
+    # Part B: a whole block pasted from a spreadsheet, with its header and row numbers
+    lines = ["序号\t位置1\t位置2\t位置3\t位置4"]
+    lines += [f"{n}\t" + "\t".join(row) for n, row in enumerate(table("handout_vertical.csv"), 1)]
+    text = "\n".join(lines)
     first = page.locator("#part-latitude .readings-grid tbody input").first
     first.click()
     page.evaluate(
@@ -64,6 +73,9 @@ def test_student_types_the_handout_tables(any_live_server, new_page):
         ["#part-latitude .readings-grid tbody input", text],
     )
     expect(page.locator("#part-latitude .grid-status")).to_contain_text("Pasted 10 rows")
+    expect(page.locator("#part-latitude .grid-status")).to_contain_text("header row skipped")
+    expect(page.locator("#part-latitude .grid-status")).to_contain_text("row-number column")
+    expect(page.locator("#part-latitude .grid-status")).to_contain_text("40 readings")
     with page.expect_navigation():
         page.locator("#part-latitude .save-manual").click()
 

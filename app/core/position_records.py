@@ -1,0 +1,110 @@
+"""Single records: one position's readings as a device or a script sends them, and a static
+record for an Allan analysis."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+import numpy as np
+
+from app.core.exceptions import UserError
+from app.core.readings import _is_number, _number, parse_readings_csv
+from app.core.text_files import decode_text
+
+
+def parse_static_record(text: str) -> np.ndarray:
+    """One static record for an Allan analysis.
+
+    Parameters
+    ----------
+    text : str
+        A CSV in either layout with one position, or one value (or ``time_s,value``) per
+        line with an optional header.
+
+    Returns
+    -------
+    numpy.ndarray
+        The readings, in the unit the record was written in.
+
+    Raises
+    ------
+    UserError
+        More than one position (``allan.one_position``) or a bad cell.
+    """
+    try:
+        readings = parse_readings_csv(text)
+    except UserError as error:
+        if error.key != "csv.unknown_layout":
+            raise
+        return parse_position_csv(text)[0]
+    if len(readings.positions) != 1:
+        raise UserError(
+            "allan.one_position",
+            "An Allan analysis needs one static record (one position), not "
+            f"{len(readings.positions)}.",
+            count=len(readings.positions),
+        )
+    return readings.positions[0]
+
+
+def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None]:
+    r"""One position's readings: one value per line, or ``time_s,value`` per line.
+
+    What a device or a script sends (``text/csv`` to the API) and the fallback for a static
+    record.  An optional header on line 1 and ``#`` comment lines are skipped; lines may
+    end in ``\n``, ``\r\n`` or a bare ``\r``.
+
+    Parameters
+    ----------
+    data : bytes or str
+        The CSV, as bytes (UTF-8, UTF-16 with a byte-order mark, or GB18030) or text.
+
+    Returns
+    -------
+    values : numpy.ndarray
+        The readings, in the order given (their unit is the caller's to say).
+    times : numpy.ndarray or None
+        Each reading's time in seconds when every line gives one, else None.
+
+    Raises
+    ------
+    UserError
+        ``csv.encoding``, ``csv.unreadable``, ``csv.not_a_number`` or ``csv.out_of_range``
+        (with the line), ``csv.one_or_two_columns``, ``csv.times_on_every_line``,
+        ``csv.empty``.
+    """
+    if isinstance(data, bytes):
+        data = decode_text(data)
+    try:  # newline="": lines may end in \n, \r\n or a bare \r
+        rows = list(csv.reader(io.StringIO(data.lstrip("\ufeff"), newline="")))
+    except csv.Error as error:
+        raise UserError(
+            "csv.unreadable", f"The file cannot be read as CSV: {error}.", detail=str(error)
+        ) from None
+    values: list[float] = []
+    times: list[float] = []
+    for number, row in enumerate(rows, start=1):
+        cells = [c.strip() for c in row if c.strip()]
+        if not cells or cells[0].startswith("#"):
+            continue
+        if number == 1 and not all(_is_number(cell) for cell in cells):
+            continue  # a header such as "time_s,value"
+        if len(cells) > 2:
+            raise UserError(
+                "csv.one_or_two_columns",
+                f"Line {number}: expected 'value' or 'time_s,value'.",
+                line=number,
+            )
+        numbers = [
+            _number(cell, number, name)
+            for cell, name in zip(cells, ("time_s", "value")[2 - len(cells) :], strict=True)
+        ]
+        values.append(numbers[-1])
+        if len(numbers) == 2:
+            times.append(numbers[0])
+    if times and len(times) != len(values):
+        raise UserError("csv.times_on_every_line", "Give a time on every line or on none.")
+    if not values:
+        raise UserError("csv.empty", "The file has no readings.")
+    return np.array(values), (np.array(times) if times else None)
