@@ -20,8 +20,8 @@ from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude, render_text
 from app.core.jsonsafe import json_safe
 from app.core.noise_model import GyroNoise, Window, back_to_back
-from app.core.presets import PRESETS
 from app.core.position_records import parse_static_record
+from app.core.presets import PRESETS
 from app.core.readings import Readings, parse_readings_csv, readings_to_long_csv
 from app.core.simulate import GyroStream, Setup, simulate_run, simulate_static
 from app.core.sinusoid import elevation_angles, heading_angles
