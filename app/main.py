@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import gzip
 from contextlib import asynccontextmanager
+from functools import lru_cache
 from pathlib import Path
 
 import plotly
-from fastapi import FastAPI
+from fastapi import FastAPI, Request, Response
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 from swagger_ui_bundle import swagger_ui_path
@@ -41,13 +43,22 @@ SWAGGER_PAGE = """<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>GyroLab API</title>
 <link rel="icon" href="/static/favicon.svg" type="image/svg+xml">
 <link rel="stylesheet" href="/vendor/swagger-ui/swagger-ui.css"></head>
-<body data-schema="/docs/openapi.json"><div id="swagger-ui"></div>
+<body data-schema="/docs/openapi.json">
+<nav style="font:15px system-ui,sans-serif;padding:10px 20px;background:#13263a">
+<a href="/" style="color:#fff;text-decoration:none">&larr; GyroLab</a></nav>
+<div id="swagger-ui"></div>
 <script src="/vendor/swagger-ui/swagger-ui-bundle.js"></script>
 <script src="/vendor/swagger-ui/swagger-ui-standalone-preset.js"></script>
 <script src="/static/js/swagger-init.js"></script></body></html>
 """
 PLOTLY_JS = Path(plotly.__file__).parent / "package_data" / "plotly.min.js"
 PLOTLY_URL = f"/vendor/plotly-{plotly.__version__}.min.js"
+
+
+@lru_cache(maxsize=1)
+def plotly_gzip() -> bytes:
+    """The gzip of plotly.min.js (made on the first request, then kept)."""
+    return gzip.compress(PLOTLY_JS.read_bytes(), compresslevel=6, mtime=0)
 
 
 def create_app(*, migrate_on_start: bool = True) -> FastAPI:
@@ -85,13 +96,20 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
         return {**app.openapi(), "openapi": "3.0.3"}
 
     @app.get(PLOTLY_URL, include_in_schema=False)
-    def plotly_js() -> FileResponse:
-        """plotly.js straight from the installed plotly package, cached for a year."""
-        return FileResponse(
-            PLOTLY_JS,
-            media_type="text/javascript",
-            headers={"Cache-Control": "public, max-age=31536000, immutable"},
-        )
+    def plotly_js(request: Request) -> Response:
+        """plotly.js from the installed plotly package, gzip-compressed once per process
+        (4.8 MB → 1.4 MB) for browsers that accept it, and cached for a year."""
+        headers = {
+            "Cache-Control": "public, max-age=31536000, immutable",
+            "Vary": "Accept-Encoding",
+        }
+        if "gzip" in request.headers.get("accept-encoding", ""):
+            return Response(
+                plotly_gzip(),
+                media_type="text/javascript",
+                headers={**headers, "Content-Encoding": "gzip"},
+            )
+        return FileResponse(PLOTLY_JS, media_type="text/javascript", headers=headers)
 
     app.state.plotly_url = PLOTLY_URL
 

@@ -121,10 +121,20 @@ def test_language_switch_is_remembered_per_user(client, teacher, app):
 def test_plotly_is_served_from_the_installed_package(client):
     from app.main import PLOTLY_JS, PLOTLY_URL
 
-    response = client.get(PLOTLY_URL)
-    assert response.status_code == 200
-    assert "max-age=31536000" in response.headers["cache-control"]
-    assert len(response.content) == Path(PLOTLY_JS).stat().st_size > 1_000_000
+    plain = client.get(PLOTLY_URL, headers={"Accept-Encoding": "identity"})
+    assert plain.status_code == 200 and "content-encoding" not in plain.headers
+    assert "max-age=31536000" in plain.headers["cache-control"]
+    assert len(plain.content) == Path(PLOTLY_JS).stat().st_size > 1_000_000
+    # compressed for browsers: under a third of the bytes on the wire, the same script
+    packed = client.get(PLOTLY_URL, headers={"Accept-Encoding": "gzip, deflate, br"})
+    assert packed.headers["content-encoding"] == "gzip"
+    assert packed.headers["vary"] == "Accept-Encoding"
+    assert int(packed.headers["content-length"]) < len(plain.content) / 3
+    assert packed.content == plain.content  # httpx decodes it
+
+
+def test_api_docs_link_back_to_the_app(client):
+    assert '<a href="/"' in client.get("/docs").text
 
 
 def test_no_page_loads_anything_from_the_internet():

@@ -17,11 +17,17 @@ from app.core.exceptions import UserError
 MAX_POINTS = 2000
 COLORS = ["#0b6bcb", "#d1495b", "#2a9d8f", "#e9a23b", "#6d597a", "#264653"]
 LAYOUT = {
-    "margin": {"l": 60, "r": 20, "t": 40, "b": 50},
+    # titles sit on the left, clear of plotly's toolbar at the top right
+    "margin": {"l": 60, "r": 20, "t": 50, "b": 50},
     "height": 320,
     "font": {"family": "system-ui, 'PingFang SC', 'Noto Sans CJK SC', sans-serif"},
     "legend": {"orientation": "h", "y": -0.25},
 }
+
+
+def titled(text: str) -> dict:
+    """A chart title, left-aligned so the toolbar (top right) never covers it."""
+    return {"text": text, "x": 0.01, "xanchor": "left", "font": {"size": 14}}
 
 
 def downsample(times: np.ndarray, values: np.ndarray, limit: int = MAX_POINTS):
@@ -40,9 +46,12 @@ def downsample(times: np.ndarray, values: np.ndarray, limit: int = MAX_POINTS):
 
 
 def readings_figure(part_result, _: Callable[..., str]) -> dict:
+    """Each position's readings against time, or against the reading number when the
+    readings have no times (typed or pasted)."""
     traces = []
+    timed = all(item.times is not None for item in part_result.positions.values())
     for position, item in sorted(part_result.positions.items()):
-        times = item.times if item.times is not None else np.arange(item.values.size, dtype=float)
+        times = item.times if timed else np.arange(1, item.values.size + 1, dtype=float)
         t, v = downsample(times, item.values)
         traces.append(
             {
@@ -58,8 +67,8 @@ def readings_figure(part_result, _: Callable[..., str]) -> dict:
         "data": traces,
         "layout": {
             **LAYOUT,
-            "title": {"text": _("chart.readings_title")},
-            "xaxis": {"title": {"text": _("chart.time_s")}},
+            "title": titled(_("chart.readings_title")),
+            "xaxis": {"title": {"text": _("chart.time_s") if timed else _("chart.reading_number")}},
             "yaxis": {"title": {"text": _("chart.rate_deg_h")}},
         },
     }
@@ -102,7 +111,7 @@ def fit_figure(part_result, _: Callable[..., str]) -> dict | None:
         ],
         "layout": {
             **LAYOUT,
-            "title": {"text": _("chart.fit_title")},
+            "title": titled(_("chart.fit_title")),
             "xaxis": {"title": {"text": axis}},
             "yaxis": {"title": {"text": _("chart.rate_deg_h")}},
         },
@@ -148,7 +157,7 @@ def compass_figure(heading_result, angles, _: Callable[..., str]) -> dict | None
         **LAYOUT,
         "height": 340,
         "showlegend": False,
-        "title": {"text": _("chart.compass_title", azimuth=f"{start:.2f}")},
+        "title": titled(_("chart.compass_title", azimuth=f"{start:.2f}")),
         "polar": {
             "angularaxis": {"direction": "clockwise", "rotation": 90, "dtick": 30},
             "radialaxis": {"visible": False, "range": [0, 1.15]},
@@ -189,7 +198,7 @@ def allan_figure(part_result, _: Callable[..., str], minimum_samples: int = 1000
         ],
         "layout": {
             **LAYOUT,
-            "title": {"text": _("chart.allan_title", n=longest.take.position)},
+            "title": titled(_("chart.allan_title", n=longest.take.position)),
             "xaxis": {"type": "log", "title": {"text": "τ (s)"}},
             "yaxis": {"type": "log", "title": {"text": _("chart.adev")}},
         },
@@ -236,13 +245,18 @@ def class_error_figure(rows, _: Callable[..., str]) -> dict:
         "layout": {
             **LAYOUT,
             "margin": {**LAYOUT["margin"], "r": 70},
-            "title": {"text": _("review.class_errors_title")},
+            "title": titled(_("review.class_errors_title")),
+            "xaxis": {"automargin": True, "tickangle": -30},
             "yaxis": {"title": {"text": _("review.heading_error")}, "zeroline": True},
             "yaxis2": {
                 "title": {"text": _("review.latitude_error")},
                 "overlaying": "y",
                 "side": "right",
                 "rangemode": "tozero",
+                "showgrid": False,  # one grid (the left axis's); the right axis's ticks only
+                "tickmode": "auto",  # not "sync" (plotly's default here): round numbers
+                "nticks": 6,
+                "tickformat": ".2~f",
             },
         },
     }
@@ -254,7 +268,6 @@ def class_histogram_figure(rows, _: Callable[..., str]) -> dict:
         "data": [
             {
                 "type": "histogram",
-                "nbinsx": 24,
                 "x": [e for e in errors if e is not None],
                 "name": _("review.heading_error"),
                 "marker": {"color": COLORS[0]},
@@ -262,8 +275,14 @@ def class_histogram_figure(rows, _: Callable[..., str]) -> dict:
         ],
         "layout": {
             **LAYOUT,
-            "title": {"text": _("review.histogram_title")},
-            "xaxis": {"title": {"text": _("review.heading_error")}},
-            "yaxis": {"title": {"text": _("review.students")}},
+            "title": titled(_("review.histogram_title")),
+            "bargap": 0.05,
+            "xaxis": {"title": {"text": _("review.heading_error")}, "automargin": True},
+            # whole students: integer ticks, never 0.5
+            "yaxis": {
+                "title": {"text": _("review.students")},
+                "dtick": max(1, math.ceil(len(errors) / 8)),
+                "tickformat": "d",
+            },
         },
     }

@@ -54,7 +54,7 @@
       xaxis: { title: { text: t("explore.axis_azimuth") }, range: [0, 360], dtick: 45 },
       yaxis: { title: { text: t("explore.axis_error") }, zeroline: true },
       legend: { orientation: "h", y: -0.2 },
-    }, { responsive: true, displaylogo: false });
+    }, { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] });
     info.textContent = t("explore.runs_used", { runs: data.info.runs, points: data.info.points,
                                                  total: data.info.simulated_runs, seconds: data.info.seconds });
     const dwell = data.dwell;
@@ -69,7 +69,7 @@
       yaxis: { type: "log", title: { text: t("explore.sigma_axis") } },
       legend: { orientation: "h", y: -0.3 },
       shapes: dwell.knee_s ? [{ type: "line", x0: dwell.knee_s, x1: dwell.knee_s, yref: "paper", y0: 0, y1: 1, line: { color: "#e9a23b", dash: "dot" } }] : [],
-    }, { responsive: true, displaylogo: false });
+    }, { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] });
     const orderColors = { "1234": "#d1495b", "1324": "#e9a23b", "12344321": "#0b6bcb" };
     Plotly.react("order-chart", Object.entries(data.orders.orders).map(([order, errors]) => ({
       x: data.orders.azimuth_deg, y: errors, mode: "lines", name: t(`explore.order_${order}`),
@@ -79,7 +79,7 @@
       xaxis: { title: { text: t("explore.axis_azimuth") }, range: [0, 360], dtick: 45 },
       yaxis: { title: { text: t("explore.axis_error") }, zeroline: true },
       legend: { orientation: "h", y: -0.3 },
-    }, { responsive: true, displaylogo: false });
+    }, { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] });
   }
 
   function schedule() {

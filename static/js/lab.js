@@ -13,7 +13,7 @@
   const selected = { heading: 1, latitude: 1 };
 
   // --- charts -----------------------------------------------------------------------------
-  const plotConfig = { responsive: true, displaylogo: false };
+  const plotConfig = { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] };
   document.querySelectorAll(".chart[data-figure]").forEach((element) => {
     const figure = figures[element.dataset.figure];
     if (figure && window.Plotly) Plotly.newPlot(element, figure.data, figure.layout, plotConfig);

@@ -6,7 +6,7 @@
   document.querySelectorAll(".chart[data-figure]").forEach((element) => {
     const figure = figures[element.dataset.figure];
     if (figure && window.Plotly) {
-      Plotly.newPlot(element, figure.data, figure.layout, { responsive: true, displaylogo: false });
+      Plotly.newPlot(element, figure.data, figure.layout, { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] });
     }
   });
 

@@ -1,0 +1,72 @@
+"""Phones and laptops: no page scrolls sideways at 390 px or 1366 px, in either language,
+for a student or a teacher; the class dashboard's table fits at 1366 px."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.e2e.conftest import log_in
+
+pytestmark = pytest.mark.e2e
+
+# the page's width beyond the viewport, and the first elements sticking out (outside the
+# containers that scroll on purpose: tables, the grid, plotly's own layers)
+OVERFLOW = """() => {
+  const width = document.documentElement.clientWidth;
+  const out = [];
+  if (document.documentElement.scrollWidth > width + 1) {
+    for (const element of document.querySelectorAll("body *")) {
+      const box = element.getBoundingClientRect();
+      if (box.width > 0 && box.right > width + 1
+          && !element.closest(".table-scroll, .grid-wrap, .js-plotly-plot, pre")) {
+        out.push(`${element.tagName.toLowerCase()}.${element.className}`);
+      }
+    }
+  }
+  return {scroll: document.documentElement.scrollWidth, width, out: out.slice(0, 5)};
+}"""
+
+
+def pages_of(page, url: str, role: str) -> list[str]:
+    """Every kind of page the role sees, found by following the app's own links."""
+    paths = ["/", "/lab", "/explore", "/account/tokens", "/account/password"]
+    if role == "teacher":
+        page.goto(f"{url}/courses")
+        course = page.locator("main a[href^='/courses/']").first.get_attribute("href")
+        page.goto(url + course)
+        assignment = page.locator("main a[href*='/assignments/']").first.get_attribute("href")
+        page.goto(url + assignment)
+        review = page.locator("#class-table a[href^='/review/']").first.get_attribute("href")
+        paths += ["/courses", course, assignment, review]
+    else:
+        page.goto(f"{url}/lab")
+        paths += [page.locator("main a[href^='/lab/sessions/']").first.get_attribute("href")]
+    return paths
+
+
+@pytest.mark.parametrize("role", ["student1", "teacher"])
+def test_no_page_scrolls_sideways(demo_server, browser, role):
+    server, credentials = demo_server
+    problems = []
+    for locale in ("en-US", "zh-CN"):
+        context = browser.new_context(locale=locale, viewport={"width": 1366, "height": 900})
+        page = context.new_page()
+        log_in(page, server.url, role, credentials[role])
+        paths = pages_of(page, server.url, "teacher" if role == "teacher" else "student")
+        for width in (390, 1366):
+            page.set_viewport_size({"width": width, "height": 900})
+            for path in paths:
+                page.goto(server.url + path)
+                page.wait_for_load_state("load")
+                found = page.evaluate(OVERFLOW)
+                if found["scroll"] > width + 1:
+                    problems.append((locale, width, path, found))
+                if path.startswith("/courses/") and "/assignments/" in path and width == 1366:
+                    table = page.evaluate(
+                        "() => { const s = document.querySelector('#class-table').parentElement;"
+                        " return [s.scrollWidth, s.clientWidth]; }"
+                    )
+                    if table[0] > table[1] + 1:
+                        problems.append((locale, width, path, {"class table": table}))
+        context.close()
+    assert problems == []
