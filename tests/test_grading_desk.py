@@ -253,16 +253,37 @@ def test_export_and_api_carry_points(world):
     teacher = browser(world, "teacher1")
     _, session_id = submitted(world, "s1")
     review(teacher, session_id, points="77", letter="B", action="release")
-    base = f"/courses/{world['course']}/assignments/{world['assignment']}"
-    rows = list(
-        csv.DictReader(io.StringIO(teacher.get(f"{base}/export.csv").text.lstrip("\ufeff")))
-    )
+    from tests.factories import token_for
+
+    headers = token_for(browser(world, "teacher1"), "teacher1")
+    api = teacher.get(f"/api/v1/assignments/{world['assignment']}/export.csv", headers=headers)
+    rows = list(csv.DictReader(io.StringIO(api.text.lstrip("\ufeff"))))
     mine = next(row for row in rows if row["username"] == "s1")
     assert (mine["points"], mine["max_points"], mine["letter_grade"], mine["released"]) == (
         "77.0000",
         "100",
         "B",
         "yes",
+    )
+    submissions = teacher.get(
+        f"/api/v1/assignments/{world['assignment']}/submissions", headers=headers
+    ).json()
+    row = next(r for r in submissions if r["username"] == "s1")
+    assert (row["points"], row["max_points"], row["grade"], row["released"]) == (
+        77.0,
+        100.0,
+        "77 / 100 (B)",
+        True,
+    )
+    submissions = teacher.get(
+        f"/api/v1/assignments/{world['assignment']}/submissions", headers=headers
+    ).json()
+    row = next(r for r in submissions if r["username"] == "s1")
+    assert (row["points"], row["max_points"], row["grade"], row["released"]) == (
+        77.0,
+        100.0,
+        "77 / 100 (B)",
+        True,
     )
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -280,7 +281,11 @@ def test_exports(student_client):
     save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
     save_manual(student_client, session_id, "latitude", handout("handout_vertical.csv"))
     exported = student_client.get(f"/lab/sessions/{session_id}/export.csv")
-    assert exported.status_code == 200 and "attachment" in exported.headers["content-disposition"]
+    assert exported.status_code == 200
+    # named after the session and the student (the owner's username), with the date
+    disposition = exported.headers["content-disposition"]
+    assert re.search(r"filename\*=UTF-8''[^;]*_student1_\d{8}\.csv$", disposition), disposition
+    assert re.search(r'filename="[A-Za-z0-9_.-]+_student1_\d{8}\.csv"', disposition)
     text = exported.content.decode("utf-8-sig")
     assert text.startswith("# GyroLab")
     readings = parse_readings_csv(text, part="latitude")

@@ -266,14 +266,22 @@ def test_csv_export_opens_in_excel_with_chinese_names(world):
     base = f"/courses/{world['course']}/assignments/{world['assignment']}"
     response = teacher.get(f"{base}/export.csv")
     assert response.content.startswith("\ufeff".encode())
+    # named after the course and assignment (UTF-8 filename* with an ASCII fallback)
+    disposition = response.headers["content-disposition"]
+    assert 'filename="Nav-lab_Find-north.csv"' in disposition
+    assert "filename*=UTF-8''Nav-lab-%E6%83%AF%E5%AF%BC_Find-north.csv" in disposition
+    # the page's download speaks the teacher's language; the API's keeps machine names
     rows = list(csv.DictReader(io.StringIO(response.content.decode("utf-8-sig"))))
-    assert [r["display_name"] for r in rows] == ["学生1", "学生2", "学生3"]
+    assert [r["Name"] for r in rows] == ["学生1", "学生2", "学生3"]
     first = rows[0]
-    assert first["status"] == "submitted" and first["late"] == "no"
-    assert float(first["heading_error_deg"]) == pytest.approx(10.753 - 10.8, abs=1e-3)
-    assert float(first["latitude_error_percent"]) == pytest.approx(2.00, abs=5e-3)
-    assert first["auto_check"] == "pass"
-    assert rows[1]["status"] == "not_started" and rows[1]["azimuth_deg"] == ""
+    assert first["Status"] == "submitted" and first["Late"] == "no"
+    assert float(first["Heading error (°)"]) == pytest.approx(10.753 - 10.8, abs=1e-3)
+    assert float(first["Latitude error (%)"]) == pytest.approx(2.00, abs=5e-3)
+    assert first["Auto-check"] == "pass"
+    assert rows[1]["Status"] == "not started" and rows[1]["Azimuth of position 1 (°)"] == ""
+    teacher.post("/lang", data={"lang": "zh", "csrf_token": csrf_from(teacher, base)})
+    chinese = teacher.get(f"{base}/export.csv").content.decode("utf-8-sig")
+    assert chinese.startswith("用户名,姓名,状态") and ",已提交," in chinese
     archive = zipfile.ZipFile(io.BytesIO(teacher.get(f"{base}/export.zip").content))
     names = set(archive.namelist())
     assert {"class.csv", "s1/attempt-1.csv", "s1/attempt-1.json"} <= names

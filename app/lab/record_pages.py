@@ -24,7 +24,7 @@ from app.lab.store import POSITIONS, check_position, set_symmetric_order
 from app.lab.submissions import submit
 from app.models import InputMethod, LabSession
 from app.web.deps import CsrfProtected, CurrentUser, ObjectId, ReadOnlySessionDep, SessionDep
-from app.web.exports import Selection, readings_csv, session_json
+from app.web.exports import Selection, attachment, readings_csv, session_json
 from app.web.render import flash, redirect
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
@@ -232,26 +232,24 @@ def submit_session(request: Request, session: OwnedSession, db: SessionDep):
 
 
 @router.get("/sessions/{session_id}/export.csv")
-def export_session_csv(session: OwnedSession):
+def export_session_csv(session: OwnedSession, user: CurrentUser):
     return StreamingResponse(
         readings_csv(Selection(session.id)),
         media_type="text/csv; charset=utf-8",
-        headers=download_headers(session, "csv"),
+        headers=download_headers(session, user.username, "csv"),
     )
 
 
 @router.get("/sessions/{session_id}/export.json")
-def export_session_json(session: OwnedSession):
+def export_session_json(session: OwnedSession, user: CurrentUser):
     return StreamingResponse(
         session_json(Selection(session.id)),
         media_type="application/json",
-        headers=download_headers(session, "json"),
+        headers=download_headers(session, user.username, "json"),
     )
 
 
-def download_headers(session: LabSession, extension: str) -> dict[str, str]:
+def download_headers(session: LabSession, owner: str, extension: str) -> dict[str, str]:
+    """The session's download named after it and its student: "<title>_<username>_<date>"."""
     stamp = datetime.now().strftime("%Y%m%d")
-    return {
-        "Content-Disposition": f'attachment; filename="gyrolab-session-{session.id}-'
-        f'{stamp}.{extension}"'
-    }
+    return {"Content-Disposition": attachment([session.title, owner, stamp], extension)}

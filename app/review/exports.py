@@ -1,26 +1,129 @@
 """The class's downloads for a teacher: the class table (CSV) and every submitted attempt
-(zip).  One function each, shared by the dashboard and the REST API."""
+(zip).  One function each, shared by the dashboard and the REST API.
+
+The dashboard's downloads speak the teacher's language (column names, statuses, yes/no,
+times in the course's zone) and are named after the course and assignment; the API's
+class table keeps stable English column names and UTC times for scripts.
+"""
 
 from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from datetime import UTC
 
 from fastapi.responses import StreamingResponse
 from sqlmodel import Session
 
-from app.models import Assignment
-from app.review.service import class_rows, export_rows
-from app.web.exports import SubmittedWork, assignment_zip, csv_table
+from app.courses.local_time import zone
+from app.models import Assignment, Course
+from app.review.service import StudentRow, class_rows
+from app.web.exports import SubmittedWork, assignment_zip, attachment, csv_table
+
+COLUMNS = (
+    "username",
+    "display_name",
+    "status",
+    "attempts",
+    "submitted_at_utc",
+    "late",
+    "azimuth_deg",
+    "azimuth_sigma_deg",
+    "heading_error_deg",
+    "latitude_deg",
+    "latitude_error_percent",
+    "earth_rate_deg_h",
+    "earth_rate_error_percent",
+    "auto_check",
+    "points",
+    "max_points",
+    "letter_grade",
+    "released",
+    "flags",
+    "identical_data_with",
+)
 
 
-def class_table_response(db: Session, assignment: Assignment) -> StreamingResponse:
-    """The class table as CSV (UTF-8 with BOM, cells safe to open in a spreadsheet)."""
+def export_rows(
+    rows: list[StudentRow], _: Callable[..., str] | None = None, zone_name: str | None = None
+) -> list[list]:
+    """The assignment CSV: identifiers, status, results, errors, grade, late flag; in the
+    reader's words when ``_`` is given (times then in ``zone_name``), else machine names."""
+
+    def word(key: str, machine: str) -> str:
+        return _(key) if _ else machine
+
+    shown_zone = zone(zone_name) if _ else UTC
+    header = [
+        (_("export.submitted_at", zone=shown_zone.key) if _ else name)
+        if name == "submitted_at_utc"
+        else word(f"export.{name}", name)
+        for name in COLUMNS
+    ]
+    out = [header]
+    for row in rows:
+        heading = row.results.get("heading") or {}
+        latitude = row.results.get("latitude") or {}
+        passed = None if row.check is None else row.check.passed
+        submitted = row.submitted_at
+        if submitted is not None:
+            aware = submitted if submitted.tzinfo else submitted.replace(tzinfo=UTC)
+            submitted = aware.astimezone(shown_zone)
+        out.append(
+            [
+                row.student.username,
+                row.student.display_name,
+                word(f"status.{row.status}", row.status),
+                len(row.attempts),
+                submitted.strftime("%Y-%m-%d %H:%M:%S") if submitted else "",
+                word("export.yes", "yes") if row.late else word("export.no", "no"),
+                _num(heading.get("azimuth_deg")),
+                _num(heading.get("azimuth_sigma_deg")),
+                _num(row.check_error("heading")),
+                _num(latitude.get("latitude_deg")),
+                _num(row.check_error("latitude")),
+                _num(latitude.get("earth_rate_deg_h")),
+                _num(row.check_error("earth_rate")),
+                ""
+                if passed is None
+                else (word("review.pass", "pass") if passed else word("review.fail", "fail")),
+                _num(row.points),
+                f"{row.max_points:g}",
+                row.letter,
+                word("export.yes", "yes") if row.released else word("export.no", "no"),
+                ";".join(sorted({f["key"].split(".")[-1] for f in row.flags})),
+                ";".join(row.duplicate_of),
+            ]
+        )
+    return out
+
+
+def _num(value: float | None) -> str:
+    if value is None or (isinstance(value, float) and not math.isfinite(value)):
+        return ""
+    return f"{value:.4f}"
+
+
+def class_table_response(
+    db: Session,
+    assignment: Assignment,
+    course: Course | None = None,
+    _: Callable[..., str] | None = None,
+) -> StreamingResponse:
+    """The class table as CSV (UTF-8 with BOM, cells safe to open in a spreadsheet); with
+    ``course`` and ``_``, in the teacher's language and named after course and assignment."""
+    rows = export_rows(class_rows(db, assignment), _, course.timezone if course else None)
+    names = [course.name, assignment.title] if course else [f"assignment-{assignment.id}"]
     return StreamingResponse(
-        csv_table(export_rows(class_rows(db, assignment))),
+        csv_table(rows),
         media_type="text/csv; charset=utf-8",
-        headers={"Content-Disposition": f'attachment; filename="assignment-{assignment.id}.csv"'},
+        headers={"Content-Disposition": attachment(names, "csv")},
     )
 
 
-def class_zip_response(db: Session, assignment: Assignment) -> StreamingResponse:
+def class_zip_response(
+    db: Session, assignment: Assignment, course: Course, _: Callable[..., str]
+) -> StreamingResponse:
     """The class table plus every submitted attempt's own data (CSV and JSON with its
     results): what the students submitted, never what they changed afterwards."""
     rows = class_rows(db, assignment)
@@ -30,7 +133,7 @@ def class_zip_response(db: Session, assignment: Assignment) -> StreamingResponse
         if row.session is not None and row.attempts
     ]
     return StreamingResponse(
-        assignment_zip(export_rows(rows), work),
+        assignment_zip(export_rows(rows, _, course.timezone), work),
         media_type="application/zip",
-        headers={"Content-Disposition": f'attachment; filename="assignment-{assignment.id}.zip"'},
+        headers={"Content-Disposition": attachment([course.name, assignment.title], "zip")},
     )

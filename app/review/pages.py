@@ -140,11 +140,13 @@ def upload_characterisation(
 
 
 @router.get("/courses/{course_id}/assignments/{assignment_id}/export.csv")
-def export_assignment_csv(target: TeacherAssignment, db: SessionDep):
-    return class_table_response(db, target.assignment)
+def export_assignment_csv(request: Request, target: TeacherAssignment, db: SessionDep):
+    _ = translator(request_language(request))
+    return class_table_response(db, target.assignment, target.course, _)
 
 
 @router.get("/courses/{course_id}/assignments/{assignment_id}/export.zip")
-def export_assignment_zip(target: TeacherAssignment, db: SessionDep):
+def export_assignment_zip(request: Request, target: TeacherAssignment, db: SessionDep):
     """The class table plus every submitted attempt's own data."""
-    return class_zip_response(db, target.assignment)
+    _ = translator(request_language(request))
+    return class_zip_response(db, target.assignment, target.course, _)

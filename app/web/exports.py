@@ -15,6 +15,7 @@ import csv
 import io
 import json
 import math
+import re
 import tempfile
 import zipfile
 from collections.abc import Iterable, Iterator
@@ -269,6 +270,27 @@ def _write_text(archive: zipfile.ZipFile, name: str, pieces: Iterable[str]) -> N
     with archive.open(name, "w", force_zip64=True) as member:
         for piece in pieces:
             member.write(piece.encode("utf-8"))
+
+
+FILENAME_UNSAFE = re.compile(r'[\x00-\x1f\x7f/\\:*?"<>|;,%]+')
+
+
+def attachment(parts: list[str], extension: str) -> str:
+    """A Content-Disposition naming the download after its contents (course, assignment,
+    student…): an ASCII ``filename`` for old clients and the UTF-8 ``filename*`` (RFC 6266
+    / 5987) that browsers use, so "惯导实验_寻北_s1.csv" survives."""
+    cleaned = [
+        re.sub(r"\s+", "-", FILENAME_UNSAFE.sub("-", part).strip()).strip("-.") for part in parts
+    ]
+    stem = "_".join(part for part in cleaned if part)[:120] or "gyrolab"
+    ascii_stem = "".join(
+        ch if ch.isascii() and (ch.isalnum() or ch in "_.-") else "_" for ch in stem
+    )
+    ascii_stem = re.sub(r"-*_[-_]*", "_", ascii_stem).strip("_.-") or "gyrolab"
+    return (
+        f'attachment; filename="{ascii_stem}.{extension}"; '
+        f"filename*=UTF-8''{quote(stem)}.{extension}"
+    )
 
 
 def safe_name(text: str) -> str:
