@@ -37,11 +37,14 @@ from app.lab.schemas import (
     SessionCreate,
     SessionOut,
     Station,
+    TrimIn,
+    TrimOut,
     UploadOut,
 )
 from app.lab.service import append_readings, own_session, record_position, require_method
 from app.lab.store import POSITIONS, current_takes
 from app.lab.submissions import submit
+from app.lab.trim import trim_position
 from app.models import InputMethod, LabSession
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS
@@ -325,6 +328,27 @@ def get_results(session: ReadableSession, db: SessionDep):
 
 def submittable_session(session_id: ObjectId, caller: UploadCaller, db: SessionDep) -> LabSession:
     return own_session(db, caller.user, session_id)
+
+
+@router.put("/sessions/{session_id}/{part}/positions/{position}/trim", response_model=TrimOut)
+def put_trim(
+    part: PartPath,
+    position: PositionPath,
+    body: TrimIn,
+    session: Annotated[LabSession, Depends(submittable_session)],
+    db: SessionDep,
+):
+    """Leave out the first ``trim`` readings of a position (the transient after turning the
+    table); 0 restores them.  Stored as a trim on the take: no sample is deleted."""
+    take = trim_position(db, session, part=part, position=position, trim=body.trim)
+    db.commit()
+    return TrimOut(
+        part=part,
+        position=position,
+        n_samples=take.n_samples,
+        trim_start=take.trim_start,
+        n_used=take.n_samples - take.trim_start,
+    )
 
 
 @router.post("/sessions/{session_id}/submit", response_model=AttemptOut)

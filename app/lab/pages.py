@@ -302,6 +302,10 @@ JS_MESSAGES = (
     "js.header_skipped",
     "js.row_numbers_skipped",
     "js.cells_dropped",
+    "js.trim_shown",
+    "js.done_trim",
+    "js.projector",
+    "js.projector_exit",
 )
 
 

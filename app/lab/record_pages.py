@@ -22,6 +22,7 @@ from app.lab.service import record_positions, recordable_session
 from app.lab.sim import nominal_angle, position_count
 from app.lab.store import POSITIONS, check_position, set_symmetric_order
 from app.lab.submissions import submit
+from app.lab.trim import trim_position
 from app.models import InputMethod, LabSession
 from app.web.deps import CsrfProtected, CurrentUser, ObjectId, ReadOnlySessionDep, SessionDep
 from app.web.exports import Selection, attachment, readings_csv, session_json
@@ -171,6 +172,21 @@ def turn_table(session: SimulatorSession, db: SessionDep, body: Annotated[Turn, 
         "position": body.position,
         "dial_angle_deg": nominal_angle(session, body.part, body.position),
     }
+
+
+class Trim(BaseModel):
+    part: Part
+    position: int = Field(ge=1, le=POSITIONS)
+    trim: int = Field(ge=0, le=10_000_000)
+
+
+@router.post("/sessions/{session_id}/trim", dependencies=[CsrfProtected])
+def trim_recording(session: OwnedSession, db: SessionDep, body: Annotated[Trim, Body()]):
+    """Leave out the first readings of a position (the transient after turning the table):
+    stored as a trim, no sample deleted."""
+    take = trim_position(db, session, part=body.part, position=body.position, trim=body.trim)
+    db.commit()
+    return {"trim_start": take.trim_start, "n_used": take.n_samples - take.trim_start}
 
 
 class Plane(BaseModel):

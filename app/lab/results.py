@@ -30,9 +30,22 @@ from app.models import (
 
 @dataclass
 class PositionData:
+    """A position's readings as the result uses them: after the take's trimmed start."""
+
     take: Take
     values: np.ndarray
     times: np.ndarray | None
+
+    @classmethod
+    def of(cls, take: Take, values: np.ndarray, times: np.ndarray | None) -> PositionData:
+        """All of a take's samples → the ones used (the first ``take.trim_start`` are the
+        transient after turning the table: kept in the database, left out here)."""
+        start = min(max(take.trim_start or 0, 0), values.size)
+        return cls(take, values[start:], None if times is None else times[start:])
+
+    @property
+    def trimmed(self) -> int:
+        return self.take.trim_start or 0
 
 
 @dataclass
@@ -56,7 +69,7 @@ def _assemble(take: Take, rows: list[SampleChunk]) -> PositionData:
     times = None
     if rows and all(r.times is not None for r in rows):
         times = np.concatenate([unpack(r.times) for r in rows])
-    return PositionData(take, values, times)
+    return PositionData.of(take, values, times)
 
 
 def iter_current_data(db: Session, *where) -> Iterator[tuple[int, SessionData]]:

@@ -200,3 +200,15 @@ class AttemptOut(BaseModel):
     submitted_at: datetime
     late: bool
     status: str
+
+
+class TrimIn(BaseModel):
+    trim: int = Field(ge=0, le=10_000_000, description="readings to leave out at the start")
+
+
+class TrimOut(BaseModel):
+    part: str
+    position: int
+    n_samples: int
+    trim_start: int
+    n_used: int

@@ -97,6 +97,23 @@ def set_symmetric_order(db: Session, session: LabSession, symmetric: bool) -> No
     db.add(session)
 
 
+def check_editable(session: LabSession) -> None:
+    """Graded work and work awaiting review do not change."""
+    if session.status == SessionStatus.graded:
+        raise UserError("lab.already_graded", "This work has been graded.")
+    if session.status == SessionStatus.submitted and session.assignment_id is not None:
+        raise UserError(
+            "lab.awaiting_review", "Your last attempt is waiting for your teacher's review."
+        )
+
+
+def reopen(session: LabSession) -> None:
+    """An edit after submitting (or after the work came back) starts the next attempt."""
+    session.updated_at = utcnow()
+    if session.status in (SessionStatus.submitted, SessionStatus.returned):
+        session.status = SessionStatus.in_progress
+
+
 def store_take(
     db: Session,
     session: LabSession,
@@ -112,12 +129,7 @@ def store_take(
 ) -> Take:
     """Add a take (values in °/h) and supersede the previous one; the caller commits once,
     so the position is either fully saved or not at all."""
-    if session.status == SessionStatus.graded:
-        raise UserError("lab.already_graded", "This work has been graded.")
-    if session.status == SessionStatus.submitted and session.assignment_id is not None:
-        raise UserError(
-            "lab.awaiting_review", "Your last attempt is waiting for your teacher's review."
-        )
+    check_editable(session)
     check_position(session, part, position)
     if values.size == 0:
         raise UserError(
@@ -165,9 +177,7 @@ def store_take(
     db.flush()
     for seq, value_blob, time_blob in chunks(values, times):
         db.add(SampleChunk(take_id=take.id, seq=seq, values=value_blob, times=time_blob))
-    session.updated_at = now
-    if session.status in (SessionStatus.submitted, SessionStatus.returned):
-        session.status = SessionStatus.in_progress  # an edit after submitting starts a new attempt
+    reopen(session)
     db.add(session)
     return take
 
@@ -257,12 +267,18 @@ def append_samples(
     for seq, value_blob, time_blob in chunks(values, times):
         db.add(SampleChunk(take_id=take.id, seq=next_seq + seq, values=value_blob, times=time_blob))
     take.n_samples = stored + int(values.size)
-    session.updated_at = utcnow()
-    if session.status in (SessionStatus.submitted, SessionStatus.returned):
-        session.status = SessionStatus.in_progress
+    reopen(session)
     db.add(take)
     db.add(session)
     return take, int(values.size)
+
+
+def copy_take(db: Session, take: Take) -> Take:
+    """A frozen (submitted) take's samples in a new current take, to change its metadata."""
+    rows = db.exec(
+        select(SampleChunk).where(SampleChunk.take_id == take.id).order_by(SampleChunk.seq)
+    ).all()
+    return _copy_take(db, take, rows)[0]
 
 
 def _copy_take(db: Session, take: Take, rows: list[SampleChunk]) -> tuple[Take, list[SampleChunk]]:
@@ -276,6 +292,7 @@ def _copy_take(db: Session, take: Take, rows: list[SampleChunk]) -> tuple[Take, 
         source=take.source,
         unit=take.unit,
         n_samples=take.n_samples,
+        trim_start=take.trim_start,
         created_at=now,
     )
     take.superseded_at = now

@@ -128,7 +128,7 @@ def _results(db: Session, session: LabSession, selection: Selection, takes: list
         times = None
         if blocks and all(t is not None for _, t in blocks):
             times = np.concatenate([t for _, t in blocks])
-        data[take.part][take.position] = PositionData(take, values, times)
+        data[take.part][take.position] = PositionData.of(take, values, times)
     station = station_noise_for(db, session)
     results = {part: solve_part(session, part, data[part], station) for part in PARTS}
     return json_safe(results_json(results))
@@ -153,16 +153,25 @@ def readings_csv(selection: Selection) -> Iterator[str]:
             f"{session.earth_rate_deg_h} deg/h; heading rotation {session.heading_rotation}; "
             "values in deg/h"
         )
+        takes = selection.takes(db)
+        for take in takes:
+            if take.trim_start:
+                yield comment_line(
+                    f"{take.part} position {take.position}: the first {take.trim_start} "
+                    "readings (the transient after turning) are trimmed: not used, not listed"
+                )
         yield "part,position,angle_deg,source,time_s,value\n"
-        for take in selection.takes(db):
+        for take in takes:
             prefix = f"{take.part},{take.position},{take.angle_deg:g},{neutralise(take.source)},"
             index = 0
+            skip = take.trim_start or 0
             for values, times in take_blocks(db, take):
                 stamps = times if times is not None else np.arange(index, index + values.size)
                 index += values.size
+                start = min(max(skip - (index - values.size), 0), values.size)
                 yield "".join(
                     f"{prefix}{t:.3f},{v:.6f}\n"
-                    for t, v in zip(stamps.tolist(), values.tolist(), strict=True)
+                    for t, v in zip(stamps[start:].tolist(), values[start:].tolist(), strict=True)
                 )
 
 
@@ -198,6 +207,7 @@ def session_json(selection: Selection, attempts: list[dict] | None = None) -> It
                 "angle_deg": take.angle_deg,
                 "source": take.source,
                 "recorded_at": take.created_at.isoformat(),
+                "trim_start": take.trim_start,  # the first readings, kept but not used
             }
             yield ("" if number == 0 else ", ") + json.dumps(head)[:-1] + ', "values_deg_h": ['
             yield from _number_list(values for values, _ in take_blocks(db, take))

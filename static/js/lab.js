@@ -340,8 +340,61 @@
     const startButton = panel.querySelector(".start-sim");
     const stopButton = panel.querySelector(".stop-sim");
     const chart = panel.querySelector(".live-chart");
+    const trimBox = panel.querySelector(".trim-box");
+    const trimRange = panel.querySelector(".trim-range");
     let socket = null;
     let saved = false;
+    let recorded = { t: [], v: [], position: 0 };
+
+    // Running n, mean, σ and σ/√n (Welford), from the first reading kept.
+    function showStats(values) {
+      let n = 0, mean = 0, m2 = 0;
+      for (const value of values) {
+        n += 1;
+        const delta = value - mean;
+        mean += delta / n;
+        m2 += delta * (value - mean);
+      }
+      const sigma = n > 1 ? Math.sqrt(m2 / (n - 1)) : NaN;
+      const show = (selector, value, digits) => {
+        panel.querySelector(selector).textContent = Number.isFinite(value) ? value.toFixed(digits) : "—";
+      };
+      panel.querySelector(".live-n").textContent = String(n);
+      show(".live-mean", n ? mean : NaN, 3);
+      show(".live-sigma", sigma, 3);
+      show(".live-se", sigma / Math.sqrt(n), 4);
+    }
+
+    function markTrim(count) {
+      const cut = recorded.t[count] ?? recorded.t[0];
+      Plotly.relayout(chart, {
+        shapes: count > 0 ? [{ type: "rect", xref: "x", yref: "paper", x0: recorded.t[0], x1: cut, y0: 0, y1: 1,
+          fillcolor: "#d1495b", opacity: 0.15, line: { width: 0 } }] : [],
+      });
+      panel.querySelector(".trim-shown").textContent = t("js.trim_shown", { n: count, s: (cut - recorded.t[0]).toFixed(1) });
+      showStats(recorded.v.slice(count));
+    }
+
+    trimRange.addEventListener("input", () => markTrim(Number(trimRange.value)));
+    panel.querySelector(".keep-all").addEventListener("click", () => window.location.reload());
+    panel.querySelector(".save-trim").addEventListener("click", async () => {
+      try {
+        await postJson("/trim", { part, position: recorded.position, trim: Number(trimRange.value) });
+        window.location.reload();
+      } catch (error) {
+        status.textContent = error.message;
+      }
+    });
+
+    const projector = panel.querySelector(".projector-toggle");
+    function setProjector(on) {
+      panel.querySelector(".live-panel").classList.toggle("projector", on);
+      projector.setAttribute("aria-pressed", String(on));
+      projector.textContent = t(on ? "js.projector_exit" : "js.projector");
+      if (window.Plotly && chart.data) Plotly.Plots.resize(chart);
+    }
+    projector.addEventListener("click", () => setProjector(projector.getAttribute("aria-pressed") !== "true"));
+    document.addEventListener("keydown", (event) => { if (event.key === "Escape") setProjector(false); });
 
     panel.querySelector(".turn").addEventListener("click", async () => {
       try {
@@ -400,6 +453,10 @@
           progress.value = 0;
           stopButton.disabled = false;
           status.textContent = t("js.recording", { n: frame.position });
+          recorded = { t: [], v: [], position: frame.position };
+          trimBox.hidden = true;
+          panel.querySelector(".live-title").textContent = t("js.position", { n: frame.position });
+          showStats([]);
           Plotly.newPlot(chart, [{ x: [], y: [], mode: "lines", type: "scatter", line: { width: 1 } }], {
             margin: { l: 60, r: 10, t: 10, b: 40 }, height: 220,
             xaxis: { title: { text: t("chart.time_s") } }, yaxis: { title: { text: t("chart.rate_deg_h") } },
@@ -407,12 +464,20 @@
         } else if (frame.type === "samples") {
           Plotly.extendTraces(chart, { x: [frame.t], y: [frame.v] }, [0], LIVE_WINDOW);
           progress.value = frame.done;
+          recorded.t.push(...frame.t);
+          recorded.v.push(...frame.v);
+          showStats(recorded.v);
         } else if (frame.type === "saved") {
           saved = true;
           remember(part, { position: Math.min(frame.position + 1, 4) });
-          finish(t("js.done", { n: frame.n }));
+          finish(t("js.done_trim", { n: frame.n }));
           socket.close();
-          reloadSoon();
+          // the whole recording, for choosing where the transient ends (or keeping it all)
+          Plotly.react(chart, [{ x: recorded.t, y: recorded.v, mode: "lines", type: "scatter", line: { width: 1 } }], chart.layout, plotConfig);
+          trimRange.max = String(Math.max(0, recorded.v.length - config.minReadings));
+          trimRange.value = "0";
+          markTrim(0);
+          trimBox.hidden = false;
         } else if (frame.type === "error") {
           finish(frame.message);
           socket.close();
@@ -428,6 +493,35 @@
     });
   }
   document.querySelectorAll('.method-panel[data-method="simulator"]').forEach(setupSimulator);
+
+  // --- trimming a stored position's start ---------------------------------------------------
+  document.querySelectorAll(".trim-form").forEach((form) => {
+    const part = form.closest(".part").dataset.part;
+    const select = form.querySelector(".trim-position");
+    const count = form.querySelector(".trim-count");
+    const status = form.querySelector(".trim-status");
+    const sync = () => {
+      const option = select.selectedOptions[0];
+      count.value = option.dataset.trim;
+      count.max = String(Math.max(0, Number(option.dataset.total) - config.minReadings));
+    };
+    select.addEventListener("change", sync);
+    sync();
+    form.querySelector(".apply-trim").addEventListener("click", async () => {
+      const value = Number(count.value);
+      if (count.value.trim() === "" || !Number.isInteger(value) || value < 0) {
+        status.textContent = t("js.not_a_number");
+        return;
+      }
+      try {
+        await postJson("/trim", { part, position: Number(select.value), trim: value });
+        status.textContent = t("js.saved");
+        reloadSoon();
+      } catch (error) {
+        status.textContent = error.message;
+      }
+    });
+  });
 
   ["heading", "latitude"].forEach((part) => {
     if (!document.getElementById(`part-${part}`)) return;

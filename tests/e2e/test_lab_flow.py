@@ -113,9 +113,25 @@ def test_student_records_everything_from_the_simulated_gyro_and_submits(live_ser
             # the default dwell: 30 s, or longer when the minimum of readings needs it
             expect(section.locator(".dwell")).to_have_value("30")
             section.locator(".speed").select_option("60")
-            with page.expect_navigation(timeout=20_000):
-                section.locator(".start-sim").click()
-                expect(section.locator(".sim-progress")).to_be_visible()
+            section.locator(".start-sim").click()
+            # live n, mean, σ and σ/√n while recording; afterwards a chance to trim
+            expect(section.locator(".trim-box")).to_be_visible(timeout=20_000)
+            expect(section.locator(".live-n")).to_have_text("300")  # 30 s at 10 Hz
+            if part == "heading" and position == 1:
+                section.locator(".projector-toggle").click()
+                expect(section.locator(".live-panel.projector .live-n")).to_have_text("300")
+                page.keyboard.press("Escape")
+                expect(section.locator(".live-panel.projector")).to_have_count(0)
+                section.locator(".trim-range").fill("20")  # the first 2 s after turning
+                expect(section.locator(".live-n")).to_have_text("280")
+                with page.expect_navigation():
+                    section.locator(".save-trim").click()
+                expect(page.locator("#part-heading .positions-table")).to_contain_text(
+                    "280 (20 trimmed)"
+                )
+            else:
+                with page.expect_navigation():
+                    section.locator(".keep-all").click()
             expect(page.locator(f"#part-{part} .step[data-position='{position}']")).to_contain_text(
                 "simulated gyro"
             )

@@ -45,8 +45,10 @@ def test_teacher_reviews_returns_and_student_resubmits(demo_server, new_page):
         section.locator(".turn").click()
     section.locator(".dwell").fill("120")  # 12 readings of the teaching gyro
     section.locator(".speed").select_option("60")
-    with student.expect_navigation(timeout=20_000):
-        section.locator(".start-sim").click()
+    section.locator(".start-sim").click()
+    expect(section.locator(".trim-box")).to_be_visible(timeout=20_000)
+    with student.expect_navigation():
+        section.locator(".keep-all").click()
     # halfway through the fix (in progress again) the teacher's comments are still there
     expect(student.locator("#revising-notice")).to_be_visible()
     expect(student.locator("#overall-feedback")).to_contain_text("longer dwell")
