@@ -21,7 +21,7 @@ from app.config import get_settings
 from app.courses import assignment_pages, join_pages
 from app.courses import pages as course_pages
 from app.explore import pages as explore_pages
-from app.lab import api, record_pages, stream
+from app.lab import api, partner_pages, record_pages, stream
 from app.lab import pages as lab_pages
 from app.paths import STATIC_DIR
 from app.review import api as review_api
@@ -122,6 +122,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(assignment_pages.router)
     app.include_router(lab_pages.router)
     app.include_router(record_pages.router)
+    app.include_router(partner_pages.router)
     app.include_router(review_pages.router)
     app.include_router(desk_pages.router)
     app.include_router(stream.router)

@@ -164,6 +164,7 @@ class Assignment(SQLModel, table=True):
     late_policy: str = Field(default=LatePolicy.accept, max_length=8)
     reveal_truth: str = Field(default=RevealTruth.after_grading, max_length=20)
     max_points: float = 100.0
+    group_size: int = 1  # lab partners: up to this many students share one session (1–3)
     # optional rubric: JSON [{"name": "...", "points": 40}, ...] adding up to max_points
     rubric: str = Field(default="[]", max_length=20_000)
 
@@ -206,6 +207,8 @@ class LabSession(SQLModel, table=True):
     sim_roll_deg: float | None = None
     sim_misalign_h_deg: float | None = None
     sim_misalign_v_deg: float | None = None
+    # lab partners join with this code (assignments that allow groups); None: no partners
+    partner_code: str | None = Field(default=None, max_length=16, unique=True)
     # 1-2-3-4-4-3-2-1: positions 5–8 revisit 4–1 (a linear drift cancels, and is fitted)
     symmetric_order: bool = False
     # part B's vertical plane: the horizontal dial (° clockwise from heading position 1)
@@ -267,6 +270,18 @@ class Attempt(SQLModel, table=True):
     returned_at: datetime | None = None  # returned for revision
     released_at: datetime | None = None  # graded and released
     seen_at: datetime | None = None  # the student opened the work after either
+
+
+class SessionMember(SQLModel, table=True):
+    """A lab partner: a student who shares another student's session for an assignment
+    (sees it, records and submits in it, gets its grade)."""
+
+    __tablename__ = "session_member"
+    __table_args__ = (UniqueConstraint("session_id", "user_id"),)
+    id: int | None = Field(default=None, primary_key=True)
+    session_id: int = Field(foreign_key="lab_session.id", index=True, ondelete="CASCADE")
+    user_id: int = Field(foreign_key="user.id", index=True, ondelete="CASCADE")
+    joined_at: datetime = Field(default_factory=utcnow)
 
 
 class Extension(SQLModel, table=True):

@@ -72,10 +72,11 @@ class AssignmentForm(BaseModel):
     late_policy: LatePolicy = LatePolicy.accept
     reveal_truth: RevealTruth = RevealTruth.after_grading
     max_points: float = Field(default=100.0, gt=0, le=100_000)
+    group_size: int = Field(default=1, ge=1, le=3)  # lab partners per session
     # one criterion per line, "name | points" (a rubric is optional)
     rubric: str = Field(default="", max_length=20_000)
 
-    @field_validator("min_readings", "max_attempts", mode="before")
+    @field_validator("min_readings", "max_attempts", "group_size", mode="before")
     @classmethod
     def _whole_number(cls, value: Any) -> Any:
         """A count typed as "10.0" is 10 (the part after the point is dropped)."""

@@ -17,7 +17,7 @@ from fastapi import APIRouter, Depends, Path, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import ValidationError
-from sqlmodel import Session, select
+from sqlmodel import Session, col, select
 
 from app.accounts.api_auth import ReadCaller, UploadCaller
 from app.core.exceptions import UserError
@@ -45,7 +45,7 @@ from app.lab.service import append_readings, own_session, record_position, requi
 from app.lab.store import POSITIONS, current_takes
 from app.lab.submissions import submit
 from app.lab.trim import trim_position
-from app.models import InputMethod, LabSession
+from app.models import InputMethod, LabSession, SessionMember
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS
 
@@ -203,10 +203,11 @@ UPLOAD_BODY = {
 
 @router.get("/sessions", response_model=list[SessionOut])
 def list_sessions(caller: ReadCaller, db: SessionDep):
-    """The caller's own lab sessions, newest first."""
+    """The caller's own lab sessions and those shared as a lab partner, newest first."""
+    shared = select(SessionMember.session_id).where(SessionMember.user_id == caller.user.id)
     sessions = db.exec(
         select(LabSession)
-        .where(LabSession.owner_id == caller.user.id)
+        .where((LabSession.owner_id == caller.user.id) | col(LabSession.id).in_(shared))
         .order_by(LabSession.updated_at.desc())
     ).all()
     return [session_out(db, s) for s in sessions]

@@ -13,9 +13,11 @@ from sqlmodel import Session, select
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS
+from app.lab import partners
 from app.lab import sessions as labsessions
 from app.lab.charts import allan_figure, compass_figure, fit_figure, readings_figure
 from app.lab.deps import OwnedSession
+from app.lab.partner_pages import partner_view
 from app.lab.results import session_results
 from app.lab.service import allowed_methods
 from app.lab.sim import FIRST_PASS, nominal_angle, north_dial_deg, position_count
@@ -77,11 +79,14 @@ def my_assignments(db: Session, user: User) -> list[tuple[Assignment, Course]]:
 
 @router.get("")
 def lab_home(request: Request, user: CurrentUser, db: SessionDep):
-    sessions = db.exec(
-        select(LabSession)
-        .where(LabSession.owner_id == user.id)
-        .order_by(LabSession.updated_at.desc())
-    ).all()
+    sessions = sorted(
+        [
+            *db.exec(select(LabSession).where(LabSession.owner_id == user.id)).all(),
+            *partners.shared_sessions(db, user),
+        ],
+        key=lambda s: s.updated_at,
+        reverse=True,
+    )
     mine = {s.assignment_id: s for s in sessions if s.assignment_id is not None}
     extensions = {
         row.assignment_id: row.due_at
@@ -179,7 +184,7 @@ def _figures(results, _) -> dict[str, dict]:
 
 
 @router.get("/sessions/{session_id}")
-def session_page(request: Request, session: OwnedSession, db: SessionDep):
+def session_page(request: Request, session: OwnedSession, user: CurrentUser, db: SessionDep):
     _ = translator(request_language(request))
     attempts = db.exec(
         select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
@@ -192,6 +197,8 @@ def session_page(request: Request, session: OwnedSession, db: SessionDep):
         "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
         "plane": session.sim_plane_dial_deg,
         "messages": {key: _(key) for key in JS_MESSAGES},
+        "version": session.updated_at.isoformat(),
+        "shared": len(partners.members_of(db, session)) > 1,
     }
     editable = session.status != SessionStatus.graded and not (
         session.assignment_id and session.status == SessionStatus.submitted
@@ -209,6 +216,7 @@ def session_page(request: Request, session: OwnedSession, db: SessionDep):
             **session_view(db, session, assignment, attempts, _),
             "due": grading.due_for(db, assignment, session.owner_id),
             "timezone": course.timezone if course else None,
+            **partner_view(db, session, assignment, user),
             "history": take_history(db, session.id),
             "methods": allowed_methods(db, session),
             "units": UNITS,
@@ -306,6 +314,9 @@ JS_MESSAGES = (
     "js.done_trim",
     "js.projector",
     "js.projector_exit",
+    "js.partner_recording",
+    "js.part_heading",
+    "js.part_latitude",
 )
 
 

@@ -16,6 +16,7 @@ from sqlmodel import Session
 
 from app.core.exceptions import UserError
 from app.core.units import canonical_unit, to_deg_per_hour
+from app.lab.partners import is_member
 from app.lab.sim import nominal_angle
 from app.lab.store import append_samples, check_position, store_take
 from app.models import Assignment, InputMethod, LabSession, Take, User
@@ -30,9 +31,10 @@ def allowed_methods(db: Session, session: LabSession) -> list[str]:
 
 
 def own_session(db: Session, user: User, session_id: int) -> LabSession:
-    """The user's own session; anyone else's (or none) answers 404."""
+    """The user's own session, or one they share as a lab partner; anyone else's (or none)
+    answers 404."""
     session = db.get(LabSession, session_id)
-    if session is None or session.owner_id != user.id:
+    if session is None or not is_member(db, session, user):
         raise UserError("lab.no_such_session", status=404)
     return session
 

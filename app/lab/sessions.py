@@ -10,6 +10,7 @@ from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
+from app.lab.partners import ensure_partner_code, member_map
 from app.lab.sim import new_truth
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User, utcnow
 from app.review.service import draw_truth
@@ -75,6 +76,9 @@ def start_session(
         ).first()
         if existing is not None:  # one session per student and assignment
             return existing, False
+        shared = member_map(db, assignment).get(user.id)
+        if shared is not None:  # a lab partner's: the group's one session
+            return shared, False
     seed, azimuth = new_truth()
     session = LabSession(
         owner_id=user.id,
@@ -97,6 +101,7 @@ def start_session(
         session.simulator_preset = assignment.simulator_preset
         session.min_readings = assignment.min_readings
         session.title = session.title or assignment.title
+        ensure_partner_code(db, session, assignment)
     else:
         if settings.latitude_deg is None or settings.earth_rate_deg_h is None:
             raise UserError("lab.station_required", "Enter the station's latitude and Earth rate.")

@@ -11,6 +11,7 @@ from sqlmodel import select
 
 from app.core.exceptions import UserError
 from app.courses.local_time import local_input_to_utc, utc_to_local_input
+from app.lab import partners
 from app.lab.pages import UNIT_NAMES, session_view
 from app.models import Attempt, SessionStatus, User
 from app.review import grading
@@ -47,6 +48,7 @@ def submission_page(request: Request, target: ReviewableSession, db: SessionDep)
             "rubric_scores": grading.rubric_scores_of(latest),
             "grade": grading.grade_text(latest, assignment),
             "student": db.get(User, session.owner_id),
+            "members": partners.members_of(db, session),
             "course": course,
             "timezone": course.timezone,
             "neighbours": grading.neighbours(db, session),

@@ -19,6 +19,7 @@ from app.models import (
     Attempt,
     Extension,
     LabSession,
+    SessionMember,
     SessionStatus,
     User,
     utcnow,
@@ -287,7 +288,10 @@ def notices(db: Session, student: User) -> list[Notice]:
         .join(LabSession, LabSession.id == Attempt.session_id)
         .join(Assignment, Assignment.id == LabSession.assignment_id)
         .where(
-            LabSession.owner_id == student.id,
+            (LabSession.owner_id == student.id)
+            | col(LabSession.id).in_(
+                select(SessionMember.session_id).where(SessionMember.user_id == student.id)
+            ),
             col(Attempt.seen_at).is_(None),
             (col(Attempt.released_at).is_not(None)) | (col(Attempt.returned_at).is_not(None)),
         )

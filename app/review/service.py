@@ -18,6 +18,7 @@ from sqlmodel import Session, select
 
 from app.core.sinusoid import wrap180
 from app.core.solve import percent_error
+from app.lab.partners import group_names, member_map
 from app.lab.results import SessionData, iter_current_data, quality_flags
 from app.lab.store import PARTS, current_takes
 from app.models import (
@@ -213,6 +214,7 @@ class StudentRow:
     duplicate_of: list[str] = field(default_factory=list)
     prints: tuple[str | None, str | None] = (None, None)  # data_fingerprint of current data
     max_points: float = 100.0
+    group: list[str] = field(default_factory=list)  # lab partners sharing the session
     due_at: datetime | None = None  # this student's due date (an extension, or the class's)
     extended: bool = False
 
@@ -268,6 +270,9 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
     ).all()
     in_assignment = LabSession.assignment_id == assignment.id
     sessions = {s.owner_id: s for s in db.exec(select(LabSession).where(in_assignment)).all()}
+    for member_id, shared in member_map(db, assignment).items():
+        sessions.setdefault(member_id, shared)  # a lab partner's row shows the group's session
+    groups = group_names(db, [s.id for s in sessions.values()])
     attempts: dict[int, list[Attempt]] = {}
     for attempt in db.exec(
         select(Attempt)
@@ -320,15 +325,21 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
             list(flags),
             any(a.late for a in history),
             prints=prints,
+            group=groups.get(session.id, []),
             **due,
         )
         rows.append(row)
         for print_ in prints:
             if print_:
                 fingerprints.setdefault(print_, []).append(student.username)
+    same_session = {row.student.username: row.session.id for row in rows if row.session is not None}
     for row in rows:
         for print_ in row.prints:
-            others = [u for u in fingerprints.get(print_ or "", []) if u != row.student.username]
+            others = [
+                u
+                for u in fingerprints.get(print_ or "", [])
+                if u != row.student.username and same_session.get(u) != row.session.id
+            ]
             row.duplicate_of.extend(u for u in others if u not in row.duplicate_of)
     return rows
 

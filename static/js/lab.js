@@ -523,6 +523,29 @@
     });
   });
 
+  // --- lab partners: follow the shared session live ------------------------------------------
+  // Every few seconds the page asks whether the session changed (a partner saved or submitted)
+  // and reloads when it did -- unless this page is in the middle of something.
+  if (config.shared) {
+    const note = document.getElementById("live-note");
+    const busy = () => document.querySelector('[data-busy="1"]') || document.querySelector(".trim-box:not([hidden])") ||
+      (document.activeElement && document.activeElement.matches("input, textarea, select") && document.activeElement.value);
+    setInterval(async () => {
+      if (document.hidden) return;
+      try {
+        const response = await fetch(`${base}/state`, { headers: { Accept: "application/json" } });
+        if (!response.ok) return;
+        const state = await response.json();
+        if (note) {
+          note.textContent = state.recording
+            ? t("js.partner_recording", { part: t(`js.part_${state.recording.part}`), n: state.recording.position })
+            : "";
+        }
+        if (state.version !== config.version && !busy()) window.location.reload();
+      } catch (error) { /* offline for a moment: try again next time */ }
+    }, 4000);
+  }
+
   ["heading", "latitude"].forEach((part) => {
     if (!document.getElementById(`part-${part}`)) return;
     selectPosition(part, memory[part]?.position || 1);
