@@ -36,19 +36,21 @@ def test_student_types_the_handout_tables(any_live_server, new_page):
     log_in(page, live_server.url, "student", STUDENT_PASSWORD)
     start_practice(page, live_server.url)
 
-    # Part A: typed down each column, Enter after each reading, as a student would
+    # Part A: position 1 typed down its column with Enter after each reading, as a student
+    # would (Enter moves down: "10.74⏎10.65" never becomes one cell); the rest filled
     cells = page.locator("#part-heading .readings-grid tbody tr")
     rows = table("handout_horizontal.csv")
-    for c in range(4):
-        cells.nth(0).locator("input").nth(c).click()
-        for row in rows:
-            page.keyboard.type(row[c])
-            page.keyboard.press("Enter")
-    assert cells.nth(1).locator("input").nth(0).input_value() == rows[1][0]  # not "10.7410.65"
+    cells.nth(0).locator("input").nth(0).click()
+    for row in rows:
+        page.keyboard.type(row[0])
+        page.keyboard.press("Enter")
+    assert cells.nth(1).locator("input").nth(0).input_value() == rows[1][0]
     page.keyboard.press("ArrowUp")  # the arrows move between cells
-    page.keyboard.press("ArrowLeft")
-    focused = page.evaluate("document.activeElement.dataset.column")
-    assert focused == "3"
+    page.keyboard.press("ArrowRight")
+    assert page.evaluate("document.activeElement.dataset.column") == "2"
+    for r, row in enumerate(rows):
+        for c in range(1, 4):
+            cells.nth(r).locator("input").nth(c).fill(row[c])
     status = page.locator("#part-heading .grid-status")
     expect(status).to_contain_text("40 readings")
     page.locator("#part-heading .readings-grid tbody input").first.fill("10.7x")
