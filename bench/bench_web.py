@@ -4,8 +4,9 @@
 
 Starts GyroLab (``gyrolab serve``, no access log) and a bare FastAPI app on free
 127.0.0.1 ports, then measures sequential request rates: the results endpoint against a
-bare JSON endpoint, the lab page against a bare Jinja page; an upload of 1e6 samples plus
-solving them against writing the same array as one BLOB with sqlite3; 60 logins; and the
+bare JSON endpoint, the lab page against a bare Jinja page; an upload of 1e6 samples (as
+JSON and as raw float64) plus solving them against writing the same array as one BLOB with
+sqlite3; 60 logins; and the
 teacher dashboard of an assignment with 300 submissions.  Bounded in count and time.
 """
 
@@ -236,6 +237,21 @@ def main() -> None:
                     "upload 1e6 samples (JSON) + solve (s)",
                     f"{ours:.2f}",
                     f"sqlite3 BLOB write {ceiling * 1000:.0f} ms → {ours / ceiling:.0f}×",
+                )
+            )
+            start = time.perf_counter()
+            client.put(
+                f"/api/v1/sessions/{session}/heading/positions/1",
+                headers={**auth, "Content-Type": "application/octet-stream"},
+                content=big.astype("<f8").tobytes(),
+            ).raise_for_status()
+            client.get(f"/api/v1/sessions/{session}/results", headers=auth).raise_for_status()
+            binary = time.perf_counter() - start
+            results.append(
+                (
+                    "upload 1e6 samples (raw float64) + solve (s)",
+                    f"{binary:.2f}",
+                    f"sqlite3 BLOB write {ceiling * 1000:.0f} ms → {binary / ceiling:.1f}×",
                 )
             )
 

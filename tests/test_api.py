@@ -332,7 +332,11 @@ def test_openapi_documents_every_route(client):
             assert operation.get("summary"), (method, path)
             assert "401" in operation["responses"] or path.endswith("/auth/token")
     upload = paths[f"{API}/sessions/{{session_id}}/{{part}}/positions/{{position}}"]["put"]
-    assert set(upload["requestBody"]["content"]) == {"application/json", "text/csv"}
+    assert set(upload["requestBody"]["content"]) == {
+        "application/json",
+        "text/csv",
+        "application/octet-stream",
+    }
     docs = client.get("/docs")
     assert docs.status_code == 200 and "/vendor/swagger-ui/swagger-ui-bundle.js" in docs.text
     assert "cdn" not in docs.text.lower()

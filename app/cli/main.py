@@ -133,7 +133,13 @@ def _bridge(args: argparse.Namespace) -> int:
     headers = {"Authorization": f"Bearer {token}"}
     with httpx.Client(base_url=args.url, headers=headers, timeout=30) as client:
         uploader = Uploader(
-            client, args.session, args.part, args.position, unit=args.unit, batch=args.batch
+            client,
+            args.session,
+            args.part,
+            args.position,
+            unit=args.unit,
+            batch=args.batch,
+            binary=not args.json,
         )
         try:
             run_bridge(lines, parser, uploader, max_samples=args.max_samples, seconds=args.seconds)
@@ -268,6 +274,11 @@ def build_parser() -> argparse.ArgumentParser:
     bridge.add_argument("--part", choices=["heading", "latitude"], required=True)
     bridge.add_argument("--position", type=int, choices=[1, 2, 3, 4], required=True)
     bridge.add_argument("--batch", type=int, default=50, help="readings per upload")
+    bridge.add_argument(
+        "--json",
+        action="store_true",
+        help="upload JSON instead of raw little-endian float64 (for an older server)",
+    )
     bridge.add_argument("--max-samples", type=int, help="stop after this many readings")
     bridge.add_argument("--seconds", type=float, help="stop after this long")
     bridge.set_defaults(handler=_bridge)

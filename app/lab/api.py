@@ -26,6 +26,7 @@ from app.core.position_records import parse_position_csv
 from app.core.readings import parse_decimal
 from app.core.units import canonical_unit
 from app.lab import sessions as labsessions
+from app.lab.binary_upload import is_npy, parse_npy, parse_raw
 from app.lab.results import session_results
 from app.lab.schemas import (
     AttemptOut,
@@ -96,11 +97,20 @@ async def upload_body(request: Request) -> bytes:
 
 
 @dataclass
+class UploadMeta:
+    """What comes with the samples: their unit, the dial angle, an append's offset."""
+
+    unit: str = "deg/h"
+    angle_deg: float | None = None
+    offset: int | None = None
+
+
+@dataclass
 class ParsedUpload:
     """An upload parsed before any database work (so that no write transaction waits on
     parsing); a problem is kept and reported after the permission checks."""
 
-    upload: PositionUpload | None = None
+    upload: UploadMeta | None = None
     values: np.ndarray | None = None
     times: np.ndarray | None = None
     problem: Exception | None = None
@@ -113,37 +123,53 @@ class ParsedUpload:
 
 def parsed_upload(request: Request, body: Annotated[bytes, Depends(upload_body)]) -> ParsedUpload:
     try:
-        upload = read_upload(request, body)
-        values, times = upload_arrays(upload)
+        meta, values, times = read_upload(request, body)
     except (UserError, RequestValidationError) as error:
         return ParsedUpload(problem=error)
-    return ParsedUpload(upload, values, times)
+    return ParsedUpload(meta, values, times)
 
 
-def read_upload(request: Request, body: bytes) -> PositionUpload:
-    """A JSON PositionUpload, or text/csv: one value per line, or ``time_s,value``."""
+BINARY_TYPES = ("application/octet-stream", "application/x-npy", "application/npy")
+
+
+def read_upload(request: Request, body: bytes) -> tuple[UploadMeta, np.ndarray, np.ndarray | None]:
+    """JSON (a PositionUpload), ``text/csv`` (one value per line, or ``time_s,value``), or
+    binary: raw little-endian float64/float32 or ``.npy`` (see binary_upload)."""
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if content_type == "text/csv":
         values, times = parse_position_csv(body)
-        unit = canonical_unit(request.query_params.get("unit", "deg/h"))
-        angle = request.query_params.get("angle_deg")
-        try:
-            angle_deg = parse_decimal(angle.strip()) if angle is not None else None
-        except ValueError:
-            raise UserError("api.bad_angle") from None
-        return PositionUpload(
-            samples=values.tolist(),
-            unit=unit,
-            times_s=None if times is None else times.tolist(),
-            angle_deg=angle_deg,
-        )
+        return query_meta(request), values, times
+    if content_type in BINARY_TYPES:
+        query = request.query_params
+        if is_npy(body, content_type):
+            values, times = parse_npy(body)
+        else:
+            values, times = parse_raw(body, query.get("dtype"), query.get("columns"))
+        return query_meta(request), values, times
     if content_type not in ("application/json", ""):
         raise UserError("api.content_type", status=415)
     data = loads_finite(body)
     try:
-        return PositionUpload.model_validate(data)
+        upload = PositionUpload.model_validate(data)
     except ValidationError as error:
         raise RequestValidationError(error.errors()) from None
+    values, times = upload_arrays(upload)
+    return UploadMeta(upload.unit, upload.angle_deg, upload.offset), values, times
+
+
+def query_meta(request: Request) -> UploadMeta:
+    """``?unit=``, ``?angle_deg=`` and (appends) ``?offset=`` of a CSV or binary upload."""
+    query = request.query_params
+    unit = canonical_unit(query.get("unit", "deg/h"))
+    try:
+        angle = query.get("angle_deg")
+        angle_deg = parse_decimal(angle.strip()) if angle is not None else None
+    except ValueError:
+        raise UserError("api.bad_angle") from None
+    offset = query.get("offset")
+    if offset is not None and not (offset.isdigit() and len(offset) <= 12):
+        raise UserError("api.bad_offset")
+    return UploadMeta(unit, angle_deg, int(offset) if offset is not None else None)
 
 
 def upload_arrays(upload: PositionUpload) -> tuple[np.ndarray, np.ndarray | None]:
@@ -189,9 +215,19 @@ UPLOAD_BODY = {
                 "schema": {
                     "type": "string",
                     "description": "one value per line, or time_s,value per line; an "
-                    "optional header; ?unit= and ?angle_deg= in the URL",
+                    "optional header; ?unit= and ?angle_deg= (and for appends ?offset=) "
+                    "in the URL",
                 },
                 "example": "time_s,value\n0,10.74\n1,10.65\n2,10.84\n",
+            },
+            "application/octet-stream": {
+                "schema": {
+                    "type": "string",
+                    "format": "binary",
+                    "description": "raw little-endian floats: ?dtype=float64 (default) or "
+                    "float32, ?columns=2 for time_s,value pairs; or a NumPy .npy file "
+                    "(shape (n,) or (n, 2)); ?unit=, ?angle_deg=, ?offset= as for CSV",
+                }
             },
         },
     }

@@ -1,0 +1,79 @@
+"""Binary position uploads: raw little-endian floats (``application/octet-stream``) or a
+NumPy ``.npy`` file, read straight into arrays (no text parsing, no Python lists).
+
+* raw: ``?dtype=float64`` (default) or ``float32``; ``?columns=2`` for interleaved
+  ``time_s, value`` pairs;
+* ``.npy`` (recognised by its magic bytes, or sent as ``application/x-npy``): a float or
+  integer array of shape ``(n,)`` (values) or ``(n, 2)`` (``time_s, value`` rows), any byte
+  order; never unpickled.
+"""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+from app.core.exceptions import UserError
+from app.lab.store import MAX_SAMPLES_PER_POSITION
+
+NPY_MAGIC = b"\x93NUMPY"
+RAW_DTYPES = {
+    "float64": "<f8",
+    "f8": "<f8",
+    "<f8": "<f8",
+    "float32": "<f4",
+    "f4": "<f4",
+    "<f4": "<f4",
+}
+
+
+def is_npy(body: bytes, content_type: str) -> bool:
+    return content_type in ("application/x-npy", "application/npy") or body.startswith(NPY_MAGIC)
+
+
+def _columns(array: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """(values, times) from ``(n,)`` or ``(n, 2)``; finite, not empty, not too many."""
+    if array.ndim == 1:
+        values, times = array, None
+    elif array.ndim == 2 and array.shape[1] == 2:
+        times, values = array[:, 0], array[:, 1]
+    else:
+        raise UserError("api.binary_shape", shape=str(tuple(array.shape)))
+    if values.size == 0:
+        raise UserError("api.binary_empty")
+    if values.size > MAX_SAMPLES_PER_POSITION:
+        raise UserError("lab.too_many_samples", limit=MAX_SAMPLES_PER_POSITION)
+    if not np.all(np.isfinite(values)):
+        raise UserError("api.samples_not_finite")
+    if times is not None and not np.all(np.isfinite(times)):
+        raise UserError("api.times_not_finite")
+    return np.ascontiguousarray(values), None if times is None else np.ascontiguousarray(times)
+
+
+def parse_npy(body: bytes) -> tuple[np.ndarray, np.ndarray | None]:
+    """A ``.npy`` file's values (and times): float or integer, 1-D or two columns."""
+    try:
+        array = np.load(io.BytesIO(body), allow_pickle=False)
+    except (ValueError, OSError, EOFError):
+        raise UserError("api.bad_npy") from None
+    if not isinstance(array, np.ndarray) or array.dtype.kind not in "fiu":
+        raise UserError("api.bad_npy")
+    return _columns(array.astype(np.float64, copy=False))
+
+
+def parse_raw(
+    body: bytes, dtype: str | None, columns: str | None
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """Raw little-endian floats: ``dtype`` float64 (default) or float32, ``columns`` 1 or 2."""
+    code = RAW_DTYPES.get((dtype or "float64").strip().lower())
+    if code is None:
+        raise UserError("api.bad_dtype", dtype=(dtype or "")[:20])
+    width = {"1": 1, "2": 2, None: 1}.get(columns)
+    if width is None:
+        raise UserError("api.bad_columns")
+    item = np.dtype(code).itemsize * width
+    if len(body) % item:
+        raise UserError("api.binary_length", size=len(body), item=item)
+    array = np.frombuffer(body, dtype=code).astype(np.float64)
+    return _columns(array.reshape(-1, 2) if width == 2 else array)

@@ -1,0 +1,145 @@
+"""Binary uploads: raw little-endian float64/float32 and .npy files on the position routes,
+stored exactly as JSON would store them."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+from sqlmodel import select
+
+from app.db import read_session
+from app.lab.store import load_samples
+from app.models import Take
+from tests.factories import API, handout, new_api_session, token_for
+
+
+@pytest.fixture
+def auth(client, student):
+    return token_for(client, "student1")
+
+
+def put_binary(client, auth, session_id, body: bytes, position=1, **params):
+    return client.put(
+        f"{API}/sessions/{session_id}/heading/positions/{position}",
+        content=body,
+        params=params,
+        headers={**auth, "Content-Type": "application/octet-stream"},
+    )
+
+
+def npy(array: np.ndarray) -> bytes:
+    buffer = io.BytesIO()
+    np.save(buffer, array, allow_pickle=False)
+    return buffer.getvalue()
+
+
+def stored(session_id: int, position: int = 1) -> tuple[np.ndarray, np.ndarray | None]:
+    with read_session() as db:
+        take = db.exec(
+            select(Take).where(
+                Take.session_id == session_id,
+                Take.position == position,
+                Take.superseded_at.is_(None),
+            )
+        ).one()
+        return load_samples(db, take)
+
+
+def test_every_binary_form_stores_the_same_samples(client, auth):
+    columns = handout("handout_horizontal.csv")
+    values = np.array(columns[1])
+    times = np.arange(values.size) * 0.1 + 5.0
+    forms = [
+        (values.astype("<f8").tobytes(), {}),
+        (values.astype("<f4").tobytes(), {"dtype": "float32"}),
+        (np.column_stack([times, values]).astype("<f8").tobytes(), {"columns": "2"}),
+        (npy(values), {}),
+        (npy(values.astype(">f8")), {}),  # big-endian .npy: its header says so
+        (npy(np.column_stack([times, values])), {}),
+        (npy(np.round(values * 100).astype(np.int32)), {"unit": "deg/h"}),
+    ]
+    for body, params in forms:
+        session_id = new_api_session(client, auth)
+        response = put_binary(client, auth, session_id, body, **params)
+        assert response.status_code == 200, (params, response.text)
+        got, got_times = stored(session_id)
+        if body == forms[-1][0]:
+            np.testing.assert_allclose(got, np.round(values * 100))
+        else:
+            np.testing.assert_allclose(got, values, rtol=1e-6 if "dtype" in params else 0)
+        if params.get("columns") or body in (forms[5][0],):
+            np.testing.assert_array_equal(got_times, times)
+
+
+def test_units_angle_and_appends_ride_in_the_query(client, auth):
+    session_id = new_api_session(client, auth)
+    values = np.full(10, 0.001)
+    response = put_binary(
+        client, auth, session_id, values.tobytes(), unit="deg/s", angle_deg="-90", position=2
+    )
+    assert response.status_code == 200
+    np.testing.assert_allclose(stored(session_id, 2)[0], 3.6)
+    url = f"{API}/sessions/{session_id}/heading/positions/3/samples"
+    headers = {**auth, "Content-Type": "application/octet-stream"}
+    for offset in (0, 0, 5):  # the repeated batch is stored once
+        batch = np.full(5, 10.0 + offset).tobytes()
+        reply = client.post(url, content=batch, params={"offset": offset}, headers=headers)
+        assert reply.status_code == 200, reply.text
+    assert reply.json()["n_samples"] == 10
+
+
+@pytest.mark.parametrize(
+    ("body", "params", "message"),
+    [
+        (b"\x00" * 12, {}, "not a whole number of 8-byte samples"),
+        (b"\x00" * 16, {"dtype": "complex128"}, "Unknown dtype"),
+        (b"\x00" * 16, {"columns": "3"}, "columns must be 1"),
+        (b"", {}, "no samples"),
+        (np.array([1.0, np.nan]).tobytes(), {}, "finite"),
+        (np.array([1.0, np.inf]).astype("<f4").tobytes(), {"dtype": "float32"}, "finite"),
+        (npy(np.zeros((2, 2, 2))), {}, "shape (2, 2, 2)"),
+        (npy(np.array(["a", "b"])), {}, "not a readable .npy"),
+        (b"\x93NUMPY\x01\x00garbage", {}, "not a readable .npy"),
+        (np.ones(10).tobytes(), {"offset": "-1"}, "offset must be"),
+    ],
+)
+def test_bad_binary_bodies_are_explained_and_store_nothing(client, auth, body, params, message):
+    session_id = new_api_session(client, auth)
+    response = put_binary(client, auth, session_id, body, **params)
+    assert 400 <= response.status_code < 500, response.text
+    assert message in str(response.json()["detail"])
+    with read_session() as db:
+        assert db.exec(select(Take).where(Take.session_id == session_id)).all() == []
+
+
+def test_a_pickled_npy_is_never_loaded(client, auth):
+    buffer = io.BytesIO()
+    np.save(buffer, np.array([{"x": 1}], dtype=object), allow_pickle=True)
+    session_id = new_api_session(client, auth)
+    response = put_binary(client, auth, session_id, buffer.getvalue())
+    assert response.status_code == 400 and response.json()["key"] == "api.bad_npy"
+
+
+def test_the_bridge_uploads_binary(client, auth):
+    """gyrolab bridge's uploader sends raw float64 by default (8 bytes a reading)."""
+    from app.bridge import Uploader
+
+    session_id = new_api_session(client, auth)
+    client.headers.update(auth)
+    uploader = Uploader(client, session_id, "heading", 1, batch=4)
+    sent = []
+    original = client.post
+
+    def spy(url, **kwargs):
+        sent.append(kwargs)
+        return original(url, **kwargs)
+
+    client.post = spy
+    for value in range(10):
+        uploader.add(10.0 + value)
+    uploader.flush()
+    assert uploader.sent == 10
+    assert all(k["headers"]["Content-Type"] == "application/octet-stream" for k in sent)
+    np.testing.assert_array_equal(stored(session_id)[0], 10.0 + np.arange(10))
