@@ -9,24 +9,17 @@ status, in the language of ``Accept-Language``; objects the caller may not see a
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Annotated, Any, Literal
 
-import numpy as np
-from fastapi import APIRouter, Depends, Path, Request
-from fastapi.exceptions import RequestValidationError
+from fastapi import APIRouter, Depends, Path
 from fastapi.responses import JSONResponse
-from pydantic import ValidationError
-from sqlmodel import Session, col, select
+from sqlmodel import Session, select
 
 from app.accounts.api_auth import ReadCaller, UploadCaller
 from app.core.exceptions import UserError
-from app.core.jsonsafe import json_safe, loads_finite
-from app.core.position_records import parse_position_csv
-from app.core.readings import parse_decimal
-from app.core.units import canonical_unit
+from app.core.jsonsafe import json_safe
 from app.lab import sessions as labsessions
-from app.lab.binary_upload import is_npy, parse_npy, parse_raw
+from app.lab.partners import in_sessions_of
 from app.lab.results import session_results
 from app.lab.schemas import (
     AttemptOut,
@@ -46,12 +39,12 @@ from app.lab.service import append_readings, own_session, record_position, requi
 from app.lab.store import POSITIONS, current_takes
 from app.lab.submissions import submit
 from app.lab.trim import trim_position
-from app.models import InputMethod, LabSession, SessionMember
+from app.lab.uploads import Upload
+from app.models import InputMethod, LabSession
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS
 
 router = APIRouter(prefix="/api/v1", tags=["api"], responses=API_ERRORS)
-MAX_UPLOAD_BYTES = 32 * 1024 * 1024  # 1e6 samples as JSON text are about 20 MB
 
 
 def session_out(db: Session, session: LabSession) -> SessionOut:
@@ -85,108 +78,6 @@ def session_out(db: Session, session: LabSession) -> SessionOut:
         created_at=session.created_at,
         updated_at=session.updated_at,
     )
-
-
-async def upload_body(request: Request) -> bytes:
-    """The raw body (the only async step of an upload; parsing and storing run on the
-    thread pool so that a 20 MB JSON body never stops the event loop)."""
-    body = await request.body()
-    if len(body) > MAX_UPLOAD_BYTES:
-        raise UserError("api.body_too_large", status=413, limit=MAX_UPLOAD_BYTES)
-    return body
-
-
-@dataclass
-class UploadMeta:
-    """What comes with the samples: their unit, the dial angle, an append's offset."""
-
-    unit: str = "deg/h"
-    angle_deg: float | None = None
-    offset: int | None = None
-
-
-@dataclass
-class ParsedUpload:
-    """An upload parsed before any database work (so that no write transaction waits on
-    parsing); a problem is kept and reported after the permission checks."""
-
-    upload: UploadMeta | None = None
-    values: np.ndarray | None = None
-    times: np.ndarray | None = None
-    problem: Exception | None = None
-
-    def checked(self) -> ParsedUpload:
-        if self.problem is not None:
-            raise self.problem
-        return self
-
-
-def parsed_upload(request: Request, body: Annotated[bytes, Depends(upload_body)]) -> ParsedUpload:
-    try:
-        meta, values, times = read_upload(request, body)
-    except (UserError, RequestValidationError) as error:
-        return ParsedUpload(problem=error)
-    return ParsedUpload(meta, values, times)
-
-
-BINARY_TYPES = ("application/octet-stream", "application/x-npy", "application/npy")
-
-
-def read_upload(request: Request, body: bytes) -> tuple[UploadMeta, np.ndarray, np.ndarray | None]:
-    """JSON (a PositionUpload), ``text/csv`` (one value per line, or ``time_s,value``), or
-    binary: raw little-endian float64/float32 or ``.npy`` (see binary_upload)."""
-    content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
-    if content_type == "text/csv":
-        values, times = parse_position_csv(body)
-        return query_meta(request), values, times
-    if content_type in BINARY_TYPES:
-        query = request.query_params
-        if is_npy(body, content_type):
-            values, times = parse_npy(body)
-        else:
-            values, times = parse_raw(body, query.get("dtype"), query.get("columns"))
-        return query_meta(request), values, times
-    if content_type not in ("application/json", ""):
-        raise UserError("api.content_type", status=415)
-    data = loads_finite(body)
-    try:
-        upload = PositionUpload.model_validate(data)
-    except ValidationError as error:
-        raise RequestValidationError(error.errors()) from None
-    values, times = upload_arrays(upload)
-    return UploadMeta(upload.unit, upload.angle_deg, upload.offset), values, times
-
-
-def query_meta(request: Request) -> UploadMeta:
-    """``?unit=``, ``?angle_deg=`` and (appends) ``?offset=`` of a CSV or binary upload."""
-    query = request.query_params
-    unit = canonical_unit(query.get("unit", "deg/h"))
-    try:
-        angle = query.get("angle_deg")
-        angle_deg = parse_decimal(angle.strip()) if angle is not None else None
-    except ValueError:
-        raise UserError("api.bad_angle") from None
-    offset = query.get("offset")
-    if offset is not None and not (offset.isdigit() and len(offset) <= 12):
-        raise UserError("api.bad_offset")
-    return UploadMeta(unit, angle_deg, int(offset) if offset is not None else None)
-
-
-def upload_arrays(upload: PositionUpload) -> tuple[np.ndarray, np.ndarray | None]:
-    values = np.asarray(upload.samples, dtype=float)
-    if not np.all(np.isfinite(values)):
-        raise UserError("api.samples_not_finite")
-    times = None
-    if upload.times_s is not None:
-        times = np.asarray(upload.times_s, dtype=float)
-        if times.size != values.size:
-            raise UserError("api.times_count")
-        if not np.all(np.isfinite(times)):
-            raise UserError("api.times_not_finite")
-    return values, times
-
-
-Upload = Annotated[ParsedUpload, Depends(parsed_upload)]
 
 
 def uploadable_session(session_id: ObjectId, caller: UploadCaller, db: SessionDep) -> LabSession:
@@ -240,10 +131,9 @@ UPLOAD_BODY = {
 @router.get("/sessions", response_model=list[SessionOut])
 def list_sessions(caller: ReadCaller, db: SessionDep):
     """The caller's own lab sessions and those shared as a lab partner, newest first."""
-    shared = select(SessionMember.session_id).where(SessionMember.user_id == caller.user.id)
     sessions = db.exec(
         select(LabSession)
-        .where((LabSession.owner_id == caller.user.id) | col(LabSession.id).in_(shared))
+        .where(in_sessions_of(caller.user.id))
         .order_by(LabSession.updated_at.desc())
     ).all()
     return [session_out(db, s) for s in sessions]

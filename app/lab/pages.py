@@ -79,14 +79,11 @@ def my_assignments(db: Session, user: User) -> list[tuple[Assignment, Course]]:
 
 @router.get("")
 def lab_home(request: Request, user: CurrentUser, db: SessionDep):
-    sessions = sorted(
-        [
-            *db.exec(select(LabSession).where(LabSession.owner_id == user.id)).all(),
-            *partners.shared_sessions(db, user),
-        ],
-        key=lambda s: s.updated_at,
-        reverse=True,
-    )
+    sessions = db.exec(
+        select(LabSession)
+        .where(partners.in_sessions_of(user.id))
+        .order_by(LabSession.updated_at.desc())
+    ).all()
     mine = {s.assignment_id: s for s in sessions if s.assignment_id is not None}
     extensions = {
         row.assignment_id: row.due_at

@@ -56,15 +56,11 @@ def members_of(db: Session, session: LabSession) -> list[User]:
     return [owner, *partners]
 
 
-def shared_sessions(db: Session, user: User) -> list[LabSession]:
-    """Sessions the user joined as a partner."""
-    return list(
-        db.exec(
-            select(LabSession)
-            .join(SessionMember, SessionMember.session_id == LabSession.id)
-            .where(SessionMember.user_id == user.id)
-        ).all()
-    )
+def in_sessions_of(user_id: int):
+    """A condition on LabSession: the user's own sessions and those they joined as a
+    partner (one clause for every list of "my sessions")."""
+    joined = select(SessionMember.session_id).where(SessionMember.user_id == user_id)
+    return (LabSession.owner_id == user_id) | col(LabSession.id).in_(joined)
 
 
 def member_map(db: Session, assignment: Assignment) -> dict[int, LabSession]:

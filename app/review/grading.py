@@ -14,12 +14,12 @@ from sqlmodel import Session, col, select
 
 from app.core.exceptions import UserError
 from app.core.readings import parse_decimal
+from app.lab.partners import in_sessions_of
 from app.models import (
     Assignment,
     Attempt,
     Extension,
     LabSession,
-    SessionMember,
     SessionStatus,
     User,
     utcnow,
@@ -288,10 +288,7 @@ def notices(db: Session, student: User) -> list[Notice]:
         .join(LabSession, LabSession.id == Attempt.session_id)
         .join(Assignment, Assignment.id == LabSession.assignment_id)
         .where(
-            (LabSession.owner_id == student.id)
-            | col(LabSession.id).in_(
-                select(SessionMember.session_id).where(SessionMember.user_id == student.id)
-            ),
+            in_sessions_of(student.id),
             col(Attempt.seen_at).is_(None),
             (col(Attempt.released_at).is_not(None)) | (col(Attempt.returned_at).is_not(None)),
         )

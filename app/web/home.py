@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 from fastapi import APIRouter, Request
-from sqlmodel import col, select
+from sqlmodel import select
 
-from app.models import Assignment, Course, Enrollment, LabSession, Role, SessionMember, User
+from app.lab.partners import in_sessions_of
+from app.models import Assignment, Course, Enrollment, LabSession, Role, User
 from app.review import grading
 from app.web.deps import CurrentUser, SessionDep
 from app.web.render import redirect, render
@@ -38,11 +39,10 @@ def dashboard(request: Request, user: CurrentUser, db: SessionDep):
         .order_by(Course.name)
     ).all()
     work = []
-    shared = select(SessionMember.session_id).where(SessionMember.user_id == user.id)
     for session, assignment in db.exec(
         select(LabSession, Assignment)
         .join(Assignment, Assignment.id == LabSession.assignment_id)
-        .where((LabSession.owner_id == user.id) | col(LabSession.id).in_(shared))
+        .where(in_sessions_of(user.id))
         .order_by(LabSession.updated_at.desc())
     ).all():
         latest = grading.latest_attempt(db, session.id)
