@@ -187,6 +187,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
     ).all()
     assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
+    group = partner_view(db, session, assignment, user)
     config = {
         "sessionId": session.id,
         "csrf": csrf_token_for(request),
@@ -195,7 +196,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         "plane": session.sim_plane_dial_deg,
         "messages": {key: _(key) for key in JS_MESSAGES},
         "version": session.updated_at.isoformat(),
-        "shared": len(partners.members_of(db, session)) > 1,
+        "shared": len(group["members"]) > 1,
     }
     editable = session.status != SessionStatus.graded and not (
         session.assignment_id and session.status == SessionStatus.submitted
@@ -213,7 +214,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
             **session_view(db, session, assignment, attempts, _),
             "due": grading.due_for(db, assignment, session.owner_id),
             "timezone": course.timezone if course else None,
-            **partner_view(db, session, assignment, user),
+            **group,
             "history": take_history(db, session.id),
             "methods": allowed_methods(db, session),
             "units": UNITS,
