@@ -12,7 +12,7 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Depends, Path
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
 from sqlmodel import Session, select
 
 from app.accounts.api_auth import ReadCaller, UploadCaller
@@ -20,7 +20,7 @@ from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
 from app.lab import sessions as labsessions
 from app.lab.partners import in_sessions_of
-from app.lab.results import session_results
+from app.lab.result_cache import CachedResults, cached_results
 from app.lab.schemas import (
     AttemptOut,
     HeadingSettings,
@@ -244,13 +244,19 @@ def append_position(
 @router.get("/sessions/{session_id}/results", response_model=ResultsOut)
 def get_results(session: ReadableSession, db: SessionDep):
     """Exactly the keys of ``gyrolab solve --json`` per part (null without enough data)."""
-    results = session_results(db, session)
-    payload: dict[str, Any] = {"problems": {}}
-    for part, outcome in results.items():
-        payload[part] = json_safe(outcome.to_json())
-        if outcome.result is None and outcome.error is not None:
-            payload["problems"][part] = str(outcome.error)
-    return payload
+    return Response(results_body(cached_results(db, session)), media_type="application/json")
+
+
+def results_body(entry: CachedResults) -> bytes:
+    """The response body of a cached result, validated and serialised once."""
+    if entry.payload is None:
+        payload: dict[str, Any] = {"problems": {}}
+        for part, outcome in entry.parts.items():
+            payload[part] = json_safe(outcome.to_json())
+            if outcome.result is None and outcome.error is not None:
+                payload["problems"][part] = str(outcome.error)
+        entry.payload = ResultsOut.model_validate(payload).model_dump_json().encode()
+    return entry.payload
 
 
 def submittable_session(session_id: ObjectId, caller: UploadCaller, db: SessionDep) -> LabSession:

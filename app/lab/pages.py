@@ -7,6 +7,8 @@ import math
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, Form, Request
+from jinja2.utils import htmlsafe_json_dumps
+from markupsafe import Markup
 from sqlalchemy.exc import OperationalError
 from sqlmodel import Session, select
 
@@ -18,6 +20,7 @@ from app.lab import sessions as labsessions
 from app.lab.charts import allan_figure, compass_figure, fit_figure, readings_figure
 from app.lab.deps import OwnedSession
 from app.lab.partner_pages import partner_view
+from app.lab.result_cache import CACHE, cached_results
 from app.lab.results import session_results
 from app.lab.service import allowed_methods
 from app.lab.sim import FIRST_PASS, nominal_angle, north_dial_deg, position_count
@@ -180,6 +183,18 @@ def _figures(results, _) -> dict[str, dict]:
     return figures
 
 
+def _cached_figures(db: Session, session: LabSession, entry, solved: dict, _):
+    """The figures of a cached result in the page's language: drawn (from the samples)
+    once per data version and language, then embedded as they are."""
+    language = _.language
+    cached = entry.figures.get(language)
+    if cached is None:
+        figures = _figures(solved or session_results(db, session), _)
+        cached = (frozenset(figures), Markup(htmlsafe_json_dumps(figures)))
+        CACHE.add_figures(entry, language, cached)
+    return cached
+
+
 @router.get("/sessions/{session_id}")
 def session_page(request: Request, session: OwnedSession, user: CurrentUser, db: SessionDep):
     _ = translator(request_language(request))
@@ -236,7 +251,10 @@ def session_view(
     A review belongs to its attempt: the student sees the latest attempt's review once the
     teacher returned or released it -- also while re-recording, until the next submission
     -- and earlier attempts' reviews with those attempts."""
-    results = session_results(db, session)
+    solved: dict = {}
+    entry = cached_results(db, session, assignment, on_miss=solved.update)
+    results = entry.parts
+    figure_names, figures_json = _cached_figures(db, session, entry, solved, _)
     nominal = {
         part: [nominal_angle(session, part, k) for k in range(1, position_count(session) + 1)]
         for part in PARTS
@@ -257,7 +275,8 @@ def session_view(
         "session": session,
         "north_dial": north,
         "results": results,
-        "figures": _figures(results, _),
+        "figures": figure_names,
+        "figures_json": figures_json,
         "attempts": attempts,
         "assignment": assignment,
         "nominal": nominal,

@@ -17,7 +17,7 @@ from app.core.jsonsafe import json_safe
 from app.core.readings import Readings, parse_readings_csv
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.deps import ManualSession, OwnedSession, SimulatorSession
-from app.lab.results import session_results
+from app.lab.result_cache import results_of
 from app.lab.service import record_positions, recordable_session
 from app.lab.sim import nominal_angle, position_count
 from app.lab.store import POSITIONS, check_position, set_symmetric_order
@@ -228,7 +228,7 @@ def set_order(
 
 @router.get("/sessions/{session_id}/results.json")
 def results_endpoint(session: OwnedSession, db: SessionDep):
-    results = session_results(db, session)
+    results = results_of(db, session)
     payload = {part: outcome.to_json() for part, outcome in results.items()}
     return Response(json.dumps(json_safe(payload)), media_type="application/json")
 

@@ -4,9 +4,11 @@ data-quality flags."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from itertools import pairwise
+from types import SimpleNamespace
 
 import numpy as np
 from sqlmodel import Session, select
@@ -30,22 +32,48 @@ from app.models import (
 
 @dataclass
 class PositionData:
-    """A position's readings as the result uses them: after the take's trimmed start."""
+    """A position's readings as the result uses them: after the take's trimmed start.
+
+    ``n``, ``mean`` and ``std`` (sample, ddof = 1; None below 2 readings) summarise the
+    used readings; a cached result keeps them and drops ``values``/``times`` (``slim``)."""
 
     take: Take
-    values: np.ndarray
+    values: np.ndarray | None
     times: np.ndarray | None
+    n: int = 0
+    mean: float = math.nan
+    std: float | None = None
 
     @classmethod
     def of(cls, take: Take, values: np.ndarray, times: np.ndarray | None) -> PositionData:
         """All of a take's samples → the ones used (the first ``take.trim_start`` are the
         transient after turning the table: kept in the database, left out here)."""
         start = min(max(take.trim_start or 0, 0), values.size)
-        return cls(take, values[start:], None if times is None else times[start:])
+        used = values[start:]
+        return cls(
+            take,
+            used,
+            None if times is None else times[start:],
+            n=int(used.size),
+            mean=float(used.mean()) if used.size else math.nan,
+            std=float(used.std(ddof=1)) if used.size > 1 else None,
+        )
 
     @property
     def trimmed(self) -> int:
         return self.take.trim_start or 0
+
+    @property
+    def sem(self) -> float | None:
+        """s/√n of the used readings (None below 2 readings)."""
+        return None if self.std is None else self.std / math.sqrt(self.n)
+
+    def slim(self) -> PositionData:
+        """The summary without the samples, and the take as a detached snapshot (safe to
+        share between requests and threads)."""
+        return PositionData(
+            SimpleNamespace(**self.take.model_dump()), None, None, self.n, self.mean, self.std
+        )
 
 
 @dataclass
@@ -59,6 +87,11 @@ class PartResult:
 
     def to_json(self) -> dict | None:
         return None if self.result is None else self.result.to_json()
+
+    def slim(self) -> PartResult:
+        """The same result without the samples (see :meth:`PositionData.slim`)."""
+        positions = {k: item.slim() for k, item in self.positions.items()}
+        return PartResult(self.part, positions, self.result, self.error, self.steps, self.flags)
 
 
 SessionData = dict[str, dict[int, PositionData]]  # part → position → data

@@ -10,7 +10,8 @@ from sqlmodel import Session, select
 from app import __version__
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
-from app.lab.results import results_json, session_results
+from app.lab.result_cache import cached_results
+from app.lab.results import results_json
 from app.lab.store import current_takes
 from app.models import (
     Assignment,
@@ -57,7 +58,7 @@ def submit(db: Session, session: LabSession) -> Attempt:
         raise UserError(
             "lab.past_due", "The due date has passed; submissions are closed.", status=409
         )
-    results = session_results(db, session)
+    results = cached_results(db, session, assignment).parts
     if all(outcome.result is None for outcome in results.values()):
         raise UserError(
             "lab.nothing_to_submit", "There is no result to submit yet: record the positions first."

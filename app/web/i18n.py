@@ -144,4 +144,5 @@ def translator(language: str) -> Callable[..., str]:
     def _(key: str, **params: object) -> str:
         return translate(key, language, **params)
 
+    _.language = language  # what a cache of translated output is keyed by
     return _

@@ -1,0 +1,170 @@
+"""A session's results, solved once per change of its data.
+
+The key is a digest of everything a result depends on, read from the database: each
+current take (id, position, dial angle, source, sample count, trim), the session's columns
+(station, schedule, simulator -- not those that only follow the recording, such as the
+virtual table's position) and its assignment's (the characterised station noise).  Any
+change the database sees gives a new key, so a cached result can never be stale, and
+several worker processes (or hosts) need no invalidation: each keeps its own bounded cache
+of immutable entries and solves a given key at most once.  Reading the key costs one small
+query (no samples); a miss loads the samples and solves.
+
+Entries hold slim results (position summaries, no samples), the REST payload already
+serialised, and the plotly figures per language as the page embeds them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from markupsafe import Markup
+from sqlmodel import Session, select
+
+from app.lab.results import PartResult, session_results
+from app.models import Assignment, LabSession, Take
+
+MAX_ENTRIES = 512  # slim results: a few kB each
+MAX_FIGURE_BYTES = 32 * 2**20  # the figures' JSON of all entries, both languages
+
+
+@dataclass
+class CachedResults:
+    key: str
+    parts: dict[str, PartResult]
+    payload: bytes | None = None  # the REST results body (set by the API on first use)
+    # language → (the figures' names, their JSON as the page's <script> embeds it)
+    figures: dict[str, tuple[frozenset[str], Markup]] = field(default_factory=dict)
+
+
+class ResultCache:
+    """A thread-safe LRU of :class:`CachedResults`, bounded in entries and figure bytes."""
+
+    def __init__(self, max_entries: int = MAX_ENTRIES, max_figure_bytes: int = MAX_FIGURE_BYTES):
+        self.max_entries = max_entries
+        self.max_figure_bytes = max_figure_bytes
+        self._entries: OrderedDict[str, CachedResults] = OrderedDict()
+        self._lock = threading.Lock()
+        self.hits = 0
+        self.misses = 0
+
+    def get(self, key: str) -> CachedResults | None:
+        with self._lock:
+            entry = self._entries.get(key)
+            if entry is None:
+                self.misses += 1
+                return None
+            self._entries.move_to_end(key)
+            self.hits += 1
+            return entry
+
+    def put(self, entry: CachedResults) -> CachedResults:
+        with self._lock:
+            kept = self._entries.setdefault(entry.key, entry)  # a racing solve: keep one
+            self._entries.move_to_end(entry.key)
+            self._trim()
+            return kept
+
+    def add_figures(
+        self, entry: CachedResults, language: str, figures: tuple[frozenset[str], Markup]
+    ) -> None:
+        with self._lock:
+            entry.figures[language] = figures
+            self._trim()
+
+    def clear(self) -> None:
+        with self._lock:
+            self._entries.clear()
+
+    def _trim(self) -> None:
+        while len(self._entries) > self.max_entries:
+            self._entries.popitem(last=False)
+        while len(self._entries) > 1 and self._figure_bytes() > self.max_figure_bytes:
+            self._entries.popitem(last=False)
+
+    def _figure_bytes(self) -> int:
+        return sum(len(f) for e in self._entries.values() for _, f in e.figures.values())
+
+
+CACHE = ResultCache()
+
+
+# Session columns that change while recording or submitting but never enter a result
+# (every other column does, including any added later: a new column is safe by default).
+NOT_IN_RESULTS = frozenset(
+    {
+        "title",
+        "status",
+        "created_at",
+        "updated_at",
+        "stream_part",
+        "stream_position",
+        "sim_table_heading",
+        "sim_table_latitude",
+        "sim_turns",
+        "sim_clock_s",
+        "sim_clock_at",
+        "partner_code",
+    }
+)
+
+
+def _row(record) -> tuple:
+    if record is None:
+        return ()
+    return tuple(
+        getattr(record, column.name)
+        for column in type(record).__table__.columns
+        if column.name not in NOT_IN_RESULTS
+    )
+
+
+def data_key(db: Session, session: LabSession, assignment: Assignment | None) -> str:
+    """The digest of everything the session's results depend on (one query for the takes;
+    the session and assignment rows are the caller's)."""
+    takes = db.exec(
+        select(
+            Take.id,
+            Take.part,
+            Take.position,
+            Take.angle_deg,
+            Take.source,
+            Take.n_samples,
+            Take.trim_start,
+        )
+        .where(Take.session_id == session.id, Take.superseded_at.is_(None))
+        .order_by(Take.part, Take.position)
+    ).all()
+    text = repr((tuple(tuple(t) for t in takes), _row(session), _row(assignment)))
+    return hashlib.blake2b(text.encode(), digest_size=16).hexdigest()
+
+
+def cached_results(
+    db: Session,
+    session: LabSession,
+    assignment: Assignment | None = None,
+    *,
+    on_miss: Callable[[dict[str, PartResult]], None] | None = None,
+) -> CachedResults:
+    """The session's results for its current data, solved only when that data changed.
+
+    ``assignment`` is the session's (looked up when not given).  ``on_miss`` sees the full
+    results (with samples) when they had to be solved, e.g. to draw the figures at once."""
+    if assignment is None and session.assignment_id is not None:
+        assignment = db.get(Assignment, session.assignment_id)
+    key = data_key(db, session, assignment)
+    entry = CACHE.get(key)
+    if entry is not None:
+        return entry
+    full = session_results(db, session)
+    if on_miss is not None:
+        on_miss(full)
+    return CACHE.put(CachedResults(key, {part: r.slim() for part, r in full.items()}))
+
+
+def results_of(db: Session, session: LabSession) -> dict[str, PartResult]:
+    """The session's (slim) results: the cached path for every reader."""
+    return cached_results(db, session).parts

@@ -1,0 +1,134 @@
+"""Results solved once per change of the data: the page, the page's JSON, the REST API and
+a submission share one cached result, which every change of the data replaces."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from sqlmodel import select
+
+from app.db import read_session
+from app.lab import result_cache
+from app.lab.result_cache import CachedResults, ResultCache, data_key
+from app.models import Assignment, Attempt, LabSession
+from tests.factories import (
+    csrf_from,
+    handout,
+    new_session,
+    post_form,
+    post_json,
+    save_manual,
+)
+
+
+@pytest.fixture
+def solves(monkeypatch) -> list[int]:
+    """Each time a session's results are solved from its samples (a cache miss)."""
+    result_cache.CACHE.clear()
+    calls: list[int] = []
+    solve = result_cache.session_results
+
+    def counted(db, session):
+        calls.append(session.id)
+        return solve(db, session)
+
+    monkeypatch.setattr(result_cache, "session_results", counted)
+    return calls
+
+
+def heading(client, session_id) -> float:
+    return client.get(f"/lab/sessions/{session_id}/results.json").json()["heading"]["theta_deg"]
+
+
+def test_every_reader_shares_one_solve_until_the_data_changes(student_client, solves):
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    solves.clear()
+    first = heading(student_client, session_id)
+    for _ in range(3):
+        assert student_client.get(f"/lab/sessions/{session_id}").status_code == 200
+        assert heading(student_client, session_id) == first
+    assert solves == [session_id]  # one solve for three pages and four JSON reads
+
+    columns = handout("handout_horizontal.csv")
+    columns[1] = [30.0] * 3 + [value + 2.0 for value in columns[1]]  # re-record position 1
+    save_manual(student_client, session_id, "heading", {1: columns[1]})
+    moved = heading(student_client, session_id)
+    assert moved != first and solves == [session_id, session_id]
+
+    page = f"/lab/sessions/{session_id}"
+    trim = {"part": "heading", "position": 1, "trim": 3}
+    assert post_json(student_client, f"{page}/trim", trim, page).status_code == 200
+    assert heading(student_client, session_id) not in (first, moved)
+    assert len(solves) == 3
+
+
+def test_the_page_shows_the_numbers_of_the_current_data(student_client, solves):
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    student_client.get(f"/lab/sessions/{session_id}")  # cached with the first data
+    save_manual(student_client, session_id, "heading", {2: [5.0] * 9 + [5.5]})
+    page = student_client.get(f"/lab/sessions/{session_id}").text
+    assert "5.050" in page  # position 2's new mean, not the cached one
+    assert "n = 10" in page
+
+
+def test_a_change_of_station_or_assignment_is_a_new_key(student_client):
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        before = data_key(db, session, None)
+        assert data_key(db, session, None) == before  # stable
+        session.latitude_deg += 0.5
+        assert data_key(db, session, None) != before
+        assignment = Assignment(course_id=1, title="x", latitude_deg=39.9, earth_rate_deg_h=15.04)
+        with_assignment = data_key(db, session, assignment)
+        assignment.gyro_characterisation = "{}"  # a characterised station: another σ
+        assert data_key(db, session, assignment) != with_assignment
+
+
+def test_symmetric_order_switch_is_a_new_result(student_client, solves):
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    heading(student_client, session_id)
+    solved = len(solves)
+    page = f"/lab/sessions/{session_id}"
+    post_form(student_client, f"{page}/order", {"symmetric": "on"}, page=page)
+    with read_session() as db:
+        assert db.get(LabSession, session_id).symmetric_order
+    heading(student_client, session_id)
+    heading(student_client, session_id)
+    assert len(solves) == solved + 1
+
+
+def test_the_cache_is_bounded():
+    cache = ResultCache(max_entries=2, max_figure_bytes=100)
+    for key in "abc":
+        cache.put(CachedResults(key, {}))
+    assert cache.get("a") is None and cache.get("b") is not None
+    entry = cache.get("c")
+    cache.add_figures(entry, "en", (frozenset(), "x" * 80))
+    cache.add_figures(cache.get("b"), "en", (frozenset(), "y" * 80))
+    assert cache.get("c") is None  # the least recently used went over the byte bound
+    assert cache.get("b") is not None
+
+
+def test_a_racing_solve_keeps_one_entry():
+    cache = ResultCache()
+    first = cache.put(CachedResults("k", {}))
+    assert cache.put(CachedResults("k", {})) is first
+
+
+def test_a_submission_freezes_the_shown_result(student_client, solves):
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    solves.clear()
+    shown = heading(student_client, session_id)
+    page = f"/lab/sessions/{session_id}"
+    student_client.post(f"{page}/submit", data={"csrf_token": csrf_from(student_client, page)})
+    with read_session() as db:
+        attempt = db.exec(select(Attempt).where(Attempt.session_id == session_id)).one()
+        assert json.loads(attempt.results_json)["heading"]["theta_deg"] == shown
+    assert solves == [session_id]  # the submission and the page after it: no new solve
