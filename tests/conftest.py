@@ -174,11 +174,21 @@ def test_database(tmp_path, monkeypatch, backend, request) -> Iterator[TestDatab
         database = TestDatabase(backend, path=path)
     get_settings.cache_clear()
     engine_for.cache_clear()
+    forget_process_caches()
     yield database
     database.close_connections()
     get_settings.cache_clear()
     if database.name:
         pg.server.drop_database(database.name)
+
+
+def forget_process_caches() -> None:
+    """Each test starts like a fresh worker: no cached results, no leased rate windows."""
+    from app.accounts.rate_leases import LEASES
+    from app.lab.result_cache import CACHE
+
+    CACHE.clear()
+    LEASES.clear()
 
 
 @pytest.fixture

@@ -44,31 +44,28 @@ def api_caller(request: Request, db: SessionDep, settings: SettingsDep) -> Calle
     if user.must_change_password:
         raise UserError("api.change_password_first", status=403)
     with statement_session() as counter_db:  # the same per-minute rate as a token
-        wait = count_cookie_request(counter_db, request.state.auth.id, settings.api_rate_per_minute)
-        counter_db.commit()
+        wait = count_cookie_request(counter_db, request.state.auth, settings.api_rate_per_minute)
     if wait:
         raise UserError("api.rate_session", status=429, headers={"Retry-After": str(wait)})
     return Caller(user, {"read", "upload"}, "cookie")
 
 
 def _token_caller(raw: str, db, rate_per_minute: int) -> Caller:
-    # Not a serialised writer: the count is one atomic UPDATE (see check_token); the user
-    # is read alongside and handed to the request's session like a cookie login
-    # (deps.load_login), so the write lock is taken by the handler alone.
+    # Not a serialised writer: the token and its owner are read, and the rate's lease (a
+    # database write once per few requests) is one atomic UPDATE (see check_token); the
+    # user is handed to the request's session like a cookie login (deps.load_login), so
+    # the write lock is taken by the handler alone.
     with statement_session() as counter_db:
         check = check_token(counter_db, raw, rate_per_minute)
-        counter_db.commit()
-        found = counter_db.get(User, check.token.user_id) if check.token else None
-        scopes = set(check.token.scopes.split(",")) if check.token else set()
-    if check.problem == "invalid" or (check.problem is None and found is None):
+    if check.problem == "invalid" or check.user is None:
         raise UserError("api.bad_token", status=401, headers=BEARER)
     if check.problem == "rate":
         raise UserError(
             "api.rate_token", status=429, headers={"Retry-After": str(check.retry_after)}
         )
-    if found.must_change_password:
+    if check.user.must_change_password:
         raise UserError("api.change_password_first", status=403)
-    return Caller(db.merge(found, load=False), scopes, "token")
+    return Caller(db.merge(check.user, load=False), check.scopes, "token")
 
 
 def scoped(scope: str, *, teacher: bool = False):

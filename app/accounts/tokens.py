@@ -2,7 +2,8 @@
 
 Tokens look like ``gl_<43 random characters>``; only their SHA-256 is stored.  Each token
 has a fixed one-minute request window kept in the database, so the limit holds across
-restarts and several server processes.
+restarts and several server processes; workers lease requests of it a few at a time
+(``rate_leases``), so most requests only read.
 """
 
 from __future__ import annotations
@@ -11,9 +12,10 @@ import secrets
 from dataclasses import dataclass
 from datetime import timedelta
 
-from sqlalchemy import and_, case, or_, update
+from sqlalchemy import or_
 from sqlmodel import Session, select
 
+from app.accounts.rate_leases import LEASES, lease_statement
 from app.accounts.security import token_digest
 from app.models import ApiToken, AuthSession, User, utcnow
 
@@ -46,67 +48,57 @@ def new_token(
 
 
 @dataclass
-class TokenUse:
-    id: int
-    user_id: int
-    scopes: str
-
-
-@dataclass
 class TokenCheck:
-    token: TokenUse | None
+    user: User | None  # the token's owner (None: no live token)
+    scopes: set[str]
     problem: str | None = None  # "invalid" | "rate"
     retry_after: int = 0
 
 
-def _counted(model, condition, now):
-    """``UPDATE model SET <this request counted in its one-minute window> WHERE condition
-    RETURNING ...``: atomic on its own (a row lock on PostgreSQL), so it needs no
-    serialised write transaction -- every SET expression reads the row as it was."""
-    window_over = or_(
-        model.window_start.is_(None), model.window_start <= now - timedelta(minutes=1)
-    )
-    return (
-        update(model)
-        .where(condition)
-        .values(
-            window_start=case((window_over, now), else_=model.window_start),
-            window_count=case((window_over, 1), else_=model.window_count + 1),
-        )
-        .returning(model.id, model.user_id, model.window_start, model.window_count)
-    )
-
-
-def _retry_after(row, now) -> int:
-    return max(60 - int((now - row.window_start).total_seconds()), 1)
-
-
 def check_token(db: Session, raw: str, rate_per_minute: int) -> TokenCheck:
-    """Find a live token and count this request in its one-minute window (caller commits)."""
+    """Find a live token and its owner (one read) and admit this request within the
+    token's per-minute rate (a database write once per lease, see ``rate_leases``)."""
     now = utcnow()
-    live = and_(
-        ApiToken.token_hash == token_digest(raw),
-        ApiToken.revoked_at.is_(None),
-        or_(ApiToken.expires_at.is_(None), ApiToken.expires_at > now),
-    )
-    counted = db.execute(
-        _counted(ApiToken, live, now).values(last_used_at=now).returning(ApiToken.scopes)
+    digest = token_digest(raw)
+    found = db.exec(
+        select(ApiToken.id, ApiToken.scopes, User)
+        .join(User, User.id == ApiToken.user_id)
+        .where(
+            ApiToken.token_hash == digest,
+            ApiToken.revoked_at.is_(None),
+            or_(ApiToken.expires_at.is_(None), ApiToken.expires_at > now),
+        )
     ).first()
-    if counted is None:
-        return TokenCheck(None, "invalid")
-    token = TokenUse(counted.id, counted.user_id, counted.scopes)
-    if counted.window_count > rate_per_minute:
-        return TokenCheck(token, "rate", _retry_after(counted, now))
-    return TokenCheck(token)
+    if found is None:
+        return TokenCheck(None, set(), "invalid")
+    token_id, scopes, user = found
+    admission = LEASES.admit(digest, rate_per_minute, _leaser(db, ApiToken, token_id, touch=True))
+    if not admission.admitted:
+        return TokenCheck(user, set(), "rate", admission.retry_after)
+    return TokenCheck(user, set(scopes.split(",")))
 
 
-def count_cookie_request(db: Session, auth_session_id: int, rate_per_minute: int) -> int:
+def count_cookie_request(db: Session, auth: AuthSession, rate_per_minute: int) -> int:
     """Count an API call made with a browser session; 0, or seconds to wait past the rate."""
-    now = utcnow()
-    counted = db.execute(_counted(AuthSession, AuthSession.id == auth_session_id, now)).first()
-    if counted is not None and counted.window_count > rate_per_minute:
-        return _retry_after(counted, now)
-    return 0
+    admission = LEASES.admit(auth.token_hash, rate_per_minute, _leaser(db, AuthSession, auth.id))
+    return 0 if admission.admitted else admission.retry_after
+
+
+def _leaser(db: Session, model, row_id: int, *, touch: bool = False):
+    """Lease ``size`` requests of the row's window in its own short statement."""
+
+    def lease(size: int, now):
+        # End the read first: on SQLite a read transaction cannot become a write once
+        # another writer has committed ("database is locked" at once, no busy wait).
+        db.commit()
+        statement = lease_statement(model, row_id, size, now)
+        if touch:
+            statement = statement.values(last_used_at=now)
+        counted = db.execute(statement).first()
+        db.commit()
+        return None if counted is None else (counted.window_start, counted.window_count)
+
+    return lease
 
 
 def user_tokens(db: Session, user: User) -> list[ApiToken]:

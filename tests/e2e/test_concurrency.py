@@ -5,7 +5,7 @@
   dependencies froze the whole worker until SQLite's busy timeout);
 * guesses sent in parallel cannot get past the log-in throttle while passwords are hashed
   outside the write lock;
-* the per-token rate limit counts every request exactly once across workers.
+* the per-token rate limit holds across workers (leased from the database's window).
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import httpx
 import pytest
 from sqlalchemy import create_engine, text
 
+from app.accounts.rate_leases import MAX_LEASE
 from app.db import WRITE_LOCK_KEY
 from tests.e2e.conftest import STUDENT_PASSWORD, LiveServer
 
@@ -164,10 +165,13 @@ def test_parallel_log_ins_of_one_account_all_get_through(any_live_server: LiveSe
         assert list(pool.map(token, range(5))) == [200] * 5
 
 
-def test_token_rate_limit_counts_each_request_once(any_live_server: LiveServer):
-    """600 requests per minute per token, counted in the database by both workers."""
+def test_token_rate_limit_holds_across_workers(any_live_server: LiveServer):
+    """600 requests per minute per token: both workers lease requests of the one window in
+    the database and never admit more; a worker's unused lease (at most MAX_LEASE - 1
+    requests each) is the only slack."""
     api = bearer(any_live_server.url)
     with ThreadPoolExecutor(8) as pool:
-        statuses = list(pool.map(lambda _: api.get("/api/v1/me").status_code, range(620)))
-    assert statuses.count(200) == 600
-    assert statuses.count(429) == 20
+        statuses = list(pool.map(lambda _: api.get("/api/v1/me").status_code, range(640)))
+    slack = 2 * (MAX_LEASE - 1) if any_live_server.database_url else 0
+    assert 600 - slack <= statuses.count(200) <= 600, statuses
+    assert statuses.count(200) + statuses.count(429) == 640
