@@ -185,9 +185,10 @@ def test_database(tmp_path, monkeypatch, backend, request) -> Iterator[TestDatab
 def forget_process_caches() -> None:
     """Each test starts like a fresh worker: no cached results, no leased rate windows."""
     from app.accounts.rate_leases import LEASES
-    from app.lab.result_cache import CACHE
+    from app.lab.result_cache import CACHE, SUMMARIES
 
     CACHE.clear()
+    SUMMARIES.clear()
     LEASES.clear()
 
 

@@ -13,12 +13,16 @@ from app.lab import result_cache
 from app.lab.result_cache import CachedResults, ResultCache, data_key
 from app.models import Assignment, Attempt, LabSession
 from tests.factories import (
+    browser,
+    build_world,
     csrf_from,
+    do_lab,
     handout,
     new_session,
     post_form,
     post_json,
     save_manual,
+    start,
 )
 
 
@@ -132,3 +136,35 @@ def test_a_submission_freezes_the_shown_result(student_client, solves):
         attempt = db.exec(select(Attempt).where(Attempt.session_id == session_id)).one()
         assert json.loads(attempt.results_json)["heading"]["theta_deg"] == shown
     assert solves == [session_id]  # the submission and the page after it: no new solve
+
+
+def test_the_dashboard_reads_samples_only_of_sessions_that_changed(app, teacher, monkeypatch):
+    from app.review import service
+
+    world = build_world(app, teacher)
+    sessions = {}
+    for name in ("s1", "s2", "s3"):
+        client = browser(world, name)
+        sessions[name] = start(client, world)
+        do_lab(client, sessions[name])
+    read: list[int] = []
+    load = service.iter_current_data
+
+    def counted(db, *where):
+        for session_id, data in load(db, *where):
+            read.append(session_id)
+            yield session_id, data
+
+    monkeypatch.setattr(service, "iter_current_data", counted)
+    teacher_client = browser(world, teacher.username)
+    dashboard = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    assert teacher_client.get(dashboard).status_code == 200
+    assert sorted(read) == sorted(sessions.values())
+    read.clear()
+    assert teacher_client.get(dashboard).status_code == 200
+    assert read == []  # nothing changed: no samples read
+    s2 = browser(world, "s2")
+    save_manual(s2, sessions["s2"], "heading", {1: [30.0] * 10})  # a spike-free new take
+    page = teacher_client.get(dashboard).text
+    assert read == [sessions["s2"]]
+    assert page.count("学生") >= 3

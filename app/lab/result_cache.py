@@ -92,6 +92,37 @@ class ResultCache:
 CACHE = ResultCache()
 
 
+class SummaryCache:
+    """A thread-safe LRU of small per-session values keyed like results (e.g. the class
+    dashboard's data flags and fingerprints of a session's current data)."""
+
+    def __init__(self, max_entries: int = 8192):
+        self.max_entries = max_entries
+        self._entries: OrderedDict[str, object] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, key: str):
+        with self._lock:
+            value = self._entries.get(key)
+            if value is not None:
+                self._entries.move_to_end(key)
+            return value
+
+    def put(self, key: str, value) -> None:
+        with self._lock:
+            self._entries[key] = value
+            self._entries.move_to_end(key)
+            while len(self._entries) > self.max_entries:
+                self._entries.popitem(last=False)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._entries.clear()
+
+
+SUMMARIES = SummaryCache()
+
+
 # Session columns that change while recording or submitting but never enter a result
 # (every other column does, including any added later: a new column is safe by default).
 NOT_IN_RESULTS = frozenset(
@@ -122,24 +153,47 @@ def _row(record) -> tuple:
     )
 
 
+KEY_COLUMNS = (
+    Take.id,
+    Take.part,
+    Take.position,
+    Take.angle_deg,
+    Take.source,
+    Take.n_samples,
+    Take.trim_start,
+)
+
+
+def _digest(takes, session: LabSession, assignment_row: tuple) -> str:
+    text = repr((tuple(tuple(t) for t in takes), _row(session), assignment_row))
+    return hashlib.blake2b(text.encode(), digest_size=16).hexdigest()
+
+
 def data_key(db: Session, session: LabSession, assignment: Assignment | None) -> str:
     """The digest of everything the session's results depend on (one query for the takes;
     the session and assignment rows are the caller's)."""
     takes = db.exec(
-        select(
-            Take.id,
-            Take.part,
-            Take.position,
-            Take.angle_deg,
-            Take.source,
-            Take.n_samples,
-            Take.trim_start,
-        )
+        select(*KEY_COLUMNS)
         .where(Take.session_id == session.id, Take.superseded_at.is_(None))
         .order_by(Take.part, Take.position)
     ).all()
-    text = repr((tuple(tuple(t) for t in takes), _row(session), _row(assignment)))
-    return hashlib.blake2b(text.encode(), digest_size=16).hexdigest()
+    return _digest(takes, session, _row(assignment))
+
+
+def data_keys(
+    db: Session, sessions: list[LabSession], assignment: Assignment | None
+) -> dict[int, str]:
+    """:func:`data_key` of many sessions of one assignment, in one query."""
+    by_session: dict[int, list] = {session.id: [] for session in sessions}
+    rows = db.exec(
+        select(Take.session_id, *KEY_COLUMNS)
+        .where(Take.session_id.in_(list(by_session)), Take.superseded_at.is_(None))
+        .order_by(Take.session_id, Take.part, Take.position)
+    ).all()
+    for session_id, *take in rows:
+        by_session[session_id].append(take)
+    assignment_row = _row(assignment)
+    return {s.id: _digest(by_session[s.id], s, assignment_row) for s in sessions}
 
 
 def cached_results(

@@ -19,6 +19,7 @@ from sqlmodel import Session, select
 from app.core.sinusoid import wrap180
 from app.core.solve import percent_error
 from app.lab.partners import group_names, member_map
+from app.lab.result_cache import SUMMARIES, data_keys
 from app.lab.results import SessionData, iter_current_data, quality_flags
 from app.lab.store import PARTS, current_takes
 from app.models import (
@@ -252,6 +253,32 @@ class StudentRow:
         return next((c.error for c in self.check.checks if c.name == name), None)
 
 
+def data_summaries(
+    db: Session, assignment: Assignment, by_id: dict[int, LabSession]
+) -> dict[int, tuple[list[dict], tuple[str | None, str | None], list]]:
+    """Each session's data flags, fingerprints and current takes: computed from the samples
+    once per version of its data (``result_cache.data_keys``), so that the dashboard
+    reads samples only of the sessions that changed since it was last drawn."""
+    keys = data_keys(db, list(by_id.values()), assignment)
+    summaries = {sid: SUMMARIES.get(key) for sid, key in keys.items()}
+    changed = [sid for sid, summary in summaries.items() if summary is None]
+    if changed:
+        for session_id, data in iter_current_data(db, LabSession.id.in_(changed)):
+            positions = [item for part in data.values() for item in part.values()]
+            summary = (
+                data_flags(by_id[session_id], data),
+                data_fingerprint(data),
+                [item.slim().take for item in positions],
+            )
+            SUMMARIES.put(keys[session_id], summary)
+            summaries[session_id] = summary
+        for session_id in changed:
+            if summaries[session_id] is None:  # no recording yet
+                summaries[session_id] = ([], (None, None), [])
+                SUMMARIES.put(keys[session_id], summaries[session_id])
+    return summaries
+
+
 def latest_results(attempts: list[Attempt]) -> dict:
     return json.loads(attempts[-1].results_json) if attempts else {}
 
@@ -281,13 +308,7 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
         .order_by(Attempt.session_id, Attempt.number)
     ).all():
         attempts.setdefault(attempt.session_id, []).append(attempt)
-    by_id = {session.id: session for session in sessions.values()}
-    summaries: dict[int, tuple[list[dict], tuple[str | None, str | None], list[Take]]] = {}
-    for session_id, data in iter_current_data(db, in_assignment):
-        if session_id not in by_id:  # started after the sessions were read
-            continue
-        takes = [item.take for positions in data.values() for item in positions.values()]
-        summaries[session_id] = (data_flags(by_id[session_id], data), data_fingerprint(data), takes)
+    summaries = data_summaries(db, assignment, {s.id: s for s in sessions.values()})
 
     rows = []
     fingerprints: dict[str, list[str]] = {}
