@@ -8,10 +8,20 @@ next sample offset, attempt numbers, throttle windows) is correct without per-si
   locked" under concurrency). Read-only requests keep a deferred ``BEGIN`` so readers never
   queue behind writers.
 * PostgreSQL: reads run in REPEATABLE READ (one snapshot per request, like SQLite);
-  a write transaction starts by taking one transaction-scoped advisory lock
-  (``pg_advisory_xact_lock``), held until COMMIT/ROLLBACK, across every worker process and
-  host; readers take no lock. Under READ COMMITTED each statement after the lock sees every
-  earlier writer's commit, which is the same guarantee SQLite's single writer gives.
+  readers take no lock.  Writers come in two kinds, both under READ COMMITTED (each
+  statement after a lock sees every earlier writer's commit):
+
+  - a *row writer* (``row_writer``: the lab's work on one session -- recording, streaming,
+    trimming, submitting) takes the app-wide advisory lock in SHARED mode, so row writers
+    run in parallel, and locks the rows its read-check-write needs with ``SELECT … FOR
+    UPDATE`` (``lock_rows``: the lab session, then its owner for the storage quota), so
+    two writes to one session queue and writes to different sessions do not;
+  - any other writer (``writer``: accounts, courses, assignments, reviews -- rare, and
+    their checks span many rows) takes the same advisory lock EXCLUSIVELY, as every writer
+    did before: it waits for the row writers in flight and they wait for it.
+
+  Single-row counters (rate windows, the idle timer) are atomic ``UPDATE … RETURNING``
+  statements outside any serialised transaction (``statement_session``).
 """
 
 from __future__ import annotations
@@ -22,11 +32,12 @@ from functools import lru_cache
 
 from sqlalchemy import Engine, event
 from sqlalchemy.engine import make_url
-from sqlmodel import Session, create_engine
+from sqlmodel import Session, create_engine, select
 
 BUSY_TIMEOUT_MS = 10_000
 WRITE_LOCK_KEY = 0x6779726F  # "gyro": the advisory lock every PostgreSQL writer takes
 WRITER_OPTION = "gyrolab_writer"
+ROW_WRITER = "rows"  # WRITER_OPTION's value for a row writer (True: an exclusive writer)
 
 
 def is_sqlite(url: str) -> bool:
@@ -136,7 +147,10 @@ def _postgres_engine(url: str) -> Engine:
 
     @event.listens_for(engine, "begin")
     def _on_begin(connection) -> None:
-        if connection.get_execution_options().get(WRITER_OPTION, False):
+        kind = connection.get_execution_options().get(WRITER_OPTION, False)
+        if kind == ROW_WRITER:
+            connection.exec_driver_sql(f"SELECT pg_advisory_xact_lock_shared({WRITE_LOCK_KEY})")
+        elif kind:
             connection.exec_driver_sql(f"SELECT pg_advisory_xact_lock({WRITE_LOCK_KEY})")
 
     return engine
@@ -167,10 +181,34 @@ def writer(engine: Engine) -> Engine:
     return engine.execution_options(**{WRITER_OPTION: True})
 
 
+def row_writer(engine: Engine) -> Engine:
+    """The same engine for writes that lock the rows they check (``lock_rows``): on
+    PostgreSQL they run in parallel with each other, on SQLite they are serialised."""
+    return engine.execution_options(**{WRITER_OPTION: ROW_WRITER})
+
+
+def is_row_writer(session: Session) -> bool:
+    bind = session.get_bind()
+    return bind.get_execution_options().get(WRITER_OPTION) == ROW_WRITER
+
+
+def lock_rows(session: Session, model, *ids: int) -> bool:
+    """``SELECT … FOR UPDATE`` of these rows in a row writer's transaction (held until it
+    ends; SQLite's single writer needs none): whether rows were locked.  Callers lock in
+    one order -- a lab session, then its owner -- so that two row writers never wait for
+    each other in a cycle."""
+    if not ids or not is_row_writer(session) or session.get_bind().dialect.name != "postgresql":
+        return False
+    session.exec(select(model.id).where(model.id.in_(ids)).order_by(model.id).with_for_update())
+    return True
+
+
 @contextmanager
-def write_session(engine: Engine | None = None) -> Iterator[Session]:
-    """A session for one write transaction: commits on success, rolls back on error."""
-    with Session(writer(engine or get_engine()), expire_on_commit=False) as session:
+def write_session(engine: Engine | None = None, *, rows: bool = False) -> Iterator[Session]:
+    """A session for one write transaction: commits on success, rolls back on error
+    (``rows``: a row writer, see ``row_writer``)."""
+    bind = (row_writer if rows else writer)(engine or get_engine())
+    with Session(bind, expire_on_commit=False) as session:
         try:
             yield session
             session.commit()

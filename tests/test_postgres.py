@@ -214,3 +214,66 @@ def test_a_read_request_sees_one_snapshot(app, backend):
         assert db.exec(select(Course.name)).all() == before == ["First"]
     with read_session() as db:
         assert sorted(db.exec(select(Course.name)).all()) == ["First", "Second"]
+
+
+def test_row_writers_lock_one_lab_session_not_the_database(app, backend):
+    """Writes to one lab session queue on its row; a write to another session goes
+    through meanwhile; an exclusive writer (accounts, courses) waits for the row writers
+    in flight (and, being queued, holds up row writers that come after it: PostgreSQL
+    grants locks in order).  On SQLite every writer is serialised by BEGIN IMMEDIATE, so
+    there only the queue is checked."""
+    from app.lab.service import own_session
+
+    students = [make_user(f"rw{i}") for i in (1, 2)]
+    with write_session() as db:
+        sessions = []
+        for student in students:
+            session = LabSession(owner_id=student.id, title="t", latitude_deg=39.9)
+            db.add(session)
+            db.flush()
+            sessions.append(session.id)
+    order: list[str] = []
+    holding = threading.Event()
+    release = threading.Event()
+
+    def first() -> None:
+        with write_session(rows=True) as db:
+            own_session(db, students[0], sessions[0]).title = "first"
+            holding.set()
+            release.wait(10)
+            order.append("first commits")
+
+    def same_session() -> None:
+        holding.wait(10)
+        with write_session(rows=True) as db:
+            session = own_session(db, students[0], sessions[0])
+            order.append(f"same session sees {session.title!r}")
+
+    def other_session() -> None:
+        holding.wait(10)
+        with write_session(rows=True) as db:
+            own_session(db, students[1], sessions[1]).title = "other"
+        order.append("other session commits")
+        if backend == "postgresql":
+            release.set()  # it did not wait for the first
+
+    def exclusive() -> None:
+        holding.wait(10)
+        if backend == "postgresql":
+            release.wait(10)  # after the other session's write
+        with write_session() as db:
+            order.append(f"exclusive sees {db.get(LabSession, sessions[0]).title!r}")
+
+    threads = [threading.Thread(target=f) for f in (first, same_session, other_session)]
+    threads.append(threading.Thread(target=exclusive))
+    for thread in threads:
+        thread.start()
+    if backend != "postgresql":
+        holding.wait(10)
+        release.set()
+    for thread in threads:
+        thread.join(30)
+    assert order.index("same session sees 'first'") > order.index("first commits")
+    assert order.index("exclusive sees 'first'") > order.index("first commits")
+    if backend == "postgresql":
+        assert order.index("other session commits") < order.index("first commits")

@@ -16,6 +16,7 @@ from sqlmodel import Session
 
 from app.core.exceptions import UserError
 from app.core.units import canonical_unit, to_deg_per_hour
+from app.db import lock_rows
 from app.lab.partners import is_member
 from app.lab.sim import nominal_angle
 from app.lab.store import append_samples, check_position, store_take
@@ -32,10 +33,15 @@ def allowed_methods(db: Session, session: LabSession) -> list[str]:
 
 def own_session(db: Session, user: User, session_id: int) -> LabSession:
     """The user's own session, or one they share as a lab partner; anyone else's (or none)
-    answers 404."""
+    answers 404.  In a row writer's transaction the session's row and its owner's are
+    locked first (``db.lock_rows``: offsets, attempt numbers and the storage quota are
+    read-check-writes), so writes to one session queue and others' proceed."""
     session = db.get(LabSession, session_id)
     if session is None or not is_member(db, session, user):
         raise UserError("lab.no_such_session", status=404)
+    if lock_rows(db, LabSession, session.id):
+        lock_rows(db, User, session.owner_id)
+        db.refresh(session)  # as of the lock: an earlier writer may just have changed it
     return session
 
 

@@ -26,7 +26,7 @@ from starlette.concurrency import run_in_threadpool
 
 from app.config import get_settings
 from app.core.exceptions import UserError
-from app.db import write_session
+from app.db import lock_rows, read_session, write_session
 from app.lab.service import record_position, recordable_session
 from app.lab.sim import (
     MAX_DWELL_S,
@@ -58,7 +58,7 @@ def _same_origin(websocket: WebSocket) -> bool:
 
 def _owner(websocket: WebSocket, session_id: int) -> tuple[User, LabSession] | None:
     """The cookie's user and their session, when it may be recorded from the simulator."""
-    with write_session() as db:
+    with read_session() as db:
         found = login_for_cookie(db, websocket.cookies.get(SESSION_COOKIE), get_settings())
         if found is None or found[0].must_change_password:
             return None
@@ -69,9 +69,18 @@ def _owner(websocket: WebSocket, session_id: int) -> tuple[User, LabSession] | N
         return found[0], session
 
 
+def _locked(db, session_id: int) -> LabSession:
+    """The session in a row writer's transaction, its rows locked (see own_session)."""
+    session = db.get(LabSession, session_id)
+    if lock_rows(db, LabSession, session_id):
+        lock_rows(db, User, session.owner_id)
+        db.refresh(session)
+    return session
+
+
 def _mark_started(session_id: int, part: str, position: int) -> LabSession:
-    with write_session() as db:
-        session = db.get(LabSession, session_id)
+    with write_session(rows=True) as db:
+        session = _locked(db, session_id)
         session.stream_part, session.stream_position = part, position
         db.add(session)
         return session
@@ -80,8 +89,8 @@ def _mark_started(session_id: int, part: str, position: int) -> LabSession:
 def _save(
     session_id: int, part: str, position: int, dial: float, values, times, end_s: float
 ) -> int:
-    with write_session() as db:
-        session = db.get(LabSession, session_id)
+    with write_session(rows=True) as db:
+        session = _locked(db, session_id)
         session.stream_part = session.stream_position = None
         set_gyro_clock(session, end_s)  # the gyro ran through the recording
         record_position(
@@ -98,8 +107,8 @@ def _save(
 
 
 def _clear_mark(session_id: int) -> None:
-    with write_session() as db:
-        session = db.get(LabSession, session_id)
+    with write_session(rows=True) as db:
+        session = _locked(db, session_id)
         session.stream_part = session.stream_position = None
         db.add(session)
 

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
 from datetime import timedelta
 from typing import Annotated
 
 from fastapi import Depends, Path, Request
-from sqlalchemy import inspect
+from sqlalchemy import inspect, update
 from sqlalchemy.exc import DBAPIError
 from sqlmodel import Session, select
 from starlette.datastructures import FormData
@@ -19,8 +20,9 @@ from app.db import (
     get_engine,
     read_session,
     reader,
+    row_writer,
+    statement_session,
     storage_unavailable,
-    write_session,
     writer,
 )
 from app.models import AuthSession, Role, User, utcnow
@@ -40,10 +42,22 @@ class PasswordChangeRequired(Exception):
     """The user must choose a new password before anything else."""
 
 
+# Writes to one lab session (recording, trimming, submitting, leaving a group): each of
+# these routes reaches the session through ``lab.service.own_session``, which locks its row
+# and its owner's (db.lock_rows), so they are row writers; every other write is exclusive.
+ROW_WRITE_PATH = re.compile(r"^/(lab|api/v1)/sessions/\d+/")
+
+
 def get_db(request: Request) -> Iterator[Session]:
-    """One session per request; writes (POST, PUT, ...) take the write lock (db.writer)."""
+    """One session per request; writes (POST, PUT, ...) take the write lock (db.writer),
+    or on one lab session's routes lock that session's rows (db.row_writer)."""
     engine = get_engine()
-    bind = reader(engine) if request.method in SAFE_METHODS else writer(engine)
+    if request.method in SAFE_METHODS:
+        bind = reader(engine)
+    elif ROW_WRITE_PATH.match(request.url.path):
+        bind = row_writer(engine)
+    else:
+        bind = writer(engine)
     with Session(bind, expire_on_commit=False) as session:
         yield session
 
@@ -123,14 +137,16 @@ def _resolve_login(request: Request, db: Session, settings: Settings) -> User | 
 
 
 def _touch(session_id: int) -> None:
-    """Extend the idle timer in its own short write transaction (skipped while the
-    database cannot be written: reading pages goes on)."""
+    """Extend the idle timer: one atomic UPDATE of its row, in no serialised transaction
+    (skipped while the database cannot be written: reading pages goes on)."""
     try:
-        with write_session() as db:
-            record = db.get(AuthSession, session_id)
-            if record is not None:
-                record.last_seen_at = utcnow()
-                db.add(record)
+        with statement_session() as db:
+            db.exec(
+                update(AuthSession)
+                .where(AuthSession.id == session_id)
+                .values(last_seen_at=utcnow())
+            )
+            db.commit()
     except DBAPIError as error:
         if not storage_unavailable(error):
             raise

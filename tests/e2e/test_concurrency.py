@@ -175,3 +175,47 @@ def test_token_rate_limit_holds_across_workers(any_live_server: LiveServer):
     slack = 2 * (MAX_LEASE - 1) if any_live_server.database_url else 0
     assert 600 - slack <= statuses.count(200) <= 600, statuses
     assert statuses.count(200) + statuses.count(429) == 640
+
+
+def test_one_batch_sent_at_once_by_many_is_stored_once(any_live_server: LiveServer):
+    """The append's offset check is a read-check-write: eight identical batches (offset 0)
+    at once through both workers store ten samples, not eighty."""
+    api = bearer(any_live_server.url)
+    session = api.post(
+        "/api/v1/sessions", json={"title": "offsets", "station": {"latitude_deg": 39.9}}
+    ).json()["id"]
+    batch = {"samples": [10.0 + i / 100 for i in range(10)], "offset": 0}
+    path = f"/api/v1/sessions/{session}/heading/positions/1/samples"
+    with ThreadPoolExecutor(8) as pool:
+        replies = list(pool.map(lambda _: api.post(path, json=batch), range(8)))
+    assert [reply.status_code for reply in replies] == [200] * 8
+    assert sorted(reply.json()["added"] for reply in replies) == [0] * 7 + [10]
+    stored = api.get(f"/api/v1/sessions/{session}").json()["positions"]
+    assert [p["n_samples"] for p in stored] == [10]
+
+
+@pytest.mark.postgres_only
+def test_a_locked_lab_session_holds_up_only_its_own_writes(pg_live_server: LiveServer):
+    """A write transaction on one lab session (its row locked, as a long save would) does
+    not stop another student's save: per-row locks, not one lock for the database."""
+    api = bearer(pg_live_server.url)
+    body = {"title": "rows", "station": {"latitude_deg": 39.9}}
+    locked, free = (api.post("/api/v1/sessions", json=body).json()["id"] for _ in range(2))
+    samples = {"samples": [10.0] * 10}
+    engine = create_engine(pg_live_server.database_url)
+    finished: dict[int, int] = {}
+
+    def save(session: int) -> None:
+        path = f"/api/v1/sessions/{session}/heading/positions/1"
+        finished[session] = api.put(path, json=samples, timeout=60).status_code
+
+    with engine.connect() as connection:
+        connection.execute(text(f"SELECT id FROM lab_session WHERE id = {locked} FOR UPDATE"))
+        waiting = threading.Thread(target=save, args=(locked,))
+        waiting.start()
+        save(free)  # goes through while the other session is locked
+        assert finished == {free: 200}
+        connection.rollback()
+    waiting.join(30)
+    engine.dispose()
+    assert finished == {free: 200, locked: 200}
