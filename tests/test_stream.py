@@ -292,3 +292,32 @@ def test_the_return_pass_streams_only_in_the_symmetric_order(student_client):
     with connect(student_client, session_id) as ws:
         frames = record(ws, part="heading", position=5, dwell_s=2, speed=60)
     assert frames[0]["dial_angle_deg"] == -270.0 and frames[-1]["type"] == "saved"
+
+
+def test_a_save_that_waits_past_the_busy_timeout_says_so_and_the_stream_stays(
+    student_client, monkeypatch
+):
+    """The write lock held past SQLite's busy timeout: an error frame (nothing saved, try
+    again) instead of a crashed connection; the next recording on it works."""
+    import sqlite3
+
+    from sqlalchemy.exc import OperationalError
+
+    from app.lab import stream
+
+    session_id = new_session(student_client, preset="tactical-fog")
+    save = stream._save
+    calls = []
+
+    def busy_once(*args):
+        calls.append(1)
+        if len(calls) == 1:
+            raise OperationalError("BEGIN", {}, sqlite3.OperationalError("database is locked"))
+        return save(*args)
+
+    monkeypatch.setattr(stream, "_save", busy_once)
+    with connect(student_client, session_id) as ws:
+        frames = record(ws, part="heading", position=1, dwell_s=2, speed=60)
+        assert frames[-1]["type"] == "error" and "very busy" in frames[-1]["message"]
+        frames = record(ws, part="heading", position=1, dwell_s=2, speed=60)
+        assert frames[-1]["type"] == "saved"

@@ -22,11 +22,12 @@ from urllib.parse import urlsplit
 
 import numpy as np
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+from sqlalchemy.exc import DBAPIError
 from starlette.concurrency import run_in_threadpool
 
 from app.config import get_settings
 from app.core.exceptions import UserError
-from app.db import lock_rows, read_session, write_session
+from app.db import database_busy, lock_rows, read_session, write_session
 from app.lab.service import record_position, recordable_session
 from app.lab.sim import (
     MAX_DWELL_S,
@@ -253,4 +254,8 @@ async def _record(
     except UserError:  # e.g. stopped before the minimum number of readings
         await run_in_threadpool(_clear_mark, session_id)
         raise
+    except DBAPIError as error:  # the write lock stayed taken past the busy timeout
+        if not database_busy(error):
+            raise
+        raise UserError("error.busy") from error  # nothing was saved: the client says so
     await websocket.send_json({"type": "saved", "part": part, "position": position, "n": saved})
