@@ -195,6 +195,7 @@ def main() -> None:
     parser.add_argument("--requests", type=int, default=200)
     parser.add_argument("--seconds", type=float, default=8.0)
     args = parser.parse_args()
+    os.environ["GYROLAB_API_RATE_PER_MINUTE"] = "1000000"  # measure the app, not its limit
     with tempfile.TemporaryDirectory() as tmp:
         var = Path(tmp) / "sqlite"
         var.mkdir()
@@ -214,8 +215,8 @@ def main() -> None:
             pg_var.mkdir()
             create_student(pg_var, url)
             with running_server(pg_var, "--no-demo", "--workers", "2", database_url=url) as srv:
-                pids = server_pids(srv.process.pid)
                 cost = per_route_cpu(srv.url, srv.process.pid, args.requests)
+                pids = server_pids(srv.process.pid)
                 results_ms = cost["GET /api/v1/sessions/{id}/results"]
                 before = cpu_seconds(pids)
                 measured, client_cores = throughput(srv.url, 8, args.seconds)
