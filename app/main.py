@@ -114,6 +114,11 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.state.plotly_url = PLOTLY_URL
 
     register_error_handlers(app)
+    # The REST API first: its requests (devices, scripts, the bridge) are matched against
+    # its few routes before the pages' many (paths never overlap: /api/v1/...).
+    app.include_router(account_api.router)
+    app.include_router(api.router)
+    app.include_router(review_api.router)
     app.include_router(account_pages.router)
     app.include_router(home.router)
     app.include_router(course_pages.router)
@@ -128,9 +133,6 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(stream.router)
     app.include_router(token_pages.router)
     app.include_router(explore_pages.router)
-    app.include_router(account_api.router)
-    app.include_router(api.router)
-    app.include_router(review_api.router)
     return app
 
 

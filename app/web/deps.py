@@ -70,7 +70,12 @@ def get_read_db() -> Iterator[Session]:
 
 SessionDep = Annotated[Session, Depends(get_db)]
 ReadOnlySessionDep = Annotated[Session, Depends(get_read_db)]
-SettingsDep = Annotated[Settings, Depends(get_settings)]
+async def settings_now() -> Settings:
+    """The settings, as a dependency that needs no trip to the thread pool."""
+    return get_settings()
+
+
+SettingsDep = Annotated[Settings, Depends(settings_now)]
 
 
 def reload_login(request: Request) -> None:
