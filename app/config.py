@@ -40,6 +40,8 @@ class Settings(BaseSettings):
     api_rate_per_minute: int = Field(default=600, ge=1)
     student_storage_mb: int = Field(default=200, ge=1)
     max_body_bytes: int = Field(default=32 * 1024 * 1024, ge=1024)
+    # state-changing requests of one worker inside the app at once (web/write_admission.py)
+    write_concurrency: int = Field(default=8, ge=1, le=32)
     timezone: str = "Asia/Shanghai"  # a course's default zone for due dates and times
 
     @field_validator("timezone")

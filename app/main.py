@@ -30,6 +30,7 @@ from app.review import pages as review_pages
 from app.web import home
 from app.web.errors import register_error_handlers
 from app.web.headers import SecurityHeaders
+from app.web.write_admission import WriteAdmission
 
 API_DESCRIPTION = """REST API of GyroLab, the FOG north-finding teaching lab.
 
@@ -79,6 +80,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
         redoc_url=None,
         max_body_size=get_settings().max_body_bytes,
     )
+    app.add_middleware(WriteAdmission, max_body=get_settings().max_body_bytes)
     app.add_middleware(SecurityHeaders)
     app.mount("/static", StaticFiles(directory=str(STATIC_DIR)), name="static")
     app.mount("/vendor/swagger-ui", StaticFiles(directory=swagger_ui_path), name="swagger-ui")

@@ -41,6 +41,7 @@ from app.models import InputMethod, LabSession, User
 from app.web.deps import ObjectId, login_for_cookie
 from app.web.errors import message_for
 from app.web.render import SESSION_COOKIE, request_language
+from app.web.write_admission import write_slot
 
 router = APIRouter(tags=["streams"])
 
@@ -195,7 +196,8 @@ async def _record(
         raise UserError("lab.needs_symmetric", position=position)
     if getattr(session, f"sim_table_{part}") != position:
         raise UserError("stream.turn_first", position=position)
-    session = await run_in_threadpool(_mark_started, session_id, part, position)
+    async with write_slot():
+        session = await run_in_threadpool(_mark_started, session_id, part, position)
     take = SimulatedTake(session, part, position, settle)
     total = max(1, int(round(dwell * take.rate_hz)))
     await websocket.send_json(
@@ -248,11 +250,13 @@ async def _record(
             }
         )
     try:
-        saved = await run_in_threadpool(
-            _save, session_id, part, position, take.dial_angle_deg, values, times, take.end_s
-        )
+        async with write_slot():
+            saved = await run_in_threadpool(
+                _save, session_id, part, position, take.dial_angle_deg, values, times, take.end_s
+            )
     except UserError:  # e.g. stopped before the minimum number of readings
-        await run_in_threadpool(_clear_mark, session_id)
+        async with write_slot():
+            await run_in_threadpool(_clear_mark, session_id)
         raise
     except DBAPIError as error:  # the write lock stayed taken past the busy timeout
         if not database_busy(error):

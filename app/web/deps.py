@@ -70,6 +70,8 @@ def get_read_db() -> Iterator[Session]:
 
 SessionDep = Annotated[Session, Depends(get_db)]
 ReadOnlySessionDep = Annotated[Session, Depends(get_read_db)]
+
+
 async def settings_now() -> Settings:
     """The settings, as a dependency that needs no trip to the thread pool."""
     return get_settings()
