@@ -277,3 +277,36 @@ def test_row_writers_lock_one_lab_session_not_the_database(app, backend):
     assert order.index("exclusive sees 'first'") > order.index("first commits")
     if backend == "postgresql":
         assert order.index("other session commits") < order.index("first commits")
+
+
+def test_one_session_per_student_and_assignment_when_started_at_once(app, backend):
+    """Starting a session is a read-check-write ("none yet for this assignment?") under a
+    row lock on the student: six starts at once give one session."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from app.lab.sessions import SessionSettings, start_session
+    from app.models import Assignment
+
+    teacher = make_user("tq", Role.teacher)
+    student = make_user("sq")
+    course_id = make_course(teacher, "Rows", (student,))
+    with write_session() as db:
+        assignment = Assignment(course_id=course_id, title="a", latitude_deg=39.9)
+        db.add(assignment)
+        db.flush()
+        assignment_id = assignment.id
+
+    def start(_: int) -> int:
+        with write_session(rows=True) as db:
+            found = db.get(Assignment, assignment_id)
+            session, _created = start_session(db, student, SessionSettings(title=""), found, "t")
+            db.add(session)
+            db.flush()
+            return session.id
+
+    with ThreadPoolExecutor(6) as pool:
+        ids = set(pool.map(start, range(6)))
+    with read_session() as db:
+        stored = db.exec(select(LabSession).where(LabSession.assignment_id == assignment_id))
+        assert len(stored.all()) == 1
+    assert len(ids) == 1

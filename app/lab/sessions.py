@@ -10,6 +10,7 @@ from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
+from app.db import lock_rows
 from app.lab.partners import ensure_partner_code, member_map
 from app.lab.sim import new_truth
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User, utcnow
@@ -58,8 +59,11 @@ def start_session(
 ) -> tuple[LabSession, bool]:
     """A new session (added, not committed), or the existing one for this assignment.
 
-    Returns (session, created).  Raises UserError for impossible settings.
+    Returns (session, created).  Raises UserError for impossible settings.  In a row
+    writer's transaction the student's row is locked first: "one session per student and
+    assignment" is a read-check-write.
     """
+    lock_rows(db, User, user.id)
     angles = (settings.heading_start_deg, settings.latitude_start_deg, settings.latitude_step_deg)
     if not all(math.isfinite(a) for a in angles) or abs(settings.latitude_step_deg) < 1:
         raise UserError(

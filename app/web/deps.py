@@ -42,10 +42,11 @@ class PasswordChangeRequired(Exception):
     """The user must choose a new password before anything else."""
 
 
-# Writes to one lab session (recording, trimming, submitting, leaving a group): each of
-# these routes reaches the session through ``lab.service.own_session``, which locks its row
-# and its owner's (db.lock_rows), so they are row writers; every other write is exclusive.
-ROW_WRITE_PATH = re.compile(r"^/(lab|api/v1)/sessions/\d+/")
+# Row writers (db.row_writer): writes to one lab session (recording, trimming, submitting,
+# leaving a group) reach it through ``lab.service.own_session``, which locks its row and
+# its owner's; starting a session locks the student's row (``lab.sessions.start_session``).
+# Every other write is exclusive.
+ROW_WRITE_PATH = re.compile(r"^/(lab|api/v1)/sessions(/\d+/|$)")
 
 
 def get_db(request: Request) -> Iterator[Session]:
