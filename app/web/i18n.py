@@ -16,7 +16,8 @@ from functools import lru_cache
 from io import BytesIO
 
 from babel import Locale
-from babel.dates import format_skeleton
+from babel.dates import format_datetime as babel_format_datetime
+from babel.dates import match_skeleton
 from babel.messages.mofile import write_mo
 from babel.messages.pofile import read_po
 from babel.numbers import format_decimal
@@ -126,18 +127,40 @@ def format_datetime(
     are UTC; ``zone`` (the course's) gives the wall clock shown."""
     if value is None:
         return ""
+    return _formatted(value, language, date, time, zone)
+
+
+@lru_cache(maxsize=8192)
+def _formatted(value: datetime, language: str, date, time, zone) -> str:
+    """format_datetime's work, remembered: a page of a class formats the same submission
+    times on every refresh, and Babel's formatting is the slow part of it."""
     if zone is not None:
         value = (value if value.tzinfo else value.replace(tzinfo=UTC)).astimezone(zone)
-    locale = Locale.parse(LOCALES[language])
+    locale = _locale(language)
     parts = [
-        format_skeleton(skeleton, value, locale=locale) for skeleton in (date, time) if skeleton
+        babel_format_datetime(value, _skeleton_pattern(language, skeleton), locale=locale)
+        for skeleton in (date, time)
+        if skeleton
     ]
     return " ".join(parts)
 
 
+@lru_cache
+def _locale(language: str) -> Locale:
+    return Locale.parse(LOCALES[language])
+
+
+@lru_cache
+def _skeleton_pattern(language: str, skeleton: str):
+    """The locale's pattern for a CLDR skeleton (what ``format_skeleton`` looks up on
+    every call; a class dashboard formats hundreds of dates)."""
+    patterns = _locale(language).datetime_skeletons
+    return patterns[skeleton if skeleton in patterns else match_skeleton(skeleton, patterns)]
+
+
 def format_number(value: float, language: str, digits: int = 3) -> str:
     """A number with the locale's separators (Babel), at most ``digits`` decimals."""
-    return format_decimal(round(value, digits), locale=Locale.parse(LOCALES[language]))
+    return format_decimal(round(value, digits), locale=_locale(language))
 
 
 def translator(language: str) -> Callable[..., str]:
