@@ -12,13 +12,16 @@ next sample offset, attempt numbers, throttle windows) is correct without per-si
   statement after a lock sees every earlier writer's commit):
 
   - a *row writer* (``row_writer``: the lab's work on one session -- recording, streaming,
-    trimming, submitting) takes the app-wide advisory lock in SHARED mode, so row writers
-    run in parallel, and locks the rows its read-check-write needs with ``SELECT … FOR
-    UPDATE`` (``lock_rows``: the lab session, then its owner for the storage quota), so
-    two writes to one session queue and writes to different sessions do not;
-  - any other writer (``writer``: accounts, courses, assignments, reviews -- rare, and
-    their checks span many rows) takes the same advisory lock EXCLUSIVELY, as every writer
-    did before: it waits for the row writers in flight and they wait for it.
+    trimming, submitting -- starting a session, logging in and out) takes the app-wide
+    advisory lock in SHARED mode, so row writers run in parallel, and locks what its
+    read-check-write needs: rows with ``SELECT … FOR UPDATE`` (``lock_rows``: the lab
+    session, then its owner for the storage quota; the student starting a session), names
+    with advisory locks (``lock_keys``: a log-in's account and address for the throttle),
+    so two writes to one thing queue and writes to different things do not;
+  - any other writer (``writer``: account administration, courses, assignments, reviews,
+    joining a lab group -- rare, and their checks span many rows) takes the same advisory
+    lock EXCLUSIVELY, as every writer did before: it waits for the row writers in flight
+    and they wait for it.
 
   Single-row counters (rate windows, the idle timer) are atomic ``UPDATE … RETURNING``
   statements outside any serialised transaction (``statement_session``).
@@ -30,7 +33,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from functools import lru_cache
 
-from sqlalchemy import Engine, event
+from sqlalchemy import Engine, event, text
 from sqlalchemy.engine import make_url
 from sqlmodel import Session, create_engine, select
 
@@ -38,6 +41,7 @@ BUSY_TIMEOUT_MS = 10_000
 WRITE_LOCK_KEY = 0x6779726F  # "gyro": the advisory lock every PostgreSQL writer takes
 WRITER_OPTION = "gyrolab_writer"
 ROW_WRITER = "rows"  # WRITER_OPTION's value for a row writer (True: an exclusive writer)
+NAMED_LOCKS = 0x676C  # the two-key advisory lock space of ``lock_keys`` ("gl")
 
 
 def is_sqlite(url: str) -> bool:
@@ -200,6 +204,20 @@ def lock_rows(session: Session, model, *ids: int) -> bool:
     if not ids or not is_row_writer(session) or session.get_bind().dialect.name != "postgresql":
         return False
     session.exec(select(model.id).where(model.id.in_(ids)).order_by(model.id).with_for_update())
+    return True
+
+
+def lock_keys(session: Session, *keys: str) -> bool:
+    """Transaction-scoped advisory locks on names (a log-in's account and address) in a
+    row writer's transaction on PostgreSQL, for a read-check-write over rows that do not
+    exist yet (the throttle's counts, then a new row); taken in sorted order."""
+    if not keys or not is_row_writer(session) or session.get_bind().dialect.name != "postgresql":
+        return False
+    for key in sorted(set(keys)):
+        session.exec(
+            text("SELECT pg_advisory_xact_lock(:space, hashtext(:key))"),
+            params={"space": NAMED_LOCKS, "key": key},
+        )
     return True
 
 

@@ -310,3 +310,44 @@ def test_one_session_per_student_and_assignment_when_started_at_once(app, backen
         stored = db.exec(select(LabSession).where(LabSession.assignment_id == assignment_id))
         assert len(stored.all()) == 1
     assert len(ids) == 1
+
+
+@pytest.mark.postgres_only
+def test_a_log_in_locks_its_account_not_the_database(app):
+    """The throttle's count-then-charge runs under advisory locks on the account and the
+    address: a log-in to another account goes through while one is being checked; a
+    second log-in to the same account waits for it."""
+    from app.accounts.security import log_in
+    from app.config import get_settings
+    from app.db import lock_keys
+
+    for name in ("alpha", "beta"):
+        make_user(name)
+    settings = get_settings()
+    holding, release = threading.Event(), threading.Event()
+    finished: list[str] = []
+
+    def checking_alpha() -> None:
+        with write_session(rows=True) as db:
+            lock_keys(db, "account:alpha")
+            holding.set()
+            release.wait(10)
+        finished.append("first alpha")
+
+    def log_in_as(name: str, address: str) -> None:
+        with write_session(rows=True) as db:
+            outcome = log_in(db, name, "correct-horse-42", address, settings)
+            assert outcome.user is not None
+        finished.append(name)
+
+    first = threading.Thread(target=checking_alpha)
+    first.start()
+    holding.wait(10)
+    second = threading.Thread(target=log_in_as, args=("alpha", "10.0.0.2"))
+    second.start()
+    log_in_as("beta", "10.0.0.3")  # does not wait for alpha's check
+    assert finished == ["beta"]
+    release.set()
+    first.join(10)
+    second.join(10)
+    assert finished == ["beta", "first alpha", "alpha"]

@@ -18,6 +18,7 @@ from sqlalchemy import delete, update
 from sqlmodel import Session, select
 
 from app.config import Settings
+from app.db import lock_keys
 from app.models import ApiToken, AuthSession, LoginFailure, User, utcnow
 
 # OWASP's minimum for argon2id (m=19 MiB, t=2, p=1): ~30 ms per verify on 2 cores,
@@ -270,6 +271,9 @@ def log_in(
     account = _account_key(username)
     address = address[:128]
     device = trusted_device(device_cookie, account, settings.secret_key)
+    # the throttle is a read-check-write (count, then charge): one at a time per account,
+    # address and device (PostgreSQL row writers; SQLite's single writer needs nothing)
+    lock_keys(db, f"account:{account}", f"address:{address}", f"device:{device}")
     wait, trusted = login_wait(db, account, address, device, settings)
     if wait:
         return LoginOutcome(None, "throttled", wait)

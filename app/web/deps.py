@@ -44,9 +44,10 @@ class PasswordChangeRequired(Exception):
 
 # Row writers (db.row_writer): writes to one lab session (recording, trimming, submitting,
 # leaving a group) reach it through ``lab.service.own_session``, which locks its row and
-# its owner's; starting a session locks the student's row (``lab.sessions.start_session``).
-# Every other write is exclusive.
-ROW_WRITE_PATH = re.compile(r"^/(lab|api/v1)/sessions(/\d+/|$)")
+# its owner's; starting a session locks the student's row (``lab.sessions.start_session``);
+# a log-in locks its account and address names (``accounts.security.log_in``); a log-out
+# revokes its own session row.  Every other write is exclusive.
+ROW_WRITE_PATH = re.compile(r"/(lab|api/v1)/sessions(/\d+/.*)?|/login|/logout|/api/v1/auth/token")
 
 
 def get_db(request: Request) -> Iterator[Session]:
@@ -55,7 +56,7 @@ def get_db(request: Request) -> Iterator[Session]:
     engine = get_engine()
     if request.method in SAFE_METHODS:
         bind = reader(engine)
-    elif ROW_WRITE_PATH.match(request.url.path):
+    elif ROW_WRITE_PATH.fullmatch(request.url.path):
         bind = row_writer(engine)
     else:
         bind = writer(engine)
