@@ -40,6 +40,13 @@ class Settings(BaseSettings):
     api_rate_per_minute: int = Field(default=600, ge=1)
     student_storage_mb: int = Field(default=200, ge=1)
     max_body_bytes: int = Field(default=32 * 1024 * 1024, ge=1024)
+    # OpenID Connect single sign-on (accounts/sso.py): on when a discovery URL is set
+    oidc_discovery_url: str | None = None  # …/.well-known/openid-configuration
+    oidc_client_id: str = ""
+    oidc_client_secret: str = ""
+    oidc_name: str = ""  # the button's words, e.g. "University ID" (default: "single sign-on")
+    oidc_role_claim: str = ""  # a claim naming the person's roles or groups, e.g. "groups"
+    oidc_teacher_values: str = ""  # comma-separated values of that claim that mean teacher
     # state-changing requests of one worker inside the app at once (web/write_admission.py)
     write_concurrency: int = Field(default=8, ge=1, le=32)
     timezone: str = "Asia/Shanghai"  # a course's default zone for due dates and times

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gzip
+import hashlib
 from contextlib import asynccontextmanager
 from functools import lru_cache
 from pathlib import Path
@@ -11,10 +12,11 @@ import plotly
 from fastapi import FastAPI, Request, Response
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
+from starlette.middleware.sessions import SessionMiddleware
 from swagger_ui_bundle import swagger_ui_path
 
 from app import __version__
-from app.accounts import admin_pages, token_pages
+from app.accounts import admin_pages, sso_pages, token_pages
 from app.accounts import api as account_api
 from app.accounts import pages as account_pages
 from app.config import get_settings
@@ -81,6 +83,16 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
         max_body_size=get_settings().max_body_bytes,
     )
     app.add_middleware(WriteAdmission, max_body=get_settings().max_body_bytes)
+    # single sign-on's state and nonce between /login/sso and its callback (a signed cookie
+    # for those two paths only, ten minutes)
+    app.add_middleware(
+        SessionMiddleware,
+        secret_key=hashlib.sha256(f"sso:{get_settings().secret_key}".encode()).hexdigest(),
+        session_cookie="gyrolab_sso",
+        path="/login/sso",
+        max_age=600,
+        same_site="lax",
+    )
     app.add_middleware(SecurityHeaders)
     app.mount("/static", StaticFiles(directory=str(STATIC_DIR)), name="static")
     app.mount("/vendor/swagger-ui", StaticFiles(directory=swagger_ui_path), name="swagger-ui")
@@ -122,6 +134,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(api.router)
     app.include_router(review_api.router)
     app.include_router(account_pages.router)
+    app.include_router(sso_pages.router)
     app.include_router(home.router)
     app.include_router(course_pages.router)
     app.include_router(join_pages.router)

@@ -284,6 +284,21 @@ class SessionMember(SQLModel, table=True):
     joined_at: datetime = Field(default_factory=utcnow)
 
 
+class ExternalIdentity(SQLModel, table=True):
+    """An account's identity at an outside identity provider (OpenID Connect single
+    sign-on): the provider's issuer and its stable subject id.  Such accounts have no
+    usable password; they log in through the provider."""
+
+    __tablename__ = "external_identity"
+    __table_args__ = (UniqueConstraint("issuer", "subject"),)
+    id: int | None = Field(default=None, primary_key=True)
+    user_id: int = Field(foreign_key="user.id", index=True, ondelete="CASCADE")
+    issuer: str = Field(max_length=500)
+    subject: str = Field(max_length=255)
+    created_at: datetime = Field(default_factory=utcnow)
+    last_login_at: datetime | None = None
+
+
 class Extension(SQLModel, table=True):
     """A later due date for one student of one assignment."""
 

@@ -295,6 +295,8 @@ ACCESS = {
     "GET /vendor/plotly-{version}.min.js": "public",
     "GET /login": "public",
     "POST /login": "public",
+    "GET /login/sso": "public",  # 404 unless a provider is configured (tests/test_sso.py)
+    "GET /login/sso/callback": "public",
     "POST /lang": "public",
     "POST /logout": "user",
     "GET /account/password": "user",

@@ -15,6 +15,8 @@ from app.accounts.security import (
     revoke_credentials,
     verify_password,
 )
+from app.accounts.sso import sso_enabled
+from app.config import Settings
 from app.models import AuthSession, User, utcnow
 from app.web.deps import CsrfProtected, CurrentUser, OptionalUser, SessionDep, SettingsDep
 from app.web.i18n import normalise
@@ -42,11 +44,16 @@ def client_address(request: Request) -> str:
     return request.client.host if request.client else "unknown"
 
 
+def login_view(settings: Settings, **context) -> dict:
+    """The log-in page's context: with a single sign-on button when a provider is set."""
+    return {"sso": sso_enabled(settings), "sso_name": settings.oidc_name, **context}
+
+
 @router.get("/login")
-def login_page(request: Request, user: OptionalUser, next: str = "/"):
+def login_page(request: Request, user: OptionalUser, settings: SettingsDep, next: str = "/"):
     if user is not None:
         return redirect(safe_next(next))
-    return render(request, "auth/login.html", {"next": safe_next(next)})
+    return render(request, "auth/login.html", login_view(settings, next=safe_next(next)))
 
 
 @router.post("/login", dependencies=[CsrfProtected])
@@ -59,7 +66,7 @@ def login(
     next: Annotated[str, Form(max_length=2000)] = "/",
 ):
     address = client_address(request)
-    context = {"next": safe_next(next), "username": username}
+    context = login_view(settings, next=safe_next(next), username=username)
     outcome = log_in(db, username, password, address, settings, request.cookies.get(DEVICE_COOKIE))
     if outcome.problem in ("throttled", "busy"):
         context.update(login_wait_message(outcome))
