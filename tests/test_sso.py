@@ -162,3 +162,9 @@ def test_an_unreachable_provider_is_a_clear_page(sso_client, monkeypatch):
     sso.provider_client.cache_clear()
     reply = sso_client.get("/login/sso")
     assert reply.status_code == 400 and "did not work" in reply.text
+
+
+def test_an_sso_account_has_no_password_to_change(sso_client):
+    come_back(sso_client, consent(to_provider(sso_client), "u-1001"))
+    page = sso_client.get("/account/password").text
+    assert "signs in with Uni ID" in page and 'name="current_password"' not in page

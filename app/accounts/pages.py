@@ -15,7 +15,7 @@ from app.accounts.security import (
     revoke_credentials,
     verify_password,
 )
-from app.accounts.sso import sso_enabled
+from app.accounts.sso import signs_in_elsewhere, sso_enabled
 from app.config import Settings
 from app.models import AuthSession, User, utcnow
 from app.web.deps import CsrfProtected, CurrentUser, OptionalUser, SessionDep, SettingsDep
@@ -109,8 +109,17 @@ def logout(request: Request, db: SessionDep):
 
 
 @router.get("/account/password")
-def password_page(request: Request, user: CurrentUser):
-    return render(request, "auth/password.html", {"forced": user.must_change_password})
+def password_page(request: Request, user: CurrentUser, db: SessionDep, settings: SettingsDep):
+    external = signs_in_elsewhere(db, user)
+    return render(
+        request,
+        "auth/password.html",
+        {
+            "forced": user.must_change_password,
+            "external": external,
+            "sso_name": settings.oidc_name,
+        },
+    )
 
 
 @router.post("/account/password", dependencies=[CsrfProtected])

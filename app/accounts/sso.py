@@ -109,3 +109,9 @@ def account_for(db: Session, claims: dict, settings: Settings) -> User:
     identity.last_login_at = utcnow()
     db.add(identity)
     return user
+
+
+def signs_in_elsewhere(db: Session, user: User) -> bool:
+    """Whether the account logs in through an identity provider (it has no password)."""
+    found = db.exec(select(ExternalIdentity.id).where(ExternalIdentity.user_id == user.id))
+    return found.first() is not None
