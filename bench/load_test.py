@@ -376,8 +376,11 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
         serve_args = ["--no-demo", "--no-access-log"]
         workers = 1
         if backend == "postgresql":
-            pg = PostgresServer().start(durable=True)
-            database_url = pg.create_database("gyrolab_load")
+            if args.database_url:  # an empty database on a server of the caller's (tests)
+                database_url = args.database_url
+            else:
+                pg = PostgresServer().start(durable=True)
+                database_url = pg.create_database("gyrolab_load")
             workers = args.pg_workers
             serve_args += ["--workers", str(workers)]
         try:
@@ -410,6 +413,9 @@ def main() -> int:
     parser.add_argument("--dwell", type=float, default=60.0, help="simulated seconds/position")
     parser.add_argument("--speed", type=float, default=20.0, help="simulated time speed-up")
     parser.add_argument("--ramp", type=float, default=3.0, help="students start within (s)")
+    parser.add_argument(
+        "--database-url", help="PostgreSQL: an empty database to use instead of starting one"
+    )
     args = parser.parse_args()
     backends = ("sqlite", "postgresql") if args.backend == "both" else (args.backend,)
     print(

@@ -21,6 +21,10 @@ from app.db import read_session
 from app.models import ExternalIdentity, Role, User
 from tests.factories import PASSWORD, login, make_user, without_tokens
 
+# The protocol and its refusals do not depend on the database: one backend is enough for
+# them; the account-making tests run on both.
+protocol_only = pytest.mark.sqlite_only
+
 PEOPLE = (
     ProviderUser(
         sub="u-1001",
@@ -74,6 +78,7 @@ def come_back(client: TestClient, callback: str):
     return client.get(f"{parts.path}?{parts.query}")
 
 
+@protocol_only
 def test_the_login_page_offers_single_sign_on_when_configured(sso_client, client):
     page = sso_client.get("/login").text
     assert "Sign in with Uni ID" in page and 'href="/login/sso?next=/"' in page
@@ -81,6 +86,7 @@ def test_the_login_page_offers_single_sign_on_when_configured(sso_client, client
     assert "使用Uni ID登录" in sso_client.get("/login").text
 
 
+@protocol_only
 def test_without_a_provider_there_is_no_button_and_no_route(client):
     assert "/login/sso" not in client.get("/login").text
     assert client.get("/login/sso").status_code == 404
@@ -107,6 +113,7 @@ def test_the_next_log_in_finds_the_same_account(sso_client):
         assert len(db.exec(select(User).where(User.username.startswith("liwei"))).all()) == 1
 
 
+@protocol_only
 def test_a_teacher_claim_makes_a_teacher(sso_client):
     come_back(sso_client, consent(to_provider(sso_client), "u-2002"))
     with read_session() as db:
@@ -125,6 +132,7 @@ def test_a_local_account_of_the_same_name_is_never_taken_over(sso_client):
     assert login(local, "student1", PASSWORD).status_code == 303
 
 
+@protocol_only
 def test_a_forged_state_is_refused_with_a_clear_page(sso_client):
     callback = consent(to_provider(sso_client), "u-1001")
     query = parse_qs(urlsplit(callback).query)
@@ -136,12 +144,14 @@ def test_a_forged_state_is_refused_with_a_clear_page(sso_client):
     assert "gyrolab_session" not in reply.headers.get("set-cookie", "")
 
 
+@protocol_only
 def test_the_callback_of_another_browser_is_refused(sso_client, app):
     callback = consent(to_provider(sso_client), "u-1001")
     stranger = TestClient(app, follow_redirects=False)  # no state cookie of its own
     assert come_back(stranger, callback).status_code == 400
 
 
+@protocol_only
 def test_a_code_works_once(sso_client):
     url = to_provider(sso_client)
     state_cookie = sso_client.cookies.get("gyrolab_sso")
@@ -151,11 +161,13 @@ def test_a_code_works_once(sso_client):
     assert come_back(sso_client, callback).status_code == 400
 
 
+@protocol_only
 def test_a_denied_consent_says_so(sso_client):
     reply = come_back(sso_client, consent(to_provider(sso_client), "", action="deny"))
     assert reply.status_code == 400 and "access_denied" in reply.text
 
 
+@protocol_only
 def test_an_unreachable_provider_is_a_clear_page(sso_client, monkeypatch):
     settings = get_settings()
     monkeypatch.setattr(settings, "oidc_discovery_url", "http://127.0.0.1:9/.well-known/x")
@@ -164,6 +176,7 @@ def test_an_unreachable_provider_is_a_clear_page(sso_client, monkeypatch):
     assert reply.status_code == 400 and "did not work" in reply.text
 
 
+@protocol_only
 def test_an_sso_account_has_no_password_to_change(sso_client):
     come_back(sso_client, consent(to_provider(sso_client), "u-1001"))
     page = sso_client.get("/account/password").text

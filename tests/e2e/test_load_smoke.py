@@ -15,8 +15,12 @@ ROOT = Path(__file__).resolve().parents[2]
 
 @pytest.mark.parametrize("database", ["sqlite", "postgresql"])
 def test_load_test_runs_clean(database, request):
-    if database == "postgresql":
-        request.getfixturevalue("postgres")  # skips (or fails in CI) without PostgreSQL
+    extra = []
+    if database == "postgresql":  # skips (or fails in CI) without PostgreSQL
+        postgres = request.getfixturevalue("postgres")
+        name, url = postgres.new_database()
+        request.addfinalizer(lambda: postgres.server.drop_database(name))
+        extra = ["--database-url", url]  # the tests' server: no cluster of its own to start
     done = subprocess.run(
         [
             sys.executable,
@@ -28,9 +32,10 @@ def test_load_test_runs_clean(database, request):
             "--dwell",
             "5",
             "--speed",
-            "20",
+            "60",
             "--ramp",
             "0.5",
+            *extra,
         ],
         capture_output=True,
         text=True,
