@@ -54,11 +54,13 @@ def pytest_addoption(parser) -> None:
 
 
 def pytest_generate_tests(metafunc) -> None:
-    """Run every database test on each backend (``sqlite_only`` tests on SQLite alone)."""
+    """Run every database test on each backend (``sqlite_only`` and ``one_backend`` tests
+    on SQLite alone)."""
     if "backend" in metafunc.fixturenames:
         chosen = metafunc.config.getoption("backends").split(",")
         backends = [name for name in BACKENDS if name in chosen]
-        if metafunc.definition.get_closest_marker("sqlite_only"):
+        marked = metafunc.definition.get_closest_marker
+        if marked("sqlite_only") or marked("one_backend"):
             backends = [name for name in backends if name == "sqlite"]
         if metafunc.definition.get_closest_marker("postgres_only"):
             backends = [name for name in backends if name == "postgresql"]

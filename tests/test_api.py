@@ -135,6 +135,7 @@ def test_csv_bodies(client, auth):
     assert unreadable.status_code == 400 and "cannot be read" in unreadable.json()["detail"]
 
 
+@pytest.mark.one_backend  # input refused before any write
 @pytest.mark.parametrize(
     ("body", "status", "text"),
     [

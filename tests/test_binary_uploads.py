@@ -90,6 +90,7 @@ def test_units_angle_and_appends_ride_in_the_query(client, auth):
     assert reply.json()["n_samples"] == 10
 
 
+@pytest.mark.one_backend  # input refused before any write
 @pytest.mark.parametrize(
     ("body", "params", "message"),
     [

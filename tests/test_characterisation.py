@@ -104,6 +104,7 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
     assert result["uncertainty_model"] == "white"
 
 
+@pytest.mark.one_backend  # input refused before any write
 @pytest.mark.parametrize(
     ("content", "rate", "message"),
     [

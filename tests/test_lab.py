@@ -127,6 +127,7 @@ def test_units_are_converted(student_client):
     assert results["heading"]["position_means_deg_h"][0] == pytest.approx(10.706)
 
 
+@pytest.mark.one_backend  # input refused before any write
 @pytest.mark.parametrize(
     ("columns", "unit", "message"),
     [
@@ -210,6 +211,7 @@ def test_csv_long_layout_keeps_angles_and_times(student_client):
     assert latitude == pytest.approx(39.93, abs=0.05)
 
 
+@pytest.mark.one_backend  # input refused before any write
 @pytest.mark.parametrize(
     ("text", "message"),
     [

@@ -207,6 +207,7 @@ def test_maximum_attempts(world):
     assert "attempts are used" in student.get(f"/lab/sessions/{session_id}").text
 
 
+@pytest.mark.one_backend  # the reveal rule, not the database
 @pytest.mark.parametrize(
     ("policy", "after_submit", "after_grade"),
     [

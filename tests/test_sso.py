@@ -23,7 +23,7 @@ from tests.factories import PASSWORD, login, make_user, without_tokens
 
 # The protocol and its refusals do not depend on the database: one backend is enough for
 # them; the account-making tests run on both.
-protocol_only = pytest.mark.sqlite_only
+protocol_only = pytest.mark.one_backend
 
 PEOPLE = (
     ProviderUser(

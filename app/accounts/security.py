@@ -235,9 +235,20 @@ def login_wait(
     window = timedelta(minutes=settings.login_window_minutes)
     since = now - window
     key = _pair_key(account, address)
-    pair = _failure_times(db, "pair", key, since)  # completed failures
-    in_flight = _failure_times(db, "pending", key, since)  # being checked right now
-    tries = sorted(pair + in_flight)
+    # completed failures and attempts being checked right now, in ONE statement: an
+    # attempt that completes (pending → pair) between two statements would otherwise be
+    # counted in neither (READ COMMITTED on PostgreSQL) and let one guess too many through
+    rows = db.exec(
+        select(LoginFailure.scope, LoginFailure.at)
+        .where(
+            LoginFailure.scope.in_(("pair", "pending")),
+            LoginFailure.key == key,
+            LoginFailure.at >= since,
+        )
+        .order_by(LoginFailure.at)
+    ).all()
+    pair = [at for scope, at in rows if scope == "pair"]
+    tries = [at for _, at in rows]
     waits = [_wait_for_limit(tries, settings.login_max_failures_per_pair, window, now)]
     if 2 <= len(pair) < settings.login_max_failures_per_pair:  # 2 s, 4 s, 8 s, ...
         delay = timedelta(seconds=2 ** (len(pair) - 1))
