@@ -6,8 +6,6 @@ client; the database work runs on the thread pool, as everywhere else."""
 
 from __future__ import annotations
 
-import httpx
-from authlib.integrations.base_client import OAuthError
 from fastapi import APIRouter, Request
 from starlette.concurrency import run_in_threadpool
 
@@ -21,9 +19,16 @@ from app.web.render import SESSION_COOKIE, redirect, render, set_cookie
 
 router = APIRouter(tags=["pages: account"], include_in_schema=False)
 NEXT_KEY = "sso_next"
-# what the round trip can meet: the provider's errors and refusals (authlib), an ID token
-# that fails its checks (joserfc/authlib: ValueError subclasses), the network (httpx)
-PROVIDER_PROBLEMS = (OAuthError, httpx.HTTPError, OSError, ValueError, KeyError)
+
+
+def provider_problems() -> tuple[type[Exception], ...]:
+    """What the round trip can meet: the provider's errors and refusals (authlib), an ID
+    token that fails its checks (joserfc/authlib: ValueError subclasses), the network
+    (httpx).  Both are imported here, when single sign-on is used (0.2 s at start-up)."""
+    import httpx
+    from authlib.integrations.base_client import OAuthError
+
+    return (OAuthError, httpx.HTTPError, OSError, ValueError, KeyError)
 
 
 def _enabled() -> Settings:
@@ -41,7 +46,7 @@ async def sso_start(request: Request, next: str = "/"):
         return await client_for(settings).authorize_redirect(
             request, str(request.url_for("sso_callback"))
         )
-    except PROVIDER_PROBLEMS as error:  # the provider is unreachable or misconfigured
+    except provider_problems() as error:  # the provider is unreachable or misconfigured
         return _failed(request, settings, error)
 
 
@@ -50,7 +55,7 @@ async def sso_callback(request: Request):
     settings = _enabled()
     try:
         token = await client_for(settings).authorize_access_token(request)
-    except PROVIDER_PROBLEMS as error:  # denied, wrong state, bad token, unreachable…
+    except provider_problems() as error:  # denied, wrong state, bad token, unreachable…
         return _failed(request, settings, error)
     claims = token.get("userinfo") or {}
     if not claims.get("iss") or not claims.get("sub"):
