@@ -13,7 +13,6 @@ teacher dashboard of an assignment with 300 submissions.  Bounded in count and t
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import platform
 import socket
@@ -26,9 +25,9 @@ from pathlib import Path
 
 import httpx
 import numpy as np
+from handout import handout_session  # bench/, the script's folder
 
 ROOT = Path(__file__).resolve().parents[1]
-DATA = ROOT / "tests" / "data"
 PASSWORD = "bench-password-1"
 
 
@@ -169,26 +168,7 @@ def main() -> None:
                 "/api/v1/auth/token", data={"username": "student", "password": PASSWORD}
             ).json()
             auth = {"Authorization": f"Bearer {token['access_token']}"}
-            session = client.post(
-                "/api/v1/sessions",
-                headers=auth,
-                json={
-                    "title": "bench",
-                    "station": {"latitude_deg": 39.93, "earth_rate_deg_h": 15.04},
-                },
-            ).json()["id"]
-            for part, name in (
-                ("heading", "handout_horizontal.csv"),
-                ("latitude", "handout_vertical.csv"),
-            ):
-                with open(DATA / name) as handle:
-                    rows = list(csv.DictReader(handle))
-                for k in range(1, 5):
-                    client.put(
-                        f"/api/v1/sessions/{session}/{part}/positions/{k}",
-                        headers=auth,
-                        json={"samples": [float(r[f"position_{k}"]) for r in rows]},
-                    ).raise_for_status()
+            session = handout_session(client, auth)
             n = args.requests
             ours = rate(client, f"/api/v1/sessions/{session}/results", n, headers=auth)
             ceiling = rate(bare_client, "/json", n)

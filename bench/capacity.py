@@ -16,8 +16,8 @@
 from __future__ import annotations
 
 import argparse
-import csv
 import os
+import sqlite3
 import sys
 import tempfile
 import threading
@@ -29,10 +29,11 @@ import httpx
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from handout import handout_session  # noqa: E402  (bench/, the script's folder)
+
 from tests.e2e.conftest import running_server  # noqa: E402
 from tests.pgserver import PostgresServer  # noqa: E402
 
-DATA = ROOT / "tests" / "data"
 PASSWORD = "capacity-pass-1"
 TICKS = os.sysconf("SC_CLK_TCK")
 
@@ -75,24 +76,6 @@ def create_student(var: Path, database_url: str | None) -> None:
              "--username", name],
             input=PASSWORD + "\n", env=env, text=True, check=True, capture_output=True,
         )  # fmt: skip
-
-
-def handout_session(client: httpx.Client, auth: dict) -> int:
-    session = client.post(
-        "/api/v1/sessions",
-        headers=auth,
-        json={"title": "capacity", "station": {"latitude_deg": 39.93, "earth_rate_deg_h": 15.04}},
-    ).json()["id"]
-    for part, name in (("heading", "handout_horizontal.csv"), ("latitude", "handout_vertical.csv")):
-        with open(DATA / name) as handle:
-            rows = list(csv.DictReader(handle))
-        for k in range(1, 5):
-            client.put(
-                f"/api/v1/sessions/{session}/{part}/positions/{k}",
-                headers=auth,
-                json={"samples": [float(r[f"position_{k}"]) for r in rows]},
-            ).raise_for_status()
-    return session
 
 
 def browser_login(url: str) -> httpx.Client:
@@ -141,17 +124,25 @@ def per_route_cpu(url: str, pid: int, count: int) -> dict[str, float]:
     return costs
 
 
+def checkpointed_size(database: Path) -> int:
+    """The database file's size with its write-ahead log folded in (the log's own size
+    says how much was written lately, not how much is stored)."""
+    with sqlite3.connect(database) as connection:
+        connection.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+    return database.stat().st_size
+
+
 def stored_bytes_per_student(url: str, var: Path) -> float:
     """Database growth for one full lab: eight streamed positions are approximated by
     API uploads of the same size (600 samples with times each), plus the handout tables."""
     database = var / "gyrolab.db"
-    before = database.stat().st_size + sum(p.stat().st_size for p in var.glob("gyrolab.db-*"))
+    before = checkpointed_size(database)
     api = httpx.Client(base_url=url, timeout=60)
     token = api.post("/api/v1/auth/token", data={"username": "student", "password": PASSWORD})
     auth = {"Authorization": f"Bearer {token.json()['access_token']}"}
     labs = 5
     for _ in range(labs):
-        session = handout_session(api, auth)
+        session = handout_session(api, auth, "capacity")
         timed = {"samples": [10.0] * 600, "times_s": [i / 10 for i in range(600)]}
         for part in ("heading", "latitude"):
             for k in range(1, 5):
@@ -160,7 +151,7 @@ def stored_bytes_per_student(url: str, var: Path) -> float:
                 ).raise_for_status()
     api.post("/api/v1/auth/token", data={"username": "student", "password": PASSWORD})
     time.sleep(1)
-    after = database.stat().st_size + sum(p.stat().st_size for p in var.glob("gyrolab.db-*"))
+    after = checkpointed_size(database)
     return (after - before) / labs
 
 
