@@ -9,6 +9,7 @@
 | GYROLAB_SESSION_LIFETIME_HOURS | 12 |
 | GYROLAB_HOST / GYROLAB_PORT | 127.0.0.1 / 8000 |
 | GYROLAB_TIMEZONE | ``Asia/Shanghai`` (a course's default zone for due dates) |
+| GYROLAB_PUBLIC_URL | the request's address (LTI registration behind a proxy) |
 """
 
 from __future__ import annotations
@@ -47,6 +48,9 @@ class Settings(BaseSettings):
     oidc_name: str = ""  # the button's words, e.g. "University ID" (default: "single sign-on")
     oidc_role_claim: str = ""  # a claim naming the person's roles or groups, e.g. "groups"
     oidc_teacher_values: str = ""  # comma-separated values of that claim that mean teacher
+    # the address people and LMSs reach GyroLab at (LTI registration, behind a proxy);
+    # default: the address of the request
+    public_url: str = ""
     # state-changing requests of one worker inside the app at once (web/write_admission.py)
     write_concurrency: int = Field(default=8, ge=1, le=32)
     timezone: str = "Asia/Shanghai"  # a course's default zone for due dates and times

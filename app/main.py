@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import gzip
 import hashlib
 from contextlib import asynccontextmanager
@@ -25,6 +26,10 @@ from app.courses import pages as course_pages
 from app.explore import pages as explore_pages
 from app.lab import api, partner_pages, record_pages, stream
 from app.lab import pages as lab_pages
+from app.lti import admin_pages as lti_admin_pages
+from app.lti import course_pages as lti_course_pages
+from app.lti import grades as lms_grades
+from app.lti import pages as lti_pages
 from app.paths import STATIC_DIR
 from app.review import api as review_api
 from app.review import desk_pages
@@ -71,7 +76,12 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
             from app.migrate import upgrade_to_head
 
             upgrade_to_head()
-        yield
+        # grades released for an LMS are posted (and retried) by every worker
+        sender = asyncio.create_task(lms_grades.run_sender())
+        try:
+            yield
+        finally:
+            sender.cancel()
 
     app = FastAPI(
         title="GyroLab",
@@ -135,6 +145,9 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(review_api.router)
     app.include_router(account_pages.router)
     app.include_router(sso_pages.router)
+    app.include_router(lti_pages.router)
+    app.include_router(lti_admin_pages.router)
+    app.include_router(lti_course_pages.router)
     app.include_router(home.router)
     app.include_router(course_pages.router)
     app.include_router(join_pages.router)

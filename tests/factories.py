@@ -298,6 +298,22 @@ ACCESS = {
     "GET /login/sso": "public",  # 404 unless a provider is configured (tests/test_sso.py)
     "GET /login/sso/callback": "public",
     "POST /lang": "public",
+    "GET /lti/jwks.json": "public",
+    "GET /lti/login": "public",  # the LMS's login initiation (tests/test_lti.py)
+    "POST /lti/login": "public",
+    "POST /lti/launch": "public",  # authenticated by the id_token, not a cookie
+    "GET /lti/continue/{token}": "public",  # a one-time link made by a launch
+    "POST /lti/deep-link": "public",  # authenticated by the stored launch's id
+    "GET /lti/register": "public",  # needs an administrator's one-time link
+    "GET /admin/lti": "admin",
+    "POST /admin/lti/platforms": "admin",
+    "POST /admin/lti/platforms/{platform_id}/remove": "admin",
+    "POST /admin/lti/registration-link": "admin",
+    "POST /admin/lti/rotate-key": "admin",
+    "POST /courses/{course_id}/lti/sync": "teacher",
+    "POST /courses/{course_id}/assignments/{assignment_id}/lti/send": "teacher",
+    "GET /lti/links/{link_id}": "teacher",
+    "POST /lti/links/{link_id}": "teacher",
     "POST /logout": "user",
     "GET /account/password": "user",
     "POST /account/password": "user",

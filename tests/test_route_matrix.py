@@ -12,8 +12,8 @@ from fastapi.testclient import TestClient
 from sqlmodel import select
 from starlette.websockets import WebSocketDisconnect
 
-from app.db import read_session
-from app.models import ApiToken, Role, User
+from app.db import read_session, write_session
+from app.models import ApiToken, LtiContext, LtiPlatform, LtiResourceLink, Role, User
 from tests.conftest import iter_routes, snapshot
 from tests.factories import (
     ACCESS,
@@ -77,6 +77,7 @@ def build_ids(app) -> dict:
     with read_session() as db:
         token_id = db.exec(select(ApiToken.id)).first()
         student_id = db.exec(select(User.id).where(User.username == "s1")).one()
+    platform_id, link_id = placed_in_an_lms(world)
     return {
         "course_id": world["course"],
         "assignment_id": world["assignment"],
@@ -87,7 +88,37 @@ def build_ids(app) -> dict:
         "part": "heading",
         "position": 1,
         "version": "x",
+        "platform_id": platform_id,
+        "link_id": link_id,
+        "token": "not-a-token",
     }
+
+
+def placed_in_an_lms(world) -> tuple[int, int]:
+    """The world's assignment as an activity of a registered LMS (for the LTI routes)."""
+    with write_session() as db:
+        platform = LtiPlatform(
+            name="LMS",
+            issuer="https://lms.example",
+            client_id="c",
+            auth_login_url="https://lms.example/auth",
+            auth_token_url="https://lms.example/token",
+            key_set_url="https://lms.example/jwks",
+        )
+        db.add(platform)
+        db.flush()
+        context = LtiContext(platform_id=platform.id, context_id="c1", course_id=world["course"])
+        db.add(context)
+        db.flush()
+        link = LtiResourceLink(
+            platform_id=platform.id,
+            resource_link_id="r1",
+            context_row_id=context.id,
+            assignment_id=world["assignment"],
+        )
+        db.add(link)
+        db.flush()
+        return platform.id, link.id
 
 
 def routes_with(*rules: str) -> list[str]:

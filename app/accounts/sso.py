@@ -68,7 +68,8 @@ def role_from_claims(claims: dict, settings: Settings) -> Role:
     return Role.teacher if held & teacher else Role.student
 
 
-def _free_username(db: Session, claims: dict) -> str:
+def free_username(db: Session, claims: dict) -> str:
+    """A username from ``preferred_username`` (or the e-mail's local part), made unique."""
     wanted = str(claims.get("preferred_username") or "")
     if not wanted and isinstance(claims.get("email"), str):
         wanted = claims["email"].split("@", 1)[0]
@@ -82,24 +83,33 @@ def _free_username(db: Session, claims: dict) -> str:
     return candidate
 
 
-def account_for(db: Session, claims: dict, settings: Settings) -> User:
-    """The account of a verified identity (created on its first log-in); caller commits."""
+def account_for(db: Session, claims: dict, new_role: Role) -> User:
+    """The account of a verified identity (``iss``, ``sub``), created on its first log-in
+    with ``new_role``; its name and e-mail follow the provider's.  The caller commits.
+
+    Used by single sign-on and by LTI launches (the LMS is then the identity provider)."""
     issuer, subject = str(claims["iss"]), str(claims["sub"])
     identity = db.exec(
         select(ExternalIdentity).where(
             ExternalIdentity.issuer == issuer, ExternalIdentity.subject == subject
         )
     ).first()
+    name = str(claims.get("name") or claims.get("preferred_username") or "").strip()[:128]
+    email = claims.get("email") if isinstance(claims.get("email"), str) else None
+    email = email if email and len(email) <= 254 else None
     if identity is not None:
         user = db.get(User, identity.user_id)
+        if name and user.display_name != name:
+            user.display_name = name
+        if email and user.email != email:
+            user.email = email
+        db.add(user)
     else:
-        name = str(claims.get("name") or claims.get("preferred_username") or "").strip()
-        email = claims.get("email") if isinstance(claims.get("email"), str) else None
         user = User(
-            username=_free_username(db, claims),
-            display_name=name[:128] or subject[:128],
-            email=email if email and len(email) <= 254 else None,
-            role=role_from_claims(claims, settings).value,
+            username=free_username(db, claims),
+            display_name=name or subject[:128],
+            email=email,
+            role=new_role.value,
             # a password nobody knows: this account logs in through the provider
             password_hash=hash_password(secrets.token_urlsafe(32)),
         )

@@ -11,7 +11,7 @@ from starlette.concurrency import run_in_threadpool
 
 from app.accounts.pages import login_view, safe_next
 from app.accounts.security import create_session
-from app.accounts.sso import account_for, client_for, sso_enabled
+from app.accounts.sso import account_for, client_for, role_from_claims, sso_enabled
 from app.config import Settings, get_settings
 from app.core.exceptions import UserError
 from app.db import write_session
@@ -68,7 +68,7 @@ async def sso_callback(request: Request):
 
 def _log_in(claims: dict, settings: Settings) -> str:
     with write_session() as db:
-        user = account_for(db, claims, settings)
+        user = account_for(db, claims, role_from_claims(claims, settings))
         return create_session(db, user, settings)
 
 

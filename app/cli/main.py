@@ -283,9 +283,11 @@ def build_parser() -> argparse.ArgumentParser:
     bridge.add_argument("--seconds", type=float, help="stop after this long")
     bridge.set_defaults(handler=_bridge)
 
+    from app.cli.lti import add_lti_commands
     from app.cli.science import add_science_commands
 
     add_science_commands(commands)
+    add_lti_commands(commands)
     return parser
 
 

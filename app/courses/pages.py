@@ -22,6 +22,7 @@ from app.courses.assignment_form import form_values
 from app.courses.deps import TeacherCourse
 from app.courses.local_time import valid_zone_name, zone_choices
 from app.courses.roster_csv import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
+from app.lti.course_pages import lms_links
 from app.models import Assignment, Course, Enrollment, User
 from app.web.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
 from app.web.exports import credentials_data_url
@@ -92,6 +93,7 @@ def course_context(db: Session, course: Course, **extra) -> dict:
         "assignment_form": form_values(),
         "timezone": course.timezone,
         "zones": zone_choices(),
+        "lms": lms_links(db, course),
         **extra,
     }
 

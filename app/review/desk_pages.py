@@ -6,13 +6,14 @@ from __future__ import annotations
 import json
 from datetime import datetime
 
-from fastapi import APIRouter, Request
+from fastapi import APIRouter, BackgroundTasks, Request
 from sqlmodel import select
 
 from app.core.exceptions import UserError
 from app.courses.local_time import local_input_to_utc, utc_to_local_input
 from app.lab import partners
 from app.lab.pages import UNIT_NAMES, session_view
+from app.lti import grades as lms_grades
 from app.models import Attempt, SessionStatus, User
 from app.review import grading
 from app.review.deps import ReviewableSession, TeacherAssignment
@@ -69,7 +70,13 @@ def submission_page(request: Request, target: ReviewableSession, db: SessionDep)
 
 
 @router.post("/review/sessions/{session_id}/feedback", dependencies=[CsrfProtected])
-def save_review(request: Request, target: ReviewableSession, db: SessionDep, form: FormDep):
+def save_review(
+    request: Request,
+    target: ReviewableSession,
+    db: SessionDep,
+    form: FormDep,
+    background: BackgroundTasks,
+):
     """The review of the latest attempt (feedback, comments, points, rubric, letter);
     ``action`` = save | return | release; ``go`` = next | previous after saving."""
     session, assignment = target.session, target.assignment
@@ -87,6 +94,8 @@ def save_review(request: Request, target: ReviewableSession, db: SessionDep, for
             grading.return_for_revision(session, attempt)
         elif action == "release":
             grading.release(session, attempt)
+            if lms_grades.queue_release(db, session, attempt):
+                background.add_task(lms_grades.wake_sender)
     except UserError as problem:
         db.rollback()
         flash(response, request, problem.key, "error", **problem.params)
@@ -135,8 +144,14 @@ def save_extension(request: Request, target: ReviewableSession, db: SessionDep, 
 @router.post(
     "/courses/{course_id}/assignments/{assignment_id}/release", dependencies=[CsrfProtected]
 )
-def release_selected(request: Request, target: TeacherAssignment, db: SessionDep, form: FormDep):
-    """Bulk release: every ticked submission that has points."""
+def release_selected(
+    request: Request,
+    target: TeacherAssignment,
+    db: SessionDep,
+    form: FormDep,
+    background: BackgroundTasks,
+):
+    """Bulk release: every ticked submission that has points (and their LMS grade posts)."""
     course, assignment = target.course, target.assignment
     chosen = []
     for value in form.getlist("session"):
@@ -146,6 +161,8 @@ def release_selected(request: Request, target: TeacherAssignment, db: SessionDep
             continue
     released, skipped = grading.bulk_release(db, assignment, chosen[:10_000])
     db.commit()
+    if released and lms_grades.anything_queued():
+        background.add_task(lms_grades.wake_sender)
     response = redirect(f"/courses/{course.id}/assignments/{assignment.id}")
     kind = "success" if released and not skipped else ("warning" if released else "error")
     flash(response, request, "review.bulk_released", kind, released=released, skipped=skipped)

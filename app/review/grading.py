@@ -15,6 +15,7 @@ from sqlmodel import Session, col, select
 from app.core.exceptions import UserError
 from app.core.readings import parse_decimal
 from app.lab.partners import in_sessions_of
+from app.lti.grades import queue_release
 from app.models import (
     Assignment,
     Attempt,
@@ -180,6 +181,7 @@ def bulk_release(db: Session, assignment: Assignment, session_ids: list[int]) ->
         release(session, attempt)
         db.add(attempt)
         db.add(session)
+        queue_release(db, session, attempt)
         released += 1
     skipped += len(set(session_ids)) - len(sessions)
     return released, skipped

@@ -14,6 +14,7 @@ from app.core.text_files import decode_text
 from app.courses import characterisation
 from app.courses.assignment_form import form_values, parse_assignment_form
 from app.lab.charts import class_error_figure, class_histogram_figure
+from app.lti.grades import passback_state
 from app.review.deps import TeacherAssignment
 from app.review.exports import class_table_response, class_zip_response
 from app.review.service import class_rows, status_counts
@@ -53,6 +54,7 @@ def assignment_dashboard(
             "characterisation": characterisation.summary_of(assignment, with_time=True),
             "presets": sorted(PRESETS),
             "plotly_url": request.app.state.plotly_url,
+            "passback": passback_state(db, assignment.id),
         },
     )
 

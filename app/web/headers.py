@@ -4,7 +4,9 @@ pass untouched).
 CSP: scripts only from this site (no inline scripts anywhere; page data travel in
 ``<script type="application/json">`` blocks, which are not executed); styles from this
 site plus inline styles, which plotly.js sets on the elements it draws; images from this
-site and data: URLs (plotly's exports); no framing.
+site and data: URLs (plotly's exports); no framing.  A response that sets its own CSP
+(the LTI pages an LMS shows in a frame, ``lti/framing.py``) keeps it and gets no
+X-Frame-Options: its ``frame-ancestors`` names the platforms allowed to frame it.
 """
 
 from __future__ import annotations
@@ -38,8 +40,10 @@ class SecurityHeaders:
 
         async def send_with_headers(message: Message) -> None:
             if message["type"] == "http.response.start":
-                present = {name for name, _ in message.get("headers", [])}
+                present = {name.lower() for name, _ in message.get("headers", [])}
                 extra = [h for h in HEADERS if h[0] not in present]
+                if b"content-security-policy" in present:
+                    extra = [h for h in extra if h[0] != b"x-frame-options"]
                 if https:
                     extra.append(HSTS)
                 message = {**message, "headers": [*message.get("headers", []), *extra]}

@@ -1,0 +1,142 @@
+"""``gyrolab lti …``: register LMSs, rotate GyroLab's LTI key, send grades, sync rosters."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from sqlmodel import select
+
+from app.core.exceptions import UserError
+
+
+def _add_platform(args: argparse.Namespace) -> int:
+    from app.db import write_session
+    from app.lti.platforms import PlatformFields, add_platform
+
+    fields = PlatformFields(
+        name=args.name or "",
+        issuer=args.issuer,
+        client_id=args.client_id,
+        auth_login_url=args.login_url,
+        auth_token_url=args.token_url,
+        key_set_url=args.jwks_url,
+        deployment_ids=args.deployment or [],
+        auth_audience=args.audience,
+    )
+    try:
+        with write_session() as db:
+            platform = add_platform(db, fields)
+            print(
+                f"registered {platform.name}: issuer {platform.issuer}, client {platform.client_id}"
+            )
+    except UserError as error:
+        from app.web.i18n import translator
+
+        print(
+            f"gyrolab lti add-platform: {translator('en')(error.key, **error.params)}",
+            file=sys.stderr,
+        )
+        return 2
+    return 0
+
+
+def _list(_args: argparse.Namespace) -> int:
+    from app.db import read_session
+    from app.lti.platforms import deployments_of
+    from app.models import LtiPlatform
+
+    with read_session() as db:
+        for platform in db.exec(select(LtiPlatform).order_by(LtiPlatform.id)):
+            deployments = ",".join(deployments_of(platform)) or "-"
+            print(
+                f"{platform.id}\t{platform.name}\t{platform.issuer}\t{platform.client_id}"
+                f"\t{deployments}\t{platform.registered_by}"
+            )
+    return 0
+
+
+def _rotate(_args: argparse.Namespace) -> int:
+    from app.db import write_session
+    from app.lti import keys
+
+    with write_session() as db:
+        key = keys.rotate(db)
+        days = keys.KEEP_RETIRED.days
+        print(f"new signing key {key.kid}; older keys stay published for {days} days")
+    return 0
+
+
+def _registration_link(args: argparse.Namespace) -> int:
+    from app.config import get_settings
+    from app.db import write_session
+    from app.lti.registration import new_registration_link
+
+    base = (args.base_url or get_settings().public_url or "").rstrip("/")
+    if not base:
+        print(
+            "gyrolab lti registration-link: give --base-url or set GYROLAB_PUBLIC_URL",
+            file=sys.stderr,
+        )
+        return 2
+    with write_session() as db:
+        token = new_registration_link(db)
+    print(f"{base}/lti/register?token={token}")
+    return 0
+
+
+def _send_grades(_args: argparse.Namespace) -> int:
+    from app.lti.grades import send_due
+
+    counts = send_due()
+    print(f"sent {counts['sent']}, failed {counts['failed']}")
+    return 1 if counts["failed"] else 0
+
+
+def _sync_roster(args: argparse.Namespace) -> int:
+    from app.db import read_session
+    from app.lti.roster import sync_roster
+    from app.models import LtiContext
+
+    with read_session() as db:
+        contexts = db.exec(select(LtiContext.id).where(LtiContext.course_id == args.course)).all()
+    if not contexts:
+        print(
+            f"gyrolab lti sync-roster: course {args.course} is not linked to an LMS",
+            file=sys.stderr,
+        )
+        return 2
+    failed = False
+    for context_id in contexts:
+        outcome = sync_roster(context_id)
+        failed |= outcome.problem is not None
+        print(outcome.problem or f"{outcome.students} students ({outcome.newly_enrolled} new)")
+    return 1 if failed else 0
+
+
+def add_lti_commands(commands) -> None:
+    lti = commands.add_parser("lti", help="LTI 1.3: platforms, keys, grades, rosters")
+    sub = lti.add_subparsers(dest="lti_command", required=True)
+    add = sub.add_parser("add-platform", help="register an LMS by hand (or add a deployment)")
+    add.add_argument("--name")
+    add.add_argument("--issuer", required=True)
+    add.add_argument("--client-id", required=True)
+    add.add_argument("--login-url", required=True, help="the platform's OIDC authorization URL")
+    add.add_argument("--token-url", required=True, help="the platform's access token URL")
+    add.add_argument("--jwks-url", required=True, help="the platform's public keyset URL")
+    add.add_argument("--audience", help="token audience, if not the token URL")
+    add.add_argument("--deployment", action="append", help="a deployment id (repeatable)")
+    add.set_defaults(handler=_add_platform)
+    sub.add_parser("list", help="the registered platforms").set_defaults(handler=_list)
+    sub.add_parser("rotate-key", help="new signing key; old ones kept a week").set_defaults(
+        handler=_rotate
+    )
+    link = sub.add_parser("registration-link", help="a one-time dynamic registration URL")
+    link.add_argument("--base-url", help="GyroLab's public address (default GYROLAB_PUBLIC_URL)")
+    link.set_defaults(handler=_registration_link)
+    sub.add_parser("send-grades", help="send grade posts that are due").set_defaults(
+        handler=_send_grades
+    )
+    sync = sub.add_parser("sync-roster", help="fetch a linked course's roster from the LMS")
+    sync.add_argument("--course", type=int, required=True, help="GyroLab course id")
+    sync.set_defaults(handler=_sync_roster)

@@ -1,0 +1,341 @@
+"""The LTI endpoints an LMS calls, and the pages around them.
+
+``/lti/login`` (third-party login initiation) → the platform's authorization endpoint →
+``/lti/launch`` (the id_token, checked by ``handshake.Launch``) → the person's page:
+a student's lab session, a teacher's assignment dashboard, or the deep-linking picker.
+``/lti/jwks.json`` publishes GyroLab's keys; ``/lti/register`` is dynamic registration.
+
+Inside an LMS frame, GyroLab's own pages cannot work (its session cookie would be a
+third-party cookie and its pages refuse framing): a framed launch shows a button that
+opens GyroLab in a new window through a one-time ``/lti/continue`` link.  The deep-linking
+picker needs no cookie -- the launch id it carries is its credential, used once.
+"""
+
+from __future__ import annotations
+
+import secrets
+from datetime import timedelta
+
+import jwt
+import requests
+from fastapi import APIRouter, BackgroundTasks, Request
+from fastapi.responses import JSONResponse
+from pylti1p3.deep_link_resource import DeepLinkResource
+from pylti1p3.exception import LtiException
+from pylti1p3.lineitem import LineItem
+from sqlmodel import select
+from starlette.concurrency import run_in_threadpool
+
+from app.accounts.security import create_session
+from app.config import get_settings
+from app.core.exceptions import UserError
+from app.courses.assignment_form import form_values, parse_assignment_form
+from app.db import read_session, write_session
+from app.lti import keys, provisioning, roster
+from app.lti.framing import framed_csp
+from app.lti.handshake import (
+    DatabaseStorage,
+    FormRequest,
+    Launch,
+    LaunchRefused,
+    Login,
+    stored_launch,
+)
+from app.lti.platforms import DatabaseToolConf, find_platform
+from app.lti.registration import link_is_live, register
+from app.models import Assignment, Course, LtiContext, LtiPlatform
+from app.web.i18n import translator
+from app.web.render import SESSION_COOKIE, redirect, render, request_language, set_cookie
+
+router = APIRouter(prefix="/lti", tags=["pages: lti"], include_in_schema=False)
+MAX_PARAM = 20_000  # an id_token is a few kB
+CONTINUE_LIFETIME = timedelta(minutes=2)
+REFUSALS = (
+    LtiException,
+    LaunchRefused,
+    jwt.PyJWTError,
+    requests.RequestException,
+    ValueError,
+    KeyError,
+    TypeError,
+    AssertionError,
+    LookupError,
+)
+
+
+def public_base(request: Request) -> str:
+    return get_settings().public_url.rstrip("/") or str(request.base_url).rstrip("/")
+
+
+def is_secure(request: Request) -> bool:
+    return public_base(request).startswith("https://")
+
+
+async def _params(request: Request) -> dict[str, str]:
+    params = {k: v for k, v in request.query_params.items() if len(v) <= MAX_PARAM}
+    if request.method == "POST":
+        form = await request.form()
+        params.update({k: v for k, v in form.items() if isinstance(v, str) and len(v) <= MAX_PARAM})
+    return params
+
+
+def refused(request: Request, reason: str, status: int = 401, frame_urls=()):
+    response = render(request, "lti/refused.html", {"reason": reason}, status)
+    response.headers["Content-Security-Policy"] = framed_csp(list(frame_urls))
+    return response
+
+
+@router.get("/jwks.json")
+def jwks_json() -> JSONResponse:
+    """GyroLab's public keys (the current and recently retired), for platforms."""
+    keys.ensure_key()
+    with read_session() as db:
+        body = keys.jwks(db)
+    return JSONResponse(body, headers={"Cache-Control": "public, max-age=300"})
+
+
+@router.api_route("/login", methods=["GET", "POST"])
+async def login_initiation(request: Request):
+    """Third-party initiated login: check the platform, set the state, send the browser to
+    the platform's authorization endpoint with a nonce."""
+    params = await _params(request)
+    lti_request = FormRequest(params, dict(request.cookies), is_secure(request))
+    launch_url = public_base(request) + "/lti/launch"
+
+    def start():
+        keys.ensure_key()
+        with read_session() as db:
+            return Login(lti_request, DatabaseToolConf(db)).redirect(launch_url)
+
+    try:
+        return await run_in_threadpool(start)
+    except REFUSALS as error:
+        return refused(request, str(error) or type(error).__name__, 400)
+
+
+@router.post("/launch")
+async def launch(request: Request, background: BackgroundTasks):
+    """The platform's form post with the id_token: checked, then the person lands."""
+    params = await _params(request)
+    lti_request = FormRequest(params, dict(request.cookies), is_secure(request))
+    _ = translator(request_language(request))
+
+    def check() -> tuple[dict, int, str]:
+        keys.ensure_key()
+        with read_session() as db:
+            message = Launch(lti_request, DatabaseToolConf(db))
+            body = dict(message.get_launch_data())
+            platform = find_platform(db, body["iss"], message.get_client_id())
+            return body, platform.id, message.get_launch_id()
+
+    try:
+        body, platform_id, launch_id = await run_in_threadpool(check)
+    except REFUSALS as error:
+        return refused(request, str(error) or type(error).__name__)
+    settings = get_settings()
+
+    def arrive():
+        with write_session() as db:
+            platform = db.get(LtiPlatform, platform_id)
+            landing = provisioning.land(db, platform, body, launch_id, _("lab.practice_title"))
+            if landing.url.startswith("/lti/deep-link/"):
+                return landing, None, picker_context(db, landing.course, launch_id, body)
+            return landing, create_session(db, landing.user, settings), None
+
+    try:
+        landing, cookie, picker = await run_in_threadpool(arrive)
+    except UserError as problem:
+        frames = _platform_urls(body)
+        response = render(request, "lti/refused.html", {"problem": problem}, problem.status)
+        response.headers["Content-Security-Policy"] = framed_csp(frames)
+        return response
+    if landing.teacher:  # the roster follows the LMS's, fetched after the response
+        background.add_task(roster.sync_roster, landing.context_row_id)
+    if picker is not None:
+        response = render(request, "lti/deep_link.html", picker)
+        response.headers["Content-Security-Policy"] = framed_csp(_platform_urls(body))
+        return response
+    if request.headers.get("sec-fetch-dest") == "iframe":
+        token = await run_in_threadpool(_continue_token, landing.user.id, cookie, landing.url)
+        response = render(request, "lti/new_window.html", {"token": token})
+        response.headers["Content-Security-Policy"] = framed_csp(_platform_urls(body))
+        return response
+    response = redirect(landing.url)
+    set_cookie(response, request, SESSION_COOKIE, cookie, settings.session_lifetime_hours * 3600)
+    return response
+
+
+def _platform_urls(body: dict) -> list[str]:
+    presentation = body.get(provisioning.CLAIM + "launch_presentation") or {}
+    settings = body.get(DEEP_LINK_SETTINGS) or {}
+    return [body.get("iss"), presentation.get("return_url"), settings.get("deep_link_return_url")]
+
+
+def _continue_token(user_id: int, cookie: str, url: str) -> str:
+    token = secrets.token_urlsafe(24)
+    DatabaseStorage().set_value(
+        f"lti1p3-continue-{token}",
+        {"user": user_id, "cookie": cookie, "url": url},
+        int(CONTINUE_LIFETIME.total_seconds()),
+    )
+    return token
+
+
+@router.get("/continue/{token}")
+def continue_in_new_window(request: Request, token: str):
+    """A framed launch's one-time link: the session cookie, set first-party, then the page."""
+    storage = DatabaseStorage()
+    key = f"lti1p3-continue-{token[:64]}"
+    value = storage.get_value(key)
+    if not isinstance(value, dict) or not storage.consume(key):
+        return refused(request, "This link was used already or has expired.", 410)
+    response = redirect(provisioning_safe(value.get("url")))
+    settings = get_settings()
+    set_cookie(
+        response,
+        request,
+        SESSION_COOKIE,
+        str(value["cookie"]),
+        settings.session_lifetime_hours * 3600,
+    )
+    return response
+
+
+def provisioning_safe(url) -> str:
+    text = str(url or "/")
+    return text if text.startswith("/") and not text.startswith("//") else "/"
+
+
+# --- deep linking -----------------------------------------------------------------------------
+
+DEEP_LINK_SETTINGS = "https://purl.imsglobal.org/spec/lti-dl/claim/deep_linking_settings"
+
+
+def picker_context(db, course: Course, launch_id: str, body: dict, **extra) -> dict:
+    assignments = db.exec(
+        select(Assignment).where(Assignment.course_id == course.id).order_by(Assignment.id)
+    ).all()
+    settings = body.get(DEEP_LINK_SETTINGS) or {}
+    return {
+        "course": course,
+        "assignments": assignments,
+        "launch_id": launch_id,
+        "accepts_many": bool(settings.get("accept_multiple")),
+        **extra,
+    }
+
+
+@router.post("/deep-link")
+async def deep_link_response(request: Request):
+    """The teacher's choice (an existing assignment, or a new one) signed and posted back
+    to the LMS's deep-linking return URL.  The launch id is the credential, used once."""
+    params = await _params(request)
+    launch_id = params.get("launch_id", "")[:80]
+    body = await run_in_threadpool(stored_launch, launch_id) if launch_id else None
+    if not body or body.get(provisioning.CLAIM + "message_type") != provisioning.DEEP_LINKING:
+        return refused(request, "This choice has expired; add the activity again.", 410)
+    lti_request = FormRequest({}, {}, is_secure(request))
+    base = public_base(request)
+
+    def respond():
+        with write_session() as db:
+            platform = find_platform(db, body["iss"], _client_of(body))
+            context = db.exec(
+                select(LtiContext).where(
+                    LtiContext.platform_id == platform.id,
+                    LtiContext.context_id == str(body[provisioning.CLAIM + "context"]["id"]),
+                )
+            ).one()
+            course = db.get(Course, context.course_id)
+            if params.get("new"):
+                assignment = _new_assignment(db, course, params)
+            else:
+                chosen = provisioning.assignment_in(db, course, params.get("assignment_id"))
+                if chosen is None:
+                    raise UserError("lti.choose_assignment", status=400)
+                assignment = db.get(Assignment, chosen)
+            message = Launch.restored(launch_id, body, lti_request, DatabaseToolConf(db))
+            resource = (
+                DeepLinkResource()
+                .set_url(base + "/lti/launch")
+                .set_title(assignment.title)
+                .set_custom_params({provisioning.ASSIGNMENT_PARAMETER: str(assignment.id)})
+                .set_lineitem(
+                    LineItem()
+                    .set_score_maximum(assignment.max_points)
+                    .set_label(assignment.title)
+                    .set_resource_id(f"gyrolab-assignment-{assignment.id}")
+                    .set_tag("gyrolab")
+                )
+            )
+            token = message.get_deep_link().get_response_jwt([resource])
+            return course, token
+
+    try:
+        course, token = await run_in_threadpool(respond)
+    except UserError as problem:
+        with read_session() as db:
+            platform = find_platform(db, body["iss"], _client_of(body))
+            context_id = str(body[provisioning.CLAIM + "context"]["id"])
+            context = db.exec(
+                select(LtiContext).where(
+                    LtiContext.platform_id == platform.id, LtiContext.context_id == context_id
+                )
+            ).one()
+            course = db.get(Course, context.course_id)
+            picker = picker_context(db, course, launch_id, body, problem=problem, form=params)
+        response = render(request, "lti/deep_link.html", picker, problem.status)
+        response.headers["Content-Security-Policy"] = framed_csp(_platform_urls(body))
+        return response
+    except REFUSALS as error:
+        return refused(request, str(error) or type(error).__name__, 400, _platform_urls(body))
+    await run_in_threadpool(DatabaseStorage().consume, launch_id)
+    return_url = (body.get(DEEP_LINK_SETTINGS) or {}).get("deep_link_return_url")
+    response = render(request, "lti/deep_link_return.html", {"url": return_url, "jwt": token})
+    response.headers["Content-Security-Policy"] = framed_csp(_platform_urls(body), [return_url])
+    return response
+
+
+def _client_of(body: dict) -> str:
+    audience = body.get("aud")
+    return audience[0] if isinstance(audience, list) else audience
+
+
+def _new_assignment(db, course: Course, params: dict[str, str]) -> Assignment:
+    values = form_values()
+    for name in ("title", "latitude_deg", "max_points"):
+        if params.get(name, "").strip():
+            values[name] = params[name]
+    assignment = parse_assignment_form(values, course.timezone)
+    assignment.course_id = course.id
+    db.add(assignment)
+    db.flush()
+    return assignment
+
+
+# --- dynamic registration ---------------------------------------------------------------------
+
+
+@router.get("/register")
+async def dynamic_registration(
+    request: Request,
+    token: str = "",
+    openid_configuration: str = "",
+    registration_token: str | None = None,
+):
+    """LTI Dynamic Registration, opened by the LMS with a one-time link of an admin's."""
+    _ = translator(request_language(request))
+    frames = [openid_configuration]
+    if not token or not await run_in_threadpool(link_is_live, token):
+        return refused(request, _("lti.registration_link_used"), 403, frames)
+    if not openid_configuration:
+        return refused(request, _("lti.registration_needs_lms"), 400, frames)
+    try:
+        platform = await run_in_threadpool(
+            register, token, public_base(request), openid_configuration, registration_token
+        )
+    except UserError as problem:
+        return refused(request, _(problem.key, **problem.params), problem.status, frames)
+    response = render(request, "lti/registered.html", {"platform": platform})
+    response.headers["Content-Security-Policy"] = framed_csp(frames)
+    return response
