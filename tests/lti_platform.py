@@ -147,18 +147,15 @@ class PlatformLaunch(LTIAdvantageMessageLaunchAbstract):
     def get_preflight_response(self) -> dict:
         return self.params
 
-    def get_launch_message(self, include_extra_claims: bool = True) -> dict:
-        message = super().get_launch_message(include_extra_claims)
-        return self.state.tamper(message) if self.state.tamper else message
-
     def generate_launch_request(self):
         launch = super().generate_launch_request()
-        if self.state.forge:  # the same claims, signed by somebody else under the kid
+        if self.state.tamper or self.state.forge:  # edit the signed claims, sign again
             claims = jwt.decode(launch["id_token"], options={"verify_signature": False})
             kid = jwt.get_unverified_header(launch["id_token"])["kid"]
-            launch["id_token"] = jwt.encode(
-                claims, new_private_key(), algorithm="RS256", headers={"kid": kid}
-            )
+            if self.state.tamper:
+                claims = self.state.tamper(claims)
+            key = new_private_key() if self.state.forge else self.state.private_key
+            launch["id_token"] = jwt.encode(claims, key, algorithm="RS256", headers={"kid": kid})
         self.state.last_id_token = launch["id_token"]
         return launch
 

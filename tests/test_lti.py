@@ -17,21 +17,11 @@ from sqlmodel import select
 from app.db import read_session, write_session
 from app.lti import grades, keys
 from app.lti.platforms import PlatformFields, add_platform
-from app.models import (
-    Enrollment,
-    ExternalIdentity,
-    LabSession,
-    LtiGradePost,
-    LtiKey,
-    LtiPlatform,
-    Role,
-    User,
-)
+from app.models import Enrollment, ExternalIdentity, LtiGradePost, LtiPlatform, Role, User
 from tests.e2e.conftest import free_port
 from tests.factories import CSRF_RE, HEADING, VERTICAL, make_user, post_form, without_tokens
 from tests.lti_platform import (
     CLIENT_ID,
-    DEPLOYMENT_ID,
     Browser,
     PlatformState,
     create_platform_app,
@@ -191,3 +181,247 @@ def _release(teacher: Browser, tool: str, session_id: int, **review):
     return teacher.client.post(
         f"{page}/feedback", data={"csrf_token": csrf, "action": "release", **review}
     )
+
+
+# --- the launch's security checks: each refused with a page, nobody logged in ------------------
+
+
+def refused_launch(lti: Lti, browser: Browser | None = None, **start) -> None:
+    browser = browser or lti.browser()
+    page = browser.launch(lti.platform.url, **{"user": "teacher-1", "kind": "deep", **start})
+    assert page.status_code in (400, 401), page.text[:300]
+    assert REFUSED in page.text
+    assert "gyrolab_session" not in cookie_names(browser)
+    with read_session() as db:
+        assert db.exec(select(ExternalIdentity)).first() is None  # no account was made
+
+
+def tamper(lti: Lti, edit) -> None:
+    def edited(claims: dict) -> dict:
+        edit(claims)
+        return claims
+
+    lti.platform.tamper = edited
+
+
+@protocol_only
+def test_a_forged_signature_is_refused(lti):
+    lti.platform.forge = True
+    refused_launch(lti)
+
+
+@protocol_only
+def test_an_expired_id_token_is_refused(lti):
+    lti.platform.expires_in = -30
+    refused_launch(lti)
+
+
+@protocol_only
+def test_an_id_token_for_another_tool_is_refused(lti):
+    tamper(lti, lambda c: c.update(aud="someone-else", azp="someone-else"))
+    refused_launch(lti)
+
+
+@protocol_only
+def test_several_audiences_need_gyrolab_as_the_authorised_party(lti):
+    tamper(lti, lambda c: c.update(aud=[CLIENT_ID, "other-tool"], azp="other-tool"))
+    refused_launch(lti)
+
+
+@protocol_only
+def test_an_unknown_deployment_is_refused(lti):
+    claim = "https://purl.imsglobal.org/spec/lti/claim/deployment_id"
+    tamper(lti, lambda c: c.update({claim: "deployment-of-someone-else"}))
+    refused_launch(lti)
+
+
+@protocol_only
+def test_a_nonce_not_issued_by_this_login_is_refused(lti):
+    tamper(lti, lambda c: c.update(nonce="made-up"))
+    refused_launch(lti)
+
+
+@protocol_only
+def test_an_id_token_from_the_future_is_refused(lti):
+    tamper(lti, lambda c: c.update(iat=int(time.time()) + 3600))
+    refused_launch(lti)
+
+
+@protocol_only
+def test_an_unsigned_id_token_is_refused(lti):
+    browser = lti.browser()
+    page = browser.get(f"{lti.platform.url}/start?user=teacher-1&kind=deep")
+    claims = jwt.decode(lti.platform.last_id_token, options={"verify_signature": False})
+    unsigned = jwt.encode(claims, key=None, algorithm="none")
+    posted = browser.submit_auto_form(page, {"id_token": unsigned})
+    assert posted.status_code == 401 and REFUSED in posted.text
+
+
+@protocol_only
+def test_a_replayed_launch_is_refused(lti):
+    browser = lti.browser()
+    page = browser.get(f"{lti.platform.url}/start?user=teacher-1&kind=deep")
+    first = browser.submit_auto_form(page)
+    assert first.status_code == 200 and "Add a GyroLab activity" in first.text
+    again = browser.submit_auto_form(page)  # the same id_token and state, posted once more
+    assert again.status_code == 401 and REFUSED in again.text
+    assert "nonce was used already" in again.text
+
+
+@protocol_only
+def test_a_launch_posted_from_another_browser_is_refused(lti):
+    """Login CSRF: an id_token obtained in one browser, posted by another (no state cookie)."""
+    attacker = lti.browser()
+    page = attacker.get(f"{lti.platform.url}/start?user=teacher-1&kind=deep")
+    victim = lti.browser()
+    victim_page = victim.client.post(
+        f"{lti.tool}/lti/launch",
+        data={k: v for k, v in Browser.FIELD.findall(page.text)},
+    )
+    assert victim_page.status_code == 401 and "State not found" in victim_page.text
+    assert "gyrolab_session" not in cookie_names(victim)
+
+
+@protocol_only
+def test_an_unregistered_platform_cannot_start_a_login(lti):
+    page = lti.browser().get(
+        f"{lti.tool}/lti/login?iss=https://evil.example&login_hint=x&target_link_uri=/"
+    )
+    assert page.status_code == 400 and REFUSED in page.text
+
+
+@protocol_only
+def test_a_launch_with_nothing_in_it_is_a_clear_page(lti):
+    page = lti.browser().client.post(f"{lti.tool}/lti/launch", data={"id_token": "x" * 30_000})
+    assert page.status_code == 401 and REFUSED in page.text
+
+
+@protocol_only
+def test_observers_are_refused_and_students_wait_for_their_teacher(lti):
+    early = lti.browser().launch(lti.platform.url, user="student-1", link="link-9")
+    assert early.status_code == 409 and "has not opened GyroLab in this course" in early.text
+    observer = lti.browser().launch(lti.platform.url, user="observer-1", link="link-9")
+    assert observer.status_code == 403 and "neither" in observer.text
+
+
+@protocol_only
+def test_a_student_account_launched_as_an_instructor_is_not_promoted(lti):
+    with write_session() as db:
+        student = make_user("li", Role.student)
+        db.add(ExternalIdentity(user_id=student.id, issuer=lti.platform.url, subject="teacher-1"))
+    page = lti.browser().launch(lti.platform.url, user="teacher-1", kind="deep")
+    assert page.status_code == 403 and "role does not match" in page.text
+    with read_session() as db:
+        assert db.get(User, student.id).role == Role.student
+
+
+# --- inside an LMS frame, keys, retries, registration -------------------------------------------
+
+
+@protocol_only
+def test_a_framed_launch_opens_gyrolab_in_a_new_window_through_a_one_time_link(lti):
+    deep_link_new_assignment(lti)
+    framed = lti.browser(**{"Sec-Fetch-Dest": "iframe"})
+    page = framed.launch(lti.platform.url, user="teacher-1", link="link-1")
+    assert page.status_code == 200 and "GyroLab opens in its own window" in page.text
+    assert f"frame-ancestors {lti.platform.url}" in page.headers["content-security-policy"]
+    assert "x-frame-options" not in page.headers
+    assert "gyrolab_session" not in cookie_names(framed)
+    link = page.text.split('href="/lti/continue/', 1)[1].split('"', 1)[0]
+    window = lti.browser()
+    opened = window.get(f"{lti.tool}/lti/continue/{link}")
+    assert opened.status_code == 200 and "/assignments/" in str(opened.url)
+    assert "gyrolab_session" in cookie_names(window)
+    assert lti.browser().get(f"{lti.tool}/lti/continue/{link}").status_code == 410  # once
+
+
+@protocol_only
+def test_rotating_the_key_keeps_the_old_one_published_and_signs_with_the_new(lti):
+    before = Browser().get(f"{lti.tool}/lti/jwks.json").json()["keys"]
+    with write_session() as db:
+        new = keys.rotate(db)
+    after = Browser().get(f"{lti.tool}/lti/jwks.json").json()["keys"]
+    assert [k["kid"] for k in after] == [new.kid, before[0]["kid"]]
+    assert all("d" not in key for key in after)  # public halves only
+    deep_link_new_assignment(lti)  # the platform verifies a response signed with the new key
+
+
+@protocol_only
+def test_a_grade_the_platform_refuses_is_kept_shown_and_retried(lti):
+    deep_link_new_assignment(lti)
+    teacher = lti.browser()
+    dashboard = teacher.launch(lti.platform.url, user="teacher-1", link="link-1")
+    learner = lti.browser()
+    lab = learner.launch(lti.platform.url, user="student-2", link="link-1")
+    session_id = int(urlsplit(str(lab.url)).path.rsplit("/", 1)[1])
+    _record_and_submit(learner, lti.tool, session_id)
+    lti.platform.fail_scores = 2
+    _release(teacher, lti.tool, session_id, points="30", feedback="")
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        with read_session() as db:
+            post = db.exec(select(LtiGradePost)).one()
+            if post.tries:
+                break
+        time.sleep(0.05)
+    assert post.status == "pending" and "503" in post.last_error
+    page = without_tokens(teacher.get(str(dashboard.url)).text)
+    assert "0 grades received by the learning platform, 1 waiting" in page
+    assert "The last attempt failed" in page
+    assert grades.send_due(post.next_try_at) == {"sent": 0, "failed": 1}  # still 503
+    csrf = csrf_of(teacher, str(dashboard.url))
+    sent = teacher.client.post(f"{dashboard.url}/lti/send", data={"csrf_token": csrf})
+    assert "1 grades sent, 0 failed" in sent.text
+    scores = arrived(lti.platform.scores, 1)
+    assert scores[0]["userId"] == "student-2" and scores[0]["scoreGiven"] == 30
+    with read_session() as db:
+        assert db.exec(select(LtiGradePost)).one().status == "sent"
+
+
+def test_the_pause_between_tries_grows_to_an_hour():
+    assert [grades.pause_after(n).total_seconds() for n in (1, 2, 3, 10, 20)] == [
+        30,
+        60,
+        120,
+        3600,
+        3600,
+    ]
+
+
+@protocol_only
+def test_dynamic_registration_needs_a_live_one_time_link(lti, client):
+    from app.lti.registration import new_registration_link
+
+    assert client.get("/lti/register?token=made-up").status_code == 403
+    with write_session() as db:
+        token = new_registration_link(db)
+    no_lms = client.get(f"/lti/register?token={token}")
+    assert no_lms.status_code == 400 and "tool registration" in no_lms.text
+    broken = client.get(
+        f"/lti/register?token={token}&openid_configuration=http://127.0.0.1:9/nothing"
+    )
+    assert broken.status_code == 502  # the link survives a failed attempt
+    with read_session() as db:
+        assert db.exec(select(LtiPlatform)).all()[0].issuer == lti.platform.url
+
+
+@protocol_only
+def test_registering_a_platform_by_hand_checks_every_address(lti, client):
+    admin = make_user("root", Role.admin)
+    from tests.factories import login
+
+    login(client, admin.username)
+    bad = post_form(
+        client,
+        "/admin/lti/platforms",
+        {**lti.platform.platform_fields(), "auth_login_url": "javascript:alert(1)"},
+        page="/admin/lti",
+    )
+    assert bad.status_code == 400
+    assert "Authentication request URL" not in bad.text or "must be a full" in bad.text
+    fields = {**lti.platform.platform_fields(), "client_id": "second", "deployment_ids": "a, b"}
+    saved = post_form(client, "/admin/lti/platforms", fields, page="/admin/lti")
+    assert saved.status_code == 303
+    page = client.get("/admin/lti").text
+    assert "<code>second</code>" in page and "<code>a</code>, <code>b</code>" in page
+    assert f"{lti.platform.url}" in page

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from contextlib import suppress
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
@@ -344,10 +345,8 @@ async def run_sender(period_s: float = SENDER_PERIOD_S) -> None:
     event = asyncio.Event()
     _waker = (asyncio.get_running_loop(), event)
     while True:
-        try:
+        with suppress(TimeoutError):
             await asyncio.wait_for(event.wait(), period_s)
-        except TimeoutError:
-            pass
         event.clear()
         try:
             if await run_in_threadpool(anything_queued):

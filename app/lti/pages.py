@@ -21,7 +21,7 @@ import requests
 from fastapi import APIRouter, BackgroundTasks, Request
 from fastapi.responses import JSONResponse
 from pylti1p3.deep_link_resource import DeepLinkResource
-from pylti1p3.exception import LtiException
+from pylti1p3.exception import LtiException, OIDCException, ToolConfException
 from pylti1p3.lineitem import LineItem
 from sqlmodel import select
 from starlette.concurrency import run_in_threadpool
@@ -52,6 +52,8 @@ MAX_PARAM = 20_000  # an id_token is a few kB
 CONTINUE_LIFETIME = timedelta(minutes=2)
 REFUSALS = (
     LtiException,
+    OIDCException,
+    ToolConfException,
     LaunchRefused,
     jwt.PyJWTError,
     requests.RequestException,
