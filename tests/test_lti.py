@@ -5,6 +5,7 @@ refused with a clear page and nobody logged in."""
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -425,3 +426,23 @@ def test_registering_a_platform_by_hand_checks_every_address(lti, client):
     page = client.get("/admin/lti").text
     assert "<code>second</code>" in page and "<code>a</code>, <code>b</code>" in page
     assert f"{lti.platform.url}" in page
+
+
+def every_form_has_a_token(page: str) -> bool:
+    forms = re.findall(r'<form[^>]*method="post".*?</form>', page, re.S)
+    return bool(forms) and all(re.search(r'name="csrf_token" value="[^"]+"', f) for f in forms)
+
+
+@protocol_only
+def test_the_lms_forms_carry_their_csrf_token(lti, client):
+    deep_link_new_assignment(lti)
+    teacher = lti.browser()
+    dashboard = teacher.launch(lti.platform.url, user="teacher-1", link="link-1")
+    course = str(dashboard.url).split("/assignments/")[0]
+    assert 'id="lms"' in dashboard.text and every_form_has_a_token(dashboard.text)
+    assert 'id="lms"' in (page := teacher.get(course).text) and every_form_has_a_token(page)
+    make_user("root", Role.admin)
+    from tests.factories import login
+
+    login(client, "root")
+    assert every_form_has_a_token(client.get("/admin/lti").text)

@@ -1,0 +1,46 @@
+"""GyroLab inside an LMS, in a real browser: ``gyrolab serve`` registered with a real LTI
+1.3 platform on loopback (tests/lti_platform.py) by ``gyrolab lti add-platform``; Chromium
+adds the activity by deep linking (GyroLab's answer auto-posts back to the LMS under
+GyroLab's CSP), then a student's first launch lands in their session."""
+
+from __future__ import annotations
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.e2e.conftest import free_port, running_server
+from tests.lti_platform import PlatformState, create_platform_app, serving
+
+pytestmark = pytest.mark.e2e
+
+
+def test_a_teacher_adds_gyrolab_and_a_student_lands_in_the_lab(tmp_path, new_page):
+    with running_server(tmp_path, "--no-demo") as server:
+        port = free_port()
+        platform = PlatformState(url=f"http://127.0.0.1:{port}", tool_url=server.url)
+        fields = platform.platform_fields()
+        server.gyrolab(
+            "lti", "add-platform",
+            "--name", fields["name"],
+            "--issuer", fields["issuer"],
+            "--client-id", fields["client_id"],
+            "--login-url", fields["auth_login_url"],
+            "--token-url", fields["auth_token_url"],
+            "--jwks-url", fields["key_set_url"],
+            "--deployment", fields["deployment_ids"],
+        )  # fmt: skip
+        with serving(create_platform_app(platform), port):
+            teacher = new_page(locale="zh-CN")
+            teacher.goto(f"{platform.url}/start?user=teacher-1&kind=deep")
+            expect(teacher.locator("h1")).to_have_text("添加 GyroLab 活动")
+            teacher.fill("input[name=title]", "寻北实验")
+            with teacher.expect_navigation(url=f"{platform.url}/deep-link-return"):
+                teacher.click("text=新建并添加")
+            expect(teacher.locator("body")).to_contain_text("added 1")
+            assert platform.links["link-1"]["title"] == "寻北实验"
+
+            student = new_page()
+            student.goto(f"{platform.url}/start?user=student-1&link=link-1")
+            student.wait_for_url(f"{server.url}/lab/sessions/*")
+            expect(student.locator("header")).to_contain_text("Li Wei 李伟")
+            expect(student.locator("h1")).to_contain_text("寻北实验")
