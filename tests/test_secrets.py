@@ -1,14 +1,17 @@
-"""No page or response carries a secret: password hashes, token hashes, or (for students)
-the simulator's truth before the assignment's rule reveals it."""
+"""No page or response carries a secret: password hashes, token hashes, GyroLab's LTI
+private key (the JWKS publishes only the public half), or (for students) the simulator's
+truth before the assignment's rule reveals it."""
 
 from __future__ import annotations
 
 import json
 
+from jwcrypto.jwk import JWK
 from sqlmodel import select
 
 from app.db import read_session, write_session
-from app.models import ApiToken, Assignment, AuthSession, LabSession, User
+from app.lti.keys import ensure_key
+from app.models import ApiToken, Assignment, AuthSession, LabSession, LtiKey, User
 from tests.factories import ACCESS, browser, concrete, do_lab, start, submit, token_for
 
 
@@ -17,6 +20,8 @@ def secrets_in_database() -> dict[str, list[str]]:
         hashes = [u.password_hash for u in db.exec(select(User)).all()]
         hashes += [t.token_hash for t in db.exec(select(ApiToken)).all()]
         hashes += [s.token_hash for s in db.exec(select(AuthSession)).all()]
+        for key in db.exec(select(LtiKey)).all():  # the private exponent, as a JWK shows it
+            hashes.append(json.loads(JWK.from_pem(key.private_pem.encode()).export())["d"])
         truths = []
         for session in db.exec(select(LabSession)).all():
             truths += [str(session.sim_seed), f"{session.sim_azimuth_deg:.2f}"]
@@ -40,6 +45,7 @@ def test_no_response_carries_a_secret(world):  # noqa: F811
     teacher = browser(world, "teacher1")
     student_api = token_for(student, "s1")
     teacher_api = token_for(teacher, "teacher1")
+    ensure_key()
     secrets = secrets_in_database()
     ids = {
         "course_id": world["course"],
@@ -51,6 +57,9 @@ def test_no_response_carries_a_secret(world):  # noqa: F811
         "part": "heading",
         "position": 1,
         "version": "x",
+        "token": "x",
+        "link_id": 1,
+        "platform_id": 1,
     }
     checked = 0
     for route in ACCESS:

@@ -43,7 +43,7 @@ from app.lti.handshake import (
 )
 from app.lti.platforms import DatabaseToolConf, find_platform
 from app.lti.registration import link_is_live, register
-from app.models import Assignment, Course, LtiContext, LtiPlatform
+from app.models import Assignment, Course, LtiContext, LtiPlatform, User
 from app.web.i18n import translator
 from app.web.render import SESSION_COOKIE, redirect, render, request_language, set_cookie
 
@@ -135,6 +135,7 @@ async def launch(request: Request, background: BackgroundTasks):
     except REFUSALS as error:
         return refused(request, str(error) or type(error).__name__)
     settings = get_settings()
+    framed = request.headers.get("sec-fetch-dest") == "iframe"
 
     def arrive():
         with write_session() as db:
@@ -142,6 +143,8 @@ async def launch(request: Request, background: BackgroundTasks):
             landing = provisioning.land(db, platform, body, launch_id, _("lab.practice_title"))
             if landing.url.startswith("/lti/deep-link/"):
                 return landing, None, picker_context(db, landing.course, launch_id, body)
+            if framed:  # the session is made when the new window opens
+                return landing, None, None
             return landing, create_session(db, landing.user, settings), None
 
     try:
@@ -157,8 +160,8 @@ async def launch(request: Request, background: BackgroundTasks):
         response = render(request, "lti/deep_link.html", picker)
         response.headers["Content-Security-Policy"] = framed_csp(_platform_urls(body))
         return response
-    if request.headers.get("sec-fetch-dest") == "iframe":
-        token = await run_in_threadpool(_continue_token, landing.user.id, cookie, landing.url)
+    if framed:
+        token = await run_in_threadpool(_continue_token, landing.user.id, landing.url)
         response = render(request, "lti/new_window.html", {"token": token})
         response.headers["Content-Security-Policy"] = framed_csp(_platform_urls(body))
         return response
@@ -173,11 +176,11 @@ def _platform_urls(body: dict) -> list[str]:
     return [body.get("iss"), presentation.get("return_url"), settings.get("deep_link_return_url")]
 
 
-def _continue_token(user_id: int, cookie: str, url: str) -> str:
+def _continue_token(user_id: int, url: str) -> str:
     token = secrets.token_urlsafe(24)
     DatabaseStorage().set_value(
         f"lti1p3-continue-{token}",
-        {"user": user_id, "cookie": cookie, "url": url},
+        {"user": user_id, "url": url},
         int(CONTINUE_LIFETIME.total_seconds()),
     )
     return token
@@ -191,15 +194,14 @@ def continue_in_new_window(request: Request, token: str):
     value = storage.get_value(key)
     if not isinstance(value, dict) or not storage.consume(key):
         return refused(request, "This link was used already or has expired.", 410)
-    response = redirect(provisioning_safe(value.get("url")))
     settings = get_settings()
-    set_cookie(
-        response,
-        request,
-        SESSION_COOKIE,
-        str(value["cookie"]),
-        settings.session_lifetime_hours * 3600,
-    )
+    with write_session() as db:
+        user = db.get(User, int(value["user"]))
+        if user is None:
+            return refused(request, "This account no longer exists.", 410)
+        cookie = create_session(db, user, settings)
+    response = redirect(provisioning_safe(value.get("url")))
+    set_cookie(response, request, SESSION_COOKIE, cookie, settings.session_lifetime_hours * 3600)
     return response
 
 
