@@ -92,6 +92,8 @@ class PlatformState:
     fail_scores: int = 0  # answer this many score posts with 503
     last_id_token: str | None = None
     tokens_issued: int = 0
+    registration_token: str = "registration-token-1"  # what the LMS admin's page hands out
+    registered: dict | None = None  # the tool configuration GyroLab sent (dynamic registration)
 
     @property
     def registration(self) -> Registration:
@@ -234,6 +236,38 @@ def create_platform_app(state: PlatformState) -> FastAPI:
                 item.get("lineitem"),
             )
         return launch.lti_launch()
+
+    @app.get("/.well-known/openid-configuration")
+    def openid_configuration():
+        """The platform's configuration for LTI Dynamic Registration."""
+        return {
+            "issuer": state.url,
+            "authorization_endpoint": f"{state.url}/authorize",
+            "token_endpoint": f"{state.url}/token",
+            "jwks_uri": f"{state.url}/jwks",
+            "registration_endpoint": f"{state.url}/register",
+            "https://purl.imsglobal.org/spec/lti-platform-configuration": {
+                "product_family_code": "lti1p3platform-test",
+                "version": "0.1.8",
+                "messages_supported": [{"type": "LtiResourceLinkRequest"}],
+            },
+        }
+
+    @app.post("/register")
+    async def register(request: Request):
+        if request.headers.get("authorization") != f"Bearer {state.registration_token}":
+            return JSONResponse({"error": "invalid registration token"}, 401)
+        body = json.loads(await request.body())
+        tool = body.get("https://purl.imsglobal.org/spec/lti-tool-configuration") or {}
+        if body.get("initiate_login_uri") != f"{state.tool_url}/lti/login" or not tool:
+            return JSONResponse({"error": "invalid tool configuration"}, 400)
+        state.registered = body
+        answer = {**body, "client_id": "dyn-client"}
+        answer["https://purl.imsglobal.org/spec/lti-tool-configuration"] = {
+            **tool,
+            "deployment_id": "dyn-deployment",
+        }
+        return answer
 
     @app.get("/jwks")
     def jwks():

@@ -407,6 +407,31 @@ def test_dynamic_registration_needs_a_live_one_time_link(lti, client):
 
 
 @protocol_only
+def test_dynamic_registration_registers_the_platform_with_one_pasted_link(lti):
+    from app.lti.registration import new_registration_link
+
+    with write_session() as db:
+        token = new_registration_link(db)
+    configuration = f"{lti.platform.url}/.well-known/openid-configuration"
+    url = f"{lti.tool}/lti/register?token={token}&openid_configuration={configuration}"
+    client = lti.browser()
+    refused = client.get(f"{url}&registration_token=wrong")
+    assert refused.status_code == 502 and "did not complete" in refused.text
+    done = client.get(f"{url}&registration_token={lti.platform.registration_token}")
+    assert done.status_code == 200 and "GyroLab is registered" in done.text, done.text[-1200:]
+    assert f"frame-ancestors {lti.platform.url}" in done.headers["content-security-policy"]
+    sent = lti.platform.registered
+    assert sent["jwks_uri"].endswith("/lti/jwks.json") and "/lti/launch" in sent["redirect_uris"][0]
+    assert "contextmembership.readonly" in sent["scope"]
+    with read_session() as db:
+        row = db.exec(select(LtiPlatform).where(LtiPlatform.client_id == "dyn-client")).one()
+        assert (row.registered_by, row.deployment_ids) == ("dynamic", "dyn-deployment")
+        assert row.auth_login_url == f"{lti.platform.url}/authorize"
+    again = client.get(f"{url}&registration_token={lti.platform.registration_token}")
+    assert again.status_code == 403  # the link worked once
+
+
+@protocol_only
 def test_registering_a_platform_by_hand_checks_every_address(lti, client):
     admin = make_user("root", Role.admin)
     from tests.factories import login

@@ -328,18 +328,19 @@ async def dynamic_registration(
     registration_token: str | None = None,
 ):
     """LTI Dynamic Registration, opened by the LMS with a one-time link of an admin's."""
-    _ = translator(request_language(request))
     frames = [openid_configuration]
-    if not token or not await run_in_threadpool(link_is_live, token):
-        return refused(request, _("lti.registration_link_used"), 403, frames)
-    if not openid_configuration:
-        return refused(request, _("lti.registration_needs_lms"), 400, frames)
     try:
+        if not token or not await run_in_threadpool(link_is_live, token):
+            raise UserError("lti.registration_link_used", status=403)
+        if not openid_configuration:
+            raise UserError("lti.registration_needs_lms", status=400)
         platform = await run_in_threadpool(
             register, token, public_base(request), openid_configuration, registration_token
         )
     except UserError as problem:
-        return refused(request, _(problem.key, **problem.params), problem.status, frames)
-    response = render(request, "lti/registered.html", {"platform": platform})
+        context = {"problem": problem, "title_key": "lti.registration_refused_title"}
+        response = render(request, "lti/refused.html", context, problem.status)
+    else:
+        response = render(request, "lti/registered.html", {"platform": platform})
     response.headers["Content-Security-Policy"] = framed_csp(frames)
     return response
