@@ -60,6 +60,17 @@ BATCH = 200
 MAX_COMMENT = 4000
 
 
+def line_item(assignment_id: int | None, title: str, maximum: float) -> LineItem:
+    """An assignment's AGS line item: found again by its ``resourceId``."""
+    return (
+        LineItem()
+        .set_score_maximum(maximum)
+        .set_label(title)
+        .set_resource_id(f"gyrolab-assignment-{assignment_id}")
+        .set_tag("gyrolab")
+    )
+
+
 def pause_after(tries: int) -> timedelta:
     """30 s, 60 s, 2 min, 4 min … at most an hour, after the ``tries``-th failure."""
     return timedelta(seconds=min(FIRST_PAUSE_S * 2 ** max(tries - 1, 0), LONGEST_PAUSE_S))
@@ -158,14 +169,9 @@ def _outbound(db: Session, post: LtiGradePost) -> Outbound:
     )
     if post.comment:
         grade.set_comment(post.comment)
-    line_item = (
-        LineItem()
-        .set_score_maximum(post.maximum)
-        .set_label(assignment.title if assignment else "GyroLab")
-        .set_resource_id(f"gyrolab-assignment-{link.assignment_id}")
-        .set_resource_link_id(link.resource_link_id)
-        .set_tag("gyrolab")
-    )
+    item = line_item(
+        link.assignment_id, assignment.title if assignment else "GyroLab", post.maximum
+    ).set_resource_link_id(link.resource_link_id)
     scopes = context.ags_scopes.split() or SCORE_SCOPES
     return Outbound(
         post.id,
@@ -175,7 +181,7 @@ def _outbound(db: Session, post: LtiGradePost) -> Outbound:
         link.lineitem_url,
         scopes,
         grade,
-        line_item,
+        item,
     )
 
 

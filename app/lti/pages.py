@@ -22,10 +22,10 @@ from fastapi import APIRouter, BackgroundTasks, Request
 from fastapi.responses import JSONResponse
 from pylti1p3.deep_link_resource import DeepLinkResource
 from pylti1p3.exception import LtiException, OIDCException, ToolConfException
-from pylti1p3.lineitem import LineItem
 from sqlmodel import select
 from starlette.concurrency import run_in_threadpool
 
+from app.accounts.pages import safe_next
 from app.accounts.security import create_session
 from app.config import get_settings
 from app.core.exceptions import UserError
@@ -33,6 +33,7 @@ from app.courses.assignment_form import form_values, parse_assignment_form
 from app.db import read_session, write_session
 from app.lti import keys, provisioning, roster
 from app.lti.framing import framed_csp
+from app.lti.grades import line_item
 from app.lti.handshake import (
     DatabaseStorage,
     FormRequest,
@@ -200,14 +201,9 @@ def continue_in_new_window(request: Request, token: str):
         if user is None:
             return refused(request, "This account no longer exists.", 410)
         cookie = create_session(db, user, settings)
-    response = redirect(provisioning_safe(value.get("url")))
+    response = redirect(safe_next(str(value.get("url") or "/")))
     set_cookie(response, request, SESSION_COOKIE, cookie, settings.session_lifetime_hours * 3600)
     return response
-
-
-def provisioning_safe(url) -> str:
-    text = str(url or "/")
-    return text if text.startswith("/") and not text.startswith("//") else "/"
 
 
 # --- deep linking -----------------------------------------------------------------------------
@@ -219,14 +215,19 @@ def picker_context(db, course: Course, launch_id: str, body: dict, **extra) -> d
     assignments = db.exec(
         select(Assignment).where(Assignment.course_id == course.id).order_by(Assignment.id)
     ).all()
-    settings = body.get(DEEP_LINK_SETTINGS) or {}
-    return {
-        "course": course,
-        "assignments": assignments,
-        "launch_id": launch_id,
-        "accepts_many": bool(settings.get("accept_multiple")),
-        **extra,
-    }
+    return {"course": course, "assignments": assignments, "launch_id": launch_id, **extra}
+
+
+def _launch_course(db, body: dict) -> Course:
+    """The GyroLab course linked to a stored launch's LMS course."""
+    platform = find_platform(db, body["iss"], _client_of(body))
+    context = db.exec(
+        select(LtiContext).where(
+            LtiContext.platform_id == platform.id,
+            LtiContext.context_id == str(body[provisioning.CLAIM + "context"]["id"]),
+        )
+    ).one()
+    return db.get(Course, context.course_id)
 
 
 @router.post("/deep-link")
@@ -243,14 +244,7 @@ async def deep_link_response(request: Request):
 
     def respond():
         with write_session() as db:
-            platform = find_platform(db, body["iss"], _client_of(body))
-            context = db.exec(
-                select(LtiContext).where(
-                    LtiContext.platform_id == platform.id,
-                    LtiContext.context_id == str(body[provisioning.CLAIM + "context"]["id"]),
-                )
-            ).one()
-            course = db.get(Course, context.course_id)
+            course = _launch_course(db, body)
             if params.get("new"):
                 assignment = _new_assignment(db, course, params)
             else:
@@ -264,13 +258,7 @@ async def deep_link_response(request: Request):
                 .set_url(base + "/lti/launch")
                 .set_title(assignment.title)
                 .set_custom_params({provisioning.ASSIGNMENT_PARAMETER: str(assignment.id)})
-                .set_lineitem(
-                    LineItem()
-                    .set_score_maximum(assignment.max_points)
-                    .set_label(assignment.title)
-                    .set_resource_id(f"gyrolab-assignment-{assignment.id}")
-                    .set_tag("gyrolab")
-                )
+                .set_lineitem(line_item(assignment.id, assignment.title, assignment.max_points))
             )
             token = message.get_deep_link().get_response_jwt([resource])
             return course, token
@@ -279,14 +267,7 @@ async def deep_link_response(request: Request):
         course, token = await run_in_threadpool(respond)
     except UserError as problem:
         with read_session() as db:
-            platform = find_platform(db, body["iss"], _client_of(body))
-            context_id = str(body[provisioning.CLAIM + "context"]["id"])
-            context = db.exec(
-                select(LtiContext).where(
-                    LtiContext.platform_id == platform.id, LtiContext.context_id == context_id
-                )
-            ).one()
-            course = db.get(Course, context.course_id)
+            course = _launch_course(db, body)
             picker = picker_context(db, course, launch_id, body, problem=problem, form=params)
         response = render(request, "lti/deep_link.html", picker, problem.status)
         response.headers["Content-Security-Policy"] = framed_csp(_platform_urls(body))
