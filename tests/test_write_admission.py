@@ -4,6 +4,7 @@ arrived; reads and read-only POSTs pass straight through."""
 from __future__ import annotations
 
 import asyncio
+from concurrent.futures import ThreadPoolExecutor
 
 import httpx
 import pytest
@@ -52,7 +53,10 @@ def run(requests) -> tuple[Inside, list[httpx.Response]]:
             inside.release.set()
             return await asyncio.gather(*tasks)
 
-    return inside, asyncio.run(main())
+    # a loop of its own in a thread of its own: a session-wide Playwright browser may keep
+    # an event loop running in this thread (asyncio.run refuses to nest)
+    with ThreadPoolExecutor(1) as pool:
+        return inside, pool.submit(asyncio.run, main()).result()
 
 
 def test_writes_are_admitted_a_few_at_a_time_with_their_whole_body(limit):
