@@ -87,6 +87,28 @@ def ensure_installed(extras: str) -> None:
     stamp.write_text(digest.hexdigest())
 
 
+REPORT_PACKAGES = ("libpango-1.0-0", "libpangoft2-1.0-0", "libharfbuzz-subset0", "fonts-wqy-zenhei")
+
+
+def chinese_font_installed() -> bool:
+    fc_list = shutil.which("fc-list")
+    if fc_list is None:
+        return False
+    found = subprocess.run([fc_list, ":lang=zh", "family"], capture_output=True, text=True)
+    return bool(found.stdout.strip())
+
+
+def ensure_report_libraries() -> None:
+    """WeasyPrint (the PDF lab reports) needs Debian's Pango, and Chinese reports a CJK font."""
+    import ctypes.util
+
+    have_pango = all(ctypes.util.find_library(name) for name in ("pango-1.0", "pangoft2-1.0"))
+    if have_pango and chinese_font_installed():
+        return
+    if not apt_install(*REPORT_PACKAGES):
+        say("could not install Pango and a CJK font: PDF lab reports will not work")
+
+
 def postgres_installed() -> bool:
     return bool(shutil.which("initdb") or glob.glob("/usr/lib/postgresql/*/bin/initdb"))
 
@@ -111,6 +133,7 @@ def main(argv: list[str]) -> int:
     command, rest = argv[0], argv[1:]
     os.chdir(ROOT)
     ensure_venv()
+    ensure_report_libraries()
     if command == "run":
         ensure_installed("")
         return subprocess.call([str(BIN / "gyrolab"), "serve", *rest])

@@ -31,6 +31,8 @@ from app.lti import course_pages as lti_course_pages
 from app.lti import grades as lms_grades
 from app.lti import pages as lti_pages
 from app.paths import STATIC_DIR
+from app.reports import api as report_api
+from app.reports import pages as report_pages
 from app.review import api as review_api
 from app.review import desk_pages
 from app.review import pages as review_pages
@@ -143,6 +145,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(account_api.router)
     app.include_router(api.router)
     app.include_router(review_api.router)
+    app.include_router(report_api.router)
     app.include_router(account_pages.router)
     app.include_router(sso_pages.router)
     app.include_router(lti_pages.router)
@@ -158,6 +161,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(partner_pages.router)
     app.include_router(review_pages.router)
     app.include_router(desk_pages.router)
+    app.include_router(report_pages.router)
     app.include_router(stream.router)
     app.include_router(token_pages.router)
     app.include_router(explore_pages.router)

@@ -17,6 +17,9 @@ def utcnow() -> datetime:
     return datetime.now(UTC)
 
 
+DISCUSSION_MAX = 20_000  # characters of a student's discussion in the lab report
+
+
 class Role(StrEnum):
     admin = "admin"
     teacher = "teacher"
@@ -217,6 +220,7 @@ class LabSession(SQLModel, table=True):
     sim_clock_s: float = 0.0
     sim_clock_at: datetime | None = None
     status: str = Field(default=SessionStatus.in_progress, max_length=16)
+    discussion: str = Field(default="", max_length=DISCUSSION_MAX)  # the lab report's draft
     created_at: datetime = Field(default_factory=utcnow)
     updated_at: datetime = Field(default_factory=utcnow)
 
@@ -261,6 +265,7 @@ class Attempt(SQLModel, table=True):
     results_json: str
     submitted_at: datetime = Field(default_factory=utcnow)
     late: bool = False
+    discussion: str = Field(default="", max_length=DISCUSSION_MAX)  # frozen with the attempt
     # the teacher's review of this attempt: it stays with the attempt it was written on
     feedback: str = Field(default="", max_length=20_000)
     feedback_positions: str = Field(default="{}", max_length=20_000)  # JSON {"heading-1": "..."}

@@ -19,6 +19,18 @@ from app.models import Assignment, Role, User
 
 # --- from conftest.py ----------------------------------------
 
+
+def pdf_text(content: bytes) -> str:
+    """The text of every page of a PDF, with the names and contents of its attachments."""
+    from pypdf import PdfReader
+
+    reader = PdfReader(io.BytesIO(content))
+    text = "\n".join(page.extract_text() or "" for page in reader.pages)
+    for name, blobs in reader.attachments.items():
+        text += "\n" + name + "\n" + "".join(b.decode("utf-8", "replace") for b in blobs)
+    return text
+
+
 PASSWORD = "correct-horse-42"
 
 
@@ -350,6 +362,8 @@ ACCESS = {
     "POST /courses/{course_id}/assignments/{assignment_id}/characterisation": "teacher",
     "GET /courses/{course_id}/assignments/{assignment_id}/export.csv": "teacher",
     "GET /courses/{course_id}/assignments/{assignment_id}/export.zip": "teacher",
+    "GET /courses/{course_id}/assignments/{assignment_id}/reports.zip": "teacher",
+    "GET /review/sessions/{session_id}/report.pdf": "review",
     "GET /review/sessions/{session_id}": "review",
     "POST /review/sessions/{session_id}/feedback": "review",
     "POST /review/sessions/{session_id}/extension": "review",
@@ -369,6 +383,8 @@ ACCESS = {
     "POST /lab/sessions/{session_id}/submit": "owner",
     "GET /lab/sessions/{session_id}/export.csv": "owner",
     "GET /lab/sessions/{session_id}/export.json": "owner",
+    "GET /lab/sessions/{session_id}/report.pdf": "owner",
+    "POST /lab/sessions/{session_id}/discussion": "owner",
     "WS /lab/sessions/{session_id}/stream": "owner",
     "POST /api/v1/auth/token": "public",
     "GET /api/v1/me": "user",
@@ -378,6 +394,7 @@ ACCESS = {
     "PUT /api/v1/sessions/{session_id}/{part}/positions/{position}": "owner",
     "POST /api/v1/sessions/{session_id}/{part}/positions/{position}/samples": "owner",
     "GET /api/v1/sessions/{session_id}/results": "owner",
+    "GET /api/v1/sessions/{session_id}/report.pdf": "owner",
     "POST /api/v1/sessions/{session_id}/submit": "owner",
     "PUT /api/v1/sessions/{session_id}/{part}/positions/{position}/trim": "owner",
     "GET /api/v1/courses": "teacher-any",

@@ -15,7 +15,11 @@ from app.core.allan import allan_deviation
 from app.core.exceptions import UserError
 
 MAX_POINTS = 2000
-COLORS = ["#0b6bcb", "#d1495b", "#2a9d8f", "#e9a23b", "#6d597a", "#264653"]
+# Okabe & Ito's palette, told apart with every common colour-vision deficiency (its yellow
+# swapped for a wine red, which keeps 3:1 against white); each series also has its own
+# marker symbol, so no chart relies on colour alone
+PALETTE = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#882255"]
+SYMBOLS = ["circle", "square", "triangle-up", "diamond", "triangle-down", "cross", "x", "star"]
 LAYOUT = {
     # titles sit on the left, clear of plotly's toolbar at the top right
     "margin": {"l": 60, "r": 20, "t": 50, "b": 50},
@@ -60,7 +64,8 @@ def readings_figure(part_result, _: Callable[..., str]) -> dict:
                 "name": _("chart.position", n=position),
                 "x": np.round(t, 3).tolist(),
                 "y": np.round(v, 5).tolist(),
-                "line": {"color": COLORS[(position - 1) % len(COLORS)], "width": 1},
+                "line": {"color": PALETTE[(position - 1) % len(PALETTE)], "width": 1},
+                "marker": {"symbol": SYMBOLS[(position - 1) % len(SYMBOLS)], "size": 5},
             }
         )
     return {
@@ -98,7 +103,7 @@ def fit_figure(part_result, _: Callable[..., str]) -> dict | None:
                 "x": angles.tolist(),
                 "y": fit.means.tolist(),
                 "error_y": {"type": "data", "array": sems, "visible": True},
-                "marker": {"size": 9, "color": COLORS[0]},
+                "marker": {"size": 9, "color": PALETTE[0]},
             },
             {
                 "type": "scatter",
@@ -106,7 +111,7 @@ def fit_figure(part_result, _: Callable[..., str]) -> dict | None:
                 "name": _("chart.fit"),
                 "x": grid.tolist(),
                 "y": np.round(curve, 5).tolist(),
-                "line": {"color": COLORS[1], "dash": "dot"},
+                "line": {"color": PALETTE[1], "dash": "dot"},
             },
         ],
         "layout": {
@@ -148,7 +153,7 @@ def compass_figure(heading_result, angles, _: Callable[..., str]) -> dict | None
                 "name": _("chart.position", n=index),
                 "textposition": "top center",
                 "line": {
-                    "color": COLORS[(index - 1) % len(COLORS)],
+                    "color": PALETTE[(index - 1) % len(PALETTE)],
                     "width": 3 if index == 1 else 1.5,
                 },
             }
@@ -229,7 +234,7 @@ def class_error_figure(rows, _: Callable[..., str]) -> dict:
                 "x": names,
                 "y": heading,
                 "error_y": {"type": "data", "array": heading_sigma, "visible": True},
-                "marker": {"size": 10, "color": COLORS[0]},
+                "marker": {"size": 10, "color": PALETTE[0]},
             },
             {
                 "type": "scatter",
@@ -238,7 +243,7 @@ def class_error_figure(rows, _: Callable[..., str]) -> dict:
                 "x": names,
                 "y": latitude,
                 "yaxis": "y2",
-                "marker": {"size": 10, "symbol": "diamond", "color": COLORS[1]},
+                "marker": {"size": 10, "symbol": "diamond", "color": PALETTE[1]},
                 "error_y": {"type": "data", "array": latitude_sigma, "visible": True},
             },
         ],
@@ -270,7 +275,7 @@ def class_histogram_figure(rows, _: Callable[..., str]) -> dict:
                 "type": "histogram",
                 "x": [e for e in errors if e is not None],
                 "name": _("review.heading_error"),
-                "marker": {"color": COLORS[0]},
+                "marker": {"color": PALETTE[0]},
             }
         ],
         "layout": {
@@ -286,3 +291,115 @@ def class_histogram_figure(rows, _: Callable[..., str]) -> dict:
             },
         },
     }
+
+
+# --- text alternatives: a sentence and a data table for every chart ------------------------
+
+
+def readings_summary(part_result, _: Callable[..., str]) -> str:
+    """E.g. "Readings of 4 positions, 10–12 each; means from −9.87 to 10.74 °/h"."""
+    items = [part_result.positions[k] for k in sorted(part_result.positions)]
+    counts = [item.n for item in items]
+    means = [item.mean for item in items if item.n]
+    if not means:
+        return _("chart.summary_no_readings")
+    return _(
+        "chart.summary_readings",
+        positions=len(items),
+        n=f"{min(counts)}" if min(counts) == max(counts) else f"{min(counts)}–{max(counts)}",
+        low=f"{min(means):.3f}",
+        high=f"{max(means):.3f}",
+    )
+
+
+def fit_summary(part_result, _: Callable[..., str]) -> str:
+    """E.g. "4 position means with the fitted sinusoid: amplitude H 10.000 °/h, bias
+    0.020 °/h, start azimuth 10.75°" (the latitude part: latitude and Earth rate)."""
+    result = part_result.result
+    fit = result.fit
+    common = {"positions": len(fit.means), "bias": f"{fit.b:.3f}"}
+    if part_result.part == "heading":
+        return _(
+            "chart.summary_fit_heading",
+            amplitude=f"{result.amplitude_deg_h:.3f}",
+            azimuth=f"{result.azimuth_deg:.2f}",
+            **common,
+        )
+    return _(
+        "chart.summary_fit_latitude",
+        latitude=f"{result.latitude_deg:.2f}",
+        rate=f"{result.earth_rate_deg_h:.3f}",
+        **common,
+    )
+
+
+def readings_table(part_result, _: Callable[..., str]) -> dict:
+    """The readings chart's numbers: each position's n, mean and standard deviation."""
+    return {
+        "columns": [_("results.position"), "n", _("results.mean"), _("results.std")],
+        "rows": [
+            [
+                k,
+                item.n,
+                f"{item.mean:.3f}" if item.n else "—",
+                f"{item.std:.3f}" if item.std is not None else "—",
+            ]
+            for k, item in sorted(part_result.positions.items())
+        ],
+    }
+
+
+def fit_table(part_result, _: Callable[..., str]) -> dict:
+    """The fit chart's numbers: angle, mean, 1σ and the fitted value at each position."""
+    fit = part_result.result.fit
+    sigmas = fit.position_sigmas or [None] * len(fit.means)
+    angles = np.asarray(fit.angles_deg, dtype=float)
+    fitted = fit.a * np.cos(np.radians(angles)) + fit.c * np.sin(np.radians(angles)) + fit.b
+    return {
+        "columns": [
+            _("results.angle"),
+            _("results.mean"),
+            "1σ",
+            _("chart.fit"),
+        ],
+        "rows": [
+            [f"{angle:g}°", f"{mean:.3f}", "—" if s is None else f"{s:.4f}", f"{value:.3f}"]
+            for angle, mean, s, value in zip(
+                angles.tolist(), list(fit.means), sigmas, fitted.tolist(), strict=True
+            )
+        ],
+    }
+
+
+def compass_summary(heading_result, _: Callable[..., str]) -> str:
+    return _("chart.summary_compass", azimuth=f"{heading_result.azimuth_deg:.2f}")
+
+
+def compass_table(heading_result, angles, _: Callable[..., str]) -> dict:
+    """Each position's direction, clockwise from north."""
+    first = float(angles[0]) if len(angles) else 0.0
+    return {
+        "columns": [_("results.position"), _("chart.direction")],
+        "rows": [
+            [index, f"{(heading_result.azimuth_deg + float(angle) - first) % 360:.2f}°"]
+            for index, angle in enumerate(angles, start=1)
+        ],
+    }
+
+
+def allan_text(figure: dict, _: Callable[..., str]) -> tuple[str, dict]:
+    """The Allan chart's sentence and table, read off the figure itself."""
+    trace = figure["data"][0]
+    taus, adevs = trace["x"], trace["y"]
+    best = int(np.argmin(adevs))
+    summary = _(
+        "chart.summary_allan",
+        points=len(taus),
+        floor=f"{adevs[best]:.4f}",
+        tau=f"{taus[best]:.3g}",
+    )
+    table = {
+        "columns": ["τ (s)", _("chart.adev")],
+        "rows": [[f"{t:.3g}", f"{a:.4f}"] for t, a in zip(taus, adevs, strict=True)],
+    }
+    return summary, table

@@ -74,6 +74,7 @@ def submit(db: Session, session: LabSession) -> Attempt:
         results_json=json.dumps(json_safe(results_json(results))),
         submitted_at=now,
         late=late,
+        discussion=session.discussion,
     )
     session.status = SessionStatus.submitted
     session.updated_at = utcnow()

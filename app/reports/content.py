@@ -1,0 +1,127 @@
+"""What a lab report holds: one session's data and results -- its current draft, or one
+submitted attempt exactly as it was submitted -- with the review the student was given.
+
+The numbers are the ones the pages show: the same stored takes solved by the same
+``solve_part`` (which also writes the worked steps and the data-quality flags).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from datetime import datetime
+
+import numpy as np
+from sqlmodel import Session, select
+
+from app.core.exceptions import UserError
+from app.core.presets import PRESETS
+from app.lab.partners import members_of
+from app.lab.results import PartResult, PositionData, solve_part, station_noise_for
+from app.lab.store import PARTS
+from app.models import Assignment, Attempt, Course, LabSession, Take, User, utcnow
+from app.review import grading
+from app.review.service import AutoCheck, Truth, auto_check, session_truth, truth_visible
+from app.web.exports import Selection, take_blocks
+
+FULL_TABLE_LIMIT = 50  # readings per position printed in full; longer records are attached
+
+
+@dataclass
+class Report:
+    """Everything the report shows, gathered once (the renderer only lays it out)."""
+
+    session: LabSession
+    assignment: Assignment | None
+    course: Course | None
+    members: list[User]
+    attempt: Attempt | None  # None: the session's current, unsubmitted data
+    results: dict[str, PartResult]
+    discussion: str
+    generated_at: datetime
+    sources: list[str] = field(default_factory=list)
+    preset_name: str | None = None
+    truth: Truth | None = None
+    check: AutoCheck | None = None
+    feedback: str = ""
+    comments: dict[str, str] = field(default_factory=dict)
+    grade: str = ""
+
+    @property
+    def longest_record(self) -> int:
+        sizes = [item.n for outcome in self.results.values() for item in outcome.positions.values()]
+        return max(sizes, default=0)
+
+    @property
+    def readings_in_full(self) -> bool:
+        """Short records are printed reading by reading; long ones are summarised and the
+        samples attached to the PDF as CSV."""
+        return self.longest_record <= FULL_TABLE_LIMIT
+
+    def readings_rows(self, part: str) -> list[list[float | None]]:
+        """Row i: the i-th used reading of each position (None past a shorter record)."""
+        positions = [self.results[part].positions[k] for k in sorted(self.results[part].positions)]
+        length = max((item.n for item in positions), default=0)
+        return [
+            [float(item.values[i]) if i < item.n else None for item in positions]
+            for i in range(length)
+        ]
+
+
+def _attempt(db: Session, session: LabSession, number: int) -> Attempt:
+    attempt = db.exec(
+        select(Attempt).where(Attempt.session_id == session.id, Attempt.number == number)
+    ).first()
+    if attempt is None:
+        raise UserError("report.no_such_attempt", "There is no such attempt.", status=404)
+    return attempt
+
+
+def _solve(db: Session, session: LabSession, takes: list[Take]) -> dict[str, PartResult]:
+    data: dict[str, dict[int, PositionData]] = {part: {} for part in PARTS}
+    for take in takes:
+        blocks = list(take_blocks(db, take))
+        values = np.concatenate([v for v, _t in blocks]) if blocks else np.empty(0)
+        times = None
+        if blocks and all(t is not None for _v, t in blocks):
+            times = np.concatenate([t for _v, t in blocks])
+        data[take.part][take.position] = PositionData.of(take, values, times)
+    station = station_noise_for(db, session)
+    return {part: solve_part(session, part, data[part], station) for part in PARTS}
+
+
+def build_report(db: Session, session: LabSession, attempt_number: int | None = None) -> Report:
+    """The report of ``session``: attempt ``attempt_number`` as submitted, or, with None,
+    the current data and discussion draft.
+
+    The review (feedback, position comments) appears once the teacher has returned or
+    released that attempt, the grade once it is released, and the secret truth under the
+    assignment's reveal rule -- the same rules as the student's page, whoever asks."""
+    assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
+    course = db.get(Course, assignment.course_id) if assignment else None
+    attempts = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
+    attempt = _attempt(db, session, attempt_number) if attempt_number is not None else None
+    selection = Selection(session.id, attempt.id if attempt else None)
+    takes = selection.takes(db)
+    report = Report(
+        session=session,
+        assignment=assignment,
+        course=course,
+        members=members_of(db, session),
+        attempt=attempt,
+        results=_solve(db, session, takes),
+        discussion=attempt.discussion if attempt else session.discussion,
+        generated_at=utcnow(),
+        sources=sorted({take.source for take in takes}),
+        preset_name=session.simulator_preset if session.simulator_preset in PRESETS else None,
+    )
+    if truth_visible(session, assignment, len(attempts)):
+        report.truth = session_truth(db, session, assignment, takes)
+        if assignment is not None and attempt is not None:
+            report.check = auto_check(json.loads(attempt.results_json), report.truth, assignment)
+    if attempt is not None and grading.shown_to_student(attempt):
+        report.feedback = attempt.feedback
+        report.comments = grading.comments_of(attempt)
+        if attempt.released_at is not None:
+            report.grade = grading.grade_text(attempt, assignment)
+    return report
