@@ -1,0 +1,218 @@
+"""Lab reports: the PDF a student hands in and a teacher reads -- the handout's numbers,
+an attempt exactly as submitted, the review once given, long records attached, the class
+zip, and the discussion the student writes for it."""
+
+from __future__ import annotations
+
+import csv
+import io
+import zipfile
+
+import pytest
+from pypdf import PdfReader
+
+from app.db import read_session
+from app.models import LabSession
+from tests.factories import (
+    API,
+    HEADING,
+    VERTICAL,
+    browser,
+    do_lab,
+    new_api_session,
+    pdf_text,
+    post_form,
+    review,
+    save_manual,
+    start,
+    submit,
+    token_for,
+)
+
+
+def report(client, session_id: int, attempt: int | None = None, language: str = "en"):
+    query = f"?attempt={attempt}" if attempt is not None else ""
+    response = client.get(
+        f"/lab/sessions/{session_id}/report.pdf{query}", headers={"Accept-Language": language}
+    )
+    assert response.status_code == 200, response.text[:300]
+    assert response.headers["content-type"] == "application/pdf"
+    assert response.content.startswith(b"%PDF-")
+    return response
+
+
+def write_discussion(client, session_id: int, text: str):
+    page = f"/lab/sessions/{session_id}"
+    return post_form(client, f"{page}/discussion", {"discussion": text}, page=page)
+
+
+def flat(text: str) -> str:
+    """PDF text with line breaks and runs of spaces made single spaces."""
+    return " ".join(text.split())
+
+
+def test_the_handout_report_holds_the_pages_numbers_in_both_languages(world):
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    do_lab(student, session_id)
+    write_discussion(student, session_id, "The bias cancels in ω1 − ω3.\n\n误差主要来自读数噪声。")
+    submit(student, session_id)
+    results = student.get(f"/lab/sessions/{session_id}/results.json").json()
+    azimuth = f"{results['heading']['azimuth_deg']:.2f}"
+    latitude = f"{results['latitude']['latitude_deg']:.2f}"
+    rate = f"{results['latitude']['earth_rate_deg_h']:.3f}"
+    assert (azimuth, latitude, rate) == ("10.75", "40.73", "15.133")  # the handout's
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert f"{azimuth}°" in page and f"{latitude}°" in page and rate in page
+
+    english = report(student, session_id, attempt=1)
+    assert "attempt-1.pdf" in english.headers["content-disposition"]
+    reader = PdfReader(io.BytesIO(english.content))
+    assert len(reader.pages) >= 4
+    assert reader.metadata.title.startswith("Lab report")
+    text = flat(pdf_text(english.content))
+    for heading in ("Apparatus and method", "Readings", "Calculation", "Results", "Figures"):
+        assert heading in text
+    assert "Data quality" in text and "Discussion" in text
+    assert f"{azimuth}°" in text and f"{latitude}°" in text and f"{rate} °/h" in text
+    assert "A1 = atan2(y, x) = 10.75°" in text  # the worked steps, as on the page
+    assert "10.740" in text and "-11.870" in text  # every reading (10 per position)
+    assert "Submitted attempt 1" in text and "学生1 (s1)" in text
+    assert "The bias cancels in ω1 − ω3." in text and "误差主要来自读数噪声。" in text
+    assert "Figure 4." in text  # readings and fit, per part
+
+    chinese = flat(pdf_text(report(student, session_id, attempt=1, language="zh-CN").content))
+    assert "实验报告" in chinese and "计算过程" in chinese and "第 1 次提交" in chinese
+    assert f"{azimuth}°" in chinese and f"{latitude}°" in chinese
+
+
+@pytest.mark.one_backend  # seven PDFs; the attempt's takes are the exports' (both backends)
+def test_an_attempts_report_never_changes_and_the_review_appears_once_given(world):
+    student = browser(world, "s1")
+    teacher = browser(world, "teacher1")
+    session_id = start(student, world)
+    do_lab(student, session_id)
+    write_discussion(student, session_id, "First thoughts.")
+    submit(student, session_id)
+    review(teacher, session_id, feedback="Draft note.", points="70", action="save")
+    assert "Draft note." not in pdf_text(report(student, session_id, 1).content)
+    review(
+        teacher,
+        session_id,
+        feedback="Check the sign of θ.",
+        **{"comment-latitude-2": "Let the table settle."},
+        action="return",
+    )
+    returned = flat(pdf_text(report(student, session_id, 1).content))
+    assert "Check the sign of θ." in returned and "Let the table settle." in returned
+    assert "70" not in returned.split("Teacher's review")[-1]  # no grade before release
+
+    # the student revises: new latitude readings and a new discussion
+    shifted = {k: [v + 0.5 for v in values] for k, values in VERTICAL.items()}
+    assert save_manual(student, session_id, "latitude", shifted).status_code == 200
+    write_discussion(student, session_id, "Second thoughts.")
+    current = flat(pdf_text(report(student, session_id).content))
+    assert "Second thoughts." in current and "Current data, not submitted" in current
+    first = flat(pdf_text(report(student, session_id, 1).content))
+    assert "First thoughts." in first and "Second thoughts." not in first
+    assert "11.100" in first and "11.600" not in first  # attempt 1's own readings
+    assert "11.600" in current
+
+    submit(student, session_id)
+    review(teacher, session_id, feedback="Well done.", points="88", action="release")
+    second = flat(pdf_text(report(student, session_id, 2).content))
+    assert "Well done." in second and "88 / 100" in second and "Second thoughts." in second
+    assert "88 / 100" not in flat(pdf_text(report(student, session_id, 1).content))
+
+
+@pytest.mark.one_backend  # the layout of a long record; its queries are the ones above
+def test_long_records_are_summarised_and_attached_as_csv(client, student):
+    auth = token_for(client, "student1")
+    session_id = new_api_session(client, auth)
+    for position in range(1, 5):
+        values = [HEADING[position][i % 10] for i in range(120)]
+        upload = {"samples": values, "times_s": [position * 100 + i * 0.1 for i in range(120)]}
+        response = client.put(
+            f"{API}/sessions/{session_id}/heading/positions/{position}", json=upload, headers=auth
+        )
+        assert response.status_code == 200, response.text
+    response = client.get(f"{API}/sessions/{session_id}/report.pdf?lang=zh-CN", headers=auth)
+    assert response.status_code == 200 and response.content.startswith(b"%PDF-")
+    reader = PdfReader(io.BytesIO(response.content))
+    (name,) = reader.attachments
+    assert name == f"gyrolab-session-{session_id}-current-readings.csv"
+    rows = [r for r in csv.reader(io.StringIO(reader.attachments[name][0].decode("utf-8-sig")))]
+    data = [r for r in rows if r and not r[0].startswith("#")]
+    assert data[0] == ["part", "position", "angle_deg", "source", "time_s", "value"]
+    assert len(data) == 1 + 4 * 120
+    text = flat("\n".join(page.extract_text() for page in reader.pages))
+    assert "实验报告" in text and name in text  # in Chinese, naming the attachment
+    assert "全部所用读数" not in text  # no 120-row table printed
+
+
+@pytest.mark.one_backend  # refused before any report is built
+@pytest.mark.parametrize("query", ["?attempt=7", "?attempt=0", "?attempt=x", "?attempt=1e400"])
+def test_a_missing_or_bad_attempt_is_a_clear_4xx(student_client, query):
+    session_id = start_practice(student_client)
+    response = student_client.get(
+        f"/lab/sessions/{session_id}/report.pdf{query}", headers={"Accept": "application/json"}
+    )
+    assert response.status_code in (404, 422)
+    assert response.json()["detail"]
+
+
+def start_practice(client) -> int:
+    page = post_form(client, "/lab/sessions", {"station": "handout"}, page="/lab")
+    return int(page.headers["location"].rsplit("/", 1)[1])
+
+
+@pytest.mark.one_backend  # PDF rendering; the class rows are the dashboard's (both backends)
+def test_the_class_zip_holds_each_submitted_students_latest_report(world):
+    for username in ("s1", "s2"):
+        student = browser(world, username)
+        session_id = start(student, world)
+        do_lab(student, session_id)
+        submit(student, session_id)
+    browser(world, "s3")  # enrolled, nothing submitted: no report
+    teacher = browser(world, "teacher1")
+    path = f"/courses/{world['course']}/assignments/{world['assignment']}/reports.zip"
+    response = teacher.get(path)
+    assert response.status_code == 200
+    assert response.headers["content-type"] == "application/zip"
+    archive = zipfile.ZipFile(io.BytesIO(response.content))
+    assert sorted(archive.namelist()) == ["s1_attempt-1.pdf", "s2_attempt-1.pdf"]
+    assert "学生2 (s2)" in pdf_text(archive.read("s2_attempt-1.pdf"))
+    # the teacher's copy of one student's report, from the review desk
+    review_page = teacher.get(f"/review/sessions/{session_id}").text
+    assert f"/review/sessions/{session_id}/report.pdf?attempt=1" in review_page
+    copy = teacher.get(f"/review/sessions/{session_id}/report.pdf?attempt=1")
+    assert copy.status_code == 200 and "学生2 (s2)" in pdf_text(copy.content)
+
+
+def test_the_discussion_is_kept_cleaned_and_frozen_while_under_review(world):
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    hostile = "<script>alert(1)</script>\x00\x07 =1+1 \r\nline two"
+    assert write_discussion(student, session_id, hostile).status_code == 303
+    with read_session() as db:
+        kept = db.get(LabSession, session_id).discussion
+    assert kept == "<script>alert(1)</script> =1+1 \nline two"
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert "&lt;script&gt;alert(1)&lt;/script&gt;" in page and "<script>alert(1)" not in page
+    text = pdf_text(report(student, session_id).content)
+    assert "<script>alert(1)</script>" in text  # printed as text, nothing run or fetched
+
+    too_long = write_discussion(student, session_id, "x" * 20_001)
+    assert too_long.status_code == 303
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert "longer than 20000 characters" in page
+    with read_session() as db:
+        assert db.get(LabSession, session_id).discussion.startswith("<script>")
+
+    do_lab(student, session_id)
+    submit(student, session_id)
+    write_discussion(student, session_id, "changed after submitting")
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert "waiting for your teacher" in page
+    with read_session() as db:
+        assert "changed" not in db.get(LabSession, session_id).discussion
