@@ -403,3 +403,40 @@ def allan_text(figure: dict, _: Callable[..., str]) -> tuple[str, dict]:
         "rows": [[f"{t:.3g}", f"{a:.4f}"] for t, a in zip(taus, adevs, strict=True)],
     }
     return summary, table
+
+
+def class_text(rows, _: Callable[..., str]) -> tuple[str, dict]:
+    """The class charts' sentence and table: each submitted student's errors."""
+    table_rows = []
+    heading_errors, latitude_errors = [], []
+    for row in rows:
+        if not row.attempts:
+            continue
+        heading, latitude = row.check_error("heading"), row.check_error("latitude")
+        if heading is not None:
+            heading_errors.append(heading)
+        if latitude is not None:
+            latitude_errors.append(latitude)
+        table_rows.append(
+            [
+                row.student.display_name,
+                "—" if heading is None else f"{heading:+.2f}",
+                "—" if latitude is None else f"{latitude:.2f}",
+            ]
+        )
+    if not heading_errors:
+        summary = _("chart.summary_class_empty", n=len(table_rows))
+    else:
+        summary = _(
+            "chart.summary_class",
+            n=len(table_rows),
+            low=f"{min(heading_errors):+.2f}",
+            high=f"{max(heading_errors):+.2f}",
+            median=f"{float(np.median(heading_errors)):+.2f}",
+            worst=f"{max(latitude_errors):.2f}" if latitude_errors else "—",
+        )
+    table = {
+        "columns": [_("review.student"), _("review.heading_error"), _("review.latitude_error")],
+        "rows": table_rows,
+    }
+    return summary, table

@@ -17,7 +17,19 @@ from app.core.presets import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS
 from app.lab import partners
 from app.lab import sessions as labsessions
-from app.lab.charts import allan_figure, compass_figure, fit_figure, readings_figure
+from app.lab.charts import (
+    allan_figure,
+    allan_text,
+    compass_figure,
+    compass_summary,
+    compass_table,
+    fit_figure,
+    fit_summary,
+    fit_table,
+    readings_figure,
+    readings_summary,
+    readings_table,
+)
 from app.lab.deps import OwnedSession
 from app.lab.partner_pages import partner_view
 from app.lab.result_cache import CACHE, cached_results
@@ -165,32 +177,49 @@ def _back_with_error(request: Request, key: str):
     return response
 
 
-def _figures(results, _) -> dict[str, dict]:
-    figures = {}
+def _figures(results, _) -> tuple[dict[str, dict], dict[str, dict]]:
+    """The plotly figures, and for each its text alternative: ``{"summary": sentence,
+    "table": {"columns", "rows"}}`` shown under the chart."""
+    figures, texts = {}, {}
     for part, outcome in results.items():
         if outcome.positions:
             figures[f"{part}-readings"] = readings_figure(outcome, _)
+            texts[f"{part}-readings"] = {
+                "summary": readings_summary(outcome, _),
+                "table": readings_table(outcome, _),
+            }
         fit = fit_figure(outcome, _)
         if fit:
             figures[f"{part}-fit"] = fit
+            texts[f"{part}-fit"] = {
+                "summary": fit_summary(outcome, _),
+                "table": fit_table(outcome, _),
+            }
         allan = allan_figure(outcome, _)
         if allan:
             figures[f"{part}-allan"] = allan
+            summary, table = allan_text(allan, _)
+            texts[f"{part}-allan"] = {"summary": summary, "table": table}
     heading = results["heading"]
     if heading.result is not None:
         angles = [heading.positions[k].take.angle_deg for k in sorted(heading.positions)]
         figures["heading-compass"] = compass_figure(heading.result, angles, _)
-    return figures
+        texts["heading-compass"] = {
+            "summary": compass_summary(heading.result, _),
+            "table": compass_table(heading.result, angles, _),
+        }
+    return figures, texts
 
 
 def _cached_figures(db: Session, session: LabSession, entry, solved: dict, _):
-    """The figures of a cached result in the page's language: drawn (from the samples)
-    once per data version and language, then embedded as they are."""
+    """The figures of a cached result in the page's language, with their text
+    alternatives: drawn (from the samples) once per data version and language, then
+    embedded as they are."""
     language = _.language
     cached = entry.figures.get(language)
     if cached is None:
-        figures = _figures(solved or session_results(db, session), _)
-        cached = (frozenset(figures), Markup(htmlsafe_json_dumps(figures)))
+        figures, texts = _figures(solved or session_results(db, session), _)
+        cached = (texts, Markup(htmlsafe_json_dumps(figures)))
         CACHE.add_figures(entry, language, cached)
     return cached
 
@@ -254,7 +283,7 @@ def session_view(
     solved: dict = {}
     entry = cached_results(db, session, assignment, on_miss=solved.update)
     results = entry.parts
-    figure_names, figures_json = _cached_figures(db, session, entry, solved, _)
+    figure_texts, figures_json = _cached_figures(db, session, entry, solved, _)
     nominal = {
         part: [nominal_angle(session, part, k) for k in range(1, position_count(session) + 1)]
         for part in PARTS
@@ -275,7 +304,7 @@ def session_view(
         "session": session,
         "north_dial": north,
         "results": results,
-        "figures": figure_names,
+        "figures": figure_texts,
         "figures_json": figures_json,
         "attempts": attempts,
         "assignment": assignment,

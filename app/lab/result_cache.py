@@ -36,8 +36,8 @@ class CachedResults:
     key: str
     parts: dict[str, PartResult]
     payload: bytes | None = None  # the REST results body (set by the API on first use)
-    # language → (the figures' names, their JSON as the page's <script> embeds it)
-    figures: dict[str, tuple[frozenset[str], Markup]] = field(default_factory=dict)
+    # language → (each figure's text alternative by name, the figures' JSON as embedded)
+    figures: dict[str, tuple[dict[str, dict], Markup]] = field(default_factory=dict)
 
 
 class ResultCache:
@@ -69,7 +69,7 @@ class ResultCache:
             return kept
 
     def add_figures(
-        self, entry: CachedResults, language: str, figures: tuple[frozenset[str], Markup]
+        self, entry: CachedResults, language: str, figures: tuple[dict[str, dict], Markup]
     ) -> None:
         with self._lock:
             entry.figures[language] = figures

@@ -34,7 +34,7 @@ def _figures(report: Report, _) -> list[Figure]:
     out = []
     for part in PARTS:
         outcome = report.results[part]
-        part_name = _("lab.part_short_" + part)
+        part_name = _(f"lab.part_short_{part}")
         if outcome.positions and (svg := readings_svg(outcome, _)):
             caption = f"{part_name}, {_('chart.readings_title')}: {readings_summary(outcome, _)}"
             out.append(Figure(_data_url(svg), caption))

@@ -13,7 +13,7 @@ from app.core.readings import parse_decimal
 from app.core.text_files import decode_text
 from app.courses import characterisation
 from app.courses.assignment_form import form_values, parse_assignment_form
-from app.lab.charts import class_error_figure, class_histogram_figure
+from app.lab.charts import class_error_figure, class_histogram_figure, class_text
 from app.lti.grades import passback_state
 from app.review.deps import TeacherAssignment
 from app.review.exports import class_table_response, class_zip_response
@@ -39,6 +39,8 @@ def assignment_dashboard(
         "class-errors": class_error_figure(rows, _),
         "class-histogram": class_histogram_figure(rows, _),
     }
+    summary, table = class_text(rows, _)
+    figure_texts = dict.fromkeys(figures, {"summary": summary, "table": table})
     return render(
         request,
         "review/dashboard.html",
@@ -48,6 +50,7 @@ def assignment_dashboard(
             "rows": rows,
             "counts": status_counts(rows),
             "figures": figures,
+            "figure_texts": figure_texts,
             "status_filter": status,
             "timezone": course.timezone,
             "form": form_values(assignment, course.timezone),
