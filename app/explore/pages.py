@@ -93,6 +93,9 @@ JS_MESSAGES = (
     "explore.order_1234",
     "explore.order_1324",
     "explore.order_12344321",
+    "explore.summary_heading",
+    "explore.summary_dwell",
+    "explore.summary_orders",
 )
 
 

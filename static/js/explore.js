@@ -7,9 +7,48 @@
     (config.messages[key] || key).replace(/\{(\w+)\}/g, (_, name) => params[name] ?? "");
   const form = document.getElementById("explorer-form");
   const info = document.getElementById("run-info");
-  const colors = { two: "#d1495b", four: "#0b6bcb", seeker: "#2a9d4b" };
+  const colors = { two: "#D55E00", four: "#0072B2", seeker: "#009E73" };  // Okabe–Ito, as the lab's charts
   let timer = null;
   let generation = 0;
+  const round = (value, digits = 3) => (value === null || !Number.isFinite(value) ? "—" : Number(value.toFixed(digits)).toString());
+
+  // Each chart's text alternative: a sentence under it and its numbers in a table.
+  function describe(chartId, sentence, columns, rows) {
+    document.getElementById(`${chartId}-summary`).textContent = sentence;
+    const table = document.getElementById(`${chartId}-table`);
+    table.replaceChildren();
+    const head = table.createTHead().insertRow();
+    columns.forEach((name) => { const th = document.createElement("th"); th.scope = "col"; th.textContent = name; head.appendChild(th); });
+    const body = table.createTBody();
+    rows.forEach((cells) => { const row = body.insertRow(); cells.forEach((cell) => { row.insertCell().textContent = cell; }); });
+  }
+
+  function largest(xs, ys) {
+    let best = 0;
+    ys.forEach((y, i) => { if (Number.isFinite(y) && Math.abs(y) > Math.abs(ys[best] ?? 0)) best = i; });
+    return { x: xs[best], y: ys[best] };
+  }
+
+  function describeAll(data) {
+    const names = data.curves.map((curve) => t(`explore.method_${curve.method}`));
+    describe("heading-chart",
+      data.curves.map((curve, i) => { const top = largest(curve.azimuths_deg, curve.formula_deg);
+        return t("explore.summary_heading", { method: names[i], error: round(top.y), azimuth: round(top.x, 1) }); }).join(" "),
+      [t("explore.axis_azimuth"), ...names.map((name) => `${name} — ${t("explore.formula")}`)],
+      (data.curves[0]?.azimuths_deg || []).map((azimuth, row) => [round(azimuth, 1), ...data.curves.map((curve) => round(curve.formula_deg[row]))]));
+    const dwell = data.dwell;
+    const last = dwell.dwell_s.length - 1;
+    describe("dwell-chart",
+      t("explore.summary_dwell", { first: round(dwell.sigma_deg[0]), from: round(dwell.dwell_s[0], 1), last: round(dwell.sigma_deg[last]), to: round(dwell.dwell_s[last], 1), floor: round(dwell.floor_deg) }),
+      [t("explore.dwell_axis"), t("explore.expected"), t("explore.white_only")],
+      dwell.dwell_s.map((seconds, i) => [round(seconds, 1), round(dwell.sigma_deg[i], 4), round(dwell.white_only_deg[i], 4)]));
+    const orders = Object.entries(data.orders.orders);
+    describe("order-chart",
+      orders.map(([order, errors]) => { const top = largest(data.orders.azimuth_deg, errors);
+        return t("explore.summary_orders", { order: t(`explore.order_${order}`), error: round(top.y), azimuth: round(top.x, 1) }); }).join(" "),
+      [t("explore.axis_azimuth"), ...orders.map(([order]) => t(`explore.order_${order}`))],
+      data.orders.azimuth_deg.map((azimuth, row) => [round(azimuth, 1), ...orders.map(([, errors]) => round(errors[row]))]));
+  }
 
   function showOutputs() {
     form.querySelectorAll("output").forEach((output) => {
@@ -40,6 +79,7 @@
     if (mine !== generation) return;  // a newer request is on its way
     if (!response.ok) { info.textContent = `${response.status}`; return; }
     const data = await response.json();
+    describeAll(data);
     const traces = [];
     data.curves.forEach((curve) => {
       const name = t(`explore.method_${curve.method}`);
@@ -60,20 +100,20 @@
     const dwell = data.dwell;
     const floor = dwell.dwell_s.map(() => dwell.floor_deg);
     Plotly.react("dwell-chart", [
-      { x: dwell.dwell_s, y: dwell.sigma_deg, mode: "lines", name: t("explore.expected"), line: { width: 3, color: "#0b6bcb" } },
+      { x: dwell.dwell_s, y: dwell.sigma_deg, mode: "lines", name: t("explore.expected"), line: { width: 3, color: "#0072B2" } },
       { x: dwell.dwell_s, y: dwell.white_only_deg, mode: "lines", name: t("explore.white_only"), line: { dash: "dot", color: "#5d6b7a" } },
-      { x: dwell.dwell_s, y: floor, mode: "lines", name: t("explore.floor"), line: { dash: "dash", color: "#d1495b" } },
+      { x: dwell.dwell_s, y: floor, mode: "lines", name: t("explore.floor"), line: { dash: "dash", color: "#D55E00" } },
     ], {
       title: { text: t("explore.dwell_title") }, height: 340, margin: { l: 60, r: 20, t: 50, b: 60 },
       xaxis: { type: "log", title: { text: t("explore.dwell_axis") } },
       yaxis: { type: "log", title: { text: t("explore.sigma_axis") } },
       legend: { orientation: "h", y: -0.3 },
-      shapes: dwell.knee_s ? [{ type: "line", x0: dwell.knee_s, x1: dwell.knee_s, yref: "paper", y0: 0, y1: 1, line: { color: "#e9a23b", dash: "dot" } }] : [],
+      shapes: dwell.knee_s ? [{ type: "line", x0: dwell.knee_s, x1: dwell.knee_s, yref: "paper", y0: 0, y1: 1, line: { color: "#E69F00", dash: "dot" } }] : [],
     }, { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] });
-    const orderColors = { "1234": "#d1495b", "1324": "#e9a23b", "12344321": "#0b6bcb" };
+    const orderColors = { "1234": "#D55E00", "1324": "#E69F00", "12344321": "#0072B2" };
     Plotly.react("order-chart", Object.entries(data.orders.orders).map(([order, errors]) => ({
       x: data.orders.azimuth_deg, y: errors, mode: "lines", name: t(`explore.order_${order}`),
-      line: { color: orderColors[order], width: order === "12344321" ? 3 : 2 },
+      line: { color: orderColors[order], width: order === "12344321" ? 3 : 2, dash: order === "1324" ? "dash" : "solid" },
     })), {
       title: { text: t("explore.orders_title") }, height: 340, margin: { l: 60, r: 20, t: 50, b: 60 },
       xaxis: { title: { text: t("explore.axis_azimuth") }, range: [0, 360], dtick: 45 },

@@ -1,9 +1,12 @@
-"""Phones and laptops: no page scrolls sideways at 390 px or 1366 px, in either language,
-for a student or a teacher; the class dashboard's table fits at 1366 px."""
+"""Every page as people meet it: no page scrolls sideways at 390 px or 1366 px, in either
+language, for a student, a teacher or an administrator (the class dashboard's table fits
+at 1366 px); and every page passes axe-core's WCAG 2.0/2.1/2.2 A and AA rules with no
+serious or critical violation, in the light and the dark theme."""
 
 from __future__ import annotations
 
 import pytest
+from axe_playwright_python.sync_playwright import Axe
 
 from tests.e2e.conftest import log_in
 
@@ -27,9 +30,39 @@ OVERFLOW = """() => {
 }"""
 
 
+AXE = Axe()
+WCAG = {
+    "runOnly": {"type": "tag", "values": ["wcag2a", "wcag2aa", "wcag21a", "wcag21aa", "wcag22aa"]},
+    "resultTypes": ["violations"],
+}
+
+
+def axe_problems(page) -> list[tuple]:
+    """axe-core's serious and critical WCAG A/AA violations on the page as it is now."""
+    found = AXE.run(page, options=WCAG).response["violations"]
+    return [
+        (v["id"], v["impact"], [node["target"] for node in v["nodes"][:3]])
+        for v in found
+        if v["impact"] in ("serious", "critical")
+    ]
+
+
+ADMIN = ("admin1", "admin-e2e-pass-1")
+
+
+@pytest.fixture(scope="session")
+def admin_password(demo_server) -> str:
+    """An administrator in the demo installation (the demo itself has none)."""
+    server, _credentials = demo_server
+    server.gyrolab("create-user", "--role", "admin", "--username", ADMIN[0], "--password", ADMIN[1])
+    return ADMIN[1]
+
+
 def pages_of(page, url: str, role: str) -> list[str]:
     """Every kind of page the role sees, found by following the app's own links."""
     paths = ["/", "/lab", "/explore", "/account/tokens", "/account/password"]
+    if role == "admin":
+        return ["/", "/admin/accounts", "/admin/lti", "/account/tokens", "/no-such-page"]
     if role == "teacher":
         page.goto(f"{url}/courses")
         course = page.locator("main a[href^='/courses/']").first.get_attribute("href")
@@ -46,12 +79,20 @@ def pages_of(page, url: str, role: str) -> list[str]:
     return paths
 
 
-@pytest.mark.parametrize("locale", ["en-US", "zh-CN"])
-@pytest.mark.parametrize("role", ["student1", "teacher"])
-def test_no_page_scrolls_sideways(demo_server, browser, role, locale):
+@pytest.mark.parametrize(
+    ("locale", "theme"), [("en-US", "light"), ("zh-CN", "dark")], ids=["en-light", "zh-dark"]
+)
+@pytest.mark.parametrize("role", ["student1", "teacher", "admin"])
+def test_every_page_fits_the_screen_and_passes_axe(
+    demo_server, browser, request, role, locale, theme
+):
     server, credentials = demo_server
-    problems = []
-    context = browser.new_context(locale=locale, viewport={"width": 1366, "height": 900})
+    if role == "admin":
+        credentials = {**credentials, "admin": request.getfixturevalue("admin_password")}
+    problems, inaccessible = [], {}
+    context = browser.new_context(
+        locale=locale, color_scheme=theme, viewport={"width": 1366, "height": 900}
+    )
     page = context.new_page()
     if role == "student1":  # the log-in page, before anyone is logged in
         for width in (390, 1366):
@@ -60,8 +101,11 @@ def test_no_page_scrolls_sideways(demo_server, browser, role, locale):
             found = page.evaluate(OVERFLOW)
             if found["scroll"] > width + 1:
                 problems.append((locale, width, "/login", found))
-    log_in(page, server.url, role, credentials[role])
-    paths = pages_of(page, server.url, "teacher" if role == "teacher" else "student")
+        if found_axe := axe_problems(page):
+            inaccessible["/login"] = found_axe
+    log_in(page, server.url, ADMIN[0] if role == "admin" else role, credentials[role])
+    kind = {"student1": "student", "teacher": "teacher", "admin": "admin"}[role]
+    paths = pages_of(page, server.url, kind)
     # each page loaded once at 390 px, then widened to 1366 px (plotly resizes its
     # charts a moment after the window does: they shrink late, never grow too wide)
     for path in paths:
@@ -80,5 +124,8 @@ def test_no_page_scrolls_sideways(demo_server, browser, role, locale):
                 )
                 if table[0] > table[1] + 1:
                     problems.append((locale, width, path, {"class table": table}))
+        if found_axe := axe_problems(page):
+            inaccessible[path] = found_axe
     context.close()
     assert problems == []
+    assert inaccessible == {}
