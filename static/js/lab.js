@@ -34,7 +34,27 @@
     return payload;
   }
 
-  function reloadSoon() { setTimeout(() => window.location.reload(), 400); }
+  // After a save the page reloads with the new result.  The control that was used keeps
+  // the keyboard focus, and a status line announces what happened and the new result.
+  const announceKey = `gyrolab-lab-announce-${config.sessionId}`;
+  function reloadSoon(message = t("js.saved")) {
+    const active = document.activeElement;
+    const part = active?.closest("[data-part]")?.dataset.part || active?.closest(".part")?.dataset.part;
+    const className = active && active !== document.body ? [...active.classList][0] : null;
+    sessionStorage.setItem(announceKey, JSON.stringify({ message, part, className }));
+    setTimeout(() => window.location.reload(), 400);
+  }
+  function announceAfterReload() {
+    const saved = JSON.parse(sessionStorage.getItem(announceKey) || "null");
+    sessionStorage.removeItem(announceKey);
+    if (!saved) return;
+    const section = saved.part ? document.getElementById(`part-${saved.part}`) : null;
+    const summary = section?.querySelector(".summary")?.innerText.replace(/\s+/g, " ").trim() || "";
+    const target = section && saved.className ? section.querySelector(`.${CSS.escape(saved.className)}:not([hidden])`) : null;
+    if (target && target.offsetParent !== null) target.focus();
+    // written a moment after load, so screen readers notice the live region change
+    setTimeout(() => { document.getElementById("lab-announcer").textContent = `${saved.message} ${summary}`.trim(); }, 300);
+  }
 
   // --- stepper and method tabs ------------------------------------------------------------
   function selectPosition(part, position) {
@@ -70,7 +90,10 @@
     const section = document.getElementById(`part-${part}`);
     const tab = section.querySelector(`.method-tab[data-method="${method}"]`);
     if (!tab) return;
-    section.querySelectorAll(".method-tab").forEach((other) => other.classList.toggle("active", other === tab));
+    section.querySelectorAll(".method-tab").forEach((other) => {
+      other.classList.toggle("active", other === tab);
+      other.setAttribute("aria-pressed", String(other === tab));
+    });
     section.querySelectorAll(".method-panel").forEach((panel) => {
       panel.hidden = panel.dataset.method !== method;
     });
@@ -376,11 +399,11 @@
     }
 
     trimRange.addEventListener("input", () => markTrim(Number(trimRange.value)));
-    panel.querySelector(".keep-all").addEventListener("click", () => window.location.reload());
+    panel.querySelector(".keep-all").addEventListener("click", () => reloadSoon());
     panel.querySelector(".save-trim").addEventListener("click", async () => {
       try {
         await postJson("/trim", { part, position: recorded.position, trim: Number(trimRange.value) });
-        window.location.reload();
+        reloadSoon();
       } catch (error) {
         status.textContent = error.message;
       }
@@ -402,6 +425,7 @@
         config.table[part] = selected[part];
         updateTurnHint(part);
         status.textContent = t("js.turned", { n: selected[part] });
+        if (!startButton.disabled) startButton.focus();  // the turn button is now disabled
       } catch (error) {
         status.textContent = error.message;
       }
@@ -452,6 +476,7 @@
           progress.max = frame.total;
           progress.value = 0;
           stopButton.disabled = false;
+          if (document.activeElement === document.body || document.activeElement === startButton) stopButton.focus();
           status.textContent = t("js.recording", { n: frame.position });
           recorded = { t: [], v: [], position: frame.position };
           trimBox.hidden = true;
@@ -478,9 +503,11 @@
           trimRange.value = "0";
           markTrim(0);
           trimBox.hidden = false;
+          trimRange.focus();  // keyboard users continue where the recording left them
         } else if (frame.type === "error") {
           finish(frame.message);
           socket.close();
+          (startButton.disabled ? panel.querySelector(".turn") : startButton).focus();
         }
       });
       socket.addEventListener("close", () => {
@@ -551,4 +578,5 @@
     selectPosition(part, memory[part]?.position || 1);
     if (memory[part]?.method) showMethod(part, memory[part].method);
   });
+  announceAfterReload();
 })();

@@ -213,6 +213,28 @@ def browser():
         instance.close()
 
 
+AXE = None  # axe-core, loaded on first use (the wheel carries axe.min.js)
+WCAG = {
+    "runOnly": {"type": "tag", "values": ["wcag2a", "wcag2aa", "wcag21a", "wcag21aa", "wcag22aa"]},
+    "resultTypes": ["violations"],
+}
+
+
+def axe_problems(page) -> list[tuple]:
+    """axe-core's serious and critical WCAG A/AA violations on the page as it is now."""
+    global AXE
+    if AXE is None:
+        from axe_playwright_python.sync_playwright import Axe
+
+        AXE = Axe()
+    found = AXE.run(page, options=WCAG).response["violations"]
+    return [
+        (v["id"], v["impact"], [node["target"] for node in v["nodes"][:3]])
+        for v in found
+        if v["impact"] in ("serious", "critical")
+    ]
+
+
 def log_in(page, url: str, username: str, password: str) -> None:
     page.goto(f"{url}/login")
     page.fill("input[name=username]", username)

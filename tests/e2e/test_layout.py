@@ -6,9 +6,8 @@ serious or critical violation, in the light and the dark theme."""
 from __future__ import annotations
 
 import pytest
-from axe_playwright_python.sync_playwright import Axe
 
-from tests.e2e.conftest import log_in
+from tests.e2e.conftest import axe_problems, log_in
 
 pytestmark = pytest.mark.e2e
 
@@ -28,23 +27,6 @@ OVERFLOW = """() => {
   }
   return {scroll: document.documentElement.scrollWidth, width, out: out.slice(0, 5)};
 }"""
-
-
-AXE = Axe()
-WCAG = {
-    "runOnly": {"type": "tag", "values": ["wcag2a", "wcag2aa", "wcag21a", "wcag21aa", "wcag22aa"]},
-    "resultTypes": ["violations"],
-}
-
-
-def axe_problems(page) -> list[tuple]:
-    """axe-core's serious and critical WCAG A/AA violations on the page as it is now."""
-    found = AXE.run(page, options=WCAG).response["violations"]
-    return [
-        (v["id"], v["impact"], [node["target"] for node in v["nodes"][:3]])
-        for v in found
-        if v["impact"] in ("serious", "critical")
-    ]
 
 
 ADMIN = ("admin1", "admin-e2e-pass-1")
