@@ -8,7 +8,7 @@ from __future__ import annotations
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import free_port, running_server
+from tests.e2e.conftest import axe_problems, free_port, running_server
 from tests.lti_platform import PlatformState, create_platform_app, serving
 
 pytestmark = pytest.mark.e2e
@@ -33,6 +33,7 @@ def test_a_teacher_adds_gyrolab_and_a_student_lands_in_the_lab(tmp_path, new_pag
             teacher = new_page(locale="zh-CN")
             teacher.goto(f"{platform.url}/start?user=teacher-1&kind=deep")
             expect(teacher.locator("h1")).to_have_text("添加 GyroLab 活动")
+            assert axe_problems(teacher) == []  # the deep-linking picker, in Chinese
             teacher.fill("input[name=title]", "寻北实验")
             with teacher.expect_navigation(url=f"{platform.url}/deep-link-return"):
                 teacher.click("text=新建并添加")

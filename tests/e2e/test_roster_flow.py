@@ -7,7 +7,7 @@ import csv
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import TEACHER_PASSWORD
+from tests.e2e.conftest import TEACHER_PASSWORD, axe_problems
 
 pytestmark = pytest.mark.e2e
 
@@ -36,6 +36,7 @@ def test_teacher_imports_roster_and_student_changes_password(live_server, new_pa
     teacher.set_input_files("input[name=roster_file]", str(roster))
     teacher.get_by_role("button", name="Import", exact=True).click()
     expect(teacher.locator("#credentials")).to_contain_text("张三")
+    assert axe_problems(teacher) == []  # the one-time passwords page
     with teacher.expect_download() as download_info:
         teacher.click("#download-credentials")
     saved = tmp_path / "passwords.csv"
