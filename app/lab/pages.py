@@ -17,19 +17,16 @@ from app.core.presets import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS
 from app.lab import partners
 from app.lab import sessions as labsessions
-from app.lab.charts import (
-    allan_figure,
+from app.lab.chart_texts import (
     allan_text,
-    compass_figure,
     compass_summary,
     compass_table,
-    fit_figure,
     fit_summary,
     fit_table,
-    readings_figure,
     readings_summary,
     readings_table,
 )
+from app.lab.charts import allan_figure, compass_figure, fit_figure, readings_figure
 from app.lab.deps import OwnedSession
 from app.lab.partner_pages import partner_view
 from app.lab.result_cache import CACHE, cached_results

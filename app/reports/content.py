@@ -11,18 +11,16 @@ import json
 from dataclasses import dataclass, field
 from datetime import datetime
 
-import numpy as np
 from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.lab.partners import members_of
-from app.lab.results import PartResult, PositionData, solve_part, station_noise_for
-from app.lab.store import PARTS
-from app.models import Assignment, Attempt, Course, LabSession, Take, User, utcnow
+from app.lab.results import PartResult
+from app.models import Assignment, Attempt, Course, LabSession, User, utcnow
 from app.review import grading
 from app.review.service import AutoCheck, Truth, auto_check, session_truth, truth_visible
-from app.web.exports import Selection, take_blocks
+from app.web.exports import Selection, solve_takes
 
 FULL_TABLE_LIMIT = 50  # readings per position printed in full; longer records are attached
 
@@ -77,19 +75,6 @@ def _attempt(db: Session, session: LabSession, number: int) -> Attempt:
     return attempt
 
 
-def _solve(db: Session, session: LabSession, takes: list[Take]) -> dict[str, PartResult]:
-    data: dict[str, dict[int, PositionData]] = {part: {} for part in PARTS}
-    for take in takes:
-        blocks = list(take_blocks(db, take))
-        values = np.concatenate([v for v, _t in blocks]) if blocks else np.empty(0)
-        times = None
-        if blocks and all(t is not None for _v, t in blocks):
-            times = np.concatenate([t for _v, t in blocks])
-        data[take.part][take.position] = PositionData.of(take, values, times)
-    station = station_noise_for(db, session)
-    return {part: solve_part(session, part, data[part], station) for part in PARTS}
-
-
 def build_report(db: Session, session: LabSession, attempt_number: int | None = None) -> Report:
     """The report of ``session``: attempt ``attempt_number`` as submitted, or, with None,
     the current data and discussion draft.
@@ -109,7 +94,7 @@ def build_report(db: Session, session: LabSession, attempt_number: int | None = 
         course=course,
         members=members_of(db, session),
         attempt=attempt,
-        results=_solve(db, session, takes),
+        results=solve_takes(db, session, takes),
         discussion=attempt.discussion if attempt else session.discussion,
         generated_at=utcnow(),
         sources=sorted({take.source for take in takes}),

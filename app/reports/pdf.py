@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 from app import __version__
 from app.courses.local_time import zone
-from app.lab.charts import fit_summary, readings_summary
+from app.lab.chart_texts import fit_summary, readings_summary
 from app.lab.pages import error_text
 from app.lab.store import PARTS
 from app.paths import TEMPLATES_DIR

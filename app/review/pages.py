@@ -13,7 +13,8 @@ from app.core.readings import parse_decimal
 from app.core.text_files import decode_text
 from app.courses import characterisation
 from app.courses.assignment_form import form_values, parse_assignment_form
-from app.lab.charts import class_error_figure, class_histogram_figure, class_text
+from app.lab.chart_texts import class_text
+from app.lab.charts import class_error_figure, class_histogram_figure
 from app.lti.grades import passback_state
 from app.review.deps import TeacherAssignment
 from app.review.exports import class_table_response, class_zip_response

@@ -28,7 +28,13 @@ from sqlmodel import Session, func, select
 from app import __version__
 from app.core.jsonsafe import json_safe
 from app.db import read_session
-from app.lab.results import PositionData, results_json, solve_part, station_noise_for
+from app.lab.results import (
+    PartResult,
+    PositionData,
+    results_json,
+    solve_part,
+    station_noise_for,
+)
 from app.lab.samples import unpack
 from app.lab.store import PARTS
 from app.lab.submissions import export_metadata
@@ -118,9 +124,9 @@ def take_blocks(db: Session, take: Take) -> Iterator[tuple[np.ndarray, np.ndarra
         yield unpack(values), None if times is None else unpack(times)
 
 
-def _results(db: Session, session: LabSession, selection: Selection, takes: list[Take]) -> dict:
-    if selection.attempt_id is not None:
-        return json.loads(db.get(Attempt, selection.attempt_id).results_json)
+def solve_takes(db: Session, session: LabSession, takes: list[Take]) -> dict[str, PartResult]:
+    """Both parts solved from exactly these takes (an attempt's, or the current ones),
+    with their samples, worked steps and flags -- as the session page solves them."""
     data: dict[str, dict[int, PositionData]] = {part: {} for part in PARTS}
     for take in takes:
         blocks = list(take_blocks(db, take))
@@ -130,7 +136,13 @@ def _results(db: Session, session: LabSession, selection: Selection, takes: list
             times = np.concatenate([t for _, t in blocks])
         data[take.part][take.position] = PositionData.of(take, values, times)
     station = station_noise_for(db, session)
-    results = {part: solve_part(session, part, data[part], station) for part in PARTS}
+    return {part: solve_part(session, part, data[part], station) for part in PARTS}
+
+
+def _results(db: Session, session: LabSession, selection: Selection, takes: list[Take]) -> dict:
+    if selection.attempt_id is not None:
+        return json.loads(db.get(Attempt, selection.attempt_id).results_json)
+    results = solve_takes(db, session, takes)
     return json_safe(results_json(results))
 
 
