@@ -125,7 +125,7 @@ def test_a_pickled_npy_is_never_loaded(client, auth):
 
 def test_the_bridge_uploads_binary(client, auth):
     """gyrolab bridge's uploader sends raw float64 by default (8 bytes a reading)."""
-    from app.bridge import Uploader
+    from app.bridge.upload import Uploader
 
     session_id = new_api_session(client, auth)
     client.headers.update(auth)

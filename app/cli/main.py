@@ -95,62 +95,6 @@ def _create_user(args: argparse.Namespace) -> int:
     return 0
 
 
-def _bridge(args: argparse.Namespace) -> int:
-    import os
-    import re
-
-    import httpx
-
-    from app.bridge import BridgeError, LineParser, Uploader, run_bridge, serial_lines
-
-    token = args.token or os.environ.get("GYROLAB_TOKEN")
-    if not token:
-        print(
-            "gyrolab bridge: give --token or set GYROLAB_TOKEN (a personal access token)",
-            file=sys.stderr,
-        )
-        return 2
-    try:
-        pattern = re.compile(args.regex) if args.regex else None
-    except re.error as error:
-        print(f"gyrolab bridge: bad --regex: {error}", file=sys.stderr)
-        return 2
-    parser = LineParser(regex=pattern, column=args.column, scale=args.scale)
-    if args.serial:
-        try:
-            lines = serial_lines(args.serial, args.baud)
-        except BridgeError as error:
-            print(f"gyrolab bridge: {error}", file=sys.stderr)
-            return 2
-    elif args.file and args.file != "-":
-        try:
-            lines = open(args.file, encoding="utf-8", errors="replace")  # noqa: SIM115
-        except OSError as error:
-            print(f"gyrolab bridge: cannot read {args.file}: {error.strerror}", file=sys.stderr)
-            return 2
-    else:
-        lines = sys.stdin
-    headers = {"Authorization": f"Bearer {token}"}
-    with httpx.Client(base_url=args.url, headers=headers, timeout=30) as client:
-        uploader = Uploader(
-            client,
-            args.session,
-            args.part,
-            args.position,
-            unit=args.unit,
-            batch=args.batch,
-            binary=not args.json,
-        )
-        try:
-            run_bridge(lines, parser, uploader, max_samples=args.max_samples, seconds=args.seconds)
-        except BridgeError as error:
-            print(f"gyrolab bridge: {error}", file=sys.stderr)
-            return 1
-        except KeyboardInterrupt:
-            uploader.flush()
-    return 0
-
-
 def _prune(args: argparse.Namespace) -> int:
     from app.db import write_session
     from app.lab.prune import prune_takes
@@ -256,32 +200,9 @@ def build_parser() -> argparse.ArgumentParser:
     restore.add_argument("--yes", action="store_true", help="really replace everything")
     restore.set_defaults(handler=_restore)
 
-    bridge = commands.add_parser("bridge", help="send a gyro's serial output to a session")
-    source = bridge.add_mutually_exclusive_group()
-    source.add_argument("--serial", help="serial port, e.g. /dev/ttyUSB0 or COM3")
-    source.add_argument("--file", help="read lines from a file ('-' or nothing: stdin)")
-    bridge.add_argument("--baud", type=int, default=9600)
-    bridge.add_argument(
-        "--regex",
-        help="regular expression; the first group (or the group named 'value') is the reading",
-    )
-    bridge.add_argument("--column", type=int, help="1-based column of the reading")
-    bridge.add_argument("--scale", type=float, default=1.0, help="multiply readings by this")
-    bridge.add_argument("--unit", choices=["deg/h", "deg/s", "rad/s"], default="deg/h")
-    bridge.add_argument("--url", default="http://127.0.0.1:8000", help="GyroLab server")
-    bridge.add_argument("--token", help="personal access token (or GYROLAB_TOKEN)")
-    bridge.add_argument("--session", type=int, required=True)
-    bridge.add_argument("--part", choices=["heading", "latitude"], required=True)
-    bridge.add_argument("--position", type=int, choices=[1, 2, 3, 4], required=True)
-    bridge.add_argument("--batch", type=int, default=50, help="readings per upload")
-    bridge.add_argument(
-        "--json",
-        action="store_true",
-        help="upload JSON instead of raw little-endian float64 (for an older server)",
-    )
-    bridge.add_argument("--max-samples", type=int, help="stop after this many readings")
-    bridge.add_argument("--seconds", type=float, help="stop after this long")
-    bridge.set_defaults(handler=_bridge)
+    from app.cli.bridge import add_bridge_command
+
+    add_bridge_command(commands)
 
     from app.cli.lti import add_lti_commands
     from app.cli.science import add_science_commands

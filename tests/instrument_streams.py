@@ -1,0 +1,106 @@
+"""Byte streams as real gyros send them, built here from the data-sheet layouts with code
+of the tests' own (bit-by-bit CRCs from their definitions, ``struct`` packing), never with
+the bridge's decoder or its checksum library — so that a round trip tests both sides.
+
+* KVH DSP-1750/1760 format A: FE 81 FF 55, six big-endian float32 (gyro X Y Z, accel
+  X Y Z), status, counter 0–127, big-endian int16 temperature, CRC-32/MPEG-2 of bytes 0–31;
+* KVH DSP-3000: ASCII ``(-)xxx.xxxxxx y`` lines;
+* a teaching FOG's short frame: 99 66, little-endian int32 rate (1e-4 °/h), little-endian
+  int16 temperature (0.01 °C), counter, sum8 from byte 2.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+
+import numpy as np
+
+KVH_HEADER = bytes.fromhex("FE81FF55")
+# the KVH manual's sample output of format A (all sensors valid, counter 0x3D, 40 °C)
+KVH_MANUAL_EXAMPLE = bytes.fromhex(
+    "FE81FF55 37A96A6E 38586C1F B75BF862 BF803E78 BB650D28 3B0A37AC 77 3D 0028 4BFA34D8"
+)
+TEACHING_SPEC = "hdr=99 66, z:<i4*0.0001, temp:<i2*0.01, seq:u1, check=sum8@2, rate=200, unit=deg/h"
+RAD_PER_DEG = math.pi / 180
+
+
+def crc32_mpeg2(data: bytes) -> int:
+    """CRC-32/MPEG-2 bit by bit: poly 0x04C11DB7, init 0xFFFFFFFF, MSB first, no final XOR."""
+    crc = 0xFFFFFFFF
+    for byte in data:
+        crc ^= byte << 24
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x04C11DB7) if crc & 0x80000000 else crc << 1
+            crc &= 0xFFFFFFFF
+    return crc
+
+
+def crc16_ccitt(data: bytes) -> int:
+    """CRC-16/CCITT-FALSE bit by bit: poly 0x1021, init 0xFFFF, MSB first."""
+    crc = 0xFFFF
+    for byte in data:
+        crc ^= byte << 8
+        for _ in range(8):
+            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else crc << 1
+            crc &= 0xFFFF
+    return crc
+
+
+def dsp1750_frame(
+    gyro: tuple[float, float, float],
+    counter: int,
+    *,
+    status: int = 0x77,
+    temperature: int = 25,
+    accel: tuple[float, float, float] = (0.0, 0.0, 1.0),
+) -> bytes:
+    body = (
+        KVH_HEADER
+        + struct.pack(">6f", *gyro, *accel)
+        + bytes([status, counter % 128])
+        + struct.pack(">h", temperature)
+    )
+    return body + struct.pack(">I", crc32_mpeg2(body))
+
+
+def dsp1750_stream(
+    rates_deg_h: np.ndarray, *, rate_hz: float = 1000.0, axis: int = 2, first_counter: int = 0
+) -> list[bytes]:
+    """One frame per rate: the rate as a Δangle in radians over 1/rate_hz on ``axis``, the
+    only gyro flagged valid (a one-axis DSP-1750), the other axes' words left at noise."""
+    frames = []
+    for index, rate in enumerate(rates_deg_h):
+        delta_rad = rate / 3600.0 / rate_hz * RAD_PER_DEG
+        gyro = [1e-7, -2e-7, 3e-7]
+        gyro[axis] = delta_rad
+        status = 0x70 | (1 << axis)
+        frames.append(
+            dsp1750_frame(tuple(gyro), first_counter + index, status=status, temperature=30)
+        )
+    return frames
+
+
+def dsp3000_lines(values: np.ndarray, faults: set[int] = frozenset()) -> list[bytes]:
+    return [f"{v:.6f} {0 if i in faults else 1}\r\n".encode() for i, v in enumerate(values)]
+
+
+def teaching_frame(rate_deg_h: float, counter: int, temperature_c: float = 24.5) -> bytes:
+    body = (
+        b"\x99\x66"
+        + struct.pack("<i", round(rate_deg_h / 1e-4))
+        + struct.pack("<h", round(temperature_c / 0.01))
+        + bytes([counter % 256])
+    )
+    return body + bytes([sum(body[2:]) % 256])
+
+
+def chunked(data: bytes, seed: int = 0, largest: int = 97) -> list[bytes]:
+    """The stream cut into random pieces (a serial read returns whatever has arrived)."""
+    rng = np.random.default_rng(seed)
+    pieces, at = [], 0
+    while at < len(data):
+        size = int(rng.integers(1, largest + 1))
+        pieces.append(data[at : at + size])
+        at += size
+    return pieces
