@@ -26,8 +26,9 @@ from app.cli.main import main
 from app.core.exceptions import UserError
 from app.core.readings import parse_readings_csv
 from app.db import read_session
+from app.lab.results import current_data, quality_flags
 from app.lab.store import load_samples
-from app.models import Take
+from app.models import LabSession, Take
 from tests.factories import PRACTICE, token_for
 from tests.instrument_streams import dsp1750_stream, dsp3000_lines
 
@@ -134,6 +135,10 @@ def test_a_dsp3000_at_38400_baud_with_a_fault_line_is_stored_with_the_gap(api_se
     values, times = stored(session_id)
     assert values == pytest.approx(np.delete(RATES[:120], [0, 30]), abs=0.002)
     assert np.diff(times).max() == pytest.approx(0.02)  # 100 Hz, one line missing
+    with read_session() as db:  # the session flags the gap to the student and the teacher
+        session = db.get(LabSession, session_id)
+        flags = quality_flags(session, current_data(db, session)["heading"])
+    assert {"key": "flag.gaps", "params": {"position": 1, "n": 1, "missing": 1}} in flags
 
 
 def test_a_text_gyro_on_a_pseudo_terminal(api_session):

@@ -15,6 +15,7 @@ from app.bridge.frames import FrameDecoder, parse_spec
 from app.bridge.instruments import KVH_DSP1750, Instrument, set_up
 from app.bridge.samples import SampleMaker
 from app.core.exceptions import UserError
+from app.core.record_gaps import record_gaps
 from tests.instrument_streams import (
     KVH_MANUAL_EXAMPLE,
     TEACHING_SPEC,
@@ -306,3 +307,12 @@ def test_nan_rates_from_a_broken_gyro_are_dropped():
     good = dsp1750_frame((0.0, 0.0, 1e-6), 1, status=0x74)
     decoder = FrameDecoder(KVH_DSP1750)
     assert len(decoder.feed(nan_frame + good)) == 1 and decoder.stats.faults == 1
+
+
+def test_record_gaps_counts_missing_readings_not_clock_jitter():
+    steps = np.arange(200) * 0.01
+    jittered = steps + np.random.default_rng(3).normal(0, 0.001, 200)
+    assert record_gaps(jittered) == (0, 0)
+    assert record_gaps(np.delete(steps, [10, 11, 50])) == (2, 3)
+    assert record_gaps(np.delete(steps, np.arange(100, 150))) == (1, 50)
+    assert record_gaps(np.zeros(10)) == (0, 0) and record_gaps(np.array([1.0, 5.0])) == (0, 0)

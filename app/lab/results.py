@@ -16,6 +16,7 @@ from sqlmodel import Session, select
 from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude
 from app.core.noise_model import GyroNoise, Window
+from app.core.record_gaps import record_gaps
 from app.core.solve import solve_heading, solve_latitude
 from app.courses.characterisation import StationNoise, station_noise
 from app.lab.samples import unpack
@@ -236,7 +237,8 @@ def solve_part(
 
 
 def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[dict]:
-    """Data-quality warnings: too few readings, spikes, a position far noisier than the rest.
+    """Data-quality warnings: too few readings, spikes, gaps in a timed record (readings
+    lost between the gyro and the server), a position far noisier than the rest.
 
     Each flag is ``{"key": message key, "params": {...}}``.
     """
@@ -263,6 +265,10 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
             outliers = int(np.sum(np.abs(item.values - median) > 6 * mad)) if mad > 0 else 0
             if outliers:
                 flags.append(flag("flag.spikes", position=position, n=outliers))
+        if item.times is not None:
+            gaps, missing = record_gaps(item.times)
+            if gaps:
+                flags.append(flag("flag.gaps", position=position, n=gaps, missing=missing))
     if len(stds) >= 3:
         typical = float(np.median(list(stds.values())))
         for position, std in stds.items():
