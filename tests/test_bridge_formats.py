@@ -9,6 +9,8 @@ import struct
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from app.bridge.checksums import CHECKSUMS
 from app.bridge.frames import FrameDecoder, parse_spec
@@ -316,3 +318,24 @@ def test_record_gaps_counts_missing_readings_not_clock_jitter():
     assert record_gaps(np.delete(steps, [10, 11, 50])) == (2, 3)
     assert record_gaps(np.delete(steps, np.arange(100, 150))) == (1, 50)
     assert record_gaps(np.zeros(10)) == (0, 0) and record_gaps(np.array([1.0, 5.0])) == (0, 0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.binary(max_size=80), max_size=30), st.integers(0, 2**32 - 1))
+def test_any_bytes_at_all_never_break_a_decoder(pieces, seed):
+    """Line noise, cut frames and lookalike headers: decoders count, they never raise,
+    and what they keep from real frames mixed into the noise is exact."""
+    frames = dsp1750_stream(RATES[:5])
+    rng = np.random.default_rng(seed)
+    stream = b"".join(piece + frames[int(rng.integers(0, 5))] for piece in pieces)
+    for instrument in (
+        Instrument("kvh-dsp1750"),
+        Instrument("kvh-dsp3000"),
+        Instrument("frame:" + TEACHING_SPEC),
+        Instrument("text", column=1),
+    ):
+        samples, stats, _ = decode(instrument, stream, seed=seed % 1000)
+        assert all(math.isfinite(s.rate_deg_h) for s in samples)
+        assert stats.frames == len(samples)
+    kvh, _, _ = decode(Instrument("kvh-dsp1750"), stream)
+    assert set(np.round(values(kvh), 6)) <= set(np.round(RATES[:5], 6))
