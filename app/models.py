@@ -244,7 +244,8 @@ class Take(SQLModel, table=True):
 
 
 class SampleChunk(SQLModel, table=True):
-    """A block of a take's samples: little-endian float64 °/h (and optional seconds)."""
+    """A block of a take's samples: little-endian float64 °/h (and optional seconds, and
+    the gyro's optional case temperature in °C)."""
 
     __tablename__ = "sample_chunk"
     __table_args__ = (UniqueConstraint("take_id", "seq"),)
@@ -253,6 +254,7 @@ class SampleChunk(SQLModel, table=True):
     seq: int
     values: bytes
     times: bytes | None = None
+    temperatures: bytes | None = None
 
 
 class Attempt(SQLModel, table=True):

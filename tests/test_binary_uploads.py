@@ -4,14 +4,18 @@ stored exactly as JSON would store them."""
 from __future__ import annotations
 
 import io
+import json
 
 import numpy as np
 import pytest
 from sqlmodel import select
 
 from app.db import read_session
+from app.lab.results import current_data, quality_flags
+from app.lab.samples import unpack
 from app.lab.store import load_samples
-from app.models import Take
+from app.models import LabSession, SampleChunk, Take
+from app.web.exports import Selection, readings_csv, session_json
 from tests.factories import API, handout, new_api_session, token_for
 
 
@@ -96,7 +100,8 @@ def test_units_angle_and_appends_ride_in_the_query(client, auth):
     [
         (b"\x00" * 12, {}, "not a whole number of 8-byte samples"),
         (b"\x00" * 16, {"dtype": "complex128"}, "Unknown dtype"),
-        (b"\x00" * 16, {"columns": "3"}, "columns must be 1"),
+        (b"\x00" * 16, {"columns": "4"}, "columns must be 1"),
+        (b"\x00" * 32, {"columns": "3"}, "not a whole number of 24-byte samples"),
         (b"", {}, "no samples"),
         (np.array([1.0, np.nan]).tobytes(), {}, "finite"),
         (np.array([1.0, np.inf]).astype("<f4").tobytes(), {"dtype": "float32"}, "finite"),
@@ -144,3 +149,61 @@ def test_the_bridge_uploads_binary(client, auth):
     assert uploader.sent == 10
     assert all(k["headers"]["Content-Type"] == "application/octet-stream" for k in sent)
     np.testing.assert_array_equal(stored(session_id)[0], 10.0 + np.arange(10))
+
+
+def test_gyro_temperatures_are_stored_exported_and_flag_a_warm_up(client, auth):
+    """What the bridge sends from a KVH or a described frame: time, value, temperature."""
+    session_id = new_api_session(client, auth)
+    n = 40
+    times = 100.0 + np.arange(n) * 0.01
+    values = np.full(n, 10.0)
+    temperatures = 25.0 + np.linspace(0.0, 2.0, n)  # still warming up: 2 °C
+    url = f"{API}/sessions/{session_id}/heading/positions/1/samples"
+    binary = {**auth, "Content-Type": "application/octet-stream"}
+    triples = np.column_stack([times, values, temperatures]).astype("<f8")
+    first = client.post(
+        url, content=triples[:20].tobytes(), params={"columns": "3", "offset": "0"}, headers=binary
+    )
+    assert first.status_code == 200, first.text
+    second = client.post(
+        url,
+        json={
+            "samples": values[20:].tolist(),
+            "times_s": times[20:].tolist(),
+            "temperatures_c": temperatures[20:].tolist(),
+            "offset": 20,
+        },
+        headers=auth,
+    )
+    assert second.json()["n_samples"] == n
+    refusals = [
+        ({"samples": [10.0], "times_s": [101.0], "offset": n}, "lab.temperatures_mismatch"),
+        (
+            {"samples": [10.0, 10.0], "temperatures_c": [20.0], "offset": n},
+            "api.temperatures_count",
+        ),
+        (
+            {"samples": [10.0], "times_s": [101.0], "temperatures_c": [1e6], "offset": n},
+            "lab.bad_temperatures",
+        ),
+    ]
+    for body, key in refusals:
+        refused = client.post(url, json=body, headers=auth)
+        assert refused.status_code == 400 and refused.json()["key"] == key, refused.text
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        chunks = db.exec(
+            select(SampleChunk)
+            .join(Take, Take.id == SampleChunk.take_id)
+            .where(Take.session_id == session_id)
+            .order_by(SampleChunk.seq)
+        ).all()
+        flags = quality_flags(session, current_data(db, session)["heading"])
+    assert np.concatenate([unpack(c.temperatures) for c in chunks]) == pytest.approx(temperatures)
+    assert {"key": "flag.warm_up", "params": {"position": 1, "change": "2.0"}} in flags
+    table = "".join(readings_csv(Selection(session_id)))
+    assert "source,time_s,value,temperature_c\n" in table
+    assert "heading,1,0,api,100.390,10.000000,27.00\n" in table
+    exported = json.loads("".join(session_json(Selection(session_id))))
+    assert exported["positions"][0]["temperatures_c"] == pytest.approx(temperatures)
+    assert exported["positions"][0]["times_s"] == pytest.approx(times)

@@ -29,6 +29,7 @@ from app.db import read_session
 from app.lab.results import current_data, quality_flags
 from app.lab.store import load_samples
 from app.models import LabSession, Take
+from app.web.exports import Selection, session_json
 from tests.factories import PRACTICE, token_for
 from tests.instrument_streams import dsp1750_stream, dsp3000_lines
 
@@ -112,6 +113,8 @@ def test_a_dsp1750_at_921600_baud_reaches_the_session_with_its_own_times(api_ses
         finish()
     assert outcome.samples == outcome.stored == 500 and not outcome.gapped
     assert outcome.temperatures == [30.0, 30.0]
+    exported = json.loads("".join(session_json(Selection(session_id))))  # temperature kept
+    assert exported["positions"][0]["temperatures_c"] == [30.0] * 500
     values, times = stored(session_id)
     assert values == pytest.approx(RATES, rel=1e-6)
     assert times == pytest.approx(36000.0 + np.arange(500) / 1000.0)  # the gyro's clock

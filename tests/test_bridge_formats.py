@@ -17,7 +17,7 @@ from app.bridge.frames import FrameDecoder, parse_spec
 from app.bridge.instruments import KVH_DSP1750, Instrument, set_up
 from app.bridge.samples import SampleMaker
 from app.core.exceptions import UserError
-from app.core.record_gaps import record_gaps
+from app.core.record_checks import record_gaps
 from tests.instrument_streams import (
     KVH_MANUAL_EXAMPLE,
     TEACHING_SPEC,

@@ -156,4 +156,4 @@ def _take(
         table.write(samples)
     if uploader is not None:
         for sample in samples:
-            uploader.add(sample.rate_deg_h, sample.time_s)
+            uploader.add(sample.rate_deg_h, sample.time_s, sample.temperature_c)

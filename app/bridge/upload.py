@@ -3,8 +3,9 @@
 Each batch goes to ``POST /api/v1/sessions/{id}/{part}/positions/{k}/samples`` with the
 index of its first sample as ``offset``; network errors and 5xx answers are retried with
 back-off, and because of the offset a batch whose answer was lost is never stored twice.
-Timed samples go as interleaved ``time_s, value`` float64 pairs (``columns=2``) or, in
-JSON, with ``times_s``.
+Timed samples go as interleaved ``time_s, value`` float64 pairs (``columns=2``), or
+``time_s, value, temperature_c`` triples (``columns=3``) when the gyro reports its
+temperature; in JSON, with ``times_s`` and ``temperatures_c``.
 """
 
 from __future__ import annotations
@@ -34,20 +35,30 @@ class Uploader:
     sent: int = 0  # samples acknowledged by the server
     pending: list[float] = field(default_factory=list)
     pending_times: list[float] = field(default_factory=list)
+    pending_temperatures: list[float] = field(default_factory=list)
     attempts: int = 0
     binary: bool = True  # little-endian float64 bodies (8 bytes a sample); False: JSON
-    timed: bool | None = None  # set by the first sample: every sample has a time, or none
+    # set by the first sample: every sample has a time (a temperature), or none has
+    timed: bool | None = None
+    with_temperatures: bool | None = None
 
     @property
     def url(self) -> str:
         return f"/api/v1/sessions/{self.session_id}/{self.part}/positions/{self.position}/samples"
 
-    def add(self, value: float, time_s: float | None = None) -> None:
+    def add(
+        self, value: float, time_s: float | None = None, temperature_c: float | None = None
+    ) -> None:
         if self.timed is None:
             self.timed = time_s is not None
+            self.with_temperatures = temperature_c is not None
         self.pending.append(value)
         if self.timed:
             self.pending_times.append(time_s if time_s is not None else float("nan"))
+        if self.with_temperatures:
+            self.pending_temperatures.append(
+                temperature_c if temperature_c is not None else float("nan")
+            )
         if len(self.pending) >= self.batch:
             self.flush()
 
@@ -55,21 +66,33 @@ class Uploader:
         while self.pending:
             chunk = self.pending[: self.batch]
             times = self.pending_times[: self.batch] if self.timed else None
-            stored = self._post(chunk, times, self.sent)
+            temperatures = (
+                self.pending_temperatures[: self.batch] if self.with_temperatures else None
+            )
+            stored = self._post(self._request(chunk, times, temperatures, self.sent), self.sent)
             accepted = min(max(stored - self.sent, 0), len(chunk))
             self.sent = stored
             del self.pending[:accepted]
             del self.pending_times[:accepted]
+            del self.pending_temperatures[:accepted]
 
-    def _request(self, chunk: list[float], times: list[float] | None, offset: int) -> dict:
-        """The POST's arguments: raw float64 with the unit and offset in the query, or JSON."""
-        if self.binary:
+    def _request(
+        self,
+        chunk: list[float],
+        times: list[float] | None,
+        temperatures: list[float] | None,
+        offset: int,
+    ) -> dict:
+        """The POST's arguments: raw float64 columns with the unit and offset in the query,
+        or JSON (also for temperatures without times, which have no binary layout)."""
+        if self.binary and (times is not None or temperatures is None):
             params = {"unit": self.unit, "offset": str(offset)}
             if times is None:
                 body = np.asarray(chunk, dtype="<f8")
             else:
-                body = np.column_stack([times, chunk]).astype("<f8")
-                params["columns"] = "2"
+                columns = [times, chunk] + ([temperatures] if temperatures is not None else [])
+                body = np.column_stack(columns).astype("<f8")
+                params["columns"] = str(len(columns))
             return {
                 "content": body.tobytes(),
                 "headers": {"Content-Type": "application/octet-stream"},
@@ -78,12 +101,13 @@ class Uploader:
         payload: dict = {"samples": chunk, "unit": self.unit, "offset": offset}
         if times is not None:
             payload["times_s"] = times
+        if temperatures is not None:
+            payload["temperatures_c"] = temperatures
         return {"json": payload}
 
-    def _post(self, chunk: list[float], times: list[float] | None, offset: int) -> int:
+    def _post(self, arguments: dict, offset: int) -> int:
         """POST with retries; returns the server's count of stored samples."""
         delay = self.backoff_s
-        arguments = self._request(chunk, times, offset)
         for attempt in range(self.retries + 1):
             self.attempts += 1
             try:

@@ -23,6 +23,7 @@ from app.core.noise_model import GyroNoise, Window, back_to_back
 from app.core.position_records import parse_static_record
 from app.core.presets import PRESETS
 from app.core.readings import Readings, parse_readings_csv, readings_to_long_csv
+from app.core.record_checks import WARM_UP_LIMIT_C
 from app.core.simulate import GyroStream, Setup, simulate_run, simulate_static
 from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.solve import solve_heading, solve_latitude
@@ -121,9 +122,6 @@ def _solve(args: argparse.Namespace) -> int:
     if warm_up is not None:
         print(warm_up["note"][args.language])
     return 0
-
-
-WARM_UP_LIMIT_C = 1.0
 
 
 def temperature_summary(readings: Readings) -> dict | None:

@@ -198,6 +198,7 @@ def put_position(
         unit=upload.upload.unit,
         angle_deg=upload.upload.angle_deg,
         source=InputMethod.api,
+        temperatures=upload.temperatures,
     )
     db.commit()
     return UploadOut(
@@ -234,6 +235,7 @@ def append_position(
         unit=upload.upload.unit,
         angle_deg=upload.upload.angle_deg,
         offset=upload.upload.offset,
+        temperatures=upload.temperatures,
     )
     db.commit()
     return UploadOut(

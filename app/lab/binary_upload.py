@@ -2,7 +2,8 @@
 NumPy ``.npy`` file, read straight into arrays (no text parsing, no Python lists).
 
 * raw: ``?dtype=float64`` (default) or ``float32``; ``?columns=2`` for interleaved
-  ``time_s, value`` pairs;
+  ``time_s, value`` pairs, ``?columns=3`` for ``time_s, value, temperature_c`` triples
+  (the bridge, from an instrument that reports its temperature);
 * ``.npy`` (recognised by its magic bytes, or sent as ``application/x-npy``): a float or
   integer array of shape ``(n,)`` (values) or ``(n, 2)`` (``time_s, value`` rows), any byte
   order; never unpickled.
@@ -64,16 +65,22 @@ def parse_npy(body: bytes) -> tuple[np.ndarray, np.ndarray | None]:
 
 def parse_raw(
     body: bytes, dtype: str | None, columns: str | None
-) -> tuple[np.ndarray, np.ndarray | None]:
-    """Raw little-endian floats: ``dtype`` float64 (default) or float32, ``columns`` 1 or 2."""
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """Raw little-endian floats: ``dtype`` float64 (default) or float32, ``columns`` 1, 2
+    (time, value) or 3 (time, value, temperature); returns (values, times, temperatures)."""
     code = RAW_DTYPES.get((dtype or "float64").strip().lower())
     if code is None:
         raise UserError("api.bad_dtype", dtype=(dtype or "")[:20])
-    width = {"1": 1, "2": 2, None: 1}.get(columns)
+    width = {"1": 1, "2": 2, "3": 3, None: 1}.get(columns)
     if width is None:
         raise UserError("api.bad_columns")
     item = np.dtype(code).itemsize * width
     if len(body) % item:
         raise UserError("api.binary_length", size=len(body), item=item)
     array = np.frombuffer(body, dtype=code).astype(np.float64)
-    return _columns(array.reshape(-1, 2) if width == 2 else array)
+    if width == 3:
+        rows = array.reshape(-1, 3)
+        values, times = _columns(rows[:, :2])
+        return values, times, np.ascontiguousarray(rows[:, 2])
+    values, times = _columns(array.reshape(-1, 2) if width == 2 else array)
+    return values, times, None

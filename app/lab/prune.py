@@ -9,6 +9,7 @@ from datetime import timedelta
 from sqlalchemy import delete, func
 from sqlmodel import Session, select
 
+from app.lab.store import stored_bytes
 from app.models import SampleChunk, Take, utcnow
 
 
@@ -31,7 +32,7 @@ def prune_takes(db: Session, older_than_days: int) -> Pruned:
         )
         .scalar_subquery()
     )
-    size = func.length(SampleChunk.values) + func.coalesce(func.length(SampleChunk.times), 0)
+    size = stored_bytes()
     freed = db.exec(
         select(func.coalesce(func.sum(size), 0)).where(SampleChunk.take_id.in_(doomed))
     ).one()

@@ -16,7 +16,7 @@ from sqlmodel import Session, select
 from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude
 from app.core.noise_model import GyroNoise, Window
-from app.core.record_gaps import record_gaps
+from app.core.record_checks import record_gaps, warm_up_change
 from app.core.solve import solve_heading, solve_latitude
 from app.courses.characterisation import StationNoise, station_noise
 from app.lab.samples import unpack
@@ -44,9 +44,16 @@ class PositionData:
     n: int = 0
     mean: float = math.nan
     std: float | None = None
+    temperatures: np.ndarray | None = None  # °C, when the instrument reported them
 
     @classmethod
-    def of(cls, take: Take, values: np.ndarray, times: np.ndarray | None) -> PositionData:
+    def of(
+        cls,
+        take: Take,
+        values: np.ndarray,
+        times: np.ndarray | None,
+        temperatures: np.ndarray | None = None,
+    ) -> PositionData:
         """All of a take's samples → the ones used (the first ``take.trim_start`` are the
         transient after turning the table: kept in the database, left out here)."""
         start = min(max(take.trim_start or 0, 0), values.size)
@@ -58,6 +65,7 @@ class PositionData:
             n=int(used.size),
             mean=float(used.mean()) if used.size else math.nan,
             std=float(used.std(ddof=1)) if used.size > 1 else None,
+            temperatures=None if temperatures is None else temperatures[start:],
         )
 
     @property
@@ -100,10 +108,12 @@ SessionData = dict[str, dict[int, PositionData]]  # part → position → data
 
 def _assemble(take: Take, rows: list[SampleChunk]) -> PositionData:
     values = np.concatenate([unpack(r.values) for r in rows]) if rows else np.empty(0)
-    times = None
+    times = temperatures = None
     if rows and all(r.times is not None for r in rows):
         times = np.concatenate([unpack(r.times) for r in rows])
-    return PositionData.of(take, values, times)
+    if rows and all(r.temperatures is not None for r in rows):
+        temperatures = np.concatenate([unpack(r.temperatures) for r in rows])
+    return PositionData.of(take, values, times, temperatures)
 
 
 def iter_current_data(db: Session, *where) -> Iterator[tuple[int, SessionData]]:
@@ -238,7 +248,8 @@ def solve_part(
 
 def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[dict]:
     """Data-quality warnings: too few readings, spikes, gaps in a timed record (readings
-    lost between the gyro and the server), a position far noisier than the rest.
+    lost between the gyro and the server), a gyro still warming up (its reported
+    temperature moved over 1 °C), a position far noisier than the rest.
 
     Each flag is ``{"key": message key, "params": {...}}``.
     """
@@ -269,6 +280,10 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
             gaps, missing = record_gaps(item.times)
             if gaps:
                 flags.append(flag("flag.gaps", position=position, n=gaps, missing=missing))
+        if item.temperatures is not None:
+            change = warm_up_change(item.temperatures)
+            if change is not None:
+                flags.append(flag("flag.warm_up", position=position, change=f"{change:.1f}"))
     if len(stds) >= 3:
         typical = float(np.median(list(stds.values())))
         for position, std in stds.items():

@@ -18,8 +18,22 @@ def unpack(blob: bytes | None) -> np.ndarray:
     return np.frombuffer(blob, dtype=DTYPE).astype(float)
 
 
-def chunks(values: np.ndarray, times: np.ndarray | None = None):
-    """(seq, values bytes, times bytes|None) blocks of at most CHUNK_SAMPLES samples."""
+def chunks(
+    values: np.ndarray,
+    times: np.ndarray | None = None,
+    temperatures: np.ndarray | None = None,
+):
+    """(seq, values, times or None, temperatures or None) as bytes, in blocks of at most
+    CHUNK_SAMPLES samples."""
+
+    def block(array: np.ndarray | None, start: int, stop: int) -> bytes | None:
+        return None if array is None else pack(array[start:stop])
+
     for seq, start in enumerate(range(0, max(len(values), 1), CHUNK_SAMPLES)):
         stop = start + CHUNK_SAMPLES
-        yield seq, pack(values[start:stop]), None if times is None else pack(times[start:stop])
+        yield (
+            seq,
+            pack(values[start:stop]),
+            block(times, start, stop),
+            block(temperatures, start, stop),
+        )

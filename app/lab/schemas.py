@@ -119,6 +119,12 @@ class PositionUpload(BaseModel):
         "(e.g. since switch-on): with the symmetric order the fit then estimates a linear "
         "bias drift",
     )
+    temperatures_c: list[StrictFloat | StrictInt] | None = Field(
+        default=None,
+        max_length=MAX_SAMPLES_PER_POSITION,
+        description="each sample's gyro case temperature in °C, when the instrument "
+        "reports it (a change over 1 °C while recording is flagged: warm-up)",
+    )
     offset: StrictInt | None = Field(
         default=None,
         ge=0,

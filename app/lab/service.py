@@ -91,6 +91,7 @@ def record_position(
     unit: str = "deg/h",
     times: np.ndarray | None = None,
     angle_deg: float | None = None,
+    temperatures: np.ndarray | None = None,
 ) -> Take:
     """Store one position's readings (in ``unit``) as a new take, replacing the last."""
     check_position(session, part, position)
@@ -105,6 +106,7 @@ def record_position(
         times=times,
         source=source,
         unit=reading.unit,
+        temperatures=temperatures,
     )
 
 
@@ -146,6 +148,7 @@ def append_readings(
     times: np.ndarray | None = None,
     angle_deg: float | None = None,
     offset: int | None = None,
+    temperatures: np.ndarray | None = None,
 ) -> tuple[Take, int]:
     """Append readings to a position's API take (a streaming device); returns the take and
     how many samples were new (a retried batch with ``offset`` is stored once)."""
@@ -160,4 +163,5 @@ def append_readings(
         times=times,
         unit=reading.unit,
         offset=offset,
+        temperatures=temperatures,
     )

@@ -126,9 +126,11 @@ def store_take(
     source: str,
     unit: str = "deg/h",
     check_minimum: bool = True,
+    temperatures: np.ndarray | None = None,
 ) -> Take:
-    """Add a take (values in °/h) and supersede the previous one; the caller commits once,
-    so the position is either fully saved or not at all."""
+    """Add a take (values in °/h, optional times in s and case temperatures in °C) and
+    supersede the previous one; the caller commits once, so the position is either fully
+    saved or not at all."""
     check_editable(session)
     check_position(session, part, position)
     if values.size == 0:
@@ -143,7 +145,8 @@ def store_take(
         )
     _check_values(session, position, values)
     _check_angle_and_times(position, angle_deg, times, values.size)
-    _check_storage(db, session, values, times)
+    _check_temperatures(position, temperatures, values.size)
+    _check_storage(db, session, values, times, temperatures)
     if check_minimum and values.size < session.min_readings:
         raise UserError(
             "lab.too_few_readings",
@@ -175,8 +178,16 @@ def store_take(
     )
     db.add(take)
     db.flush()
-    for seq, value_blob, time_blob in chunks(values, times):
-        db.add(SampleChunk(take_id=take.id, seq=seq, values=value_blob, times=time_blob))
+    for seq, value_blob, time_blob, temperature_blob in chunks(values, times, temperatures):
+        db.add(
+            SampleChunk(
+                take_id=take.id,
+                seq=seq,
+                values=value_blob,
+                times=time_blob,
+                temperatures=temperature_blob,
+            )
+        )
     reopen(session)
     db.add(session)
     return take
@@ -193,6 +204,7 @@ def append_samples(
     times: np.ndarray | None,
     unit: str = "deg/h",
     offset: int | None = None,
+    temperatures: np.ndarray | None = None,
 ) -> tuple[Take, int]:
     """Append readings (°/h) to the position's current API take, or start one.
 
@@ -226,6 +238,7 @@ def append_samples(
         skip = stored - offset
         values = values[skip:]
         times = None if times is None else times[skip:]
+        temperatures = None if temperatures is None else temperatures[skip:]
     if take is None or not values.size:
         if take is None:
             if not values.size:
@@ -241,6 +254,7 @@ def append_samples(
                 source=InputMethod.api,
                 unit=unit,
                 check_minimum=False,
+                temperatures=temperatures,
             )
             return new, int(values.size)
         return take, 0
@@ -252,6 +266,7 @@ def append_samples(
         )
     _check_values(session, position, values)
     _check_angle_and_times(position, angle_deg, times, values.size)
+    _check_temperatures(position, temperatures, values.size)
     existing = db.exec(
         select(SampleChunk).where(SampleChunk.take_id == take.id).order_by(SampleChunk.seq)
     ).all()
@@ -260,12 +275,26 @@ def append_samples(
         raise UserError(
             "lab.times_mismatch", "Send times with every batch of a position, or with none."
         )
-    _check_storage(db, session, values, times, copying=take if take.frozen else None)
+    has_temperatures = all(chunk.temperatures is not None for chunk in existing)
+    if has_temperatures != (temperatures is not None):
+        raise UserError(
+            "lab.temperatures_mismatch",
+            "Send temperatures with every batch of a position, or with none.",
+        )
+    _check_storage(db, session, values, times, temperatures, copying=take if take.frozen else None)
     if take.frozen:  # submitted data never changes: continue in a copy of the take
         take, existing = _copy_take(db, take, existing)
     next_seq = max(chunk.seq for chunk in existing) + 1
-    for seq, value_blob, time_blob in chunks(values, times):
-        db.add(SampleChunk(take_id=take.id, seq=next_seq + seq, values=value_blob, times=time_blob))
+    for seq, value_blob, time_blob, temperature_blob in chunks(values, times, temperatures):
+        db.add(
+            SampleChunk(
+                take_id=take.id,
+                seq=next_seq + seq,
+                values=value_blob,
+                times=time_blob,
+                temperatures=temperature_blob,
+            )
+        )
     take.n_samples = stored + int(values.size)
     reopen(session)
     db.add(take)
@@ -300,16 +329,31 @@ def _copy_take(db: Session, take: Take, rows: list[SampleChunk]) -> tuple[Take, 
     db.add(copy)
     db.flush()
     copied = [
-        SampleChunk(take_id=copy.id, seq=row.seq, values=row.values, times=row.times)
+        SampleChunk(
+            take_id=copy.id,
+            seq=row.seq,
+            values=row.values,
+            times=row.times,
+            temperatures=row.temperatures,
+        )
         for row in rows
     ]
     db.add_all(copied)
     return copy, copied
 
 
+def stored_bytes():
+    """SQL: one chunk's bytes (samples, times, temperatures)."""
+    return (
+        func.length(SampleChunk.values)
+        + func.coalesce(func.length(SampleChunk.times), 0)
+        + func.coalesce(func.length(SampleChunk.temperatures), 0)
+    )
+
+
 def storage_used(db: Session, owner_id: int) -> int:
-    """Bytes of samples (and times) stored in every take of one student's sessions."""
-    size = func.length(SampleChunk.values) + func.coalesce(func.length(SampleChunk.times), 0)
+    """Bytes of samples (and times, temperatures) in every take of one student's sessions."""
+    size = stored_bytes()
     return int(
         db.exec(
             select(func.coalesce(func.sum(size), 0))
@@ -325,13 +369,14 @@ def _check_storage(
     session: LabSession,
     values: np.ndarray,
     times: np.ndarray | None,
+    temperatures: np.ndarray | None = None,
     copying: Take | None = None,
 ) -> None:
     """Refuse a recording that would take the student past their storage quota."""
     limit = get_settings().student_storage_mb * 1024 * 1024
-    adding = values.nbytes + (times.nbytes if times is not None else 0)
+    adding = sum(a.nbytes for a in (values, times, temperatures) if a is not None)
     if copying is not None:
-        adding += copying.n_samples * 16
+        adding += copying.n_samples * (8 * (1 + (times is not None) + (temperatures is not None)))
     if storage_used(db, session.owner_id) + adding > limit:
         raise UserError(
             "lab.storage_full",
@@ -361,6 +406,26 @@ def _check_angle_and_times(
             "lab.bad_times",
             f"Position {position}: give one finite time per reading.",
             position=position,
+        )
+
+
+PLAUSIBLE_TEMPERATURE_C = 200.0  # a case temperature beyond ±200 °C is a decoding error
+
+
+def _check_temperatures(position: int, temperatures: np.ndarray | None, n_values: int) -> None:
+    if temperatures is None:
+        return
+    if (
+        temperatures.size != n_values
+        or not np.all(np.isfinite(temperatures))
+        or float(np.max(np.abs(temperatures), initial=0.0)) > PLAUSIBLE_TEMPERATURE_C
+    ):
+        raise UserError(
+            "lab.bad_temperatures",
+            f"Position {position}: give one temperature per reading, in °C "
+            f"(at most ±{PLAUSIBLE_TEMPERATURE_C:g}).",
+            position=position,
+            limit=PLAUSIBLE_TEMPERATURE_C,
         )
 
 

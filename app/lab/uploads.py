@@ -49,6 +49,7 @@ class ParsedUpload:
     upload: UploadMeta | None = None
     values: np.ndarray | None = None
     times: np.ndarray | None = None
+    temperatures: np.ndarray | None = None
     problem: Exception | None = None
 
     def checked(self) -> ParsedUpload:
@@ -59,29 +60,33 @@ class ParsedUpload:
 
 def parsed_upload(request: Request, body: Annotated[bytes, Depends(upload_body)]) -> ParsedUpload:
     try:
-        meta, values, times = read_upload(request, body)
+        meta, values, times, temperatures = read_upload(request, body)
     except (UserError, RequestValidationError) as error:
         return ParsedUpload(problem=error)
-    return ParsedUpload(meta, values, times)
+    return ParsedUpload(meta, values, times, temperatures)
 
 
 BINARY_TYPES = ("application/octet-stream", "application/x-npy", "application/npy")
 
 
-def read_upload(request: Request, body: bytes) -> tuple[UploadMeta, np.ndarray, np.ndarray | None]:
+Arrays = tuple[np.ndarray, np.ndarray | None, np.ndarray | None]  # values, times, °C
+
+
+def read_upload(request: Request, body: bytes) -> tuple[UploadMeta, *Arrays]:
     """JSON (a PositionUpload), ``text/csv`` (one value per line, or ``time_s,value``), or
     binary: raw little-endian float64/float32 or ``.npy`` (see binary_upload)."""
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if content_type == "text/csv":
         values, times = parse_position_csv(body)
-        return query_meta(request), values, times
+        return query_meta(request), values, times, None
     if content_type in BINARY_TYPES:
         query = request.query_params
         if is_npy(body, content_type):
             values, times = parse_npy(body)
+            temperatures = None
         else:
-            values, times = parse_raw(body, query.get("dtype"), query.get("columns"))
-        return query_meta(request), values, times
+            values, times, temperatures = parse_raw(body, query.get("dtype"), query.get("columns"))
+        return query_meta(request), values, times, temperatures
     if content_type not in ("application/json", ""):
         raise UserError("api.content_type", status=415)
     data = loads_finite(body)
@@ -89,8 +94,9 @@ def read_upload(request: Request, body: bytes) -> tuple[UploadMeta, np.ndarray, 
         upload = PositionUpload.model_validate(data)
     except ValidationError as error:
         raise RequestValidationError(error.errors()) from None
-    values, times = upload_arrays(upload)
-    return UploadMeta(upload.unit, upload.angle_deg, upload.offset), values, times
+    values, times, temperatures = upload_arrays(upload)
+    meta = UploadMeta(upload.unit, upload.angle_deg, upload.offset)
+    return meta, values, times, temperatures
 
 
 def query_meta(request: Request) -> UploadMeta:
@@ -108,7 +114,7 @@ def query_meta(request: Request) -> UploadMeta:
     return UploadMeta(unit, angle_deg, int(offset) if offset is not None else None)
 
 
-def upload_arrays(upload: PositionUpload) -> tuple[np.ndarray, np.ndarray | None]:
+def upload_arrays(upload: PositionUpload) -> Arrays:
     values = np.asarray(upload.samples, dtype=float)
     if not np.all(np.isfinite(values)):
         raise UserError("api.samples_not_finite")
@@ -119,7 +125,12 @@ def upload_arrays(upload: PositionUpload) -> tuple[np.ndarray, np.ndarray | None
             raise UserError("api.times_count")
         if not np.all(np.isfinite(times)):
             raise UserError("api.times_not_finite")
-    return values, times
+    temperatures = None
+    if upload.temperatures_c is not None:
+        temperatures = np.asarray(upload.temperatures_c, dtype=float)
+        if temperatures.size != values.size:
+            raise UserError("api.temperatures_count")
+    return values, times, temperatures
 
 
 Upload = Annotated[ParsedUpload, Depends(parsed_upload)]

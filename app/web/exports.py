@@ -112,16 +112,24 @@ class Selection:
         return sorted(db.exec(statement).all(), key=lambda t: (PARTS.index(t.part), t.position))
 
 
-def take_blocks(db: Session, take: Take) -> Iterator[tuple[np.ndarray, np.ndarray | None]]:
-    """A take's samples block by block (values °/h, times s or None), in order."""
+Block = tuple[np.ndarray, np.ndarray | None, np.ndarray | None]
+
+
+def take_blocks(db: Session, take: Take) -> Iterator[Block]:
+    """A take's samples block by block (values °/h, times s or None, temperatures °C or
+    None), in order."""
     rows = db.exec(
-        select(SampleChunk.values, SampleChunk.times)
+        select(SampleChunk.values, SampleChunk.times, SampleChunk.temperatures)
         .where(SampleChunk.take_id == take.id)
         .order_by(SampleChunk.seq)
         .execution_options(yield_per=4)
     )
-    for values, times in rows:
-        yield unpack(values), None if times is None else unpack(times)
+    for values, times, temperatures in rows:
+        yield (
+            unpack(values),
+            None if times is None else unpack(times),
+            None if temperatures is None else unpack(temperatures),
+        )
 
 
 def solve_takes(db: Session, session: LabSession, takes: list[Take]) -> dict[str, PartResult]:
@@ -130,11 +138,13 @@ def solve_takes(db: Session, session: LabSession, takes: list[Take]) -> dict[str
     data: dict[str, dict[int, PositionData]] = {part: {} for part in PARTS}
     for take in takes:
         blocks = list(take_blocks(db, take))
-        values = np.concatenate([v for v, _ in blocks]) if blocks else np.empty(0)
-        times = None
-        if blocks and all(t is not None for _, t in blocks):
-            times = np.concatenate([t for _, t in blocks])
-        data[take.part][take.position] = PositionData.of(take, values, times)
+        values = np.concatenate([v for v, _, _ in blocks]) if blocks else np.empty(0)
+        times = temperatures = None
+        if blocks and all(t is not None for _, t, _ in blocks):
+            times = np.concatenate([t for _, t, _ in blocks])
+        if blocks and all(c is not None for _, _, c in blocks):
+            temperatures = np.concatenate([c for _, _, c in blocks])
+        data[take.part][take.position] = PositionData.of(take, values, times, temperatures)
     station = station_noise_for(db, session)
     return {part: solve_part(session, part, data[part], station) for part in PARTS}
 
@@ -150,7 +160,8 @@ def _results(db: Session, session: LabSession, selection: Selection, takes: list
 
 
 def readings_csv(selection: Selection) -> Iterator[str]:
-    """``part,position,angle_deg,source,time_s,value`` (°/h) for every sample, streamed."""
+    """``part,position,angle_deg,source,time_s,value`` (°/h) for every sample, streamed,
+    with ``temperature_c`` (empty where not reported) when any position has temperatures."""
     with read_session() as db:
         session = db.get(LabSession, selection.session_id)
         yield BOM
@@ -172,18 +183,28 @@ def readings_csv(selection: Selection) -> Iterator[str]:
                     f"{take.part} position {take.position}: the first {take.trim_start} "
                     "readings (the transient after turning) are trimmed: not used, not listed"
                 )
-        yield "part,position,angle_deg,source,time_s,value\n"
+        with_temperatures = any(take_has(db, take, SampleChunk.temperatures) for take in takes)
+        yield "part,position,angle_deg,source,time_s,value"
+        yield ",temperature_c\n" if with_temperatures else "\n"
         for take in takes:
             prefix = f"{take.part},{take.position},{take.angle_deg:g},{neutralise(take.source)},"
             index = 0
             skip = take.trim_start or 0
-            for values, times in take_blocks(db, take):
+            for values, times, temperatures in take_blocks(db, take):
                 stamps = times if times is not None else np.arange(index, index + values.size)
                 index += values.size
                 start = min(max(skip - (index - values.size), 0), values.size)
+                rows = zip(stamps[start:].tolist(), values[start:].tolist(), strict=True)
+                if not with_temperatures:
+                    yield "".join(f"{prefix}{t:.3f},{v:.6f}\n" for t, v in rows)
+                    continue
+                cells = (
+                    [f"{c:.2f}" for c in temperatures[start:].tolist()]
+                    if temperatures is not None
+                    else [""] * (values.size - start)
+                )
                 yield "".join(
-                    f"{prefix}{t:.3f},{v:.6f}\n"
-                    for t, v in zip(stamps[start:].tolist(), values[start:].tolist(), strict=True)
+                    f"{prefix}{t:.3f},{v:.6f},{c}\n" for (t, v), c in zip(rows, cells, strict=True)
                 )
 
 
@@ -198,7 +219,8 @@ def _number_list(arrays: Iterable[np.ndarray]) -> Iterator[str]:
 
 
 def session_json(selection: Selection, attempts: list[dict] | None = None) -> Iterator[str]:
-    """``{"metadata", "positions": [... "values_deg_h", "times_s"], "results"[, "attempts"]}``
+    """``{"metadata", "positions": [... "values_deg_h", "times_s", "temperatures_c"],
+    "results"[, "attempts"]}``
     written piece by piece (the samples never sit in memory as one list)."""
     with read_session() as db:
         session = db.get(LabSession, selection.session_id)
@@ -222,25 +244,31 @@ def session_json(selection: Selection, attempts: list[dict] | None = None) -> It
                 "trim_start": take.trim_start,  # the first readings, kept but not used
             }
             yield ("" if number == 0 else ", ") + json.dumps(head)[:-1] + ', "values_deg_h": ['
-            yield from _number_list(values for values, _ in take_blocks(db, take))
-            if take_has_times(db, take):
-                yield '], "times_s": ['
-                yield from _number_list(times for _, times in take_blocks(db, take))
-                yield "]}"
-            else:
-                yield '], "times_s": null}'
+            yield from _number_list(values for values, _, _ in take_blocks(db, take))
+            yield "]"
+            for name, column, index in (
+                ("times_s", SampleChunk.times, 1),
+                ("temperatures_c", SampleChunk.temperatures, 2),
+            ):
+                if take_has(db, take, column):
+                    yield f', "{name}": ['
+                    yield from _number_list(block[index] for block in take_blocks(db, take))
+                    yield "]"
+                else:
+                    yield f', "{name}": null'
+            yield "}"
         yield '], "results": ' + json.dumps(_results(db, session, selection, takes))
         if attempts is not None:
             yield ', "attempts": ' + json.dumps(attempts, ensure_ascii=False)
         yield "}\n"
 
 
-def take_has_times(db: Session, take: Take) -> bool:
-    """Whether every stored block of the take carries times."""
+def take_has(db: Session, take: Take, column) -> bool:
+    """Whether every stored block of the take carries ``column`` (times, temperatures)."""
     missing = db.exec(
         select(func.count())
         .select_from(SampleChunk)
-        .where(SampleChunk.take_id == take.id, SampleChunk.times.is_(None))
+        .where(SampleChunk.take_id == take.id, column.is_(None))
     ).one()
     return missing == 0
 
