@@ -293,7 +293,7 @@ def test_the_command_line_replays_checks_and_explains(tmp_path, capsys):
     report = capsys.readouterr().err
     assert code == 3  # finished, but the record has a gap
     assert "199 frames read, 199 samples made" in report
-    assert "1 gap(s), 1 sample(s) missing" in report and "Temperature 30.00 to 30.00 °C" in report
+    assert "samples missing: 1, in gaps: 1" in report and "Temperature 30.00 to 30.00 °C" in report
     assert table.read_text().count("\n") == 200  # header + 199 rows
     code = main(
         ["bridge", "--replay", str(recording), "--format", "frame:hdr=zz", "--language", "zh-CN"]
