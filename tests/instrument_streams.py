@@ -25,26 +25,26 @@ TEACHING_SPEC = "hdr=99 66, z:<i4*0.0001, temp:<i2*0.01, seq:u1, check=sum8@2, r
 RAD_PER_DEG = math.pi / 180
 
 
-def crc32_mpeg2(data: bytes) -> int:
-    """CRC-32/MPEG-2 bit by bit: poly 0x04C11DB7, init 0xFFFFFFFF, MSB first, no final XOR."""
-    crc = 0xFFFFFFFF
+def crc_msb_first(data: bytes, width: int, polynomial: int, initial: int) -> int:
+    """A CRC bit by bit from its definition: MSB first, no reflection, no final XOR."""
+    top, mask = 1 << (width - 1), (1 << width) - 1
+    crc = initial
     for byte in data:
-        crc ^= byte << 24
+        crc ^= byte << (width - 8)
         for _ in range(8):
-            crc = ((crc << 1) ^ 0x04C11DB7) if crc & 0x80000000 else crc << 1
-            crc &= 0xFFFFFFFF
+            crc = ((crc << 1) ^ polynomial) if crc & top else crc << 1
+            crc &= mask
     return crc
+
+
+def crc32_mpeg2(data: bytes) -> int:
+    """CRC-32/MPEG-2: poly 0x04C11DB7, init 0xFFFFFFFF."""
+    return crc_msb_first(data, 32, 0x04C11DB7, 0xFFFFFFFF)
 
 
 def crc16_ccitt(data: bytes) -> int:
-    """CRC-16/CCITT-FALSE bit by bit: poly 0x1021, init 0xFFFF, MSB first."""
-    crc = 0xFFFF
-    for byte in data:
-        crc ^= byte << 8
-        for _ in range(8):
-            crc = ((crc << 1) ^ 0x1021) if crc & 0x8000 else crc << 1
-            crc &= 0xFFFF
-    return crc
+    """CRC-16/CCITT-FALSE: poly 0x1021, init 0xFFFF."""
+    return crc_msb_first(data, 16, 0x1021, 0xFFFF)
 
 
 def dsp1750_frame(

@@ -11,7 +11,7 @@ from sqlmodel import select
 
 from app.config import get_settings
 from app.db import read_session, write_session
-from app.lab.store import storage_used
+from app.lab.quota import storage_used
 from app.models import Role, SampleChunk, Take, User, utcnow
 from tests.factories import API, csrf_from, login, make_user, new_api_session, post_form, token_for
 

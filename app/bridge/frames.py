@@ -338,8 +338,7 @@ class FrameDecoder:
         if found < 0:
             found = max(position + 1, end - len(self.spec.header) + 1)
         self.stats.garbage_bytes += found - position
-        if self._locked:
-            self._locked = False
+        self._locked = False
         return found
 
     def _check(self, view: memoryview, position: int) -> bool:

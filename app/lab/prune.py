@@ -9,7 +9,7 @@ from datetime import timedelta
 from sqlalchemy import delete, func
 from sqlmodel import Session, select
 
-from app.lab.store import stored_bytes
+from app.lab.quota import stored_bytes
 from app.models import SampleChunk, Take, utcnow
 
 

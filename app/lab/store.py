@@ -9,10 +9,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from sqlmodel import Session, func, select
+from sqlmodel import Session, select
 
-from app.config import get_settings
 from app.core.exceptions import UserError
+from app.lab.quota import check_storage
 from app.lab.samples import chunks, unpack
 from app.lab.sim import FIRST_PASS, position_count
 from app.models import (
@@ -146,7 +146,7 @@ def store_take(
     _check_values(session, position, values)
     _check_angle_and_times(position, angle_deg, times, values.size)
     _check_temperatures(position, temperatures, values.size)
-    _check_storage(db, session, values, times, temperatures)
+    check_storage(db, session, values, times, temperatures)
     if check_minimum and values.size < session.min_readings:
         raise UserError(
             "lab.too_few_readings",
@@ -281,7 +281,7 @@ def append_samples(
             "lab.temperatures_mismatch",
             "Send temperatures with every batch of a position, or with none.",
         )
-    _check_storage(db, session, values, times, temperatures, copying=take if take.frozen else None)
+    check_storage(db, session, values, times, temperatures, copying=take if take.frozen else None)
     if take.frozen:  # submitted data never changes: continue in a copy of the take
         take, existing = _copy_take(db, take, existing)
     next_seq = max(chunk.seq for chunk in existing) + 1
@@ -340,51 +340,6 @@ def _copy_take(db: Session, take: Take, rows: list[SampleChunk]) -> tuple[Take, 
     ]
     db.add_all(copied)
     return copy, copied
-
-
-def stored_bytes():
-    """SQL: one chunk's bytes (samples, times, temperatures)."""
-    return (
-        func.length(SampleChunk.values)
-        + func.coalesce(func.length(SampleChunk.times), 0)
-        + func.coalesce(func.length(SampleChunk.temperatures), 0)
-    )
-
-
-def storage_used(db: Session, owner_id: int) -> int:
-    """Bytes of samples (and times, temperatures) in every take of one student's sessions."""
-    size = stored_bytes()
-    return int(
-        db.exec(
-            select(func.coalesce(func.sum(size), 0))
-            .join(Take, Take.id == SampleChunk.take_id)
-            .join(LabSession, LabSession.id == Take.session_id)
-            .where(LabSession.owner_id == owner_id)
-        ).one()
-    )
-
-
-def _check_storage(
-    db: Session,
-    session: LabSession,
-    values: np.ndarray,
-    times: np.ndarray | None,
-    temperatures: np.ndarray | None = None,
-    copying: Take | None = None,
-) -> None:
-    """Refuse a recording that would take the student past their storage quota."""
-    limit = get_settings().student_storage_mb * 1024 * 1024
-    adding = sum(a.nbytes for a in (values, times, temperatures) if a is not None)
-    if copying is not None:
-        adding += copying.n_samples * (8 * (1 + (times is not None) + (temperatures is not None)))
-    if storage_used(db, session.owner_id) + adding > limit:
-        raise UserError(
-            "lab.storage_full",
-            f"Your recordings would use more than your {limit // 2**20} MB of storage. "
-            "Ask your teacher to remove old re-recordings.",
-            status=413,
-            limit_mb=limit // 2**20,
-        )
 
 
 MAX_ANGLE_DEG = 3600.0  # ten turns of the dial: anything beyond is a typing mistake
