@@ -192,12 +192,12 @@ def test_rate_random_walk_grows_like_sqrt_time():
 def test_gauss_markov_is_stationary_with_its_sigma():
     preset = replace(
         PRESETS["navigation-fog"].ideal(),
-        bias_instability_deg_h=1.0,
-        bias_corr_time_s=5.0,
+        markov_sigma_deg_h=1.0,
+        markov_corr_time_s=5.0,
         sample_rate_hz=10.0,
     )
     values = GyroStream(preset, 3).read(np.zeros(200_000))
-    assert values.std() == pytest.approx(0.664 / 0.6178, rel=0.05)
+    assert values.std() == pytest.approx(1.0, rel=0.05)
     lag = int(5.0 * 10)
     correlation = np.corrcoef(values[:-lag], values[lag:])[0, 1]
     assert correlation == pytest.approx(math.exp(-1), abs=0.05)

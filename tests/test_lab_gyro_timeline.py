@@ -80,7 +80,7 @@ def test_slow_bias_carries_across_positions_as_the_noise_model_says():
             means.append(values.mean() - take.true_rate * (1 + 500e-6) - turn_on_bias(lab))
         errors.append(means)
     measured = np.cov(np.asarray(errors).T)
-    model = GyroNoise.from_preset(PRESETS["teaching-fog"]).mean_covariance(windows)
+    model = GyroNoise.from_preset(PRESETS["teaching-fog"]).mean_covariance(windows, warm_up=False)
     correlation = model[0, 1] / math.sqrt(model[0, 0] * model[1, 1])
     assert correlation > 0.2
     found = measured[0, 1] / math.sqrt(measured[0, 0] * measured[1, 1])
@@ -136,7 +136,7 @@ def test_north_from_part_a_carries_into_latitude():
     miss in north predicts; turning to south instead (the handout's sign check skipped)
     puts Earth's axis behind the gyro and the fit lands beyond 90°."""
     lab = session(5, "navigation-fog", **level(sim_misalign_h_deg=3.0))
-    clock, positions, angles = 60.0, [], []
+    clock, positions, angles = 3600.0, [], []  # a warm gyro
     for position in range(1, 5):
         lab.sim_table_heading = position
         lab.sim_turns += 1
@@ -226,7 +226,7 @@ def test_the_symmetric_order_cancels_a_linear_drift(monkeypatch):
     error, result = _heading_error(lab, 8)
     assert result.fit.drift == pytest.approx(2.0, abs=4 * result.fit.drift_sigma)
     assert abs(error) < 4 * result.azimuth_sigma_deg
-    assert abs(plain) > 10 * abs(error)
+    assert abs(plain) > 5 * abs(error)  # the rest is the flicker bias's own wander
 
 
 def test_the_symmetric_order_halves_a_cold_gyros_warm_up_error():

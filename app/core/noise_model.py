@@ -9,8 +9,11 @@ computed from the model, windows of the recording schedule given (lab-reference 
 Terms, with continuous-time covariances of the rate (°/h):
 
 * angle random walk N (°/√h): white, spectral density (60·N)² (°/h)²·s;
-* bias instability: first-order Gauss–Markov, variance σ² = (1.075·B)², correlation time
-  T, autocovariance σ²·e^(−|Δ|/T);
+* bias instability B (°/h): flicker (1/f) noise, the sum of Gauss–Markov components of
+  :mod:`app.core.flicker` (equal variances v, correlation times T_j log-spaced over the
+  band), autocovariance Σ_j v·e^(−|Δ|/T_j) -- an Allan floor 0.664·B over the band;
+* a correlated bias where one is known (a data sheet's correlation time, or a fit that
+  found the Gauss–Markov bump): variance σ_m², correlation time T_m;
 * rate random walk K (°/h/√h): Brownian, Cov(r(s), r(t)) = (K²/3600)·min(s, t) with s, t
   in seconds from switch-on;
 * angle quantisation q (°): the rate is the difference of an angle rounded to q, so a
@@ -19,8 +22,10 @@ Terms, with continuous-time covariances of the rate (°/h):
 
 Allan variance of the same model (used by the dwell advice and printed by the CLI):
 
-    σ²_A(τ) = (60N)²/τ + (3600·q)²/(4τ²) + (2σ²T/τ)·[1 − (T/2τ)(3 − 4e^(−τ/T) + e^(−2τ/T))]
-              + (K²/3600)·τ/3                                   (IEEE 952, annex C)
+    σ²_A(τ) = (60N)²/τ + (3600·q)²/(4τ²) + Σ_j v_j·g(τ/T_j) + (K²/3600)·τ/3
+    g(x) = (2/x)·[1 − (3 − 4e^(−x) + e^(−2x))/(2x)]             (IEEE 952, annex C)
+
+the sum running over the flicker components and the Gauss–Markov bias.
 """
 
 from __future__ import annotations
@@ -31,8 +36,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from app.core.flicker import DEFAULT_BAND_S, flicker_components, gauss_markov_avar
 from app.core.presets import GyroPreset
-from app.core.simulate import GM_SIGMA_PER_B
 
 SECONDS_PER_HOUR = 3600.0
 
@@ -80,29 +85,44 @@ def back_to_back(
 
 @dataclass(frozen=True)
 class GyroNoise:
-    """The noise terms of one gyro and the indexing σ of its turntable."""
+    """The noise terms of one gyro and the indexing σ of its turntable.
+
+    ``bias_instability_deg_h`` is the flicker floor B over ``flicker_band_s``;
+    ``markov_sigma_deg_h`` and ``markov_corr_time_s`` a correlated (Gauss–Markov) bias."""
 
     arw_deg_rt_h: float = 0.0
     bias_instability_deg_h: float = 0.0
-    bias_corr_time_s: float = 0.0
     rrw_deg_h_rt_h: float = 0.0
     angle_lsb_deg: float = 0.0
     indexing_sigma_deg: float = 0.0
+    flicker_band_s: tuple[float, float] = DEFAULT_BAND_S
+    markov_sigma_deg_h: float = 0.0
+    markov_corr_time_s: float = 0.0
+    warmup_bias_deg_h: float = 0.0  # the warm-up: b_w·e^(−t/τ_w), b_w of this size
+    warmup_time_constant_s: float = 0.0
 
     @classmethod
     def from_preset(cls, preset: GyroPreset) -> GyroNoise:
         return cls(
             arw_deg_rt_h=preset.arw_deg_rt_h,
             bias_instability_deg_h=preset.bias_instability_deg_h,
-            bias_corr_time_s=preset.bias_corr_time_s,
             rrw_deg_h_rt_h=preset.rrw_deg_h_rt_h,
             angle_lsb_deg=preset.angle_lsb_deg,
             indexing_sigma_deg=preset.indexing_sigma_arcsec / 3600.0,
+            flicker_band_s=preset.flicker_band_s,
+            markov_sigma_deg_h=preset.markov_sigma_deg_h,
+            markov_corr_time_s=preset.markov_corr_time_s,
+            warmup_bias_deg_h=preset.warmup_bias_deg_h,
+            warmup_time_constant_s=preset.warmup_time_constant_s,
         )
 
-    @property
-    def gm_variance(self) -> float:
-        return (GM_SIGMA_PER_B * self.bias_instability_deg_h) ** 2
+    def correlated_terms(self) -> list[tuple[float, float]]:
+        """(variance (°/h)², correlation time s) of every exponentially correlated part:
+        the flicker components and the Gauss–Markov bias."""
+        terms = flicker_components(self.bias_instability_deg_h, self.flicker_band_s)
+        if self.markov_sigma_deg_h > 0 and self.markov_corr_time_s > 0:
+            terms.append((self.markov_sigma_deg_h**2, self.markov_corr_time_s))
+        return terms
 
     @property
     def white_density(self) -> float:
@@ -114,29 +134,46 @@ class GyroNoise:
         """K²/3600: growth of the random walk's variance, (°/h)² per second."""
         return self.rrw_deg_h_rt_h**2 / SECONDS_PER_HOUR
 
-    def allan_variance(self, tau_s: float) -> float:
-        """σ²_A(τ) in (°/h)² (see the module docstring)."""
-        tau = float(tau_s)
+    def allan_variance(self, tau_s) -> np.ndarray | float:
+        """σ²_A(τ) in (°/h)² (see the module docstring); τ a number or an array."""
+        tau = np.asarray(tau_s, dtype=float)
         total = self.white_density / tau
-        total += (SECONDS_PER_HOUR * self.angle_lsb_deg) ** 2 / (4.0 * tau * tau)
-        if self.gm_variance and self.bias_corr_time_s:
-            t = self.bias_corr_time_s
-            x = tau / t
-            total += (2.0 * self.gm_variance * t / tau) * (
-                1.0 - (3.0 - 4.0 * math.exp(-x) + math.exp(-2.0 * x)) / (2.0 * x)
-            )
-        total += self.rrw_rate * tau / 3.0
-        return total
+        total = total + (SECONDS_PER_HOUR * self.angle_lsb_deg) ** 2 / (4.0 * tau * tau)
+        for variance, corr in self.correlated_terms():
+            total = total + variance * gauss_markov_avar(tau, corr)
+        total = total + self.rrw_rate * tau / 3.0
+        return float(total) if total.ndim == 0 else total
 
-    def mean_covariance(self, windows: Sequence[Window], *, continuous: bool = True) -> np.ndarray:
+    def warm_up_profile(self, windows: Sequence[Window]) -> np.ndarray:
+        """Each window's mean of e^(−t/τ_w), t from switch-on:
+        (τ_w/L)·(e^(−a/τ_w) − e^(−(a+L)/τ_w)) for a window from a of length L."""
+        tau = self.warmup_time_constant_s
+        if tau <= 0 or not self.warmup_bias_deg_h:
+            return np.zeros(len(windows))
+        return np.array(
+            [
+                tau / w.length_s * (math.exp(-w.start_s / tau) - math.exp(-w.end_s / tau))
+                for w in windows
+            ]
+        )
+
+    def mean_covariance(
+        self, windows: Sequence[Window], *, continuous: bool = True, warm_up: bool = True
+    ) -> np.ndarray:
         """Covariance matrix of the rate's mean over each window, (°/h)².
 
-        ``continuous``: one gyro running through every window (one timeline);
-        otherwise each window is a separate recording started afresh (no correlation
-        between windows, random walk from zero, Gauss–Markov stationary)."""
+        ``continuous``: one gyro running through every window (one timeline, times from
+        switch-on); otherwise each window is a separate recording started afresh (no
+        correlation between windows, random walk from zero, Gauss–Markov stationary).
+        ``warm_up`` (on one timeline): the warm-up b_w·e^(−t/τ_w) is a bias of unknown
+        size b_w ~ N(0, warmup_bias²) -- its sign and size differ from one switch-on to the
+        next -- so the means share the rank-one term b²·g·gᵀ, g the windows'
+        :meth:`warm_up_profile`: nothing once the gyro is warm, the honest uncertainty of a
+        cold start."""
         count = len(windows)
         cov = np.zeros((count, count))
         quant = (SECONDS_PER_HOUR * self.angle_lsb_deg) ** 2 / 12.0
+        terms = self.correlated_terms()
         for i, wi in enumerate(windows):
             for j, wj in enumerate(windows):
                 if i != j and not continuous:
@@ -147,17 +184,21 @@ class GyroNoise:
                     value += self.white_density / li + 2.0 * quant / (li * li)
                 elif abs(wi.end_s - wj.start_s) < 1e-9 or abs(wj.end_s - wi.start_s) < 1e-9:
                     value -= quant / (li * lj)  # a shared end of the rounded angle
-                value += (
-                    self.gm_variance
-                    * _exponential_mean_product(wi, wj, self.bias_corr_time_s)
-                    / (li * lj)
-                )
+                for variance, corr in terms:
+                    value += variance * _exponential_mean_product(wi, wj, corr) / (li * lj)
                 if continuous:
                     value += self.rrw_rate * _brownian_integral(wi, wj) / (li * lj)
                 elif i == j:
                     value += self.rrw_rate * li / 3.0  # a walk from zero at the start
                 cov[i, j] = value
+        if continuous and warm_up:
+            cov = cov + self.warm_up_cov(windows)
         return cov
+
+    def warm_up_cov(self, windows: Sequence[Window]) -> np.ndarray:
+        """The warm-up's share of :meth:`mean_covariance`: b²·g·gᵀ (zero once warm)."""
+        profile = self.warm_up_profile(windows)
+        return self.warmup_bias_deg_h**2 * np.outer(profile, profile)
 
 
 def _exponential_mean_product(wi: Window, wj: Window, t: float) -> float:
@@ -166,7 +207,7 @@ def _exponential_mean_product(wi: Window, wj: Window, t: float) -> float:
         return 0.0
     if wi is wj or (wi.start_s == wj.start_s and wi.length_s == wj.length_s):
         length = wi.length_s
-        return 2.0 * t * length - 2.0 * t * t * (1.0 - math.exp(-length / t))
+        return 2.0 * t * length + 2.0 * t * t * math.expm1(-length / t)
     first, second = (wi, wj) if wi.start_s <= wj.start_s else (wj, wi)
     if first.end_s > second.start_s + 1e-9:
         raise ValueError("windows overlap")
@@ -222,37 +263,92 @@ def four_position_sigma(
     lab-reference §3 and §6; IEEE Std 952-1997.
     """
     count = max(1, int(round(dwell_s * rate_hz)))
-    cov = noise.mean_covariance(back_to_back([count] * 4, rate_hz))
+    cov = noise.mean_covariance(back_to_back([count] * 4, rate_hz), warm_up=False)  # warm
     variance = (FOUR_X @ cov @ FOUR_X + FOUR_Y @ cov @ FOUR_Y) / 2.0
     return math.degrees(math.sqrt(max(variance, 0.0)) / amplitude)
 
 
-DWELL_RANGE_S = (5.0, 1800.0)  # the lab's shortest sensible and longest allowed dwell
-CORRELATED_SHARE = 1.5  # σ² = 1.5·σ²_white: correlated noise adds half the white variance
+LAB_DWELL_S = (5.0, 1800.0)  # the lab's shortest sensible and longest allowed dwell
+DWELL_GRID_S = np.geomspace(0.01, 1.0e6, 8 * 24 + 1)  # 24 per decade: every caller's grid
+NEAR_BEST = 1.1  # "within 10 % of the best σ"
 
 
 @dataclass(frozen=True)
 class DwellAdvice:
-    """Four-position heading σ against dwell (for an amplitude H of 1 °/h: divide by H)."""
+    """Four-position heading σ against dwell (for an amplitude H of 1 °/h: divide by H).
+
+    ``recommended_s`` minimises σ within the span; ``lower_bound`` says σ is still falling
+    at the span's end (``limit``: "record", the record's longest τ, or "lab", the longest
+    dwell the lab allows), so the optimum lies beyond it; ``near_best_s`` is the shortest
+    dwell whose σ is within 10 % of the best."""
 
     dwell_s: np.ndarray
-    sigma: np.ndarray  # the full noise model
-    white_sigma: np.ndarray  # angle random walk alone
+    sigma: np.ndarray  # the full noise model (or the curve, when no model fits)
+    white_sigma: np.ndarray | None  # angle random walk alone
     recommended_s: float
+    lower_bound: bool
+    near_best_s: float
+    limit: str
+    source: str = "model"  # "model" or "curve"
+
+    def to_json(self) -> dict:
+        return {
+            "recommended_s": self.recommended_s,
+            "lower_bound": self.lower_bound,
+            "near_best_s": self.near_best_s,
+            "limit": self.limit,
+            "source": self.source,
+        }
 
 
-def recommended_dwell(noise: GyroNoise, rate_hz: float) -> DwellAdvice:
-    """The dwell per position to recommend for four-position north finding.
+def _advice(dwell, sigma, white, limit, source) -> DwellAdvice:
+    best = int(np.argmin(sigma))
+    lower_bound = best == dwell.size - 1 and dwell.size > 1 and sigma[-1] < sigma[-2]
+    near = int(np.flatnonzero(sigma <= NEAR_BEST * sigma[best])[0])
+    return DwellAdvice(
+        dwell,
+        sigma,
+        white,
+        float(dwell[best]),
+        bool(lower_bound),
+        float(dwell[near]),
+        limit,
+        source,
+    )
 
-    From the same noise model the simulator generates: where the correlated noise (bias
-    instability, rate random walk, quantisation) has grown to half the white noise's variance
-    in the heading, σ_full² = 1.5·σ_white²; beyond it a longer dwell pays off more slowly
-    than 1/√T.  Within 5 s … 30 min (the longest dwell the lab allows when white noise
-    always wins).  The threshold sits where σ_full²/σ_white² still rises steeply for every
-    preset, so the crossing does not flip with small changes of a fitted B.  The heading σ
-    scales as 1/H, so the choice does not depend on the latitude.  ("Where the ARW line
-    meets 0.664·B" jumped with every estimate of B, and a Gauss–Markov bias has no such
-    floor; this crossing of two smooth curves moves smoothly with the noise terms.)
+
+def dwell_grid(span_s: tuple[float, float]) -> np.ndarray:
+    """The dwells considered: the fixed grid (24 per decade) inside ``span_s`` and its two
+    ends -- the same dwells for every caller, so the explorer, the Allan page and the CLI
+    land on the same number.
+
+    Parameters
+    ----------
+    span_s : (float, float)
+        The shortest and longest dwell (s).
+
+    Returns
+    -------
+    numpy.ndarray
+        The dwells (s), increasing.
+    """
+    low, high = float(span_s[0]), float(span_s[1])
+    inside = DWELL_GRID_S[(low * (1 + 1e-9) < DWELL_GRID_S) & (high * (1 - 1e-9) > DWELL_GRID_S)]
+    return np.unique(np.concatenate([[low], inside, [high]]))
+
+
+def recommended_dwell(
+    noise: GyroNoise, rate_hz: float, span_s: tuple[float, float] = LAB_DWELL_S, limit: str = "lab"
+) -> DwellAdvice:
+    """The dwell per position that minimises the four-position heading σ.
+
+    σ_A(T) = √((v_x + v_y)/2)/H for four back-to-back positions of dwell T (the noise
+    model's covariance of the four means, :func:`four_position_sigma`), minimised over the
+    fixed dwell grid inside ``span_s``.  White noise falls as 1/√T, the flicker floor stays,
+    rate random walk and a Gauss–Markov bump rise: with only white and flicker noise σ keeps
+    falling, the optimum lies beyond the span, and the advice says so (``lower_bound``) and
+    gives the shortest dwell within 10 % of the best σ.  The heading σ scales as 1/H, so the
+    choice does not depend on the latitude.
 
     Parameters
     ----------
@@ -260,21 +356,41 @@ def recommended_dwell(noise: GyroNoise, rate_hz: float) -> DwellAdvice:
         The gyro's noise terms.
     rate_hz : float
         Sample rate (Hz).
+    span_s : (float, float)
+        The dwells to consider (s): the lab's range, or a record's τ range.
+    limit : {"lab", "record"}
+        What the span's end is, for the words of a lower bound.
 
     Returns
     -------
     DwellAdvice
-        The heading σ against dwell (s), with the full noise model and with white noise
-    alone, and the recommended dwell (s).
+        The heading σ against dwell, the recommended dwell, whether it is a lower bound,
+        and the shortest dwell within 10 % of the best.
 
     References
     ----------
-    lab-reference §6; IEEE Std 952-1997, annex C.
+    lab-reference §3 and §6; IEEE Std 952-1997, annex C.
     """
-    dwell = np.geomspace(*DWELL_RANGE_S, 72)
+    dwell = dwell_grid(span_s)
     white_noise = GyroNoise(arw_deg_rt_h=noise.arw_deg_rt_h)
     sigma = np.array([four_position_sigma(noise, rate_hz, t, 1.0) for t in dwell])
     white = np.array([four_position_sigma(white_noise, rate_hz, t, 1.0) for t in dwell])
-    crossing = np.flatnonzero(sigma**2 >= CORRELATED_SHARE * white**2)
-    recommended = float(dwell[crossing[0]]) if crossing.size else DWELL_RANGE_S[1]
-    return DwellAdvice(dwell, sigma, white, recommended)
+    return _advice(dwell, sigma, white, limit, "model")
+
+
+def curve_dwell(taus_s: np.ndarray, adev: np.ndarray) -> DwellAdvice:
+    """Dwell advice from the Allan curve itself, where no noise model fits it: the heading
+    σ of four back-to-back positions follows the Allan deviation at τ = T, so the best dwell
+    sits at the curve's minimum (lab-reference §6).
+
+    Parameters
+    ----------
+    taus_s, adev : numpy.ndarray
+        The curve: τ (s) and σ(τ) (°/h).
+
+    Returns
+    -------
+    DwellAdvice
+        With ``source`` "curve" and ``limit`` "record".
+    """
+    return _advice(np.asarray(taus_s, float), np.asarray(adev, float), None, "record", "curve")

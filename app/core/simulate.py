@@ -14,9 +14,11 @@ Measured rate, each term switchable by setting it to zero (IEEE Std 952 error mo
 * b0 constant bias, b_on turn-on bias ~ N(0, σ_on) drawn once per run (seed);
 * g·u_up: g-dependent bias (axis up vs down), °/h per g;
 * n_k angle random walk: white, σ = 60·N/√Δt °/h (N in °/√h, Δt in s);
-* x_k bias instability: first-order Gauss–Markov with exact discretisation
-  x_k = φ·x_(k−1) + σ_GM·√(1−φ²)·w_k, φ = e^(−Δt/τ_c), σ_GM = 1.075·B, so its Allan
-  deviation peaks at ≈ 0.664·B near τ ≈ 1.89·τ_c;
+* x_k bias instability B: flicker (1/f) noise, the sum of the Gauss–Markov components of
+  :mod:`app.core.flicker` (a flat Allan floor 0.664·B over the preset's band of correlation
+  times), each with the exact discretisation x_k = φ·x_(k−1) + σ·√(1−φ²)·w_k,
+  φ = e^(−Δt/T_j); plus, where the preset has one, a Gauss–Markov bias (σ_m, T_m) the same
+  way;
 * ḃ·t linear bias drift, °/h per hour;
 * warm-up: b_0·e^(−t/τ_w) after switch-on, while the case temperature rises as
   ambient + ΔT·(1 − e^(−t/τ_w)) (:meth:`GyroStream.temperatures_c`);
@@ -40,11 +42,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from app.core.flicker import flicker_components
 from app.core.presets import GyroPreset
 from app.core.units import EARTH_RATE_DEG_H, SECONDS_PER_HOUR
 
-GM_SIGMA_PER_B = 0.664 / 0.6178  # σ_GM giving an Allan peak of 0.664·B
-GM_PEAK_TAU_PER_TC = 1.89
 AMBIENT_C = 20.0
 
 
@@ -147,14 +148,21 @@ class GyroStream:
         self.preset = preset
         arw_seq, gm_seq, rrw_seq, run_seq = np.random.SeedSequence(seed).spawn(4)
         self._arw = np.random.Generator(np.random.PCG64(arw_seq))
-        self._gm = np.random.Generator(np.random.PCG64(gm_seq))
         self._rrw = np.random.Generator(np.random.PCG64(rrw_seq))
         run = np.random.Generator(np.random.PCG64(run_seq))
         self.turn_on_bias_deg_h = float(run.normal(0.0, 1.0) * preset.turn_on_bias_sigma_deg_h)
         dt = preset.dt_s
-        self._phi = math.exp(-dt / preset.bias_corr_time_s) if preset.bias_corr_time_s > 0 else 0.0
-        self._gm_sigma = GM_SIGMA_PER_B * preset.bias_instability_deg_h
-        self._gm_state = float(self._gm.normal()) * self._gm_sigma  # stationary start
+        terms = flicker_components(preset.bias_instability_deg_h, preset.flicker_band_s)
+        if preset.markov_sigma_deg_h > 0 and preset.markov_corr_time_s > 0:
+            terms.append((preset.markov_sigma_deg_h**2, preset.markov_corr_time_s))
+        # one recursion per correlated component: (φ, σ, state, its own random stream)
+        self._correlated = []
+        children = gm_seq.spawn(len(terms))
+        for (variance, corr), child in zip(terms, children, strict=True):
+            rng = np.random.Generator(np.random.PCG64(child))
+            sigma = math.sqrt(variance)
+            state = float(rng.normal()) * sigma  # stationary start
+            self._correlated.append([math.exp(-dt / corr), sigma, state, rng])
         self._rrw_state = 0.0
         self._angle = 0.0  # accumulated angle (deg) for quantisation
         self.samples_read = 0
@@ -187,17 +195,18 @@ class GyroStream:
         if p.warmup_bias_deg_h and p.warmup_time_constant_s > 0:
             rate = rate + p.warmup_bias_deg_h * self._warmup_decay(n)
         white = self._arw.standard_normal(n)
-        gm_noise = self._gm.standard_normal(n)
         rrw_noise = self._rrw.standard_normal(n)
         if p.arw_deg_rt_h:
             rate = rate + p.white_sigma_deg_h * white
-        if p.bias_instability_deg_h and n:
-            drive = self._gm_sigma * math.sqrt(1.0 - self._phi**2) * gm_noise
+        if self._correlated and n:
             from scipy.signal import lfilter  # imported when first needed: ~1 s
 
-            gm, _ = lfilter([1.0], [1.0, -self._phi], drive, zi=[self._phi * self._gm_state])
-            self._gm_state = float(gm[-1])
-            rate = rate + gm
+            for component in self._correlated:
+                phi, sigma, state, rng = component
+                drive = sigma * math.sqrt(1.0 - phi * phi) * rng.standard_normal(n)
+                values, _ = lfilter([1.0], [1.0, -phi], drive, zi=[phi * state])
+                component[2] = float(values[-1])
+                rate = rate + values
         if p.rrw_deg_h_rt_h and n:
             steps = p.rrw_deg_h_rt_h * math.sqrt(p.dt_s / SECONDS_PER_HOUR) * rrw_noise
             walk = np.cumsum(np.concatenate([[self._rrw_state], steps]))[1:]
@@ -381,7 +390,13 @@ def read_dial(angle_deg: float, resolution_deg: float) -> float:
 
 
 def simulate_static(
-    preset: GyroPreset, setup: Setup, seconds: float, *, seed: int = 0, elevation_deg: float = 0.0
+    preset: GyroPreset,
+    setup: Setup,
+    seconds: float,
+    *,
+    seed: int = 0,
+    elevation_deg: float = 0.0,
+    start_s: float = 0.0,
 ) -> np.ndarray:
     """A long record at one fixed orientation (for the Allan deviation).
 
@@ -397,6 +412,8 @@ def simulate_static(
         Seed of the noise.
     elevation_deg : float
         Axis elevation (°).
+    start_s : float
+        How long the gyro has been on when the record starts (s; warm-up).
 
     Returns
     -------
@@ -411,4 +428,9 @@ def simulate_static(
     vector = axis_vectors(setup.azimuth_deg, 0.0, elevation_deg, setup.pitch_deg, setup.roll_deg)
     rate = float(true_rate(setup.latitude_deg, vector, setup.earth_rate_deg_h))
     count = max(1, int(round(seconds * preset.sample_rate_hz)))
+    skip = int(round(start_s * preset.sample_rate_hz))
+    while skip > 0:  # the gyro's history since switch-on, in bounded blocks
+        block = min(skip, 1_000_000)
+        stream.read(np.zeros(block))
+        skip -= block
     return stream.read(np.full(count, rate), float(vector[2]))
