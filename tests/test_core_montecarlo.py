@@ -8,13 +8,15 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from app.core.allan import allan_deviation, gauss_markov_avar
+from app.core.allan import allan_deviation
 from app.core.error_analysis import (
     ErrorSources,
     four_position_first_order,
     two_position_first_order,
 )
 from app.core.error_monte_carlo import monte_carlo_heading_errors
+from app.core.flicker import gauss_markov_avar
+from app.core.noise_model import GyroNoise
 from app.core.presets import PRESETS
 from app.core.simulate import Setup, simulate_run, simulate_static
 from app.core.sinusoid import heading_angles
@@ -64,17 +66,19 @@ def test_expected_sigma_table_of_the_reference():
     assert math.degrees(sigma) == pytest.approx(1.36, abs=0.01)
 
 
-@pytest.mark.parametrize("name", ["teaching-fog", "mems"])
-def test_allan_returns_the_simulators_own_arw_and_b(name):
-    preset = PRESETS[name].without("quantization", "rrw")
+@pytest.mark.parametrize(("name", "hours"), [("teaching-fog", 24.0), ("mems", 2.0)])
+def test_allan_returns_the_simulators_own_arw_and_b(name, hours):
+    """The simulator's flicker bias instability reads back as B, its white noise as N."""
+    preset = PRESETS[name].without("quantization", "rrw", "warmup")
     ratios_n, ratios_b = [], []
     for seed in range(3):
-        record = simulate_static(preset, Setup(40.0), 1000 * preset.bias_corr_time_s, seed=seed)
+        record = simulate_static(preset, Setup(40.0), hours * 3600.0, seed=seed)
         result = allan_deviation(record, preset.sample_rate_hz)
         ratios_n.append(result.arw_deg_rt_h / preset.arw_deg_rt_h)
         ratios_b.append(result.bias_instability_deg_h / preset.bias_instability_deg_h)
+        assert not result.terms["rrw"].resolved
     assert np.mean(ratios_n) == pytest.approx(1.0, abs=0.10)
-    assert np.mean(ratios_b) == pytest.approx(1.0, abs=0.10)
+    assert np.mean(ratios_b) == pytest.approx(1.0, abs=0.15)
 
 
 def test_allan_white_noise_slope_and_gauss_markov_peak():
@@ -89,24 +93,19 @@ def test_allan_white_noise_slope_and_gauss_markov_peak():
 
 
 def test_recommended_dwell_comes_from_the_fitted_noise_model():
-    """The Allan read-out's advice is the noise model's rule applied to the fitted terms:
-    the first dwell where σ² of the four-position heading reaches 1.5× its white part."""
-    from app.core.allan import fit_noise_model, fitted_noise, white_noise_dof
-    from app.core.noise_model import GyroNoise, recommended_dwell
+    """The Allan read-out's advice is the noise model's minimum of the four-position heading
+    σ, on the same dwell grid, inside the record's τ range."""
+    from app.core.noise_model import recommended_dwell
 
-    preset = PRESETS["tactical-fog"].without("quantization", "rrw")
-    record = simulate_static(preset, Setup(40.0), 300 * preset.bias_corr_time_s, seed=1)
+    preset = PRESETS["mems"].without("quantization", "warmup")
+    record = simulate_static(preset, Setup(40.0), 2 * 3600.0, seed=1)
     result = allan_deviation(record, preset.sample_rate_hz)
-    dof = white_noise_dof(result.taus_s, preset.sample_rate_hz, record.size)
-    fit = fit_noise_model(result.taus_s, result.adev_deg_h, result.adev_error_deg_h, dof)
-    advice = recommended_dwell(fitted_noise(fit), preset.sample_rate_hz)
+    span = (float(result.taus_s[0]), float(result.taus_s[-1]))
+    advice = recommended_dwell(result.noise(), preset.sample_rate_hz, span, "record")
     assert result.recommended_dwell_s == advice.recommended_s
-    truth = recommended_dwell(GyroNoise.from_preset(preset), preset.sample_rate_hz)
-    ratio = truth.sigma**2 / truth.white_sigma**2
-    index = int(np.flatnonzero(truth.dwell_s == truth.recommended_s)[0])
-    assert ratio[index] >= 1.5 > ratio[index - 1]
+    assert span[0] <= result.recommended_dwell_s <= span[1]
     white = recommended_dwell(GyroNoise(arw_deg_rt_h=0.01), 10.0)
-    assert white.recommended_s == 1800.0  # white noise always rewards a longer dwell
+    assert white.recommended_s == 1800.0 and white.lower_bound  # white noise: longer is better
     assert np.allclose(white.sigma, white.white_sigma)
 
 

@@ -1,162 +1,135 @@
-"""Allan deviation of a static rate record and its IEEE Std 952 read-outs.
+"""Allan deviation of a static rate record and the IEEE Std 952 terms it carries.
 
-σ²(τ) = 3Q²/τ² + N²/τ + (2 ln2/π)·B² + K²·τ/3 + R²·τ²/2   (IEEE Std 952-1997, Annex C).
+σ²(τ) = 3Q²/τ² + N²/τ + (2 ln2/π)·B² + K²·τ/3 + R²·τ²/2   (IEEE Std 952-1997, annex C).
 
-Computed with ``allantools.oadev`` (overlapping, octave-spaced τ).  Read-outs (rates in
-°/h, τ in hours): one weighted non-negative least-squares fit of σ²(τ) over every τ with
-all terms at once -- quantisation Q, angle random walk N (°/√h), rate random walk K
-(°/h/√h) and the bias instability as a first-order Gauss–Markov term (correlation time
-scanned), reported as B = peak/0.664, the value whose flicker floor 0.664·B equals the
-Gauss–Markov peak.  Fitting Q with N keeps quantisation from reading as extra angle random
-walk at short τ (the teaching preset's N read +10.7 % when N came from the −½ slope alone).
+The curve: ``allantools.oadev`` (overlapping, octave-spaced τ), with each σ̂²(τ)'s
+equivalent degrees of freedom (Greenhall & Riley 2003, ``allantools.edf_greenhall``, for
+the noise type that dominates at that τ) and its 68 % χ² confidence band.  The terms:
+:func:`app.core.allan_fit.fit_terms` -- a log-domain fit weighted by those degrees of
+freedom, every term ≥ 0, and a term reported only where the curve carries it, otherwise
+"not resolved" with the upper bound the curve allows (lab-reference §6).
 
-Recommended dwell per position (lab-reference §6): from the fitted model itself, where
-correlated noise starts to outweigh white noise in the four-position heading σ
-(:func:`app.core.noise_model.recommended_dwell`) -- the same noise model the simulator
-generates, so the advice does not jump with each estimate of B.
+The dwell to recommend (lab-reference §6): the dwell per position that minimises the
+four-position heading σ of the fitted model, inside the record's τ range
+(:func:`app.core.noise_model.recommended_dwell`); from the curve's minimum where no model
+fits; a lower bound where σ still falls at the longest τ.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from app.core.allan_fit import BASES, TERM_ALPHA, TERM_ORDER, TermEstimate, TermFit, fit_terms
 from app.core.exceptions import UserError
-from app.core.noise_model import GyroNoise, recommended_dwell
+from app.core.flicker import DEFAULT_BAND_S
+from app.core.noise_model import DwellAdvice, GyroNoise, curve_dwell, recommended_dwell
+from app.core.static_record import Progress, StaticRecord, prepare_record
 
-FLOOR_FACTOR = 0.664  # √(2 ln2 / π)
-GM_PEAK = 0.6178  # peak Allan deviation of a unit-variance Gauss–Markov process
 MIN_SAMPLES = 16
-# A Gauss–Markov term whose correlation time is within a few of the shortest τ looks like
-# white noise over the whole record and would take angle random walk from N.
-MIN_CORR_TAUS = 8.0
-REWEIGHT_PASSES = 3
+UNITS = {
+    "quantization": "°",
+    "arw": "°/√h",
+    "bias_instability": "°/h",
+    "rrw": "°/h/√h",
+    "rate_ramp": "°/h²",
+    "markov": "°/h",
+}
 
 
 @dataclass(frozen=True)
 class AllanResult:
     taus_s: np.ndarray
     adev_deg_h: np.ndarray
-    adev_error_deg_h: np.ndarray
-    arw_deg_rt_h: float
-    bias_instability_deg_h: float | None
-    rrw_deg_h_rt_h: float | None
+    band_low_deg_h: np.ndarray
+    band_high_deg_h: np.ndarray
+    edf: np.ndarray
+    model_adev_deg_h: np.ndarray
+    terms: dict[str, TermEstimate]
+    model_fits: bool
     tau_min_s: float
     adev_min_deg_h: float
-    recommended_dwell_s: float
-    arw_sigma_deg_rt_h: float | None = None
-    bias_instability_sigma_deg_h: float | None = None
-    quantization_deg: float = 0.0
-    bias_corr_time_s: float | None = None
+    dwell: DwellAdvice
+    rate_hz: float
+    samples: int
+    notes: list[dict] = field(default_factory=list)  # what was done to the record
+
+    def value(self, name: str) -> float | None:
+        return self.terms[name].value
+
+    @property
+    def arw_deg_rt_h(self) -> float | None:
+        return self.value("arw")
+
+    @property
+    def bias_instability_deg_h(self) -> float | None:
+        return self.value("bias_instability")
+
+    @property
+    def rrw_deg_h_rt_h(self) -> float | None:
+        return self.value("rrw")
+
+    @property
+    def quantization_deg(self) -> float:
+        return self.value("quantization") or 0.0
+
+    @property
+    def recommended_dwell_s(self) -> float:
+        return self.dwell.recommended_s
+
+    @property
+    def adev_error_deg_h(self) -> np.ndarray:
+        """Half the width of the 68 % band at each τ (°/h), for error bars."""
+        return (self.band_high_deg_h - self.band_low_deg_h) / 2.0
+
+    def noise(self) -> GyroNoise:
+        """The resolved terms as a noise model (unresolved terms left out)."""
+        markov = self.terms["markov"]
+        band = (
+            min(DEFAULT_BAND_S[0], float(self.taus_s[0])),
+            max(DEFAULT_BAND_S[1], 10.0 * float(self.taus_s[-1])),
+        )
+        return GyroNoise(
+            arw_deg_rt_h=self.arw_deg_rt_h or 0.0,
+            bias_instability_deg_h=self.bias_instability_deg_h or 0.0,
+            rrw_deg_h_rt_h=self.rrw_deg_h_rt_h or 0.0,
+            angle_lsb_deg=self.quantization_deg * math.sqrt(12.0),
+            flicker_band_s=band,
+            markov_sigma_deg_h=markov.value or 0.0,
+            markov_corr_time_s=markov.corr_time_s or 0.0,
+        )
 
     def to_json(self) -> dict:
         return {
+            "rate_hz": self.rate_hz,
+            "samples": self.samples,
             "taus_s": self.taus_s.tolist(),
             "adev_deg_h": self.adev_deg_h.tolist(),
-            "adev_error_deg_h": self.adev_error_deg_h.tolist(),
+            "band_low_deg_h": self.band_low_deg_h.tolist(),
+            "band_high_deg_h": self.band_high_deg_h.tolist(),
+            "edf": self.edf.tolist(),
+            "model_adev_deg_h": self.model_adev_deg_h.tolist(),
+            "model_fits": self.model_fits,
+            "terms": {name: term.to_json() for name, term in self.terms.items()},
+            "units": UNITS,
             "arw_deg_rt_h": self.arw_deg_rt_h,
-            "arw_sigma_deg_rt_h": self.arw_sigma_deg_rt_h,
             "bias_instability_deg_h": self.bias_instability_deg_h,
-            "bias_instability_sigma_deg_h": self.bias_instability_sigma_deg_h,
-            "bias_corr_time_s": self.bias_corr_time_s,
-            "quantization_deg": self.quantization_deg,
             "rrw_deg_h_rt_h": self.rrw_deg_h_rt_h,
+            "quantization_deg": self.quantization_deg,
             "tau_min_s": self.tau_min_s,
             "adev_min_deg_h": self.adev_min_deg_h,
-            "recommended_dwell_s": self.recommended_dwell_s,
+            "recommended_dwell_s": self.dwell.recommended_s,
+            "dwell": self.dwell.to_json(),
+            "notes": self.notes,
         }
 
 
-@dataclass(frozen=True)
-class NoiseFit:
-    quantization_deg: float
-    arw_deg_rt_h: float
-    bias_instability_deg_h: float | None
-    bias_corr_time_s: float | None
-    rrw_deg_h_rt_h: float | None
-    arw_sigma_deg_rt_h: float | None = None  # 1σ of N from the fit's covariance
-    bias_instability_sigma_deg_h: float | None = None  # 1σ of B
-
-
-def _coefficient_sigmas(matrix: np.ndarray, coefficients: np.ndarray, residual: float):
-    """1σ of each fitted coefficient (NaN where the constraint holds it at zero):
-    Cov = s²·(AᵀA)⁻¹ over the free columns of the weighted design A, with
-    s² = max(1, χ²/(n − p)) so a misfit widens the intervals rather than hiding."""
-    free = np.flatnonzero(coefficients > 0)
-    sigmas = np.full(coefficients.size, np.nan)
-    if free.size == 0 or matrix.shape[0] <= free.size:
-        return sigmas
-    design = matrix[:, free]
-    scale2 = max(1.0, residual**2 / (matrix.shape[0] - free.size))
-    try:
-        cov = np.linalg.inv(design.T @ design) * scale2
-    except np.linalg.LinAlgError:
-        return sigmas
-    sigmas[free] = np.sqrt(np.maximum(np.diag(cov), 0.0))
-    return sigmas
-
-
-def gauss_markov_avar(tau_h: np.ndarray, corr_time_h: float) -> np.ndarray:
-    """Allan variance of a unit-variance first-order Gauss–Markov process.
-
-    σ²(τ) = (2T/τ)·[1 − (T/2τ)(3 − 4e^(−τ/T) + e^(−2τ/T))]; its deviation peaks at 0.6178
-    near τ = 1.89·T.
-
-    Parameters
-    ----------
-    tau_h : numpy.ndarray
-        Averaging times τ (h).
-    corr_time_h : float
-        The correlation time T (h).
-
-    Returns
-    -------
-    numpy.ndarray
-        σ²(τ) for unit process variance.
-
-    References
-    ----------
-    IEEE Std 952-1997, annex C (exponentially correlated noise).
-    """
-    x = tau_h / corr_time_h
-    return (2.0 / x) * (1.0 - (3.0 - 4.0 * np.exp(-x) + np.exp(-2.0 * x)) / (2.0 * x))
-
-
-def white_noise_arw(taus_s: np.ndarray, adev: np.ndarray) -> float:
-    """Angle random walk N = σ(τ)·√τ (τ in hours), read where the curve has slope −½.
-
-    Parameters
-    ----------
-    taus_s : numpy.ndarray
-        Averaging times τ (s).
-    adev : numpy.ndarray
-        Allan deviation σ(τ) (°/h).
-
-    Returns
-    -------
-    float
-        N (°/√h) at the shortest τ on the −½ slope (else at the shortest τ).
-
-    References
-    ----------
-    IEEE Std 952-1997, annex C (angle random walk: σ(τ) = N/√τ).
-    """
-    if taus_s.size < 2:
-        return float(adev[0] * math.sqrt(taus_s[0] / 3600.0))
-    slopes = np.gradient(np.log(adev), np.log(taus_s))
-    white = np.flatnonzero(np.abs(slopes + 0.5) < 0.15)
-    first = int(white[0]) if white.size else 0
-    return float(adev[first] * math.sqrt(taus_s[first] / 3600.0))
-
-
-def white_noise_dof(taus_s: np.ndarray, rate_hz: float, count: int) -> np.ndarray:
-    """Equivalent degrees of freedom of each overlapping Allan variance for white rate noise.
-
-    About 3N/2m (N samples, m = τ·rate), so a τ averaged over few stretches of the record
-    weighs little; allantools' own δσ = σ/√N ignores that and lets the noisy long-τ end
-    steer a fit.
+def degrees_of_freedom(
+    taus_s: np.ndarray, rate_hz: float, count: int, alphas: np.ndarray
+) -> np.ndarray:
+    """Equivalent degrees of freedom of each overlapping σ̂²(τ).
 
     Parameters
     ----------
@@ -166,134 +139,93 @@ def white_noise_dof(taus_s: np.ndarray, rate_hz: float, count: int) -> np.ndarra
         Sample rate (Hz).
     count : int
         Samples in the record.
+    alphas : numpy.ndarray
+        The power-law noise type α (S_y ∝ f^α) that dominates at each τ.
 
     Returns
     -------
     numpy.ndarray
-        edf for each τ.
+        ν for each τ (≥ 1).
 
     References
     ----------
-    NIST SP 1065 (2008), table 5, via ``allantools.edf_simple``.
+    Greenhall & Riley, "Uncertainty of stability variances based on finite differences",
+    PTTI 2003; NIST SP 1065 (2008), §5.3; ``allantools.edf_greenhall``.
     """
-    import allantools  # with scipy and matplotlib: imported when first needed
+    import allantools
 
-    edf = [allantools.edf_simple(count + 1, max(1, int(round(tau * rate_hz))), 0) for tau in taus_s]
+    edf = []
+    for tau, alpha in zip(taus_s, alphas, strict=True):
+        m = max(1, int(round(tau * rate_hz)))
+        edf.append(
+            allantools.edf_greenhall(
+                alpha=int(alpha), d=2, m=m, N=count + 1, overlapping=True, modified=False
+            )
+        )
     return np.maximum(np.asarray(edf, dtype=float), 1.0)
 
 
-def fit_noise_model(
-    taus_s: np.ndarray, adev: np.ndarray, error: np.ndarray, dof: np.ndarray | None = None
-) -> NoiseFit:
-    """All IEEE 952 terms at once, by weighted non-negative least squares of
-
-        σ²(τ) = 3Q²/τ² + N²/τ + σ_GM²·g(τ/T) + K²τ/3      (τ in hours)
-
-    over every τ, the Gauss–Markov correlation time T scanned on a log grid (T ≥ the
-    shortest τ, so it cannot pose as white noise).  Fitting Q and N together keeps
-    quantisation from passing for angle random walk at short τ.  B = 0.6178·σ_GM/0.664.
-    Weights: the standard error of each σ², √(2/edf)·σ², first with the measured σ², then
-    (iteratively reweighted) with the model's: weighing by the measured value favours the
-    τ's that happened to come out low and read B 14 % low when its hump dominates.
-    Without degrees of freedom, allantools' δσ gives 1/(2σ·δσ).
+def dominant_alphas(taus_s: np.ndarray, fit: TermFit) -> np.ndarray:
+    """The noise type of the resolved term that contributes most at each τ.
 
     Parameters
     ----------
     taus_s : numpy.ndarray
         Averaging times τ (s).
-    adev : numpy.ndarray
-        Allan deviation σ(τ) (°/h).
-    error : numpy.ndarray
-        allantools' δσ(τ) (°/h), used without ``dof``.
-    dof : numpy.ndarray, optional
-        Equivalent degrees of freedom of each σ²(τ) (:func:`white_noise_dof`).
+    fit : TermFit
+        A first fit of the curve.
 
     Returns
     -------
-    NoiseFit
-        Q (°), N (°/√h), B (°/h) with its correlation time T (s), K (°/h/√h), and the 1σ
-    of N and B from the fit's covariance.
-
-    References
-    ----------
-    IEEE Std 952-1997, annex C; lab-reference §6 (the Allan fit).
+    numpy.ndarray
+        α (S_y ∝ f^α) at each τ: 2 quantisation, 0 white, −1 flicker, −2 random walk.
     """
     tau_h = taus_s / 3600.0
-    basis = [3.0 / tau_h**2, 1.0 / tau_h, tau_h / 3.0]
-    grid = np.geomspace(tau_h[0] * MIN_CORR_TAUS, tau_h[-1] * 4.0, 64) if tau_h.size > 3 else [None]
-    expected = adev**2  # the first pass weighs by the measured σ², later ones by the model's
-    for _ in range(REWEIGHT_PASSES):
-        if dof is not None:  # Var(σ̂²) ≈ 2σ⁴/edf
-            weight = np.sqrt(dof / 2.0) / np.maximum(expected, 1e-300)
-        else:
-            weight = 1.0 / np.maximum(2.0 * adev * np.maximum(error, 1e-12 * adev), 1e-300)
-        target = adev**2 * weight
-        best = None
-        for corr in grid:
-            columns = [*basis, gauss_markov_avar(tau_h, corr)] if corr is not None else basis
-            matrix = np.column_stack(columns) * weight[:, None]
-            scale = np.linalg.norm(matrix, axis=0)
-            scale[scale == 0] = 1.0
-            from scipy.optimize import nnls
-
-            scaled, residual = nnls(matrix / scale, target)
-            if best is None or residual < best[0]:
-                sigmas = _coefficient_sigmas(matrix / scale, scaled, residual) / scale
-                best = (residual, scaled / scale, corr, sigmas, matrix / weight[:, None])
-        model = best[4] @ best[1]
-        if dof is None or not np.all(model > 0):
-            break
-        expected = model
-    _, c, corr, c_sigma, _ = best
-    gm_sigma = math.sqrt(c[3]) if len(c) > 3 and c[3] > 0 else 0.0
-    arw = math.sqrt(c[1]) if c[1] > 0 else white_noise_arw(taus_s, adev)
-    # δ√c = δc/(2√c): N from the N² coefficient, B ∝ σ_GM from the σ_GM² coefficient
-    arw_sigma = c_sigma[1] / (2.0 * arw) if c[1] > 0 else None
-    bias = GM_PEAK * gm_sigma / FLOOR_FACTOR if gm_sigma else None
-    bias_sigma = GM_PEAK / FLOOR_FACTOR * c_sigma[3] / (2.0 * gm_sigma) if gm_sigma else None
-    return NoiseFit(
-        quantization_deg=math.sqrt(c[0]),
-        arw_deg_rt_h=arw,
-        bias_instability_deg_h=bias,
-        bias_corr_time_s=corr * 3600.0 if gm_sigma else None,
-        rrw_deg_h_rt_h=math.sqrt(c[2]) if c[2] > 0 else None,
-        arw_sigma_deg_rt_h=_finite_or_none(arw_sigma),
-        bias_instability_sigma_deg_h=_finite_or_none(bias_sigma),
-    )
+    contributions, alphas = [], []
+    for name in TERM_ORDER:
+        term = fit.terms[name]
+        if term.resolved:
+            contributions.append(term.value**2 * BASES[name](tau_h))
+            alphas.append(TERM_ALPHA[name])
+    if not contributions:
+        return np.zeros(taus_s.size)
+    return np.asarray(alphas)[np.argmax(np.vstack(contributions), axis=0)]
 
 
-def _finite_or_none(value: float | None) -> float | None:
-    return float(value) if value is not None and math.isfinite(value) else None
-
-
-def fitted_noise(fit: NoiseFit) -> GyroNoise:
-    """The fit as a noise model for :mod:`app.core.noise_model`.
+def allan_curve(data: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """Overlapping Allan deviation at octave τ (allantools), positive values only.
 
     Parameters
     ----------
-    fit : NoiseFit
-        A fit from :func:`fit_noise_model`.
+    data : numpy.ndarray
+        The rate record (°/h).
+    rate_hz : float
+        Sample rate (Hz).
 
     Returns
     -------
-    GyroNoise
-        The same terms: Q → an angle LSB of √12·Q; B → the Gauss–Markov σ and T.
+    (numpy.ndarray, numpy.ndarray)
+        τ (s) and σ(τ) (°/h).
 
     References
     ----------
-    IEEE Std 952-1997, annex C.
+    IEEE Std 952-1997, annex C; NIST SP 1065 (2008), §5.2.4 (overlapping ADEV).
     """
-    return GyroNoise(
-        arw_deg_rt_h=fit.arw_deg_rt_h,
-        bias_instability_deg_h=fit.bias_instability_deg_h or 0.0,
-        bias_corr_time_s=fit.bias_corr_time_s or 0.0,
-        rrw_deg_h_rt_h=fit.rrw_deg_h_rt_h or 0.0,
-        angle_lsb_deg=fit.quantization_deg * math.sqrt(12.0),
-    )
+    import allantools
+
+    taus, adev, _, _ = allantools.oadev(data, rate=rate_hz, data_type="freq", taus="octave")
+    keep = adev > 0
+    return np.asarray(taus[keep], dtype=float), np.asarray(adev[keep], dtype=float)
 
 
-def allan_deviation(rates_deg_h, rate_hz: float) -> AllanResult:
-    """Overlapping Allan deviation (octave-spaced τ) of a rate record, with read-outs.
+def allan_deviation(
+    rates_deg_h,
+    rate_hz: float,
+    *,
+    notes: list[dict] | None = None,
+    max_tau_s: float | None = None,
+) -> AllanResult:
+    """Overlapping Allan deviation (octave τ) of a rate record, with the terms it carries.
 
     Parameters
     ----------
@@ -301,22 +233,26 @@ def allan_deviation(rates_deg_h, rate_hz: float) -> AllanResult:
         The rate record (°/h), equally spaced.
     rate_hz : float
         The sample rate (Hz).
+    notes : list of dict, optional
+        What was done to the record before (trimmed, spikes, gaps), carried into the result.
+    max_tau_s : float, optional
+        The longest τ to analyse (s).
 
     Returns
     -------
     AllanResult
-        τ (s), σ(τ) (°/h) with its error, and the fitted IEEE 952 terms: angle random walk N
-        (°/√h), bias instability B (°/h), rate random walk K (°/h/√h), quantisation Q (°)
-    and the dwell to recommend (s).
+        τ (s), σ(τ) (°/h) with its degrees of freedom and 68 % band, every IEEE 952 term
+        resolved or bounded, the model curve and the dwell advice.
 
     Raises
     ------
     UserError
-        Too short a record, a non-positive rate, or non-finite readings.
+        Too short a record, a non-positive rate, non-finite readings, or a constant record.
 
     References
     ----------
-    IEEE Std 952-1997, annex C; allantools ``oadev``; NIST SP 1065 (edf).
+    IEEE Std 952-1997, annex C; allantools ``oadev``; NIST SP 1065 (2008);
+    lab-reference §6.
     """
     data = np.asarray(rates_deg_h, dtype=float).ravel()
     if data.size < MIN_SAMPLES:
@@ -329,33 +265,93 @@ def allan_deviation(rates_deg_h, rate_hz: float) -> AllanResult:
         raise UserError("readings.not_finite", "A reading is not a finite number.")
     if not (rate_hz > 0 and math.isfinite(rate_hz)):
         raise UserError("allan.bad_rate", "The sample rate must be a positive number.")
-    import allantools
-
-    taus, adev, error, _ = allantools.oadev(data, rate=rate_hz, data_type="freq", taus="octave")
-    keep = adev > 0
-    taus, adev, error = taus[keep], adev[keep], error[keep]
+    taus, adev = allan_curve(data, rate_hz)
+    if max_tau_s is not None:
+        keep = taus <= max_tau_s * (1 + 1e-9)
+        taus, adev = taus[keep], adev[keep]
     if taus.size == 0:
         raise UserError(
             "allan.constant",
             "The readings never change; there is no noise "
             "to analyse (is the record quantised too coarsely?).",
         )
-    fit = fit_noise_model(taus, adev, error, white_noise_dof(taus, rate_hz, data.size))
-    arw, bias, rrw = fit.arw_deg_rt_h, fit.bias_instability_deg_h, fit.rrw_deg_h_rt_h
+    edf = degrees_of_freedom(taus, rate_hz, data.size, np.zeros(taus.size))
+    fit = fit_terms(taus, adev, edf)
+    alphas = dominant_alphas(taus, fit)
+    edf = degrees_of_freedom(taus, rate_hz, data.size, alphas)
+    fit = fit_terms(taus, adev, edf, alphas)
     smallest = int(np.argmin(adev))
-    dwell = recommended_dwell(fitted_noise(fit), rate_hz).recommended_s
-    return AllanResult(
+    result = AllanResult(
         taus,
         adev,
-        error,
-        arw,
-        bias,
-        rrw,
+        fit.band[0],
+        fit.band[1],
+        edf,
+        fit.model_adev,
+        fit.terms,
+        fit.fits,
         float(taus[smallest]),
         float(adev[smallest]),
-        float(dwell),
-        fit.arw_sigma_deg_rt_h,
-        fit.bias_instability_sigma_deg_h,
-        fit.quantization_deg,
-        fit.bias_corr_time_s,
+        curve_dwell(taus, adev),
+        float(rate_hz),
+        int(data.size),
+        list(notes or []),
+    )
+    if fit.fits and any(t.resolved for t in fit.terms.values()):
+        advice = recommended_dwell(
+            result.noise(), rate_hz, (float(taus[0]), float(taus[-1])), limit="record"
+        )
+        result = _with_dwell(result, advice)
+    return result
+
+
+def _with_dwell(result: AllanResult, advice: DwellAdvice) -> AllanResult:
+    from dataclasses import replace
+
+    return replace(result, dwell=advice)
+
+
+def analyse_record(
+    record: StaticRecord,
+    rate_hz: float | None,
+    *,
+    unit: str = "deg/h",
+    max_tau_s: float | None = None,
+    progress: Progress | None = None,
+) -> AllanResult:
+    """A real static record from reading to terms: unit, gaps, spikes, warm-up
+    (:func:`app.core.static_record.prepare_record`), then :func:`allan_deviation`.
+
+    Parameters
+    ----------
+    record : StaticRecord
+        The record as read.
+    rate_hz : float or None
+        Sample rate (Hz); None: from the record's times.
+    unit : str
+        The readings' unit (:data:`app.core.units.UNITS`).
+    max_tau_s : float, optional
+        The longest τ asked for (s).
+    progress : callable, optional
+        Told of each stage: ``progress(stage, details)``.
+
+    Returns
+    -------
+    AllanResult
+        With ``notes`` saying what was done to the record.
+
+    References
+    ----------
+    IEEE Std 952-1997, annex C; lab-reference §6.
+    """
+    from app.core.units import to_deg_per_hour
+
+    values = to_deg_per_hour(record.values, unit)
+    prepared = prepare_record(
+        StaticRecord(values, record.times_s, record.temperatures_c), rate_hz, max_tau_s=max_tau_s
+    )
+    if progress:
+        progress("analyse", {"samples": int(prepared.values.size)})
+    return allan_deviation(
+        prepared.values, prepared.rate_hz, notes=prepared.notes, max_tau_s=max_tau_s
     )

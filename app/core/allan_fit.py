@@ -1,0 +1,427 @@
+"""The IEEE Std 952 terms that an Allan curve carries, and only those.
+
+Model (IEEE Std 952-1997 annex C, IEEE Std 1554-2005; lab-reference §6), τ in hours:
+
+    σ²(τ) = 3Q²/τ² + N²/τ + (2 ln2/π)·B² + K²·τ/3 + R²·τ²/2  [+ σ_m²·g(τ/T_m)]
+
+quantisation Q (°), angle random walk N (°/√h), bias instability B (°/h) as the flicker
+floor 0.664·B, rate random walk K (°/h/√h), rate ramp R (°/h²) and, only where the curve
+shows its bump, a Gauss–Markov bias σ_m (°/h) with correlation time T_m.
+
+Fit: weighted least squares in the log domain with every coefficient c_k ≥ 0,
+
+    χ² = Σ_i [log Σ_k c_k f_k(τ_i) − (log σ̂²_i − E log(χ²_ν/ν))]² / (ψ₁(ν_i/2) + ε²)
+
+(the residuals decorrelated along τ, neighbouring octave estimates sharing samples:
+``NEIGHBOUR_CORRELATION``), with ν_i the equivalent degrees of freedom of σ̂²(τ_i)
+(Greenhall & Riley 2003, for the noise type that dominates there): σ̂² ~ σ²·χ²_ν/ν, so
+log σ̂² has mean log σ² + ψ(ν/2) + log(2/ν) and variance ψ₁(ν/2) (ψ, ψ₁ the digamma and trigamma
+functions) -- the long-τ points, averaged over few stretches of the record, weigh little
+and their downward bias in the log is removed; ε = ``MODEL_ERROR`` allows for the ideal
+terms' shapes not being exact (sampling, real floors).
+
+A term is *resolved* only when the curve carries it (lab-reference §6): its own line
+√(c_k f_k(τ)) comes within the curve's confidence band (3σ of each log σ̂²: with twenty
+τ's, a line running along the curve leaves a 68 % band somewhere by chance) at some τ of
+the data holding ≥ ``MIN_REGION_EDF`` degrees of freedom, never rises above the band's
+upper edge, and leaving it out makes the fit worse
+by Δχ² ≥ ``SIGNIFICANCE``: of every subset of terms that are all carried, the one with
+the least χ² + 9·(terms) is the model, and a term in it is resolved only when no other
+term in its place comes within Δχ² < 4 (so a flicker floor and a random walk cannot stand
+in for each other).  The rest are reported "not resolved" with the upper bound the curve
+allows: the largest value whose line stays under the band's upper edge at every τ.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from itertools import combinations
+
+import numpy as np
+
+from app.core.flicker import FLOOR_FACTOR, gauss_markov_avar
+
+SIGNIFICANCE = 9.0  # Δχ² a term must earn: 3σ for one parameter
+RIVAL_MARGIN = 4.0  # Δχ² by which a term must beat any other term in its place (2σ)
+BAND_LEVEL = 0.6826894921370859  # the band drawn and reported with the curve
+# The band a term's line is held to: 3σ of each log σ̂²(τ), σ including MODEL_ERROR.  A
+# resolved term's line runs along the curve, and with ~20 τ's some point lies outside its own
+# 68 % band by chance.
+RESOLVE_SIGMAS = 3.0
+# The IEEE model is an idealisation: a sampled record's first τ's differ from the
+# continuous-time terms (a sampled random walk reads √1.5 × K·√(τ/3) at τ = Δt) and real
+# floors are not perfectly flat.  Each log σ̂² is given this much model error (≈ 5 % in σ)
+# on top of its statistical scatter, so the τ's with 10⁵ degrees of freedom do not steer
+# the fit by their discretisation: ε(m) = MODEL_ERROR·(1 + 2/m) at τ = m·Δt (a sampled
+# random walk or flicker reads 20 % high at m = 1, 6 % at m = 2, 1–2 % at m = 4).
+MODEL_ERROR = 0.1
+# The τ region that carries a term must hold this many degrees of freedom in all: the
+# longest τ's (ν ≈ 1–5 each, and correlated, since overlapping stretches share samples)
+# cannot carry a term alone -- a high last point would read as rate random walk.
+MIN_REGION_EDF = 10.0
+TERM_ORDER = ("quantization", "arw", "bias_instability", "rrw", "rate_ramp")
+# the noise type each term is (α of S_y(f) ∝ f^α) for the degrees of freedom
+TERM_ALPHA = {
+    "quantization": 2,
+    "arw": 0,
+    "bias_instability": -1,
+    "rrw": -2,
+    "rate_ramp": -2,
+    "markov": -2,
+}
+
+# Correlation of log σ̂² between neighbouring octave τ's (overlapping estimates share
+# samples), by noise type; measured on 300 independent records each: white 0.51, flicker
+# 0.66, random walk 0.87 (tests/noise_sources.py); quantisation taken as white.
+NEIGHBOUR_CORRELATION = {2: 0.5, 0: 0.5, -1: 0.66, -2: 0.87}
+
+Basis = Callable[[np.ndarray], np.ndarray]
+BASES: dict[str, Basis] = {  # f_k(τ_h), so that σ² = Σ value_k²·f_k  ((°/h)², τ in hours)
+    "quantization": lambda tau_h: 3.0 / tau_h**2,
+    "arw": lambda tau_h: 1.0 / tau_h,
+    "bias_instability": lambda tau_h: np.full_like(tau_h, FLOOR_FACTOR**2),
+    "rrw": lambda tau_h: tau_h / 3.0,
+    "rate_ramp": lambda tau_h: tau_h**2 / 2.0,
+}
+
+
+@dataclass(frozen=True)
+class TermEstimate:
+    """One IEEE 952 term: its value where resolved, else the bound the curve allows."""
+
+    name: str
+    value: float | None  # None: not resolved
+    interval: tuple[float, float] | None = None  # 68 % interval of a resolved value
+    upper_bound: float | None = None  # for an unresolved term
+    tau_region_s: tuple[float, float] | None = None  # where its line meets the curve's band
+    corr_time_s: float | None = None  # the Gauss–Markov bias only
+
+    @property
+    def resolved(self) -> bool:
+        return self.value is not None
+
+    def to_json(self) -> dict:
+        return {
+            "resolved": self.resolved,
+            "value": self.value,
+            "interval": None if self.interval is None else list(self.interval),
+            "upper_bound": self.upper_bound,
+            "tau_region_s": None if self.tau_region_s is None else list(self.tau_region_s),
+            **({"corr_time_s": self.corr_time_s} if self.name == "markov" else {}),
+        }
+
+
+@dataclass(frozen=True)
+class TermFit:
+    terms: dict[str, TermEstimate]
+    chi2: float
+    dof: int
+    model_adev: np.ndarray  # the fitted model's σ(τ) at each τ (°/h)
+    band: tuple[np.ndarray, np.ndarray]  # the curve's 68 % band (low, high) (°/h)
+    edf: np.ndarray = field(repr=False, default_factory=lambda: np.empty(0))
+
+    @property
+    def fits(self) -> bool:
+        """The model describes the curve: χ² per degree of freedom below 4."""
+        return self.dof <= 0 or self.chi2 / self.dof < 4.0
+
+
+def curve_band(adev: np.ndarray, edf: np.ndarray, level: float = BAND_LEVEL):
+    """The curve's confidence band: σ̂·√(ν/χ²_ν((1±p)/2)) at each τ.
+
+    Parameters
+    ----------
+    adev : numpy.ndarray
+        σ̂(τ) (°/h).
+    edf : numpy.ndarray
+        Equivalent degrees of freedom ν of each σ̂².
+    level : float
+        The band's coverage p (default 68.3 %).
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        The low and high edge (°/h).
+
+    References
+    ----------
+    NIST SP 1065 (2008), §5.3 (chi-squared confidence intervals).
+    """
+    from scipy.stats import chi2
+
+    low = adev * np.sqrt(edf / chi2.ppf(0.5 + level / 2, edf))
+    high = adev * np.sqrt(edf / chi2.ppf(0.5 - level / 2, edf))
+    return low, high
+
+
+@dataclass
+class _Solution:
+    names: list[str]
+    coefficients: np.ndarray  # c_k = value_k² (markov: σ_m²)
+    chi2: float
+    model: np.ndarray  # σ² at each τ
+    cov: np.ndarray | None
+
+
+class _LogFit:
+    """Weighted non-negative least squares of log σ² for a chosen set of terms."""
+
+    def __init__(
+        self, taus_s: np.ndarray, adev: np.ndarray, edf: np.ndarray, alphas: np.ndarray
+    ) -> None:
+        from scipy.special import digamma, polygamma
+
+        self.tau_h = taus_s / 3600.0
+        self.variance = adev**2
+        half = edf / 2.0
+        self.target = np.log(self.variance) - (digamma(half) + np.log(1.0 / half))
+        m = np.maximum(taus_s / taus_s[0], 1.0)
+        model_error = MODEL_ERROR * (1.0 + 2.0 / m)
+        self.weight = 1.0 / np.sqrt(polygamma(1, half) + model_error**2)
+        self.stat_weight = 1.0 / np.sqrt(polygamma(1, half))  # for the intervals
+        # the sampled τ's own misfit (a few %, falling as 1/m) counts in the intervals: the
+        # terms' shapes are exact only for m ≫ 1
+        self.sampling_error = MODEL_ERROR / m
+        self.edf = edf
+        self.markov_time_h: float | None = None
+        rho = np.array([NEIGHBOUR_CORRELATION.get(int(a), 0.5) for a in alphas])
+        # neighbours i, i+1 correlated by r_i = √(ρ_i ρ_(i+1)): a first-order Markov chain
+        # along τ, whitened by e_i = (u_i − r_(i−1)·u_(i−1))/√(1 − r_(i−1)²)
+        self.step_correlation = np.sqrt(rho[:-1] * rho[1:])
+
+    def statistical_cov(self) -> np.ndarray:
+        """Covariance of the log σ̂²'s: ψ₁(ν/2) each, neighbours correlated along τ, plus
+        the sampled τ's misfit (independent)."""
+        sd = 1.0 / self.stat_weight
+        count = sd.size
+        logs = np.concatenate([[0.0], np.cumsum(np.log(self.step_correlation))])
+        corr = np.exp(-np.abs(logs[:, None] - logs[None, :]))
+        corr[np.arange(count), np.arange(count)] = 1.0
+        return corr * np.outer(sd, sd) + np.diag(self.sampling_error**2)
+
+    def whiten(self, values: np.ndarray) -> np.ndarray:
+        """Decorrelate normalised residuals (or Jacobian rows) along τ."""
+        out = values.copy()
+        r = self.step_correlation
+        if values.ndim == 1:
+            out[1:] = (values[1:] - r * values[:-1]) / np.sqrt(1.0 - r * r)
+        else:
+            out[1:] = (values[1:] - r[:, None] * values[:-1]) / np.sqrt(1.0 - r * r)[:, None]
+        return out
+
+    def resolve_band(self) -> tuple[np.ndarray, np.ndarray]:
+        """σ at log σ² = target ± 3 standard deviations (°/h)."""
+        spread = RESOLVE_SIGMAS / self.weight
+        return np.exp((self.target - spread) / 2.0), np.exp((self.target + spread) / 2.0)
+
+    def basis(self, name: str) -> np.ndarray:
+        if name == "markov":
+            return gauss_markov_avar(self.tau_h, self.markov_time_h)
+        return BASES[name](self.tau_h)
+
+    def solve(self, names: list[str]) -> _Solution:
+        from scipy.optimize import least_squares, nnls
+
+        design = np.column_stack([self.basis(n) for n in names])
+        # unit u_k: term k at most equal to the curve anywhere
+        scale = 1.0 / np.max(design / self.variance[:, None], axis=0)
+        scaled = design * scale
+        relative = scaled / self.variance[:, None] * self.weight[:, None]
+        start, _ = nnls(relative, self.weight)
+        start = np.maximum(start, 1e-6)
+
+        def residual(u):
+            raw = self.weight * (np.log(np.maximum(scaled @ u, 1e-300)) - self.target)
+            return self.whiten(raw)
+
+        def jacobian(u):
+            raw = self.weight[:, None] * scaled / np.maximum(scaled @ u, 1e-300)[:, None]
+            return self.whiten(raw)
+
+        found = least_squares(
+            residual, start, jac=jacobian, bounds=(0.0, np.inf), method="trf", x_scale=1.0
+        )
+        u = np.where(found.x < 1e-9, 0.0, found.x)
+        res = residual(u)
+        chi2 = float(res @ res)
+        cov = None
+        free = np.flatnonzero(u > 0)
+        dof = self.tau_h.size - free.size
+        if free.size:
+            # The sandwich M·Σ·Mᵀ: the fit's own linear map M = (JᵀJ)⁻¹Jᵀ·A (A: weigh and
+            # whiten) applied to the log σ̂²'s statistical covariance Σ (χ² scatter, the
+            # neighbour correlation) -- the model error steers the fit, it is not scatter.
+            jac = jacobian(u)[:, free]
+            try:
+                inverse = np.linalg.inv(jac.T @ jac)
+            except np.linalg.LinAlgError:
+                inverse = None
+            if inverse is not None:
+                mapping = inverse @ jac.T @ self.whiten(np.diag(self.weight))
+                spread = mapping @ self.statistical_cov() @ mapping.T
+                inflate = max(1.0, chi2 / dof) if dof > 0 else 1.0
+                cov = np.zeros((u.size, u.size))
+                cov[np.ix_(free, free)] = spread * inflate
+                cov = cov * np.outer(scale, scale)
+        return _Solution(list(names), u * scale, chi2, scaled @ u, cov)
+
+
+def _value(name: str, coefficient: float) -> float:
+    return math.sqrt(max(coefficient, 0.0))
+
+
+def fit_terms(
+    taus_s: np.ndarray, adev: np.ndarray, edf: np.ndarray, alphas: np.ndarray | None = None
+) -> TermFit:
+    """The resolved IEEE 952 terms of an Allan curve, with intervals; bounds for the rest.
+
+    Parameters
+    ----------
+    taus_s : numpy.ndarray
+        Averaging times τ (s), increasing.
+    adev : numpy.ndarray
+        The overlapping Allan deviation σ̂(τ) (°/h).
+    edf : numpy.ndarray
+        Equivalent degrees of freedom of each σ̂²(τ).
+    alphas : numpy.ndarray, optional
+        The noise type dominating at each τ (for the correlation between τ's; default
+        white).
+
+    Returns
+    -------
+    TermFit
+        Every term of ``TERM_ORDER`` and "markov": resolved with a value (Q in °, N °/√h,
+        B °/h, K °/h/√h, R °/h², the Markov σ in °/h with its T in s), its 68 % interval and
+        τ region, or not resolved with its upper bound; χ² and the model curve.
+
+    References
+    ----------
+    IEEE Std 952-1997, annex C; IEEE Std 1554-2005; NIST SP 1065 (2008);
+    lab-reference §6.
+    """
+    taus_s, adev, edf = (np.asarray(a, dtype=float) for a in (taus_s, adev, edf))
+    edf = np.maximum(edf, 1.0)
+    alphas = np.zeros(taus_s.size) if alphas is None else np.asarray(alphas)
+    fitter = _LogFit(taus_s, adev, edf, alphas)
+    low, high = fitter.resolve_band()
+    best = _resolve(fitter, list(TERM_ORDER), low, high)
+    base = best
+    markov = None
+    if taus_s.size >= 6:
+        markov = _try_markov(fitter, base, low, high)
+        if markov is not None:
+            best = markov
+    resolved = [n for n in best[0].names if best[1].get(n)]
+    # Values and intervals from the fit with every term free (≥ 0), where the term is still
+    # carried there: a term present but too weak to resolve then takes its share instead of
+    # biasing the resolved ones; else from the model that resolved it.
+    solution = fitter.solve([*TERM_ORDER, *(["markov"] if "markov" in resolved else [])])
+    terms: dict[str, TermEstimate] = {}
+    for name in (*TERM_ORDER, "markov"):
+        if name in resolved:
+            carried = _carried(fitter, solution, name, low, high)
+            terms[name] = _resolved(fitter, solution if carried else best[0], name, low)
+        elif name == "markov":
+            terms[name] = TermEstimate(name, None)
+        else:
+            column = BASES[name](fitter.tau_h)
+            bound = float(np.min(high**2 / column))
+            terms[name] = TermEstimate(name, None, upper_bound=_value(name, bound))
+    dof = int(taus_s.size - np.count_nonzero(solution.coefficients))
+    band = curve_band(adev, edf)
+    return TermFit(terms, solution.chi2, dof, np.sqrt(solution.model), band, edf)
+
+
+def _resolved(fitter: _LogFit, solution: _Solution, name: str, low: np.ndarray) -> TermEstimate:
+    index = solution.names.index(name)
+    c = float(solution.coefficients[index])
+    line = np.sqrt(c * fitter.basis(name))
+    inside = np.flatnonzero(line >= low)
+    taus_s = fitter.tau_h * 3600.0
+    region = (float(taus_s[inside[0]]), float(taus_s[inside[-1]])) if inside.size else None
+    interval = None
+    if solution.cov is not None:
+        sigma = math.sqrt(max(solution.cov[index, index], 0.0))
+        interval = (_value(name, c - sigma), _value(name, c + sigma))
+    corr = fitter.markov_time_h * 3600.0 if name == "markov" else None
+    return TermEstimate(name, _value(name, c), interval, None, region, corr)
+
+
+def _carried(fitter, solution, name, low, high) -> bool:
+    c = solution.coefficients[solution.names.index(name)]
+    if c <= 0:
+        return False
+    line = np.sqrt(c * fitter.basis(name))
+    inside = line >= low
+    return bool(np.sum(fitter.edf[inside]) >= MIN_REGION_EDF and np.all(line <= high * (1 + 1e-9)))
+
+
+def _resolve(fitter: _LogFit, names: list[str], low, high):
+    """The terms the curve carries.  Of every subset of ``names`` whose terms are all present
+    (> 0) and carried (:func:`_carried`), the one with the least χ² + SIGNIFICANCE·(number of
+    terms) is the model: each of its terms earns Δχ² ≥ 9 against leaving it out.  A term is
+    resolved only if, besides, no other term in its place fits within Δχ² < 4
+    (``RIVAL_MARGIN``) -- a floor that could as well be a random walk is neither.  Returns
+    the model's solution and {term: True} for the resolved ones."""
+    scores: dict[frozenset, float] = {}
+    best = None
+    for size in range(1, len(names) + 1):
+        for subset in combinations(names, size):
+            solution = fitter.solve(list(subset))
+            if np.any(solution.coefficients <= 0):
+                continue
+            if not all(_carried(fitter, solution, n, low, high) for n in subset):
+                continue
+            score = solution.chi2 + SIGNIFICANCE * size
+            scores[frozenset(subset)] = score
+            if best is None or score < best[0]:
+                best = (score, solution)
+    if best is None:
+        return fitter.solve(list(names)), {}
+    score, solution = best
+    chosen = frozenset(solution.names)
+    status = {}
+    for term in chosen:
+        ambiguous = any(
+            scores.get((chosen - {term}) | {other}, math.inf) < score + RIVAL_MARGIN
+            for other in names
+            if other not in chosen
+        )
+        status[term] = not ambiguous
+    return solution, status
+
+
+def _has_bump(model_variance: np.ndarray) -> bool:
+    """The model curve rises and then falls inside the data (a local maximum)."""
+    steps = np.diff(model_variance)
+    rising = np.flatnonzero(steps > 0)
+    return bool(rising.size and np.any(steps[rising[0] + 1 :] < 0))
+
+
+def _try_markov(fitter: _LogFit, base, low, high):
+    """A Gauss–Markov bias, only where the curve shows its bump: correlation times whose
+    peak 1.89·T lies inside the data, a model that rises and falls there, and a fit better
+    by Δχ² ≥ SIGNIFICANCE than every power-law term together (a flicker floor, a random
+    walk and a ramp are the default explanation); then resolved like every other term."""
+    solution, status = base
+    names = [n for n in solution.names if status.get(n)]
+    taus_h = fitter.tau_h
+    grid = np.geomspace(taus_h[1] / 1.89, taus_h[-2] / 1.89, 24)
+    best = None
+    for corr in grid:
+        fitter.markov_time_h = float(corr)
+        trial = fitter.solve([*names, "markov"])
+        if best is None or trial.chi2 < best[0].chi2:
+            best = (trial, float(corr))
+    fitter.markov_time_h = None
+    power_laws = fitter.solve(list(TERM_ORDER)).chi2
+    if best is None or power_laws - best[0].chi2 < SIGNIFICANCE or not _has_bump(best[0].model):
+        return None
+    fitter.markov_time_h = best[1]
+    result = _resolve(fitter, [*names, "markov"], low, high)
+    if "markov" not in result[0].names or not result[1].get("markov"):
+        fitter.markov_time_h = None
+        return None
+    return result
