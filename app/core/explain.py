@@ -272,9 +272,16 @@ def explain_heading(result: HeadingResult) -> list[Step]:
             f"σx = {_f(math.sqrt(fit.cov[0, 0]), 4)},  σy = {_f(math.sqrt(fit.cov[1, 1]), 4)} °/h,"
             f"  H_c = √(H² − σx² − σy²) = {_f(corrected)} °/h"
         )
-        lines.append(
-            f"σ_A = √(y²σx² + x²σy² − 2xy·σxy)/(H·H_c) = {_f(result.azimuth_sigma_deg, 3)}°"
+        linear = (
+            result.linear_sigma_deg
+            if result.linear_sigma_deg is not None
+            else (result.azimuth_sigma_deg)
         )
+        lines.append(f"σ_A = √(y²σx² + x²σy² − 2xy·σxy)/(H·H_c) = {_f(linear, 3)}°")
+        lines.extend(_exact_lines(result.exact_sigma_deg, linear, result.expected_amplitude_deg_h,
+                                  "A1", "Ω cos φ"))  # fmt: skip
+        lines.extend(_warm_up_lines(result.drift_check, result.noise_sigma_deg,
+                                    result.azimuth_sigma_deg, "A1", "azimuth_deg"))  # fmt: skip
     if result.azimuth_error_deg is not None:
         lines.append(f"ΔA1 = A1 − A1,true = {_f(result.azimuth_error_deg, 2)}°")
     steps.append(
@@ -378,6 +385,13 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
         f"100% = {_f(result.earth_rate_error_percent, 2)}%"
     )
     if result.latitude_sigma_deg is not None:
+        linear = result.linear_sigma_deg
+        if linear is not None and result.exact_sigma_deg is not None:
+            lines.append(f"σ_φ (propagated) = {_f(linear, 3)}°")
+            lines.extend(_exact_lines(result.exact_sigma_deg, linear,
+                                      result.true_earth_rate_deg_h, "φ", "Ω0"))  # fmt: skip
+        lines.extend(_warm_up_lines(result.drift_check, result.noise_sigmas[0],
+                                    result.latitude_sigma_deg, "φ", "latitude_deg"))  # fmt: skip
         lines.append(
             f"1σ: φ ± {_f(result.latitude_sigma_deg, 3)}°,  Ω ± "
             f"{_f(result.earth_rate_sigma_deg_h, 3)} °/h"
@@ -388,6 +402,30 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
         )
     )
     return steps
+
+
+def _exact_lines(exact, linear, amplitude, name: str, amplitude_name: str) -> list[str]:
+    """The exact σ of the angle when it differs from the propagated one as shown."""
+    if exact is None or linear is None or _f(exact, 3) == _f(linear, 3):
+        return []
+    return [
+        f"{amplitude_name} = {_f(amplitude)} °/h known:  68 % of p({name} | x, y) within "
+        f"± {_f(exact, 3)}°"
+    ]
+
+
+def _warm_up_lines(check, noise_sigma, final_sigma, name: str, key: str) -> list[str]:
+    """A drift flagged as warm-up: its rate, how far it moved the result, and the widened σ."""
+    if check is None or not check.flagged or not check.shift or noise_sigma is None:
+        return []
+    unit = "°/h²" if check.timed else "°/h per reading"
+    rate = _f(check.rate, 4) if check.rate is not None else "—"
+    spread = f" ± {_f(check.sigma, 4)}" if check.sigma is not None else ""
+    moved = check.shift.get(key, 0.0)
+    return [
+        f"ḃ = {rate}{spread} {unit}:  ω̄_i − ḃ·(t̄_i − t̄)  →  Δ{name} = {_f(moved, 3)}°",
+        f"σ = √({_f(noise_sigma, 3)}² + {_f(moved, 3)}²) = {_f(final_sigma, 3)}°",
+    ]
 
 
 def render_text(steps: list[Step], language: str = "en") -> str:

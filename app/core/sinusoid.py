@@ -78,10 +78,13 @@ class SinusoidFit:
 
     @property
     def closure_sigma(self) -> float | None:
-        """σ_d = √(σ1² + σ2² + σ3² + σ4²)/2 (None without four positions 90° apart)."""
+        """σ_d = √(wᵀΣw), w = (1, −1, 1, −1)/2: √(σ1² + σ2² + σ3² + σ4²)/2 for independent
+        means, with their correlations under a noise model (None without four positions
+        90° apart)."""
         if self.noise is None or self.closure_residual is None:
             return None
-        return float(math.sqrt(float(np.sum(self.noise.variances))) / 2)
+        weights = np.array([0.5, -0.5, 0.5, -0.5])
+        return float(math.sqrt(max(float(weights @ self.noise.cov @ weights), 0.0)))
 
     @property
     def closure_consistent(self) -> bool | None:

@@ -20,10 +20,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from app.core.angle_posterior import angle_half_width
+from app.core.drift_check import DriftCheck, check_drift, position_offsets
 from app.core.exceptions import UserError
 from app.core.sinusoid import SIGNIFICANCE, SinusoidFit, fit_sinusoid, wrap180, wrap360
 from app.core.units import EARTH_RATE_DEG_H
@@ -38,7 +40,9 @@ def _polar(
     factor H² replaced by the noise-bias-corrected H_c² = H² − σ²x − σ²y (E[Ĥ²] = H² + σ²x +
     σ²y, the Rice bias), floored at H²/4.  At high signal-to-noise H_c = H; near the
     significance limit the measured H is inflated by the noise and the plain formula is
-    over-confident (a consumer MEMS at 300 s: 64 % coverage instead of 68 %)."""
+    over-confident (a consumer MEMS at 300 s: 64 % coverage instead of 68 %).  Where the
+    amplitude is known beforehand (Ω cos φ at a known station, or Ω) the solvers replace
+    the angle's σ by the exact 68 % half-width of its posterior (:func:`_exact_sigma`)."""
     amplitude = math.hypot(x, y)
     angle = math.degrees(math.atan2(y, x))
     if cov_xy is None or amplitude == 0.0:
@@ -47,12 +51,16 @@ def _polar(
     corrected = max(amplitude**2 - vx - vy, 0.25 * amplitude**2)
     var_angle = (y * y * vx + x * x * vy - 2 * x * y * vxy) / (amplitude**2 * corrected)
     var_amp = (x * x * vx + y * y * vy + 2 * x * y * vxy) / amplitude**2
-    return (
-        angle,
-        amplitude,
-        math.degrees(math.sqrt(max(var_angle, 0.0))),
-        math.sqrt(max(var_amp, 0.0)),
-    )
+    sigma_angle = math.degrees(math.sqrt(max(var_angle, 0.0)))
+    sigma_amp = math.sqrt(max(var_amp, 0.0))
+    return angle, amplitude, sigma_angle, sigma_amp
+
+
+def _exact_sigma(x, y, cov_xy, known_amplitude, sigma_amp) -> float | None:
+    """The angle's exact 68 % half-width given the known amplitude, or None."""
+    if known_amplitude is None or cov_xy is None or sigma_amp is None:
+        return None
+    return angle_half_width(x, y, cov_xy, known_amplitude, sigma_amp)
 
 
 def _check_significant(amplitude: float, sigma: float | None, what: str, scale: float) -> None:
@@ -91,6 +99,11 @@ class HeadingResult:
     closure_residual_deg_h: float | None
     azimuth_error_deg: float | None = None
     notes: tuple[str, ...] = field(default=())
+    drift_check: DriftCheck | None = None
+    noise_sigma_deg: float | None = None  # the σ before a flagged drift widened it
+    linear_sigma_deg: float | None = None  # the propagated (linearised) σ
+    exact_sigma_deg: float | None = None  # the exact half-width, H known
+    expected_amplitude_deg_h: float | None = None  # that H
 
     @property
     def bias_deg_h(self) -> float:
@@ -119,6 +132,8 @@ class HeadingResult:
             "drift_deg_h_per_h": self.fit.drift,
             "drift_sigma_deg_h_per_h": self.fit.drift_sigma,
             "azimuth_error_deg": self.azimuth_error_deg,
+            "azimuth_noise_sigma_deg": self.noise_sigma_deg,
+            "warm_up": None if self.drift_check is None else self.drift_check.to_json(),
         }
 
 
@@ -169,6 +184,9 @@ def solve_heading(
     position_cov: np.ndarray | None = None,
     indexing_sigma_deg: float = 0.0,
     times_s: Sequence[Sequence[float]] | None = None,
+    temperatures_c: Sequence[Sequence[float]] | None = None,
+    expected_amplitude_deg_h: float | None = None,
+    warm_up_cov: np.ndarray | None = None,
 ) -> HeadingResult:
     """Azimuth of position 1 (clockwise from true north, [0°, 360°)) with its 1σ.
 
@@ -192,6 +210,14 @@ def solve_heading(
         The turntable's indexing error, 1σ (°), added for every stop after the first.
     times_s : sequence of sequences of float, optional
         Each reading's time (s, one clock): with 5+ positions a linear drift is fitted.
+    temperatures_c : sequence of sequences of float, optional
+        Each reading's case temperature (°C), for the warm-up check.
+    expected_amplitude_deg_h : float, optional
+        H = Ω cos φ at the known station (°/h): the azimuth's σ is then the exact 68 %
+        half-width of its posterior (:mod:`app.core.angle_posterior`).
+    warm_up_cov : numpy.ndarray, optional
+        The warm-up's part of ``position_cov`` (a known noise model on a timeline from
+        switch-on), for the warm-up check.
 
     Returns
     -------
@@ -219,10 +245,20 @@ def solve_heading(
         # (x, y) = (a, −c): flip the sign of c's covariance terms.
         flip = np.diag([1.0, -1.0])
         cov_xy = flip @ fit.cov[:2, :2] @ flip
-    angle_ref, amplitude, sigma_az, sigma_amp = _polar(fit.a, -fit.c, cov_xy)
+    angle_ref, amplitude, linear_az, sigma_amp = _polar(fit.a, -fit.c, cov_xy)
     _check_significant(amplitude, sigma_amp, "horizontal", _scale(fit))
+    exact = _exact_sigma(fit.a, -fit.c, cov_xy, expected_amplitude_deg_h, sigma_amp)
+    sigma_az = exact if exact is not None else linear_az
     azimuth = wrap360(angle_ref + float(fit.angles_deg[0]))
     theta, direction, rotate, points = handout_theta(azimuth)
+    check, shift = _drift(
+        positions, fit, times_s, temperatures_c, "heading", angles_deg, warm_up_cov
+    )
+    noise_sigma = sigma_az
+    if check is not None and check.flagged and shift is not None and sigma_az is not None:
+        moved = wrap180(azimuth - shift[0])
+        check = replace(check, shift={"azimuth_deg": moved})
+        sigma_az = math.hypot(sigma_az, moved)
     error = None if true_azimuth_deg is None else wrap180(azimuth - true_azimuth_deg)
     return HeadingResult(
         fit=fit,
@@ -236,6 +272,11 @@ def solve_heading(
         then_axis_points=points,
         closure_residual_deg_h=fit.closure_residual,
         azimuth_error_deg=error,
+        drift_check=check,
+        noise_sigma_deg=noise_sigma,
+        linear_sigma_deg=linear_az,
+        exact_sigma_deg=exact,
+        expected_amplitude_deg_h=expected_amplitude_deg_h if exact is not None else None,
     )
 
 
@@ -252,6 +293,10 @@ class LatitudeResult:
     true_earth_rate_deg_h: float
     latitude_error_percent: float | None
     earth_rate_error_percent: float
+    drift_check: DriftCheck | None = None
+    noise_sigmas: tuple[float | None, float | None] = (None, None)  # before a drift widened
+    linear_sigma_deg: float | None = None  # the propagated (linearised) σ of φ
+    exact_sigma_deg: float | None = None  # its exact half-width, Ω known
 
     @property
     def bias_deg_h(self) -> float:
@@ -285,6 +330,9 @@ class LatitudeResult:
             "uncertainty_model": self.fit.uncertainty_model,
             "drift_deg_h_per_h": self.fit.drift,
             "drift_sigma_deg_h_per_h": self.fit.drift_sigma,
+            "latitude_noise_sigma_deg": self.noise_sigmas[0],
+            "earth_rate_noise_sigma_deg_h": self.noise_sigmas[1],
+            "warm_up": None if self.drift_check is None else self.drift_check.to_json(),
         }
 
 
@@ -321,6 +369,8 @@ def solve_latitude(
     position_cov: np.ndarray | None = None,
     indexing_sigma_deg: float = 0.0,
     times_s: Sequence[Sequence[float]] | None = None,
+    temperatures_c: Sequence[Sequence[float]] | None = None,
+    warm_up_cov: np.ndarray | None = None,
 ) -> LatitudeResult:
     """Latitude φ and Earth rate Ω from readings in the meridian plane, with 1σ.
 
@@ -337,7 +387,7 @@ def solve_latitude(
         The station's latitude φ0 (°), for η_φ.
     true_earth_rate_deg_h : float
         Ω0 (°/h), for η_Ω; default the sidereal rate 15.041 °/h.
-    position_cov, indexing_sigma_deg, times_s
+    position_cov, indexing_sigma_deg, times_s, temperatures_c, warm_up_cov
         As for :func:`solve_heading`.
 
     Returns
@@ -364,8 +414,10 @@ def solve_latitude(
         times_s=times_s,
     )
     cov_xy = None if fit.cov is None else fit.cov[:2, :2]
-    latitude, omega, sigma_lat, sigma_omega = _polar(fit.a, fit.c, cov_xy)
+    latitude, omega, linear_lat, sigma_omega = _polar(fit.a, fit.c, cov_xy)
     _check_significant(omega, sigma_omega, "Earth-rate", _scale(fit))
+    exact = _exact_sigma(fit.a, fit.c, cov_xy, true_earth_rate_deg_h, sigma_omega)
+    sigma_lat = exact if exact is not None else linear_lat
     if abs(latitude) > 90.0:
         raise UserError(
             "readings.latitude_out_of_range",
@@ -373,7 +425,20 @@ def solve_latitude(
             "the axis pointing north (0°) and that the angles increase towards the zenith.",
             latitude=round(latitude, 2),
         )
+    check, shift = _drift(
+        positions, fit, times_s, temperatures_c, "latitude", elevations_deg, warm_up_cov
+    )
+    noise_sigmas = (sigma_lat, sigma_omega)
+    if check is not None and check.flagged and shift is not None and sigma_lat is not None:
+        moved_lat, moved_omega = latitude - shift[0], omega - shift[1]
+        check = replace(check, shift={"latitude_deg": moved_lat, "earth_rate_deg_h": moved_omega})
+        sigma_lat = math.hypot(sigma_lat, moved_lat)
+        sigma_omega = math.hypot(sigma_omega, moved_omega)
     return LatitudeResult(
+        drift_check=check,
+        noise_sigmas=noise_sigmas,
+        linear_sigma_deg=linear_lat,
+        exact_sigma_deg=exact,
         fit=fit,
         latitude_deg=latitude,
         latitude_sigma_deg=sigma_lat,
@@ -384,3 +449,38 @@ def solve_latitude(
         latitude_error_percent=percent_error(latitude, true_latitude_deg),
         earth_rate_error_percent=percent_error(omega, true_earth_rate_deg_h),
     )
+
+
+def _drift(
+    positions, fit: SinusoidFit, times_s, temperatures_c, part: str, angles_deg, warm_up_cov
+):
+    """The warm-up check of a four-position (or longer) run without a fitted drift term, and
+    where it is flagged, the result recomputed from means corrected by ḃ·(t̄_i − t̄):
+    (azimuth,) or (latitude, Earth rate), or None when that cannot be solved."""
+    if fit.drift is not None:  # five or more timed positions: the drift is in the fit already
+        return None, None
+    closure_sigma = fit.closure_sigma if fit.uncertainty_model != "closure" else None
+    share = None
+    if warm_up_cov is not None and fit.cov is not None:
+        warm = fit_sinusoid(positions, angles_deg, position_cov=warm_up_cov).cov
+        total = fit.cov[0, 0] + fit.cov[1, 1]
+        share = float((warm[0, 0] + warm[1, 1]) / total) if total > 0 else None
+    check = check_drift(
+        [np.asarray(p, dtype=float) for p in positions],
+        fit.means,
+        fit.closure_residual,
+        closure_sigma,
+        times_s=times_s,
+        temperatures_c=temperatures_c,
+        warm_up_share=share,
+    )
+    seen = {"closure", "trend", "combined", "temperature"} & set(check.witnesses)
+    if not check.flagged or check.rate is None or not seen or "model" in check.witnesses:
+        return check, None  # nothing to correct, or the noise model's σ holds the warm-up
+    offsets = position_offsets(check, positions, times_s)
+    corrected = [np.asarray(p, dtype=float) - o for p, o in zip(positions, offsets, strict=True)]
+    again = fit_sinusoid(corrected, angles_deg)
+    if part == "heading":
+        azimuth = math.degrees(math.atan2(-again.c, again.a)) + float(again.angles_deg[0])
+        return check, (wrap360(azimuth),)
+    return check, (math.degrees(math.atan2(again.c, again.a)), math.hypot(again.a, again.c))
