@@ -40,7 +40,7 @@ class Settings(BaseSettings):
     login_hash_slots: int = Field(default=4, ge=1)
     api_rate_per_minute: int = Field(default=600, ge=1)
     student_storage_mb: int = Field(default=200, ge=1)
-    max_body_bytes: int = Field(default=32 * 1024 * 1024, ge=1024)
+    max_body_bytes: int = Field(default=64 * 1024 * 1024, ge=1024)
     # OpenID Connect single sign-on (accounts/sso.py): on when a discovery URL is set
     oidc_discovery_url: str | None = None  # …/.well-known/openid-configuration
     oidc_client_id: str = ""

@@ -46,7 +46,7 @@ API_DESCRIPTION = """REST API of GyroLab, the FOG north-finding teaching lab.
 Authenticate with `Authorization: Bearer <token>`: a personal access token (page *API
 tokens*; scopes `read` and `upload`) or a one-hour token from `POST /api/v1/auth/token`.
 Rates are °/h unless a unit is given; angles are degrees.  Errors are
-`{"detail": "..."}` with a 4xx status.  Limits: request bodies up to 32 MiB, at most
+`{"detail": "..."}` with a 4xx status.  Limits: request bodies up to 64 MiB, at most
 1,000,000 samples per position, 600 requests per minute per token.
 """
 SWAGGER_PAGE = """<!doctype html>

@@ -4,6 +4,7 @@ stored, used for the σ of real-gyro readings, validated, and only the teacher's
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -61,11 +62,12 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
     reply = upload(teacher, world, text)
     assert reply.status_code == 303
     page = teacher.get(reply.headers["location"]).text
-    assert "Characterisation stored: N = " in page
+    assert "Characterisation stored" in page
     summary = stored(world)
     assert summary["arw_deg_rt_h"] == pytest.approx(gyro.arw_deg_rt_h, rel=0.05)
-    low, high = summary["arw_interval"]
+    low, high = summary["terms"]["arw"]["interval"]
     assert low < summary["arw_deg_rt_h"] < high
+    assert "angle random walk N" in page and "not resolved" in page  # K: a bound, no value
     assert summary["rate_hz"] == 10.0 and summary["samples"] == 72000
     assert "68 % interval" in page
     # the settings form does not touch it
@@ -85,9 +87,9 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
     noise = GyroNoise(
         arw_deg_rt_h=summary["arw_deg_rt_h"],
         bias_instability_deg_h=summary["bias_instability_deg_h"],
-        bias_corr_time_s=summary["bias_corr_time_s"],
         rrw_deg_h_rt_h=summary["rrw_deg_h_rt_h"],
         angle_lsb_deg=summary["quantization_deg"] * 12**0.5,
+        flicker_band_s=tuple(summary["flicker_band_s"]),
     )
     positions = [HEADING[k] for k in sorted(HEADING)]
     windows = [Window(0.0, len(p) / 10.0) for p in positions]
@@ -95,6 +97,7 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
         positions,
         [0.0, -90.0, -180.0, -270.0],
         position_cov=noise.mean_covariance(windows, continuous=False),
+        expected_amplitude_deg_h=15.04 * math.cos(math.radians(39.93)),  # the station's H
     )
     assert result["azimuth_sigma_deg"] == pytest.approx(expected.azimuth_sigma_deg, rel=1e-9)
     # removed: back to white noise
@@ -113,7 +116,7 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
         ("x\n" + "1.0\n" * 7000, "abc", "sample rate must be"),
         ("x\n" + "1.0\n" * 7000, "0", "sample rate must be"),
         ("x\n" + "1.0\n" * 7000, "1e9", "sample rate must be"),
-        ("x\n" + "1.0\n" * 7000 + "oops\n", "10", "is not a number"),
+        ("x\n" + "1.0\n" * 7000 + "oops\n", "10", "Line 7002 of the record is not a reading"),
         ("position_1,position_2\n1,2\n", "10", "one static record"),
         ("x\n" + "1.0\n" * 7000, "10", "never change"),
         (b"\x00\x01\x81\x00", "10", "not text (UTF-8 or GB18030)"),

@@ -172,8 +172,11 @@ def test_simulate_static_and_allan(capsys, tmp_path):
     result = json.loads(out)
     assert code == 0
     assert result["arw_deg_rt_h"] == pytest.approx(0.012, rel=0.1)
+    assert result["terms"]["arw"]["resolved"] and result["dwell"]["limit"] == "record"
     code, out, _ = run(capsys, "allan", str(path), "--rate", "10")
-    assert "ARW N =" in out and "recommended dwell" in out
+    assert "angle random walk N" in out and "0.01" in out and "best dwell" in out
+    code, out, _ = run(capsys, "allan", str(path), "--language", "zh-CN")  # rate from times
+    assert code == 0 and "角度随机游走 N" in out
     single = tmp_path / "single.txt"
     single.write_text("\n".join(csv_text.splitlines()[1:][i].split(",")[-1] for i in range(500)))
     assert run(capsys, "allan", str(single), "--rate", "10")[0] == 0

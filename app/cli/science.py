@@ -14,20 +14,23 @@ from itertools import pairwise
 
 import numpy as np
 
-from app.core.allan import allan_deviation
-from app.core.allan_intervals import fit_intervals
+from app.core.allan import analyse_record
+from app.core.allan_summary import dwell_lines, note_lines, summary_lines, term_rows
+from app.core.drift_check import warm_up_message
 from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude, render_text
 from app.core.jsonsafe import json_safe
 from app.core.noise_model import GyroNoise, Window, back_to_back
-from app.core.position_records import parse_static_record
 from app.core.presets import PRESETS
 from app.core.readings import Readings, parse_readings_csv, readings_to_long_csv
 from app.core.record_checks import WARM_UP_LIMIT_C
 from app.core.simulate import GyroStream, Setup, simulate_run, simulate_static
 from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.solve import solve_heading, solve_latitude
+from app.core.static_record import read_static_record, text_lines
 from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
+
+WARM_GYRO_S = 3600.0  # simulate's default: a lab gyro is usually left on
 
 
 class CommandError(Exception):
@@ -71,9 +74,19 @@ def solve_readings(part: str, readings: Readings, args: argparse.Namespace):
     else:
         angles = elevation_angles(count, args.start_angle, args.step)
     known = _known_noise(readings, positions, getattr(args, "gyro_preset", None))
-    known["times_s"] = readings.times_s  # five or more timed positions: drift is fitted
+    known["times_s"] = readings.times_s  # drift fitted (5+ positions) or checked (warm-up)
+    known["temperatures_c"] = readings.temperatures_c or None
     if part == "heading":
-        return solve_heading(positions, angles, true_azimuth_deg=args.true_azimuth, **known)
+        expected = None
+        if args.latitude is not None and -90 <= args.latitude <= 90:
+            expected = args.earth_rate * math.cos(math.radians(args.latitude))
+        return solve_heading(
+            positions,
+            angles,
+            true_azimuth_deg=args.true_azimuth,
+            expected_amplitude_deg_h=expected,
+            **known,
+        )
     return solve_latitude(
         positions,
         angles,
@@ -99,9 +112,11 @@ def _known_noise(readings: Readings, positions, preset_name: str | None) -> dict
         ordered = all(a.end_s <= b.start_s + 1e-9 for a, b in pairwise(timed))
         if ordered and timed[0].start_s >= 0:
             windows = timed
+    timed = readings.times_s is not None  # only then is the time since switch-on known
     return {
-        "position_cov": noise.mean_covariance(windows),
+        "position_cov": noise.mean_covariance(windows, warm_up=timed),
         "indexing_sigma_deg": noise.indexing_sigma_deg,
+        "warm_up_cov": noise.warm_up_cov(windows) if timed else None,
     }
 
 
@@ -121,7 +136,23 @@ def _solve(args: argparse.Namespace) -> int:
     print(render_text(steps, args.language))
     if warm_up is not None:
         print(warm_up["note"][args.language])
+    if result.drift_check is not None and result.drift_check.flagged:
+        from app.web.i18n import translator
+
+        key, params = warm_up_message(result.drift_check, _wait_minutes(readings, args))
+        print(translator(args.language)(key, **params))
     return 0
+
+
+def _wait_minutes(readings: Readings, args: argparse.Namespace) -> int | None:
+    """Minutes until a preset's gyro is warm (five warm-up time constants after switch-on),
+    when the times say how long it had been on; else None (a FOG's usual wait)."""
+    name = getattr(args, "gyro_preset", None)
+    if name is None or readings.times_s is None:
+        return None
+    tau = PRESETS[name].warmup_time_constant_s
+    last = max(float(np.max(t)) for t in readings.times_s if len(t))
+    return max(0, math.ceil((5.0 * tau - last) / 60.0)) if tau > 0 else None
 
 
 def temperature_summary(readings: Readings) -> dict | None:
@@ -197,11 +228,22 @@ def _simulate(args: argparse.Namespace) -> int:
     )
     if args.part == "static":
         seconds = args.seconds or args.seconds_per_position or 600.0
+        _finite("--warm-up", args.warm_up)
+        if not 0 <= args.warm_up <= 86_400:
+            raise CommandError("--warm-up must be between 0 and 86400 seconds")
         values = simulate_static(
-            preset, setup, seconds, seed=args.seed, elevation_deg=args.elevation
+            preset,
+            setup,
+            seconds,
+            seed=args.seed,
+            elevation_deg=args.elevation,
+            start_s=args.warm_up,
         )
-        times = [np.arange(values.size) / preset.sample_rate_hz]
-        temperatures = [GyroStream(preset, args.seed).temperatures_c(values.size)]
+        skip = int(round(args.warm_up * preset.sample_rate_hz))
+        times = [(skip + np.arange(values.size)) / preset.sample_rate_hz]
+        clock = GyroStream(preset, args.seed)
+        clock.samples_read = skip
+        temperatures = [clock.temperatures_c(values.size)]
         sys.stdout.write(
             readings_to_long_csv(
                 [values], [0.0], times, temperatures_c=temperatures if args.temperature else None
@@ -240,35 +282,62 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _open_record(path: str):
+    """The record's lines, read as the file is parsed (never the whole text at once)."""
+    if path == "-":
+        binary = getattr(sys.stdin, "buffer", None)
+        return text_lines(binary) if binary is not None else iter(sys.stdin)
+    try:
+        handle = open(path, "rb")  # noqa: SIM115 -- closed when the lines run out
+    except FileNotFoundError:
+        raise CommandError(f"no such file: {path}") from None
+    except OSError as error:
+        raise CommandError(f"cannot read {path}: {error.strerror}") from None
+
+    def lines():
+        with handle:
+            yield from text_lines(handle)
+
+    return lines()
+
+
 def _allan(args: argparse.Namespace) -> int:
-    values = parse_static_record(_read_text(args.file))
-    _finite("--rate", args.rate)
-    result = allan_deviation(to_deg_per_hour(values, args.unit), args.rate)
-    intervals = None
-    if args.intervals:
-        intervals = fit_intervals(result, args.rate, len(values), replicates=args.intervals)
+    from app.web.i18n import translator
+
+    _ = translator(args.language)
+    for name in ("rate", "max_tau"):
+        _finite(f"--{name.replace('_', '-')}", getattr(args, name))
+    show = args.progress or (sys.stderr.isatty() and not args.json)
+
+    def progress(stage: str, details: dict) -> None:
+        if show:
+            count = f"{details['samples']:,}"
+            print(_(f"allan.progress_{stage}", samples=count), file=sys.stderr, flush=True)
+
+    record = read_static_record(_open_record(args.file), progress=progress)
+    result = analyse_record(
+        record, args.rate, unit=args.unit, max_tau_s=args.max_tau, progress=progress
+    )
     if args.json:
         payload = result.to_json()
-        payload["intervals"] = intervals.to_json() if intervals else None
+        payload["summary"] = {
+            "terms": term_rows(payload["terms"], _),
+            "dwell": dwell_lines(payload["dwell"], _),
+            "notes": note_lines(result.notes, _),
+        }
         print(to_json_text(payload))
         return 0
-    print(f"{'tau (s)':>12} {'ADEV (°/h)':>14}")
-    for tau, adev in zip(result.taus_s, result.adev_deg_h, strict=True):
-        print(f"{tau:12.3f} {adev:14.6f}")
-
-    def interval(pair) -> str:
-        return f"  ({intervals.level:.0%} interval {pair[0]:.5g} … {pair[1]:.5g})" if pair else ""
-
-    print(f"ARW N = {result.arw_deg_rt_h:.5f} °/√h{interval(intervals and intervals.arw_deg_rt_h)}")
-    if result.bias_instability_deg_h is not None:
-        bias_range = intervals and intervals.bias_instability_deg_h
-        print(f"bias instability B = {result.bias_instability_deg_h:.5f} °/h{interval(bias_range)}")
-    if result.rrw_deg_h_rt_h is not None:
-        print(f"rate random walk K = {result.rrw_deg_h_rt_h:.5f} °/h/√h")
-    print(f"Allan minimum {result.adev_min_deg_h:.5f} °/h at τ = {result.tau_min_s:.1f} s")
-    print(f"recommended dwell per position ≈ {result.recommended_dwell_s:.0f} s")
-    if intervals is None:
-        print("(--intervals 40 adds bootstrap intervals: how far one record can be trusted)")
+    print(_("allan.heading_curve"))
+    for tau, adev, low, high in zip(
+        result.taus_s,
+        result.adev_deg_h,
+        result.band_low_deg_h,
+        result.band_high_deg_h,
+        strict=True,
+    ):
+        print(f"{tau:12.3f} {adev:14.6g}   {low:.4g} … {high:.4g}")
+    for line in summary_lines(result, _):
+        print(line)
     return 0
 
 
@@ -363,24 +432,36 @@ def add_science_commands(commands) -> None:
     simulate.add_argument(
         "--warm-up",
         type=float,
-        default=0.0,
+        default=WARM_GYRO_S,
         metavar="SECONDS",
-        help="the gyro has been on this long before the first position (default 0: cold)",
+        help="the gyro has been on this long before the first reading (default 3600: a lab "
+        "gyro is left on; 0 is a cold start, whose bias still drifts)",
     )
     simulate.set_defaults(handler=_guarded(_simulate))
 
-    allan = commands.add_parser("allan", help="Allan deviation of a static record")
-    allan.add_argument("file", help="CSV (long/wide with one position, or one value per line)")
-    allan.add_argument("--rate", type=float, required=True, help="sample rate in Hz")
+    allan = commands.add_parser(
+        "allan",
+        help="Allan deviation of a static record, the IEEE 952 terms it resolves, dwell advice",
+    )
+    allan.add_argument(
+        "file",
+        help="CSV: one value per line, time_s,value[,temperature_c], or the long layout "
+        "with one position; '-' reads stdin",
+    )
+    allan.add_argument(
+        "--rate", type=float, help="sample rate in Hz (default: from the record's times)"
+    )
     allan.add_argument("--unit", choices=UNITS, default="deg/h")
     allan.add_argument(
-        "--intervals",
-        type=int,
-        default=0,
-        metavar="REPLICATES",
-        help="bootstrap 68 %% intervals of N and B from this many "
-        "simulated records of the fitted model (e.g. 40; takes about a second per 10)",
+        "--max-tau",
+        type=float,
+        metavar="SECONDS",
+        help="the longest τ to analyse: refused when the record is shorter than twice it",
     )
+    allan.add_argument(
+        "--progress", action="store_true", help="report reading and analysis on stderr"
+    )
+    allan.add_argument("--language", choices=["en", "zh-CN"], default="en")
     allan.add_argument("--json", action="store_true")
     allan.set_defaults(handler=_guarded(_allan))
 

@@ -1,8 +1,10 @@
 """A real gyro's Allan characterisation, uploaded by the teacher for an assignment.
 
-The teacher records the bench's gyro at rest (ideally hours, after warm-up) and uploads
-the record with its sample rate.  Its IEEE 952 terms (joint fit, with bootstrap 68 %
-intervals) are stored on the assignment; from then on the position means of readings that
+The teacher records the bench's gyro at rest (ideally hours) and uploads the record, with
+its sample rate or its times (the bridge's CSV: gaps and temperature too).  Gaps, spikes
+and a warm-up are dealt with and said (:mod:`app.core.static_record`); the IEEE 952 terms
+the curve resolves, with 68 % intervals, and bounds for the rest, are stored on the
+assignment (:mod:`app.core.allan_fit`); from then on the position means of readings that
 did not come from the simulated gyro (typed, CSV, API, the serial bridge) get their
 covariance from that noise model -- ``uncertainty_model`` "allan" -- instead of assuming
 white noise (lab-reference §3).
@@ -17,17 +19,16 @@ from datetime import UTC, datetime
 
 import numpy as np
 
-from app.core.allan import allan_deviation
-from app.core.allan_intervals import fit_intervals
+from app.core.allan import analyse_record
 from app.core.exceptions import UserError
+from app.core.flicker import DEFAULT_BAND_S
 from app.core.noise_model import GyroNoise
-from app.core.position_records import parse_static_record
-from app.core.units import canonical_unit, to_deg_per_hour
+from app.core.static_record import read_static_record, text_lines
+from app.core.units import canonical_unit
 from app.models import Assignment, utcnow
 
 MAX_RATE_HZ = 10_000.0
 MIN_RECORD_S = 600.0  # shorter records say little about the slow terms
-REPLICATES = 20
 
 
 @dataclass(frozen=True)
@@ -38,39 +39,59 @@ class StationNoise:
     rate_hz: float
 
 
-def characterise(text: str, rate_hz: float, unit: str = "deg/h") -> dict:
-    """Fit the record's Allan deviation; the stored summary (JSON-ready)."""
-    if not (isinstance(rate_hz, int | float) and math.isfinite(rate_hz)) or not (
-        0 < rate_hz <= MAX_RATE_HZ
+def _check_length(seconds: float) -> None:
+    if not seconds >= MIN_RECORD_S:
+        raise UserError(
+            "characterisation.too_short",
+            f"The record covers {seconds:.0f} s; at least {MIN_RECORD_S:.0f} s (better: hours) "
+            "are needed to see the slow terms.",
+            seconds=round(seconds) if math.isfinite(seconds) else 0,
+            minimum=round(MIN_RECORD_S),
+        )
+
+
+def characterise(source, rate_hz: float | None, unit: str = "deg/h") -> dict:
+    """Fit the record's Allan deviation; the stored summary (JSON-ready).
+
+    ``source`` is the record's bytes or a binary file (an upload spooled to disk), read in
+    blocks of lines; ``rate_hz`` None takes the rate from the record's times."""
+    if rate_hz is not None and (
+        not (isinstance(rate_hz, int | float) and math.isfinite(rate_hz))
+        or not (0 < rate_hz <= MAX_RATE_HZ)
     ):
         raise UserError(
             "characterisation.bad_rate",
             "The sample rate must be a number of readings per second, up to 10000.",
         )
-    values = to_deg_per_hour(parse_static_record(text), canonical_unit(unit))
-    seconds = values.size / rate_hz
-    if seconds < MIN_RECORD_S:
+    record = read_static_record(text_lines(source))
+    if rate_hz is not None:
+        _check_length(record.values.size / rate_hz)
+    elif record.times_s is not None and record.times_s.size > 1:
+        _check_length(float(record.times_s[-1] - record.times_s[0]))
+    result = analyse_record(record, rate_hz, unit=canonical_unit(unit))
+    _check_length(result.samples / result.rate_hz)  # what is left after trimming
+    if result.rate_hz > MAX_RATE_HZ:
         raise UserError(
-            "characterisation.too_short",
-            f"The record covers {seconds:.0f} s; at least {MIN_RECORD_S:.0f} s (better: hours) "
-            "are needed to see the slow terms.",
-            seconds=round(seconds),
-            minimum=round(MIN_RECORD_S),
+            "characterisation.bad_rate",
+            "The sample rate must be a number of readings per second, up to 10000.",
         )
-    result = allan_deviation(values, rate_hz)
-    intervals = fit_intervals(result, rate_hz, values.size, replicates=REPLICATES)
+    noise = result.noise()
+    seconds = result.samples / result.rate_hz
     return {
-        "rate_hz": float(rate_hz),
-        "samples": int(values.size),
+        "rate_hz": result.rate_hz,
+        "samples": result.samples,
         "record_s": float(seconds),
-        "arw_deg_rt_h": result.arw_deg_rt_h,
-        "arw_interval": list(intervals.arw_deg_rt_h),
-        "bias_instability_deg_h": result.bias_instability_deg_h or 0.0,
-        "bias_instability_interval": list(intervals.bias_instability_deg_h or (0.0, 0.0)),
-        "bias_corr_time_s": result.bias_corr_time_s or 0.0,
-        "rrw_deg_h_rt_h": result.rrw_deg_h_rt_h or 0.0,
+        "terms": {name: term.to_json() for name, term in result.terms.items()},
+        "arw_deg_rt_h": noise.arw_deg_rt_h,
+        "bias_instability_deg_h": noise.bias_instability_deg_h,
+        "rrw_deg_h_rt_h": noise.rrw_deg_h_rt_h,
         "quantization_deg": result.quantization_deg,
-        "recommended_dwell_s": result.recommended_dwell_s,
+        "flicker_band_s": list(noise.flicker_band_s),
+        "markov_sigma_deg_h": noise.markov_sigma_deg_h,
+        "markov_corr_time_s": noise.markov_corr_time_s,
+        "dwell": result.dwell.to_json(),
+        "recommended_dwell_s": result.dwell.recommended_s,
+        "notes": result.notes,
         "uploaded_at": utcnow().strftime("%Y-%m-%d %H:%M"),
     }
 
@@ -99,11 +120,16 @@ def station_noise(assignment: Assignment | None) -> StationNoise | None:
     summary = summary_of(assignment)
     if summary is None:
         return None
+    if "terms" not in summary:  # stored before bias instability was flicker noise: its B
+        # was the Gauss–Markov peak / 0.664, the same floor
+        summary.setdefault("flicker_band_s", list(DEFAULT_BAND_S))
     noise = GyroNoise(
         arw_deg_rt_h=summary["arw_deg_rt_h"],
         bias_instability_deg_h=summary["bias_instability_deg_h"],
-        bias_corr_time_s=summary["bias_corr_time_s"],
         rrw_deg_h_rt_h=summary["rrw_deg_h_rt_h"],
         angle_lsb_deg=summary["quantization_deg"] * float(np.sqrt(12.0)),
+        flicker_band_s=tuple(summary.get("flicker_band_s", DEFAULT_BAND_S)),
+        markov_sigma_deg_h=summary.get("markov_sigma_deg_h", 0.0),
+        markov_corr_time_s=summary.get("markov_corr_time_s", 0.0),
     )
     return StationNoise(noise, summary["rate_hz"])

@@ -100,12 +100,13 @@ JS_MESSAGES = (
 
 
 @router.get("/data")
-def explorer_data(user: CurrentUser, query: QueryDep):
+def explorer_data(request: Request, user: CurrentUser, query: QueryDep):
     curves, info = heading_error_curves(query.explorer_input())
+    _ = translator(request_language(request))
     return {
         "curves": [c.__dict__ for c in curves],
         "info": info,
-        "dwell": dwell_curve(query.preset, query.latitude_deg),
+        "dwell": dwell_curve(query.preset, query.latitude_deg, _),
         "orders": drift_order_curves(
             query.latitude_deg, query.dwell_s, query.bias_drift_deg_h_per_h
         ),
@@ -133,7 +134,7 @@ def explorer_csv(
                 [f"{azimuth:g}", *[f"{errors[index]:.6f}" for errors in data["orders"].values()]]
             )
     elif chart == "dwell":
-        data = dwell_curve(query.preset, query.latitude_deg)
+        data = dwell_curve(query.preset, query.latitude_deg, _)
         writer.writerow(["dwell_s", "heading_sigma_deg", "white_noise_only_deg", "floor_deg"])
         for row in zip(data["dwell_s"], data["sigma_deg"], data["white_only_deg"], strict=True):
             writer.writerow(

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from app.core.allan_summary import dwell_lines
 from app.core.error_analysis import ErrorSources, first_order
 from app.core.error_monte_carlo import monte_carlo_heading_errors
 from app.core.noise_model import GyroNoise, recommended_dwell
@@ -90,7 +91,7 @@ def heading_error_curves(
             gyro,
             arw_deg_rt_h=preset.arw_deg_rt_h,
             bias_instability_deg_h=preset.bias_instability_deg_h,
-            bias_corr_time_s=preset.bias_corr_time_s,
+            flicker_band_s=preset.flicker_band_s,
         )
     sources = params.sources()
     coarse = np.arange(MC_STEP_DEG / 2, 360.0, MC_STEP_DEG)
@@ -131,23 +132,27 @@ def heading_error_curves(
     return curves, info
 
 
-def dwell_curve(preset_name: str, latitude_deg: float) -> dict:
+def dwell_curve(preset_name: str, latitude_deg: float, _=None) -> dict:
     """Expected four-position heading σ (°) against dwell per position, from the preset's
-    noise model; the white-noise part alone; the recommended dwell, where correlated noise
-    starts to outweigh white noise (the same rule as the Allan read-out), and its σ."""
+    noise model (flicker bias instability included); the white-noise part alone; the dwell
+    that minimises σ within the lab's range -- the same rule and grid as the Allan page and
+    ``gyrolab allan`` (:func:`app.core.noise_model.recommended_dwell`) -- with the advice in
+    words when a translator ``_`` is given."""
     preset = PRESETS[preset_name]
     amplitude = EARTH_RATE_DEG_H * math.cos(math.radians(latitude_deg))
     advice = recommended_dwell(GyroNoise.from_preset(preset), preset.sample_rate_hz)
     scale = 1.0 / amplitude if amplitude > 0 else math.nan
     sigma, white = advice.sigma * scale, advice.white_sigma * scale
-    best = int(np.argmin(np.abs(advice.dwell_s - advice.recommended_s)))
     return {
         "dwell_s": advice.dwell_s.tolist(),
         "sigma_deg": sigma.tolist(),
         "white_only_deg": white.tolist(),
-        "floor_deg": float(sigma[best]),
+        "floor_deg": float(np.min(sigma)),
         "best_dwell_s": advice.recommended_s,
-        "knee_s": advice.recommended_s if advice.recommended_s < advice.dwell_s[-1] else None,
+        "lower_bound": advice.lower_bound,
+        "near_best_s": advice.near_best_s,
+        "knee_s": advice.near_best_s,
+        "advice": dwell_lines(advice.to_json(), _) if _ is not None else [],
         "arw_deg_rt_h": preset.arw_deg_rt_h,
         "bias_instability_deg_h": preset.bias_instability_deg_h,
     }

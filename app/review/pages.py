@@ -7,10 +7,10 @@ from typing import Annotated
 
 from fastapi import APIRouter, File, Form, Request, UploadFile
 
+from app.core.allan_summary import dwell_lines, note_lines, term_rows
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.core.readings import parse_decimal
-from app.core.text_files import decode_text
 from app.courses import characterisation
 from app.courses.assignment_form import form_values, parse_assignment_form
 from app.lab.chart_texts import class_text
@@ -42,6 +42,14 @@ def assignment_dashboard(
     }
     summary, table = class_text(rows, _)
     figure_texts = dict.fromkeys(figures, {"summary": summary, "table": table})
+    stored = characterisation.summary_of(assignment, with_time=True)
+    words = None
+    if stored is not None and "terms" in stored:
+        words = {
+            "terms": term_rows(stored["terms"], _),
+            "dwell": dwell_lines(stored["dwell"], _),
+            "notes": note_lines(stored.get("notes", []), _),
+        }
     return render(
         request,
         "review/dashboard.html",
@@ -55,7 +63,8 @@ def assignment_dashboard(
             "status_filter": status,
             "timezone": course.timezone,
             "form": form_values(assignment, course.timezone),
-            "characterisation": characterisation.summary_of(assignment, with_time=True),
+            "characterisation": stored,
+            "characterisation_words": words,
             "presets": sorted(PRESETS),
             "plotly_url": request.app.state.plotly_url,
             "passback": passback_state(db, assignment.id),
@@ -91,7 +100,20 @@ def update_settings(
     return response
 
 
-MAX_RECORD_BYTES = 20_000_000  # about a million readings as text
+def _record_source(record: UploadFile):
+    """The uploaded record as a binary file, read in blocks (spooled to disk by the server):
+    gzip-compressed CSV (``.gz``, or the gzip magic bytes) is decompressed as it is read."""
+    import gzip
+
+    handle = record.file
+    handle.seek(0)
+    magic = handle.read(2)
+    handle.seek(0)
+    if not magic:
+        raise UserError("characterisation.no_file", "Choose the record's CSV file.")
+    if magic == b"\x1f\x8b":
+        return gzip.GzipFile(fileobj=handle, mode="rb")
+    return handle
 
 
 @router.post(
@@ -117,31 +139,27 @@ def upload_characterisation(
         flash(response, request, "characterisation.removed", "success")
         return response
     try:
-        data = record.file.read(MAX_RECORD_BYTES + 1) if record else b""
-        if not data:
+        if record is None:
             raise UserError("characterisation.no_file", "Choose the record's CSV file.")
-        if len(data) > MAX_RECORD_BYTES:
-            raise UserError("characterisation.too_large", "The file is larger than 20 MB.")
-        text = decode_text(data)
+        rate = None
+        if rate_hz.strip():
+            try:
+                rate = parse_decimal(rate_hz.strip())
+            except ValueError:
+                rate = math.nan
         try:
-            rate = parse_decimal(rate_hz.strip())
-        except ValueError:
-            rate = math.nan
-        summary = characterisation.characterise(text, rate, unit)
+            summary = characterisation.characterise(_record_source(record), rate, unit)
+        except (OSError, EOFError):  # a truncated or corrupt gzip stream
+            raise UserError(
+                "characterisation.bad_gzip", "The compressed file is damaged or incomplete."
+            ) from None
     except UserError as error:
         flash(response, request, error.key, "error", **error.params)
         return response
     characterisation.store(assignment, summary)
     db.add(assignment)
     db.commit()
-    flash(
-        response,
-        request,
-        "characterisation.stored",
-        "success",
-        arw=f"{summary['arw_deg_rt_h']:.4g}",
-        bias=f"{summary['bias_instability_deg_h']:.3g}",
-    )
+    flash(response, request, "characterisation.stored", "success")
     return response
 
 

@@ -39,7 +39,7 @@
     const dwell = data.dwell;
     const last = dwell.dwell_s.length - 1;
     describe("dwell-chart",
-      t("explore.summary_dwell", { first: round(dwell.sigma_deg[0]), from: round(dwell.dwell_s[0], 1), last: round(dwell.sigma_deg[last]), to: round(dwell.dwell_s[last], 1), floor: round(dwell.floor_deg) }),
+      t("explore.summary_dwell", { first: round(dwell.sigma_deg[0]), from: round(dwell.dwell_s[0], 1), last: round(dwell.sigma_deg[last]), to: round(dwell.dwell_s[last], 1), floor: round(dwell.floor_deg) }) + " " + (dwell.advice || []).join(" "),
       [t("explore.dwell_axis"), t("explore.expected"), t("explore.white_only")],
       dwell.dwell_s.map((seconds, i) => [round(seconds, 1), round(dwell.sigma_deg[i], 4), round(dwell.white_only_deg[i], 4)]));
     const orders = Object.entries(data.orders.orders);
