@@ -132,6 +132,8 @@ HEADING_KEYS = [
     "drift_deg_h_per_h",
     "drift_sigma_deg_h_per_h",
     "azimuth_error_deg",
+    "azimuth_noise_sigma_deg",
+    "warm_up",
 ]
 
 
@@ -155,6 +157,9 @@ LATITUDE_KEYS = [
     "uncertainty_model",
     "drift_deg_h_per_h",
     "drift_sigma_deg_h_per_h",
+    "latitude_noise_sigma_deg",
+    "earth_rate_noise_sigma_deg_h",
+    "warm_up",
 ]
 
 
@@ -375,6 +380,7 @@ ACCESS = {
     "POST /lab/sessions/{session_id}/turn": "owner",
     "POST /lab/sessions/{session_id}/plane": "owner",
     "POST /lab/sessions/{session_id}/order": "owner",
+    "POST /lab/sessions/{session_id}/wait": "owner",
     "POST /lab/sessions/{session_id}/trim": "owner",
     "GET /lab/sessions/{session_id}/state": "owner",
     "POST /lab/sessions/{session_id}/leave": "owner",

@@ -32,7 +32,13 @@ from app.lab.partner_pages import partner_view
 from app.lab.result_cache import CACHE, cached_results
 from app.lab.results import session_results
 from app.lab.service import allowed_methods
-from app.lab.sim import FIRST_PASS, nominal_angle, north_dial_deg, position_count
+from app.lab.sim import (
+    FIRST_PASS,
+    nominal_angle,
+    north_dial_deg,
+    position_count,
+    warm_up_state,
+)
 from app.lab.store import PARTS, take_history
 from app.models import (
     Assignment,
@@ -309,6 +315,7 @@ def session_view(
         "drawing": drawing_coordinates(session),
         "positions": range(1, position_count(session) + 1),
         "preset": PRESETS.get(session.simulator_preset),
+        "warm_up": warm_up_state(session) if session.simulator_preset in PRESETS else None,
         "error_text": lambda error: error_text(error, _),
         "truth": truth,
         "check": check,

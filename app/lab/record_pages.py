@@ -19,7 +19,7 @@ from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.deps import ManualSession, OwnedSession, SimulatorSession
 from app.lab.result_cache import results_of
 from app.lab.service import record_positions, recordable_session
-from app.lab.sim import nominal_angle, position_count
+from app.lab.sim import nominal_angle, position_count, wait_for_gyro, warm_up_state
 from app.lab.store import POSITIONS, check_position, set_symmetric_order
 from app.lab.submissions import submit
 from app.lab.trim import trim_position
@@ -223,6 +223,30 @@ def set_order(
         return response
     db.commit()
     flash(response, request, "lab.order_symmetric" if symmetric == "on" else "lab.order_plain")
+    return response
+
+
+@router.post("/sessions/{session_id}/wait", dependencies=[CsrfProtected])
+def wait_for_warm_up(
+    request: Request,
+    session: SimulatorSession,
+    db: SessionDep,
+    minutes: Annotated[str, Form(max_length=8)] = "",
+):
+    """Let the simulated gyro warm up: its clock runs on by the minutes asked (1–60)."""
+    response = redirect(f"/lab/sessions/{session.id}#sim-warm-up")
+    try:
+        wanted = int(minutes)
+    except ValueError:
+        wanted = 0
+    if not 1 <= wanted <= 60:
+        flash(response, request, "sim.bad_wait", "error")
+        return response
+    wait_for_gyro(session, wanted * 60.0)
+    db.add(session)
+    db.commit()
+    state = warm_up_state(session)
+    flash(response, request, "sim.waited", "success", minutes=state["on_minutes"])
     return response
 
 

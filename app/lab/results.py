@@ -13,6 +13,7 @@ from types import SimpleNamespace
 import numpy as np
 from sqlmodel import Session, select
 
+from app.core.drift_check import warm_up_message
 from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude
 from app.core.noise_model import GyroNoise, Window
@@ -20,7 +21,7 @@ from app.core.record_checks import record_gaps, warm_up_change
 from app.core.solve import solve_heading, solve_latitude
 from app.courses.characterisation import StationNoise, station_noise
 from app.lab.samples import unpack
-from app.lab.sim import FIRST_PASS, preset_for
+from app.lab.sim import preset_for
 from app.lab.store import PARTS
 from app.models import (
     Assignment,
@@ -175,6 +176,7 @@ def simulated_noise(session: LabSession, ordered: list[PositionData]) -> dict:
     return {
         "position_cov": noise.mean_covariance(windows, continuous=on_one_clock),
         "indexing_sigma_deg": noise.indexing_sigma_deg,
+        "warm_up_cov": noise.warm_up_cov(windows) if on_one_clock else None,
     }
 
 
@@ -216,12 +218,18 @@ def solve_part(
     values = [p.values for p in ordered]
     angles = [p.take.angle_deg for p in ordered]
     known = simulated_noise(session, ordered) or characterised_noise(station, ordered)
-    if len(ordered) > FIRST_PASS and all(p.times is not None for p in ordered):
-        # the symmetric order, timed on one clock: the fit adds b + ḃ·(t − t̄)
+    if all(p.times is not None for p in ordered):
+        # timed on one clock: the symmetric order's fit adds b + ḃ·(t − t̄); four positions
+        # are checked for a drifting bias (a gyro still warming up)
         known["times_s"] = [p.times for p in ordered]
+    if any(p.temperatures is not None for p in ordered):
+        known["temperatures_c"] = [p.temperatures for p in ordered]
     try:
         if part == "heading":
-            outcome.result = solve_heading(values, angles, **known)
+            expected = session.earth_rate_deg_h * math.cos(math.radians(session.latitude_deg))
+            outcome.result = solve_heading(
+                values, angles, expected_amplitude_deg_h=expected, **known
+            )
             outcome.steps = explain_heading(outcome.result)
         else:
             outcome.result = solve_latitude(
@@ -235,7 +243,13 @@ def solve_part(
     except UserError as error:
         outcome.error = error
     outcome.flags = quality_flags(session, data)
-    if outcome.result is not None and outcome.result.fit.closure_consistent is False:
+    check = outcome.result.drift_check if outcome.result is not None else None
+    if check is not None and check.flagged:
+        until = None
+        if all(p.take.source == InputMethod.simulator and p.times is not None for p in ordered):
+            until = max(float(p.times[-1]) for p in ordered if p.times.size)
+        outcome.flags.append(warm_up_flag(session, check, until))
+    elif outcome.result is not None and outcome.result.fit.closure_consistent is False:
         fit = outcome.result.fit
         outcome.flags.append(
             {
@@ -290,6 +304,19 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
             if typical > 0 and std > 3 * typical:
                 flags.append(flag("flag.noisy", position=position, ratio=round(std / typical, 1)))
     return flags
+
+
+def warm_up_flag(session: LabSession, check, simulated_until_s: float | None) -> dict:
+    """The words for a run whose bias drifted (a gyro still warming up) -- for the simulated
+    gyro (``simulated_until_s``: the gyro time its run ended), how long it still needed
+    then until five warm-up time constants after switch-on."""
+    minutes = None
+    preset = preset_for(session)
+    if simulated_until_s is not None and preset.warmup_time_constant_s > 0:
+        left = 5.0 * preset.warmup_time_constant_s - simulated_until_s
+        minutes = max(1, math.ceil(left / 60.0)) if left > 0 else 0
+    key, params = warm_up_message(check, minutes)
+    return {"key": key, "params": params}
 
 
 def session_results(db: Session, session: LabSession) -> dict[str, PartResult]:

@@ -141,6 +141,25 @@ class UploadOut(BaseModel):
     added: int
 
 
+class WarmUpOut(BaseModel):
+    """Whether the bias drifted through the run (a gyro still warming up)."""
+
+    flagged: bool = Field(
+        description="the drift is significant (|z| ≥ 3) or the case "
+        "temperature changed by more than 1 °C"
+    )
+    drift_rate: float | None = Field(description="the linear bias drift ḃ seen")
+    drift_sigma: float | None
+    drift_unit: Literal["deg/h per h", "deg/h per reading"]
+    z: float | None
+    witnesses: list[str] = Field(description="closure, trend, temperature or combined")
+    temperature_change_c: float | None
+    shift: dict[str, float] | None = Field(
+        description="how far the drift moved the result (added in quadrature to its 1σ)"
+    )
+    wait_minutes: int
+
+
 class HeadingOut(BaseModel):
     part: Literal["heading"]
     n_positions: int
@@ -170,6 +189,10 @@ class HeadingOut(BaseModel):
     )
     drift_sigma_deg_h_per_h: float | None
     azimuth_error_deg: float | None
+    azimuth_noise_sigma_deg: float | None = Field(
+        description="the 1σ from the noise alone, before a flagged drift widened it"
+    )
+    warm_up: WarmUpOut | None
 
 
 class LatitudeOut(BaseModel):
@@ -192,6 +215,9 @@ class LatitudeOut(BaseModel):
     uncertainty_model: Literal["white", "closure", "allan"] | None
     drift_deg_h_per_h: float | None
     drift_sigma_deg_h_per_h: float | None
+    latitude_noise_sigma_deg: float | None
+    earth_rate_noise_sigma_deg_h: float | None
+    warm_up: WarmUpOut | None
 
 
 class ResultsOut(BaseModel):

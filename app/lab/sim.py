@@ -136,6 +136,35 @@ def set_gyro_clock(session: LabSession, gyro_s: float, now: datetime | None = No
     session.sim_clock_at = now or utcnow()
 
 
+WARM_AFTER_TIME_CONSTANTS = 5.0  # e^(−5): the warm-up bias has fallen below 1 %
+MAX_WAIT_S = 3600.0
+
+
+def warm_up_state(session: LabSession, now: datetime | None = None) -> dict:
+    """How long the session's simulated gyro has been on and how long until it is warm
+    (five warm-up time constants of its preset after switch-on), in whole minutes."""
+    preset = preset_for(session)
+    on_s = gyro_clock_s(session, now)
+    warm_s = WARM_AFTER_TIME_CONSTANTS * preset.warmup_time_constant_s
+    left_s = max(0.0, warm_s - on_s) if preset.warmup_bias_deg_h else 0.0
+    return {
+        "on_minutes": int(on_s // 60),
+        "warm_minutes": math.ceil(warm_s / 60),
+        "left_minutes": math.ceil(left_s / 60),
+        "warm": left_s <= 0,
+    }
+
+
+def wait_for_gyro(session: LabSession, seconds: float, now: datetime | None = None) -> float:
+    """Let the simulated gyro run on for ``seconds`` (0 < s ≤ 1 h) without recording: its
+    clock, and so its warm-up, advances.  Returns the new gyro time (s since switch-on)."""
+    if not (math.isfinite(seconds) and 0 < seconds <= MAX_WAIT_S):
+        raise ValueError("wait between 0 and 3600 s")
+    gyro = gyro_clock_s(session, now) + seconds
+    set_gyro_clock(session, gyro, now)
+    return gyro
+
+
 class SimulatedTake:
     """Samples of one recording from the session's one simulated gyro.
 
