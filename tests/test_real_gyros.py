@@ -308,3 +308,17 @@ def test_the_explorer_and_the_allan_analysis_give_the_same_dwell_for_the_same_gy
         advice = recommended_dwell(GyroNoise.from_preset(preset), preset.sample_rate_hz)
         assert data["best_dwell_s"] == advice.recommended_s
         assert data["lower_bound"] == advice.lower_bound
+
+
+def test_one_axis_of_a_multi_axis_record_is_chosen_by_name_or_number():
+    text = "timestamp,gx,gy,gz\n" + "\n".join(
+        f"{k / 100:.2f},{k % 7},{10 + k % 3},{-(k % 5)}" for k in range(50)
+    )
+    record = read_static_record(io.StringIO(text), column="gy")
+    assert record.values[:3] == pytest.approx([10, 11, 12])
+    assert record.times_s[1] == pytest.approx(0.01)
+    assert read_static_record(io.StringIO(text), column="4").values[4] == -4
+    for column, key in ((None, "allan.no_value_column"), ("gq", "allan.no_such_column")):
+        with pytest.raises(UserError) as error:
+            read_static_record(io.StringIO(text), column=column)
+        assert error.value.key == key and "gx, gy, gz" in str(error.value)

@@ -314,7 +314,7 @@ def _allan(args: argparse.Namespace) -> int:
             count = f"{details['samples']:,}"
             print(_(f"allan.progress_{stage}", samples=count), file=sys.stderr, flush=True)
 
-    record = read_static_record(_open_record(args.file), progress=progress)
+    record = read_static_record(_open_record(args.file), progress=progress, column=args.column)
     result = analyse_record(
         record, args.rate, unit=args.unit, max_tau_s=args.max_tau, progress=progress
     )
@@ -452,6 +452,11 @@ def add_science_commands(commands) -> None:
         "--rate", type=float, help="sample rate in Hz (default: from the record's times)"
     )
     allan.add_argument("--unit", choices=UNITS, default="deg/h")
+    allan.add_argument(
+        "--column",
+        metavar="NAME|N",
+        help="the rates' column: a header name or a number from 1 (one axis of an IMU record)",
+    )
     allan.add_argument(
         "--max-tau",
         type=float,

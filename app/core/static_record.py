@@ -41,7 +41,7 @@ WARM_UP_LIMIT = 6.0
 WARM_UP_BLOCKS = 64
 MAX_TRIM_SHARE = 0.5
 VALUE_NAMES = ("value", "rate", "rate_deg_h", "omega", "reading")
-TIME_NAMES = ("time_s", "time", "t", "t_s")
+TIME_NAMES = ("time_s", "time", "t", "t_s", "timestamp", "timestamp_s")
 TEMPERATURE_NAMES = ("temperature_c", "temperature", "temp_c", "temp")
 
 Progress = Callable[[str, dict], None]
@@ -68,11 +68,31 @@ def _note(key: str, english: str, **params) -> dict:
     return {"key": key, "params": params, "en": english}
 
 
-def _columns(header: list[str]) -> tuple[int, int | None, int | None, int | None]:
+def _chosen(column: str, names: list[str]) -> int:
+    """The column asked for: its name in the header, or its number counted from 1."""
+    wanted = column.strip().lower()
+    if wanted in names:
+        return names.index(wanted)
+    if wanted.isdigit() and 1 <= int(wanted) <= len(names):
+        return int(wanted) - 1
+    raise UserError(
+        "allan.no_such_column",
+        f"The record has no column {column!r}; its columns are: {', '.join(names)}.",
+        column=column,
+        columns=", ".join(names),
+    )
+
+
+def _columns(
+    header: list[str], column: str | None = None
+) -> tuple[int, int | None, int | None, int | None]:
     names = [h.strip().lower() for h in header]
 
     def find(options):
         return next((names.index(o) for o in options if o in names), None)
+
+    if column is not None:  # one axis of a multi-axis record, say
+        return _chosen(column, names), find(TIME_NAMES), find(TEMPERATURE_NAMES), None
 
     wide = [n for n in names if n.startswith("position_")]
     if len(wide) > 1:  # the wide layout: one column per position
@@ -89,7 +109,9 @@ def _columns(header: list[str]) -> tuple[int, int | None, int | None, int | None
             )
         raise UserError(
             "allan.no_value_column",
-            "The record has a header but no 'value' column.",
+            "The record has a header but no 'value' column; its columns are: "
+            f"{', '.join(names)} (choose one).",
+            columns=", ".join(names),
         )
     return value, find(TIME_NAMES), find(TEMPERATURE_NAMES), find(("position",))
 
@@ -102,7 +124,9 @@ def _is_header(cells: list[str]) -> bool:
     return False
 
 
-def read_static_record(lines: Iterable[str], *, progress: Progress | None = None) -> StaticRecord:
+def read_static_record(
+    lines: Iterable[str], *, progress: Progress | None = None, column: str | None = None
+) -> StaticRecord:
     """Parse a static record from an iterable of text lines, block by block.
 
     Parameters
@@ -111,6 +135,9 @@ def read_static_record(lines: Iterable[str], *, progress: Progress | None = None
         The CSV's lines (a text file, or ``io.StringIO``).
     progress : callable, optional
         Called as ``progress("read", {"samples": n})`` after every block.
+    column : str, optional
+        The column of the rates: a header name or a number from 1 (e.g. one axis of an
+        IMU's record); by default ``value`` (or the layouts above).
 
     Returns
     -------
@@ -185,11 +212,14 @@ def read_static_record(lines: Iterable[str], *, progress: Progress | None = None
             cells = [c.strip() for c in text.split(",")] if "," in text else [text]
         if layout is None:
             if _is_header(cells):
-                layout = _columns(cells)
+                layout = _columns(cells, column)
                 width = len(cells)
                 continue
             width = len(cells)
             layout = {1: (0, None, None, None), 2: (1, 0, None, None)}.get(width, (1, 0, 2, None))
+            if column is not None:
+                numbers = [str(k) for k in range(1, width + 1)]
+                layout = (_chosen(column, numbers), None, None, None)
         if len(cells) != width:
             raise UserError(
                 "allan.bad_line",
