@@ -322,3 +322,25 @@ def test_one_axis_of_a_multi_axis_record_is_chosen_by_name_or_number():
         with pytest.raises(UserError) as error:
             read_static_record(io.StringIO(text), column=column)
         assert error.value.key == key and "gx, gy, gz" in str(error.value)
+
+
+def test_the_labs_allan_chart_draws_the_terms_the_curve_carries():
+    """A long static position on the lab page: the curve with its 68 % band, and beside it
+    the model of the resolved terms (a dashed line, also a column of the chart's table)."""
+    from types import SimpleNamespace
+
+    from app.lab.chart_texts import allan_text
+    from app.lab.charts import allan_figure
+    from app.web.i18n import translator
+
+    rates = static_record(1.0, 10.0, arw=0.012, flicker=0.05, seed=8)
+    item = SimpleNamespace(
+        values=rates, times=np.arange(rates.size) / 10.0, take=SimpleNamespace(position=1)
+    )
+    _ = translator("en")
+    figure = allan_figure(SimpleNamespace(positions={1: item}), _)
+    curve, model = figure["data"]
+    assert model["name"] == "fitted IEEE 952 model" and len(model["y"]) == len(curve["y"])
+    assert np.allclose(model["y"], curve["y"], rtol=0.3)
+    _summary, table = allan_text(figure, _)
+    assert table["columns"][-1] == "fitted IEEE 952 model" and len(table["rows"][0]) == 3

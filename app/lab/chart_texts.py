@@ -110,9 +110,13 @@ def allan_text(figure: dict, _: Callable[..., str]) -> tuple[str, dict]:
         floor=f"{adevs[best]:.4f}",
         tau=f"{taus[best]:.3g}",
     )
+    model = figure["data"][1]["y"] if len(figure["data"]) > 1 else [None] * len(taus)
     table = {
-        "columns": ["τ (s)", _("chart.adev")],
-        "rows": [[f"{t:.3g}", f"{a:.4f}"] for t, a in zip(taus, adevs, strict=True)],
+        "columns": ["τ (s)", _("chart.adev"), _("chart.allan_model")],
+        "rows": [
+            [f"{t:.3g}", f"{a:.4f}", "—" if m is None else f"{m:.4f}"]
+            for t, a, m in zip(taus, adevs, model, strict=True)
+        ],
     }
     return summary, table
 

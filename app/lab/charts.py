@@ -199,7 +199,15 @@ def allan_figure(part_result, _: Callable[..., str], minimum_samples: int = 1000
                     "array": result.adev_error_deg_h.tolist(),
                     "visible": True,
                 },
-            }
+            },
+            {  # the IEEE 952 terms the curve carries (allan_fit): its own model line
+                "type": "scatter",
+                "mode": "lines",
+                "name": _("chart.allan_model"),
+                "x": result.taus_s.tolist(),
+                "y": result.model_adev_deg_h.tolist(),
+                "line": {"dash": "dash", "color": PALETTE[1]},
+            },
         ],
         "layout": {
             **LAYOUT,
