@@ -341,6 +341,6 @@ def test_the_labs_allan_chart_draws_the_terms_the_curve_carries():
     figure = allan_figure(SimpleNamespace(positions={1: item}), _)
     curve, model = figure["data"]
     assert model["name"] == "fitted IEEE 952 model" and len(model["y"]) == len(curve["y"])
-    assert np.allclose(model["y"], curve["y"], rtol=0.3)
+    assert np.allclose(model["y"][:10], curve["y"][:10], rtol=0.1)  # where the curve is sure
     _summary, table = allan_text(figure, _)
     assert table["columns"][-1] == "fitted IEEE 952 model" and len(table["rows"][0]) == 3
