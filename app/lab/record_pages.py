@@ -154,7 +154,7 @@ def save_csv(
 
 class Turn(BaseModel):
     part: Part
-    position: int = Field(ge=1, le=POSITIONS)
+    position: int = Field(ge=1, le=POSITIONS, strict=True)
 
 
 @router.post("/sessions/{session_id}/turn", dependencies=[CsrfProtected])
@@ -176,8 +176,8 @@ def turn_table(session: SimulatorSession, db: SessionDep, body: Annotated[Turn, 
 
 class Trim(BaseModel):
     part: Part
-    position: int = Field(ge=1, le=POSITIONS)
-    trim: int = Field(ge=0, le=10_000_000)
+    position: int = Field(ge=1, le=POSITIONS, strict=True)
+    trim: int = Field(ge=0, le=10_000_000, strict=True)
 
 
 @router.post("/sessions/{session_id}/trim", dependencies=[CsrfProtected])
@@ -190,7 +190,7 @@ def trim_recording(session: OwnedSession, db: SessionDep, body: Annotated[Trim, 
 
 
 class Plane(BaseModel):
-    dial_deg: float = Field(ge=-360, le=360, allow_inf_nan=False)
+    dial_deg: float = Field(ge=-360, le=360, allow_inf_nan=False, strict=True)
 
 
 @router.post("/sessions/{session_id}/plane", dependencies=[CsrfProtected])

@@ -235,7 +235,9 @@ class AttemptOut(BaseModel):
 
 
 class TrimIn(BaseModel):
-    trim: int = Field(ge=0, le=10_000_000, description="readings to leave out at the start")
+    trim: int = Field(
+        ge=0, le=10_000_000, strict=True, description="readings to leave out at the start"
+    )
 
 
 class TrimOut(BaseModel):
