@@ -484,3 +484,23 @@ def test_the_lms_forms_carry_their_csrf_token(lti, client):
 
     login(client, "root")
     assert every_form_has_a_token(client.get("/admin/lti").text)
+
+
+def test_a_link_opened_from_another_lms_course_is_refused(lti):
+    """Issue 31, item 3: a resource link belongs to the LMS course (context) it was placed
+    in; the same link id launched from another course -- a copied course, or a forged id --
+    lands in nobody's assignment but is refused with a page that says what to do."""
+    deep_link_new_assignment(lti)
+    link_id = next(iter(lti.platform.links))
+    first = lti.browser().launch(lti.platform.url, user="teacher-1", link=link_id)
+    assert first.status_code == 200 and "/assignments/" in str(first.url)  # bound to its course
+    context = "https://purl.imsglobal.org/spec/lti/claim/context"
+    tamper(lti, lambda c: c.update({context: {"id": "OTHER-COURSE", "title": "Other"}}))
+    page = lti.browser().launch(lti.platform.url, user="teacher-1", link=link_id)
+    assert page.status_code == 409, page.text[:300]
+    assert "belongs to another course of your learning platform" in page.text
+    page = lti.browser().launch(lti.platform.url, user="student-1", link=link_id)
+    assert page.status_code == 409 and "/lab/sessions/" not in str(page.url)
+    lti.platform.tamper = None
+    page = lti.browser().launch(lti.platform.url, user="student-1", link=link_id)
+    assert page.status_code == 200 and "/lab/sessions/" in str(page.url)  # at home: fine

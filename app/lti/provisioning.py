@@ -150,7 +150,12 @@ def resource_link(
             LtiResourceLink.platform_id == platform.id,
             LtiResourceLink.resource_link_id == link_id,
         )
-    ).first() or LtiResourceLink(
+    ).first()
+    if link is not None and link.context_row_id != context.id:
+        # a link belongs to the LMS course it was placed in: another course's link id
+        # would land this person in that course's assignment, outside both rosters
+        raise UserError("lti.link_other_context", status=409)
+    link = link or LtiResourceLink(
         platform_id=platform.id, resource_link_id=link_id, context_row_id=context.id
     )
     if link.assignment_id is None:
