@@ -36,6 +36,7 @@ from app.reports import pages as report_pages
 from app.review import api as review_api
 from app.review import desk_pages
 from app.review import pages as review_pages
+from app.serving_lock import hold_while_serving, release
 from app.web import home
 from app.web.errors import register_error_handlers
 from app.web.headers import SecurityHeaders
@@ -78,12 +79,15 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
             from app.migrate import upgrade_to_head
 
             upgrade_to_head()
+        # restore refuses while this lock is held (app/serving_lock.py)
+        serving = hold_while_serving(get_settings().database_url)
         # grades released for an LMS are posted (and retried) by every worker
         sender = asyncio.create_task(lms_grades.run_sender())
         try:
             yield
         finally:
             sender.cancel()
+            release(serving)
 
     app = FastAPI(
         title="GyroLab",

@@ -54,3 +54,40 @@ def test_postgres_urls_get_pg_dump_instructions(monkeypatch, capsys):
     text = postgres_hint("postgresql+psycopg://lab@db.example/gyrolab", "backup", "x.dump")
     assert text.startswith("PostgreSQL: pg_dump --format=custom --file=x.dump")
     assert "gyrolab" in postgres_hint("postgresql://u@h/gyrolab", "restore", "x.dump")
+
+
+@pytest.mark.sqlite_only
+def test_restore_refuses_while_a_server_uses_the_database(app, tmp_path, capsys):
+    """Issue 31, item 5: every server process holds a shared lock beside the SQLite file for
+    as long as it runs (app/serving_lock.py); restore wants it exclusively and says what to
+    stop.  A real `gyrolab serve` holds it too (its lifespan takes it)."""
+    from app.config import get_settings
+    from app.serving_lock import hold_while_serving, release, servers_using
+
+    url = get_settings().database_url
+    target = tmp_path / "copy.db"
+    assert main(["backup", str(target)]) == 0
+    capsys.readouterr()
+    server = hold_while_serving(url)
+    try:
+        assert servers_using(url)
+        assert main(["restore", str(target), "--yes"]) == 2
+        assert "a GyroLab server is using this database" in capsys.readouterr().err
+    finally:
+        release(server)
+    assert not servers_using(url)
+    engine_for(url).dispose()
+    assert main(["restore", str(target), "--yes"]) == 0
+
+
+@pytest.mark.sqlite_only
+def test_a_running_apps_lifespan_holds_the_lock(app):
+    from fastapi.testclient import TestClient
+
+    from app.config import get_settings
+    from app.serving_lock import servers_using
+
+    url = get_settings().database_url
+    with TestClient(app):
+        assert servers_using(url)
+    assert not servers_using(url)

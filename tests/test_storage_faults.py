@@ -144,3 +144,41 @@ def test_a_write_lock_held_past_the_busy_timeout_answers_503_busy(student_client
 def new_session_id(client) -> int:
 
     return new_session(client)
+
+
+def test_the_lms_grade_sender_reports_a_full_disk_as_requests_do(monkeypatch, caplog):
+    """Issue 31, item 5: the background loop meets a full disk: the one storage message
+    (once, then every ten minutes), no traceback, and the loop goes on."""
+    import asyncio
+    import logging
+    import sqlite3
+    import threading
+
+    from sqlalchemy.exc import OperationalError
+
+    from app.lti import grades
+    from app.web import errors
+
+    rounds = []
+
+    def full_disk():
+        rounds.append(1)
+        raise OperationalError("SELECT 1", {}, sqlite3.OperationalError("database or disk is full"))
+
+    monkeypatch.setattr(grades, "anything_queued", full_disk)
+    monkeypatch.setattr(errors, "_storage_logged_at", [-1e9])
+
+    async def three_rounds():
+        task = asyncio.create_task(grades.run_sender(period_s=0.01))
+        while len(rounds) < 3:
+            await asyncio.sleep(0.01)
+        task.cancel()
+
+    with caplog.at_level(logging.INFO):
+        # a loop of its own, in a thread of its own: a browser test before this one on the
+        # same worker may have left a running loop in the main thread
+        runner = threading.Thread(target=lambda: asyncio.run(three_rounds()))
+        runner.start()
+        runner.join(30)
+    messages = [r for r in caplog.records if "cannot be written" in r.getMessage()]
+    assert len(messages) == 1 and not any(r.exc_info for r in caplog.records)

@@ -136,6 +136,7 @@ def _restore(args: argparse.Namespace) -> int:
     from app.cli.backup import BackupError, postgres_hint, restore, sqlite_path
     from app.config import get_settings
     from app.migrate import upgrade_to_head
+    from app.serving_lock import servers_using
 
     url = get_settings().database_url
     try:
@@ -147,6 +148,13 @@ def _restore(args: argparse.Namespace) -> int:
             print(
                 "gyrolab restore: this replaces the whole database; stop the server and "
                 "repeat with --yes",
+                file=sys.stderr,
+            )
+            return 2
+        if servers_using(url):
+            print(
+                "gyrolab restore: a GyroLab server is using this database; stop every "
+                "'gyrolab serve' of this installation (Ctrl+C, or its service) and repeat",
                 file=sys.stderr,
             )
             return 2

@@ -26,10 +26,18 @@ from pylti1p3.exception import LtiException
 from pylti1p3.grade import Grade
 from pylti1p3.lineitem import LineItem
 from sqlalchemy import func, update
+from sqlalchemy.exc import DBAPIError
 from sqlmodel import Session, col, select
 from starlette.concurrency import run_in_threadpool
 
-from app.db import read_session, statement_session, write_session
+from app.db import (
+    database_busy,
+    get_engine,
+    read_session,
+    statement_session,
+    storage_unavailable,
+    write_session,
+)
 from app.lti.handshake import old_values_removed, service_connector
 from app.lti.keys import ensure_key
 from app.lti.platforms import registration_of
@@ -45,6 +53,7 @@ from app.models import (
     SessionMember,
     utcnow,
 )
+from app.web.errors import report_storage_fault
 
 log = logging.getLogger("gyrolab.lti")
 SCORE_SCOPES = [
@@ -358,5 +367,13 @@ async def run_sender(period_s: float = SENDER_PERIOD_S) -> None:
             if await run_in_threadpool(anything_queued):
                 await run_in_threadpool(send_due)
             await run_in_threadpool(old_values_removed)
+        except DBAPIError as error:  # a full or read-only disk: said as requests say it
+            if storage_unavailable(error):
+                report_storage_fault(error)
+                get_engine().dispose()
+            elif database_busy(error):
+                log.info("LTI grade sender: database busy, next round")
+            else:
+                log.exception("LTI grade sender")
         except Exception:  # noqa: BLE001 -- the loop must outlive a bad moment
             log.exception("LTI grade sender")
