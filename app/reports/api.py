@@ -6,6 +6,7 @@ from typing import Annotated, Literal
 
 from fastapi import APIRouter, Query, Request
 
+from app.accounts.api_auth import ReadCaller
 from app.lab.api import ReadableSession
 from app.reports.pages import AttemptNumber
 from app.reports.service import report_response
@@ -23,6 +24,7 @@ router = APIRouter(prefix="/api/v1", tags=["api"], responses=API_ERRORS)
 def get_report(
     request: Request,
     session: ReadableSession,
+    caller: ReadCaller,
     db: SessionDep,
     attempt: AttemptNumber = None,
     lang: Annotated[Literal["en", "zh-CN"] | None, Query()] = None,
@@ -31,4 +33,4 @@ def get_report(
     without it the current data and discussion draft.  In ``lang``, else the language of
     ``Accept-Language``."""
     language = lang or negotiate(request.headers.get("accept-language"))
-    return report_response(db, session, attempt, language)
+    return report_response(db, session, attempt, language, caller.user.id)

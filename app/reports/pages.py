@@ -13,7 +13,7 @@ from app.models import DISCUSSION_MAX
 from app.reports.discussion import save_discussion
 from app.reports.service import class_reports_response, report_response
 from app.review.deps import ReviewableSession, TeacherAssignment
-from app.web.deps import CsrfProtected, SessionDep
+from app.web.deps import CsrfProtected, CurrentUser, SessionDep
 from app.web.i18n import translator
 from app.web.render import flash, redirect, request_language
 
@@ -24,23 +24,31 @@ AttemptNumber = Annotated[int | None, Query(ge=1, le=10_000)]
 
 @router.get("/lab/sessions/{session_id}/report.pdf")
 def student_report(
-    request: Request, session: OwnedSession, db: SessionDep, attempt: AttemptNumber = None
+    request: Request,
+    session: OwnedSession,
+    user: CurrentUser,
+    db: SessionDep,
+    attempt: AttemptNumber = None,
 ):
-    return report_response(db, session, attempt, request_language(request))
+    return report_response(db, session, attempt, request_language(request), user.id)
 
 
 @router.get("/review/sessions/{session_id}/report.pdf")
 def teacher_report(
-    request: Request, target: ReviewableSession, db: SessionDep, attempt: AttemptNumber = None
+    request: Request,
+    target: ReviewableSession,
+    user: CurrentUser,
+    db: SessionDep,
+    attempt: AttemptNumber = None,
 ):
-    return report_response(db, target.session, attempt, request_language(request))
+    return report_response(db, target.session, attempt, request_language(request), user.id)
 
 
 @router.get("/courses/{course_id}/assignments/{assignment_id}/reports.zip")
-def class_reports(request: Request, target: TeacherAssignment, db: SessionDep):
+def class_reports(request: Request, target: TeacherAssignment, user: CurrentUser, db: SessionDep):
     language = request_language(request)
     word = translator(language)("report.zip_name")
-    return class_reports_response(db, target.assignment, target.course, language, word)
+    return class_reports_response(db, target.assignment, target.course, language, word, user.id)
 
 
 @router.post("/lab/sessions/{session_id}/discussion", dependencies=[CsrfProtected])

@@ -12,6 +12,7 @@ from sqlmodel import Session
 
 from app.db import read_session
 from app.models import Assignment, Course, LabSession, User
+from app.reports.admission import give_back, render_slot, take_slot
 from app.reports.content import build_report
 from app.reports.pdf import report_pdf
 from app.review.service import class_rows
@@ -21,15 +22,18 @@ ZIP_BLOCK = 64 * 1024
 
 
 def report_response(
-    db: Session, session: LabSession, attempt: int | None, language: str
+    db: Session, session: LabSession, attempt: int | None, language: str, requester_id: int
 ) -> Response:
     """``session``'s report (attempt ``attempt``, or the current data) as a PDF download
-    named after the session's owner, title and attempt."""
-    report = build_report(db, session, attempt)
+    named after the session's owner, title and attempt; rendered in one of the process's
+    render slots, one at a time per requester (:mod:`app.reports.admission`)."""
+    with render_slot(requester_id):
+        report = build_report(db, session, attempt)
+        content = report_pdf(report, language)
     owner = db.get(User, session.owner_id)
     version = f"attempt-{attempt}" if attempt is not None else "current"
     return Response(
-        report_pdf(report, language),
+        content,
         media_type="application/pdf",
         headers={
             "Content-Disposition": attachment([owner.username, session.title, version], "pdf"),
@@ -51,10 +55,20 @@ def submitted_sessions(db: Session, assignment: Assignment) -> list[tuple[str, i
     return sorted(seen.values())
 
 
-def class_reports(work: list[tuple[str, int, int]], language: str) -> Iterator[bytes]:
+def class_reports(
+    work: list[tuple[str, int, int]], language: str, requester_id: int
+) -> Iterator[bytes]:
     """A zip of ``<username>_attempt-<n>.pdf`` reports, rendered one by one into a
     temporary file (its own database session: the download outlives the request's), then
-    sent in blocks."""
+    sent in blocks.  The requester's render slot, taken before the response starts, is
+    held until the last report is rendered."""
+    try:
+        yield from _zipped(work, language)
+    finally:
+        give_back(requester_id)
+
+
+def _zipped(work: list[tuple[str, int, int]], language: str) -> Iterator[bytes]:
     with tempfile.SpooledTemporaryFile(max_size=16 * 1024 * 1024) as spool:
         with read_session() as db, zipfile.ZipFile(spool, "w", zipfile.ZIP_STORED) as archive:
             for stem, session_id, number in work:  # PDFs are compressed already
@@ -66,10 +80,17 @@ def class_reports(work: list[tuple[str, int, int]], language: str) -> Iterator[b
 
 
 def class_reports_response(
-    db: Session, assignment: Assignment, course: Course, language: str, reports_word: str
+    db: Session,
+    assignment: Assignment,
+    course: Course,
+    language: str,
+    reports_word: str,
+    requester_id: int,
 ) -> StreamingResponse:
+    work = submitted_sessions(db, assignment)
+    take_slot(requester_id)  # refused now, with a page, rather than mid-download
     return StreamingResponse(
-        class_reports(submitted_sessions(db, assignment), language),
+        class_reports(work, language, requester_id),
         media_type="application/zip",
         headers={
             "Content-Disposition": attachment([course.name, assignment.title, reports_word], "zip")
