@@ -344,3 +344,19 @@ def test_the_labs_allan_chart_draws_the_terms_the_curve_carries():
     assert np.allclose(model["y"][:10], curve["y"][:10], rtol=0.1)  # where the curve is sure
     _summary, table = allan_text(figure, _)
     assert table["columns"][-1] == "fitted IEEE 952 model" and len(table["rows"][0]) == 3
+
+
+@pytest.mark.parametrize(
+    ("text", "values"),
+    [
+        ("% t [s]   rate\n0.0   1.5\n0.1   -2.25\n0.2   3e-1\n", [1.5, -2.25, 0.3]),
+        ("time_s\tvalue\n0\t1.5\n0.1\t-2.25\n0.2\t0.3\n", [1.5, -2.25, 0.3]),
+        ("time_s;value\n0;1,5\n0,1;-2,25\n0,2;0,3\n", [1.5, -2.25, 0.3]),
+    ],
+)
+def test_records_with_spaces_tabs_or_decimal_commas_are_read(text, values):
+    """Plain text of instruments and public data sets (spaces, `%` comments), tab-separated
+    files, and European spreadsheets (semicolons with decimal commas)."""
+    record = read_static_record(io.StringIO(text))
+    assert record.values == pytest.approx(values)
+    assert record.times_s == pytest.approx([0.0, 0.1, 0.2])

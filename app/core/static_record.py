@@ -4,7 +4,9 @@ practice trims the warm-up and records the temperature).
 
 Reading: CSV text (``value`` per line, ``time_s,value``, ``time_s,value,temperature_c``, the
 bridge's long layout ``position,angle_deg,time_s,value[,temperature_c]``, with or without a
-header), parsed in blocks of lines, so a 10⁷-sample record never exists as one string.
+header; commas, tabs, semicolons with decimal commas, or spaces between the columns;
+``#`` and ``%`` comment lines), parsed in blocks of lines, so a 10⁷-sample record never
+exists as one string.
 
 Preparation, in this order:
 
@@ -201,15 +203,15 @@ def read_static_record(
             progress("read", {"samples": count})
 
     width = None
+    split = None
     for raw in lines:
         line_number += 1
         text = raw.strip().lstrip("\ufeff")
-        if not text or text.startswith("#"):
+        if not text or text.startswith(("#", "%")):
             continue
-        if '"' in text:
-            cells = [c.strip() for c in next(csv.reader([text]))]
-        else:
-            cells = [c.strip() for c in text.split(",")] if "," in text else [text]
+        if split is None:
+            split = _splitter(text)
+        cells = split(text)
         if layout is None:
             if _is_header(cells):
                 layout = _columns(cells, column)
@@ -244,6 +246,25 @@ def read_static_record(
     if not np.all(np.isfinite(record.values)):
         raise UserError("readings.not_finite", "A reading is not a finite number.")
     return record
+
+
+def _splitter(first: str) -> Callable[[str], list[str]]:
+    """How the record's lines split into cells, decided by its first line: commas (quotes
+    allowed), tabs, semicolons with decimal commas (a European spreadsheet), or runs of
+    spaces (the plain text files of instruments and public data sets)."""
+    if "\t" in first:
+        return lambda text: [c.strip() for c in text.split("\t")]
+    if ";" in first:
+        return lambda text: [c.strip().replace(",", ".") for c in text.split(";")]
+    if "," in first:
+
+        def commas(text: str) -> list[str]:
+            if '"' in text:
+                return [c.strip() for c in next(csv.reader([text]))]
+            return [c.strip() for c in text.split(",")]
+
+        return commas
+    return lambda text: text.split()
 
 
 def _first_bad_line(block, layout) -> int:
