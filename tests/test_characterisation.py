@@ -141,3 +141,22 @@ def test_only_the_courses_teacher_may_characterise(world):
         files={"record": ("a.csv", b"1\n" * 10, "text/csv")},
     )
     assert reply.status_code == 404 and stored(world) is None
+
+
+def test_one_axis_of_an_imu_record_compressed_with_its_times(world):
+    """Issue 30: a bench record as instruments write it -- three axes, a time column, no
+    rate given, gzip-compressed -- characterised from the column the teacher names."""
+    import gzip
+
+    teacher = browser(world, "teacher1")
+    text, gyro = static_record(hours=0.5)
+    values = text.splitlines()[1:]
+    lines = ["t,gx,gy,gz"] + [f"{k / 10:.1f},0.0,{v},1.0" for k, v in enumerate(values)]
+    packed = gzip.compress("\n".join(lines).encode())
+    reply = upload(teacher, world, packed, rate="", column="gy")
+    assert reply.status_code == 303
+    summary = stored(world)
+    assert summary is not None and summary["rate_hz"] == pytest.approx(10.0)
+    assert summary["arw_deg_rt_h"] == pytest.approx(gyro.arw_deg_rt_h, rel=0.1)
+    reply = upload(teacher, world, packed, rate="", column="gq")
+    assert "has no column" in teacher.get(reply.headers["location"]).text

@@ -50,11 +50,14 @@ def _check_length(seconds: float) -> None:
         )
 
 
-def characterise(source, rate_hz: float | None, unit: str = "deg/h") -> dict:
+def characterise(
+    source, rate_hz: float | None, unit: str = "deg/h", column: str | None = None
+) -> dict:
     """Fit the record's Allan deviation; the stored summary (JSON-ready).
 
     ``source`` is the record's bytes or a binary file (an upload spooled to disk), read in
-    blocks of lines; ``rate_hz`` None takes the rate from the record's times."""
+    blocks of lines; ``rate_hz`` None takes the rate from the record's times; ``column``
+    names the rates' column (one axis of a multi-axis record)."""
     if rate_hz is not None and (
         not (isinstance(rate_hz, int | float) and math.isfinite(rate_hz))
         or not (0 < rate_hz <= MAX_RATE_HZ)
@@ -63,7 +66,7 @@ def characterise(source, rate_hz: float | None, unit: str = "deg/h") -> dict:
             "characterisation.bad_rate",
             "The sample rate must be a number of readings per second, up to 10000.",
         )
-    record = read_static_record(text_lines(source))
+    record = read_static_record(text_lines(source), column=column)
     if rate_hz is not None:
         _check_length(record.values.size / rate_hz)
     elif record.times_s is not None and record.times_s.size > 1:

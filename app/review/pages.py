@@ -127,6 +127,7 @@ def upload_characterisation(
     record: Annotated[UploadFile | None, File()] = None,
     rate_hz: Annotated[str, Form(max_length=40)] = "",
     unit: Annotated[str, Form(max_length=16)] = "deg/h",
+    column: Annotated[str, Form(max_length=100)] = "",
     remove: Annotated[str, Form(max_length=8)] = "",
 ):
     """The bench gyro's static record → its noise model for this assignment's real data."""
@@ -148,7 +149,9 @@ def upload_characterisation(
             except ValueError:
                 rate = math.nan
         try:
-            summary = characterisation.characterise(_record_source(record), rate, unit)
+            summary = characterisation.characterise(
+                _record_source(record), rate, unit, column.strip() or None
+            )
         except (OSError, EOFError):  # a truncated or corrupt gzip stream
             raise UserError(
                 "characterisation.bad_gzip", "The compressed file is damaged or incomplete."
