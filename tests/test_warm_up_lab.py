@@ -50,9 +50,8 @@ def test_the_wait_is_csrf_protected(student_client):
 
 
 def record_heading(student_client, session_id: int, dwell: float) -> None:
-    from app.lab import stream
-
-    stream.MAX_SPEED = 6000.0
+    """Four heading positions from the simulated gyro (callers raise the stream's speed
+    limit with monkeypatch, so nothing leaks into other tests)."""
     with connect(student_client, session_id) as ws:
         for position in (1, 2, 3, 4):
             if position > 1:
