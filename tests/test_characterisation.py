@@ -160,3 +160,21 @@ def test_one_axis_of_an_imu_record_compressed_with_its_times(world):
     assert summary["arw_deg_rt_h"] == pytest.approx(gyro.arw_deg_rt_h, rel=0.1)
     reply = upload(teacher, world, packed, rate="", column="gq")
     assert "has no column" in teacher.get(reply.headers["location"]).text
+
+
+def test_one_bench_record_is_analysed_at_a_time(world):
+    """Issue 31 (bounded work): a second Allan analysis while one runs in this process is
+    refused with a message (10⁷ readings take ≈ 13 s and 0.6 GB); nothing is stored."""
+    from app.web.work_slots import pool
+
+    teacher = browser(world, "teacher1")
+    text, _gyro = static_record(hours=0.3)
+    pool("analysis").take(99_999)  # another teacher's analysis under way
+    try:
+        reply = upload(teacher, world, text)
+        assert "analysing another record" in teacher.get(reply.headers["location"]).text
+        assert stored(world) is None
+    finally:
+        pool("analysis").give_back(99_999)
+    upload(teacher, world, text)
+    assert stored(world) is not None

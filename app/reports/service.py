@@ -12,11 +12,11 @@ from sqlmodel import Session
 
 from app.db import read_session
 from app.models import Assignment, Course, LabSession, User
-from app.reports.admission import give_back, render_slot, take_slot
 from app.reports.content import build_report
 from app.reports.pdf import report_pdf
 from app.review.service import class_rows
 from app.web.exports import attachment, safe_name
+from app.web.work_slots import pool
 
 ZIP_BLOCK = 64 * 1024
 
@@ -26,8 +26,8 @@ def report_response(
 ) -> Response:
     """``session``'s report (attempt ``attempt``, or the current data) as a PDF download
     named after the session's owner, title and attempt; rendered in one of the process's
-    render slots, one at a time per requester (:mod:`app.reports.admission`)."""
-    with render_slot(requester_id):
+    render slots, one at a time per requester (:mod:`app.web.work_slots`)."""
+    with pool("reports").slot(requester_id):
         report = build_report(db, session, attempt)
         content = report_pdf(report, language)
     owner = db.get(User, session.owner_id)
@@ -65,7 +65,7 @@ def class_reports(
     try:
         yield from _zipped(work, language)
     finally:
-        give_back(requester_id)
+        pool("reports").give_back(requester_id)
 
 
 def _zipped(work: list[tuple[str, int, int]], language: str) -> Iterator[bytes]:
@@ -88,7 +88,7 @@ def class_reports_response(
     requester_id: int,
 ) -> StreamingResponse:
     work = submitted_sessions(db, assignment)
-    take_slot(requester_id)  # refused now, with a page, rather than mid-download
+    pool("reports").take(requester_id)  # refused now, with a page, not mid-download
     return StreamingResponse(
         class_reports(work, language, requester_id),
         media_type="application/zip",

@@ -22,6 +22,7 @@ from app.review.service import class_rows, status_counts
 from app.web.deps import CsrfProtected, FormDep, SessionDep
 from app.web.i18n import translator
 from app.web.render import flash, redirect, render, request_language
+from app.web.work_slots import pool
 
 router = APIRouter(tags=["pages: review"], include_in_schema=False)
 
@@ -149,9 +150,10 @@ def upload_characterisation(
             except ValueError:
                 rate = math.nan
         try:
-            summary = characterisation.characterise(
-                _record_source(record), rate, unit, column.strip() or None
-            )
+            with pool("analysis").slot(course.teacher_id):
+                summary = characterisation.characterise(
+                    _record_source(record), rate, unit, column.strip() or None
+                )
         except (OSError, EOFError):  # a truncated or corrupt gzip stream
             raise UserError(
                 "characterisation.bad_gzip", "The compressed file is damaged or incomplete."

@@ -1,0 +1,74 @@
+"""Bounded expensive work: a pool of slots per kind of work in each process, and one slot
+per person at a time.  Past that the request is refused at once -- 503 ("busy", Retry-After)
+or 429 for a second job of the same person -- instead of queueing jobs that tie up the
+worker's threads and memory (issue 31: one student's twelve renders of a 6,666-paragraph
+discussion took 84–108 s and 1 GB).  Used for PDF reports (``GYROLAB_REPORT_RENDERS`` at
+once, the class zip holding its teacher's slot while it renders) and for the Allan
+analysis of an uploaded bench record (one at a time: 10⁷ readings take ≈ 13 s and
+0.6 GB)."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+from app.core.exceptions import UserError
+
+
+class WorkPool:
+    """``size`` jobs at once in this process, one per person; ``busy_key`` and
+    ``person_key`` are the refusals' messages."""
+
+    def __init__(self, size: int, busy_key: str, person_key: str, retry_s: int = 10) -> None:
+        self._slots = threading.BoundedSemaphore(size)
+        self._people: set[int] = set()
+        self._lock = threading.Lock()
+        self.busy_key, self.person_key, self.retry_s = busy_key, person_key, retry_s
+
+    @property
+    def people(self) -> set[int]:
+        return set(self._people)
+
+    def take(self, person_id: int) -> None:
+        """A slot for ``person_id``, or a UserError (429 / 503) at once."""
+        with self._lock:
+            if person_id in self._people:
+                raise UserError(self.person_key, status=429, headers={"Retry-After": "5"})
+            if not self._slots.acquire(blocking=False):
+                raise UserError(
+                    self.busy_key, status=503, headers={"Retry-After": str(self.retry_s)}
+                )
+            self._people.add(person_id)
+
+    def give_back(self, person_id: int) -> None:
+        with self._lock:
+            if person_id in self._people:
+                self._people.discard(person_id)
+                self._slots.release()
+
+    @contextmanager
+    def slot(self, person_id: int) -> Iterator[None]:
+        self.take(person_id)
+        try:
+            yield
+        finally:
+            self.give_back(person_id)
+
+
+_pools: dict[str, WorkPool] = {}
+_pools_lock = threading.Lock()
+
+
+def pool(name: str) -> WorkPool:
+    """The process's pool for ``name`` ("reports" or "analysis"), made on first use."""
+    with _pools_lock:
+        if name not in _pools:
+            from app.config import get_settings
+
+            if name == "reports":
+                size = get_settings().report_renders
+                _pools[name] = WorkPool(size, "report.busy", "report.busy_person")
+            else:
+                _pools[name] = WorkPool(1, "work.busy_analysis", "work.busy_person", 60)
+        return _pools[name]
