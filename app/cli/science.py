@@ -14,8 +14,6 @@ from itertools import pairwise
 
 import numpy as np
 
-from app.core.allan import analyse_record
-from app.core.allan_summary import dwell_lines, note_lines, summary_lines, term_rows
 from app.core.drift_check import warm_up_message
 from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude, render_text
@@ -27,7 +25,6 @@ from app.core.record_checks import WARM_UP_LIMIT_C
 from app.core.simulate import GyroStream, Setup, simulate_run, simulate_static
 from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.solve import solve_heading, solve_latitude
-from app.core.static_record import read_static_record, text_lines
 from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
 
 WARM_GYRO_S = 3600.0  # simulate's default: a lab gyro is usually left on
@@ -282,65 +279,6 @@ def _simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _open_record(path: str):
-    """The record's lines, read as the file is parsed (never the whole text at once)."""
-    if path == "-":
-        binary = getattr(sys.stdin, "buffer", None)
-        return text_lines(binary) if binary is not None else iter(sys.stdin)
-    try:
-        handle = open(path, "rb")  # noqa: SIM115 -- closed when the lines run out
-    except FileNotFoundError:
-        raise CommandError(f"no such file: {path}") from None
-    except OSError as error:
-        raise CommandError(f"cannot read {path}: {error.strerror}") from None
-
-    def lines():
-        with handle:
-            yield from text_lines(handle)
-
-    return lines()
-
-
-def _allan(args: argparse.Namespace) -> int:
-    from app.web.i18n import translator
-
-    _ = translator(args.language)
-    for name in ("rate", "max_tau"):
-        _finite(f"--{name.replace('_', '-')}", getattr(args, name))
-    show = args.progress or (sys.stderr.isatty() and not args.json)
-
-    def progress(stage: str, details: dict) -> None:
-        if show:
-            count = f"{details['samples']:,}"
-            print(_(f"allan.progress_{stage}", samples=count), file=sys.stderr, flush=True)
-
-    record = read_static_record(_open_record(args.file), progress=progress, column=args.column)
-    result = analyse_record(
-        record, args.rate, unit=args.unit, max_tau_s=args.max_tau, progress=progress
-    )
-    if args.json:
-        payload = result.to_json()
-        payload["summary"] = {
-            "terms": term_rows(payload["terms"], _),
-            "dwell": dwell_lines(payload["dwell"], _),
-            "notes": note_lines(result.notes, _),
-        }
-        print(to_json_text(payload))
-        return 0
-    print(_("allan.heading_curve"))
-    for tau, adev, low, high in zip(
-        result.taus_s,
-        result.adev_deg_h,
-        result.band_low_deg_h,
-        result.band_high_deg_h,
-        strict=True,
-    ):
-        print(f"{tau:12.3f} {adev:14.6g}   {low:.4g} … {high:.4g}")
-    for line in summary_lines(result, _):
-        print(line)
-    return 0
-
-
 def _guarded(handler):
     def run(args: argparse.Namespace) -> int:
         try:
@@ -439,37 +377,9 @@ def add_science_commands(commands) -> None:
     )
     simulate.set_defaults(handler=_guarded(_simulate))
 
-    allan = commands.add_parser(
-        "allan",
-        help="Allan deviation of a static record, the IEEE 952 terms it resolves, dwell advice",
-    )
-    allan.add_argument(
-        "file",
-        help="CSV: one value per line, time_s,value[,temperature_c], or the long layout "
-        "with one position; '-' reads stdin",
-    )
-    allan.add_argument(
-        "--rate", type=float, help="sample rate in Hz (default: from the record's times)"
-    )
-    allan.add_argument("--unit", choices=UNITS, default="deg/h")
-    allan.add_argument(
-        "--column",
-        metavar="NAME|N",
-        help="the rates' column: a header name or a number from 1 (one axis of an IMU record)",
-    )
-    allan.add_argument(
-        "--max-tau",
-        type=float,
-        metavar="SECONDS",
-        help="the longest τ to analyse: refused when the record is shorter than twice it",
-    )
-    allan.add_argument(
-        "--progress", action="store_true", help="report reading and analysis on stderr"
-    )
-    allan.add_argument("--language", choices=["en", "zh-CN"], default="en")
-    allan.add_argument("--json", action="store_true")
-    allan.set_defaults(handler=_guarded(_allan))
-
+    from app.cli.allan import add_allan_command
     from app.cli.error_scenarios import add_errors_command
+
+    add_allan_command(commands, _guarded)
 
     add_errors_command(commands, _guarded, to_json_text)

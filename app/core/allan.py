@@ -26,7 +26,8 @@ from app.core.allan_fit import BASES, TERM_ALPHA, TERM_ORDER, TermEstimate, Term
 from app.core.exceptions import UserError
 from app.core.flicker import DEFAULT_BAND_S
 from app.core.noise_model import DwellAdvice, GyroNoise, curve_dwell, recommended_dwell
-from app.core.static_record import Progress, StaticRecord, prepare_record
+from app.core.record_preparation import prepare_record
+from app.core.static_record import Progress, StaticRecord
 
 MIN_SAMPLES = 16
 UNITS = {
@@ -320,7 +321,7 @@ def analyse_record(
     progress: Progress | None = None,
 ) -> AllanResult:
     """A real static record from reading to terms: unit, gaps, spikes, warm-up
-    (:func:`app.core.static_record.prepare_record`), then :func:`allan_deviation`.
+    (:func:`app.core.record_preparation.prepare_record`), then :func:`allan_deviation`.
 
     Parameters
     ----------

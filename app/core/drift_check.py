@@ -35,6 +35,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from app.core.sinusoid import SinusoidFit, fit_sinusoid, wrap360
+
 FLAG_Z = 3.0
 MODEL_SHARE = 0.25
 TEMPERATURE_LIMIT_C = 1.0
@@ -263,3 +265,64 @@ def warm_up_message(check: DriftCheck, wait_minutes: int | None = None) -> tuple
         return key, {"minutes": minutes}
     key = "flag.warming_up" if minutes else "flag.warming_up_waited"
     return key, {"minutes": minutes, "moved": f"{moved:.2f}°"}
+
+
+def drift_and_its_effect(
+    positions, fit: SinusoidFit, times_s, temperatures_c, part: str, angles_deg, warm_up_cov
+) -> tuple[DriftCheck | None, tuple[float, ...] | None]:
+    """The warm-up check of a run solved without a fitted drift term and, where a seen
+    drift is flagged, the result recomputed from means corrected by ḃ·(t̄_i − t̄).
+
+    Parameters
+    ----------
+    positions : sequence of array_like
+        Each position's readings (°/h).
+    fit : SinusoidFit
+        The run's fit (its closure, covariance and noise model).
+    times_s, temperatures_c : sequences, optional
+        Each reading's time (s) and case temperature (°C).
+    part : {"heading", "latitude"}
+        Which result to recompute.
+    angles_deg : sequence of float
+        The positions' angles (°).
+    warm_up_cov : numpy.ndarray, optional
+        The known noise model's warm-up share of the means' covariance.
+
+    Returns
+    -------
+    (DriftCheck or None, tuple or None)
+        The check (None when the fit has its own drift term) and the recomputed
+        (azimuth,) or (latitude, Earth rate) -- None when nothing is to be corrected, or
+        when the noise model's σ already holds the warm-up.
+
+    References
+    ----------
+    lab-reference §3 (drift during the sequence) and §6 (warm-up).
+    """
+    if fit.drift is not None:  # five or more timed positions: the drift is in the fit already
+        return None, None
+    closure_sigma = fit.closure_sigma if fit.uncertainty_model != "closure" else None
+    share = None
+    if warm_up_cov is not None and fit.cov is not None:
+        warm = fit_sinusoid(positions, angles_deg, position_cov=warm_up_cov).cov
+        total = fit.cov[0, 0] + fit.cov[1, 1]
+        share = float((warm[0, 0] + warm[1, 1]) / total) if total > 0 else None
+    check = check_drift(
+        [np.asarray(p, dtype=float) for p in positions],
+        fit.means,
+        fit.closure_residual,
+        closure_sigma,
+        times_s=times_s,
+        temperatures_c=temperatures_c,
+        warm_up_share=share,
+    )
+    seen = {"closure", "trend", "combined", "temperature"} & set(check.witnesses)
+    if not check.flagged or check.rate is None or not seen or "model" in check.witnesses:
+        return check, None  # nothing to correct, or the noise model's σ holds the warm-up
+    offsets = position_offsets(check, positions, times_s)
+    corrected = [np.asarray(p, dtype=float) - o for p, o in zip(positions, offsets, strict=True)]
+    again = fit_sinusoid(corrected, angles_deg)
+    if part == "heading":
+        azimuth = math.degrees(math.atan2(-again.c, again.a)) + float(again.angles_deg[0])
+        return check, (wrap360(azimuth),)
+    return check, (math.degrees(math.atan2(again.c, again.a)), math.hypot(again.a, again.c))

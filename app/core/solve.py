@@ -25,7 +25,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from app.core.angle_posterior import angle_half_width
-from app.core.drift_check import DriftCheck, check_drift, position_offsets
+from app.core.drift_check import DriftCheck, drift_and_its_effect
 from app.core.exceptions import UserError
 from app.core.sinusoid import SIGNIFICANCE, SinusoidFit, fit_sinusoid, wrap180, wrap360
 from app.core.units import EARTH_RATE_DEG_H
@@ -251,7 +251,7 @@ def solve_heading(
     sigma_az = exact if exact is not None else linear_az
     azimuth = wrap360(angle_ref + float(fit.angles_deg[0]))
     theta, direction, rotate, points = handout_theta(azimuth)
-    check, shift = _drift(
+    check, shift = drift_and_its_effect(
         positions, fit, times_s, temperatures_c, "heading", angles_deg, warm_up_cov
     )
     noise_sigma = sigma_az
@@ -425,7 +425,7 @@ def solve_latitude(
             "the axis pointing north (0°) and that the angles increase towards the zenith.",
             latitude=round(latitude, 2),
         )
-    check, shift = _drift(
+    check, shift = drift_and_its_effect(
         positions, fit, times_s, temperatures_c, "latitude", elevations_deg, warm_up_cov
     )
     noise_sigmas = (sigma_lat, sigma_omega)
@@ -449,38 +449,3 @@ def solve_latitude(
         latitude_error_percent=percent_error(latitude, true_latitude_deg),
         earth_rate_error_percent=percent_error(omega, true_earth_rate_deg_h),
     )
-
-
-def _drift(
-    positions, fit: SinusoidFit, times_s, temperatures_c, part: str, angles_deg, warm_up_cov
-):
-    """The warm-up check of a four-position (or longer) run without a fitted drift term, and
-    where it is flagged, the result recomputed from means corrected by ḃ·(t̄_i − t̄):
-    (azimuth,) or (latitude, Earth rate), or None when that cannot be solved."""
-    if fit.drift is not None:  # five or more timed positions: the drift is in the fit already
-        return None, None
-    closure_sigma = fit.closure_sigma if fit.uncertainty_model != "closure" else None
-    share = None
-    if warm_up_cov is not None and fit.cov is not None:
-        warm = fit_sinusoid(positions, angles_deg, position_cov=warm_up_cov).cov
-        total = fit.cov[0, 0] + fit.cov[1, 1]
-        share = float((warm[0, 0] + warm[1, 1]) / total) if total > 0 else None
-    check = check_drift(
-        [np.asarray(p, dtype=float) for p in positions],
-        fit.means,
-        fit.closure_residual,
-        closure_sigma,
-        times_s=times_s,
-        temperatures_c=temperatures_c,
-        warm_up_share=share,
-    )
-    seen = {"closure", "trend", "combined", "temperature"} & set(check.witnesses)
-    if not check.flagged or check.rate is None or not seen or "model" in check.witnesses:
-        return check, None  # nothing to correct, or the noise model's σ holds the warm-up
-    offsets = position_offsets(check, positions, times_s)
-    corrected = [np.asarray(p, dtype=float) - o for p, o in zip(positions, offsets, strict=True)]
-    again = fit_sinusoid(corrected, angles_deg)
-    if part == "heading":
-        azimuth = math.degrees(math.atan2(-again.c, again.a)) + float(again.angles_deg[0])
-        return check, (wrap360(azimuth),)
-    return check, (math.degrees(math.atan2(again.c, again.a)), math.hypot(again.a, again.c))

@@ -1,6 +1,4 @@
-"""A real static record made ready for an Allan analysis: read in bounded memory, its gaps,
-spikes and warm-up found and dealt with, and every step said (lab-reference §6: IEEE
-practice trims the warm-up and records the temperature).
+"""A real static record for an Allan analysis, read in bounded memory.
 
 Reading: CSV text (``value`` per line, ``time_s,value``, ``time_s,value,temperature_c``, the
 bridge's long layout ``position,angle_deg,time_s,value[,temperature_c]``, with or without a
@@ -8,19 +6,7 @@ header; commas, tabs, semicolons with decimal commas, or spaces between the colu
 ``#`` and ``%`` comment lines), parsed in blocks of lines, so a 10⁷-sample record never
 exists as one string.
 
-Preparation, in this order:
-
-* gaps (the bridge's times skip readings, k·T steps with k ≥ 2 for the median step T):
-  the longest stretch without a gap is analysed -- joining across a gap would fake a
-  correlation;
-* spikes: readings more than ``SPIKE_LIMIT`` robust σ (1.4826·MAD of the residual from a
-  9-point running median, at least one reading step) from their running median are
-  replaced by it and counted;
-* warm-up: from the case temperature where there is one (the stretch before it settles to
-  within 10 % of its total change of its final value), else from the rate itself (64 block
-  means; the first ones step monotonically towards the settled level of the second half,
-  the first more than ``WARM_UP_LIMIT`` times the block-to-block scatter away): trimmed,
-  at most half the record.
+Preparing the record for the analysis: :mod:`app.core.record_preparation`.
 """
 
 from __future__ import annotations
@@ -28,9 +14,8 @@ from __future__ import annotations
 import codecs
 import csv
 import io
-import math
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -38,10 +23,6 @@ from app.core.exceptions import UserError
 
 BLOCK_LINES = 200_000
 MAX_SAMPLES = 20_000_000
-SPIKE_LIMIT = 10.0
-WARM_UP_LIMIT = 6.0
-WARM_UP_BLOCKS = 64
-MAX_TRIM_SHARE = 0.5
 VALUE_NAMES = ("value", "rate", "rate_deg_h", "omega", "reading")
 TIME_NAMES = ("time_s", "time", "t", "t_s", "timestamp", "timestamp_s")
 TEMPERATURE_NAMES = ("temperature_c", "temperature", "temp_c", "temp")
@@ -57,17 +38,6 @@ class StaticRecord:
     values: np.ndarray
     times_s: np.ndarray | None = None
     temperatures_c: np.ndarray | None = None
-
-
-@dataclass
-class PreparedRecord:
-    values: np.ndarray
-    rate_hz: float
-    notes: list[dict] = field(default_factory=list)  # {"key", "params", "en"}
-
-
-def _note(key: str, english: str, **params) -> dict:
-    return {"key": key, "params": params, "en": english}
 
 
 def _chosen(column: str, names: list[str]) -> int:
@@ -313,182 +283,3 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
         yield from parts
     if pending:
         yield pending
-
-
-def _longest_stretch(times: np.ndarray) -> tuple[slice, int, int, float]:
-    steps = np.diff(times)
-    interval = float(np.median(steps)) if steps.size else 0.0
-    if not (interval > 0 and math.isfinite(interval)):
-        raise UserError(
-            "allan.bad_times", "The record's times do not increase; check the time column."
-        )
-    breaks = np.flatnonzero(steps >= 1.5 * interval)
-    if np.any(steps <= 0):
-        raise UserError(
-            "allan.bad_times", "The record's times do not increase; check the time column."
-        )
-    edges = np.concatenate([[0], breaks + 1, [times.size]])
-    lengths = np.diff(edges)
-    longest = int(np.argmax(lengths))
-    missing = int(np.sum(np.rint(steps[breaks] / interval) - 1))
-    return slice(int(edges[longest]), int(edges[longest + 1])), int(breaks.size), missing, interval
-
-
-def _despike(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    from scipy.ndimage import median_filter
-
-    smooth = median_filter(values, size=9, mode="nearest")
-    residual = values - smooth
-    scale = 1.4826 * float(np.median(np.abs(residual)))
-    distinct = np.unique(values[: min(values.size, 100_000)])
-    step = float(np.min(np.diff(distinct))) if distinct.size > 1 else 0.0
-    scale = max(scale, step)
-    if scale <= 0:
-        return values, np.zeros(0, dtype=int)
-    spikes = np.flatnonzero(np.abs(residual) > SPIKE_LIMIT * scale)
-    if spikes.size:
-        values = values.copy()
-        values[spikes] = smooth[spikes]
-    return values, spikes
-
-
-def _warm_up_end(values: np.ndarray, temperatures: np.ndarray | None) -> tuple[int, str, float]:
-    """Index where the warm-up ends (0: none), how it was seen, and its size (°/h or °C)."""
-    limit = int(values.size * MAX_TRIM_SHARE)
-    if temperatures is not None and temperatures.size == values.size:
-        final = float(np.median(temperatures[-max(1, temperatures.size // 10) :]))
-        change = float(np.max(temperatures) - np.min(temperatures))
-        if change > 1.0:
-            unsettled = np.flatnonzero(np.abs(temperatures - final) > 0.1 * change)
-            end = int(unsettled[-1]) + 1 if unsettled.size else 0
-            if end:
-                return min(end, limit), "temperature", change
-    size = values.size // WARM_UP_BLOCKS
-    if size < 4:
-        return 0, "", 0.0
-    means = values[: size * WARM_UP_BLOCKS].reshape(WARM_UP_BLOCKS, size).mean(axis=1)
-    settled = means[WARM_UP_BLOCKS // 2 :]
-    level = float(np.median(settled))
-    scatter = 1.4826 * float(np.median(np.abs(np.diff(settled)))) / math.sqrt(2.0)
-    if scatter <= 0:
-        return 0, "", 0.0
-    deviation = means - level
-    if abs(deviation[0]) < WARM_UP_LIMIT * scatter:
-        return 0, "", 0.0
-    sign = np.sign(deviation[0])
-    head = deviation[:4] * sign
-    if not np.all(np.diff(head) < 0):  # a warm-up moves steadily towards the settled level
-        return 0, "", 0.0
-    inside = np.flatnonzero(np.abs(deviation) < 2.0 * scatter)
-    end_block = int(inside[0]) if inside.size else WARM_UP_BLOCKS // 2
-    return min(end_block * size, limit), "rate", float(deviation[0])
-
-
-def prepare_record(
-    record: StaticRecord, rate_hz: float | None, *, max_tau_s: float | None = None
-) -> PreparedRecord:
-    """Gaps, spikes and warm-up dealt with; the rate from the times where none is given.
-
-    Parameters
-    ----------
-    record : StaticRecord
-        The record as read (rates in °/h).
-    rate_hz : float or None
-        The sample rate (Hz); None takes it from the times' median step.
-    max_tau_s : float, optional
-        The longest τ (s) asked for: refused when the record (after trimming) is shorter
-        than 2·τ, a note when shorter than 10·τ.
-
-    Returns
-    -------
-    PreparedRecord
-        The rates to analyse, the rate, and notes of what was done.
-
-    Raises
-    ------
-    UserError
-        No rate and no times, times that do not increase, or a record too short.
-
-    References
-    ----------
-    IEEE Std 952-1997, annex C (test procedure: warm-up, temperature); lab-reference §6.
-    """
-    values = np.asarray(record.values, dtype=float)
-    temperatures = record.temperatures_c
-    notes: list[dict] = []
-    if record.times_s is not None and record.times_s.size > 2:
-        stretch, gaps, missing, interval = _longest_stretch(np.asarray(record.times_s, float))
-        if rate_hz is None:
-            rate_hz = 1.0 / interval
-        if gaps:
-            kept = stretch.stop - stretch.start
-            notes.append(
-                _note(
-                    "allan.note_gaps",
-                    f"Gaps in the record: {gaps} ({missing} readings missing). The longest "
-                    f"stretch without one, {kept} readings ({kept / rate_hz:.0f} s), was analysed.",
-                    gaps=gaps,
-                    missing=missing,
-                    kept=kept,
-                    seconds=round(kept / rate_hz),
-                )
-            )
-            values = values[stretch]
-            temperatures = None if temperatures is None else temperatures[stretch]
-    if rate_hz is None:
-        raise UserError("allan.no_rate", "Give the sample rate (the record has no time column).")
-    if not (rate_hz > 0 and math.isfinite(rate_hz)):
-        raise UserError("allan.bad_rate", "The sample rate must be a positive number.")
-    if values.size >= 32:
-        values, spikes = _despike(values)
-        if spikes.size:
-            notes.append(
-                _note(
-                    "allan.note_spikes",
-                    f"Spikes more than {SPIKE_LIMIT:.0f} σ from their neighbours: {spikes.size}, "
-                    f"replaced by the local median (the first at {spikes[0] / rate_hz:.1f} s).",
-                    n=int(spikes.size),
-                    first_s=round(spikes[0] / rate_hz, 1),
-                )
-            )
-        end, seen_by, size = _warm_up_end(values, temperatures)
-        if end:
-            english = (
-                f"The first {end / rate_hz:.0f} s were trimmed: the gyro was still warming up "
-                + (
-                    f"(its case temperature changed by {size:.1f} °C)."
-                    if seen_by == "temperature"
-                    else f"(its rate moved by {abs(size):.3g} °/h towards its settled value)."
-                )
-            )
-            notes.append(
-                _note(
-                    f"allan.note_trimmed_{seen_by}",
-                    english,
-                    seconds=round(end / rate_hz),
-                    change=f"{abs(size):.3g}",
-                )
-            )
-            values = values[end:]
-    record_s = values.size / rate_hz
-    if max_tau_s is not None:
-        if record_s < 2.0 * max_tau_s:
-            raise UserError(
-                "allan.too_short_for_tau",
-                f"The record covers {record_s:.0f} s; a τ of {max_tau_s:g} s needs at least "
-                f"{2 * max_tau_s:.0f} s (better ten times τ).",
-                seconds=round(record_s),
-                tau=max_tau_s,
-                minimum=round(2 * max_tau_s),
-            )
-        if record_s < 10.0 * max_tau_s:
-            notes.append(
-                _note(
-                    "allan.note_few_stretches",
-                    f"The record covers only {record_s / max_tau_s:.1f} τ of {max_tau_s:g} s: "
-                    "the longest τ's rest on few independent stretches.",
-                    ratio=f"{record_s / max_tau_s:.1f}",
-                    tau=max_tau_s,
-                )
-            )
-    return PreparedRecord(values, float(rate_hz), notes)
