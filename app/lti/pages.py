@@ -224,7 +224,7 @@ def _launch_course(db, body: dict) -> Course:
     context = db.exec(
         select(LtiContext).where(
             LtiContext.platform_id == platform.id,
-            LtiContext.context_id == str(body[provisioning.CLAIM + "context"]["id"]),
+            LtiContext.context_id == provisioning.context_of(platform, body)[0],
         )
     ).one()
     return db.get(Course, context.course_id)

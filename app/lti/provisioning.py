@@ -4,17 +4,22 @@ open.  Nothing here talks to the network; the caller commits.
 * The person is the platform's ``iss`` and ``sub`` (``ExternalIdentity``): the first
   launch makes an account with no password, named from the LMS; later launches find it.
 * Roles: an instructor, teaching assistant, content developer or administrator of the
-  LMS course is a teacher; a learner is a student; other roles (observers…) are refused.
+  LMS course is a teacher; a learner is a student; a mentor (an observer of another
+  person: a parent, an advisor) is refused.  No role, or only roles GyroLab does not know,
+  gives a learner's rights -- the least there are.
   An existing account keeps its role: a student account launched as an instructor is
   refused rather than promoted.
 * The LMS course (context) is linked to one GyroLab course, made by the first teacher who
-  launches from it; students are enrolled on their launch (and by roster sync).
+  launches from it; students are enrolled on their launch (and by roster sync).  A launch
+  with no context (a link placed outside any course) stands for its deployment: one
+  GyroLab course per deployment, named after the platform.
 * A resource link opens the assignment deep linking put into it (custom parameter
   ``gyrolab_assignment``, accepted only for an assignment of the linked course).
 """
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 
 from sqlmodel import Session, select
@@ -38,6 +43,7 @@ AGS_CLAIM = "https://purl.imsglobal.org/spec/lti-ags/claim/endpoint"
 NRPS_CLAIM = "https://purl.imsglobal.org/spec/lti-nrps/claim/namesroleservice"
 DEEP_LINKING = "LtiDeepLinkingRequest"
 TEACHING_ROLES = {"Instructor", "TeachingAssistant", "ContentDeveloper", "Administrator"}
+OBSERVER_ROLES = {"Mentor"}
 ASSIGNMENT_PARAMETER = "gyrolab_assignment"
 
 
@@ -53,13 +59,20 @@ class Landing:
     teacher: bool
 
 
+def role_names(roles) -> set[str]:
+    """The short names of LIS role URIs (``…/membership#Instructor`` → ``Instructor``)."""
+    if not isinstance(roles, list):
+        return set()
+    return {str(role).rsplit("#", 1)[-1].rsplit("/", 1)[-1] for role in roles}
+
+
 def role_of(roles: list) -> Role | None:
     """LIS role URIs (or NRPS short names) → teacher, student or None.
 
     ``http://purl.imsglobal.org/vocab/lis/v2/membership#Instructor`` and
     ``…membership/Instructor#TeachingAssistant`` are teachers, ``…#Learner`` a student.
     """
-    names = {str(role).rsplit("#", 1)[-1].rsplit("/", 1)[-1] for role in roles or []}
+    names = role_names(roles)
     if names & TEACHING_ROLES:
         return Role.teacher
     if "Learner" in names:
@@ -67,16 +80,33 @@ def role_of(roles: list) -> Role | None:
     return None
 
 
+def launch_role(roles) -> Role | None:
+    """The role a launch gets: ``role_of``, else None for an observer (refused), else a
+    student -- a launch with no role or only unknown ones has a learner's rights."""
+    role = role_of(roles)
+    if role is not None:
+        return role
+    return None if role_names(roles) & OBSERVER_ROLES else Role.student
+
+
 def person_claims(platform: LtiPlatform, body: dict) -> dict:
     """The identity claims of a launch (or an NRPS member) in OpenID Connect's names."""
     extension = body.get(CLAIM + "ext") if isinstance(body.get(CLAIM + "ext"), dict) else {}
     given = " ".join(str(body.get(k) or "") for k in ("given_name", "family_name")).strip()
+    subject = str(body.get("sub") or body.get("user_id") or "")
+    email = body.get("email") if isinstance(body.get("email"), str) else None
+    username = extension.get("user_username") or body.get("preferred_username")
+    name = body.get("name") or given
+    if not name:  # no name: the e-mail's local part, else the platform and a short tag
+        local = email.split("@", 1)[0] if email else ""
+        tag = hashlib.sha256(subject.encode()).hexdigest()[:6]
+        name = username or local or f"{platform.name} · {tag}"
     return {
         "iss": platform.issuer,
-        "sub": str(body.get("sub") or body.get("user_id") or ""),
-        "name": body.get("name") or given,
-        "email": body.get("email"),
-        "preferred_username": extension.get("user_username") or body.get("preferred_username"),
+        "sub": subject,
+        "name": name,
+        "email": email,
+        "preferred_username": username,
     }
 
 
@@ -90,14 +120,21 @@ def person(db: Session, platform: LtiPlatform, body: dict, role: Role) -> User:
     return user
 
 
+def context_of(platform: LtiPlatform, body: dict) -> tuple[str, str]:
+    """The LMS course's id and title; with no context claim (a link placed outside any
+    course), ``deployment:<id>`` and the platform's name."""
+    context = body.get(CLAIM + "context")
+    if isinstance(context, dict) and context.get("id"):
+        title = str(context.get("title") or context.get("label") or "").strip()[:200]
+        return str(context["id"])[:255], title
+    deployment = body.get(CLAIM + "deployment_id")
+    return f"deployment:{deployment}"[:255], f"{platform.name} · GyroLab"[:200]
+
+
 def linked_course(
     db: Session, platform: LtiPlatform, body: dict, user: User, role: Role
 ) -> tuple[Course, LtiContext]:
-    context = body.get(CLAIM + "context")
-    if not isinstance(context, dict) or not context.get("id"):
-        raise UserError("lti.no_context", status=400)
-    context_id = str(context["id"])[:255]
-    title = str(context.get("title") or context.get("label") or "").strip()[:200]
+    context_id, title = context_of(platform, body)
     row = db.exec(
         select(LtiContext).where(
             LtiContext.platform_id == platform.id, LtiContext.context_id == context_id
@@ -182,7 +219,7 @@ def land(
     db: Session, platform: LtiPlatform, body: dict, launch_id: str, default_title: str
 ) -> Landing:
     """Everything a verified launch sets up, and the page it opens."""
-    role = role_of(body.get(CLAIM + "roles") or [])
+    role = launch_role(body.get(CLAIM + "roles"))
     if role is None:
         raise UserError("lti.role_unknown", status=403)
     user = person(db, platform, body, role)
