@@ -319,6 +319,7 @@ ACCESS = {
     "GET /lti/login": "public",  # the LMS's login initiation (tests/test_lti.py)
     "POST /lti/login": "public",
     "POST /lti/launch": "public",  # authenticated by the id_token, not a cookie
+    "GET /lti/state-check": "public",  # reads only this browser's own state cookie
     "GET /lti/continue/{token}": "public",  # a one-time link made by a launch
     "POST /lti/deep-link": "public",  # authenticated by the stored launch's id
     "GET /lti/register": "public",  # needs an administrator's one-time link

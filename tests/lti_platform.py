@@ -17,9 +17,11 @@ import json
 import re
 import threading
 import time
+import urllib.request
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from http.cookiejar import CookieJar, DefaultCookiePolicy
 from urllib.parse import urlencode
 
 import httpx
@@ -94,6 +96,7 @@ class PlatformState:
     tokens_issued: int = 0
     registration_token: str = "registration-token-1"  # what the LMS admin's page hands out
     registered: dict | None = None  # the tool configuration GyroLab sent (dynamic registration)
+    storage_target: str | None = None  # offer platform storage (LTI Client Side OIDC Launch)
 
     @property
     def registration(self) -> Registration:
@@ -132,10 +135,14 @@ class PlatformConf(LTI1P3PlatformConfAbstract):
 
 
 class StartLogin(OIDCLoginAbstract):
+    storage_target: str | None = None
+
     def set_lti_message_hint(self, **kwargs) -> None:
         self._lti_message_hint = json.dumps(kwargs)
 
     def get_redirect(self, url: str) -> RedirectResponse:
+        if self.storage_target:
+            url += "&" + urlencode({"lti_storage_target": self.storage_target})
         return RedirectResponse(url, status_code=302)
 
 
@@ -162,12 +169,28 @@ class PlatformLaunch(LTIAdvantageMessageLaunchAbstract):
         return launch
 
     def render_launch_form(self, launch_data: dict, **kwargs) -> HTMLResponse:
-        return HTMLResponse(
-            auto_post_form(
-                launch_data["launch_url"],
-                {"id_token": launch_data["id_token"], "state": launch_data["state"]},
-            )
-        )
+        fields = {"id_token": launch_data["id_token"], "state": launch_data["state"]}
+        if self.state.storage_target:
+            fields["lti_storage_target"] = self.state.storage_target
+        return HTMLResponse(auto_post_form(launch_data["launch_url"], fields))
+
+
+PLATFORM_STORAGE_SCRIPT = """
+const stored = {};
+window.platformStorageCalls = [];
+window.addEventListener("message", (event) => {
+  const data = event.data || {};
+  window.platformStorageCalls.push(data.subject);
+  const mine = (stored[event.origin] = stored[event.origin] || {});
+  const reply = { subject: data.subject + ".response", message_id: data.message_id, key: data.key };
+  if (data.subject === "lti.put_data") { mine[data.key] = data.value; reply.value = data.value; }
+  else if (data.subject === "lti.get_data") {
+    if (data.key in mine) { reply.value = mine[data.key]; }
+    else { reply.error = { code: "bad_request", message: "no value for this key" }; }
+  } else { return; }
+  event.source.postMessage(reply, event.origin);
+});
+"""
 
 
 def auto_post_form(url: str, fields: dict[str, str]) -> str:
@@ -202,10 +225,24 @@ def create_platform_app(state: PlatformState) -> FastAPI:
     def start(user: str, kind: str = "link", link: str = "link-1"):
         """A user of the LMS clicks GyroLab: a resource link, or "add activity" (deep)."""
         login = StartLogin(None, conf())
+        login.storage_target = state.storage_target
         login.set_lti_message_hint(user=user, kind=kind, link=link)
         if kind == "deep":
             login.set_deeplinking_launch_url()
         return login.initiate_login(user)
+
+    @app.get("/course")
+    def course_page(user: str, kind: str = "link", link: str = "link-1"):
+        """The LMS's course page: GyroLab in a frame, and (with ``storage_target``) the
+        platform storage of the LTI Client Side OIDC Launch -- values kept per origin."""
+        start = f"/start?{urlencode({'user': user, 'kind': kind, 'link': link})}"
+        script = PLATFORM_STORAGE_SCRIPT if state.storage_target else ""
+        return HTMLResponse(
+            "<!doctype html><html><head><title>Physics 201 · LMS</title></head><body>"
+            f"<h1>Physics 201</h1><iframe id='tool' name='tool' src='{html.escape(start)}' "
+            "style='width:900px;height:600px' title='GyroLab'></iframe>"
+            f"<script>{script}</script></body></html>"
+        )
 
     @app.get("/authorize")
     def authorize(request: Request):
@@ -385,7 +422,24 @@ class Browser:
     FIELD = re.compile(r'<input type="hidden" name="([^"]+)" value="([^"]*)"', re.I)
 
     def __init__(self, headers: dict | None = None):
-        self.client = httpx.Client(follow_redirects=True, timeout=20, headers=headers or {})
+        # like a browser, count loopback as a secure context: Secure cookies go over http
+        # (httpx copies its jar into one with the default policy for each request, so the
+        # Cookie header is made here, from this jar, with this policy)
+        self.jar = CookieJar(DefaultCookiePolicy(secure_protocols=("https", "wss", "http")))
+        self.client = httpx.Client(
+            follow_redirects=True,
+            timeout=20,
+            headers=headers or {},
+            cookies=self.jar,
+            event_hooks={"request": [self._cookie_header]},
+        )
+
+    def _cookie_header(self, request: httpx.Request) -> None:
+        compatible = urllib.request.Request(str(request.url), method=request.method)
+        self.jar.add_cookie_header(compatible)
+        header = compatible.get_header("Cookie")
+        if header:
+            request.headers["Cookie"] = header
 
     def get(self, url: str) -> httpx.Response:
         return self.client.get(url)
@@ -399,10 +453,28 @@ class Browser:
             httpx.URL(str(page.url)).join(action), data={**fields, **(extra or {})}
         )
 
+    @staticmethod
+    def data(page: httpx.Response, name: str) -> str | None:
+        found = re.search(rf'data-{name}="([^"]*)"', page.text)
+        return html.unescape(found.group(1)) if found else None
+
+    def framed_login(self, page: httpx.Response) -> httpx.Response:
+        """GyroLab's login page inside a frame, as its script goes on where no platform
+        storage is offered: ask whether the state cookie arrived, then go to the
+        platform's authorization URL (or stay on the page that offers a new window)."""
+        if 'id="lti-frame"' not in page.text or self.data(page, "mode") != "login":
+            return page
+        state = self.data(page, "state")
+        check = self.get(str(httpx.URL(str(page.url)).join(f"/lti/state-check?state={state}")))
+        if not check.json()["cookie"]:
+            return page
+        return self.get(self.data(page, "auth-url"))
+
     def launch(self, platform_url: str, **params) -> httpx.Response:
         """Click GyroLab in the LMS: login initiation, authorization, the form post."""
         page = self.get(f"{platform_url}/start?{urlencode(params)}")
         assert page.status_code == 200, page.text[:500]
+        page = self.framed_login(page)
         if "/lti/launch" not in page.text:
             return page  # the tool refused the login initiation
         return self.submit_auto_form(page)

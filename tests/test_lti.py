@@ -291,7 +291,7 @@ def test_a_launch_posted_from_another_browser_is_refused(lti):
         f"{lti.tool}/lti/launch",
         data={k: v for k, v in Browser.FIELD.findall(page.text)},
     )
-    assert victim_page.status_code == 401 and "State not found" in victim_page.text
+    assert victim_page.status_code == 401 and "The state is not this browser" in victim_page.text
     assert "gyrolab_session" not in cookie_names(victim)
 
 

@@ -16,6 +16,7 @@ The security checks of a launch (IMS Security Framework §5.1.3, LTI 1.3 §5.3),
 
 from __future__ import annotations
 
+import hmac
 import json
 import secrets
 import time
@@ -37,6 +38,7 @@ from sqlmodel import col
 from starlette.responses import RedirectResponse
 
 from app.db import read_session, statement_session, write_session
+from app.lti.frame_launch import PLATFORM_STATE, state_cookie_matches
 from app.models import LtiLaunchValue, utcnow
 
 COOKIE_PATH = "/lti/"
@@ -101,8 +103,10 @@ class FormRequest(LtiRequest):
 
 
 class ResponseCookies(CookieService):
-    """State cookies: read from the request, set on the response (``/lti/`` only; SameSite
-    None and Secure over HTTPS, so a platform's cross-site form post carries them)."""
+    """State cookies: read from the request, set on the response (``/lti/`` only).  In a
+    secure context (HTTPS or loopback) they are ``SameSite=None; Secure; Partitioned``: a
+    platform's cross-site form post carries them, and inside an LMS frame the browser keeps
+    them for that LMS alone (CHIPS) instead of dropping them as third-party cookies."""
 
     def __init__(self, request: FormRequest):
         self.request = request
@@ -129,6 +133,9 @@ class ResponseCookies(CookieService):
                 secure=secure,
                 samesite="none" if secure else "lax",
             )
+            if secure:  # Python's http.cookies knows Partitioned only from 3.14
+                name, value = response.raw_headers[-1]
+                response.raw_headers[-1] = (name, value + b"; Partitioned")
 
 
 class DatabaseStorage(LaunchDataStorage):
@@ -239,6 +246,12 @@ class Login(OIDCLogin):
     def get_redirect(self, url: str) -> CookieRedirect:
         return CookieRedirect(url, self.cookies)
 
+    def registration_urls(self) -> list[str]:
+        """The platform's issuer and authorization endpoint (once the login is checked):
+        the origins that may frame the login page and answer its platform-storage calls."""
+        registration = self._registration
+        return [registration.get_issuer(), registration.get_auth_login_url()]
+
 
 class Launch(MessageLaunch):
     """A launch checked as the module's docstring lists."""
@@ -298,6 +311,24 @@ class Launch(MessageLaunch):
             self._validated = False
             raise
         self.get_session_service().save_launch_data(self.get_launch_id(), self._jwt["body"])
+        return self
+
+    def validate_state(self) -> Launch:
+        """The state cookie this browser's login set -- or, inside an LMS frame with no
+        cookies, the state read back from the LMS's platform storage by GyroLab's page
+        (``frame_launch``), for a login GyroLab started whose nonce is still unused."""
+        state = self._get_request_param("state") or ""
+        confirmed = self._get_request_param(PLATFORM_STATE) or ""
+        if state and confirmed:
+            if not hmac.compare_digest(confirmed.encode(), state.encode()):
+                raise LaunchRefused("The platform's storage holds another state.")
+            if not self.get_params_from_login():
+                raise LaunchRefused("This launch's login was not started by GyroLab.")
+            return self
+        if not state_cookie_matches(self._request.cookies, state):
+            raise LaunchRefused(
+                "The state is not this browser's (no state cookie, no platform storage)."
+            )
         return self
 
     def validate_audience(self) -> Launch:

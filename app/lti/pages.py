@@ -32,7 +32,16 @@ from app.core.exceptions import UserError
 from app.courses.assignment_form import form_values, parse_assignment_form
 from app.db import read_session, write_session
 from app.lti import keys, provisioning, roster
-from app.lti.framing import framed_csp
+from app.lti.frame_launch import (
+    PLATFORM_STATE,
+    check_page,
+    login_page,
+    secure_context,
+    state_cookie_matches,
+    storage_target,
+    unverified_claims,
+)
+from app.lti.framing import framed_csp, origin
 from app.lti.grades import line_item
 from app.lti.handshake import (
     DatabaseStorage,
@@ -71,7 +80,12 @@ def public_base(request: Request) -> str:
 
 
 def is_secure(request: Request) -> bool:
-    return public_base(request).startswith("https://")
+    """Whether cookies may be ``Secure`` (and so cross-site and partitioned)."""
+    return secure_context(public_base(request))
+
+
+def in_frame(request: Request) -> bool:
+    return request.headers.get("sec-fetch-dest") == "iframe"
 
 
 async def _params(request: Request) -> dict[str, str]:
@@ -108,12 +122,30 @@ async def login_initiation(request: Request):
     def start():
         keys.ensure_key()
         with read_session() as db:
-            return Login(lti_request, DatabaseToolConf(db)).redirect(launch_url)
+            login = Login(lti_request, DatabaseToolConf(db))
+            return login.get_redirect_object(launch_url), login.registration_urls()
 
     try:
-        return await run_in_threadpool(start)
+        redirection, platform_urls = await run_in_threadpool(start)
     except REFUSALS as error:
         return refused(request, str(error) or type(error).__name__, 400)
+    if not storage_target(params) and not in_frame(request):
+        return redirection.do_redirect()
+    # in an LMS frame: the page ties the login to this browser (frame_launch), then goes on
+    page = login_page(redirection.get_redirect_url(), params)
+    response = render(request, "lti/frame_launch.html", page)
+    response.headers["Content-Security-Policy"] = framed_csp(platform_urls)
+    response.headers["Cache-Control"] = "no-store"
+    redirection.cookies.apply(response)
+    return response
+
+
+@router.get("/state-check")
+def state_check(request: Request, state: str = "") -> JSONResponse:
+    """Whether this browser sent the state cookie of ``state`` (the framed login page asks,
+    to choose between going on and offering a new window)."""
+    arrived = state_cookie_matches(dict(request.cookies), state[:200])
+    return JSONResponse({"cookie": arrived}, headers={"Cache-Control": "no-store"})
 
 
 @router.post("/launch")
@@ -122,6 +154,8 @@ async def launch(request: Request, background: BackgroundTasks):
     params = await _params(request)
     lti_request = FormRequest(params, dict(request.cookies), is_secure(request))
     _ = translator(request_language(request))
+    if needs_platform_storage(params, dict(request.cookies)):
+        return await run_in_threadpool(_storage_check_page, request, params)
 
     def check() -> tuple[dict, int, str]:
         keys.ensure_key()
@@ -136,7 +170,7 @@ async def launch(request: Request, background: BackgroundTasks):
     except REFUSALS as error:
         return refused(request, str(error) or type(error).__name__)
     settings = get_settings()
-    framed = request.headers.get("sec-fetch-dest") == "iframe"
+    framed = in_frame(request)
 
     def arrive():
         with write_session() as db:
@@ -168,6 +202,33 @@ async def launch(request: Request, background: BackgroundTasks):
         return response
     response = redirect(landing.url)
     set_cookie(response, request, SESSION_COOKIE, cookie, settings.session_lifetime_hours * 3600)
+    return response
+
+
+def needs_platform_storage(params: dict[str, str], cookies: dict[str, str]) -> bool:
+    """A launch whose state only the LMS's platform storage can confirm: no state cookie
+    came, the LMS offers storage, and GyroLab's page has not read it back yet."""
+    return (
+        bool(storage_target(params))
+        and not params.get(PLATFORM_STATE)
+        and not state_cookie_matches(cookies, params.get("state", ""))
+    )
+
+
+def _storage_check_page(request: Request, params: dict[str, str]):
+    """The page that reads the state back from platform storage and posts the launch
+    again (``frame_launch``); the platform is the one the unverified token names."""
+    claims = unverified_claims(params.get("id_token", ""))
+    with read_session() as db:
+        platform = find_platform(db, str(claims.get("iss") or ""), _client_of(claims))
+    if platform is None:
+        return refused(request, "The id_token names no registered platform (iss, aud).")
+    page = check_page(params, origin(platform.auth_login_url) or "")
+    response = render(request, "lti/frame_launch.html", page)
+    response.headers["Content-Security-Policy"] = framed_csp(
+        [platform.issuer, platform.auth_login_url]
+    )
+    response.headers["Cache-Control"] = "no-store"
     return response
 
 
@@ -281,9 +342,11 @@ async def deep_link_response(request: Request):
     return response
 
 
-def _client_of(body: dict) -> str:
+def _client_of(body: dict) -> str | None:
     audience = body.get("aud")
-    return audience[0] if isinstance(audience, list) else audience
+    if isinstance(audience, list):
+        audience = audience[0] if audience else None
+    return audience if isinstance(audience, str) else None
 
 
 def _new_assignment(db, course: Course, params: dict[str, str]) -> Assignment:
