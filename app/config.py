@@ -39,6 +39,7 @@ class Settings(BaseSettings):
     login_window_minutes: int = Field(default=15, ge=1)
     login_hash_slots: int = Field(default=4, ge=1)
     report_renders: int = Field(default=2, ge=1)  # PDF renders at once per process
+    report_cache_mb: int = Field(default=64, ge=0)  # rendered PDFs kept per process
     api_rate_per_minute: int = Field(default=600, ge=1)
     student_storage_mb: int = Field(default=200, ge=1)
     max_body_bytes: int = Field(default=64 * 1024 * 1024, ge=1024)

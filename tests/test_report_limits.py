@@ -1,12 +1,14 @@
-"""Issue 31, item 2 (in part): PDF renders are bounded per process and per person; past
-the limit a clear answer with Retry-After, and the slot comes back after every render."""
+"""Issue 31, item 2: PDF renders are bounded per process and per person; past the limit a
+clear answer with Retry-After, and the slot comes back after every render.  A rendered PDF
+is kept by what it shows and served again without a render until that changes."""
 
 from __future__ import annotations
 
 import pytest
 
+from app.reports.pdf_cache import pdf_cache
 from app.web.work_slots import pool
-from tests.factories import new_session
+from tests.factories import new_session, post_form
 
 
 @pytest.mark.one_backend
@@ -21,6 +23,7 @@ def test_a_second_render_of_the_same_person_waits_its_turn(student_client, monke
 
     with read_session() as db:
         owner = db.get(LabSession, session_id).owner_id
+    pdf_cache().clear()  # a report not made yet
     pool("reports").take(owner)
     try:
         busy = student_client.get(url)
@@ -36,6 +39,7 @@ def test_the_process_renders_at_most_so_many_at_once(student_client, monkeypatch
     session_id = new_session(student_client)
     url = f"/lab/sessions/{session_id}/report.pdf"
     others = [10_001, 10_002]  # two renders of other people under way
+    pdf_cache().clear()
     for other in others:
         pool("reports").take(other)
     try:
@@ -46,3 +50,38 @@ def test_the_process_renders_at_most_so_many_at_once(student_client, monkeypatch
         for other in others:
             pool("reports").give_back(other)
     assert student_client.get(url).status_code == 200
+
+
+@pytest.mark.one_backend
+def test_a_pdf_is_rendered_once_per_content_and_language(student_client):
+    session_id = new_session(student_client)
+    url = f"/lab/sessions/{session_id}/report.pdf"
+    cache = pdf_cache()
+    first = student_client.get(url)
+    assert first.status_code == 200 and (cache.hits, cache.misses) == (0, 1)
+    # the same content: the same bytes, no render -- even with the person's slot taken
+    from app.db import read_session
+    from app.models import LabSession
+
+    with read_session() as db:
+        owner = db.get(LabSession, session_id).owner_id
+    pool("reports").take(owner)
+    try:
+        again = student_client.get(url)
+    finally:
+        pool("reports").give_back(owner)
+    assert again.status_code == 200 and again.content == first.content
+    assert (cache.hits, cache.misses) == (1, 1)
+    # another language is another PDF
+    chinese = student_client.get(url, headers={"Accept-Language": "zh-CN"})
+    assert chinese.status_code == 200 and chinese.content != first.content
+    assert cache.misses == 2
+    # a change that shows (the discussion) makes a new one
+    saved = post_form(
+        student_client, f"/lab/sessions/{session_id}/discussion",
+        {"discussion": "The bias drifted 漂移 by 0.1 °/h."}, page=f"/lab/sessions/{session_id}",
+    )  # fmt: skip
+    assert saved.status_code in (200, 303)
+    changed = student_client.get(url)
+    assert changed.status_code == 200 and changed.content != first.content
+    assert cache.misses == 3

@@ -44,6 +44,7 @@ class Report:
     feedback: str = ""
     comments: dict[str, str] = field(default_factory=dict)
     grade: str = ""
+    take_keys: tuple = ()  # (id, trim) of each take shown: what the PDF cache keys on
 
     @property
     def longest_record(self) -> int:
@@ -99,6 +100,7 @@ def build_report(db: Session, session: LabSession, attempt_number: int | None = 
         generated_at=utcnow(),
         sources=sorted({take.source for take in takes}),
         preset_name=session.simulator_preset if session.simulator_preset in PRESETS else None,
+        take_keys=tuple(sorted((take.id, take.trim_start, take.n_samples) for take in takes)),
     )
     if truth_visible(session, assignment, len(attempts)):
         report.truth = session_truth(db, session, assignment, takes)

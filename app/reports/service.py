@@ -12,8 +12,9 @@ from sqlmodel import Session
 
 from app.db import read_session
 from app.models import Assignment, Course, LabSession, User
-from app.reports.content import build_report
+from app.reports.content import Report, build_report
 from app.reports.pdf import report_pdf
+from app.reports.pdf_cache import content_key, pdf_cache
 from app.review.service import class_rows
 from app.web.exports import attachment, safe_name
 from app.web.work_slots import pool
@@ -25,11 +26,10 @@ def report_response(
     db: Session, session: LabSession, attempt: int | None, language: str, requester_id: int
 ) -> Response:
     """``session``'s report (attempt ``attempt``, or the current data) as a PDF download
-    named after the session's owner, title and attempt; rendered in one of the process's
-    render slots, one at a time per requester (:mod:`app.web.work_slots`)."""
-    with pool("reports").slot(requester_id):
-        report = build_report(db, session, attempt)
-        content = report_pdf(report, language)
+    named after the session's owner, title and attempt: from the PDF cache when nothing
+    it shows has changed, else rendered in one of the process's render slots, one at a
+    time per requester (:mod:`app.web.work_slots`)."""
+    content = cached_pdf(build_report(db, session, attempt), language, requester_id)
     owner = db.get(User, session.owner_id)
     version = f"attempt-{attempt}" if attempt is not None else "current"
     return Response(
@@ -40,6 +40,22 @@ def report_response(
             "Cache-Control": "no-store",
         },
     )
+
+
+def cached_pdf(report: Report, language: str, requester_id: int | None) -> bytes:
+    """The PDF of ``report``: the cached one for the same content, or rendered (in a
+    render slot of ``requester_id``'s, unless the caller holds one already: None)."""
+    cache = pdf_cache()
+    key = content_key(report, language)
+    if (content := cache.get(key)) is not None:
+        return content
+    if requester_id is None:
+        content = report_pdf(report, language)
+    else:
+        with pool("reports").slot(requester_id):
+            content = report_pdf(report, language)
+    cache.put(key, content)
+    return content
 
 
 def submitted_sessions(db: Session, assignment: Assignment) -> list[tuple[str, int, int]]:
@@ -73,7 +89,7 @@ def _zipped(work: list[tuple[str, int, int]], language: str) -> Iterator[bytes]:
         with read_session() as db, zipfile.ZipFile(spool, "w", zipfile.ZIP_STORED) as archive:
             for stem, session_id, number in work:  # PDFs are compressed already
                 report = build_report(db, db.get(LabSession, session_id), number)
-                archive.writestr(f"{stem}_attempt-{number}.pdf", report_pdf(report, language))
+                archive.writestr(f"{stem}_attempt-{number}.pdf", cached_pdf(report, language, None))
         spool.seek(0)
         while block := spool.read(ZIP_BLOCK):
             yield block
