@@ -372,6 +372,23 @@ class LtiKey(SQLModel, table=True):
     retired_at: datetime | None = None
 
 
+class ReportJob(SQLModel, table=True):
+    """A class's reports zip built in the background (``reports/class_zip.py``): its
+    progress, then the zip itself, kept until a newer one of the same assignment."""
+
+    __tablename__ = "report_job"
+    id: int | None = Field(default=None, primary_key=True)
+    assignment_id: int = Field(foreign_key="assignment.id", index=True, ondelete="CASCADE")
+    requester_id: int = Field(foreign_key="user.id", ondelete="CASCADE")
+    language: str = Field(max_length=16)
+    status: str = Field(default="running", max_length=16)  # running | done | failed
+    done: int = 0
+    total: int = 0
+    content: bytes | None = None
+    created_at: datetime = Field(default_factory=utcnow)
+    updated_at: datetime = Field(default_factory=utcnow)
+
+
 class LtiLaunchValue(SQLModel, table=True):
     """Short-lived values of the LTI handshake: nonces (used once), state parameters, a
     deep-linking launch's claims while the teacher picks an assignment."""

@@ -6,13 +6,15 @@ from __future__ import annotations
 
 import csv
 import io
+import time
 import zipfile
 
 import pytest
 from pypdf import PdfReader
+from sqlmodel import select
 
 from app.db import read_session
-from app.models import LabSession
+from app.models import LabSession, ReportJob, User
 from tests.factories import (
     API,
     HEADING,
@@ -173,8 +175,23 @@ def test_the_class_zip_holds_each_submitted_students_latest_report(world):
         submit(student, session_id)
     browser(world, "s3")  # enrolled, nothing submitted: no report
     teacher = browser(world, "teacher1")
-    path = f"/courses/{world['course']}/assignments/{world['assignment']}/reports.zip"
-    response = teacher.get(path)
+    base = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    started = post_form(teacher, f"{base}/reports", page=base)
+    assert started.status_code == 303
+    progress = started.headers["location"]
+    assert 'id="zip-job"' in teacher.get(progress).text
+    again = post_form(teacher, f"{base}/reports", page=base)  # joins the build under way
+    assert again.headers["location"] == progress
+    deadline = time.monotonic() + 60
+    while (job := teacher.get(progress, headers={"Accept": "application/json"}).json())[
+        "state"
+    ] == "running":
+        assert time.monotonic() < deadline, job
+        time.sleep(0.2)
+    assert job == {"state": "done", "done": 2, "total": 2}
+    page = teacher.get(progress)
+    assert "Ready: 2 reports in one zip." in page.text and f"{progress}/download" in page.text
+    response = teacher.get(f"{progress}/download")
     assert response.status_code == 200
     assert response.headers["content-type"] == "application/zip"
     archive = zipfile.ZipFile(io.BytesIO(response.content))
@@ -214,3 +231,23 @@ def test_the_discussion_is_kept_cleaned_and_frozen_while_under_review(world):
     assert "waiting for your teacher" in page
     with read_session() as db:
         assert "changed" not in db.get(LabSession, session_id).discussion
+
+
+@pytest.mark.one_backend
+def test_a_zip_build_needs_its_teachers_render_slot(world):
+    from app.web.work_slots import pool
+
+    teacher = browser(world, "teacher1")
+    base = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    with read_session() as db:
+        teacher_id = db.exec(select(User.id).where(User.username == "teacher1")).one()
+    pool("reports").take(teacher_id)  # a report of theirs is being made
+    try:
+        refused = post_form(teacher, f"{base}/reports", page=base)
+    finally:
+        pool("reports").give_back(teacher_id)
+    assert refused.status_code == 429 and "still being made" in refused.text
+    with read_session() as db:
+        assert db.exec(select(ReportJob)).first() is None  # nothing half-started
+    missing = teacher.get(f"{base}/reports/999999")
+    assert missing.status_code == 404 and "does not exist" in missing.text

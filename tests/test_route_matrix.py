@@ -13,7 +13,15 @@ from sqlmodel import select
 from starlette.websockets import WebSocketDisconnect
 
 from app.db import read_session, write_session
-from app.models import ApiToken, LtiContext, LtiPlatform, LtiResourceLink, Role, User
+from app.models import (
+    ApiToken,
+    LtiContext,
+    LtiPlatform,
+    LtiResourceLink,
+    ReportJob,
+    Role,
+    User,
+)
 from tests.conftest import iter_routes, snapshot
 from tests.factories import (
     ACCESS,
@@ -78,6 +86,18 @@ def build_ids(app) -> dict:
         token_id = db.exec(select(ApiToken.id)).first()
         student_id = db.exec(select(User.id).where(User.username == "s1")).one()
     platform_id, link_id = placed_in_an_lms(world)
+    with write_session() as db:  # a finished zip of the class's reports
+        teacher_id = db.exec(select(User.id).where(User.username == "teacher1")).one()
+        job = ReportJob(
+            assignment_id=world["assignment"],
+            requester_id=teacher_id,
+            language="en",
+            status="done",
+            content=b"PK\x05\x06" + bytes(18),
+        )
+        db.add(job)
+        db.flush()
+        job_id = job.id
     return {
         "course_id": world["course"],
         "assignment_id": world["assignment"],
@@ -91,6 +111,7 @@ def build_ids(app) -> dict:
         "platform_id": platform_id,
         "link_id": link_id,
         "token": "not-a-token",
+        "job_id": job_id,
     }
 
 

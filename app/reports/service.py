@@ -1,25 +1,19 @@
 """One operation shared by the student's page, the teacher's desk and the REST API: a
-session's report as a PDF download; and the class's reports as one zip."""
+session's report as a PDF download (from the PDF cache when nothing it shows changed);
+and the list of reports the class's zip holds (built by ``class_zip``)."""
 
 from __future__ import annotations
 
-import tempfile
-import zipfile
-from collections.abc import Iterator
-
-from fastapi.responses import Response, StreamingResponse
+from fastapi.responses import Response
 from sqlmodel import Session
 
-from app.db import read_session
-from app.models import Assignment, Course, LabSession, User
+from app.models import Assignment, LabSession, User
 from app.reports.content import Report, build_report
 from app.reports.pdf import report_pdf
 from app.reports.pdf_cache import content_key, pdf_cache
 from app.review.service import class_rows
 from app.web.exports import attachment, safe_name
 from app.web.work_slots import pool
-
-ZIP_BLOCK = 64 * 1024
 
 
 def report_response(
@@ -69,46 +63,3 @@ def submitted_sessions(db: Session, assignment: Assignment) -> list[tuple[str, i
         stem = safe_name(row.student.username)
         seen[row.session.id] = (stem, row.session.id, row.attempts[-1].number)
     return sorted(seen.values())
-
-
-def class_reports(
-    work: list[tuple[str, int, int]], language: str, requester_id: int
-) -> Iterator[bytes]:
-    """A zip of ``<username>_attempt-<n>.pdf`` reports, rendered one by one into a
-    temporary file (its own database session: the download outlives the request's), then
-    sent in blocks.  The requester's render slot, taken before the response starts, is
-    held until the last report is rendered."""
-    try:
-        yield from _zipped(work, language)
-    finally:
-        pool("reports").give_back(requester_id)
-
-
-def _zipped(work: list[tuple[str, int, int]], language: str) -> Iterator[bytes]:
-    with tempfile.SpooledTemporaryFile(max_size=16 * 1024 * 1024) as spool:
-        with read_session() as db, zipfile.ZipFile(spool, "w", zipfile.ZIP_STORED) as archive:
-            for stem, session_id, number in work:  # PDFs are compressed already
-                report = build_report(db, db.get(LabSession, session_id), number)
-                archive.writestr(f"{stem}_attempt-{number}.pdf", cached_pdf(report, language, None))
-        spool.seek(0)
-        while block := spool.read(ZIP_BLOCK):
-            yield block
-
-
-def class_reports_response(
-    db: Session,
-    assignment: Assignment,
-    course: Course,
-    language: str,
-    reports_word: str,
-    requester_id: int,
-) -> StreamingResponse:
-    work = submitted_sessions(db, assignment)
-    pool("reports").take(requester_id)  # refused now, with a page, not mid-download
-    return StreamingResponse(
-        class_reports(work, language, requester_id),
-        media_type="application/zip",
-        headers={
-            "Content-Disposition": attachment([course.name, assignment.title, reports_word], "zip")
-        },
-    )
