@@ -85,3 +85,31 @@ def test_a_pdf_is_rendered_once_per_content_and_language(student_client):
     changed = student_client.get(url)
     assert changed.status_code == 200 and changed.content != first.content
     assert cache.misses == 3
+
+
+@pytest.mark.one_backend
+def test_a_streamed_export_holds_one_slot_per_person_until_it_ends(student_client):
+    session_id = new_session(student_client)
+    from app.db import read_session
+    from app.models import LabSession
+
+    with read_session() as db:
+        owner = db.get(LabSession, session_id).owner_id
+    url = f"/lab/sessions/{session_id}/export.csv"
+    exports = pool("exports")
+    assert student_client.get(url).status_code == 200
+    assert owner not in exports.people  # given back when the download ended
+    exports.take(owner)  # a download of theirs still running
+    try:
+        busy = student_client.get(url)
+        assert busy.status_code == 429 and "still running" in busy.text
+    finally:
+        exports.give_back(owner)
+    # a body dropped before its first block gives its slot back too
+    from app.web.work_slots import held_while_streaming
+
+    stream = held_while_streaming("exports", owner, iter([b"x"]))
+    assert owner in exports.people
+    del stream
+    assert owner not in exports.people
+    assert student_client.get(url).status_code == 200

@@ -27,6 +27,7 @@ from app.models import InputMethod, LabSession
 from app.web.deps import CsrfProtected, CurrentUser, ObjectId, ReadOnlySessionDep, SessionDep
 from app.web.exports import Selection, attachment, readings_csv, session_json
 from app.web.render import flash, redirect
+from app.web.work_slots import held_while_streaming
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 
@@ -274,7 +275,7 @@ def submit_session(request: Request, session: OwnedSession, db: SessionDep):
 @router.get("/sessions/{session_id}/export.csv")
 def export_session_csv(session: OwnedSession, user: CurrentUser):
     return StreamingResponse(
-        readings_csv(Selection(session.id)),
+        held_while_streaming("exports", user.id, readings_csv(Selection(session.id))),
         media_type="text/csv; charset=utf-8",
         headers=download_headers(session, user.username, "csv"),
     )
@@ -283,7 +284,7 @@ def export_session_csv(session: OwnedSession, user: CurrentUser):
 @router.get("/sessions/{session_id}/export.json")
 def export_session_json(session: OwnedSession, user: CurrentUser):
     return StreamingResponse(
-        session_json(Selection(session.id)),
+        held_while_streaming("exports", user.id, session_json(Selection(session.id))),
         media_type="application/json",
         headers=download_headers(session, user.username, "json"),
     )

@@ -19,6 +19,7 @@ from app.courses.local_time import zone
 from app.models import Assignment, Course
 from app.review.service import StudentRow, class_rows
 from app.web.exports import SubmittedWork, assignment_zip, attachment, csv_table
+from app.web.work_slots import held_while_streaming
 
 COLUMNS = (
     "username",
@@ -122,7 +123,7 @@ def class_table_response(
 
 
 def class_zip_response(
-    db: Session, assignment: Assignment, course: Course, _: Callable[..., str]
+    db: Session, assignment: Assignment, course: Course, _: Callable[..., str], requester_id: int
 ) -> StreamingResponse:
     """The class table plus every submitted attempt's own data (CSV and JSON with its
     results): what the students submitted, never what they changed afterwards."""
@@ -132,8 +133,9 @@ def class_zip_response(
         for row in rows
         if row.session is not None and row.attempts
     ]
+    blocks = assignment_zip(export_rows(rows, _, course.timezone), work)
     return StreamingResponse(
-        assignment_zip(export_rows(rows, _, course.timezone), work),
+        held_while_streaming("exports", requester_id, blocks),
         media_type="application/zip",
         headers={"Content-Disposition": attachment([course.name, assignment.title], "zip")},
     )

@@ -19,7 +19,7 @@ from app.lti.grades import passback_state
 from app.review.deps import TeacherAssignment
 from app.review.exports import class_table_response, class_zip_response
 from app.review.service import class_rows, status_counts
-from app.web.deps import CsrfProtected, FormDep, SessionDep
+from app.web.deps import CsrfProtected, CurrentUser, FormDep, SessionDep
 from app.web.i18n import translator
 from app.web.render import flash, redirect, render, request_language
 from app.web.work_slots import pool
@@ -175,7 +175,9 @@ def export_assignment_csv(request: Request, target: TeacherAssignment, db: Sessi
 
 
 @router.get("/courses/{course_id}/assignments/{assignment_id}/export.zip")
-def export_assignment_zip(request: Request, target: TeacherAssignment, db: SessionDep):
+def export_assignment_zip(
+    request: Request, target: TeacherAssignment, user: CurrentUser, db: SessionDep
+):
     """The class table plus every submitted attempt's own data."""
     _ = translator(request_language(request))
-    return class_zip_response(db, target.assignment, target.course, _)
+    return class_zip_response(db, target.assignment, target.course, _, user.id)

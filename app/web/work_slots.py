@@ -10,7 +10,7 @@ analysis of an uploaded bench record (one at a time: 10⁷ readings take ≈ 13 
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 
 from app.core.exceptions import UserError
@@ -56,6 +56,47 @@ class WorkPool:
             self.give_back(person_id)
 
 
+class HeldStream:
+    """A response body that holds a slot of ``work`` for ``person_id`` until it is read to
+    its end, fails, is closed or is dropped (a download the client abandoned before its
+    first block still gives its slot back)."""
+
+    def __init__(self, work: WorkPool, person_id: int, blocks: Iterable) -> None:
+        work.take(person_id)  # refused now, with a page, not mid-download
+        self._work, self._person, self._blocks = work, person_id, iter(blocks)
+        self._held = True
+
+    def __iter__(self) -> HeldStream:
+        return self
+
+    def __next__(self):
+        try:
+            return next(self._blocks)
+        except BaseException:
+            self.release()
+            raise
+
+    def release(self) -> None:
+        if self._held:
+            self._held = False
+            self._work.give_back(self._person)
+
+    def close(self) -> None:
+        self.release()
+        closing = getattr(self._blocks, "close", None)
+        if closing is not None:
+            closing()
+
+    def __del__(self) -> None:
+        self.release()
+
+
+def held_while_streaming(name: str, person_id: int, blocks: Iterable) -> HeldStream:
+    """``blocks`` as a response body holding a slot of pool ``name`` while it streams."""
+    return HeldStream(pool(name), person_id, blocks)
+
+
+EXPORTS_AT_ONCE = 4  # streamed exports (1e6-sample CSV/JSON, the class's data zip) per process
 _pools: dict[str, WorkPool] = {}
 _pools_lock = threading.Lock()
 
@@ -69,6 +110,8 @@ def pool(name: str) -> WorkPool:
             if name == "reports":
                 size = get_settings().report_renders
                 _pools[name] = WorkPool(size, "report.busy", "report.busy_person")
+            elif name == "exports":
+                _pools[name] = WorkPool(EXPORTS_AT_ONCE, "export.busy", "export.busy_person", 5)
             else:
                 _pools[name] = WorkPool(1, "work.busy_analysis", "work.busy_person", 60)
         return _pools[name]
