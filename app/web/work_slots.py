@@ -62,6 +62,7 @@ class HeldStream:
     first block still gives its slot back)."""
 
     def __init__(self, work: WorkPool, person_id: int, blocks: Iterable) -> None:
+        self._held = False
         work.take(person_id)  # refused now, with a page, not mid-download
         self._work, self._person, self._blocks = work, person_id, iter(blocks)
         self._held = True

@@ -17,7 +17,7 @@ import json
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import CHROMIUM, CHROMIUM_ARGS, free_port, running_server
+from tests.e2e.conftest import ARTIFACTS, CHROMIUM, CHROMIUM_ARGS, free_port, running_server
 from tests.lti_platform import PlatformState, create_platform_app, serving
 
 pytestmark = pytest.mark.e2e
@@ -104,6 +104,30 @@ def third_party_cookies_blocked(frame) -> bool:
     )
 
 
+def opened_in_frame(page, url: str, heading: str):
+    """The LMS's course page at ``url``, GyroLab's frame showing ``heading``.
+
+    KNOWN FLAKE (issue 31's note): about one run in eight on a loaded machine, the very
+    first framed launch of a fresh profile leaves the frame without a heading although
+    the launch reached the server (the roster sync after it ran).  Until that is
+    understood, the frame's URL and text are written to tests/artifacts and the course
+    page is opened once more; a second miss fails."""
+    page.goto(url)
+    frame = page.frame_locator("#tool")
+    try:
+        expect(frame.locator("h1")).to_have_text(heading, timeout=LAUNCH_MS)
+    except AssertionError:
+        ARTIFACTS.mkdir(exist_ok=True)
+        stuck = page.frame("tool")
+        (ARTIFACTS / "lti-frame-flake.txt").write_text(
+            f"{stuck.url if stuck else None}\n{stuck.content() if stuck else ''}"
+        )
+        page.screenshot(path=str(ARTIFACTS / "lti-frame-flake.png"))
+        page.goto(url)
+        expect(frame.locator("h1")).to_have_text(heading, timeout=LAUNCH_MS)
+    return frame
+
+
 def open_in_new_window(page, frame):
     with page.expect_popup() as popup:
         frame.get_by_role("link", name="Open GyroLab").click()
@@ -120,9 +144,8 @@ def test_platform_storage_carries_deep_linking_a_launch_and_a_return_visit(
     no_cookies = blocking_every_framed_cookie(server, platform)
 
     teacher = chromium_profile(no_cookies).new_page()
-    teacher.goto(f"{platform.url}/course?user=teacher-1&kind=deep")
-    frame = teacher.frame_locator("#tool")
-    expect(frame.locator("h1")).to_have_text("Add a GyroLab activity", timeout=LAUNCH_MS)
+    course = f"{platform.url}/course?user=teacher-1&kind=deep"
+    frame = opened_in_frame(teacher, course, "Add a GyroLab activity")
     assert third_party_cookies_blocked(teacher.frame("tool"))
     frame.locator("input[name=title]").fill("North in a frame 框内寻北")
     frame.get_by_role("button", name="Create and add").click()
