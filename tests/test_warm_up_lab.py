@@ -82,7 +82,9 @@ def test_a_cold_run_is_flagged_in_words_and_its_sigma_holds_the_warm_up(
     record_heading(student_client, warm, 100)
     again = student_client.get(f"/lab/sessions/{warm}/results.json").json()["heading"]
     assert not again["warm_up"]["flagged"]
-    assert again["azimuth_sigma_deg"] < results["azimuth_sigma_deg"]
+    # the σ's warm-up part is the model's (deterministic); the scatter's part is random
+    # (the two σ compared directly failed once in a full run: 0.133 vs 0.128)
+    assert again["warm_up"]["warm_up_share"] < results["warm_up"]["warm_up_share"] / 2
 
 
 @pytest.mark.slow
