@@ -126,6 +126,22 @@ class PlatformState:
         }
 
 
+def register_with_cli(server, platform: PlatformState) -> None:
+    """Register ``platform`` with a running GyroLab (``tests.e2e.conftest.LiveServer``)
+    the way an administrator does: ``gyrolab lti add-platform``."""
+    fields = platform.platform_fields()
+    server.gyrolab(
+        "lti", "add-platform",
+        "--name", fields["name"],
+        "--issuer", fields["issuer"],
+        "--client-id", fields["client_id"],
+        "--login-url", fields["auth_login_url"],
+        "--token-url", fields["auth_token_url"],
+        "--jwks-url", fields["key_set_url"],
+        "--deployment", fields["deployment_ids"],
+    )  # fmt: skip
+
+
 class PlatformConf(LTI1P3PlatformConfAbstract):
     def init_platform_config(self, state: PlatformState) -> None:
         self._registration = state.registration

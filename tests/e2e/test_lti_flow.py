@@ -9,7 +9,12 @@ import pytest
 from playwright.sync_api import expect
 
 from tests.e2e.conftest import axe_problems, free_port, running_server
-from tests.lti_platform import PlatformState, create_platform_app, serving
+from tests.lti_platform import (
+    PlatformState,
+    create_platform_app,
+    register_with_cli,
+    serving,
+)
 
 pytestmark = pytest.mark.e2e
 
@@ -18,17 +23,7 @@ def test_a_teacher_adds_gyrolab_and_a_student_lands_in_the_lab(tmp_path, new_pag
     with running_server(tmp_path, "--no-demo") as server:
         port = free_port()
         platform = PlatformState(url=f"http://127.0.0.1:{port}", tool_url=server.url)
-        fields = platform.platform_fields()
-        server.gyrolab(
-            "lti", "add-platform",
-            "--name", fields["name"],
-            "--issuer", fields["issuer"],
-            "--client-id", fields["client_id"],
-            "--login-url", fields["auth_login_url"],
-            "--token-url", fields["auth_token_url"],
-            "--jwks-url", fields["key_set_url"],
-            "--deployment", fields["deployment_ids"],
-        )  # fmt: skip
+        register_with_cli(server, platform)
         with serving(create_platform_app(platform), port):
             teacher = new_page(locale="zh-CN")
             teacher.goto(f"{platform.url}/start?user=teacher-1&kind=deep")

@@ -19,7 +19,12 @@ import pytest
 from playwright.sync_api import expect
 
 from tests.e2e.conftest import ARTIFACTS, CHROMIUM, CHROMIUM_ARGS, free_port, running_server
-from tests.lti_platform import PlatformState, create_platform_app, serving
+from tests.lti_platform import (
+    PlatformState,
+    create_platform_app,
+    register_with_cli,
+    serving,
+)
 
 pytestmark = [
     pytest.mark.e2e,
@@ -41,17 +46,7 @@ def framed_lms(tmp_path):
     with running_server(tmp_path, "--no-demo") as server:
         port = free_port()
         platform = PlatformState(url=f"http://localhost:{port}", tool_url=server.url)
-        fields = platform.platform_fields()
-        server.gyrolab(
-            "lti", "add-platform",
-            "--name", fields["name"],
-            "--issuer", fields["issuer"],
-            "--client-id", fields["client_id"],
-            "--login-url", fields["auth_login_url"],
-            "--token-url", fields["auth_token_url"],
-            "--jwks-url", fields["key_set_url"],
-            "--deployment", fields["deployment_ids"],
-        )  # fmt: skip
+        register_with_cli(server, platform)
         with serving(create_platform_app(platform), port):
             yield server, platform
 
