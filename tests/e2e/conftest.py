@@ -88,38 +88,67 @@ def running_server(
     var_dir: Path, *serve_args: str, database_url: str | None = None
 ) -> Iterator[LiveServer]:
     """``gyrolab serve`` in a subprocess (its own process group) on a free loopback port,
-    stopped afterwards."""
-    port = free_port()
+    stopped afterwards.
+
+    A port found free can be taken by another process before the server binds it (seen
+    once in CI: ``[Errno 98] Address already in use``); the server is then started again
+    on another port, up to three times.
+    """
     env = server_env(var_dir, database_url)
-    server = LiveServer(f"http://127.0.0.1:{port}", var_dir, env, None, database_url, serve_args)
-    yield_server = server
-    with open(var_dir / "server.log", "a") as log:
-        process = subprocess.Popen(
-            [sys.executable, "-m", "app.cli.main", "serve", "--port", str(port), *serve_args],
-            env=env,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-            start_new_session=True,
-        )
+    log_path = var_dir / "server.log"
+    for attempt in range(3):
+        port = free_port()
+        url = f"http://127.0.0.1:{port}"
+        server = LiveServer(url, var_dir, env, None, database_url, serve_args)
+        log_start = log_path.stat().st_size if log_path.exists() else 0
+        with open(log_path, "a") as log:
+            process = subprocess.Popen(
+                [sys.executable, "-m", "app.cli.main", "serve", "--port", str(port), *serve_args],
+                env=env,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
+            )
         server.process = process
         try:
-            deadline = time.monotonic() + 60
-            while True:
-                try:
-                    if httpx.get(f"{server.url}/login", timeout=1).status_code == 200:
-                        break
-                except httpx.HTTPError:
-                    pass
-                if process.poll() is not None or time.monotonic() > deadline:
-                    raise RuntimeError((var_dir / "server.log").read_text())
-                time.sleep(0.2)
-            yield yield_server
-        finally:
-            process.terminate()
-            with suppress(subprocess.TimeoutExpired):
-                process.wait(10)
-            with suppress(ProcessLookupError):  # workers the supervisor left behind
-                os.killpg(process.pid, signal.SIGKILL)
+            if _wait_until_serving(server, log_path, log_start):
+                break
+        except BaseException:
+            _stop(process)
+            raise
+        _stop(process)
+        if attempt == 2:
+            raise RuntimeError(log_path.read_text())
+    try:
+        yield server
+    finally:
+        _stop(process)
+
+
+def _wait_until_serving(server: LiveServer, log_path: Path, log_start: int) -> bool:
+    """True once the server answers; False if it exited because its port was taken."""
+    deadline = time.monotonic() + 60
+    while True:
+        try:
+            if httpx.get(f"{server.url}/login", timeout=1).status_code == 200:
+                return True
+        except httpx.HTTPError:
+            pass
+        if server.process.poll() is not None or time.monotonic() > deadline:
+            with open(log_path) as log:
+                log.seek(log_start)
+                if "Address already in use" in log.read():
+                    return False
+            raise RuntimeError(log_path.read_text())
+        time.sleep(0.2)
+
+
+def _stop(process: subprocess.Popen) -> None:
+    process.terminate()
+    with suppress(subprocess.TimeoutExpired):
+        process.wait(10)
+    with suppress(ProcessLookupError):  # workers the supervisor left behind
+        os.killpg(process.pid, signal.SIGKILL)
 
 
 def add_teacher_and_student(var_dir: Path, database_url: str | None = None) -> None:
