@@ -72,6 +72,10 @@ def t_factor(dof: int) -> float:
 def reading_step(arrays: Sequence[np.ndarray]) -> float | None:
     """The quantisation step the data show.
 
+    Sorting every record to find it (``np.unique``) is the one cost here that grows as
+    n log n, so :func:`position_noise` asks for it only where it is used: a position whose
+    readings are all identical, or one reading per position.
+
     Parameters
     ----------
     arrays : sequence of numpy.ndarray
@@ -219,12 +223,13 @@ def position_noise(
     """
     if position_cov is not None:
         return PositionNoise(np.asarray(position_cov, dtype=float), "allan")
-    floor = quantisation_floor(arrays)
     counts = [array.size for array in arrays]
     if min(counts) >= 2:
         sigmas = []
+        floor = None  # found only when needed: it sorts every record (reading_step)
         for array in arrays:
             if np.ptp(array) == 0.0:  # all identical: rounding is the only error left
+                floor = quantisation_floor(arrays) if floor is None else floor
                 sigmas.append(floor)
             else:
                 std = float(array.std(ddof=1))
@@ -234,5 +239,5 @@ def position_noise(
     d = closure_residual(angles_deg, means)
     if d is None:
         return None
-    sigma = max(t_factor(1) * abs(d), floor)
+    sigma = max(t_factor(1) * abs(d), quantisation_floor(arrays))
     return PositionNoise.independent([sigma] * len(arrays), "closure")
