@@ -68,16 +68,21 @@ def _token_caller(raw: str, db, rate_per_minute: int) -> Caller:
     return Caller(db.merge(check.user, load=False), check.scopes, "token")
 
 
+def require_scope(caller: Caller, scope: str, *, teacher: bool = False) -> Caller:
+    """The caller, who must hold ``scope`` (and be a teacher if asked)."""
+    if scope not in caller.scopes:
+        raise UserError("api.scope_missing", status=403, scope=scope)
+    if teacher and caller.user.role != Role.teacher:
+        raise UserError("api.teachers_only", status=403)
+    return caller
+
+
 def scoped(scope: str, *, teacher: bool = False):
     """A dependency: the caller, who must hold ``scope`` (and be a teacher if asked)."""
 
     async def dependency(caller: Annotated[Caller, Depends(api_caller)]) -> Caller:
         # async: a check without I/O needs no trip to the thread pool
-        if scope not in caller.scopes:
-            raise UserError("api.scope_missing", status=403, scope=scope)
-        if teacher and caller.user.role != Role.teacher:
-            raise UserError("api.teachers_only", status=403)
-        return caller
+        return require_scope(caller, scope, teacher=teacher)
 
     return dependency
 

@@ -11,16 +11,18 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal
 
-from fastapi import APIRouter, Depends, Path
+from fastapi import APIRouter, Depends, Path, Request
 from fastapi.responses import JSONResponse, Response
 from sqlmodel import Session, select
 
-from app.accounts.api_auth import ReadCaller, UploadCaller
+from app.accounts.api_auth import ReadCaller, UploadCaller, api_caller, require_scope
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
+from app.db import read_session
 from app.lab import sessions as labsessions
 from app.lab.partners import in_sessions_of
 from app.lab.result_cache import CachedResults, cached_results
+from app.lab.results_read import cached_results_for_token
 from app.lab.schemas import (
     AttemptOut,
     HeadingSettings,
@@ -41,7 +43,7 @@ from app.lab.submissions import submit
 from app.lab.trim import trim_position
 from app.lab.uploads import Upload
 from app.models import InputMethod, LabSession
-from app.web.deps import ObjectId, SessionDep
+from app.web.deps import ObjectId, SessionDep, SettingsDep
 from app.web.errors import API_ERRORS
 
 router = APIRouter(prefix="/api/v1", tags=["api"], responses=API_ERRORS)
@@ -243,10 +245,26 @@ def append_position(
     )
 
 
+def session_results_entry(
+    request: Request, session_id: ObjectId, settings: SettingsDep
+) -> CachedResults:
+    """The caller, their session and its cached results, in one trip to the thread pool
+    (the route itself is async and does no I/O): the hot read path of devices and
+    dashboards polling for results (issue 32)."""
+    entry = cached_results_for_token(
+        request.headers.get("authorization", ""), session_id, settings.api_rate_per_minute
+    )
+    if entry is not None:
+        return entry
+    with read_session() as db:
+        caller = require_scope(api_caller(request, db, settings), "read")
+        return cached_results(db, own_session(db, caller.user, session_id))
+
+
 @router.get("/sessions/{session_id}/results", response_model=ResultsOut)
-def get_results(session: ReadableSession, db: SessionDep):
+async def get_results(entry: Annotated[CachedResults, Depends(session_results_entry)]):
     """Exactly the keys of ``gyrolab solve --json`` per part (null without enough data)."""
-    return Response(results_body(cached_results(db, session)), media_type="application/json")
+    return Response(results_body(entry), media_type="application/json")
 
 
 def results_body(entry: CachedResults) -> bytes:

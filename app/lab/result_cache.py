@@ -165,7 +165,13 @@ KEY_COLUMNS = (
 
 
 def _digest(takes, session: LabSession, assignment_row: tuple) -> str:
-    text = repr((tuple(tuple(t) for t in takes), _row(session), assignment_row))
+    return digest_rows(takes, _row(session), assignment_row)
+
+
+def digest_rows(takes, session_row: tuple, assignment_row: tuple) -> str:
+    """The cache key: the takes' key columns, the session's and the assignment's result
+    columns (in table order), as read by the ORM or by Core (``lab.results_read``)."""
+    text = repr((tuple(tuple(t) for t in takes), session_row, assignment_row))
     return hashlib.blake2b(text.encode(), digest_size=16).hexdigest()
 
 
