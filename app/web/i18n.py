@@ -99,6 +99,17 @@ def is_known(key: str) -> bool:
 def translate(key: str, language: str, **params: object) -> str:
     """The message ``key`` in ``language`` (English when missing there; the key itself
     when unknown), its placeholders filled from ``params``."""
+    text, plural_language = _message(key, language)
+    if plural_language is not None:
+        count = params.get("n", 1)
+        text = translations(plural_language).ngettext(key, key, int(count) if count else 0)
+    return text.format(**params) if params else text
+
+
+@lru_cache(maxsize=8192)
+def _message(key: str, language: str) -> tuple[str, str | None]:
+    """The catalogue's text of ``key`` (a page asks for ~250 of them; the catalogues never
+    change while serving), and the language to pick a plural form in, if it has them."""
     if language not in LANGUAGES:
         language = DEFAULT_LANGUAGE
     entry = catalogue(language).get(key)
@@ -106,13 +117,10 @@ def translate(key: str, language: str, **params: object) -> str:
         language = DEFAULT_LANGUAGE
         entry = catalogue(language).get(key)
     if entry is None:
-        return key
+        return key, None
     if entry.pluralizable:
-        count = params.get("n", 1)
-        text = translations(language).ngettext(key, key, int(count) if count else 0)
-    else:
-        text = translations(language).gettext(key)
-    return text.format(**params) if params else text
+        return key, language
+    return translations(language).gettext(key), None
 
 
 def format_datetime(

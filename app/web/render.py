@@ -34,6 +34,9 @@ FLASH_COOKIE = "gyrolab_flash"
 LANG_COOKIE = "gyrolab_lang"
 
 templates = Jinja2Templates(directory=str(TEMPLATES_DIR))
+# The templates are part of the installed app: compiled once, never re-checked on disk
+# (an auto-reloading environment stats every template a page includes on every render).
+templates.env.auto_reload = False
 # gettext extraction (pybabel, babel.cfg) reads the templates' _("key") calls through
 # Jinja's i18n extension; each page's _ is the reader's translator (render()).
 templates.env.add_extension("jinja2.ext.i18n")
