@@ -14,6 +14,7 @@ from fastapi import FastAPI, Request, Response
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.middleware.sessions import SessionMiddleware
+from starlette.types import ASGIApp, Receive, Scope, Send
 from swagger_ui_bundle import swagger_ui_path
 
 from app import __version__
@@ -72,6 +73,22 @@ def plotly_gzip() -> bytes:
     return gzip.compress(PLOTLY_JS.read_bytes(), compresslevel=6, mtime=0)
 
 
+class SsoSessionCookie:
+    """Starlette's SessionMiddleware on single sign-on's own paths only: every other
+    request passes untouched (no cookie parsed or signature checked on the hot paths)."""
+
+    def __init__(self, app: ASGIApp, **options) -> None:
+        self.app = app
+        self.with_session = SessionMiddleware(app, **options)
+        self.prefix = options["path"]
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] == "http" and scope["path"].startswith(self.prefix):
+            await self.with_session(scope, receive, send)
+        else:
+            await self.app(scope, receive, send)
+
+
 def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     @asynccontextmanager
     async def lifespan(_app: FastAPI):
@@ -102,7 +119,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     # single sign-on's state and nonce between /login/sso and its callback (a signed cookie
     # for those two paths only, ten minutes)
     app.add_middleware(
-        SessionMiddleware,
+        SsoSessionCookie,
         secret_key=hashlib.sha256(f"sso:{get_settings().secret_key}".encode()).hexdigest(),
         session_cookie="gyrolab_sso",
         path="/login/sso",
