@@ -59,10 +59,18 @@ def test_points_are_checked_against_the_maximum(world):
     teacher = browser(world, "teacher1")
     _, session_id = submitted(world, "s1")
     page = f"/review/sessions/{session_id}"
+    typed = {"feedback": "Careful work 认真", "comment-latitude-2": "Let the table settle."}
     for bad in ("101", "-1", "nan", "inf", "1e400", "abc"):
-        assert review(teacher, session_id, points=bad, action="save").status_code == 303
-        assert "enter a number from 0 to 100" in teacher.get(page).text
-        assert latest(session_id).points is None
+        for action in ("save", "release"):
+            answer = review(teacher, session_id, points=bad, action=action, **typed)
+            # issue 34: the page again, with everything the teacher typed kept
+            assert answer.status_code == 400
+            assert "Points: enter a number from 0 to 100" in answer.text
+            assert "Careful work 认真</textarea>" in answer.text
+            assert 'value="Let the table settle."' in answer.text
+            assert f'value="{bad}" aria-invalid="true"' in answer.text
+            assert latest(session_id).points is None and not latest(session_id).feedback
+            assert status_of(session_id) == "submitted"
     review(teacher, session_id, points="87,5", letter="B+", action="save")  # decimal comma
     assert latest(session_id).points == 87.5 and latest(session_id).letter == "B+"
     assert status_of(session_id) == "submitted"  # saved, not released
@@ -94,11 +102,11 @@ def test_a_rubric_sums_its_criteria(world):
     _, session_id = submitted(world, "s1")
     page = teacher.get(f"/review/sessions/{session_id}").text
     assert 'name="rubric-0"' in page and 'name="points"' not in page
-    review(teacher, session_id, **{"rubric-0": "31"}, action="save")  # above its 30
-    assert (
-        "Heading within tolerance: enter a number from 0 to 30"
-        in teacher.get(f"/review/sessions/{session_id}").text
-    )
+    answer = review(teacher, session_id, **{"rubric-0": "31", "rubric-1": "20"}, action="save")
+    assert "Heading within tolerance: enter a number from 0 to 30" in answer.text  # above 30
+    assert 'name="rubric-0" inputmode="decimal" value="31" aria-label' in answer.text
+    assert 'value="31" aria-label="Heading within tolerance" aria-invalid="true"' in answer.text
+    assert 'value="20" aria-label="纬度与地速">' in answer.text  # the other criterion kept
     review(teacher, session_id, **{"rubric-0": "25"}, action="release")  # one criterion open
     assert status_of(session_id) == "submitted" and latest(session_id).points is None
     review(teacher, session_id, **{"rubric-0": "25", "rubric-1": "17.5"}, action="release")

@@ -158,9 +158,10 @@ def test_release_needs_a_grade_and_a_submission(world):
     assert session_of(session_id).status == "in_progress"
     do_lab(student, session_id)
     submit(student, session_id)
-    review(teacher, session_id, points="", action="release")
+    answer = review(teacher, session_id, points="", feedback="Nearly there.", action="release")
     assert session_of(session_id).status == "submitted"
-    assert "Enter the points" in teacher.get(f"/review/sessions/{session_id}").text
+    assert "Enter the points" in answer.text and "Nearly there.</textarea>" in answer.text
+    assert 'id="points" inputmode="decimal" value="" aria-invalid="true"' in answer.text
 
 
 def set_assignment(world, **fields):

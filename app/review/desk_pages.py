@@ -27,6 +27,11 @@ router = APIRouter(tags=["pages: review"], include_in_schema=False)
 
 @router.get("/review/sessions/{session_id}")
 def submission_page(request: Request, target: ReviewableSession, db: SessionDep):
+    return render(request, "review/submission.html", desk_view(request, target, db))
+
+
+def desk_view(request: Request, target, db) -> dict:
+    """Everything the grading desk's page shows of one submission."""
     session, assignment, course = target.session, target.assignment, target.course
     _ = translator(request_language(request))
     attempts = db.exec(
@@ -64,9 +69,37 @@ def submission_page(request: Request, target: ReviewableSession, db: SessionDep)
             "unit_names": UNIT_NAMES,
             "plotly_url": request.app.state.plotly_url,
             "interrupted": None,
+            "typed": None,
+            "problem": None,
         }
     )
-    return render(request, "review/submission.html", view)
+    return view
+
+
+def typed_review(form, rubric: list[dict], problem: UserError) -> dict:
+    """What the teacher typed into the review form, as typed, and which field was refused
+    (shown again with the message: nothing typed is lost when one value is wrong)."""
+    fields = {key: str(value) for key, value in form.items()}
+    field = str(problem.params.get("field", ""))
+    names = [str(criterion["name"]) for criterion in rubric]
+    invalid = "points" if field == "points" and not rubric else ""
+    if field in names:
+        invalid = f"rubric-{names.index(field)}"
+    elif problem.key == "review.points_required":  # released with no points: the first gap
+        empty = [i for i in range(len(rubric)) if not fields.get(f"rubric-{i}", "").strip()]
+        invalid = f"rubric-{empty[0]}" if empty else "" if rubric else "points"
+    return {
+        "feedback": fields.get("feedback", "")[: grading.MAX_FEEDBACK],
+        "comments": {
+            key.removeprefix("comment-"): value[: grading.MAX_COMMENT]
+            for key, value in fields.items()
+            if grading.COMMENT_KEY.fullmatch(key)
+        },
+        "rubric": {str(i): fields.get(f"rubric-{i}", "")[:32] for i in range(len(rubric))},
+        "points": fields.get("points", "")[:32],
+        "letter": fields.get("letter", "")[:32],
+        "invalid": invalid,
+    }
 
 
 @router.post("/review/sessions/{session_id}/feedback", dependencies=[CsrfProtected])
@@ -98,8 +131,18 @@ def save_review(
                 background.add_task(lms_grades.wake_sender)
     except UserError as problem:
         db.rollback()
-        flash(response, request, problem.key, "error", **problem.params)
-        return response
+        if attempt is None or session.status == SessionStatus.graded:  # no form to fill
+            flash(response, request, problem.key, "error", **problem.params)
+            return response
+        # the page again, with everything typed and the refused field marked (a redirect
+        # would show the stored review and lose what was typed)
+        view = desk_view(request, target, db)
+        view["typed"] = typed_review(form, view["rubric"], problem)
+        params = dict(problem.params)
+        if params.get("field") == "points":  # the form's own word, not the field's name
+            params["field"] = translator(request_language(request))("review.points")
+        view["problem"] = {"key": problem.key, "params": params}
+        return render(request, "review/submission.html", view, problem.status)
     db.add(attempt)
     db.add(session)
     db.commit()
