@@ -114,7 +114,7 @@ def test_the_cache_is_bounded():
     assert cache.get("a") is None and cache.get("b") is not None
     entry = cache.get("c")
     cache.add_figures(entry, "en", (frozenset(), "x" * 80))
-    cache.add_figures(cache.get("b"), "en", (frozenset(), "y" * 80))
+    cache.add_blocks(cache.get("b"), "en", True, {"heading": "y" * 80})
     assert cache.get("c") is None  # the least recently used went over the byte bound
     assert cache.get("b") is not None
 
@@ -168,3 +168,44 @@ def test_the_dashboard_reads_samples_only_of_sessions_that_changed(app, teacher,
     page = teacher_client.get(dashboard).text
     assert read == [sessions["s2"]]
     assert page.count("学生") >= 3
+
+
+def test_the_results_blocks_are_rendered_once_per_key_language_and_editable(
+    student_client, solves, monkeypatch
+):
+    from app.lab import pages
+    from app.web.i18n import translator
+
+    rendered: list[tuple[str, bool]] = []
+    add = result_cache.CACHE.add_blocks
+
+    def counted(entry, language, editable, blocks):
+        rendered.append((language, editable))
+        add(entry, language, editable, blocks)
+
+    monkeypatch.setattr(result_cache.CACHE, "add_blocks", counted)
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    rendered.clear()  # the page read for its CSRF token before the save
+    page = f"/lab/sessions/{session_id}"
+    english = student_client.get(page).text
+    assert student_client.get(page).text.count('class="trim-form"') == 1
+    assert rendered == [("en", True)]
+    token = csrf_from(student_client, page)
+    student_client.post("/lang", data={"lang": "zh-CN", "csrf_token": token})
+    chinese = student_client.get(page).text
+    assert rendered == [("en", True), ("zh-CN", True)]
+    assert "<h3>结果</h3>" in chinese and "<h3>Results</h3>" in english
+    assert solves.count(session_id) == 2  # before the save, and once for both languages
+
+    # The same result shown read-only (a submitted assignment, the teacher's desk): no trim.
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        entry = result_cache.CACHE.get(data_key(db, session, None))
+    texts, _json = entry.figures["en"]
+    blocks = pages._cached_blocks(entry, texts, "en", False, translator("en"))
+    assert "trim-form" not in blocks["heading"] and "positions-table" in blocks["heading"]
+
+    save_manual(student_client, session_id, "heading", {2: [5.0] * 9 + [5.5]})
+    assert "5.050" in student_client.get(page).text  # a new key: rendered again
+    assert rendered[-1] == ("zh-CN", True)

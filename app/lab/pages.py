@@ -61,7 +61,14 @@ from app.web.deps import (
     SessionDep,
 )
 from app.web.i18n import is_known, translator
-from app.web.render import csrf_token_for, flash, redirect, render, request_language
+from app.web.render import (
+    csrf_token_for,
+    flash,
+    redirect,
+    render,
+    request_language,
+    templates,
+)
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 
@@ -245,9 +252,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         "version": session.updated_at.isoformat(),
         "shared": len(group["members"]) > 1,
     }
-    editable = session.status != SessionStatus.graded and not (
-        session.assignment_id and session.status == SessionStatus.submitted
-    )
+    editable = is_editable(session)
     if grading.mark_seen(db, attempts):  # the dashboard's notice has been read
         try:
             db.commit()
@@ -258,7 +263,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         request,
         "lab/session.html",
         {
-            **session_view(db, session, assignment, attempts, _),
+            **session_view(db, session, assignment, attempts, _, editable=editable),
             "due": grading.due_for(db, assignment, session.owner_id),
             "timezone": course.timezone if course else None,
             **group,
@@ -275,8 +280,48 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
     )
 
 
+def is_editable(session: LabSession) -> bool:
+    """Whether the student may still record: not graded, and not an assignment's
+    submitted work."""
+    return session.status != SessionStatus.graded and not (
+        session.assignment_id and session.status == SessionStatus.submitted
+    )
+
+
+def _cached_blocks(entry, figure_texts: dict, language: str, editable: bool, _) -> dict:
+    """Each part's results half (``lab/_part_results.html``), rendered once per result
+    key, language and ``editable`` and kept with the cached result: it depends on
+    nothing else, and it is most of the page's rendering."""
+    blocks = entry.blocks.get((language, editable))
+    if blocks is None:
+        template = templates.get_template("lab/_part_results.html")
+        blocks = {
+            part: Markup(
+                template.render(
+                    part=part,
+                    outcome=entry.parts[part],
+                    figures=figure_texts,
+                    editable=editable,
+                    lang=language,
+                    _=_,
+                    error_text=lambda error: error_text(error, _),
+                )
+            )
+            for part in PARTS
+        }
+        CACHE.add_blocks(entry, language, editable, blocks)
+    return blocks
+
+
 def session_view(
-    db: Session, session: LabSession, assignment, attempts, _, *, reviewer: bool = False
+    db: Session,
+    session: LabSession,
+    assignment,
+    attempts,
+    _,
+    *,
+    reviewer: bool = False,
+    editable: bool = False,
 ) -> dict:
     """What both the student's page and the teacher's review show of a session.
 
@@ -309,6 +354,7 @@ def session_view(
         "results": results,
         "figures": figure_texts,
         "figures_json": figures_json,
+        "result_blocks": _cached_blocks(entry, figure_texts, _.language, editable, _),
         "attempts": attempts,
         "assignment": assignment,
         "nominal": nominal,

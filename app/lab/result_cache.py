@@ -38,6 +38,8 @@ class CachedResults:
     payload: bytes | None = None  # the REST results body (set by the API on first use)
     # language → (each figure's text alternative by name, the figures' JSON as embedded)
     figures: dict[str, tuple[dict[str, dict], Markup]] = field(default_factory=dict)
+    # (language, editable) → each part's rendered results block (app/lab/pages.py)
+    blocks: dict[tuple[str, bool], dict[str, Markup]] = field(default_factory=dict)
 
 
 class ResultCache:
@@ -75,6 +77,13 @@ class ResultCache:
             entry.figures[language] = figures
             self._trim()
 
+    def add_blocks(
+        self, entry: CachedResults, language: str, editable: bool, blocks: dict[str, Markup]
+    ) -> None:
+        with self._lock:
+            entry.blocks[(language, editable)] = blocks
+            self._trim()
+
     def clear(self) -> None:
         with self._lock:
             self._entries.clear()
@@ -86,7 +95,11 @@ class ResultCache:
             self._entries.popitem(last=False)
 
     def _figure_bytes(self) -> int:
-        return sum(len(f) for e in self._entries.values() for _, f in e.figures.values())
+        return sum(
+            sum(len(f) for _, f in e.figures.values())
+            + sum(len(html) for parts in e.blocks.values() for html in parts.values())
+            for e in self._entries.values()
+        )
 
 
 CACHE = ResultCache()
