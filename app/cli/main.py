@@ -42,8 +42,15 @@ def _serve(args: argparse.Namespace) -> int:
         workers=args.workers,
         proxy_headers=args.proxy_headers,
         access_log=not args.no_access_log,
+        # Idle keep-alive connections stay open longer than a student's pause between
+        # requests (uvicorn's 5 s default closed them while a client was sending its next
+        # request on them: "connection reset" under load) and than a proxy's idle timeout.
+        timeout_keep_alive=KEEP_ALIVE_S,
     )
     return 0
+
+
+KEEP_ALIVE_S = 75
 
 
 def _migrate(_args: argparse.Namespace) -> int:
