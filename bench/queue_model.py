@@ -45,6 +45,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import load_test  # noqa: E402  (bench/, the script's folder)
+from capacity import server_pids  # noqa: E402
 
 from tests.e2e.conftest import running_server  # noqa: E402
 from tests.pgserver import PostgresServer  # noqa: E402
@@ -125,7 +126,7 @@ def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, 
             course, assignment = load_test.seed(env, students + 1)
             url = database_url if backend == "postgresql" else None
             with running_server(Path(var), *serve_args, database_url=url) as server:
-                pids = [server.process.pid, *load_test_children(server.process.pid)]
+                pids = server_pids(server.process.pid)
                 tally = CostTally(pids)
                 stream = []
 
@@ -152,18 +153,6 @@ def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, 
     costs = {route: tuple(np.mean(values, axis=0)) for route, values in tally.costs.items()}
     costs[STREAM] = tuple(np.mean(stream, axis=0))  # what a stream costs per frame received
     return costs
-
-
-def load_test_children(root: int) -> list[int]:
-    children = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                if int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1]) == root:
-                    children.append(int(entry.name))
-            except (OSError, ValueError):
-                continue
-    return children
 
 
 async def teacher_costs(tally, base: str, course: int, assignment: int) -> None:
