@@ -6,10 +6,12 @@ Every test module imports its helpers from here (no test module imports another)
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import json
 import re
 from pathlib import Path
+from unittest import mock
 from urllib.parse import unquote
 
 from fastapi.testclient import TestClient
@@ -34,6 +36,16 @@ def pdf_text(content: bytes) -> str:
 PASSWORD = "correct-horse-42"
 
 
+@functools.cache
+def password_hash_of_password() -> str:
+    """One real argon2id hash of PASSWORD per test process: hashing it afresh for every
+    account a test makes cost ~25 ms each, about a third of the quick loop (the log-ins
+    still verify it the real way)."""
+    from app.accounts.security import hash_password
+
+    return hash_password(PASSWORD)
+
+
 CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
 
 
@@ -46,10 +58,13 @@ def make_user(
     created_by: User | None = None,
 ) -> User:
     """An account with the password PASSWORD (``created_by``: the teacher whose roster made it)."""
-    from app.accounts.service import create_user
+    from app.accounts import service
 
-    with write_session() as db:
-        return create_user(
+    with (
+        write_session() as db,
+        mock.patch.object(service, "hash_password", lambda _password: password_hash_of_password()),
+    ):
+        return service.create_user(
             db,
             username=username,
             display_name=name or username.title(),

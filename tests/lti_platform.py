@@ -12,6 +12,8 @@ httpx client (``Browser``), following redirects and submitting the auto-posting 
 
 from __future__ import annotations
 
+import asyncio
+import functools
 import html
 import json
 import re
@@ -68,6 +70,14 @@ def new_private_key() -> str:
     ).decode()
 
 
+@functools.cache
+def platform_key() -> str:
+    """The platform's own key, one per test process (a 2048-bit key costs ~70 ms to make
+    and as much again each time a library loads it; ``forge`` still signs with a new one)."""
+    return new_private_key()
+
+
+@functools.cache
 def public_of(private_pem: str) -> str:
     key = serialization.load_pem_private_key(private_pem.encode(), None)
     return (
@@ -83,7 +93,7 @@ class PlatformState:
 
     url: str
     tool_url: str
-    private_key: str = field(default_factory=new_private_key)
+    private_key: str = field(default_factory=platform_key)
     links: dict[str, dict] = field(default_factory=dict)  # resource link id → content item
     lineitems: dict[str, dict] = field(default_factory=dict)
     scores: list[dict] = field(default_factory=list)
@@ -411,24 +421,41 @@ def new_lineitem(state: PlatformState, fields: dict) -> str:
     return url
 
 
+class _PromptServer(uvicorn.Server):
+    """uvicorn that notices ``should_exit`` within 5 ms (uvicorn's own loop ticks every
+    0.1 s, and two servers stopped one after the other cost each LTI test 0.4 s)."""
+
+    async def main_loop(self) -> None:
+        while not self.should_exit:
+            await asyncio.sleep(0.005)
+
+
 @contextmanager
-def serving(app, port: int) -> Iterator[None]:
-    """An ASGI app served by uvicorn in a thread on 127.0.0.1:port."""
-    server = uvicorn.Server(
-        uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", lifespan="on")
-    )
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    deadline = time.monotonic() + 20
-    while not server.started:
-        if time.monotonic() > deadline or not thread.is_alive():
-            raise RuntimeError("server did not start")
-        time.sleep(0.02)
+def serving(*apps_and_ports) -> Iterator[None]:
+    """ASGI apps served by uvicorn, each in a thread on 127.0.0.1:port, stopped together:
+    ``serving(app, port)`` or ``serving(app_a, port_a, app_b, port_b)``."""
+    pairs = list(zip(apps_and_ports[::2], apps_and_ports[1::2], strict=True))
+    running: list[tuple[uvicorn.Server, threading.Thread]] = []
     try:
+        for app, port in pairs:
+            server = _PromptServer(
+                uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning")
+            )
+            thread = threading.Thread(target=server.run, daemon=True)
+            thread.start()
+            running.append((server, thread))
+        deadline = time.monotonic() + 20
+        for server, thread in running:
+            while not server.started:
+                if time.monotonic() > deadline or not thread.is_alive():
+                    raise RuntimeError("server did not start")
+                time.sleep(0.005)
         yield
     finally:
-        server.should_exit = True
-        thread.join(10)
+        for server, _thread in running:
+            server.should_exit = True
+        for _server, thread in running:
+            thread.join(10)
 
 
 class Browser:

@@ -56,7 +56,7 @@ def lti(app) -> Iterator[Lti]:
                 deployment_ids=[fields["deployment_ids"]],
             ),
         )
-    with serving(app, tool_port), serving(create_platform_app(state), platform_port):
+    with serving(app, tool_port, create_platform_app(state), platform_port):
         yield Lti(tool, state)
 
 
