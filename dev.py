@@ -5,8 +5,8 @@
     python3 dev.py test   the same set-up plus test extras, Debian's Chromium (and in CI,
                           PostgreSQL), then ruff (lint and format check) and every test on
                           SQLite and PostgreSQL, in parallel on every core
-    python3 dev.py quick  the quick loop: tests without browser, server or Monte Carlo, on
-                          SQLite only (about a minute)
+    python3 dev.py quick  the quick loop: tests without browser, server, PDF or Monte Carlo,
+                          on SQLite only (under a minute)
 
 Extra arguments after ``run`` go to ``gyrolab serve`` (e.g. ``--port 8080 --no-demo``);
 after ``test`` they go to pytest (e.g. ``-k auth``).  Uses only the standard library.
@@ -138,10 +138,13 @@ def main(argv: list[str]) -> int:
         ensure_installed("")
         return subprocess.call([str(BIN / "gyrolab"), "serve", *rest])
     ensure_installed("test")
-    pytest = [str(BIN / "python"), "-m", "pytest", "-n", "auto", "--dist", "worksteal"]
-    if command == "quick":
-        quick = ["-m", "not e2e and not slow", "--backends", "sqlite"]
+    pytest = [str(BIN / "python"), "-m", "pytest", "--dist", "worksteal"]
+    if command == "quick":  # CPU-bound: one worker per core (2 cores: 56 s; 3 workers: 60 s)
+        quick = ["-n", "auto", "-m", "not e2e and not slow", "--backends", "sqlite"]
         return subprocess.call([*pytest, *quick, *rest])
+    # one worker more than cores: a browser test's worker waits on Chromium and the server
+    # (2 cores: the suite 295 s with 2 workers, 266 s with 3)
+    pytest += ["-n", str((os.cpu_count() or 1) + 1)]
     ensure_test_programs()
     for check in (["check", "."], ["format", "--check", "."]):
         say(f"ruff {' '.join(check)}")

@@ -29,6 +29,8 @@ from tests.lti_platform import (
     serving,
 )
 
+pytestmark = pytest.mark.slow  # a real LMS and GyroLab served on loopback
+
 REFUSED = "GyroLab could not open this launch"
 protocol_only = pytest.mark.one_backend
 

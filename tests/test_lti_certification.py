@@ -21,7 +21,8 @@ from tests.test_lti import (  # noqa: F401 (the fixture)
     lti,
 )
 
-pytestmark = pytest.mark.one_backend
+# slow: a real LMS and GyroLab served on loopback
+pytestmark = [pytest.mark.one_backend, pytest.mark.slow]
 
 LTI = "https://purl.imsglobal.org/spec/lti/claim/"
 

@@ -13,7 +13,8 @@ import pytest
 from tests.lti_platform import Browser
 from tests.test_lti import REFUSED, deep_link_new_assignment, lti  # noqa: F401 (the fixture)
 
-pytestmark = pytest.mark.one_backend
+# slow: a real LMS and GyroLab served on loopback
+pytestmark = [pytest.mark.one_backend, pytest.mark.slow]
 FRAME = {"Sec-Fetch-Dest": "iframe"}
 
 

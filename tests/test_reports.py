@@ -31,6 +31,8 @@ from tests.factories import (
     token_for,
 )
 
+pytestmark = pytest.mark.slow  # PDF rendering (WeasyPrint, matplotlib)
+
 
 def report(client, session_id: int, attempt: int | None = None, language: str = "en"):
     query = f"?attempt={attempt}" if attempt is not None else ""

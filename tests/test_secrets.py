@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import time
 
+import pytest
 from jwcrypto.jwk import JWK
 from sqlmodel import select
 
@@ -53,6 +54,7 @@ def built_class_zip(teacher, world) -> int:  # noqa: F811
     return int(progress.rsplit("/", 1)[1])
 
 
+@pytest.mark.slow  # every GET route, its PDFs and the class zip rendered
 def test_no_response_carries_a_secret(world):  # noqa: F811
     with write_session() as db:
         assignment = db.get(Assignment, world["assignment"])

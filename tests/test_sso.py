@@ -37,6 +37,8 @@ PEOPLE = (
     ProviderUser(sub="u-3003", claims={"email": "student1@uni.example", "name": "Other"}),
 )
 
+pytestmark = pytest.mark.slow  # a real OpenID provider served on loopback
+
 
 @pytest.fixture(scope="module")
 def provider() -> Iterator[str]:

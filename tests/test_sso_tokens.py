@@ -18,7 +18,9 @@ from app.db import read_session
 from app.models import ExternalIdentity
 from tests.oidc_forger import CLIENT_ID, CLIENT_SECRET, VARIANTS, running_forger
 
-pytestmark = pytest.mark.one_backend  # refused before any write; the good one is one insert
+# refused before any write; the good one is one insert
+# slow: a real OpenID provider served on loopback
+pytestmark = [pytest.mark.one_backend, pytest.mark.slow]
 
 
 @pytest.fixture(scope="module")
