@@ -225,7 +225,7 @@ def test_csrf_header_is_accepted(client, teacher):
 def test_every_state_changing_route_checks_csrf(app):
     from fastapi.routing import APIRoute
 
-    from app.web.deps import csrf_protect
+    from app.accounts.deps import csrf_protect
 
     unsafe = [
         route

@@ -329,7 +329,7 @@ def test_the_old_reviews_move_to_their_attempts(tmp_path):
 
 @pytest.mark.parametrize("zone", ["Asia/Shanghai", "America/New_York"])
 def test_local_time_round_trip(zone):
-    from app.courses.local_time import local_input_to_utc, utc_to_local_input
+    from app.web.local_time import local_input_to_utc, utc_to_local_input
 
     typed = datetime(2026, 3, 8, 9, 30)
     stored = local_input_to_utc(typed, zone)

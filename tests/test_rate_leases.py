@@ -9,10 +9,10 @@ from sqlmodel import select
 
 from app.accounts import rate_leases
 from app.accounts.rate_leases import MAX_LEASE, RateLeases
-from app.accounts.security import token_digest
 from app.accounts.tokens import _leaser, new_token
 from app.db import statement_session, write_session
 from app.models import ApiToken, utcnow
+from app.web.signing import token_digest
 from tests.factories import login
 
 

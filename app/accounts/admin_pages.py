@@ -8,14 +8,15 @@ from fastapi import APIRouter, Form, Request
 from sqlalchemy import func, or_
 from sqlmodel import select
 
+from app.accounts.deps import AdminUser, CsrfProtected
+from app.accounts.roster_csv import USERNAME_RE
 from app.accounts.security import generate_password
 from app.accounts.service import NewCredential, create_user, may_reset_password
 from app.accounts.service import reset_password as give_new_password
 from app.core.exceptions import UserError
-from app.courses.roster_csv import USERNAME_RE
 from app.lab.prune import prune_takes
 from app.models import Course, Enrollment, Role, User
-from app.web.deps import AdminUser, CsrfProtected, ObjectId, SessionDep
+from app.web.deps import ObjectId, SessionDep
 from app.web.exports import credentials_data_url
 from app.web.render import flash, redirect, render
 

@@ -13,12 +13,13 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 
-from app.accounts.security import tokens_match
+from app.accounts.deps import load_login
 from app.accounts.tokens import check_token, count_cookie_request
 from app.core.exceptions import UserError
 from app.db import statement_session
 from app.models import Role, User
-from app.web.deps import SAFE_METHODS, SessionDep, SettingsDep, load_login
+from app.web.deps import SAFE_METHODS, SessionDep, SettingsDep
+from app.web.signing import tokens_match
 
 BEARER = {"WWW-Authenticate": "Bearer"}
 

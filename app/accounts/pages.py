@@ -7,6 +7,7 @@ from urllib.parse import urlsplit
 
 from fastapi import APIRouter, Form, Request
 
+from app.accounts.deps import CsrfProtected, CurrentUser, OptionalUser
 from app.accounts.security import (
     create_session,
     hash_password,
@@ -18,7 +19,7 @@ from app.accounts.security import (
 from app.accounts.sso import signs_in_elsewhere, sso_enabled
 from app.config import Settings
 from app.models import AuthSession, User, utcnow
-from app.web.deps import CsrfProtected, CurrentUser, OptionalUser, SessionDep, SettingsDep
+from app.web.deps import SessionDep, SettingsDep
 from app.web.i18n import normalise
 from app.web.render import LANG_COOKIE, SESSION_COOKIE, flash, redirect, render, set_cookie
 

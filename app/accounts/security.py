@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import hashlib
-import hmac
 import math
 import secrets
 import threading
@@ -11,7 +10,6 @@ from dataclasses import dataclass
 from datetime import timedelta
 from functools import lru_cache
 
-from itsdangerous import BadSignature, URLSafeSerializer
 from pwdlib import PasswordHash
 from pwdlib.hashers.argon2 import Argon2Hasher
 from sqlalchemy import delete, update
@@ -20,6 +18,7 @@ from sqlmodel import Session, select
 from app.config import Settings
 from app.db import lock_keys
 from app.models import ApiToken, AuthSession, LoginFailure, User, utcnow
+from app.web.signing import signed, token_digest, unsigned
 
 # OWASP's minimum for argon2id (m=19 MiB, t=2, p=1): ~30 ms per verify on 2 cores,
 # against ~250 ms for the library default, so a whole class can log in at once.
@@ -87,10 +86,6 @@ def password_problem(password: str, username: str = "") -> str | None:
 # --- sessions -----------------------------------------------------------------------------
 
 
-def token_digest(token: str) -> str:
-    return hashlib.sha256(token.encode()).hexdigest()
-
-
 def create_session(db: Session, user: User, settings: Settings) -> str:
     """Store a new session for ``user``; returns the raw token for the cookie."""
     token = secrets.token_urlsafe(32)
@@ -132,30 +127,6 @@ def revoke_credentials(db: Session, user_id: int, keep_session_id: int | None = 
         .where(ApiToken.user_id == user_id, ApiToken.revoked_at.is_(None))
         .values(revoked_at=utcnow())
     )
-
-
-def tokens_match(expected: str | None, given: str | None) -> bool:
-    return bool(expected) and bool(given) and hmac.compare_digest(expected, given)
-
-
-def signer(secret: str, purpose: str) -> URLSafeSerializer:
-    """Signs small JSON values for cookies (itsdangerous); ``purpose`` is the salt, so a
-    value signed for one cookie is never accepted by another."""
-    return URLSafeSerializer(secret, salt=f"gyrolab-{purpose}")
-
-
-def signed(value: object, secret: str, purpose: str) -> str:
-    return signer(secret, purpose).dumps(value)
-
-
-def unsigned(cookie: str | None, secret: str, purpose: str) -> object | None:
-    """The signed value, or None when the cookie is missing, altered or for another use."""
-    if not cookie:
-        return None
-    try:
-        return signer(secret, purpose).loads(cookie)
-    except BadSignature:
-        return None
 
 
 # --- login throttling (in the database: survives restarts, shared by workers) --------------

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from sqlmodel import Session, select
 
+from app.accounts.roster_csv import RosterProblem, RosterRow
 from app.accounts.security import (
     generate_password,
     hash_password,
@@ -13,7 +14,6 @@ from app.accounts.security import (
     revoke_credentials,
 )
 from app.core.exceptions import UserError
-from app.courses.roster_csv import RosterProblem, RosterRow
 from app.models import Course, Enrollment, Role, User, new_join_code
 
 

@@ -6,10 +6,11 @@ from typing import Annotated
 
 from fastapi import APIRouter, Form, Request
 
+from app.accounts.deps import CsrfProtected, CurrentUser
 from app.accounts.tokens import new_token, user_tokens
 from app.core.exceptions import UserError
 from app.models import ApiToken, utcnow
-from app.web.deps import CsrfProtected, CurrentUser, ObjectId, SessionDep
+from app.web.deps import ObjectId, SessionDep
 from app.web.render import flash, redirect, render
 
 router = APIRouter(prefix="/account/tokens", tags=["pages: tokens"], include_in_schema=False)

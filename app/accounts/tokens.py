@@ -16,8 +16,8 @@ from sqlalchemy import or_
 from sqlmodel import Session, select
 
 from app.accounts.rate_leases import LEASES, lease_statement
-from app.accounts.security import token_digest
 from app.models import ApiToken, AuthSession, User, utcnow
+from app.web.signing import token_digest
 
 LOGIN_TOKEN_LIFETIME = timedelta(hours=1)
 SCOPES = ("read", "upload")

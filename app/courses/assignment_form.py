@@ -21,8 +21,8 @@ from pydantic import (
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.core.readings import parse_decimal
-from app.courses.local_time import local_input_to_utc, utc_to_local_input
 from app.models import Assignment, InputMethod, LatePolicy, RevealTruth
+from app.web.local_time import local_input_to_utc, utc_to_local_input
 
 RECORDING_METHODS = (InputMethod.manual, InputMethod.csv, InputMethod.simulator)
 HANDOUT_LATITUDE_DEG = 39.93

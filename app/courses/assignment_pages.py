@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from fastapi import APIRouter, Request
 
+from app.accounts.deps import CsrfProtected, TeacherUser
 from app.core.exceptions import UserError
 from app.courses.assignment_form import form_values, parse_assignment_form
 from app.courses.deps import TeacherCourse
 from app.courses.pages import course_context
-from app.web.deps import CsrfProtected, FormDep, SessionDep, TeacherUser
+from app.web.deps import FormDep, SessionDep
 from app.web.render import flash, redirect, render
 
 router = APIRouter(prefix="/courses", tags=["pages: assignments"], include_in_schema=False)

@@ -7,9 +7,10 @@ from typing import Annotated
 
 from fastapi import Depends
 
+from app.accounts.deps import TeacherUser
 from app.core.exceptions import UserError
 from app.models import Course
-from app.web.deps import ObjectId, SessionDep, TeacherUser
+from app.web.deps import ObjectId, SessionDep
 
 
 def teachers_course(course_id: ObjectId, teacher: TeacherUser, db: SessionDep) -> Course:

@@ -6,9 +6,10 @@ from typing import Annotated
 
 from fastapi import APIRouter, Form, Request
 
+from app.accounts.deps import CsrfProtected, StudentUser
 from app.accounts.service import course_by_code, join_course
 from app.core.exceptions import UserError
-from app.web.deps import CsrfProtected, SessionDep, StudentUser
+from app.web.deps import SessionDep
 from app.web.render import flash, redirect, render
 
 router = APIRouter(tags=["pages: join"], include_in_schema=False)

@@ -7,6 +7,8 @@ from typing import Annotated
 from fastapi import APIRouter, File, Form, Request, UploadFile
 from sqlmodel import Session, select
 
+from app.accounts.deps import CsrfProtected, TeacherUser
+from app.accounts.roster_csv import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
 from app.accounts.service import (
     NewCredential,
     add_student,
@@ -20,12 +22,11 @@ from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.courses.assignment_form import form_values
 from app.courses.deps import TeacherCourse
-from app.courses.local_time import valid_zone_name, zone_choices
-from app.courses.roster_csv import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
 from app.lti.course_pages import lms_links
 from app.models import Assignment, Course, Enrollment, User
-from app.web.deps import CsrfProtected, ObjectId, SessionDep, TeacherUser
+from app.web.deps import ObjectId, SessionDep
 from app.web.exports import credentials_data_url
+from app.web.local_time import valid_zone_name, zone_choices
 from app.web.render import flash, redirect, render
 
 router = APIRouter(prefix="/courses", tags=["pages: courses"], include_in_schema=False)

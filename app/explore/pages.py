@@ -11,6 +11,7 @@ from fastapi import APIRouter, Query, Request
 from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
+from app.accounts.deps import CurrentUser
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.explore.scenarios import (
@@ -20,7 +21,6 @@ from app.explore.scenarios import (
     dwell_curve,
     heading_error_curves,
 )
-from app.web.deps import CurrentUser
 from app.web.i18n import translator
 from app.web.render import render, request_language
 

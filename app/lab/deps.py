@@ -7,9 +7,10 @@ from typing import Annotated
 
 from fastapi import Depends
 
+from app.accounts.deps import CurrentUser
 from app.lab.service import own_session, require_method
 from app.models import InputMethod, LabSession
-from app.web.deps import CurrentUser, ObjectId, SessionDep
+from app.web.deps import ObjectId, SessionDep
 
 
 def owned_session(session_id: ObjectId, user: CurrentUser, db: SessionDep) -> LabSession:

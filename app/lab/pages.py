@@ -12,6 +12,7 @@ from markupsafe import Markup
 from sqlalchemy.exc import OperationalError
 from sqlmodel import Session, select
 
+from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS
@@ -54,12 +55,7 @@ from app.models import (
 )
 from app.review import grading
 from app.review.service import auto_check, session_truth, truth_visible
-from app.web.deps import (
-    MAX_ID,
-    CsrfProtected,
-    CurrentUser,
-    SessionDep,
-)
+from app.web.deps import MAX_ID, SessionDep
 from app.web.i18n import is_known, translator
 from app.web.render import (
     csrf_token_for,

@@ -8,11 +8,12 @@ from typing import Annotated
 from fastapi import APIRouter, Form, Request
 from sqlmodel import Session
 
+from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
 from app.lab import partners
 from app.lab.deps import OwnedSession
 from app.models import LabSession, User
-from app.web.deps import CsrfProtected, CurrentUser, SessionDep
+from app.web.deps import SessionDep
 from app.web.render import flash, redirect
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)

@@ -12,6 +12,7 @@ from fastapi import APIRouter, Body, Form, Request
 from fastapi.responses import Response, StreamingResponse
 from pydantic import BaseModel, Field, StrictFloat, StrictInt
 
+from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
 from app.core.readings import Readings, parse_readings_csv
@@ -24,7 +25,7 @@ from app.lab.store import POSITIONS, check_position, set_symmetric_order
 from app.lab.submissions import submit
 from app.lab.trim import trim_position
 from app.models import InputMethod, LabSession
-from app.web.deps import CsrfProtected, CurrentUser, ObjectId, ReadOnlySessionDep, SessionDep
+from app.web.deps import ObjectId, ReadOnlySessionDep, SessionDep
 from app.web.exports import Selection, attachment, readings_csv, session_json
 from app.web.render import flash, redirect
 from app.web.work_slots import held_while_streaming

@@ -21,10 +21,10 @@ from __future__ import annotations
 from sqlalchemy import and_, bindparam, exists, or_, select
 
 from app.accounts.rate_leases import LEASES, lease_statement
-from app.accounts.security import token_digest
 from app.db import get_engine, reader, statement_session
 from app.lab.result_cache import CACHE, KEY_COLUMNS, NOT_IN_RESULTS, CachedResults, digest_rows
 from app.models import ApiToken, Assignment, LabSession, SessionMember, Take, User, utcnow
+from app.web.signing import token_digest
 
 READ_SCOPE = "read"
 

@@ -25,6 +25,7 @@ from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from sqlalchemy.exc import DBAPIError
 from starlette.concurrency import run_in_threadpool
 
+from app.accounts.deps import login_for_cookie
 from app.config import get_settings
 from app.core.exceptions import UserError
 from app.db import database_busy, lock_rows, read_session, write_session
@@ -38,7 +39,7 @@ from app.lab.sim import (
 )
 from app.lab.store import PARTS, POSITIONS
 from app.models import InputMethod, LabSession, User
-from app.web.deps import ObjectId, login_for_cookie
+from app.web.deps import ObjectId
 from app.web.errors import message_for
 from app.web.render import SESSION_COOKIE, request_language
 from app.web.write_admission import write_slot

@@ -6,12 +6,13 @@ from __future__ import annotations
 from fastapi import APIRouter, Request
 from sqlmodel import select
 
+from app.accounts.deps import AdminUser, CsrfProtected
 from app.core.exceptions import UserError
 from app.lti import keys
 from app.lti.platforms import PlatformFields, add_platform, deployments_of
 from app.lti.registration import new_registration_link
 from app.models import LtiContext, LtiKey, LtiPlatform
-from app.web.deps import AdminUser, CsrfProtected, FormDep, ObjectId, SessionDep
+from app.web.deps import FormDep, ObjectId, SessionDep
 from app.web.render import flash, redirect, render
 
 router = APIRouter(prefix="/admin/lti", tags=["pages: admin"], include_in_schema=False)

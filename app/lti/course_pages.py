@@ -9,12 +9,13 @@ from __future__ import annotations
 from fastapi import APIRouter, Request
 from sqlmodel import Session, select
 
+from app.accounts.deps import CsrfProtected, TeacherUser
 from app.core.exceptions import UserError
 from app.lti import grades, roster
 from app.lti.provisioning import assignment_in
 from app.models import Assignment, Course, LtiContext, LtiPlatform, LtiResourceLink
 from app.review.deps import TeacherAssignment
-from app.web.deps import CsrfProtected, FormDep, ObjectId, SessionDep, TeacherUser
+from app.web.deps import FormDep, ObjectId, SessionDep
 from app.web.render import flash, redirect, render
 
 router = APIRouter(tags=["pages: lti"], include_in_schema=False)

@@ -9,6 +9,7 @@ from typing import Annotated
 from fastapi import APIRouter, Form, Path, Query, Request
 from fastapi.responses import JSONResponse, Response
 
+from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
 from app.lab.deps import OwnedSession
 from app.models import DISCUSSION_MAX
@@ -16,7 +17,7 @@ from app.reports.class_zip import find_job, job_state, start_class_zip
 from app.reports.discussion import save_discussion
 from app.reports.service import report_response
 from app.review.deps import ReviewableSession, TeacherAssignment
-from app.web.deps import CsrfProtected, CurrentUser, SessionDep
+from app.web.deps import SessionDep
 from app.web.exports import attachment
 from app.web.i18n import translator
 from app.web.render import flash, redirect, render, request_language

@@ -8,7 +8,6 @@ import base64
 from dataclasses import dataclass
 
 from app import __version__
-from app.courses.local_time import zone
 from app.lab.chart_texts import fit_summary, readings_summary
 from app.lab.pages import error_text
 from app.lab.store import PARTS
@@ -18,6 +17,7 @@ from app.reports.figures import fit_svg, readings_svg
 from app.review.service import heading_error
 from app.web.exports import Selection, readings_csv
 from app.web.i18n import format_datetime, translator
+from app.web.local_time import zone
 from app.web.render import templates
 
 CSS = (TEMPLATES_DIR / "reports" / "lab_report.css").read_text(encoding="utf-8")

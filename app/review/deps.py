@@ -9,9 +9,10 @@ from typing import Annotated
 from fastapi import Depends
 from sqlmodel import Session
 
+from app.accounts.deps import TeacherUser
 from app.core.exceptions import UserError
 from app.models import Assignment, Course, LabSession, User
-from app.web.deps import ObjectId, SessionDep, TeacherUser
+from app.web.deps import ObjectId, SessionDep
 
 
 def teachers_assignment(db: Session, teacher: User, assignment_id: int) -> Assignment:

@@ -9,8 +9,8 @@ from datetime import datetime
 from fastapi import APIRouter, BackgroundTasks, Request
 from sqlmodel import select
 
+from app.accounts.deps import CsrfProtected
 from app.core.exceptions import UserError
-from app.courses.local_time import local_input_to_utc, utc_to_local_input
 from app.lab import partners
 from app.lab.pages import UNIT_NAMES, session_view
 from app.lti import grades as lms_grades
@@ -18,8 +18,9 @@ from app.models import Attempt, SessionStatus, User
 from app.review import grading
 from app.review.deps import ReviewableSession, TeacherAssignment
 from app.review.service import auto_check, session_truth
-from app.web.deps import CsrfProtected, FormDep, SessionDep
+from app.web.deps import FormDep, SessionDep
 from app.web.i18n import translator
+from app.web.local_time import local_input_to_utc, utc_to_local_input
 from app.web.render import flash, redirect, render, request_language
 
 router = APIRouter(tags=["pages: review"], include_in_schema=False)

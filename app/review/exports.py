@@ -15,10 +15,10 @@ from datetime import UTC
 from fastapi.responses import StreamingResponse
 from sqlmodel import Session
 
-from app.courses.local_time import zone
 from app.models import Assignment, Course
 from app.review.service import StudentRow, class_rows
 from app.web.exports import SubmittedWork, assignment_zip, attachment, csv_table
+from app.web.local_time import zone
 from app.web.work_slots import held_while_streaming
 
 COLUMNS = (

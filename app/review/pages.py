@@ -7,6 +7,7 @@ from typing import Annotated
 
 from fastapi import APIRouter, File, Form, Request, UploadFile
 
+from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.allan_summary import dwell_lines, note_lines, term_rows
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
@@ -19,7 +20,7 @@ from app.lti.grades import passback_state
 from app.review.deps import TeacherAssignment
 from app.review.exports import class_table_response, class_zip_response
 from app.review.service import class_rows, status_counts
-from app.web.deps import CsrfProtected, CurrentUser, FormDep, SessionDep
+from app.web.deps import FormDep, SessionDep
 from app.web.i18n import translator
 from app.web.render import flash, redirect, render, request_language
 from app.web.work_slots import pool

@@ -5,10 +5,11 @@ from __future__ import annotations
 from fastapi import APIRouter, Request
 from sqlmodel import select
 
+from app.accounts.deps import CurrentUser
 from app.lab.partners import in_sessions_of
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User
 from app.review import grading
-from app.web.deps import CurrentUser, SessionDep
+from app.web.deps import SessionDep
 from app.web.render import redirect, render
 
 router = APIRouter(tags=["pages: home"], include_in_schema=False)

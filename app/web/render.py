@@ -10,9 +10,7 @@ from fastapi.responses import HTMLResponse, RedirectResponse
 from fastapi.templating import Jinja2Templates
 
 from app import __version__
-from app.accounts.security import signed, unsigned
 from app.config import get_settings
-from app.courses.local_time import zone
 from app.paths import TEMPLATES_DIR
 from app.web.i18n import (
     LANGUAGE_NAMES,
@@ -23,6 +21,8 @@ from app.web.i18n import (
     normalise,
     translator,
 )
+from app.web.local_time import zone
+from app.web.signing import signed, unsigned
 
 SESSION_COOKIE = "gyrolab_session"
 CSRF_COOKIE = "gyrolab_csrf"
