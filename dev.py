@@ -3,8 +3,9 @@
 
     python3 dev.py run    create .venv, install, migrate, add demo data, serve on 127.0.0.1:8000
     python3 dev.py test   the same set-up plus test extras, Debian's Chromium (and in CI,
-                          PostgreSQL), then ruff (lint and format check) and every test on
-                          SQLite and PostgreSQL, in parallel on every core
+                          PostgreSQL), then ruff (lint and format check), the layers
+                          contract (import-linter) and every test on SQLite and
+                          PostgreSQL, in parallel
     python3 dev.py quick  the quick loop: tests without browser, server, PDF or Monte Carlo,
                           on SQLite only (under a minute)
 
@@ -146,9 +147,9 @@ def main(argv: list[str]) -> int:
     # (2 cores: the suite 295 s with 2 workers, 266 s with 3)
     pytest += ["-n", str((os.cpu_count() or 1) + 1)]
     ensure_test_programs()
-    for check in (["check", "."], ["format", "--check", "."]):
-        say(f"ruff {' '.join(check)}")
-        if subprocess.call([str(BIN / "ruff"), *check]) != 0:
+    for check in (["ruff", "check", "."], ["ruff", "format", "--check", "."], ["lint-imports"]):
+        say(" ".join(check))
+        if subprocess.call([str(BIN / check[0]), *check[1:]]) != 0:
             return 1
     return subprocess.call([*pytest, *rest])
 

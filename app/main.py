@@ -25,6 +25,8 @@ from app.config import get_settings
 from app.courses import assignment_pages, join_pages
 from app.courses import pages as course_pages
 from app.explore import pages as explore_pages
+from app.home import pages as home
+from app.lab import admin_pages as lab_admin_pages
 from app.lab import api, partner_pages, record_pages, stream
 from app.lab import pages as lab_pages
 from app.lti import admin_pages as lti_admin_pages
@@ -38,7 +40,6 @@ from app.review import api as review_api
 from app.review import desk_pages
 from app.review import pages as review_pages
 from app.serving_lock import hold_while_serving, release
-from app.web import home
 from app.web.errors import register_error_handlers
 from app.web.headers import SecurityHeaders
 from app.web.write_admission import WriteAdmission
@@ -176,6 +177,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.include_router(course_pages.router)
     app.include_router(join_pages.router)
     app.include_router(admin_pages.router)
+    app.include_router(lab_admin_pages.router)
     app.include_router(assignment_pages.router)
     app.include_router(lab_pages.router)
     app.include_router(record_pages.router)

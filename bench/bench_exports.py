@@ -34,14 +34,9 @@ def _measure(kind: str, session_id: int, attempt_id: int, queue) -> None:
     from sqlmodel import select
 
     from app.db import read_session
+    from app.lab.exports import Selection, readings_csv, session_json
     from app.models import Attempt, SampleChunk
-    from app.web.exports import (
-        Selection,
-        SubmittedWork,
-        assignment_zip,
-        readings_csv,
-        session_json,
-    )
+    from app.review.exports import SubmittedWork, assignment_zip
 
     with read_session() as db:  # warm imports and the connection outside the measurement
         attempt = db.get(Attempt, attempt_id)

@@ -11,11 +11,11 @@ import pytest
 from sqlmodel import select
 
 from app.db import read_session
+from app.lab.exports import Selection, readings_csv, session_json
 from app.lab.results import current_data, quality_flags
 from app.lab.samples import unpack
 from app.lab.store import load_samples
 from app.models import LabSession, SampleChunk, Take
-from app.web.exports import Selection, readings_csv, session_json
 from tests.factories import API, handout, new_api_session, token_for
 
 

@@ -26,10 +26,10 @@ from app.cli.main import main
 from app.core.exceptions import UserError
 from app.core.readings import parse_readings_csv
 from app.db import read_session
+from app.lab.exports import Selection, session_json
 from app.lab.results import current_data, quality_flags
 from app.lab.store import load_samples
 from app.models import LabSession, Take
-from app.web.exports import Selection, session_json
 from tests.factories import PRACTICE, token_for
 from tests.instrument_streams import dsp1750_stream, dsp3000_lines
 

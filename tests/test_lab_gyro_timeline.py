@@ -27,8 +27,8 @@ from app.lab.sim import (
     table_errors,
     turn_on_bias,
 )
+from app.lab.truth import draw_truth
 from app.models import Assignment, LabSession
-from app.review.service import draw_truth
 
 
 def session(seed: int = 1, preset: str = "teaching-fog", **fields) -> LabSession:

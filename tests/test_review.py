@@ -14,8 +14,8 @@ import pytest
 from sqlmodel import select
 
 from app.db import read_session, write_session
+from app.lab.truth import Truth, auto_check, draw_truth, heading_error
 from app.models import Assignment, Attempt, LabSession, Role, utcnow
-from app.review.service import Truth, auto_check, draw_truth, heading_error
 from tests.factories import (
     HEADING,
     browser,

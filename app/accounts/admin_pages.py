@@ -14,11 +14,10 @@ from app.accounts.security import generate_password
 from app.accounts.service import NewCredential, create_user, may_reset_password
 from app.accounts.service import reset_password as give_new_password
 from app.core.exceptions import UserError
-from app.lab.prune import prune_takes
 from app.models import Course, Enrollment, Role, User
 from app.web.deps import ObjectId, SessionDep
 from app.web.exports import credentials_data_url
-from app.web.render import flash, redirect, render
+from app.web.render import render
 
 router = APIRouter(prefix="/admin", tags=["pages: admin"], include_in_schema=False)
 PAGE_SIZE = 200
@@ -122,26 +121,3 @@ def credentials_page(request: Request, credential: NewCredential, *, reset: bool
         "csv_name": f"{credential.username}-initial-password.csv",
     }
     return render(request, "admin/credentials.html", context)
-
-
-@router.post("/prune", dependencies=[CsrfProtected])
-def prune_old_takes(
-    request: Request,
-    admin: AdminUser,
-    db: SessionDep,
-    days: Annotated[int, Form(ge=1, le=3650)] = 30,
-):
-    """Remove re-recordings superseded more than ``days`` ago that no attempt refers to."""
-    pruned = prune_takes(db, days)
-    db.commit()
-    response = redirect("/admin/accounts")
-    flash(
-        response,
-        request,
-        "admin.pruned",
-        "success",
-        n=pruned.takes,
-        mb=f"{pruned.bytes / 1e6:.1f}",
-        days=days,
-    )
-    return response

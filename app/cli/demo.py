@@ -14,8 +14,8 @@ from app.core.solve import solve_heading
 from app.lab.sim import SimulatedTake, north_dial_deg, set_gyro_clock
 from app.lab.store import store_take
 from app.lab.submissions import submit
+from app.lab.truth import draw_truth
 from app.models import Assignment, Course, InputMethod, LabSession, Role, User
-from app.review.service import draw_truth
 
 DEMO_TEACHER = ("teacher", "Demo Teacher 王老师")
 DEMO_STUDENTS = (

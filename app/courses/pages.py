@@ -22,8 +22,7 @@ from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.courses.assignment_form import form_values
 from app.courses.deps import TeacherCourse
-from app.lti.course_pages import lms_links
-from app.models import Assignment, Course, Enrollment, User
+from app.models import Assignment, Course, Enrollment, LtiContext, LtiPlatform, User
 from app.web.deps import ObjectId, SessionDep
 from app.web.exports import credentials_data_url
 from app.web.local_time import valid_zone_name, zone_choices
@@ -32,6 +31,12 @@ from app.web.render import flash, redirect, render
 router = APIRouter(prefix="/courses", tags=["pages: courses"], include_in_schema=False)
 
 NameField = Annotated[str, Form(max_length=200)]
+
+
+def lms_links(db: Session, course: Course) -> list[dict]:
+    """The LMS courses linked to ``course``, for its page."""
+    rows = db.exec(select(LtiContext).where(LtiContext.course_id == course.id)).all()
+    return [{"context": row, "platform": db.get(LtiPlatform, row.platform_id)} for row in rows]
 
 
 def enrolled_student(db: Session, course: Course, student_id: int) -> User:

@@ -16,8 +16,10 @@ from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.core.units import EARTH_RATE_DEG_H, UNITS
+from app.courses import deadlines
 from app.lab import partners
 from app.lab import sessions as labsessions
+from app.lab.attempts import comments_of, mark_seen, released_grade, shown_to_student
 from app.lab.chart_texts import (
     allan_text,
     compass_summary,
@@ -41,6 +43,7 @@ from app.lab.sim import (
     warm_up_state,
 )
 from app.lab.store import PARTS, take_history
+from app.lab.truth import auto_check, session_truth, truth_visible
 from app.models import (
     Assignment,
     Attempt,
@@ -53,8 +56,6 @@ from app.models import (
     User,
     utcnow,
 )
-from app.review import grading
-from app.review.service import auto_check, session_truth, truth_visible
 from app.web.deps import MAX_ID, SessionDep
 from app.web.i18n import is_known, translator
 from app.web.render import (
@@ -249,7 +250,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         "shared": len(group["members"]) > 1,
     }
     editable = is_editable(session)
-    if grading.mark_seen(db, attempts):  # the dashboard's notice has been read
+    if mark_seen(db, attempts):  # the dashboard's notice has been read
         try:
             db.commit()
         except OperationalError:  # a read-only database: the notice simply stays
@@ -260,7 +261,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         "lab/session.html",
         {
             **session_view(db, session, assignment, attempts, _, editable=editable),
-            "due": grading.due_for(db, assignment, session.owner_id),
+            "due": deadlines.due_for(db, assignment, session.owner_id),
             "timezone": course.timezone if course else None,
             **group,
             "history": take_history(db, session.id),
@@ -333,7 +334,7 @@ def session_view(
         for part in PARTS
     }
     latest = attempts[-1] if attempts else None
-    given = latest is not None and (reviewer or grading.shown_to_student(latest))
+    given = latest is not None and (reviewer or shown_to_student(latest))
     visible = truth_visible(session, assignment, len(attempts))
     truth = session_truth(db, session, assignment) if visible else None
     check = None
@@ -363,13 +364,13 @@ def session_view(
         "check": check,
         "feedback": latest.feedback if given else "",
         "feedback_attempt": latest if given else None,
-        "position_feedback": grading.comments_of(latest) if given else {},
-        "grade": grading.released_grade(session, attempts, assignment) or None,
+        "position_feedback": comments_of(latest) if given else {},
+        "grade": released_grade(session, attempts, assignment) or None,
         "attempt_results": [(a, json.loads(a.results_json)) for a in attempts],
         "attempt_reviews": {
-            a.number: {"feedback": a.feedback, "comments": grading.comments_of(a)}
+            a.number: {"feedback": a.feedback, "comments": comments_of(a)}
             for a in attempts
-            if (reviewer or grading.shown_to_student(a)) and (a.feedback or a.feedback_positions)
+            if (reviewer or shown_to_student(a)) and (a.feedback or a.feedback_positions)
         },
     }
 

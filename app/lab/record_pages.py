@@ -18,6 +18,7 @@ from app.core.jsonsafe import json_safe
 from app.core.readings import Readings, parse_readings_csv
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.deps import ManualSession, OwnedSession, SimulatorSession
+from app.lab.exports import Selection, readings_csv, session_json
 from app.lab.result_cache import results_of
 from app.lab.service import record_positions, recordable_session
 from app.lab.sim import nominal_angle, position_count, wait_for_gyro, warm_up_state
@@ -26,7 +27,7 @@ from app.lab.submissions import submit
 from app.lab.trim import trim_position
 from app.models import InputMethod, LabSession
 from app.web.deps import ObjectId, ReadOnlySessionDep, SessionDep
-from app.web.exports import Selection, attachment, readings_csv, session_json
+from app.web.exports import attachment
 from app.web.render import flash, redirect
 from app.web.work_slots import held_while_streaming
 

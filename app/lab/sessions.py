@@ -13,8 +13,8 @@ from app.core.presets import PRESETS
 from app.db import lock_rows
 from app.lab.partners import ensure_partner_code, member_map
 from app.lab.sim import new_truth
+from app.lab.truth import draw_truth
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User, utcnow
-from app.review.service import draw_truth
 
 
 def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignment:

@@ -10,6 +10,7 @@ from sqlmodel import Session, select
 from app import __version__
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
+from app.courses.deadlines import due_for
 from app.lab.result_cache import cached_results
 from app.lab.results import results_json
 from app.lab.store import current_takes
@@ -21,7 +22,6 @@ from app.models import (
     SessionStatus,
     utcnow,
 )
-from app.review.grading import due_for
 
 
 def submit(db: Session, session: LabSession) -> Attempt:

@@ -11,20 +11,15 @@ from sqlmodel import Session, select
 
 from app.accounts.deps import CsrfProtected, TeacherUser
 from app.core.exceptions import UserError
+from app.courses.pages import lms_links
 from app.lti import grades, roster
 from app.lti.provisioning import assignment_in
-from app.models import Assignment, Course, LtiContext, LtiPlatform, LtiResourceLink
+from app.models import Assignment, Course, LtiContext, LtiResourceLink
 from app.review.deps import TeacherAssignment
 from app.web.deps import FormDep, ObjectId, SessionDep
 from app.web.render import flash, redirect, render
 
 router = APIRouter(tags=["pages: lti"], include_in_schema=False)
-
-
-def lms_links(db: Session, course: Course) -> list[dict]:
-    """The LMS courses linked to ``course``, for its page."""
-    rows = db.exec(select(LtiContext).where(LtiContext.course_id == course.id)).all()
-    return [{"context": row, "platform": db.get(LtiPlatform, row.platform_id)} for row in rows]
 
 
 @router.post("/courses/{course_id}/lti/sync", dependencies=[CsrfProtected])

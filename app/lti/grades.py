@@ -25,7 +25,7 @@ from pylti1p3.assignments_grades import AssignmentsGradesService
 from pylti1p3.exception import LtiException
 from pylti1p3.grade import Grade
 from pylti1p3.lineitem import LineItem
-from sqlalchemy import func, update
+from sqlalchemy import update
 from sqlalchemy.exc import DBAPIError
 from sqlmodel import Session, col, select
 from starlette.concurrency import run_in_threadpool
@@ -45,14 +45,13 @@ from app.models import (
     Assignment,
     Attempt,
     ExternalIdentity,
-    LabSession,
     LtiContext,
     LtiGradePost,
     LtiPlatform,
     LtiResourceLink,
-    SessionMember,
     utcnow,
 )
+from app.review.lms_outbox import anything_queued, sender_doorbell
 from app.web.errors import report_storage_fault
 
 log = logging.getLogger("gyrolab.lti")
@@ -66,7 +65,6 @@ LONGEST_PAUSE_S = 3600
 CLAIM_S = 300  # a claimed post is retried after this if its sender died
 SENDER_PERIOD_S = 60
 BATCH = 200
-MAX_COMMENT = 4000
 
 
 def line_item(assignment_id: int | None, title: str, maximum: float) -> LineItem:
@@ -83,46 +81,6 @@ def line_item(assignment_id: int | None, title: str, maximum: float) -> LineItem
 def pause_after(tries: int) -> timedelta:
     """30 s, 60 s, 2 min, 4 min … at most an hour, after the ``tries``-th failure."""
     return timedelta(seconds=min(FIRST_PAUSE_S * 2 ** max(tries - 1, 0), LONGEST_PAUSE_S))
-
-
-def queue_release(db: Session, session: LabSession, attempt: Attempt) -> int:
-    """Queue the released ``attempt``'s grade for every LMS student of ``session`` whose
-    assignment is placed in an LMS; returns how many posts were queued."""
-    if session.assignment_id is None or attempt.points is None:
-        return 0
-    links = db.exec(
-        select(LtiResourceLink).where(LtiResourceLink.assignment_id == session.assignment_id)
-    ).all()
-    if not links:
-        return 0
-    assignment = db.get(Assignment, session.assignment_id)
-    members = {session.owner_id} | set(
-        db.exec(select(SessionMember.user_id).where(SessionMember.session_id == session.id))
-    )
-    queued = 0
-    for link in links:
-        platform = db.get(LtiPlatform, link.platform_id)
-        known = set(
-            db.exec(
-                select(ExternalIdentity.user_id).where(
-                    ExternalIdentity.issuer == platform.issuer,
-                    col(ExternalIdentity.user_id).in_(members),
-                )
-            )
-        )
-        for student_id in sorted(known):
-            db.add(
-                LtiGradePost(
-                    attempt_id=attempt.id,
-                    student_id=student_id,
-                    link_id=link.id,
-                    score=float(attempt.points),
-                    maximum=float(assignment.max_points),
-                    comment=(attempt.feedback or "")[:MAX_COMMENT],
-                )
-            )
-            queued += 1
-    return queued
 
 
 def _claim(post_id: int, now: datetime) -> bool:
@@ -289,76 +247,10 @@ def send_now(assignment_id: int) -> dict[str, int]:
     return send_due(only=ids) if ids else {"sent": 0, "failed": 0}
 
 
-@dataclass
-class PassbackState:
-    """What the teacher sees of an assignment's grade posts."""
-
-    placed: bool  # the assignment is placed in an LMS
-    sent: int = 0
-    waiting: int = 0
-    last_error: str | None = None
-    next_try_at: datetime | None = None
-
-
-def passback_state(db: Session, assignment_id: int) -> PassbackState:
-    placed = db.exec(
-        select(LtiResourceLink.id).where(LtiResourceLink.assignment_id == assignment_id)
-    ).first()
-    if placed is None:
-        return PassbackState(False)
-    rows = db.exec(
-        select(LtiGradePost.status, func.count(LtiGradePost.id))
-        .join(LtiResourceLink, col(LtiResourceLink.id) == LtiGradePost.link_id)
-        .where(LtiResourceLink.assignment_id == assignment_id)
-        .group_by(LtiGradePost.status)
-    ).all()
-    counts = dict(rows)
-    failing = db.exec(
-        select(LtiGradePost)
-        .join(LtiResourceLink, col(LtiResourceLink.id) == LtiGradePost.link_id)
-        .where(
-            LtiResourceLink.assignment_id == assignment_id,
-            LtiGradePost.status == "pending",
-            col(LtiGradePost.last_error).is_not(None),
-        )
-        .order_by(col(LtiGradePost.next_try_at))
-    ).first()
-    return PassbackState(
-        True,
-        sent=counts.get("sent", 0),
-        waiting=counts.get("pending", 0),
-        last_error=failing.last_error if failing else None,
-        next_try_at=failing.next_try_at if failing else None,
-    )
-
-
-def anything_queued() -> bool:
-    with read_session() as db:
-        return (
-            db.exec(
-                select(LtiGradePost.id).where(LtiGradePost.status == "pending").limit(1)
-            ).first()
-            is not None
-        )
-
-
-_waker: tuple[asyncio.AbstractEventLoop, asyncio.Event] | None = None
-
-
-def wake_sender() -> None:
-    """Ask this worker's sender to look now (after a release; callable from any thread).
-    The sender works outside the request, so the release's transaction has ended."""
-    if _waker is not None:
-        loop, event = _waker
-        loop.call_soon_threadsafe(event.set)
-
-
 async def run_sender(period_s: float = SENDER_PERIOD_S) -> None:
     """The worker's loop: send what is due every ``period_s`` or when woken, and tidy the
     handshake values."""
-    global _waker
-    event = asyncio.Event()
-    _waker = (asyncio.get_running_loop(), event)
+    event = sender_doorbell()
     while True:
         with suppress(TimeoutError):
             await asyncio.wait_for(event.wait(), period_s)

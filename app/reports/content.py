@@ -15,12 +15,12 @@ from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
+from app.lab.attempts import comments_of, grade_text, shown_to_student
+from app.lab.exports import Selection, solve_takes
 from app.lab.partners import members_of
 from app.lab.results import PartResult
+from app.lab.truth import AutoCheck, Truth, auto_check, session_truth, truth_visible
 from app.models import Assignment, Attempt, Course, LabSession, User, utcnow
-from app.review import grading
-from app.review.service import AutoCheck, Truth, auto_check, session_truth, truth_visible
-from app.web.exports import Selection, solve_takes
 
 FULL_TABLE_LIMIT = 50  # readings per position printed in full; longer records are attached
 
@@ -106,9 +106,9 @@ def build_report(db: Session, session: LabSession, attempt_number: int | None = 
         report.truth = session_truth(db, session, assignment, takes)
         if assignment is not None and attempt is not None:
             report.check = auto_check(json.loads(attempt.results_json), report.truth, assignment)
-    if attempt is not None and grading.shown_to_student(attempt):
+    if attempt is not None and shown_to_student(attempt):
         report.feedback = attempt.feedback
-        report.comments = grading.comments_of(attempt)
+        report.comments = comments_of(attempt)
         if attempt.released_at is not None:
-            report.grade = grading.grade_text(attempt, assignment)
+            report.grade = grade_text(attempt, assignment)
     return report

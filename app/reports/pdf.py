@@ -9,13 +9,13 @@ from dataclasses import dataclass
 
 from app import __version__
 from app.lab.chart_texts import fit_summary, readings_summary
+from app.lab.exports import Selection, readings_csv
 from app.lab.pages import error_text
 from app.lab.store import PARTS
+from app.lab.truth import heading_error
 from app.paths import TEMPLATES_DIR
 from app.reports.content import Report
 from app.reports.figures import fit_svg, readings_svg
-from app.review.service import heading_error
-from app.web.exports import Selection, readings_csv
 from app.web.i18n import format_datetime, translator
 from app.web.local_time import zone
 from app.web.render import templates

@@ -10,10 +10,10 @@ from pydantic import BaseModel
 from sqlmodel import select
 
 from app.accounts.api_auth import TeacherCaller
+from app.lab.attempts import grade_text
 from app.models import Assignment, Course
 from app.review.deps import teachers_assignment
 from app.review.exports import class_table_response
-from app.review.grading import grade_text
 from app.review.service import class_rows
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS

@@ -11,13 +11,14 @@ from sqlmodel import select
 
 from app.accounts.deps import CsrfProtected
 from app.core.exceptions import UserError
+from app.courses import deadlines
 from app.lab import partners
+from app.lab.attempts import comments_of, grade_text, latest_attempt, rubric_of, rubric_scores_of
 from app.lab.pages import UNIT_NAMES, session_view
-from app.lti import grades as lms_grades
+from app.lab.truth import auto_check, session_truth
 from app.models import Attempt, SessionStatus, User
-from app.review import grading
+from app.review import grading, lms_outbox
 from app.review.deps import ReviewableSession, TeacherAssignment
-from app.review.service import auto_check, session_truth
 from app.web.deps import FormDep, SessionDep
 from app.web.i18n import translator
 from app.web.local_time import local_input_to_utc, utc_to_local_input
@@ -43,17 +44,17 @@ def desk_view(request: Request, target, db) -> dict:
     truth = session_truth(db, session, assignment)
     latest = attempts[-1] if attempts else None
     check = auto_check(json.loads(latest.results_json), truth, assignment) if latest else None
-    due = grading.due_for(db, assignment, session.owner_id)
+    due = deadlines.due_for(db, assignment, session.owner_id)
     view.update(
         {
             "truth": truth,
             "check": check,
             "latest": latest,
             "feedback": latest.feedback if latest else "",
-            "position_feedback": grading.comments_of(latest),
-            "rubric": grading.rubric_of(assignment),
-            "rubric_scores": grading.rubric_scores_of(latest),
-            "grade": grading.grade_text(latest, assignment),
+            "position_feedback": comments_of(latest),
+            "rubric": rubric_of(assignment),
+            "rubric_scores": rubric_scores_of(latest),
+            "grade": grade_text(latest, assignment),
             "student": db.get(User, session.owner_id),
             "members": partners.members_of(db, session),
             "course": course,
@@ -115,7 +116,7 @@ def save_review(
     ``action`` = save | return | release; ``go`` = next | previous after saving."""
     session, assignment = target.session, target.assignment
     response = redirect(f"/review/sessions/{session.id}")
-    attempt = grading.latest_attempt(db, session.id)
+    attempt = latest_attempt(db, session.id)
     action = str(form.get("action", "save"))
     try:
         if attempt is None:
@@ -127,9 +128,9 @@ def save_review(
         if action == "return":
             grading.return_for_revision(session, attempt)
         elif action == "release":
-            grading.release(session, attempt)
-            if lms_grades.queue_release(db, session, attempt):
-                background.add_task(lms_grades.wake_sender)
+            queued = grading.release(db, session, attempt)
+            if queued:
+                background.add_task(lms_outbox.wake_sender)
     except UserError as problem:
         db.rollback()
         if attempt is None or session.status == SessionStatus.graded:  # no form to fill
@@ -174,7 +175,7 @@ def save_extension(request: Request, target: ReviewableSession, db: SessionDep, 
         except ValueError:
             flash(response, request, "assignment.bad_due", "error")
             return response
-    grading.set_extension(db, assignment, session.owner_id, due)
+    deadlines.set_extension(db, assignment, session.owner_id, due)
     db.commit()
     flash(
         response,
@@ -205,8 +206,8 @@ def release_selected(
             continue
     released, skipped = grading.bulk_release(db, assignment, chosen[:10_000])
     db.commit()
-    if released and lms_grades.anything_queued():
-        background.add_task(lms_grades.wake_sender)
+    if released and lms_outbox.anything_queued():
+        background.add_task(lms_outbox.wake_sender)
     response = redirect(f"/courses/{course.id}/assignments/{assignment.id}")
     kind = "success" if released and not skipped else ("warning" if released else "error")
     flash(response, request, "review.bulk_released", kind, released=released, skipped=skipped)

@@ -8,16 +8,21 @@ class table keeps stable English column names and UTC times for scripts.
 
 from __future__ import annotations
 
+import json
 import math
-from collections.abc import Callable
+import tempfile
+import zipfile
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
 from datetime import UTC
 
 from fastapi.responses import StreamingResponse
 from sqlmodel import Session
 
-from app.models import Assignment, Course
+from app.lab.exports import Selection, readings_csv, session_json
+from app.models import Assignment, Attempt, Course
 from app.review.service import StudentRow, class_rows
-from app.web.exports import SubmittedWork, assignment_zip, attachment, csv_table
+from app.web.exports import ZIP_BLOCK, attachment, csv_table, safe_name
 from app.web.local_time import zone
 from app.web.work_slots import held_while_streaming
 
@@ -139,3 +144,52 @@ def class_zip_response(
         media_type="application/zip",
         headers={"Content-Disposition": attachment([course.name, assignment.title], "zip")},
     )
+
+
+# --- the class's zip ------------------------------------------------------------------------
+
+
+@dataclass
+class SubmittedWork:
+    """One student's submitted work in an assignment zip."""
+
+    username: str
+    session_id: int
+    attempts: list[Attempt]
+
+
+def attempts_summary(attempts: list[Attempt]) -> list[dict]:
+    return [
+        {
+            "number": a.number,
+            "submitted_at": a.submitted_at.isoformat(),
+            "late": a.late,
+            "results": json.loads(a.results_json),
+        }
+        for a in attempts
+    ]
+
+
+def assignment_zip(class_table: list[list], work: list[SubmittedWork]) -> Iterator[bytes]:
+    """``class.csv`` and, per student, every submitted attempt's own data (CSV and JSON):
+    built in a temporary file (spilled to disk past 8 MB), then sent block by block."""
+    with tempfile.SpooledTemporaryFile(max_size=8 * 1024 * 1024) as spool:
+        with zipfile.ZipFile(spool, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as archive:
+            _write_text(archive, "class.csv", csv_table(class_table))
+            for item in work:
+                stem = safe_name(item.username)
+                summary = attempts_summary(item.attempts)
+                for attempt in item.attempts:
+                    selection = Selection(item.session_id, attempt.id)
+                    name = f"{stem}/attempt-{attempt.number}"
+                    _write_text(archive, f"{name}.csv", readings_csv(selection))
+                    _write_text(archive, f"{name}.json", session_json(selection, summary))
+        spool.seek(0)
+        while block := spool.read(ZIP_BLOCK):
+            yield block
+
+
+def _write_text(archive: zipfile.ZipFile, name: str, pieces: Iterable[str]) -> None:
+    with archive.open(name, "w", force_zip64=True) as member:
+        for piece in pieces:
+            member.write(piece.encode("utf-8"))

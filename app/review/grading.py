@@ -1,6 +1,7 @@
 """The grading desk: a review (feedback, position comments, points, rubric, letter) belongs
-to the attempt it was written on; returning, releasing (one or many), extensions, the
-student's notices and the teacher's next/previous student."""
+to the attempt it was written on; returning, releasing (one or many, each queuing its LMS
+grade) and the teacher's next/previous student.  Reading attempts: ``app.lab.attempts``;
+due dates and extensions: ``app.courses.deadlines``."""
 
 from __future__ import annotations
 
@@ -8,65 +9,25 @@ import json
 import math
 import re
 from dataclasses import dataclass
-from datetime import datetime
 
 from sqlmodel import Session, col, select
 
 from app.core.exceptions import UserError
 from app.core.readings import parse_decimal
-from app.lab.partners import in_sessions_of
-from app.lti.grades import queue_release
+from app.lab.attempts import latest_attempt, rubric_of
 from app.models import (
     Assignment,
     Attempt,
-    Extension,
     LabSession,
     SessionStatus,
     User,
     utcnow,
 )
+from app.review.lms_outbox import queue_release
 
 MAX_FEEDBACK = 20_000
 MAX_COMMENT = 2_000
 COMMENT_KEY = re.compile(r"comment-(heading|latitude)-[1-8]")
-
-
-def rubric_of(assignment: Assignment | None) -> list[dict]:
-    """The assignment's rubric: ``[{"name": str, "points": float}, ...]`` (may be empty)."""
-    if assignment is None:
-        return []
-    try:
-        rubric = json.loads(assignment.rubric or "[]")
-    except ValueError:
-        return []
-    return [item for item in rubric if isinstance(item, dict) and "name" in item]
-
-
-def latest_attempt(db: Session, session_id: int) -> Attempt | None:
-    return db.exec(
-        select(Attempt).where(Attempt.session_id == session_id).order_by(col(Attempt.number).desc())
-    ).first()
-
-
-def comments_of(attempt: Attempt | None) -> dict[str, str]:
-    """An attempt's position comments, ``{"heading-1": "..."}``."""
-    if attempt is None:
-        return {}
-    try:
-        comments = json.loads(attempt.feedback_positions or "{}")
-    except ValueError:
-        return {}
-    return {str(k): str(v) for k, v in comments.items()} if isinstance(comments, dict) else {}
-
-
-def rubric_scores_of(attempt: Attempt | None) -> dict[str, float]:
-    if attempt is None:
-        return {}
-    try:
-        scores = json.loads(attempt.rubric_points or "{}")
-    except ValueError:
-        return {}
-    return {str(k): float(v) for k, v in scores.items()} if isinstance(scores, dict) else {}
 
 
 @dataclass
@@ -146,8 +107,10 @@ def return_for_revision(session: LabSession, attempt: Attempt) -> None:
     session.status = SessionStatus.returned
 
 
-def release(session: LabSession, attempt: Attempt) -> None:
-    """Release the attempt's grade and feedback; the session is then graded (closed)."""
+def release(db: Session, session: LabSession, attempt: Attempt) -> int:
+    """Release the attempt's grade and feedback: the session is then graded (closed) and the
+    grade queued for every LMS student of the session (``lms_outbox``); returns how many
+    grade posts were queued (ring ``lms_outbox.wake_sender`` after the commit)."""
     if attempt.points is None:
         raise UserError("review.points_required", "Enter the points before releasing.")
     if session.status not in (SessionStatus.submitted, SessionStatus.returned):
@@ -156,6 +119,9 @@ def release(session: LabSession, attempt: Attempt) -> None:
     attempt.seen_at = None
     session.status = SessionStatus.graded
     session.updated_at = utcnow()
+    db.add(attempt)
+    db.add(session)
+    return queue_release(db, session, attempt)
 
 
 def bulk_release(db: Session, assignment: Assignment, session_ids: list[int]) -> tuple[int, int]:
@@ -178,75 +144,10 @@ def bulk_release(db: Session, assignment: Assignment, session_ids: list[int]) ->
         ):
             skipped += 1
             continue
-        release(session, attempt)
-        db.add(attempt)
-        db.add(session)
-        queue_release(db, session, attempt)
+        release(db, session, attempt)
         released += 1
     skipped += len(set(session_ids)) - len(sessions)
     return released, skipped
-
-
-def grade_text(attempt: Attempt | None, assignment: Assignment | None) -> str:
-    """ "85 / 100 (B+)", "85 / 100", "B+" or "" for an attempt's grade."""
-    if attempt is None:
-        return ""
-    parts = []
-    if attempt.points is not None:
-        maximum = assignment.max_points if assignment is not None else None
-        parts.append(f"{attempt.points:g}" + (f" / {maximum:g}" if maximum else ""))
-    if attempt.letter:
-        parts.append(f"({attempt.letter})" if parts else attempt.letter)
-    return " ".join(parts)
-
-
-def released_grade(session: LabSession, attempts: list[Attempt], assignment) -> str:
-    """The grade a student may see: the released attempt's, once the session is graded."""
-    if session.status != SessionStatus.graded or not attempts:
-        return ""
-    return grade_text(attempts[-1], assignment)
-
-
-def shown_to_student(attempt: Attempt) -> bool:
-    """Has the teacher given this attempt's review to the student (returned or released)?"""
-    return attempt.returned_at is not None or attempt.released_at is not None
-
-
-def due_for(db: Session, assignment: Assignment | None, student_id: int) -> datetime | None:
-    """The student's due date: their extension, else the assignment's."""
-    if assignment is None:
-        return None
-    extension = db.exec(
-        select(Extension).where(
-            Extension.assignment_id == assignment.id, Extension.student_id == student_id
-        )
-    ).first()
-    return extension.due_at if extension else assignment.due_at
-
-
-def extensions_of(db: Session, assignment: Assignment) -> dict[int, datetime]:
-    """``{student_id: due_at}`` for every extension of ``assignment`` (one query)."""
-    rows = db.exec(select(Extension).where(Extension.assignment_id == assignment.id)).all()
-    return {row.student_id: row.due_at for row in rows}
-
-
-def set_extension(
-    db: Session, assignment: Assignment, student_id: int, due_at: datetime | None
-) -> None:
-    """Give one student a later due date (None removes the extension)."""
-    existing = db.exec(
-        select(Extension).where(
-            Extension.assignment_id == assignment.id, Extension.student_id == student_id
-        )
-    ).first()
-    if due_at is None:
-        if existing is not None:
-            db.delete(existing)
-        return
-    if existing is None:
-        existing = Extension(assignment_id=assignment.id, student_id=student_id, due_at=due_at)
-    existing.due_at = due_at
-    db.add(existing)
 
 
 @dataclass
@@ -272,45 +173,3 @@ def neighbours(db: Session, session: LabSession) -> Neighbours:
     previous = tuple(rows[at - 1]) if at > 0 else None
     following = tuple(rows[at + 1]) if at + 1 < len(rows) else None
     return Neighbours(previous, following, at + 1, len(ids))  # type: ignore[arg-type]
-
-
-@dataclass
-class Notice:
-    session_id: int
-    title: str
-    kind: str  # "released" | "returned"
-    number: int
-    grade: str
-
-
-def notices(db: Session, student: User) -> list[Notice]:
-    """Reviews given to the student that they have not opened yet, newest first."""
-    rows = db.exec(
-        select(Attempt, LabSession, Assignment)
-        .join(LabSession, LabSession.id == Attempt.session_id)
-        .join(Assignment, Assignment.id == LabSession.assignment_id)
-        .where(
-            in_sessions_of(student.id),
-            col(Attempt.seen_at).is_(None),
-            (col(Attempt.released_at).is_not(None)) | (col(Attempt.returned_at).is_not(None)),
-        )
-        .order_by(col(Attempt.submitted_at).desc())
-    ).all()
-    out = []
-    for attempt, session, assignment in rows:
-        kind = "released" if attempt.released_at is not None else "returned"
-        grade = grade_text(attempt, assignment) if kind == "released" else ""
-        out.append(Notice(session.id, assignment.title, kind, attempt.number, grade))
-    return out
-
-
-def mark_seen(db: Session, attempts: list[Attempt]) -> bool:
-    """The student opened their work: its given reviews are no longer news.  True if
-    anything changed (the caller commits)."""
-    changed = False
-    for attempt in attempts:
-        if shown_to_student(attempt) and attempt.seen_at is None:
-            attempt.seen_at = utcnow()
-            db.add(attempt)
-            changed = True
-    return changed

@@ -16,9 +16,9 @@ from app.courses import characterisation
 from app.courses.assignment_form import form_values, parse_assignment_form
 from app.lab.chart_texts import class_text
 from app.lab.charts import class_error_figure, class_histogram_figure
-from app.lti.grades import passback_state
 from app.review.deps import TeacherAssignment
 from app.review.exports import class_table_response, class_zip_response
+from app.review.lms_outbox import passback_state
 from app.review.service import class_rows, status_counts
 from app.web.deps import FormDep, SessionDep
 from app.web.i18n import translator

@@ -6,9 +6,9 @@ from fastapi import APIRouter, Request
 from sqlmodel import select
 
 from app.accounts.deps import CurrentUser
+from app.lab.attempts import latest_attempt, notices, released_grade, shown_to_student
 from app.lab.partners import in_sessions_of
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User
-from app.review import grading
 from app.web.deps import SessionDep
 from app.web.render import redirect, render
 
@@ -46,18 +46,18 @@ def dashboard(request: Request, user: CurrentUser, db: SessionDep):
         .where(in_sessions_of(user.id))
         .order_by(LabSession.updated_at.desc())
     ).all():
-        latest = grading.latest_attempt(db, session.id)
-        given = latest is not None and grading.shown_to_student(latest)
+        latest = latest_attempt(db, session.id)
+        given = latest is not None and shown_to_student(latest)
         work.append(
             {
                 "session": session,
                 "assignment": assignment,
-                "grade": grading.released_grade(session, [latest] if latest else [], assignment),
+                "grade": released_grade(session, [latest] if latest else [], assignment),
                 "feedback": latest.feedback if given else "",
             }
         )
     return render(
         request,
         "dashboard/student.html",
-        {"courses": rows, "work": work, "notices": grading.notices(db, user)},
+        {"courses": rows, "work": work, "notices": notices(db, user)},
     )
