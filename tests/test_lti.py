@@ -149,6 +149,31 @@ def test_deep_link_launch_roster_session_and_grade_reach_the_platform(lti):
     )
 
 
+def test_a_release_by_any_caller_queues_the_lms_grade(lti):
+    """release() owns all its effects: called as a script or the command line would call it
+    (no desk page, no background task), the grade still reaches the LMS."""
+    from app.lab.attempts import latest_attempt
+    from app.models import Attempt, LabSession
+    from app.review import grading
+
+    deep_link_new_assignment(lti)
+    link_id = next(iter(lti.platform.links))
+    lti.browser().launch(lti.platform.url, user="teacher-1", link=link_id)  # the roster
+    learner = lti.browser()
+    lab = learner.launch(lti.platform.url, user="student-1", link=link_id)
+    session_id = int(urlsplit(str(lab.url)).path.rsplit("/", 1)[1])
+    _record_and_submit(learner, lti.tool, session_id)
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        attempt: Attempt = latest_attempt(db, session_id)
+        attempt.points = 37.0
+        assert grading.release(db, session, attempt) == 1
+    with read_session() as db:
+        assert [p.score for p in db.exec(select(LtiGradePost))] == [37.0]
+    assert grades.send_due() == {"sent": 1, "failed": 0}
+    assert lti.platform.scores[-1]["scoreGiven"] == 37 and len(lti.platform.scores) == 1
+
+
 def arrived(scores: list, count: int, seconds: float = 10) -> list:
     """The platform's scores once ``count`` have come (the sender works after the release)."""
     deadline = time.monotonic() + seconds
