@@ -11,6 +11,7 @@ from sqlmodel import Session, func, select
 from app.accounts.security import generate_password
 from app.accounts.service import create_user, enroll
 from app.core.solve import solve_heading
+from app.lab.sessions import SessionSettings, start_session
 from app.lab.sim import SimulatedTake, north_dial_deg, set_gyro_clock
 from app.lab.store import store_take
 from app.lab.submissions import submit
@@ -94,18 +95,10 @@ def add_demo_work(db: Session, assignment: Assignment, students: list[User]) -> 
         (students[2], ("heading",), 100, False),
     ]
     for student, parts, dwell, submit_it in plans:
-        session = LabSession(
-            owner_id=student.id,
-            assignment_id=assignment.id,
-            title=assignment.title,
-            latitude_deg=assignment.latitude_deg,
-            earth_rate_deg_h=assignment.earth_rate_deg_h,
-            simulator_preset=assignment.simulator_preset,
-            min_readings=assignment.min_readings,
-            sim_seed=rng.getrandbits(62),
-        )
+        session, _ = start_session(db, student, SessionSettings(), assignment, assignment.title)
+        # a demo the same on every machine: its own seeded gyro and truth
+        session.sim_seed = rng.getrandbits(62)
         draw_truth(assignment, session, rng)
-        db.add(session)
         db.flush()
         clock = 1200.0  # the student lets the gyro warm up for 20 min, then turns in 20 s
         recorded: dict[str, list] = {}
