@@ -122,32 +122,18 @@ def auto_check(results: dict, truth: Truth, assignment: Assignment) -> AutoCheck
             None if error is None else abs(error) <= assignment.tolerance_heading_deg,
         )
     )
-    lat_error = (
-        percent_error(latitude["latitude_deg"], truth.latitude_deg)
-        if latitude.get("latitude_deg") is not None
-        else None
-    )
-    checks.append(
-        Check(
-            "latitude",
-            lat_error,
-            assignment.tolerance_latitude_pct,
-            None if lat_error is None else lat_error <= assignment.tolerance_latitude_pct,
-        )
-    )
-    rate_error = (
-        percent_error(latitude["earth_rate_deg_h"], truth.earth_rate_deg_h)
-        if latitude.get("earth_rate_deg_h") is not None
-        else None
-    )
-    checks.append(
-        Check(
+    for name, key, true_value, tolerance in (
+        ("latitude", "latitude_deg", truth.latitude_deg, assignment.tolerance_latitude_pct),
+        (
             "earth_rate",
-            rate_error,
+            "earth_rate_deg_h",
+            truth.earth_rate_deg_h,
             assignment.tolerance_earth_rate_pct,
-            None if rate_error is None else rate_error <= assignment.tolerance_earth_rate_pct,
-        )
-    )
+        ),
+    ):
+        measured = latitude.get(key)
+        pct = None if measured is None else percent_error(measured, true_value)
+        checks.append(Check(name, pct, tolerance, None if pct is None else pct <= tolerance))
     return AutoCheck(checks)
 
 
