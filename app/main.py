@@ -18,27 +18,10 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 from swagger_ui_bundle import swagger_ui_path
 
 from app import __version__
-from app.accounts import admin_pages, sso_pages, token_pages
-from app.accounts import api as account_api
-from app.accounts import pages as account_pages
 from app.config import get_settings
-from app.courses import assignment_pages, join_pages
-from app.courses import pages as course_pages
-from app.explore import pages as explore_pages
-from app.home import pages as home
-from app.lab import admin_pages as lab_admin_pages
-from app.lab import api, partner_pages, record_pages, stream
-from app.lab import pages as lab_pages
-from app.lti import admin_pages as lti_admin_pages
-from app.lti import course_pages as lti_course_pages
 from app.lti import grades as lms_grades
-from app.lti import pages as lti_pages
 from app.paths import STATIC_DIR
-from app.reports import api as report_api
-from app.reports import pages as report_pages
-from app.review import api as review_api
-from app.review import desk_pages
-from app.review import pages as review_pages
+from app.routes import include_routers, read_only_routes
 from app.serving_lock import hold_while_serving, release
 from app.web.errors import register_error_handlers
 from app.web.headers import SecurityHeaders
@@ -116,7 +99,11 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
         redoc_url=None,
         max_body_size=get_settings().max_body_bytes,
     )
-    app.add_middleware(WriteAdmission, max_body=get_settings().max_body_bytes)
+    app.add_middleware(
+        WriteAdmission,
+        max_body=get_settings().max_body_bytes,
+        read_only_routes=read_only_routes(),
+    )
     # single sign-on's state and nonce between /login/sso and its callback (a signed cookie
     # for those two paths only, ten minutes)
     app.add_middleware(
@@ -162,32 +149,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
     app.state.plotly_url = PLOTLY_URL
 
     register_error_handlers(app)
-    # The REST API first: its requests (devices, scripts, the bridge) are matched against
-    # its few routes before the pages' many (paths never overlap: /api/v1/...).
-    app.include_router(account_api.router)
-    app.include_router(api.router)
-    app.include_router(review_api.router)
-    app.include_router(report_api.router)
-    app.include_router(account_pages.router)
-    app.include_router(sso_pages.router)
-    app.include_router(lti_pages.router)
-    app.include_router(lti_admin_pages.router)
-    app.include_router(lti_course_pages.router)
-    app.include_router(home.router)
-    app.include_router(course_pages.router)
-    app.include_router(join_pages.router)
-    app.include_router(admin_pages.router)
-    app.include_router(lab_admin_pages.router)
-    app.include_router(assignment_pages.router)
-    app.include_router(lab_pages.router)
-    app.include_router(record_pages.router)
-    app.include_router(partner_pages.router)
-    app.include_router(review_pages.router)
-    app.include_router(desk_pages.router)
-    app.include_router(report_pages.router)
-    app.include_router(stream.router)
-    app.include_router(token_pages.router)
-    app.include_router(explore_pages.router)
+    include_routers(app)
     return app
 
 

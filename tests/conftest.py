@@ -271,13 +271,3 @@ def teacher_client(client, teacher):
 def student_client(client, student):
     assert login(client, "student1").status_code == 303
     return client
-
-
-def iter_routes(routes) -> Iterator:
-    """Every APIRoute/WebSocket route, looking inside included routers (any FastAPI version)."""
-    for route in routes:
-        inner = getattr(route, "original_router", None)
-        if inner is not None:
-            yield from iter_routes(inner.routes)
-        else:
-            yield route

@@ -10,8 +10,8 @@ from app.accounts.security import verify_password
 from app.config import get_settings
 from app.db import read_session, write_session
 from app.models import AuthSession, Role, User, utcnow
+from app.routes import iter_routes
 from app.web.render import SESSION_COOKIE
-from tests.conftest import iter_routes
 from tests.factories import PASSWORD, csrf_from, login, make_user, post_form
 
 

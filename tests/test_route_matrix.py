@@ -22,7 +22,8 @@ from app.models import (
     Role,
     User,
 )
-from tests.conftest import iter_routes, snapshot
+from app.routes import iter_routes
+from tests.conftest import snapshot
 from tests.factories import (
     ACCESS,
     JSON_BODIES,

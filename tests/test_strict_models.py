@@ -13,7 +13,7 @@ from fastapi.routing import APIRoute
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from app.main import create_app
-from tests.conftest import iter_routes
+from app.routes import iter_routes
 
 NUMBERS = (int, float)
 

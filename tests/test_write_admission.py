@@ -10,6 +10,7 @@ import httpx
 import pytest
 
 from app.config import get_settings
+from app.routes import read_only_routes
 from app.web.write_admission import WriteAdmission
 
 
@@ -43,7 +44,7 @@ def limit(monkeypatch) -> int:
 
 def run(requests) -> tuple[Inside, list[httpx.Response]]:
     inside = Inside()
-    app = WriteAdmission(inside, max_body=1 << 20)
+    app = WriteAdmission(inside, max_body=1 << 20, read_only_routes=read_only_routes())
 
     async def main():
         transport = httpx.ASGITransport(app=app)
@@ -65,7 +66,7 @@ def test_writes_are_admitted_a_few_at_a_time_with_their_whole_body(limit):
     assert [r.text for r in replies] == ["1000"] * 6
 
 
-def test_reads_and_read_only_posts_are_not_held_back(limit):
+def test_reads_and_posts_declared_read_only_are_not_held_back(limit):
     requests = [("GET", "/lab", b"")] * 4 + [("POST", "/lab/sessions/3/csv/preview", b"{}")] * 2
     inside, replies = run(requests)
     assert inside.most == 6

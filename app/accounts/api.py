@@ -13,7 +13,7 @@ from app.accounts.service import may_reset_password, reset_password, teaches_stu
 from app.accounts.tokens import LOGIN_TOKEN_LIFETIME, new_token
 from app.core.exceptions import UserError
 from app.models import Role, User
-from app.web.deps import ObjectId, SessionDep, SettingsDep
+from app.web.deps import ObjectId, RowWriteSession, SessionDep, SettingsDep
 from app.web.errors import API_ERRORS
 
 router = APIRouter(prefix="/api/v1", responses=API_ERRORS)
@@ -38,7 +38,12 @@ class NewPasswordOut(BaseModel):
     initial_password: str = Field(description="one-time: the user must change it at log-in")
 
 
-@router.post("/auth/token", response_model=TokenOut, tags=["api: auth"])
+@router.post(
+    "/auth/token",
+    response_model=TokenOut,
+    tags=["api: auth"],
+    dependencies=[RowWriteSession],
+)
 def login_for_token(
     request: Request,
     db: SessionDep,

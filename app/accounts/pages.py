@@ -19,7 +19,7 @@ from app.accounts.security import (
 from app.accounts.sso import signs_in_elsewhere, sso_enabled
 from app.config import Settings
 from app.models import AuthSession, User, utcnow
-from app.web.deps import SessionDep, SettingsDep
+from app.web.deps import RowWriteSession, SessionDep, SettingsDep
 from app.web.i18n import normalise
 from app.web.render import LANG_COOKIE, SESSION_COOKIE, flash, redirect, render, set_cookie
 
@@ -57,7 +57,7 @@ def login_page(request: Request, user: OptionalUser, settings: SettingsDep, next
     return render(request, "auth/login.html", login_view(settings, next=safe_next(next)))
 
 
-@router.post("/login", dependencies=[CsrfProtected])
+@router.post("/login", dependencies=[CsrfProtected, RowWriteSession])
 def login(
     request: Request,
     db: SessionDep,
@@ -96,7 +96,7 @@ def login_wait_message(outcome) -> dict:
     return {"error": "login.throttled", "minutes": -(-outcome.retry_after // 60)}
 
 
-@router.post("/logout", dependencies=[CsrfProtected])
+@router.post("/logout", dependencies=[CsrfProtected, RowWriteSession])
 def logout(request: Request, db: SessionDep):
     auth: AuthSession | None = getattr(request.state, "auth", None)
     if auth is not None:

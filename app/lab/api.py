@@ -43,7 +43,7 @@ from app.lab.submissions import submit
 from app.lab.trim import trim_position
 from app.lab.uploads import Upload
 from app.models import InputMethod, LabSession
-from app.web.deps import ObjectId, SessionDep, SettingsDep
+from app.web.deps import ObjectId, RowWriteSession, SessionDep, SettingsDep
 from app.web.errors import API_ERRORS
 
 router = APIRouter(prefix="/api/v1", tags=["api"], responses=API_ERRORS)
@@ -141,7 +141,12 @@ def list_sessions(caller: ReadCaller, db: SessionDep):
     return [session_out(db, s) for s in sessions]
 
 
-@router.post("/sessions", response_model=SessionOut, status_code=201)
+@router.post(
+    "/sessions",
+    response_model=SessionOut,
+    status_code=201,
+    dependencies=[RowWriteSession],
+)
 def create_session(body: SessionCreate, caller: UploadCaller, db: SessionDep):
     """Start a practice session (give ``station``) or the session of an assignment (give
     ``assignment_id``; asking again returns the same session)."""
@@ -179,6 +184,7 @@ def get_session(session: ReadableSession, db: SessionDep):
     "/sessions/{session_id}/{part}/positions/{position}",
     response_model=UploadOut,
     openapi_extra=UPLOAD_BODY,
+    dependencies=[RowWriteSession],
 )
 def put_position(
     part: PartPath,
@@ -216,6 +222,7 @@ def put_position(
     "/sessions/{session_id}/{part}/positions/{position}/samples",
     response_model=UploadOut,
     openapi_extra=UPLOAD_BODY,
+    dependencies=[RowWriteSession],
 )
 def append_position(
     part: PartPath,
@@ -283,7 +290,11 @@ def submittable_session(session_id: ObjectId, caller: UploadCaller, db: SessionD
     return own_session(db, caller.user, session_id)
 
 
-@router.put("/sessions/{session_id}/{part}/positions/{position}/trim", response_model=TrimOut)
+@router.put(
+    "/sessions/{session_id}/{part}/positions/{position}/trim",
+    response_model=TrimOut,
+    dependencies=[RowWriteSession],
+)
 def put_trim(
     part: PartPath,
     position: PositionPath,
@@ -304,7 +315,9 @@ def put_trim(
     )
 
 
-@router.post("/sessions/{session_id}/submit", response_model=AttemptOut)
+@router.post(
+    "/sessions/{session_id}/submit", response_model=AttemptOut, dependencies=[RowWriteSession]
+)
 def submit_session(session: Annotated[LabSession, Depends(submittable_session)], db: SessionDep):
     """Freeze the data and results as a new attempt (the assignment's rules apply)."""
     attempt = submit(db, session)

@@ -56,7 +56,7 @@ from app.models import (
     User,
     utcnow,
 )
-from app.web.deps import MAX_ID, SessionDep
+from app.web.deps import MAX_ID, RowWriteSession, SessionDep
 from app.web.i18n import is_known, translator
 from app.web.render import (
     csrf_token_for,
@@ -133,7 +133,7 @@ def lab_home(request: Request, user: CurrentUser, db: SessionDep):
     )
 
 
-@router.post("/sessions", dependencies=[CsrfProtected])
+@router.post("/sessions", dependencies=[CsrfProtected, RowWriteSession])
 def create_session(
     request: Request,
     user: CurrentUser,

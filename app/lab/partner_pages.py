@@ -13,7 +13,7 @@ from app.core.exceptions import UserError
 from app.lab import partners
 from app.lab.deps import OwnedSession
 from app.models import LabSession, User
-from app.web.deps import SessionDep
+from app.web.deps import RowWriteSession, SessionDep
 from app.web.render import flash, redirect
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
@@ -65,7 +65,7 @@ def join_group(
     return response
 
 
-@router.post("/sessions/{session_id}/leave", dependencies=[CsrfProtected])
+@router.post("/sessions/{session_id}/leave", dependencies=[CsrfProtected, RowWriteSession])
 def leave_group(request: Request, session: OwnedSession, user: CurrentUser, db: SessionDep):
     """A partner leaves the group (only before recording starts)."""
     try:

@@ -26,7 +26,7 @@ from app.lab.store import POSITIONS, check_position, set_symmetric_order
 from app.lab.submissions import submit
 from app.lab.trim import trim_position
 from app.models import InputMethod, LabSession
-from app.web.deps import ObjectId, ReadOnlySessionDep, SessionDep
+from app.web.deps import ObjectId, ReadOnlySession, RowWriteSession, SessionDep
 from app.web.exports import attachment
 from app.web.render import flash, redirect
 from app.web.work_slots import held_while_streaming
@@ -47,7 +47,7 @@ class ManualReadings(BaseModel):
     )
 
 
-@router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected])
+@router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected, RowWriteSession])
 def save_manual(session: ManualSession, db: SessionDep, body: Annotated[ManualReadings, Body()]):
     columns = {k: np.asarray(v, dtype=float) for k, v in body.columns.items() if len(v)}
     if not columns:
@@ -92,11 +92,11 @@ def check_position_count(count: int, limit: int) -> None:
         )
 
 
-@router.post("/sessions/{session_id}/csv/preview", dependencies=[CsrfProtected])
+@router.post("/sessions/{session_id}/csv/preview", dependencies=[CsrfProtected, ReadOnlySession])
 def preview_csv(
     session_id: ObjectId,
     user: CurrentUser,
-    db: ReadOnlySessionDep,
+    db: SessionDep,
     body: Annotated[CsvUpload, Body()],
 ):
     session = recordable_session(db, user, session_id, InputMethod.csv)
@@ -122,7 +122,7 @@ def preview_csv(
     return {"layout": readings.layout, "positions": rows}
 
 
-@router.post("/sessions/{session_id}/csv", dependencies=[CsrfProtected])
+@router.post("/sessions/{session_id}/csv", dependencies=[CsrfProtected, RowWriteSession])
 def save_csv(
     session_id: ObjectId,
     user: CurrentUser,
@@ -160,7 +160,7 @@ class Turn(BaseModel):
     position: int = Field(ge=1, le=POSITIONS, strict=True)
 
 
-@router.post("/sessions/{session_id}/turn", dependencies=[CsrfProtected])
+@router.post("/sessions/{session_id}/turn", dependencies=[CsrfProtected, RowWriteSession])
 def turn_table(session: SimulatorSession, db: SessionDep, body: Annotated[Turn, Body()]):
     """Turn the virtual turntable; every real turn gets a new indexing error."""
     check_position(session, body.part, body.position)
@@ -183,7 +183,7 @@ class Trim(BaseModel):
     trim: int = Field(ge=0, le=10_000_000, strict=True)
 
 
-@router.post("/sessions/{session_id}/trim", dependencies=[CsrfProtected])
+@router.post("/sessions/{session_id}/trim", dependencies=[CsrfProtected, RowWriteSession])
 def trim_recording(session: OwnedSession, db: SessionDep, body: Annotated[Trim, Body()]):
     """Leave out the first readings of a position (the transient after turning the table):
     stored as a trim, no sample deleted."""
@@ -196,7 +196,7 @@ class Plane(BaseModel):
     dial_deg: float = Field(ge=-360, le=360, allow_inf_nan=False, strict=True)
 
 
-@router.post("/sessions/{session_id}/plane", dependencies=[CsrfProtected])
+@router.post("/sessions/{session_id}/plane", dependencies=[CsrfProtected, RowWriteSession])
 def set_plane(session: SimulatorSession, db: SessionDep, body: Annotated[Plane, Body()]):
     """Turn the horizontal dial for part B: the gyro then turns in that vertical plane
     (north if part A's result was right, as at the real bench)."""
@@ -207,7 +207,7 @@ def set_plane(session: SimulatorSession, db: SessionDep, body: Annotated[Plane, 
     return {"dial_deg": session.sim_plane_dial_deg}
 
 
-@router.post("/sessions/{session_id}/order", dependencies=[CsrfProtected])
+@router.post("/sessions/{session_id}/order", dependencies=[CsrfProtected, RowWriteSession])
 def set_order(
     request: Request,
     session: OwnedSession,
@@ -229,7 +229,7 @@ def set_order(
     return response
 
 
-@router.post("/sessions/{session_id}/wait", dependencies=[CsrfProtected])
+@router.post("/sessions/{session_id}/wait", dependencies=[CsrfProtected, RowWriteSession])
 def wait_for_warm_up(
     request: Request,
     session: SimulatorSession,
@@ -260,7 +260,7 @@ def results_endpoint(session: OwnedSession, db: SessionDep):
     return Response(json.dumps(json_safe(payload)), media_type="application/json")
 
 
-@router.post("/sessions/{session_id}/submit", dependencies=[CsrfProtected])
+@router.post("/sessions/{session_id}/submit", dependencies=[CsrfProtected, RowWriteSession])
 def submit_session(request: Request, session: OwnedSession, db: SessionDep):
     response = redirect(f"/lab/sessions/{session.id}")
     try:

@@ -17,7 +17,7 @@ from app.reports.class_zip import find_job, job_state, start_class_zip
 from app.reports.discussion import save_discussion
 from app.reports.service import report_response
 from app.review.deps import ReviewableSession, TeacherAssignment
-from app.web.deps import SessionDep
+from app.web.deps import RowWriteSession, SessionDep
 from app.web.exports import attachment
 from app.web.i18n import translator
 from app.web.render import flash, redirect, render, request_language
@@ -100,7 +100,7 @@ def _zip_base(target) -> str:
     return ZIP_BASE.format(course_id=target.course.id, assignment_id=target.assignment.id)
 
 
-@router.post("/lab/sessions/{session_id}/discussion", dependencies=[CsrfProtected])
+@router.post("/lab/sessions/{session_id}/discussion", dependencies=[CsrfProtected, RowWriteSession])
 def save_discussion_page(
     request: Request,
     session: OwnedSession,

@@ -3,8 +3,8 @@ ids (who the caller is: ``app.accounts.deps``)."""
 
 from __future__ import annotations
 
-import re
 from collections.abc import Iterator
+from enum import Enum
 from typing import Annotated
 
 from fastapi import Depends, Path, Request
@@ -33,21 +33,60 @@ class PasswordChangeRequired(Exception):
     """The user must choose a new password before anything else."""
 
 
-# Row writers (db.row_writer): writes to one lab session (recording, trimming, submitting,
-# leaving a group) reach it through ``lab.service.own_session``, which locks its row and
-# its owner's; starting a session locks the student's row (``lab.sessions.start_session``);
-# a log-in locks its account and address names (``accounts.security.log_in``); a log-out
-# revokes its own session row.  Every other write is exclusive.
-ROW_WRITE_PATH = re.compile(r"/(lab|api/v1)/sessions(/\d+/.*)?|/login|/logout|/api/v1/auth/token")
+class Locking(Enum):
+    """How a route's state-changing request holds the database (declared on the route)."""
+
+    exclusive = "exclusive"  # serialised with every other writer (db.writer): the default
+    rows = "rows"  # locks the rows it checks (db.row_writer): RowWriteSession
+    none = "none"  # a POST that only reads (a body, but nothing stored): ReadOnlySession
+
+
+async def row_writes() -> None:
+    """Marker of :data:`RowWriteSession` (does nothing; no trip to the thread pool)."""
+
+
+async def reads_only() -> None:
+    """Marker of :data:`ReadOnlySession` (does nothing; no trip to the thread pool)."""
+
+
+RowWriteSession = Depends(row_writes)
+"""On a route (``dependencies=[RowWriteSession]``) or a router: its writes lock only the
+rows they check.  Writes to one lab session (recording, trimming, submitting, leaving a
+group) reach it through ``lab.service.own_session``, which locks its row and its owner's;
+starting a session locks the student's row (``lab.sessions.start_session``); a log-in locks
+its account and address names (``accounts.security.log_in``); a log-out revokes its own
+session row.  On PostgreSQL such writes run side by side; on SQLite they are serialised."""
+ReadOnlySession = Depends(reads_only)
+"""On a POST that stores nothing: it reads in a snapshot, takes no write lock and no
+write slot (``web.write_admission``)."""
+_MARKERS = {row_writes: Locking.rows, reads_only: Locking.none}
+
+
+def lockings_declared(route: object) -> list[Locking]:
+    """The lockings a route declares by :data:`RowWriteSession` or :data:`ReadOnlySession`
+    among its (or its router's) dependencies (``app.routes`` allows at most one)."""
+    return [
+        _MARKERS[depends.dependency]
+        for depends in getattr(route, "dependencies", ())
+        if depends.dependency in _MARKERS
+    ]
+
+
+def declared_locking(route: object) -> Locking:
+    """A route's declared locking; :attr:`Locking.exclusive` when it declares none."""
+    declared = lockings_declared(route)
+    return declared[0] if declared else Locking.exclusive
 
 
 def get_db(request: Request) -> Iterator[Session]:
-    """One session per request; writes (POST, PUT, ...) take the write lock (db.writer),
-    or on one lab session's routes lock that session's rows (db.row_writer)."""
+    """One session per request: reads (GET, HEAD, OPTIONS, and POSTs declared
+    :data:`ReadOnlySession`) in a snapshot; writes take the write lock (db.writer), or
+    lock their rows on routes declared :data:`RowWriteSession` (db.row_writer)."""
     engine = get_engine()
-    if request.method in SAFE_METHODS:
+    locking = declared_locking(request.scope.get("route"))
+    if request.method in SAFE_METHODS or locking is Locking.none:
         bind = reader(engine)
-    elif ROW_WRITE_PATH.fullmatch(request.url.path):
+    elif locking is Locking.rows:
         bind = row_writer(engine)
     else:
         bind = writer(engine)
@@ -55,14 +94,7 @@ def get_db(request: Request) -> Iterator[Session]:
         yield session
 
 
-def get_read_db() -> Iterator[Session]:
-    """For a POST that only reads (it carries a body, but stores nothing): no write lock."""
-    with Session(reader(get_engine()), expire_on_commit=False) as session:
-        yield session
-
-
 SessionDep = Annotated[Session, Depends(get_db)]
-ReadOnlySessionDep = Annotated[Session, Depends(get_read_db)]
 
 
 async def settings_now() -> Settings:

@@ -16,9 +16,8 @@ the WebSocket stream's saves take a place the same way (:func:`write_slot`).
 from __future__ import annotations
 
 import asyncio
-import re
 import weakref
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Sequence
 from contextlib import asynccontextmanager
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
@@ -26,8 +25,6 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from app.config import get_settings
 
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
-# POSTs that only read (they carry a body, but store nothing: deps.ReadOnlySessionDep)
-READ_ONLY_POSTS = re.compile(r"^/lab/sessions/\d+/csv/preview$")
 _semaphores: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -50,18 +47,23 @@ async def write_slot() -> AsyncIterator[None]:
 class WriteAdmission:
     """ASGI middleware: state-changing HTTP requests wait for a :func:`write_slot` once
     their body has been received (bounded by ``max_body``: past it, the app's own body
-    limit answers)."""
+    limit answers).  ``read_only_routes``: the routes that declare
+    ``web.deps.ReadOnlySession`` (``app.routes.read_only_routes``), which pass at once."""
 
-    def __init__(self, app: ASGIApp, max_body: int) -> None:
+    def __init__(self, app: ASGIApp, max_body: int, read_only_routes: Sequence = ()) -> None:
         self.app = app
         self.max_body = max_body
+        self.read_only = [(route.path_regex, route.methods) for route in read_only_routes]
+
+    def reads_only(self, scope: Scope) -> bool:
+        """Whether the request is for a route declared read-only."""
+        return any(
+            scope["method"] in methods and pattern.match(scope["path"])
+            for pattern, methods in self.read_only
+        )
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if (
-            scope["type"] != "http"
-            or scope["method"] in SAFE_METHODS
-            or READ_ONLY_POSTS.match(scope["path"])
-        ):
+        if scope["type"] != "http" or scope["method"] in SAFE_METHODS or self.reads_only(scope):
             await self.app(scope, receive, send)
             return
         received: list[Message] = []

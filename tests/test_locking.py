@@ -1,0 +1,76 @@
+"""Locking is declared on the route (web.deps.RowWriteSession / ReadOnlySession), and the
+request's database session follows the declaration."""
+
+from __future__ import annotations
+
+import pytest
+from fastapi import APIRouter, FastAPI
+from fastapi.testclient import TestClient
+
+from app.db import ROW_WRITER, WRITER_OPTION
+from app.routes import api_routes, check_locking_declarations
+from app.web.deps import Locking, ReadOnlySession, RowWriteSession, SessionDep, declared_locking
+
+
+def writer_option(db) -> object:
+    return db.get_bind().get_execution_options().get(WRITER_OPTION)
+
+
+def test_the_database_session_follows_the_routes_declaration():
+    router = APIRouter()
+
+    @router.post("/exclusive")
+    def exclusive(db: SessionDep):
+        return {"writer": writer_option(db)}
+
+    @router.post("/rows", dependencies=[RowWriteSession])
+    def rows(db: SessionDep):
+        return {"writer": writer_option(db)}
+
+    @router.post("/read", dependencies=[ReadOnlySession])
+    def read(db: SessionDep):
+        return {"writer": writer_option(db)}
+
+    @router.get("/page")
+    def page(db: SessionDep):
+        return {"writer": writer_option(db)}
+
+    app = FastAPI()
+    app.include_router(router)
+    with TestClient(app) as client:
+        assert client.post("/exclusive").json() == {"writer": True}
+        assert client.post("/rows").json() == {"writer": ROW_WRITER}
+        assert client.post("/read").json() == {"writer": None}
+        assert client.get("/page").json() == {"writer": None}
+
+
+def test_a_route_declares_one_locking_and_only_on_a_write():
+    both = APIRouter()
+    both.post("/x", dependencies=[RowWriteSession, ReadOnlySession])(lambda: None)
+    with pytest.raises(RuntimeError, match="declares 2 lockings"):
+        check_locking_declarations(both.routes)
+    read = APIRouter()
+    read.get("/y", dependencies=[RowWriteSession])(lambda: None)
+    with pytest.raises(RuntimeError, match="changes nothing"):
+        check_locking_declarations(read.routes)
+
+
+def test_the_lab_sessions_writes_lock_rows_and_everything_else_is_exclusive():
+    declared = {
+        (path, method): declared_locking(route)
+        for route in api_routes()
+        for method in route.methods - {"GET", "HEAD"}
+        for path in [route.path]
+    }
+    assert declared["/lab/sessions/{session_id}/csv/preview", "POST"] is Locking.none
+    assert declared["/lab/sessions/{session_id}/csv", "POST"] is Locking.rows
+    assert declared["/api/v1/sessions/{session_id}/submit", "POST"] is Locking.rows
+    assert declared["/login", "POST"] is Locking.rows
+    assert declared["/review/sessions/{session_id}/feedback", "POST"] is Locking.exclusive
+    assert declared["/courses", "POST"] is Locking.exclusive
+    # rows only where a lab session, an account's log-in or the token endpoint is written
+    for (path, _), locking in declared.items():
+        if locking is Locking.rows:
+            assert path.startswith(("/lab/sessions", "/api/v1/sessions", "/log")) or (
+                path == "/api/v1/auth/token"
+            ), path
