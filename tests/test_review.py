@@ -93,7 +93,7 @@ def test_full_cycle_submit_return_resubmit_grade_release(world):
     submit(student, session_id)
     assert session_of(session_id).status == "submitted"
     # while waiting for review the student can neither edit nor submit again
-    assert save_manual(student, session_id, "heading", {"1": [1.0] * 10}).status_code == 400
+    assert save_manual(student, session_id, "heading", {"1": [1.0] * 10}).status_code == 409
     submit(student, session_id)
     with read_session() as db:
         assert len(db.exec(select(Attempt)).all()) == 1
@@ -145,7 +145,7 @@ def test_full_cycle_submit_return_resubmit_grade_release(world):
     # attempt 1's position comment is not released again with attempt 2's grade
     page = student.get(f"/lab/sessions/{session_id}").text
     assert page.count("Wait until the table settles.") == 1  # in attempt 1's entry only
-    assert save_manual(student, session_id, "heading", HEADING).status_code == 400  # frozen
+    assert save_manual(student, session_id, "heading", HEADING).status_code == 409  # graded
     submission = teacher.get(f"/review/sessions/{session_id}").text
     assert "Attempt 2" in submission and "Attempt 1" in submission
 

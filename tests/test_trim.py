@@ -119,7 +119,7 @@ def test_a_submitted_take_is_copied_never_changed(world):
     submit(student, session_id)
     frozen = current(session_id, 1)
     # awaiting review: no change
-    assert trim(student, session_id, 1, 5).status_code == 400
+    assert trim(student, session_id, 1, 5).status_code == 409
     with read_session() as db:
         db.get(LabSession, session_id)
     from tests.factories import review

@@ -75,10 +75,7 @@ def check_position(session: LabSession, part: str, position: int) -> None:
 def set_symmetric_order(db: Session, session: LabSession, symmetric: bool) -> None:
     """Switch the recording order.  Switching back is refused while positions 5–8 hold
     readings (they would silently drop out of the result)."""
-    if session.status == SessionStatus.graded or (
-        session.status == SessionStatus.submitted and session.assignment_id is not None
-    ):
-        raise UserError("lab.awaiting_review", "This work is waiting for review or graded.")
+    check_editable(session)
     if not symmetric and session.symmetric_order:
         in_return_pass = db.exec(
             select(Take.id).where(
@@ -98,13 +95,15 @@ def set_symmetric_order(db: Session, session: LabSession, symmetric: bool) -> No
 
 
 def check_editable(session: LabSession) -> None:
-    """Graded work and work awaiting review do not change."""
+    """Graded work and work awaiting review do not change (409: the state forbids it).
+
+    The one check of every change to a session's data -- a take stored, appended or
+    trimmed, the order or plane chosen, the discussion written -- and of submitting again.
+    """
     if session.status == SessionStatus.graded:
-        raise UserError("lab.already_graded", "This work has been graded.")
+        raise UserError("lab.already_graded", status=409)
     if session.status == SessionStatus.submitted and session.assignment_id is not None:
-        raise UserError(
-            "lab.awaiting_review", "Your last attempt is waiting for your teacher's review."
-        )
+        raise UserError("lab.awaiting_review", status=409)
 
 
 def reopen(session: LabSession) -> None:
@@ -212,10 +211,7 @@ def append_samples(
     retried batch is not duplicated); an offset beyond the stored count is a gap.
     Returns (take, number of values added).
     """
-    if session.status == SessionStatus.graded or (
-        session.status == SessionStatus.submitted and session.assignment_id is not None
-    ):
-        raise UserError("lab.awaiting_review", "This work is waiting for review or graded.")
+    check_editable(session)
     check_position(session, part, position)
     take = db.exec(
         select(Take).where(

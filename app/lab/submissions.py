@@ -13,7 +13,7 @@ from app.core.jsonsafe import json_safe
 from app.courses.deadlines import due_for
 from app.lab.result_cache import cached_results
 from app.lab.results import results_json
-from app.lab.store import current_takes
+from app.lab.store import check_editable, current_takes
 from app.models import (
     Assignment,
     Attempt,
@@ -32,14 +32,7 @@ def submit(db: Session, session: LabSession) -> Attempt:
     """
     assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
     previous = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
-    if session.status == SessionStatus.graded:
-        raise UserError("lab.already_graded", "This work has been graded.", status=409)
-    if assignment is not None and session.status == SessionStatus.submitted:
-        raise UserError(
-            "lab.awaiting_review",
-            "Your last attempt is waiting for your teacher's review.",
-            status=409,
-        )
+    check_editable(session)
     if (
         assignment is not None
         and assignment.max_attempts

@@ -126,7 +126,7 @@ def save_review(
         review = grading.parse_review({k: str(v) for k, v in form.items()}, assignment)
         grading.store_review(attempt, review)
         if action == "return":
-            grading.return_for_revision(session, attempt)
+            grading.return_for_revision(db, session, attempt)
         elif action == "release":
             queued = grading.release(db, session, attempt)
             if queued:

@@ -98,13 +98,17 @@ def store_review(attempt: Attempt, review: Review) -> None:
     attempt.letter = review.letter
 
 
-def return_for_revision(session: LabSession, attempt: Attempt) -> None:
-    """Back to the student with the feedback; the next attempt starts a fresh review."""
+def return_for_revision(db: Session, session: LabSession, attempt: Attempt) -> None:
+    """Back to the student with the feedback (the student is notified: ``seen_at`` reset);
+    the next attempt starts a fresh review.  The caller commits."""
     if session.status not in (SessionStatus.submitted, SessionStatus.returned):
-        raise UserError("review.cannot_return", "Only submitted work can be returned.", status=409)
+        raise UserError("review.cannot_return", status=409)
     attempt.returned_at = utcnow()
     attempt.seen_at = None
     session.status = SessionStatus.returned
+    session.updated_at = utcnow()
+    db.add(attempt)
+    db.add(session)
 
 
 def release(db: Session, session: LabSession, attempt: Attempt) -> int:
