@@ -37,6 +37,13 @@ PASSWORD = "correct-horse-42"
 
 
 @functools.cache
+def english(error) -> str:
+    """A UserError's words as an English reader sees them (from the catalogue)."""
+    from app.web.i18n import translate
+
+    return translate(error.key, "en", **error.params)
+
+
 def password_hash_of_password() -> str:
     """One real argon2id hash of PASSWORD per test process: hashing it afresh for every
     account a test makes cost ~25 ms each, about a third of the quick loop (the log-ins

@@ -165,3 +165,39 @@ def test_no_inline_scripts_in_templates():
     for path in TEMPLATES_DIR.rglob("*.html"):
         for tag in re.findall(r"<script[^>]*>", path.read_text()):
             assert "src=" in tag or 'type="application/json"' in tag, (path, tag)
+
+
+def user_errors_in_the_code():
+    """Every ``UserError(...)`` call in app/: (place, key or None when computed, keyword
+    names or None when they are passed as ``**params``, positional argument count)."""
+    import ast
+
+    for path in (PROJECT_ROOT / "app").rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            name = getattr(node, "func", None)
+            if not isinstance(node, ast.Call) or getattr(name, "id", None) != "UserError":
+                continue
+            first = node.args[0] if node.args else None
+            key = first.value if isinstance(first, ast.Constant) else None
+            names = {k.arg for k in node.keywords}
+            yield f"{path.name}:{node.lineno}", key, None if None in names else names, node.args
+
+
+def test_user_errors_carry_a_key_and_every_parameter_of_its_words():
+    """The words come from the catalogue only (no English copy beside the key to drift),
+    and each placeholder of the message in either language gets a value (a missing one
+    would show "{position}" or fail)."""
+    placeholders = {
+        key: set(re.findall(r"{(\w+)", " ".join(entry.values()))) for key, entry in MESSAGES.items()
+    }
+    checked = 0
+    for place, key, names, args in user_errors_in_the_code():
+        assert len(args) == 1, f"{place}: a key only (the catalogue has the words)"
+        if key is None or names is None:
+            continue
+        assert key in MESSAGES, f"{place}: {key} is in neither catalogue"
+        missing = placeholders[key] - names
+        assert not missing, f"{place}: {key} needs {sorted(missing)}"
+        checked += 1
+    assert checked > 200

@@ -15,7 +15,7 @@ from app.core.readings import parse_readings_csv
 from app.core.sinusoid import heading_angles
 from app.core.solve import solve_heading, solve_latitude
 from app.core.units import to_deg_per_hour
-from tests.factories import handout
+from tests.factories import english, handout
 
 HEADING = handout("handout_horizontal.csv")
 VERTICAL = handout("handout_vertical.csv")
@@ -136,7 +136,7 @@ def test_only_plain_decimals_are_numbers(text):
 def test_overflowing_numbers_are_out_of_range():
     with pytest.raises(UserError) as caught:
         parse_readings_csv("position_1,position_2,position_3\n1,2,1e400\n")
-    assert caught.value.key == "csv.out_of_range" and "out of range" in str(caught.value)
+    assert caught.value.key == "csv.out_of_range" and "out of range" in english(caught.value)
     with pytest.raises(UserError) as converted:
         to_deg_per_hour([1e306, 1.0], "deg/s")
     assert converted.value.key == "readings.out_of_range"
@@ -148,7 +148,7 @@ def test_start_angle_gets_a_range_message(start):
     with pytest.raises(UserError) as caught:
         heading_angles(4, "ccw", start)
     assert caught.value.key == "angles.start_out_of_range"
-    assert "inf" not in str(caught.value) and "nan" not in str(caught.value)
+    assert "inf" not in english(caught.value) and "nan" not in english(caught.value)
 
 
 def test_huge_readings_never_print_inf_or_nan():
@@ -156,7 +156,7 @@ def test_huge_readings_never_print_inf_or_nan():
     with pytest.raises(UserError) as caught:
         solve_heading(positions, ANGLES)
     assert caught.value.key == "readings.out_of_range"
-    message = str(caught.value).lower()
+    message = english(caught.value).lower()
     assert "inf" not in message and "nan" not in message
 
 
@@ -225,5 +225,5 @@ def test_a_refusal_never_prints_a_non_finite_sigma():
     for sigma in (math.nan, math.inf):
         with pytest.raises(UserError) as caught:
             _check_significant(0.0, sigma, "horizontal", 1.0)
-        message = str(caught.value).lower()
+        message = english(caught.value).lower()
         assert "nan" not in message and "inf" not in message

@@ -87,7 +87,7 @@ def add_student(
         if user.role != Role.student:
             raise UserError("account.not_student", username=username)
         if user.created_by_id != course.teacher_id:
-            raise UserError("roster.needs_consent", username=user.username)
+            raise UserError("roster.needs_consent", username=user.username, code=course.join_code)
         enroll(db, course, user)
         return None
     password = generate_password()

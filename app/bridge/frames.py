@@ -52,7 +52,7 @@ STRUCT_CODES["f8"] = "d"
 
 
 def spec_error(problem: str, **params: object) -> UserError:
-    return UserError(f"bridge.spec_{problem}", f"bad frame description: {problem}", **params)
+    return UserError(f"bridge.spec_{problem}", **params)
 
 
 @dataclass(frozen=True)
@@ -207,9 +207,7 @@ def load_spec_file(path: Path) -> FrameSpec:
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except OSError as error:
-        raise UserError(
-            "bridge.cannot_read", f"cannot read {path}", path=str(path), error=error.strerror
-        ) from None
+        raise UserError("bridge.cannot_read", path=str(path), error=error.strerror) from None
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
         raise spec_error("toml", error=str(error)[:120]) from None
     fields = data.get("fields")
@@ -271,7 +269,6 @@ class FrameDecoder:
         if axis is not None and spec.get(axis) is None:
             raise UserError(
                 "bridge.no_such_axis",
-                f"this frame has no axis {axis}",
                 axis=axis,
                 axes=", ".join(spec.axes),
             )

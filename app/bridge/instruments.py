@@ -92,24 +92,22 @@ def set_up(instrument: Instrument, *, mid_line: bool = True) -> Setup:
     name = instrument.format
     if name == "text":
         if instrument.axis is not None:
-            raise UserError("bridge.axis_needs_frames", "--axis applies to frames with axes")
+            raise UserError("bridge.axis_needs_frames")
         parser = LineParser(instrument.regex, instrument.column, instrument.scale)
         decoder = TextDecoder(parser, mid_line=mid_line)
         return Setup(decoder, instrument.unit or "deg/h", instrument.rate_hz, False)
     if name == "kvh-dsp3000":
         if instrument.axis is not None:
-            raise UserError("bridge.axis_needs_frames", "--axis applies to frames with axes")
+            raise UserError("bridge.axis_needs_frames")
         decoder = Dsp3000Decoder(mid_line=mid_line)
         rate = instrument.rate_hz or DSP3000_RATE_HZ
         return Setup(decoder, instrument.unit or "deg/s", rate, False)
     spec = instrument.spec()
     if spec is None:
-        raise UserError(
-            "bridge.format", f"unknown format {name}", format=name[:40], known=", ".join(FORMATS)
-        )
+        raise UserError("bridge.format", format=name[:40], known=", ".join(FORMATS))
     decoder = FrameDecoder(spec, instrument.axis, instrument.temperature_scale)
     unit = instrument.unit or spec.unit
     if unit is None:
-        raise UserError("bridge.spec_needs_unit", "say what the frame's axes hold: unit=...")
+        raise UserError("bridge.spec_needs_unit")
     rate = instrument.rate_hz or spec.rate_hz
     return Setup(decoder, unit, rate, spec.get("temp") is not None)

@@ -32,9 +32,7 @@ class Recorder:
         try:
             self._file: BinaryIO = path.open("wb")
         except OSError as error:
-            raise UserError(
-                "bridge.cannot_write", f"cannot write {path}", path=str(path), error=error.strerror
-            ) from None
+            raise UserError("bridge.cannot_write", path=str(path), error=error.strerror) from None
         self._file.write(MAGIC)
         self._file.write(json.dumps(meta, ensure_ascii=False).encode() + b"\n")
         self._flushed = time.monotonic()
@@ -85,16 +83,14 @@ class Recording:
 
 
 def damaged() -> UserError:
-    return UserError("bridge.bad_recording", "not a GyroLab raw recording, or damaged")
+    return UserError("bridge.bad_recording")
 
 
 def open_recording(path: Path) -> Recording:
     try:
         handle = path.open("rb")
     except OSError as error:
-        raise UserError(
-            "bridge.cannot_read", f"cannot read {path}", path=str(path), error=error.strerror
-        ) from None
+        raise UserError("bridge.cannot_read", path=str(path), error=error.strerror) from None
     if handle.read(len(MAGIC)) != MAGIC:
         handle.close()
         raise damaged()

@@ -36,15 +36,12 @@ class SampleTable:
             if existing and existing[0].strip() != ",".join(columns):
                 raise UserError(
                     "bridge.csv_columns",
-                    f"{path} has other columns ({existing[0][:80]}); use a new file",
                     path=str(path),
                     columns=existing[0][:80],
                 )
             self._file: TextIO = path.open("a", encoding="utf-8", newline="")
         except OSError as error:
-            raise UserError(
-                "bridge.cannot_write", f"cannot write {path}", path=str(path), error=error.strerror
-            ) from None
+            raise UserError("bridge.cannot_write", path=str(path), error=error.strerror) from None
         self._writer = csv.writer(self._file, lineterminator="\n")
         if not existing:
             self._writer.writerow(columns)

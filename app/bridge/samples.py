@@ -45,16 +45,12 @@ class SampleMaker:
         start_s: float = 0.0,
     ) -> None:
         if unit not in UNITS:
-            raise UserError(
-                "bridge.unit", f"unknown unit {unit}", unit=unit, known=", ".join(UNITS)
-            )
+            raise UserError("bridge.unit", unit=unit, known=", ".join(UNITS))
         is_angle = unit in ANGLE_UNITS
         if (is_angle or integrated) and not rate_hz:
-            raise UserError(
-                "bridge.needs_rate", "angle outputs need the gyro's output rate (--rate HZ)"
-            )
+            raise UserError("bridge.needs_rate")
         if integrated and not is_angle:
-            raise UserError("bridge.integrated_unit", "an integrated output is an angle")
+            raise UserError("bridge.integrated_unit")
         self.rate_hz = rate_hz
         self.integrated = integrated
         self.start_s = start_s

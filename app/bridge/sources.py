@@ -21,9 +21,7 @@ def serial_chunks(port: str, baud: int, timeout_s: float = 0.2) -> Iterator[tupl
     try:
         connection = serial.Serial(port, baudrate=baud, timeout=timeout_s)
     except (serial.SerialException, ValueError) as error:
-        raise UserError(
-            "bridge.cannot_open", f"cannot open {port}: {error}", port=port, error=str(error)
-        ) from None
+        raise UserError("bridge.cannot_open", port=port, error=str(error)) from None
 
     def chunks() -> Iterator[tuple[float, bytes]]:
         started = time.monotonic()

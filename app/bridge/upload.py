@@ -114,7 +114,7 @@ class Uploader:
                 response = self.client.post(self.url, **arguments)
             except httpx.TransportError:
                 if attempt == self.retries:
-                    raise UserError("bridge.unreachable", "the server cannot be reached") from None
+                    raise UserError("bridge.unreachable") from None
                 time.sleep(delay)
                 delay = min(delay * 2, 10.0)
                 continue
@@ -126,18 +126,15 @@ class Uploader:
             if response.status_code == 409:
                 match = re.search(r"Expected offset (\d+)", detail)
                 if match and int(match.group(1)) < offset:
-                    raise UserError(
-                        "bridge.server_lost", f"the server lost samples: {detail}", detail=detail
-                    )
+                    raise UserError("bridge.server_lost", detail=detail)
             if response.status_code >= 400:
                 raise UserError(
                     "bridge.refused",
-                    f"upload refused ({response.status_code}): {detail}",
                     status_code=response.status_code,
                     detail=detail,
                 )
             return int(response.json()["n_samples"])
-        raise UserError("bridge.giving_up", "giving up after repeated errors")
+        raise UserError("bridge.giving_up")
 
 
 def _detail(response: httpx.Response) -> str:

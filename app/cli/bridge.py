@@ -102,10 +102,10 @@ def _run(args: argparse.Namespace, say) -> int:
     instrument = _instrument(args, saved)
     uploading = args.session is not None
     if uploading and (args.part is None or args.position is None):
-        raise UserError("bridge.needs_target", "give --part and --position with --session")
+        raise UserError("bridge.needs_target")
     token = args.token or os.environ.get("GYROLAB_TOKEN")
     if uploading and not token:
-        raise UserError("bridge.no_token", "give --token or set GYROLAB_TOKEN")
+        raise UserError("bridge.no_token")
     mid_line = bool(saved.get("mid_line", True)) if recording else bool(args.serial)
     setup = set_up(instrument, mid_line=mid_line)
     wall_clock = float(saved.get("wall_clock_s", time.time())) if recording else time.time()
@@ -124,9 +124,7 @@ def _run(args: argparse.Namespace, say) -> int:
         try:
             chunks = stream_chunks(Path(args.file).open("rb"))  # noqa: SIM115 (closed by it)
         except OSError as error:
-            raise UserError(
-                "bridge.cannot_read", "cannot read", path=args.file, error=error.strerror
-            ) from None
+            raise UserError("bridge.cannot_read", path=args.file, error=error.strerror) from None
     else:
         chunks = stream_chunks(sys.stdin.buffer)
     recorder = None
@@ -200,7 +198,7 @@ def _instrument(args: argparse.Namespace, saved: dict) -> Instrument:
     try:
         pattern = re.compile(regex) if regex else None
     except re.error as error:
-        raise UserError("bridge.bad_regex", "bad --regex", error=str(error)) from None
+        raise UserError("bridge.bad_regex", error=str(error)) from None
     column = args.column if args.column is not None else saved.get("column")
     scale = args.scale if args.scale is not None else saved.get("scale", 1.0)
     return Instrument(

@@ -122,7 +122,7 @@ def _solve(args: argparse.Namespace) -> int:
         _finite(f"--{name.replace('_', '-')}", getattr(args, name))
     readings = parse_readings_csv(_read_text(args.file), part=args.part)
     result = solve_readings(args.part, readings, args)
-    warm_up = temperature_summary(readings)
+    warm_up = temperature_summary(readings, args.language)
     if args.json:
         payload = result.to_json()
         if warm_up is not None:
@@ -132,7 +132,7 @@ def _solve(args: argparse.Namespace) -> int:
     steps = explain_heading(result) if args.part == "heading" else explain_latitude(result)
     print(render_text(steps, args.language))
     if warm_up is not None:
-        print(warm_up["note"][args.language])
+        print(warm_up["note"])
     if result.drift_check is not None and result.drift_check.flagged:
         from app.web.i18n import translator
 
@@ -152,27 +152,20 @@ def _wait_minutes(readings: Readings, args: argparse.Namespace) -> int | None:
     return max(0, math.ceil((5.0 * tau - last) / 60.0)) if tau > 0 else None
 
 
-def temperature_summary(readings: Readings) -> dict | None:
-    """Mean case temperature per position and a warning when it changed by more than
-    1 °C while recording: the bias follows the temperature during warm-up."""
+def temperature_summary(readings: Readings, language: str = "en") -> dict | None:
+    """Mean case temperature per position and a warning (in ``language``) when it changed
+    by more than 1 °C while recording: the bias follows the temperature during warm-up."""
+    from app.web.i18n import translator
+
     if not readings.temperatures_c:
         return None
     every = np.concatenate([t for t in readings.temperatures_c if t.size])
     means = [float(t.mean()) if t.size else None for t in readings.temperatures_c]
     change = float(every.max() - every.min()) if every.size else 0.0
-    if change > WARM_UP_LIMIT_C:
-        note = {
-            "en": f"Temperature changed by {change:.1f} °C while recording: the gyro was "
-            "still warming up, and its bias drifted with it. Let it warm up and record again.",
-            "zh-CN": f"记录期间温度变化了 {change:.1f} °C：陀螺仍在预热，零偏随之漂移。"
-            "请预热后重新记录。",
-        }
-    else:
-        note = {
-            "en": f"Temperature steady within {change:.1f} °C while recording.",
-            "zh-CN": f"记录期间温度稳定（变化 {change:.1f} °C 以内）。",
-        }
-    return {"mean_by_position": means, "change": change, "note": note}
+    warming = change > WARM_UP_LIMIT_C
+    key = "cli.temperature_warming" if warming else "cli.temperature_steady"
+    note = translator(language)(key, change=f"{change:.1f}")
+    return {"mean_by_position": means, "change": change, "warming_up": warming, "note": note}
 
 
 def preset_table() -> list[dict]:
@@ -283,7 +276,14 @@ def _guarded(handler):
     def run(args: argparse.Namespace) -> int:
         try:
             return handler(args)
-        except (UserError, CommandError) as error:
+        except UserError as error:
+            from app.web.i18n import translator
+
+            language = getattr(args, "language", "en")
+            message = translator(language)(error.key, **error.params)
+            print(f"gyrolab {args.command}: {message}", file=sys.stderr)
+            return 2
+        except CommandError as error:
             print(f"gyrolab {args.command}: {error}", file=sys.stderr)
             return 2
 

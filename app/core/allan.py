@@ -259,13 +259,12 @@ def allan_deviation(
     if data.size < MIN_SAMPLES:
         raise UserError(
             "allan.too_short",
-            f"The Allan deviation needs at least {MIN_SAMPLES} readings.",
             minimum=MIN_SAMPLES,
         )
     if not np.all(np.isfinite(data)):
-        raise UserError("readings.not_finite", "A reading is not a finite number.")
+        raise UserError("readings.not_finite")
     if not (rate_hz > 0 and math.isfinite(rate_hz)):
-        raise UserError("allan.bad_rate", "The sample rate must be a positive number.")
+        raise UserError("allan.bad_rate")
     taus, adev = allan_curve(data, rate_hz)
     if max_tau_s is not None:
         keep = taus <= max_tau_s * (1 + 1e-9)
@@ -273,8 +272,6 @@ def allan_deviation(
     if taus.size == 0:
         raise UserError(
             "allan.constant",
-            "The readings never change; there is no noise "
-            "to analyse (is the record quantised too coarsely?).",
         )
     edf = degrees_of_freedom(taus, rate_hz, data.size, np.zeros(taus.size))
     fit = fit_terms(taus, adev, edf)

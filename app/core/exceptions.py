@@ -13,11 +13,10 @@ class UserError(ValueError):
     Parameters
     ----------
     key
-        The message's key in the catalogue; the message is translated into the reader's
-        language with ``params`` filled in.
-    message
-        The same message as an English sentence, for the command line and logs (optional:
-        ``str(error)`` is then the English catalogue text, or the key).
+        The message's key in the catalogue (``locales/*/LC_MESSAGES/messages.po``), the
+        one source of its words: the renderers translate it into the reader's language
+        (English on the command line) with ``params`` filled in.  ``str(error)`` is the key
+        and its parameters, for logs.
     status
         The HTTP status it answers with: 400 bad input, 403 not allowed, 404 no such object
         (or not yours), 409 conflicts with the current state, 413 too large, 429 too many
@@ -31,15 +30,19 @@ class UserError(ValueError):
     def __init__(
         self,
         key: str,
-        message: str = "",
         /,
         *,
         status: int = 400,
         headers: dict[str, str] | None = None,
         **params: object,
     ) -> None:
-        super().__init__(message or key)
+        super().__init__(key)
         self.key = key
         self.status = status
         self.headers = headers or {}
         self.params = params
+
+    def __str__(self) -> str:
+        if not self.params:
+            return self.key
+        return f"{self.key} ({', '.join(f'{k}={v!r}' for k, v in self.params.items())})"

@@ -39,24 +39,18 @@ def json_safe(value):
 def _finite_float(text: str) -> float:
     value = float(text)
     if not math.isfinite(value) or abs(value) > LARGEST_NUMBER:
-        raise UserError(
-            "json.out_of_range", f"The number {text[:40]} is out of range.", number=text[:40]
-        )
+        raise UserError("json.out_of_range", number=text[:40])
     return value
 
 
 def _bounded_int(text: str) -> int:
     if len(text.lstrip("-")) > 300:
-        raise UserError(
-            "json.out_of_range", f"The number {text[:40]}… is out of range.", number=text[:40] + "…"
-        )
+        raise UserError("json.out_of_range", number=text[:40] + "…")
     return int(text)
 
 
 def _no_constant(name: str):
-    raise UserError(
-        "json.constant", f"{name} is not a number JSON allows: send finite numbers only.", name=name
-    )
+    raise UserError("json.constant", name=name)
 
 
 def loads_finite(body: bytes | str):
@@ -87,6 +81,6 @@ def loads_finite(body: bytes | str):
             parse_constant=_no_constant,
         )
     except RecursionError:
-        raise UserError("json.too_deep", "The JSON is nested too deeply.") from None
+        raise UserError("json.too_deep") from None
     except (json.JSONDecodeError, UnicodeDecodeError):
-        raise UserError("json.invalid", "The body is not valid JSON.") from None
+        raise UserError("json.invalid") from None

@@ -41,8 +41,6 @@ def parse_static_record(text: str) -> np.ndarray:
     if len(readings.positions) != 1:
         raise UserError(
             "allan.one_position",
-            "An Allan analysis needs one static record (one position), not "
-            f"{len(readings.positions)}.",
             count=len(readings.positions),
         )
     return readings.positions[0]
@@ -79,9 +77,7 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
     try:  # newline="": lines may end in \n, \r\n or a bare \r
         rows = list(csv.reader(io.StringIO(data.lstrip("\ufeff"), newline="")))
     except csv.Error as error:
-        raise UserError(
-            "csv.unreadable", f"The file cannot be read as CSV: {error}.", detail=str(error)
-        ) from None
+        raise UserError("csv.unreadable", detail=str(error)) from None
     values: list[float] = []
     times: list[float] = []
     for number, row in enumerate(rows, start=1):
@@ -93,7 +89,6 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
         if len(cells) > 2:
             raise UserError(
                 "csv.one_or_two_columns",
-                f"Line {number}: expected 'value' or 'time_s,value'.",
                 line=number,
             )
         numbers = [
@@ -104,7 +99,7 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
         if len(numbers) == 2:
             times.append(numbers[0])
     if times and len(times) != len(values):
-        raise UserError("csv.times_on_every_line", "Give a time on every line or on none.")
+        raise UserError("csv.times_on_every_line")
     if not values:
-        raise UserError("csv.empty", "The file has no readings.")
+        raise UserError("csv.empty")
     return np.array(values), (np.array(times) if times else None)

@@ -7,7 +7,7 @@ Every term of :class:`GyroPreset` is one of the measured-rate model's in
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 from app.core.flicker import DEFAULT_BAND_S
 from app.core.units import SECONDS_PER_HOUR
@@ -40,7 +40,6 @@ class GyroPreset:
     markov_sigma_deg_h: float = 0.0  # a Gauss–Markov bias, where a data sheet gives one
     markov_corr_time_s: float = 0.0
     source: str = ""
-    description: dict[str, str] = field(default_factory=dict)
 
     @classmethod
     def noise_only(
@@ -160,12 +159,6 @@ PRESETS: dict[str, GyroPreset] = {
         "dial 0.1°, level σ 0.1°, axis-to-dial misalignment σ 0.5° (the handout's latitude "
         "error of 1–2 %). Warm-up: bias 1 °/h decaying with τ = 5 min while the case warms "
         "by 8 °C.",
-        description={
-            "en": "The lab's FOG: readings every 10 s like the handout's (0.1 °/h steps, "
-            "~0.1 °/h scatter); let it warm up for a quarter of an hour.",
-            "zh-CN": "实验用光纤陀螺：每 10 秒一个读数，与讲义相近（0.1 °/h 步进，约 0.1 °/h "
-            "抖动）；开机后请预热约一刻钟。",
-        },
     ),
     "tactical-fog": GyroPreset(
         name="tactical-fog",
@@ -190,11 +183,6 @@ PRESETS: dict[str, GyroPreset] = {
         source="KVH DSP-1750 data sheet (lab-reference §5): ARW ≤ 0.012 °/√h, bias "
         "instability ≤ 0.05 °/h (flicker: a flat Allan floor from 0.1 s to a day), no rate random "
         "walk or correlation time given; scale factor ~100 ppm; warm-up 0.2 °/h with τ = 3 min.",
-        description={
-            "en": "Tactical-grade FOG (DSP-1750 class): heading to a few tenths of "
-            "a degree in minutes.",
-            "zh-CN": "战术级光纤陀螺（DSP-1750 级）：几分钟内寻北精度达零点几度。",
-        },
     ),
     "navigation-fog": GyroPreset(
         name="navigation-fog",
@@ -219,10 +207,6 @@ PRESETS: dict[str, GyroPreset] = {
         source="Navigation-grade FOG (lab-reference §5): ARW ≈ 0.002 °/√h, B < 0.01 °/h "
         "(0.008, flicker); "
         "warm-up 0.01 °/h with τ = 10 min.",
-        description={
-            "en": "Navigation-grade FOG: heading to a few hundredths of a degree.",
-            "zh-CN": "导航级光纤陀螺：寻北精度达百分之几度。",
-        },
     ),
     "mems": GyroPreset(
         name="mems",
@@ -248,11 +232,6 @@ PRESETS: dict[str, GyroPreset] = {
         "K 5 °/h/√h; turn-on bias "
         "0.1 °/s; g-sensitivity 0.01 °/s/g; 16-bit output over ±250 °/s; warm-up 20 °/h "
         "with τ = 1 min.",
-        description={
-            "en": "Consumer MEMS gyro: its noise and drift exceed Earth's rate, so it "
-            "cannot find north in a lab period.",
-            "zh-CN": "消费级 MEMS 陀螺：噪声和漂移超过地球自转角速度，一节实验课内无法寻北。",
-        },
     ),
 }
 

@@ -79,7 +79,6 @@ def _number(text: str, line: int, column: str) -> float:
     except NumberOutOfRange as error:
         raise UserError(
             "csv.out_of_range",
-            f"Line {line}, column {column}: '{text[:40]}' is out of range.",
             line=line,
             column=column,
             value=text[:40],
@@ -87,7 +86,6 @@ def _number(text: str, line: int, column: str) -> float:
     except ValueError as error:
         raise UserError(
             "csv.not_a_number",
-            f"Line {line}, column {column}: '{text}' is not a number.",
             line=line,
             column=column,
             value=text[:40],
@@ -122,16 +120,14 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
         rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))
     except csv.Error as error:
-        raise UserError(
-            "csv.unreadable", f"The file cannot be read as CSV: {error}.", detail=str(error)
-        ) from None
+        raise UserError("csv.unreadable", detail=str(error)) from None
     rows = [
         (number, row if delimiter == "," else [_point(cell) for cell in row])
         for number, row in enumerate(rows, start=1)
         if any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")
     ]
     if not rows:
-        raise UserError("csv.empty", "The file has no readings.")
+        raise UserError("csv.empty")
     header_line, header = rows[0]
     names = [_column_name(cell) for cell in header]
     if {"position", "value"} <= set(names):
@@ -151,9 +147,6 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     found = " | ".join(cell.strip() for cell in header)[:80]
     raise UserError(
         "csv.unknown_layout",
-        f"Line {header_line} reads '{found}': expected column names position_1, position_2, "
-        "… (or 位置1, 位置2 …; one column per position), position,angle_deg,value (one "
-        "reading per row), or a table of three or more columns of numbers.",
         line=header_line,
         found=found,
     )
@@ -213,7 +206,6 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
     if numbers != list(range(1, len(numbers) + 1)):
         raise UserError(
             "csv.position_columns",
-            "Position columns must be position_1 ... position_N without gaps.",
         )
     order = sorted(columns, key=columns.get)
     values: list[list[float]] = [[] for _ in order]
@@ -224,9 +216,7 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
                 values[slot].append(_number(cell, line, f"position_{slot + 1}"))
     for slot, column in enumerate(values, start=1):
         if not column:
-            raise UserError(
-                "readings.empty_position", f"Position {slot} has no readings.", position=slot
-            )
+            raise UserError("readings.empty_position", position=slot)
     return Readings([np.array(v) for v in values], None, None, "wide")
 
 
@@ -246,7 +236,7 @@ def _parse_long(names: list[str], rows) -> Readings:
 
         label = cell("position")
         if not label:
-            raise UserError("csv.no_position", f"Line {line}: the position is missing.", line=line)
+            raise UserError("csv.no_position", line=line)
         entry = grouped.get(label)
         if entry is None:
             entry = grouped[label] = {"values": [], "times": [], "temps": [], "angle": None}
@@ -263,13 +253,11 @@ def _parse_long(names: list[str], rows) -> Readings:
             elif abs(entry["angle"] - angle) > 1e-9:
                 raise UserError(
                     "csv.angle_changes",
-                    f"Line {line}: position {label} has angle {angle} but earlier rows say "
-                    f"{entry['angle']}.",
                     line=line,
                     position=label,
                 )
     if not labels:
-        raise UserError("csv.empty", "The file has no readings.")
+        raise UserError("csv.empty")
     if all(label.lstrip("-").isdigit() for label in labels):
         labels.sort(key=int)
     angles = None

@@ -48,14 +48,10 @@ def _longest_stretch(times: np.ndarray) -> tuple[slice, int, int, float]:
     steps = np.diff(times)
     interval = float(np.median(steps)) if steps.size else 0.0
     if not (interval > 0 and math.isfinite(interval)):
-        raise UserError(
-            "allan.bad_times", "The record's times do not increase; check the time column."
-        )
+        raise UserError("allan.bad_times")
     breaks = np.flatnonzero(steps >= 1.5 * interval)
     if np.any(steps <= 0):
-        raise UserError(
-            "allan.bad_times", "The record's times do not increase; check the time column."
-        )
+        raise UserError("allan.bad_times")
     edges = np.concatenate([[0], breaks + 1, [times.size]])
     lengths = np.diff(edges)
     longest = int(np.argmax(lengths))
@@ -165,9 +161,9 @@ def prepare_record(
             values = values[stretch]
             temperatures = None if temperatures is None else temperatures[stretch]
     if rate_hz is None:
-        raise UserError("allan.no_rate", "Give the sample rate (the record has no time column).")
+        raise UserError("allan.no_rate")
     if not (rate_hz > 0 and math.isfinite(rate_hz)):
-        raise UserError("allan.bad_rate", "The sample rate must be a positive number.")
+        raise UserError("allan.bad_rate")
     if values.size >= 32:
         values, spikes = _despike(values)
         if spikes.size:
@@ -204,8 +200,6 @@ def prepare_record(
         if record_s < 2.0 * max_tau_s:
             raise UserError(
                 "allan.too_short_for_tau",
-                f"The record covers {record_s:.0f} s; a τ of {max_tau_s:g} s needs at least "
-                f"{2 * max_tau_s:.0f} s (better ten times τ).",
                 seconds=round(record_s),
                 tau=max_tau_s,
                 minimum=round(2 * max_tau_s),

@@ -181,7 +181,6 @@ def heading_angles(
     if rotation not in ROTATIONS:
         raise UserError(
             "rotation.unknown",
-            f"Rotation must be 'ccw' or 'cw', not {rotation!r}.",
             rotation=rotation,
         )
     _check_schedule(start_deg, step_deg)
@@ -194,13 +193,10 @@ def _check_schedule(start_deg: float, step_deg: float) -> None:
     if not (math.isfinite(start_deg) and abs(start_deg) <= MAX_ANGLE_DEG):
         raise UserError(
             "angles.start_out_of_range",
-            f"The start angle must be a number of degrees within ±{MAX_ANGLE_DEG:g}.",
             limit=MAX_ANGLE_DEG,
         )
     if not (math.isfinite(step_deg) and abs(step_deg) <= 360.0):
-        raise UserError(
-            "angles.step_out_of_range", "The step between positions must be within ±360°."
-        )
+        raise UserError("angles.step_out_of_range")
 
 
 def elevation_angles(
@@ -234,23 +230,18 @@ def _clean_positions(positions: Sequence[Sequence[float]]) -> list[np.ndarray]:
         except (TypeError, ValueError) as error:
             raise UserError(
                 "readings.not_numbers",
-                f"Position {index} has readings that are not numbers.",
                 position=index,
             ) from error
         if array.size == 0:
-            raise UserError(
-                "readings.empty_position", f"Position {index} has no readings.", position=index
-            )
+            raise UserError("readings.empty_position", position=index)
         if not np.all(np.isfinite(array)):
             raise UserError(
                 "readings.not_finite",
-                f"Position {index} has a reading that is not a finite number (NaN or infinity).",
                 position=index,
             )
         if np.any(np.abs(array) > MAX_RATE_DEG_H):
             raise UserError(
                 "readings.out_of_range",
-                "A reading is out of range for an angular rate: check the unit.",
                 position=index,
             )
         arrays.append(array)
@@ -310,17 +301,15 @@ def fit_sinusoid(
     if angles.shape != (len(arrays),):
         raise UserError(
             "readings.angle_count",
-            f"There are {len(arrays)} positions but {angles.size} angles.",
             positions=len(arrays),
             angles=int(angles.size),
         )
     if not np.all(np.isfinite(angles)):
-        raise UserError("readings.angle_not_finite", "A position angle is not a finite number.")
+        raise UserError("readings.angle_not_finite")
     distinct = np.unique(np.round(np.mod(angles, 360.0), 6) % 360.0)
     if distinct.size < 3:
         raise UserError(
             "readings.too_few_angles",
-            f"At least 3 different angles are needed; got {distinct.size}.",
             distinct=int(distinct.size),
         )
     stats = tuple(position_stats(a) for a in arrays)
@@ -336,12 +325,7 @@ def fit_sinusoid(
             design = with_drift
     normal = design.T @ (counts[:, None] * design)
     if np.linalg.cond(normal) > 1e12:
-        raise UserError(
-            "readings.too_few_angles",
-            "The angles do not determine a sinusoid; use 3 or more different "
-            "angles spread around the circle.",
-            distinct=int(distinct.size),
-        )
+        raise UserError("readings.angles_degenerate")
     mapping = np.linalg.solve(normal, design.T * counts)  # L = (XᵀNX)⁻¹XᵀN
     a, c, b, *rest = mapping @ means
     noise = position_noise(arrays, angles, position_cov=position_cov)

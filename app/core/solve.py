@@ -68,14 +68,10 @@ def _check_significant(amplitude: float, sigma: float | None, what: str, scale: 
     if amplitude <= 1e-9 * max(scale, 1e-300) or (
         sigma is not None and amplitude < SIGNIFICANCE * sigma
     ):
-        sigma_text = f" ± {sigma:.3g}" if sigma is not None and math.isfinite(sigma) else ""
         raise UserError(
             "readings.amplitude_too_small",
-            f"The {what} amplitude ({amplitude:.3g}{sigma_text} °/h) is not clearly larger than "
-            "its uncertainty, so the direction cannot be determined. Take more readings per "
-            "position or use a less noisy gyro.",
             amplitude=round(amplitude, 4),
-            sigma=None if sigma is None else round(sigma, 4),
+            sigma=round(sigma, 4) if sigma is not None and math.isfinite(sigma) else None,
         )
 
 
@@ -405,7 +401,7 @@ def solve_latitude(
     lab-reference §3; the handout, part B.
     """
     if true_earth_rate_deg_h <= 0 or not math.isfinite(true_earth_rate_deg_h):
-        raise UserError("station.bad_earth_rate", "The true Earth rate must be positive.")
+        raise UserError("station.bad_earth_rate")
     fit = fit_sinusoid(
         positions,
         elevations_deg,
@@ -421,8 +417,6 @@ def solve_latitude(
     if abs(latitude) > 90.0:
         raise UserError(
             "readings.latitude_out_of_range",
-            f"The fitted latitude {latitude:.1f}° lies outside ±90°: check that position 1 is "
-            "the axis pointing north (0°) and that the angles increase towards the zenith.",
             latitude=round(latitude, 2),
         )
     check, shift = drift_and_its_effect(

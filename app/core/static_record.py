@@ -49,7 +49,6 @@ def _chosen(column: str, names: list[str]) -> int:
         return int(wanted) - 1
     raise UserError(
         "allan.no_such_column",
-        f"The record has no column {column!r}; its columns are: {', '.join(names)}.",
         column=column,
         columns=", ".join(names),
     )
@@ -70,7 +69,6 @@ def _columns(
     if len(wide) > 1:  # the wide layout: one column per position
         raise UserError(
             "allan.one_position",
-            f"An Allan analysis needs one static record (one position), not {len(wide)}.",
             count=len(wide),
         )
     value = find((*VALUE_NAMES, *wide))
@@ -81,8 +79,6 @@ def _columns(
             )
         raise UserError(
             "allan.no_value_column",
-            "The record has a header but no 'value' column; its columns are: "
-            f"{', '.join(names)} (choose one).",
             columns=", ".join(names),
         )
     return value, find(TIME_NAMES), find(TEMPERATURE_NAMES), find(("position",))
@@ -144,8 +140,6 @@ def read_static_record(
                 if len(positions) > 1:
                     raise UserError(
                         "allan.one_position",
-                        "An Allan analysis needs one static record (one position), not "
-                        f"{len(positions)}.",
                         count=len(positions),
                     )
                 position_seen = next(iter(positions))
@@ -158,14 +152,12 @@ def read_static_record(
             bad = _first_bad_line(block, layout)
             raise UserError(
                 "allan.bad_line",
-                f"Line {first_line + bad} of the record is not a reading.",
                 line=first_line + bad,
             ) from None
         count += len(block)
         if count > MAX_SAMPLES:
             raise UserError(
                 "allan.too_many",
-                f"The record has more than {MAX_SAMPLES:,} readings.",
                 maximum=MAX_SAMPLES,
             )
         block = []
@@ -195,7 +187,6 @@ def read_static_record(
         if len(cells) != width:
             raise UserError(
                 "allan.bad_line",
-                f"Line {line_number} of the record is not a reading.",
                 line=line_number,
             )
         if not block:
@@ -206,7 +197,7 @@ def read_static_record(
     if layout is not None:
         flush()
     if not values:
-        raise UserError("allan.empty", "The record holds no readings.")
+        raise UserError("allan.empty")
     data = np.concatenate(values)
     record = StaticRecord(
         data,
@@ -214,7 +205,7 @@ def read_static_record(
         np.concatenate(temps) if temps else None,
     )
     if not np.all(np.isfinite(record.values)):
-        raise UserError("readings.not_finite", "A reading is not a finite number.")
+        raise UserError("readings.not_finite")
     return record
 
 
@@ -276,7 +267,6 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
         except UnicodeDecodeError:
             raise UserError(
                 "csv.encoding",
-                "The file is not text (UTF-8 or GB18030): save it as CSV and try again.",
             ) from None
         parts = pending.replace("\r\n", "\n").replace("\r", "\n").split("\n")
         pending = parts.pop()

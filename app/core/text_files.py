@@ -43,6 +43,4 @@ def decode_text(data: bytes) -> str:
             continue
         if not any(ord(ch) < 32 and ch not in "\t\r\n" for ch in text):
             return text
-    raise UserError(
-        "csv.encoding", "The file is not text (UTF-8 or GB18030): save it as CSV and try again."
-    )
+    raise UserError("csv.encoding")

@@ -209,16 +209,16 @@ def solve_seeker(
     """
     values = (*first, *second, pitch_deg, roll_deg, latitude_deg, earth_rate_deg_h)
     if not all(math.isfinite(v) for v in values):
-        raise UserError("the seeker needs finite rates and angles")
+        raise UserError("seeker.not_finite")
     t, g = math.radians(pitch_deg), math.radians(roll_deg)
     if math.cos(t) < 1e-6 or math.cos(g) < 1e-6:
-        raise UserError("pitch and roll must be well inside ±90°")
+        raise UserError("seeker.tilt_too_large")
     wx = (first[0] - second[0]) / 2.0
     wy = (first[1] - second[1]) / 2.0
     lz = earth_rate_deg_h * math.sin(math.radians(latitude_deg))
     lx, ly = _undo_tilt(wx, wy, lz, t, g)
     if math.hypot(lx, ly) == 0.0:
-        raise UserError("no horizontal Earth rate: the azimuth is undefined")
+        raise UserError("seeker.no_horizontal")
     return SeekerResult(math.degrees(math.atan2(ly, lx)) % 360.0, (lx, ly))
 
 

@@ -54,9 +54,7 @@ def canonical_unit(unit: str) -> str:
     """
     name = ALIASES.get(unit.strip(), unit.strip())
     if name not in TO_DEG_PER_HOUR:
-        raise UserError(
-            "unit.unknown", f"Unknown unit '{unit}': use one of {', '.join(UNITS)}.", unit=unit
-        )
+        raise UserError("unit.unknown", unit=unit)
     return name
 
 
@@ -86,7 +84,6 @@ def to_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:
     if not np.all(np.isfinite(converted)) and np.all(np.isfinite(array)):
         raise UserError(
             "readings.out_of_range",
-            "A reading is out of range for an angular rate: check the unit.",
         )
     return converted
 

@@ -43,8 +43,6 @@ def _check_length(seconds: float) -> None:
     if not seconds >= MIN_RECORD_S:
         raise UserError(
             "characterisation.too_short",
-            f"The record covers {seconds:.0f} s; at least {MIN_RECORD_S:.0f} s (better: hours) "
-            "are needed to see the slow terms.",
             seconds=round(seconds) if math.isfinite(seconds) else 0,
             minimum=round(MIN_RECORD_S),
         )
@@ -64,7 +62,6 @@ def characterise(
     ):
         raise UserError(
             "characterisation.bad_rate",
-            "The sample rate must be a number of readings per second, up to 10000.",
         )
     record = read_static_record(text_lines(source), column=column)
     if rate_hz is not None:
@@ -76,7 +73,6 @@ def characterise(
     if result.rate_hz > MAX_RATE_HZ:
         raise UserError(
             "characterisation.bad_rate",
-            "The sample rate must be a number of readings per second, up to 10000.",
         )
     noise = result.noise()
     seconds = result.samples / result.rate_hz

@@ -45,6 +45,7 @@ from app.lab.uploads import Upload
 from app.models import InputMethod, LabSession
 from app.web.deps import ObjectId, RowWriteSession, SessionDep, SettingsDep
 from app.web.errors import API_ERRORS
+from app.web.i18n import translate
 
 router = APIRouter(prefix="/api/v1", tags=["api"], responses=API_ERRORS)
 
@@ -281,7 +282,9 @@ def results_body(entry: CachedResults) -> bytes:
         for part, outcome in entry.parts.items():
             payload[part] = json_safe(outcome.to_json())
             if outcome.result is None and outcome.error is not None:
-                payload["problems"][part] = str(outcome.error)
+                # in English: one cached body serves every reader
+                error = outcome.error
+                payload["problems"][part] = translate(error.key, "en", **error.params)
         entry.payload = ResultsOut.model_validate(payload).model_dump_json().encode()
     return entry.payload
 

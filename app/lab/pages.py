@@ -57,7 +57,7 @@ from app.models import (
     utcnow,
 )
 from app.web.deps import MAX_ID, RowWriteSession, SessionDep
-from app.web.i18n import is_known, translator
+from app.web.i18n import translator
 from app.web.render import (
     csrf_token_for,
     flash,
@@ -414,8 +414,8 @@ JS_MESSAGES = (
 
 
 def error_text(error: UserError, _) -> str:
-    """A core error in the page's language (English text when no translation exists)."""
-    return _(error.key, **error.params) if is_known(error.key) else str(error)
+    """A core error in the page's language."""
+    return _(error.key, **error.params)
 
 
 def drawing_coordinates(session: LabSession) -> dict[str, dict[int, tuple]]:

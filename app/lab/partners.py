@@ -98,18 +98,18 @@ def join(db: Session, user: User, code: str) -> LabSession:
     )
     assignment = db.get(Assignment, session.assignment_id) if session else None
     if session is None or assignment is None or assignment.group_size <= 1:
-        raise UserError("partners.no_such_code", "No group has this code.", status=404)
+        raise UserError("partners.no_such_code", status=404)
     enrolled = db.exec(
         select(Enrollment.id)
         .join(Course, Course.id == Enrollment.course_id)
         .where(Course.id == assignment.course_id, Enrollment.student_id == user.id)
     ).first()
     if enrolled is None:
-        raise UserError("partners.no_such_code", "No group has this code.", status=404)
+        raise UserError("partners.no_such_code", status=404)
     if is_member(db, session, user):
         return session
     if member_map(db, assignment).get(user.id) is not None:
-        raise UserError("partners.already_in_group", "You are already in a group.", status=409)
+        raise UserError("partners.already_in_group", status=409)
     size = (
         1
         + db.exec(

@@ -54,8 +54,6 @@ def check_storage(
     if used + adding > limit:
         raise UserError(
             "lab.storage_full",
-            f"Your recordings would use more than your {limit // 2**20} MB of storage. "
-            "Ask your teacher to remove old re-recordings.",
             status=413,
             limit_mb=limit // 2**20,
         )

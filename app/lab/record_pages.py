@@ -51,7 +51,7 @@ class ManualReadings(BaseModel):
 def save_manual(session: ManualSession, db: SessionDep, body: Annotated[ManualReadings, Body()]):
     columns = {k: np.asarray(v, dtype=float) for k, v in body.columns.items() if len(v)}
     if not columns:
-        raise UserError("readings.none", "Type at least one reading.")
+        raise UserError("readings.none")
     saved = record_positions(
         db, session, part=body.part, unit=body.unit, columns=columns, source=InputMethod.manual
     )
@@ -71,7 +71,6 @@ def parse_csv_upload(body: CsvUpload) -> Readings:
     if len(body.text) > MAX_CSV_CHARS:
         raise UserError(
             "lab.file_too_large",
-            "The file is larger than 5 MB.",
             limit_mb=MAX_CSV_CHARS // 1_000_000,
         )
     readings = parse_readings_csv(body.text, part=body.part)
@@ -85,8 +84,6 @@ def check_position_count(count: int, limit: int) -> None:
     if count > limit:
         raise UserError(
             "lab.too_many_positions",
-            f"The file has {count} positions; at most {limit} "
-            "(8 in the symmetric order 1-2-3-4-4-3-2-1).",
             count=count,
             limit=limit,
         )
@@ -218,7 +215,7 @@ def set_order(
     response = redirect(f"/lab/sessions/{session.id}")
     try:
         if symmetric not in ("on", "off"):
-            raise UserError("lab.bad_order", "Choose the order: on or off.")
+            raise UserError("lab.bad_order")
         set_symmetric_order(db, session, symmetric == "on")
     except UserError as error:
         db.rollback()

@@ -210,7 +210,6 @@ def solve_part(
     if len(data) < 3:
         outcome.error = UserError(
             "lab.need_positions",
-            "Record at least 3 positions to compute a result.",
             recorded=len(data),
         )
         return outcome

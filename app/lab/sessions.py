@@ -68,10 +68,9 @@ def start_session(
     if not all(math.isfinite(a) for a in angles) or abs(settings.latitude_step_deg) < 1:
         raise UserError(
             "lab.bad_angles",
-            "The start angles and the step must be finite numbers, the step at least 1°.",
         )
     if settings.rotation not in ("ccw", "cw"):
-        raise UserError("rotation.unknown", "Rotation must be 'ccw' or 'cw'.")
+        raise UserError("rotation.unknown", rotation=str(settings.rotation)[:20])
     if assignment is not None:
         existing = db.exec(
             select(LabSession).where(
@@ -108,13 +107,11 @@ def start_session(
         ensure_partner_code(db, session, assignment)
     else:
         if settings.latitude_deg is None or settings.earth_rate_deg_h is None:
-            raise UserError("lab.station_required", "Enter the station's latitude and Earth rate.")
+            raise UserError("lab.station_required")
         if not (math.isfinite(settings.latitude_deg) and -90 <= settings.latitude_deg <= 90):
-            raise UserError("lab.bad_latitude", "The latitude must be between −90° and 90°.")
+            raise UserError("lab.bad_latitude")
         if not (math.isfinite(settings.earth_rate_deg_h) and 0 < settings.earth_rate_deg_h < 1000):
-            raise UserError(
-                "lab.bad_earth_rate", "The Earth rate must be a positive number of °/h."
-            )
+            raise UserError("lab.bad_earth_rate")
         session.latitude_deg = settings.latitude_deg
         session.earth_rate_deg_h = settings.earth_rate_deg_h
         session.simulator_preset = settings.preset if settings.preset in PRESETS else "teaching-fog"

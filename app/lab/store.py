@@ -62,12 +62,10 @@ def load_samples(db: Session, take: Take) -> tuple[np.ndarray, np.ndarray | None
 def check_position(session: LabSession, part: str, position: int) -> None:
     """A position this session's schedule has (5–8 only in the symmetric order)."""
     if part not in PARTS or not 1 <= position <= POSITIONS:
-        raise UserError("lab.bad_position", f"There is no position {position}.", position=position)
+        raise UserError("lab.bad_position", position=position)
     if position > position_count(session):
         raise UserError(
             "lab.needs_symmetric",
-            f"Position {position} belongs to the symmetric order 1-2-3-4-4-3-2-1; switch it on "
-            "first.",
             position=position,
         )
 
@@ -87,7 +85,6 @@ def set_symmetric_order(db: Session, session: LabSession, symmetric: bool) -> No
         if in_return_pass is not None:
             raise UserError(
                 "lab.return_pass_recorded",
-                "Positions 5–8 already hold readings; the symmetric order stays on.",
             )
     session.symmetric_order = symmetric
     session.updated_at = utcnow()
@@ -133,13 +130,10 @@ def store_take(
     check_editable(session)
     check_position(session, part, position)
     if values.size == 0:
-        raise UserError(
-            "readings.empty_position", f"Position {position} has no readings.", position=position
-        )
+        raise UserError("readings.empty_position", position=position)
     if values.size > MAX_SAMPLES_PER_POSITION:
         raise UserError(
             "lab.too_many_samples",
-            f"At most {MAX_SAMPLES_PER_POSITION} readings per position.",
             limit=MAX_SAMPLES_PER_POSITION,
         )
     _check_values(session, position, values)
@@ -149,8 +143,6 @@ def store_take(
     if check_minimum and values.size < session.min_readings:
         raise UserError(
             "lab.too_few_readings",
-            f"Position {position} has {values.size} readings; at least "
-            f"{session.min_readings} are required.",
             position=position,
             n=int(values.size),
             minimum=session.min_readings,
@@ -227,7 +219,6 @@ def append_samples(
         if offset > stored:
             raise UserError(
                 "lab.offset_gap",
-                f"Expected offset {stored}, got {offset}: some samples are missing.",
                 status=409,
                 expected=stored,
             )
@@ -238,7 +229,7 @@ def append_samples(
     if take is None or not values.size:
         if take is None:
             if not values.size:
-                raise UserError("readings.empty_position", "No samples to add.")
+                raise UserError("readings.empty_position", position=position)
             new = store_take(
                 db,
                 session,
@@ -257,7 +248,6 @@ def append_samples(
     if stored + values.size > MAX_SAMPLES_PER_POSITION:
         raise UserError(
             "lab.too_many_samples",
-            f"At most {MAX_SAMPLES_PER_POSITION} readings per position.",
             limit=MAX_SAMPLES_PER_POSITION,
         )
     _check_values(session, position, values)
@@ -268,14 +258,11 @@ def append_samples(
     ).all()
     has_times = all(chunk.times is not None for chunk in existing)
     if has_times != (times is not None):
-        raise UserError(
-            "lab.times_mismatch", "Send times with every batch of a position, or with none."
-        )
+        raise UserError("lab.times_mismatch")
     has_temperatures = all(chunk.temperatures is not None for chunk in existing)
     if has_temperatures != (temperatures is not None):
         raise UserError(
             "lab.temperatures_mismatch",
-            "Send temperatures with every batch of a position, or with none.",
         )
     check_storage(db, session, values, times, temperatures, copying=take if take.frozen else None)
     if take.frozen:  # submitted data never changes: continue in a copy of the take
@@ -347,15 +334,12 @@ def _check_angle_and_times(
     if not math.isfinite(angle_deg) or abs(angle_deg) > MAX_ANGLE_DEG:
         raise UserError(
             "lab.bad_angle",
-            f"The angle of position {position} must be a finite number of degrees "
-            f"(at most ±{MAX_ANGLE_DEG:g}).",
             position=position,
             limit=MAX_ANGLE_DEG,
         )
     if times is not None and (times.size != n_values or not np.all(np.isfinite(times))):
         raise UserError(
             "lab.bad_times",
-            f"Position {position}: give one finite time per reading.",
             position=position,
         )
 
@@ -373,8 +357,6 @@ def _check_temperatures(position: int, temperatures: np.ndarray | None, n_values
     ):
         raise UserError(
             "lab.bad_temperatures",
-            f"Position {position}: give one temperature per reading, in °C "
-            f"(at most ±{PLAUSIBLE_TEMPERATURE_C:g}).",
             position=position,
             limit=PLAUSIBLE_TEMPERATURE_C,
         )
@@ -382,13 +364,9 @@ def _check_temperatures(position: int, temperatures: np.ndarray | None, n_values
 
 def _check_values(session: LabSession, position: int, values: np.ndarray) -> None:
     if not np.all(np.isfinite(values)):
-        raise UserError(
-            "readings.not_finite", "A reading is not a finite number.", position=position
-        )
+        raise UserError("readings.not_finite", position=position)
     if values.size and float(np.max(np.abs(values))) > PLAUSIBLE_RATE_DEG_H:
         raise UserError(
             "lab.implausible_rate",
-            f"Position {position} has readings above {PLAUSIBLE_RATE_DEG_H:g} °/h, far more than "
-            "a gyro at rest can read: check the unit.",
             position=position,
         )

@@ -40,7 +40,6 @@ def submit(db: Session, session: LabSession) -> Attempt:
     ):
         raise UserError(
             "lab.no_attempts_left",
-            f"All {assignment.max_attempts} attempts are used.",
             status=409,
             limit=assignment.max_attempts,
         )
@@ -48,14 +47,10 @@ def submit(db: Session, session: LabSession) -> Attempt:
     due = due_for(db, assignment, session.owner_id)
     late = bool(due and now > due)
     if late and assignment.late_policy == LatePolicy.refuse:
-        raise UserError(
-            "lab.past_due", "The due date has passed; submissions are closed.", status=409
-        )
+        raise UserError("lab.past_due", status=409)
     results = cached_results(db, session, assignment).parts
     if all(outcome.result is None for outcome in results.values()):
-        raise UserError(
-            "lab.nothing_to_submit", "There is no result to submit yet: record the positions first."
-        )
+        raise UserError("lab.nothing_to_submit")
     takes = current_takes(db, session.id)
     for take in takes:  # an attempt's takes never change again (appends copy them)
         take.frozen = True

@@ -22,9 +22,7 @@ def current_take(db: Session, session: LabSession, part: str, position: int) -> 
         )
     ).first()
     if take is None:
-        raise UserError(
-            "lab.nothing_to_trim", "Position {position} has no recording yet.", position=position
-        )
+        raise UserError("lab.nothing_to_trim", position=position)
     return take
 
 
@@ -38,14 +36,12 @@ def trim_position(db: Session, session: LabSession, *, part: str, position: int,
     if not 0 <= trim < take.n_samples:
         raise UserError(
             "lab.bad_trim",
-            f"Trim between 0 and {take.n_samples - 1} readings.",
             high=max(take.n_samples - 1, 0),
         )
     left = take.n_samples - trim
     if trim and left < session.min_readings:
         raise UserError(
             "lab.trim_too_much",
-            f"Only {left} readings would remain; at least {session.min_readings} are required.",
             left=left,
             minimum=session.min_readings,
         )

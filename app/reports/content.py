@@ -72,7 +72,7 @@ def _attempt(db: Session, session: LabSession, number: int) -> Attempt:
         select(Attempt).where(Attempt.session_id == session.id, Attempt.number == number)
     ).first()
     if attempt is None:
-        raise UserError("report.no_such_attempt", "There is no such attempt.", status=404)
+        raise UserError("report.no_such_attempt", status=404)
     return attempt
 
 

@@ -28,7 +28,6 @@ def save_discussion(db: Session, session: LabSession, text: str) -> None:
     if len(cleaned) > DISCUSSION_MAX:
         raise UserError(
             "report.discussion_too_long",
-            f"The discussion is longer than {DISCUSSION_MAX} characters.",
             limit=DISCUSSION_MAX,
         )
     if cleaned == session.discussion:

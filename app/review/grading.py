@@ -54,7 +54,6 @@ def _points(text: str, low: float, high: float, field: str) -> float | None:
     if not math.isfinite(value) or not low <= value <= high:
         raise UserError(
             "review.bad_points",
-            f"{field}: enter a number from {low:g} to {high:g}.",
             field=field,
             low=f"{low:g}",
             high=f"{high:g}",
@@ -116,9 +115,9 @@ def release(db: Session, session: LabSession, attempt: Attempt) -> int:
     grade queued for every LMS student of the session (``lms_outbox``); returns how many
     grade posts were queued (ring ``lms_outbox.wake_sender`` after the commit)."""
     if attempt.points is None:
-        raise UserError("review.points_required", "Enter the points before releasing.")
+        raise UserError("review.points_required")
     if session.status not in (SessionStatus.submitted, SessionStatus.returned):
-        raise UserError("review.cannot_release", "Only submitted work can be released.", status=409)
+        raise UserError("review.cannot_release", status=409)
     attempt.released_at = utcnow()
     attempt.seen_at = None
     session.status = SessionStatus.graded

@@ -112,7 +112,7 @@ def _record_source(record: UploadFile):
     magic = handle.read(2)
     handle.seek(0)
     if not magic:
-        raise UserError("characterisation.no_file", "Choose the record's CSV file.")
+        raise UserError("characterisation.no_file")
     if magic == b"\x1f\x8b":
         return gzip.GzipFile(fileobj=handle, mode="rb")
     return handle
@@ -143,7 +143,7 @@ def upload_characterisation(
         return response
     try:
         if record is None:
-            raise UserError("characterisation.no_file", "Choose the record's CSV file.")
+            raise UserError("characterisation.no_file")
         rate = None
         if rate_hz.strip():
             try:
@@ -156,9 +156,7 @@ def upload_characterisation(
                     _record_source(record), rate, unit, column.strip() or None
                 )
         except (OSError, EOFError):  # a truncated or corrupt gzip stream
-            raise UserError(
-                "characterisation.bad_gzip", "The compressed file is damaged or incomplete."
-            ) from None
+            raise UserError("characterisation.bad_gzip") from None
     except UserError as error:
         flash(response, request, error.key, "error", **error.params)
         return response

@@ -24,7 +24,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from app.core.exceptions import UserError
 from app.db import UnstorableText, database_busy, get_engine, storage_unavailable
 from app.web.deps import LoginRequired, PasswordChangeRequired, reload_login
-from app.web.i18n import is_known, translate
+from app.web.i18n import translate
 from app.web.render import redirect, render, request_language
 
 log = logging.getLogger("gyrolab")
@@ -50,10 +50,8 @@ def wants_json(request: Request) -> bool:
 
 
 def message_for(error: UserError, language: str) -> str:
-    """The error in the reader's language (its English sentence when the key is unknown)."""
-    if is_known(error.key):
-        return translate(error.key, language, **error.params)
-    return str(error)
+    """The error in the reader's language, from the catalogue (the one source of its words)."""
+    return translate(error.key, language, **error.params)
 
 
 def error_response(request: Request, error: UserError) -> Response:

@@ -44,7 +44,7 @@ def valid_zone_name(name: str) -> str:
     """``name`` if it is an IANA zone, else a UserError."""
     name = name.strip()
     if name not in available_timezones():
-        raise UserError("course.bad_timezone", "Choose a time zone from the list.", name=name[:64])
+        raise UserError("course.bad_timezone", name=name[:64])
     return name
 
 
