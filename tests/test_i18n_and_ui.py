@@ -201,3 +201,20 @@ def test_user_errors_carry_a_key_and_every_parameter_of_its_words():
         assert not missing, f"{place}: {key} needs {sorted(missing)}"
         checked += 1
     assert checked > 200
+
+
+def test_no_words_in_two_languages_are_kept_in_python():
+    """The catalogues are the one source of words: no ``{"en": ..., "zh-CN": ...}`` left in
+    the code (the language list itself, app/web/i18n.py, names each language once)."""
+    import ast
+
+    found = []
+    for path in (PROJECT_ROOT / "app").rglob("*.py"):
+        if path.name == "i18n.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Dict):
+                keys = {k.value for k in node.keys if isinstance(k, ast.Constant)}
+                if {"en", "zh-CN"} <= keys:
+                    found.append(f"{path.name}:{node.lineno}")
+    assert not found

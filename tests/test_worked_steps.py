@@ -10,17 +10,23 @@ import numpy as np
 import pytest
 
 from app.core.exceptions import UserError
-from app.core.explain import explain_heading, explain_latitude, render_text
+from app.core.explain import Words, explain_heading, explain_latitude, render_text
 from app.core.readings import parse_readings_csv
 from app.core.sinusoid import heading_angles
 from app.core.solve import solve_heading, solve_latitude
 from app.core.units import to_deg_per_hour
+from app.web.i18n import translator
 from tests.factories import english, handout
 
 HEADING = handout("handout_horizontal.csv")
 VERTICAL = handout("handout_vertical.csv")
 ANGLES = heading_angles(4, "ccw")
 ELEVATIONS = [0.0, 90.0, 180.0, 270.0]
+
+
+def said(words: Words, language: str = "en") -> str:
+    """A step's words as the reader sees them."""
+    return translator(language)(words.key, **words.params)
 
 
 def unequal(table: dict[int, list[float]]) -> list[list[float]]:
@@ -70,8 +76,8 @@ def test_unequal_counts_show_the_fit_that_is_used():
     closed = math.degrees(math.atan((means[3] - means[1]) / (means[0] - means[2])))
     assert abs(closed - result.theta_deg) > 0.05  # they differ at the precision shown
     steps = explain_heading(result)
-    text = render_text(steps, "en")
-    fit_step = next(s for s in steps if "each reading counts once" in s.title["en"])
+    text = render_text(steps, translator("en"))
+    fit_step = next(s for s in steps if "each reading counts once" in said(s.title))
     fit_text = "\n".join(fit_step.lines)
     x, y = numbers_after(fit_text, "x = H·cos A1")
     assert math.degrees(math.atan2(y, x)) % 360 == pytest.approx(result.azimuth_deg, abs=0.01)
@@ -80,9 +86,9 @@ def test_unequal_counts_show_the_fit_that_is_used():
     assert theta == pytest.approx(result.theta_deg, abs=0.005)
     assert math.degrees(math.atan(ratio)) == pytest.approx(theta, abs=0.01)
     # the handout's closed form is there, clearly labelled, with its own (different) θ
-    comparison = next(s for s in steps if s.title["en"].startswith("For comparison, not used"))
+    comparison = next(s for s in steps if said(s.title).startswith("For comparison, not used"))
     assert f"{closed:.2f}°" in comparison.lines[-1]
-    assert "未采用" in comparison.title["zh-CN"]
+    assert "未采用" in said(comparison.title, "zh-CN")
     # H shown is the H reported
     assert f"H = √(x² + y²) = {result.amplitude_deg_h:.3f}" in text
     assert math.hypot(x, y) == pytest.approx(result.amplitude_deg_h, abs=1e-3)
@@ -90,11 +96,11 @@ def test_unequal_counts_show_the_fit_that_is_used():
 
 def test_equal_counts_keep_the_handout_form():
     result = solve_heading([HEADING[k] for k in range(1, 5)], ANGLES)
-    text = render_text(explain_heading(result), "en")
+    text = render_text(explain_heading(result), translator("en"))
     assert "tan θ = (ω4 − ω2) / (ω1 − ω3)" in text and "θ = arctan(-0.1899) = -10.75°" in text
     assert "For comparison" not in text
     assert "From position 1, turn the table counter-clockwise by 10.75°" in text
-    assert "从位置 1 起" in render_text(explain_heading(result), "zh-CN")
+    assert "从位置 1 起" in render_text(explain_heading(result), translator("zh-CN"))
 
 
 def test_latitude_with_unequal_counts_shows_the_fit():
@@ -103,13 +109,13 @@ def test_latitude_with_unequal_counts_shows_the_fit():
     a, c, _ = weighted_fit(positions, ELEVATIONS)
     assert result.latitude_deg == pytest.approx(math.degrees(math.atan2(c, a)), abs=1e-9)
     steps = explain_latitude(result)
-    fit_step = next(s for s in steps if "each reading counts once" in s.title["en"])
+    fit_step = next(s for s in steps if "each reading counts once" in said(s.title))
     fit_text = "\n".join(fit_step.lines)
     assert f"φ = atan2(c, a) = {result.latitude_deg:.2f}°" in fit_text
     assert f"Ω = √(a² + c²) = {result.earth_rate_deg_h:.3f}" in fit_text
     means = [np.mean(p) for p in positions]
     closed = math.degrees(math.atan2(means[1] - means[3], means[0] - means[2]))
-    comparison = next(s for s in steps if s.title["en"].startswith("For comparison, not used"))
+    comparison = next(s for s in steps if said(s.title).startswith("For comparison, not used"))
     assert f"φ = {closed:.2f}°" in comparison.lines
     assert abs(closed - result.latitude_deg) > 0.05
 
@@ -118,7 +124,7 @@ def test_latitude_error_in_degrees():
     result = solve_latitude([VERTICAL[k] for k in range(1, 5)], ELEVATIONS, true_latitude_deg=39.93)
     assert result.latitude_error_deg == pytest.approx(result.latitude_deg - 39.93)
     assert result.to_json()["latitude_error_deg"] == pytest.approx(0.797, abs=1e-3)
-    assert "Δφ = φ − φ0 = 0.80°" in render_text(explain_latitude(result))
+    assert "Δφ = φ − φ0 = 0.80°" in render_text(explain_latitude(result), translator("en"))
     near_equator = solve_latitude(
         [VERTICAL[k] for k in range(1, 5)], ELEVATIONS, true_latitude_deg=0.01
     )
@@ -216,7 +222,7 @@ def test_closure_consistency_is_checked_and_flagged():
     assert bumped.fit.closure_consistent is False
     sigma_d = math.sqrt(sum(s**2 for s in bumped.fit.position_sigmas)) / 2
     assert bumped.to_json()["closure_sigma_deg_h"] == pytest.approx(sigma_d)
-    assert f"(σ_d = {sigma_d:.3f} °/h)" in render_text(explain_heading(bumped))
+    assert f"(σ_d = {sigma_d:.3f} °/h)" in render_text(explain_heading(bumped), translator("en"))
 
 
 def test_a_refusal_never_prints_a_non_finite_sigma():

@@ -130,7 +130,9 @@ def _solve(args: argparse.Namespace) -> int:
         print(to_json_text(payload))
         return 0
     steps = explain_heading(result) if args.part == "heading" else explain_latitude(result)
-    print(render_text(steps, args.language))
+    from app.web.i18n import translator
+
+    print(render_text(steps, translator(args.language)))
     if warm_up is not None:
         print(warm_up["note"])
     if result.drift_check is not None and result.drift_check.flagged:

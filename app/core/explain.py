@@ -1,13 +1,16 @@
 """The handout's calculation written out with the student's numbers substituted.
 
-Each :class:`Step` has a bilingual title and lines of mathematics (language-neutral), so
-the command line, the pages and exports all show the same worked solution.
+Each :class:`Step` has a title, and perhaps a legend and a conclusion, as message keys
+with their numbers (:class:`Words`: the catalogues hold the words in each language), and
+lines of mathematics (language-neutral), so the command line, the pages and the reports
+all show the same worked solution.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -15,31 +18,25 @@ from app.core.solve import HeadingResult, LatitudeResult
 
 
 @dataclass(frozen=True)
+class Words:
+    """A message key of the catalogues and the values of its ``{placeholders}``."""
+
+    key: str
+    params: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
 class Step:
-    title: dict[str, str]
+    title: Words
     lines: tuple[str, ...]
-    sentence: dict[str, str] | None = None  # a conclusion in words, per language
-    legend: dict[str, str] | None = None  # what the symbols of the lines mean, per language
+    sentence: Words | None = None  # a conclusion in words
+    legend: Words | None = None  # what the symbols of the lines mean
 
 
-AZIMUTH_LEGEND = {
-    "en": "A1: the azimuth of position 1, clockwise from true north.",
-    "zh-CN": "A1：位置 1 的方位角，自真北顺时针计。",
-}
-FIT_LEGEND = {
-    "en": "α: each position's angle, clockwise; A1: the azimuth of position 1, clockwise "
-    "from true north.",
-    "zh-CN": "α：各位置的转角（顺时针）；A1：位置 1 的方位角，自真北顺时针计。",
-}
-AMPLITUDE_LEGEND = {
-    "en": "d: the closure (ω1 + ω3 − ω2 − ω4)/2, zero but for noise; ΔA1: the error "
-    "against the true azimuth.",
-    "zh-CN": "d：闭合差 (ω1 + ω3 − ω2 − ω4)/2，除噪声外应为零；ΔA1：相对真方位角的误差。",
-}
-ELEVATION_LEGEND = {
-    "en": "e: each position's elevation above the north horizon.",
-    "zh-CN": "e：各位置相对北向水平线的仰角。",
-}
+AZIMUTH_LEGEND = Words("steps.legend_azimuth")
+FIT_LEGEND = Words("steps.legend_fit")
+AMPLITUDE_LEGEND = Words("steps.legend_amplitude")
+ELEVATION_LEGEND = Words("steps.legend_elevation")
 
 
 def _f(value: float, digits: int = 3) -> str:
@@ -53,24 +50,9 @@ def _p(value: float, digits: int = 3) -> str:
 
 
 MODEL_NOTES = {
-    "white": {
-        "en": "1σ of each mean: s/√n, widened by Student's t for few readings "
-        "(a 1σ-equivalent interval); this assumes white noise.",
-        "zh-CN": "各平均值的 1σ：s/√n，读数较少时按学生 t 分布放宽（等效 1σ 区间）；"
-        "此处假定噪声为白噪声。",
-    },
-    "closure": {
-        "en": "One reading per position: the noise is estimated from the closure residual "
-        "d alone (one degree of freedom, Student's t), so the 1σ is rough.",
-        "zh-CN": "每个位置只有一个读数：噪声仅由闭合残差 d 估计（一个自由度，学生 t 分布），"
-        "因此 1σ 只是粗略估计。",
-    },
-    "allan": {
-        "en": "1σ of each mean from the gyro's noise model over that position's recording "
-        "time (correlated noise and the table's indexing error included).",
-        "zh-CN": "各平均值的 1σ 取自陀螺噪声模型在该位置记录时长上的结果"
-        "（包含相关噪声与转台分度误差）。",
-    },
+    "white": Words("steps.model_white"),
+    "closure": Words("steps.model_closure"),
+    "allan": Words("steps.model_allan"),
 }
 
 
@@ -87,20 +69,17 @@ def _means_step(fit) -> Step:
             shows_sigma = True
         lines.append(line + ")")
     return Step(
-        {"en": "Average the readings at each position", "zh-CN": "求各位置读数的平均值"},
+        Words("steps.means"),
         tuple(lines),
         MODEL_NOTES.get(fit.uncertainty_model),
         legend=MEANS_LEGEND if shows_sigma else None,
     )
 
 
-MEANS_LEGEND = {
-    "en": "s: the readings' standard deviation; σi: the 1σ of mean ωi that the result uses.",
-    "zh-CN": "s：读数的标准差；σi：结果所用的平均值 ωi 的 1σ。",
-}
+MEANS_LEGEND = Words("steps.legend_means")
 
 
-_FIT_TITLE = {"en": "Least-squares fit over all readings", "zh-CN": "对全部读数做最小二乘拟合"}
+_FIT_TITLE = Words("steps.fit")
 
 
 def _four_apart(angles: np.ndarray) -> int:
@@ -139,15 +118,8 @@ def _equal_counts(stats) -> bool:
     return len({s.n for s in stats}) == 1
 
 
-WEIGHTED_TITLE = {
-    "en": "Least-squares fit of every reading (the numbers of readings differ, so each "
-    "reading counts once)",
-    "zh-CN": "对全部读数做最小二乘拟合（各位置读数个数不同，每个读数同等计权）",
-}
-UNWEIGHTED_TITLE = {
-    "en": "For comparison, not used: the handout's closed form with the plain means (unweighted)",
-    "zh-CN": "仅供比较，未采用：讲义公式（直接用各位置平均值，不计权）",
-}
+WEIGHTED_TITLE = Words("steps.fit_weighted")
+UNWEIGHTED_TITLE = Words("steps.unweighted")
 
 
 def explain_heading(result: HeadingResult) -> list[Step]:
@@ -184,7 +156,7 @@ def explain_heading(result: HeadingResult) -> list[Step]:
         formula, _, ratio = _handout_ratio(w, turn)
         steps.append(
             Step(
-                {"en": "The handout's angle θ", "zh-CN": "讲义中的角度 θ"},
+                Words("steps.handout_theta"),
                 (
                     f"{formula} = {_f(ratio, 4)}",
                     f"θ = arctan({_f(ratio, 4)}) = {_f(result.theta_deg, 2)}°",
@@ -194,10 +166,7 @@ def explain_heading(result: HeadingResult) -> list[Step]:
         y_text = "(ω2 − ω4)/2" if turn < 0 else "(ω4 − ω2)/2"
         steps.append(
             Step(
-                {
-                    "en": "Full-circle azimuth of position 1 (no quadrant ambiguity)",
-                    "zh-CN": "位置 1 的全圆周方位角（无象限模糊）",
-                },
+                Words("steps.full_circle_azimuth"),
                 (
                     f"x = (ω1 − ω3)/2 = {_f(x_used, 4)} °/h,   y = {y_text} = {_f(y_used, 4)} °/h",
                     f"A1 = atan2(y, x) = {_f(result.azimuth_deg, 2)}°",
@@ -232,31 +201,19 @@ def explain_heading(result: HeadingResult) -> list[Step]:
                         f"{formula} = {_f(ratio, 4)}",
                         f"θ = arctan({_f(ratio, 4)}) = {_f(closed, 2)}°",
                     ),
-                    {
-                        "en": f"The handout's formula weights the four means equally (θ = "
-                        f"{_f(closed, 2)}°); the result above weights every reading equally "
-                        f"(θ = {_f(result.theta_deg, 2)}°).",
-                        "zh-CN": f"讲义公式对四个平均值同等计权（θ = {_f(closed, 2)}°）；"
-                        f"上面的结果对每个读数同等计权（θ = {_f(result.theta_deg, 2)}°）。",
-                    },
+                    Words(
+                        "steps.handout_weights",
+                        {"closed": _f(closed, 2), "theta": _f(result.theta_deg, 2)},
+                    ),
                 )
             )
-    direction = {
-        "clockwise": ("clockwise", "顺时针"),
-        "counterclockwise": ("counter-clockwise", "逆时针"),
-    }[result.rotate_direction]
-    points = {"north": ("north", "北"), "south": ("south", "南")}[result.then_axis_points]
+    turn_words = {"clockwise": "cw", "counterclockwise": "ccw"}[result.rotate_direction]
     rotate = _f(result.rotate_deg, 2)
     steps.append(
         Step(
-            {"en": "Find north on the table", "zh-CN": "在转台上找到北向"},
+            Words("steps.find_north"),
             (f"θ {'≥' if result.theta_deg >= 0 else '<'} 0,  |θ| = {rotate}°",),
-            {
-                "en": f"From position 1, turn the table {direction[0]} by {rotate}°: "
-                f"the axis then points {points[0]}.",
-                "zh-CN": f"从位置 1 起，将转台{direction[1]}转动 {rotate}°，"
-                f"此时陀螺轴指向{points[1]}。",
-            },
+            Words(f"steps.turn_{turn_words}_{result.then_axis_points}", {"rotate": rotate}),
         )
     )
     lines = [f"H = √(x² + y²) = {_f(result.amplitude_deg_h)} °/h,   b = {_f(fit.b)} °/h"]
@@ -286,7 +243,7 @@ def explain_heading(result: HeadingResult) -> list[Step]:
         lines.append(f"ΔA1 = A1 − A1,true = {_f(result.azimuth_error_deg, 2)}°")
     steps.append(
         Step(
-            {"en": "Amplitude, bias and uncertainty", "zh-CN": "幅值、零偏与不确定度"},
+            Words("steps.amplitude"),
             tuple(lines),
             legend=AMPLITUDE_LEGEND,
         )
@@ -317,14 +274,14 @@ def _latitude_closed_form(
     lines.append(f"Ω = √((ω1 − ω3)² + (ω2 − ω4)²)/2 = {_f(omega)} °/h")
     return [
         Step(
-            {"en": "Latitude from the four positions", "zh-CN": "由四个位置求纬度"},
+            Words("steps.latitude"),
             (
                 f"tan φ = (ω2 − ω4)/(ω1 − ω3) = ({_p(w2)} − {_p(w4)}) / "
                 f"({_p(w1)} − {_p(w3)}) = {ratio}",
                 f"φ = {_f(phi, 2)}°",
             ),
         ),
-        Step({"en": "Earth's rotation rate", "zh-CN": "地球自转角速度"}, tuple(lines)),
+        Step(Words("steps.earth_rate"), tuple(lines)),
     ]
 
 
@@ -396,11 +353,7 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
             f"1σ: φ ± {_f(result.latitude_sigma_deg, 3)}°,  Ω ± "
             f"{_f(result.earth_rate_sigma_deg_h, 3)} °/h"
         )
-    steps.append(
-        Step(
-            {"en": "Percent errors and uncertainties", "zh-CN": "百分误差与不确定度"}, tuple(lines)
-        )
-    )
+    steps.append(Step(Words("steps.percent_errors"), tuple(lines)))
     return steps
 
 
@@ -428,27 +381,32 @@ def _warm_up_lines(check, noise_sigma, final_sigma, name: str, key: str) -> list
     ]
 
 
-def render_text(steps: list[Step], language: str = "en") -> str:
+def render_text(steps: list[Step], translate: Callable[..., str]) -> str:
     """The steps as plain text (the command line's ``--explain``).
 
     Parameters
     ----------
     steps : list of Step
         From :func:`explain_heading` or :func:`explain_latitude`.
-    language : {"en", "zh-CN"}
-        The language of the words.
+    translate : callable
+        ``translate(key, **params)``: a message of the catalogues in the reader's language
+        (``app.web.i18n.translator(language)``).
 
     Returns
     -------
     str
         One line per step.
     """
+
+    def say(words: Words) -> str:
+        return translate(words.key, **words.params)
+
     out = []
     for number, step in enumerate(steps, start=1):
-        out.append(f"{number}. {step.title.get(language, step.title['en'])}")
+        out.append(f"{number}. {say(step.title)}")
         out.extend(f"   {line}" for line in step.lines)
         if step.legend:
-            out.append(f"   {step.legend.get(language, step.legend['en'])}")
+            out.append(f"   {say(step.legend)}")
         if step.sentence:
-            out.append(f"   {step.sentence.get(language, step.sentence['en'])}")
+            out.append(f"   {say(step.sentence)}")
     return "\n".join(out)

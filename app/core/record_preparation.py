@@ -37,11 +37,11 @@ MAX_TRIM_SHARE = 0.5
 class PreparedRecord:
     values: np.ndarray
     rate_hz: float
-    notes: list[dict] = field(default_factory=list)  # {"key", "params", "en"}
+    notes: list[dict] = field(default_factory=list)  # {"key", "params"}: words in catalogues
 
 
-def _note(key: str, english: str, **params) -> dict:
-    return {"key": key, "params": params, "en": english}
+def _note(key: str, **params) -> dict:
+    return {"key": key, "params": params}
 
 
 def _longest_stretch(times: np.ndarray) -> tuple[slice, int, int, float]:
@@ -150,8 +150,6 @@ def prepare_record(
             notes.append(
                 _note(
                     "allan.note_gaps",
-                    f"Gaps in the record: {gaps} ({missing} readings missing). The longest "
-                    f"stretch without one, {kept} readings ({kept / rate_hz:.0f} s), was analysed.",
                     gaps=gaps,
                     missing=missing,
                     kept=kept,
@@ -170,26 +168,15 @@ def prepare_record(
             notes.append(
                 _note(
                     "allan.note_spikes",
-                    f"Spikes more than {SPIKE_LIMIT:.0f} σ from their neighbours: {spikes.size}, "
-                    f"replaced by the local median (the first at {spikes[0] / rate_hz:.1f} s).",
                     n=int(spikes.size),
                     first_s=round(spikes[0] / rate_hz, 1),
                 )
             )
         end, seen_by, size = _warm_up_end(values, temperatures)
         if end:
-            english = (
-                f"The first {end / rate_hz:.0f} s were trimmed: the gyro was still warming up "
-                + (
-                    f"(its case temperature changed by {size:.1f} °C)."
-                    if seen_by == "temperature"
-                    else f"(its rate moved by {abs(size):.3g} °/h towards its settled value)."
-                )
-            )
             notes.append(
                 _note(
                     f"allan.note_trimmed_{seen_by}",
-                    english,
                     seconds=round(end / rate_hz),
                     change=f"{abs(size):.3g}",
                 )
@@ -208,8 +195,6 @@ def prepare_record(
             notes.append(
                 _note(
                     "allan.note_few_stretches",
-                    f"The record covers only {record_s / max_tau_s:.1f} τ of {max_tau_s:g} s: "
-                    "the longest τ's rest on few independent stretches.",
                     ratio=f"{record_s / max_tau_s:.1f}",
                     tau=max_tau_s,
                 )
