@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated
 
 from fastapi import APIRouter, Form, Request
-from pydantic import BaseModel, Field
 
 from app.accounts.api_auth import BEARER, AnyCaller, UploadCaller
+from app.accounts.schemas import MeOut, NewPasswordOut, TokenOut
 from app.accounts.security import log_in
 from app.accounts.service import may_reset_password, reset_password, teaches_student
 from app.accounts.tokens import LOGIN_TOKEN_LIFETIME, new_token
@@ -17,25 +17,6 @@ from app.web.deps import ObjectId, RowWriteSession, SessionDep, SettingsDep
 from app.web.errors import API_ERRORS
 
 router = APIRouter(prefix="/api/v1", responses=API_ERRORS)
-
-
-class TokenOut(BaseModel):
-    access_token: str
-    token_type: Literal["bearer"] = "bearer"
-    expires_in: int = Field(description="seconds")
-
-
-class MeOut(BaseModel):
-    id: int
-    username: str
-    display_name: str
-    role: str
-    language: str | None
-
-
-class NewPasswordOut(BaseModel):
-    username: str
-    initial_password: str = Field(description="one-time: the user must change it at log-in")
 
 
 @router.post(

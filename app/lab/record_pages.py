@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import json
 from datetime import datetime
-from typing import Annotated, Literal
+from typing import Annotated
 
 import numpy as np
 from fastapi import APIRouter, Body, Form, Request
 from fastapi.responses import Response, StreamingResponse
-from pydantic import BaseModel, Field, StrictFloat, StrictInt
 
 from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
@@ -20,6 +19,7 @@ from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.deps import ManualSession, OwnedSession, SimulatorSession
 from app.lab.exports import Selection, readings_csv, session_json
 from app.lab.result_cache import results_of
+from app.lab.schemas import CsvUpload, ManualReadings, Plane, Trim, Turn
 from app.lab.service import record_positions, recordable_session
 from app.lab.sim import nominal_angle, position_count, wait_for_gyro, warm_up_state
 from app.lab.store import POSITIONS, check_position, set_symmetric_order
@@ -34,17 +34,6 @@ from app.web.work_slots import held_while_streaming
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 
 MAX_CSV_CHARS = 5_000_000
-Part = Literal["heading", "latitude"]
-
-
-class ManualReadings(BaseModel):
-    """Readings typed into the grid: one list per position (positions left empty are kept)."""
-
-    part: Part
-    unit: str = "deg/h"
-    columns: dict[int, Annotated[list[StrictFloat | StrictInt], Field(max_length=100_000)]] = Field(
-        max_length=POSITIONS
-    )
 
 
 @router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected, RowWriteSession])
@@ -57,12 +46,6 @@ def save_manual(session: ManualSession, db: SessionDep, body: Annotated[ManualRe
     )
     db.commit()
     return {"saved": saved}
-
-
-class CsvUpload(BaseModel):
-    part: Part
-    unit: str = "deg/h"
-    text: str
 
 
 def parse_csv_upload(body: CsvUpload) -> Readings:
@@ -152,11 +135,6 @@ def save_csv(
     return {"saved": saved}
 
 
-class Turn(BaseModel):
-    part: Part
-    position: int = Field(ge=1, le=POSITIONS, strict=True)
-
-
 @router.post("/sessions/{session_id}/turn", dependencies=[CsrfProtected, RowWriteSession])
 def turn_table(session: SimulatorSession, db: SessionDep, body: Annotated[Turn, Body()]):
     """Turn the virtual turntable; every real turn gets a new indexing error."""
@@ -174,12 +152,6 @@ def turn_table(session: SimulatorSession, db: SessionDep, body: Annotated[Turn, 
     }
 
 
-class Trim(BaseModel):
-    part: Part
-    position: int = Field(ge=1, le=POSITIONS, strict=True)
-    trim: int = Field(ge=0, le=10_000_000, strict=True)
-
-
 @router.post("/sessions/{session_id}/trim", dependencies=[CsrfProtected, RowWriteSession])
 def trim_recording(session: OwnedSession, db: SessionDep, body: Annotated[Trim, Body()]):
     """Leave out the first readings of a position (the transient after turning the table):
@@ -187,10 +159,6 @@ def trim_recording(session: OwnedSession, db: SessionDep, body: Annotated[Trim, 
     take = trim_position(db, session, part=body.part, position=body.position, trim=body.trim)
     db.commit()
     return {"trim_start": take.trim_start, "n_used": take.n_samples - take.trim_start}
-
-
-class Plane(BaseModel):
-    dial_deg: float = Field(ge=-360, le=360, allow_inf_nan=False, strict=True)
 
 
 @router.post("/sessions/{session_id}/plane", dependencies=[CsrfProtected, RowWriteSession])

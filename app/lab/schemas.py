@@ -1,13 +1,14 @@
-"""The REST API's lab bodies and answers (pydantic models): sessions, uploads, results."""
+"""The lab's request and response models (pydantic): the REST API's sessions, uploads and
+results, and the session page's own request bodies."""
 
 from __future__ import annotations
 
 from datetime import datetime
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt
 
-from app.lab.store import MAX_SAMPLES_PER_POSITION
+from app.lab.store import MAX_SAMPLES_PER_POSITION, POSITIONS
 from app.web.deps import MAX_ID
 
 
@@ -246,3 +247,39 @@ class TrimOut(BaseModel):
     n_samples: int
     trim_start: int
     n_used: int
+
+
+# The session page's request bodies (its fetch() calls to /lab/sessions/{id}/...)
+
+Part = Literal["heading", "latitude"]
+
+
+class ManualReadings(BaseModel):
+    """Readings typed into the grid: one list per position (positions left empty are kept)."""
+
+    part: Part
+    unit: str = "deg/h"
+    columns: dict[int, Annotated[list[StrictFloat | StrictInt], Field(max_length=100_000)]] = Field(
+        max_length=POSITIONS
+    )
+
+
+class CsvUpload(BaseModel):
+    part: Part
+    unit: str = "deg/h"
+    text: str
+
+
+class Turn(BaseModel):
+    part: Part
+    position: int = Field(ge=1, le=POSITIONS, strict=True)
+
+
+class Trim(BaseModel):
+    part: Part
+    position: int = Field(ge=1, le=POSITIONS, strict=True)
+    trim: int = Field(ge=0, le=10_000_000, strict=True)
+
+
+class Plane(BaseModel):
+    dial_deg: float = Field(ge=-360, le=360, allow_inf_nan=False, strict=True)

@@ -2,11 +2,8 @@
 
 from __future__ import annotations
 
-from datetime import datetime
-
 from fastapi import APIRouter
 from fastapi.responses import Response
-from pydantic import BaseModel
 from sqlmodel import select
 
 from app.accounts.api_auth import TeacherCaller
@@ -14,37 +11,12 @@ from app.lab.attempts import grade_text
 from app.models import Assignment, Course
 from app.review.deps import teachers_assignment
 from app.review.exports import class_table_response
+from app.review.schemas import CourseOut, SubmissionRow
 from app.review.service import class_rows
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS
 
 router = APIRouter(prefix="/api/v1", tags=["api: teachers"], responses=API_ERRORS)
-
-
-class CourseOut(BaseModel):
-    id: int
-    name: str
-    archived: bool
-    assignments: list[dict]
-
-
-class SubmissionRow(BaseModel):
-    username: str
-    display_name: str
-    status: str
-    session_id: int | None
-    attempts: int
-    submitted_at: datetime | None
-    late: bool
-    results: dict
-    heading_error_deg: float | None
-    latitude_error_percent: float | None
-    earth_rate_error_percent: float | None
-    auto_check: bool | None
-    grade: str | None  # "85 / 100 (B+)": the teacher's, released or not
-    points: float | None
-    max_points: float
-    released: bool
 
 
 @router.get("/courses", response_model=list[CourseOut])
