@@ -1,4 +1,4 @@
-"""The README's API examples, run as written against a live server."""
+"""The API examples of docs/api.md, run as written against a live server."""
 
 from __future__ import annotations
 
@@ -19,9 +19,9 @@ DATA = ROOT / "tests" / "data"
 
 
 def example(kind: str) -> str:
-    text = (ROOT / "README.md").read_text()
+    text = (ROOT / "docs" / "api.md").read_text()
     match = re.search(rf"<!-- example:{kind} -->\n```\w+\n(.*?)```\n<!-- /example -->", text, re.S)
-    assert match, f"README has no {kind} example"
+    assert match, f"docs/api.md has no {kind} example"
     return match.group(1)
 
 
@@ -37,7 +37,7 @@ def environment(server) -> dict[str, str]:
 def test_curl_example(live_server):
     if shutil.which("curl") is None:
         if os.environ.get("CI", "").lower() == "true":
-            pytest.fail("curl is needed for the README's curl example")
+            pytest.fail("curl is needed for the curl example of docs/api.md")
         pytest.skip("curl is not installed")
     done = subprocess.run(
         ["bash", "-euo", "pipefail", "-c", example("curl")],
