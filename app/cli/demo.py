@@ -11,9 +11,9 @@ from sqlmodel import Session, func, select
 from app.accounts.security import generate_password
 from app.accounts.service import create_user, enroll
 from app.core.solve import solve_heading
+from app.lab.service import record_position
 from app.lab.sessions import SessionSettings, start_session
 from app.lab.sim import SimulatedTake, north_dial_deg, set_gyro_clock
-from app.lab.store import store_take
 from app.lab.submissions import submit
 from app.lab.truth import draw_truth
 from app.models import Assignment, Course, InputMethod, LabSession, Role, User
@@ -114,15 +114,15 @@ def add_demo_work(db: Session, assignment: Assignment, students: list[User]) -> 
                 values, times = take.next(int(dwell * take.rate_hz))
                 clock = take.end_s + 20.0
                 recorded.setdefault(part, []).append((take.dial_angle_deg, values))
-                store_take(
+                record_position(
                     db,
                     session,
                     part=part,
                     position=position,
-                    angle_deg=take.dial_angle_deg,
                     values=values,
-                    times=times,
                     source=InputMethod.simulator,
+                    times=times,
+                    angle_deg=take.dial_angle_deg,
                 )
         set_gyro_clock(session, clock)
         if submit_it:
