@@ -57,10 +57,9 @@ def test_a_route_declares_one_locking_and_only_on_a_write():
 
 def test_the_lab_sessions_writes_lock_rows_and_everything_else_is_exclusive():
     declared = {
-        (path, method): declared_locking(route)
+        (route.path, method): declared_locking(route)
         for route in api_routes()
         for method in route.methods - {"GET", "HEAD"}
-        for path in [route.path]
     }
     assert declared["/lab/sessions/{session_id}/csv/preview", "POST"] is Locking.none
     assert declared["/lab/sessions/{session_id}/csv", "POST"] is Locking.rows
