@@ -17,7 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 
-from sqlalchemy import case, or_, update
+from sqlalchemy import bindparam, case, or_, update
 
 from app.models import utcnow
 
@@ -96,16 +96,23 @@ class RateLeases:
 LEASES = RateLeases()
 
 
-def lease_statement(model, row_id: int, size: int, now: datetime):
-    """``UPDATE model SET window += size WHERE id = row_id RETURNING window``: atomic on
-    its own (a row lock on PostgreSQL), so it needs no serialised write transaction."""
-    window_over = or_(model.window_start.is_(None), model.window_start <= now - WINDOW)
+def lease_update(model):
+    """``UPDATE model SET window += :size WHERE id = :row_id RETURNING window``, in bound
+    parameters (``lease_parameters``): atomic on its own (a row lock on PostgreSQL), so it
+    needs no serialised write transaction."""
+    window_over = or_(model.window_start.is_(None), model.window_start <= bindparam("window_ended"))
     return (
         update(model)
-        .where(model.id == row_id)
+        .where(model.id == bindparam("row_id"))
         .values(
-            window_start=case((window_over, now), else_=model.window_start),
-            window_count=case((window_over, size), else_=model.window_count + size),
+            window_start=case((window_over, bindparam("now")), else_=model.window_start),
+            window_count=case(
+                (window_over, bindparam("size")), else_=model.window_count + bindparam("size")
+            ),
         )
         .returning(model.window_start, model.window_count)
     )
+
+
+def lease_parameters(row_id: int, size: int, now: datetime) -> dict:
+    return {"row_id": row_id, "size": size, "now": now, "window_ended": now - WINDOW}

@@ -12,10 +12,10 @@ import secrets
 from dataclasses import dataclass
 from datetime import timedelta
 
-from sqlalchemy import or_
+from sqlalchemy import bindparam, or_
 from sqlmodel import Session, select
 
-from app.accounts.rate_leases import LEASES, lease_statement
+from app.accounts.rate_leases import LEASES, lease_parameters, lease_update
 from app.models import ApiToken, AuthSession, User, utcnow
 from app.web.signing import token_digest
 
@@ -91,10 +91,11 @@ def _leaser(db: Session, model, row_id: int, *, touch: bool = False):
         # End the read first: on SQLite a read transaction cannot become a write once
         # another writer has committed ("database is locked" at once, no busy wait).
         db.commit()
-        statement = lease_statement(model, row_id, size, now)
+        statement = lease_update(model)
         if touch:
-            statement = statement.values(last_used_at=now)
-        counted = db.execute(statement).first()
+            statement = statement.values(last_used_at=bindparam("now"))
+        # Core on the session's connection: no ORM bulk-update work for a counter
+        counted = db.connection().execute(statement, lease_parameters(row_id, size, now)).first()
         db.commit()
         return None if counted is None else (counted.window_start, counted.window_count)
 

@@ -1,29 +1,31 @@
 """The hot read path: a device or script polling ``GET /api/v1/sessions/{id}/results``
-with a bearer token, answered from the result cache in two small Core queries.
+with a bearer token, answered from the result cache in two selects on one snapshot.
 
-1. One query finds the live token, its owner, the session, whether the owner may read it
+1. One select finds the live token, its owner, the session, whether the owner may read it
    (owner or lab partner) and every column the result depends on (the session's and its
    assignment's) -- the token is checked on every request, so a revoked token or a
    changed password (which revokes them) is refused at once;
-2. the token's per-minute rate is admitted from its in-memory lease (a database write
-   once per lease, ``accounts.rate_leases``);
-3. one query reads the current takes' key columns; their digest with (1) is the result
-   cache's key (``lab.result_cache``), and a hit is the REST body, serialised once.
+2. one select reads the current takes' key columns; their digest with (1) is the result
+   cache's key (``lab.result_cache``), and a hit is the REST body, serialised once;
+3. the token's per-minute rate is admitted from its in-memory lease (an ``UPDATE``
+   once per lease, ``accounts.rate_leases``).
 
-The statements are built once (bound parameters), so no SQL expression is built or
-compiled per request, and no ORM object is loaded.  Anything else -- a cookie caller, a
-bad or rate-limited token, someone else's session, a result not yet solved -- returns
-None, and the caller takes the general path, which answers it (with the right error).
+The statements are compiled once (bound parameters) and run on a pooled driver connection
+(``app.prepared``), so no SQL expression is built, compiled or cache-keyed per request,
+and no ORM object is loaded.  Anything else -- a cookie caller, a bad or rate-limited
+token, someone else's session, a result not yet solved -- returns None, and the caller
+takes the general path, which answers it (with the right error).
 """
 
 from __future__ import annotations
 
 from sqlalchemy import and_, bindparam, exists, or_, select
 
-from app.accounts.rate_leases import LEASES, lease_statement
-from app.db import get_engine, reader, statement_session
+from app.accounts.rate_leases import LEASES, lease_parameters, lease_update
+from app.db import get_engine
 from app.lab.result_cache import CACHE, KEY_COLUMNS, NOT_IN_RESULTS, CachedResults, digest_rows
 from app.models import ApiToken, Assignment, LabSession, SessionMember, Take, User, utcnow
+from app.prepared import Prepared, driver_transaction
 from app.web.signing import token_digest
 
 READ_SCOPE = "read"
@@ -38,13 +40,18 @@ ASSIGNMENT_COLUMNS = _result_columns(Assignment)
 _member = exists().where(
     SessionMember.session_id == LabSession.id, SessionMember.user_id == User.id
 )
-CALLER_AND_SESSION = (
+CALLER = (
+    ApiToken.id.label("token_id"),
+    ApiToken.scopes,
+    User.must_change_password,
+    or_(LabSession.owner_id == User.id, _member).label("member"),
+    Assignment.id.label("assignment_present"),
+)
+SESSION_AT = len(CALLER)  # a row: the caller's columns, the session's, the assignment's
+ASSIGNMENT_AT = SESSION_AT + len(SESSION_COLUMNS)
+CALLER_AND_SESSION = Prepared(
     select(
-        ApiToken.id.label("token_id"),
-        ApiToken.scopes,
-        User.must_change_password,
-        or_(LabSession.owner_id == User.id, _member).label("member"),
-        Assignment.id.label("assignment_present"),
+        *CALLER,
         *[c.label(f"s_{c.name}") for c in SESSION_COLUMNS],
         *[c.label(f"a_{c.name}") for c in ASSIGNMENT_COLUMNS],
     )
@@ -58,11 +65,12 @@ CALLER_AND_SESSION = (
         or_(ApiToken.expires_at.is_(None), ApiToken.expires_at > bindparam("now")),
     )
 )
-TAKE_KEYS = (
+TAKE_KEYS = Prepared(
     select(*KEY_COLUMNS)
     .where(and_(Take.session_id == bindparam("session_id"), Take.superseded_at.is_(None)))
     .order_by(Take.part, Take.position)
 )
+LEASE_AND_TOUCH = Prepared(lease_update(ApiToken).values(last_used_at=bindparam("now")))
 
 
 def _token_leaser(token_id: int):
@@ -70,10 +78,7 @@ def _token_leaser(token_id: int):
     write ``accounts.tokens.check_token`` makes)."""
 
     def lease(size: int, now):
-        with statement_session() as db:
-            statement = lease_statement(ApiToken, token_id, size, now).values(last_used_at=now)
-            counted = db.execute(statement).first()
-            db.commit()
+        counted = LEASE_AND_TOUCH.first(get_engine(), **lease_parameters(token_id, size, now))
         return None if counted is None else (counted.window_start, counted.window_count)
 
     return lease
@@ -87,10 +92,10 @@ def cached_results_for_token(
     if authorization[:7].lower() != "bearer ":
         return None
     digest = token_digest(authorization[7:].strip())
-    with reader(get_engine()).connect() as connection:
-        row = connection.execute(
-            CALLER_AND_SESSION, {"digest": digest, "session_id": session_id, "now": utcnow()}
-        ).first()
+    with driver_transaction(get_engine(), snapshot=True) as transaction:
+        row = transaction.first(
+            CALLER_AND_SESSION, digest=digest, session_id=session_id, now=utcnow()
+        )
         if (
             row is None
             or row.must_change_password
@@ -98,13 +103,9 @@ def cached_results_for_token(
             or READ_SCOPE not in row.scopes.split(",")
         ):
             return None
-        takes = connection.execute(TAKE_KEYS, {"session_id": session_id}).all()
-    session_row = tuple(getattr(row, f"s_{c.name}") for c in SESSION_COLUMNS)
-    assignment_row = (
-        tuple(getattr(row, f"a_{c.name}") for c in ASSIGNMENT_COLUMNS)
-        if row.assignment_present is not None
-        else ()
-    )
+        takes = transaction.rows(TAKE_KEYS, session_id=session_id)
+    session_row = row[SESSION_AT:ASSIGNMENT_AT]
+    assignment_row = row[ASSIGNMENT_AT:] if row.assignment_present is not None else ()
     entry = CACHE.get(digest_rows(takes, session_row, assignment_row))
     if entry is None:
         return None
