@@ -17,6 +17,7 @@ from app.explore import pages as explore_pages
 from app.home import pages as home
 from app.lab import admin_pages as lab_admin_pages
 from app.lab import api as lab_api
+from app.lab import home_pages as lab_home_pages
 from app.lab import pages as lab_pages
 from app.lab import partner_pages, record_pages, stream
 from app.lti import admin_pages as lti_admin_pages
@@ -47,6 +48,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     admin_pages.router,
     lab_admin_pages.router,
     assignment_pages.router,
+    lab_home_pages.router,
     lab_pages.router,
     record_pages.router,
     partner_pages.router,

@@ -10,6 +10,7 @@ import functools
 import io
 import json
 import re
+from dataclasses import dataclass, field
 from pathlib import Path
 from unittest import mock
 from urllib.parse import unquote
@@ -474,3 +475,92 @@ def credentials_from(page: str) -> dict[str, str]:
     href = re.search(r'href="data:text/csv;charset=utf-8,([^"]+)"', page).group(1)
     text = unquote(href.replace("&amp;", "&")).lstrip("\ufeff")
     return {row["username"]: row["initial_password"] for row in csv.DictReader(io.StringIO(text))}
+
+
+# --- forms as a browser reads them (issue 34) --------------------------
+
+
+@dataclass
+class FormState:
+    """What a person sees in a form: each field's value (the checked radio, the selected
+    option, a textarea's text; checkboxes as a list of the checked ones), the refused
+    fields (``aria-invalid``) in page order, the one with the focus, and the messages
+    beside fields by the field's name."""
+
+    values: dict = field(default_factory=dict)
+    refused: list = field(default_factory=list)
+    autofocus: str | None = None
+    errors: dict = field(default_factory=dict)
+    text: str = ""
+
+
+def form_state(page: str, form_id: str) -> FormState:
+    """The state of the form with id ``form_id`` in the HTML ``page``."""
+    from html.parser import HTMLParser
+
+    state = FormState()
+
+    class Reader(HTMLParser):
+        depth = 0  # > 0 inside the form
+        select: str | None = None
+        textarea: str | None = None
+        error: str | None = None
+
+        def handle_starttag(self, tag, attrs):
+            a = dict(attrs)
+            if tag == "form" and a.get("id") == form_id:
+                self.depth = 1
+                return
+            if not self.depth:
+                return
+            if tag == "form":
+                self.depth += 1
+            name = a.get("name")
+            if name and a.get("aria-invalid") == "true":
+                state.refused.append(name)
+            if name and "autofocus" in a and state.autofocus is None:
+                state.autofocus = name
+            if tag == "input" and name and a.get("type") != "hidden":
+                if a.get("type") == "checkbox":
+                    state.values.setdefault(name, [])
+                    if "checked" in a:
+                        state.values[name].append(a.get("value"))
+                elif a.get("type") == "radio":
+                    if "checked" in a:
+                        state.values[name] = a.get("value")
+                else:
+                    state.values[name] = a.get("value", "")
+            elif tag == "select":
+                self.select = name
+            elif tag == "option" and self.select and "selected" in a:
+                state.values[self.select] = a.get("value")
+            elif tag == "textarea":
+                self.textarea = name
+                state.values[name] = ""
+            elif "field-error" in (a.get("class") or "").split():
+                self.error = (a.get("id") or "").removeprefix("error-")
+                state.errors[self.error] = ""
+
+        def handle_endtag(self, tag):
+            if not self.depth:
+                return
+            if tag == "form":
+                self.depth -= 1
+            elif tag == "select":
+                self.select = None
+            elif tag == "textarea":
+                self.textarea = None
+            elif tag == "span" and self.error:
+                self.error = None
+
+        def handle_data(self, data):
+            if not self.depth:
+                return
+            state.text += data
+            if self.textarea:
+                state.values[self.textarea] += data
+            if self.error:
+                state.errors[self.error] += data
+
+    Reader(convert_charrefs=True).feed(page)
+    return state

@@ -6,7 +6,7 @@ from datetime import UTC
 
 import pytest
 
-from app.core.exceptions import UserError
+from app.core.exceptions import FieldProblems
 from app.courses.assignment_form import form_values, parse_assignment_form
 
 GOOD = {"title": "Find north", "latitude_deg": "39.93", "methods": ["manual", "simulator"]}
@@ -37,40 +37,66 @@ def test_values_round_trip_through_the_settings_form():
 
 
 @pytest.mark.parametrize(
-    ("change", "key", "params"),
+    ("change", "field", "key", "params"),
     [
-        ({"title": " "}, "assignment.title_required", {}),
-        ({"methods": ["telepathy"]}, "assignment.methods_required", {}),
-        ({"simulator_preset": "ring-laser"}, "assignment.bad_preset", {}),
-        ({"late_policy": "maybe"}, "assignment.bad_choice", {"field": "late_policy"}),
-        ({"reveal_truth": "always"}, "assignment.bad_choice", {"field": "reveal_truth"}),
-        ({"due_at": "tomorrow"}, "assignment.bad_due", {}),
-        ({"latitude_deg": "north"}, "assignment.not_a_number", {"field": "latitude_deg"}),
-        ({"latitude_deg": ""}, "assignment.not_a_number", {"field": "latitude_deg"}),
-        (
-            {"latitude_deg": "91"},
-            "assignment.out_of_range",
-            {"field": "latitude_deg", "low": -90, "high": 90},
-        ),
+        ({"title": " "}, "title", "assignment.title_required", {}),
+        ({"methods": ["telepathy"]}, "methods", "assignment.methods_required", {}),
+        ({"simulator_preset": "ring-laser"}, "simulator_preset", "assignment.bad_preset", {}),
+        ({"late_policy": "maybe"}, "late_policy", "form.bad_choice", {}),
+        ({"reveal_truth": "always"}, "reveal_truth", "form.bad_choice", {}),
+        ({"due_at": "tomorrow"}, "due_at", "assignment.bad_due", {}),
+        ({"latitude_deg": "north"}, "latitude_deg", "form.between", {"low": "-90", "high": "90"}),
+        ({"latitude_deg": ""}, "latitude_deg", "form.required", {}),
+        ({"latitude_deg": "91"}, "latitude_deg", "form.between", {"low": "-90", "high": "90"}),
         (
             {"earth_rate_deg_h": "inf"},
-            "assignment.out_of_range",
-            {"field": "earth_rate_deg_h", "low": 1, "high": 100},
+            "earth_rate_deg_h",
+            "form.between",
+            {"low": "1", "high": "100"},
         ),
         (
             {"max_attempts": "101"},
-            "assignment.out_of_range",
-            {"field": "max_attempts", "low": 0, "high": 100},
+            "max_attempts",
+            "form.whole_between",
+            {"low": "0", "high": "100"},
         ),
         (
             {"misalignment_max_deg": "-1"},
-            "assignment.out_of_range",
-            {"field": "misalignment_max_deg", "low": 0, "high": 10},
+            "misalignment_max_deg",
+            "form.between",
+            {"low": "0", "high": "10"},
         ),
-        ({"min_readings": "ten"}, "assignment.not_a_number", {"field": "min_readings"}),
+        (
+            {"min_readings": "ten"},
+            "min_readings",
+            "form.whole_between",
+            {"low": "2", "high": "100000"},
+        ),
+        ({"rubric": "Method | lots"}, "rubric", "assignment.bad_rubric", {"line": 1}),
     ],
 )
-def test_each_problem_names_its_field(change, key, params):
-    with pytest.raises(UserError) as caught:
+def test_each_problem_is_kept_by_its_field(change, field, key, params):
+    with pytest.raises(FieldProblems) as caught:
         parse_assignment_form({**GOOD, **change})
-    assert (caught.value.key, caught.value.params) == (key, params)
+    problem = caught.value.problems[field]
+    assert list(caught.value.problems) == [field]
+    assert (problem.key, problem.params) == (key, params)
+
+
+def test_every_wrong_field_is_refused_at_once_in_the_forms_order():
+    change = {"max_attempts": "x", "title": "", "latitude_deg": "91", "earth_rate_deg_h": "0"}
+    with pytest.raises(FieldProblems) as caught:
+        parse_assignment_form({**GOOD, **change})
+    assert list(caught.value.problems) == [
+        "title",
+        "latitude_deg",
+        "earth_rate_deg_h",
+        "max_attempts",
+    ]
+
+
+def test_numbers_are_taken_as_people_type_them():
+    typed = {**GOOD, "latitude_deg": " 39,9 ", "max_points": "12,5", "azimuth_min_deg": "−0"}
+    assignment = parse_assignment_form(typed)
+    assert assignment.latitude_deg == 39.9 and assignment.max_points == 12.5
+    assert assignment.azimuth_min_deg == 0

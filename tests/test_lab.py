@@ -18,6 +18,7 @@ from app.lab.samples import unpack
 from app.models import Assignment, Attempt, LabSession, Role, SampleChunk, Take
 from tests.factories import (
     csrf_from,
+    form_state,
     handout,
     login,
     make_course,
@@ -77,9 +78,36 @@ def test_practice_session_validation(student_client, fields, message):
     response = post_form(
         student_client, "/lab/sessions", {"rotation": "ccw", **fields}, page="/lab"
     )
-    assert response.status_code == 303 and response.headers["location"] == "/lab"
-    assert message in student_client.get("/lab").text
+    assert response.status_code == 400 and message in response.text
     assert count(LabSession) == 0
+
+
+def test_a_refused_practice_session_keeps_everything_typed_and_marks_every_field(
+    student_client,
+):
+    typed = {
+        "title": "Roof lab, group 7",
+        "station": "custom",
+        "latitude_deg": "91",
+        "earth_rate_deg_h": "0",
+        "rotation": "cw",
+        "heading_start_deg": "12,5",
+        "latitude_start_deg": "north",
+        "latitude_step_deg": "90",
+        "preset": "navigation-fog",
+    }
+    response = post_form(student_client, "/lab/sessions", typed, page="/lab")
+    assert response.status_code == 400 and count(LabSession) == 0
+    form = form_state(response.text, "new-session")
+    assert form.values == typed
+    assert form.refused == ["latitude_deg", "earth_rate_deg_h", "latitude_start_deg"]
+    assert form.autofocus == "latitude_deg"
+    assert form.errors == {
+        "latitude_deg": "The latitude must be between −90° and 90°.",
+        "earth_rate_deg_h": "The Earth rate must be a positive number of °/h.",
+        "latitude_start_deg": "Type a number, e.g. 39.93.",
+    }
+    assert "3 fields need a change" in form.text
 
 
 def test_typed_handout_tables_give_the_handout_results(student_client):
@@ -389,7 +417,9 @@ def test_teacher_creates_an_assignment(client, teacher):
         {"title": "x", "latitude_deg": "north", "methods": ["manual"]},
         page=page,
     )
-    assert bad.status_code == 400 and "must be a number" in bad.text
+    assert bad.status_code == 400 and "Type a number from -90 to 90" in bad.text
+    kept = form_state(bad.text, "new-assignment")
+    assert kept.values["latitude_deg"] == "north" and kept.refused == ["latitude_deg"]
     bad = post_form(client, f"{page}/assignments", {"title": "x", "latitude_deg": "40"}, page=page)
     assert bad.status_code == 400 and "at least one way" in bad.text
 

@@ -21,6 +21,7 @@ from tests.factories import (
     browser,
     csrf_from,
     do_lab,
+    form_state,
     make_user,
     post_form,
     review,
@@ -333,8 +334,13 @@ def test_settings_form_updates_the_rules(world):
         {"title": "x", "latitude_deg": "39", "methods": ["manual"], "tolerance_heading_deg": "-1"},
         page=page,
     )
-    assert bad.status_code == 303
-    assert "must be between" in teacher.get(page).text
+    assert bad.status_code == 400  # the form again, as typed, the field marked beside it
+    kept = form_state(bad.text, "assignment-settings")
+    assert kept.values["title"] == "x" and kept.values["tolerance_heading_deg"] == "-1"
+    assert kept.refused == ["tolerance_heading_deg"] and kept.autofocus == "tolerance_heading_deg"
+    assert kept.errors == {"tolerance_heading_deg": "Type a number from 0 to 180."}
+    with read_session() as db:  # nothing changed
+        assert db.get(Assignment, world["assignment"]).title == "Find north v2"
 
 
 def test_access_rules_for_review_routes(world):

@@ -46,3 +46,17 @@ class UserError(ValueError):
         if not self.params:
             return self.key
         return f"{self.key} ({', '.join(f'{k}={v!r}' for k, v in self.params.items())})"
+
+
+class FieldProblems(UserError):
+    """Every refused field of one form at once, so a page can show each message beside its
+    field (and keep everything typed): ``problems`` maps a field's name to its
+    :class:`UserError`, in the form's order.  Anything that renders a plain UserError
+    (the API, the command line) shows the first."""
+
+    def __init__(self, problems: dict[str, UserError]) -> None:
+        if not problems:
+            raise ValueError("FieldProblems needs at least one problem")
+        first = next(iter(problems.values()))
+        super().__init__(first.key, status=first.status, **first.params)
+        self.problems = problems

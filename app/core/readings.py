@@ -64,6 +64,16 @@ def parse_decimal(text: str) -> float:
     return value
 
 
+def parse_typed_number(text: str) -> float:
+    """One number typed in a form field, as people write it: surrounding spaces, a decimal
+    comma ("12,5") and the minus sign "−" (U+2212) are taken; else as
+    :func:`parse_decimal` (which raises ValueError)."""
+    text = text.strip().replace("\u2212", "-")
+    if "," in text and "." not in text and text.count(",") == 1:
+        text = text.replace(",", ".")
+    return parse_decimal(text)
+
+
 @dataclass
 class Readings:
     positions: list[np.ndarray]

@@ -1,5 +1,6 @@
 """The assignment form (create and settings): one pydantic model holds every field's
-default, type and range; a wrong field becomes one :class:`UserError` naming it."""
+default, type and range; every wrong field is refused at once (:class:`FieldProblems`,
+each message shown beside its field)."""
 
 from __future__ import annotations
 
@@ -18,9 +19,9 @@ from pydantic import (
     field_validator,
 )
 
-from app.core.exceptions import UserError
+from app.core.exceptions import FieldProblems, UserError
 from app.core.presets import PRESETS
-from app.core.readings import parse_decimal
+from app.core.readings import parse_decimal, parse_typed_number
 from app.models import Assignment, InputMethod, LatePolicy, RevealTruth
 from app.web.local_time import local_input_to_utc, utc_to_local_input
 
@@ -30,6 +31,17 @@ HANDOUT_LATITUDE_DEG = 39.93
 
 def _blank_is_none(value: Any) -> Any:
     return None if isinstance(value, str) and not value.strip() else value
+
+
+def _typed_number(value: Any) -> Any:
+    """A number as typed ("12,5", "−3"): as a float; anything else as it is (refused by
+    the field's type)."""
+    if isinstance(value, str) and value.strip():
+        try:
+            return parse_typed_number(value)
+        except ValueError:
+            return value
+    return value
 
 
 Optional = Annotated[Any, BeforeValidator(_blank_is_none)]
@@ -86,20 +98,30 @@ class AssignmentForm(BaseModel):
             return value
         return int(number) if math.isfinite(number) else value
 
+    @field_validator(
+        "latitude_deg",
+        "earth_rate_deg_h",
+        "azimuth_min_deg",
+        "azimuth_max_deg",
+        "turn_on_bias_max_deg_h",
+        "indexing_sigma_arcsec",
+        "table_tilt_max_deg",
+        "misalignment_max_deg",
+        "true_heading_deg",
+        "tolerance_heading_deg",
+        "tolerance_latitude_pct",
+        "tolerance_earth_rate_pct",
+        "max_points",
+        mode="before",
+    )
+    @classmethod
+    def _as_typed(cls, value: Any) -> Any:
+        return _typed_number(value)
+
     def assignment(self, course_id: int = 0, zone_name: str | None = None) -> Assignment:
-        if not self.title:
-            raise UserError("assignment.title_required")
+        """The unsaved assignment (the form's rules are checked by ``rule_problems``)."""
         methods = [m for m in self.methods if m in RECORDING_METHODS]
-        if not methods:
-            raise UserError("assignment.methods_required")
-        if self.simulator_preset not in PRESETS:
-            raise UserError("assignment.bad_preset")
         criteria = parse_rubric(self.rubric)
-        total = sum(c["points"] for c in criteria)
-        if criteria and abs(total - self.max_points) > 1e-9:
-            raise UserError(
-                "assignment.rubric_total", total=f"{total:g}", max=f"{self.max_points:g}"
-            )
         fields = self.model_dump(exclude={"methods", "rubric", "due_at"})
         due = local_input_to_utc(self.due_at, zone_name) if self.due_at else None
         return Assignment(
@@ -146,33 +168,128 @@ def rubric_text(rubric_json: str) -> str:
     return "\n".join(f"{c['name']} | {c['points']:g}" for c in criteria if isinstance(c, dict))
 
 
+FIELD_LABELS = {  # the form's fields in page order, with their labels' keys
+    "title": "assignment.title",
+    "instructions": "assignment.instructions",
+    "latitude_deg": "assignment.latitude",
+    "earth_rate_deg_h": "assignment.earth_rate",
+    "methods": "assignment.methods",
+    "simulator_preset": "assignment.preset",
+    "min_readings": "assignment.min_readings",
+    "due_at": "assignment.due",
+    "late_policy": "assignment.late_policy",
+    "group_size": "assignment.group_size",
+    "max_points": "assignment.max_points",
+    "rubric": "assignment.rubric",
+    "azimuth_min_deg": "assignment.azimuth_min",
+    "azimuth_max_deg": "assignment.azimuth_max",
+    "turn_on_bias_max_deg_h": "assignment.turn_on_bias_max",
+    "indexing_sigma_arcsec": "assignment.indexing_sigma",
+    "table_tilt_max_deg": "assignment.table_tilt_max",
+    "misalignment_max_deg": "assignment.misalignment_max",
+    "true_heading_deg": "assignment.true_heading",
+    "tolerance_heading_deg": "assignment.tol_heading",
+    "tolerance_latitude_pct": "assignment.tol_latitude",
+    "tolerance_earth_rate_pct": "assignment.tol_earth_rate",
+    "max_attempts": "assignment.max_attempts",
+    "reveal_truth": "assignment.reveal",
+}
+ADVANCED_FIELDS = (  # inside the form's "advanced" section (opened when one is refused)
+    "azimuth_min_deg",
+    "azimuth_max_deg",
+    "turn_on_bias_max_deg_h",
+    "indexing_sigma_arcsec",
+    "table_tilt_max_deg",
+    "misalignment_max_deg",
+    "true_heading_deg",
+    "tolerance_heading_deg",
+    "tolerance_latitude_pct",
+    "tolerance_earth_rate_pct",
+    "max_attempts",
+    "reveal_truth",
+)
+GRADING_FIELDS = ("group_size", "max_points", "rubric")
+
+
+def form_context(problems: dict[str, UserError] | None = None) -> dict[str, Any]:
+    """What the form's template needs beside its values: the refused fields and their
+    labels, and which fields sit in its folded sections."""
+    return {
+        "problems": problems or {},
+        "field_labels": FIELD_LABELS,
+        "grading_fields": GRADING_FIELDS,
+        "advanced_fields": ADVANCED_FIELDS,
+    }
+
+
 def parse_assignment_form(values: dict[str, Any], zone_name: str | None = None) -> Assignment:
-    """The form's values (strings; ``methods`` a list) as an unsaved Assignment, or a
-    UserError naming the first wrong field.  The due date is typed in ``zone_name`` (the
-    course's time zone) and stored in UTC."""
+    """The form's values (strings; ``methods`` a list) as an unsaved Assignment, or
+    :class:`FieldProblems` with every wrong field.  The due date is typed in ``zone_name``
+    (the course's time zone) and stored in UTC."""
+    problems: dict[str, UserError] = {}
+    form = None
     try:
         form = AssignmentForm.model_validate(values)
     except ValidationError as error:
-        raise _problem(error) from None
+        for item in error.errors():
+            field = str(item["loc"][0]) if item["loc"] else ""
+            typed = values.get(field)
+            blank = isinstance(typed, str) and not typed.strip()
+            problems.setdefault(field, _field_problem(field, "missing" if blank else item["type"]))
+    for field, problem in rule_problems(values, form).items():
+        problems.setdefault(field, problem)
+    if problems:
+        order = list(FIELD_LABELS)
+        ranked = sorted(problems, key=lambda f: order.index(f) if f in order else len(order))
+        raise FieldProblems({field: problems[field] for field in ranked})
     return form.assignment(zone_name=zone_name)
 
 
-def _problem(error: ValidationError) -> UserError:
-    first = error.errors()[0]
-    field = str(first["loc"][0]) if first["loc"] else ""
-    kind = first["type"]
+def rule_problems(values: dict[str, Any], form: AssignmentForm | None) -> dict[str, UserError]:
+    """What the fields' types do not say: a title, a way of recording, a known gyro, a
+    rubric whose lines parse and add up to the maximum points."""
+    problems: dict[str, UserError] = {}
+    if not str(values.get("title", "")).strip():
+        problems["title"] = UserError("assignment.title_required")
+    methods = values.get("methods", list(RECORDING_METHODS))
+    if not [m for m in methods if m in RECORDING_METHODS]:
+        problems["methods"] = UserError("assignment.methods_required")
+    if values.get("simulator_preset", "teaching-fog") not in PRESETS:
+        problems["simulator_preset"] = UserError("assignment.bad_preset")
+    try:
+        criteria = parse_rubric(str(values.get("rubric", "")))
+    except UserError as problem:
+        problems["rubric"] = problem
+        return problems
+    total = sum(c["points"] for c in criteria)
+    if form is not None and criteria and abs(total - form.max_points) > 1e-9:
+        problems["rubric"] = UserError(
+            "assignment.rubric_total", total=f"{total:g}", max=f"{form.max_points:g}"
+        )
+    return problems
+
+
+def _field_problem(field: str, kind: str) -> UserError:
+    """A type or range refusal in the user's words (shown beside the field)."""
     if field == "due_at":
         return UserError("assignment.bad_due")
-    if field in ("late_policy", "reveal_truth"):
-        return UserError("assignment.bad_choice", field=field)
-    if field == "latitude_deg" and kind == "missing":
-        return UserError("assignment.not_a_number", field=field)
-    metadata = AssignmentForm.model_fields[field].metadata if field else []
+    if field in ("late_policy", "reveal_truth", "group_size") and kind != "missing":
+        return UserError("form.bad_choice")
+    if kind == "missing":
+        return UserError("form.required")
+    info = AssignmentForm.model_fields.get(field)
+    metadata = info.metadata if info is not None else []
     low = next((m.ge for m in metadata if hasattr(m, "ge")), None)
+    low = low if low is not None else next((m.gt for m in metadata if hasattr(m, "gt")), None)
     high = next((m.le for m in metadata if hasattr(m, "le")), None)
-    if kind in ("greater_than_equal", "less_than_equal", "finite_number") and low is not None:
-        return UserError("assignment.out_of_range", field=field, low=low, high=high)
-    return UserError("assignment.not_a_number", field=field)
+    whole = info is not None and info.annotation is int
+    if kind.startswith("string_too_long"):
+        limit = next((m.max_length for m in metadata if hasattr(m, "max_length")), None)
+        return UserError("form.too_long", limit=limit)
+    if low is not None and high is not None:
+        key = "form.whole_between" if whole else "form.between"
+        return UserError(key, low=f"{low:g}", high=f"{high:g}")
+    return UserError("form.not_a_number")
 
 
 def form_values(

@@ -5,8 +5,8 @@ from __future__ import annotations
 from fastapi import APIRouter, Request
 
 from app.accounts.deps import CsrfProtected, TeacherUser
-from app.core.exceptions import UserError
-from app.courses.assignment_form import form_values, parse_assignment_form
+from app.core.exceptions import FieldProblems
+from app.courses.assignment_form import form_context, form_values, parse_assignment_form
 from app.courses.deps import TeacherCourse
 from app.courses.pages import course_context
 from app.web.deps import FormDep, SessionDep
@@ -24,13 +24,12 @@ def create_assignment(
     form["methods"] = raw.getlist("methods")
     try:
         assignment = parse_assignment_form(form, course.timezone)
-    except UserError as problem:
+    except FieldProblems as refused:
         context = course_context(
             db,
             course,
             assignment_form={**form_values(), **form},
-            assignment_error=problem.key,
-            assignment_error_params=problem.params,
+            **form_context(refused.problems),
         )
         return render(request, "courses/detail.html", context, 400)
     assignment.course_id = course.id

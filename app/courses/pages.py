@@ -20,7 +20,7 @@ from app.accounts.service import (
 )
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
-from app.courses.assignment_form import form_values
+from app.courses.assignment_form import form_context, form_values
 from app.courses.deps import TeacherCourse
 from app.models import Assignment, Course, Enrollment, LtiContext, LtiPlatform, User
 from app.web.deps import ObjectId, SessionDep
@@ -100,6 +100,7 @@ def course_context(db: Session, course: Course, **extra) -> dict:
         "timezone": course.timezone,
         "zones": zone_choices(),
         "lms": lms_links(db, course),
+        **form_context(),
         **extra,
     }
 

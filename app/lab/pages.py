@@ -4,21 +4,18 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Annotated, Literal
 
-from fastapi import APIRouter, Form, Request
+from fastapi import APIRouter, Request
 from jinja2.utils import htmlsafe_json_dumps
 from markupsafe import Markup
 from sqlalchemy.exc import OperationalError
 from sqlmodel import Session, select
 
-from app.accounts.deps import CsrfProtected, CurrentUser
+from app.accounts.deps import CurrentUser
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
-from app.core.units import EARTH_RATE_DEG_H, UNITS
+from app.core.units import UNITS
 from app.courses import deadlines
-from app.lab import partners
-from app.lab import sessions as labsessions
 from app.lab.attempts import comments_of, mark_seen, released_grade, shown_to_student
 from app.lab.chart_texts import (
     allan_text,
@@ -48,140 +45,19 @@ from app.models import (
     Assignment,
     Attempt,
     Course,
-    Enrollment,
-    Extension,
     LabSession,
-    Role,
     SessionStatus,
-    User,
-    utcnow,
 )
-from app.web.deps import MAX_ID, RowWriteSession, SessionDep
+from app.web.deps import SessionDep
 from app.web.i18n import translator
 from app.web.render import (
     csrf_token_for,
-    flash,
-    redirect,
     render,
     request_language,
     templates,
 )
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
-
-STATIONS = [  # practice presets: (key, latitude, Earth rate)
-    ("handout", 39.93, 15.04),
-    ("beijing", 39.99, EARTH_RATE_DEG_H),
-    ("shanghai", 31.23, EARTH_RATE_DEG_H),
-    ("xian", 34.26, EARTH_RATE_DEG_H),
-    ("harbin", 45.75, EARTH_RATE_DEG_H),
-    ("guangzhou", 23.13, EARTH_RATE_DEG_H),
-]
-
-
-STATION_VALUES = {key: (latitude, rate) for key, latitude, rate in STATIONS}
-
-
-def my_assignments(db: Session, user: User) -> list[tuple[Assignment, Course]]:
-    if user.role == Role.teacher:
-        query = select(Assignment, Course).join(Course).where(Course.teacher_id == user.id)
-    else:
-        query = (
-            select(Assignment, Course)
-            .join(Course)
-            .join(Enrollment, Enrollment.course_id == Course.id)
-            .where(Enrollment.student_id == user.id)
-        )
-    return list(
-        db.exec(
-            query.where(Course.archived == False).order_by(Assignment.created_at.desc())  # noqa: E712
-        ).all()
-    )
-
-
-@router.get("")
-def lab_home(request: Request, user: CurrentUser, db: SessionDep):
-    sessions = db.exec(
-        select(LabSession)
-        .where(partners.in_sessions_of(user.id))
-        .order_by(LabSession.updated_at.desc())
-    ).all()
-    mine = {s.assignment_id: s for s in sessions if s.assignment_id is not None}
-    extensions = {
-        row.assignment_id: row.due_at
-        for row in db.exec(select(Extension).where(Extension.student_id == user.id))
-    }
-    assignments = [
-        {
-            "assignment": assignment,
-            "course": course,
-            "session": mine.get(assignment.id),
-            "due": extensions.get(assignment.id, assignment.due_at),
-        }
-        for assignment, course in my_assignments(db, user)
-    ]
-    return render(
-        request,
-        "lab/home.html",
-        {
-            "sessions": sessions,
-            "assignments": assignments,
-            "stations": STATIONS,
-            "presets": sorted(PRESETS),
-            "now": utcnow(),
-        },
-    )
-
-
-@router.post("/sessions", dependencies=[CsrfProtected, RowWriteSession])
-def create_session(
-    request: Request,
-    user: CurrentUser,
-    db: SessionDep,
-    title: Annotated[str, Form(max_length=200)] = "",
-    assignment_id: Annotated[int | None, Form(ge=1, le=MAX_ID)] = None,
-    station: Annotated[str, Form(max_length=32)] = "handout",
-    latitude_deg: Annotated[float | None, Form()] = None,
-    earth_rate_deg_h: Annotated[float | None, Form()] = None,
-    rotation: Annotated[Literal["ccw", "cw"], Form()] = "ccw",
-    heading_start_deg: Annotated[float, Form()] = 0.0,
-    latitude_start_deg: Annotated[float, Form()] = 0.0,
-    latitude_step_deg: Annotated[float, Form()] = 90.0,
-    preset: Annotated[str, Form(max_length=32)] = "teaching-fog",
-):
-    _ = translator(request_language(request))
-    assignment = (
-        labsessions.visible_assignment(db, user, assignment_id)
-        if assignment_id is not None
-        else None
-    )
-    if assignment is None and station in STATION_VALUES:
-        latitude_deg, earth_rate_deg_h = STATION_VALUES[station]
-    settings = labsessions.SessionSettings(
-        title=title,
-        latitude_deg=latitude_deg,
-        earth_rate_deg_h=earth_rate_deg_h,
-        rotation=rotation,
-        heading_start_deg=heading_start_deg,
-        latitude_start_deg=latitude_start_deg,
-        latitude_step_deg=latitude_step_deg,
-        preset=preset,
-    )
-    try:
-        session, created = labsessions.start_session(
-            db, user, settings, assignment, _("lab.practice_title")
-        )
-    except UserError as error:
-        return _back_with_error(request, error.key)
-    if created:
-        db.commit()
-    return redirect(f"/lab/sessions/{session.id}")
-
-
-def _back_with_error(request: Request, key: str):
-    response = redirect("/lab")
-    flash(response, request, key, "error")
-    return response
 
 
 def _figures(results, _) -> tuple[dict[str, dict], dict[str, dict]]:

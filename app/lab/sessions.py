@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 from sqlmodel import Session, select
 
-from app.core.exceptions import UserError
+from app.core.exceptions import FieldProblems, UserError
 from app.core.presets import PRESETS
 from app.db import lock_rows
 from app.lab.partners import ensure_partner_code, member_map
@@ -50,6 +50,30 @@ class SessionSettings:
     symmetric_order: bool = False  # positions 5–8 revisit 4–1
 
 
+def settings_problems(settings: SessionSettings, *, practice: bool) -> dict[str, UserError]:
+    """Every impossible setting, by the form's field name (``practice``: a session of no
+    assignment, whose station the student sets)."""
+    problems: dict[str, UserError] = {}
+    if practice:
+        latitude, rate = settings.latitude_deg, settings.earth_rate_deg_h
+        if latitude is None:
+            problems["latitude_deg"] = UserError("lab.station_required")
+        elif not (math.isfinite(latitude) and -90 <= latitude <= 90):
+            problems["latitude_deg"] = UserError("lab.bad_latitude")
+        if rate is None:
+            problems["earth_rate_deg_h"] = UserError("lab.station_required")
+        elif not (math.isfinite(rate) and 0 < rate < 1000):
+            problems["earth_rate_deg_h"] = UserError("lab.bad_earth_rate")
+    if settings.rotation not in ("ccw", "cw"):
+        problems["rotation"] = UserError("rotation.unknown", rotation=str(settings.rotation)[:20])
+    for name in ("heading_start_deg", "latitude_start_deg", "latitude_step_deg"):
+        if not math.isfinite(getattr(settings, name)):
+            problems[name] = UserError("lab.bad_angles")
+    if "latitude_step_deg" not in problems and abs(settings.latitude_step_deg) < 1:
+        problems["latitude_step_deg"] = UserError("lab.bad_angles")
+    return problems
+
+
 def start_session(
     db: Session,
     user: User,
@@ -64,13 +88,9 @@ def start_session(
     assignment" is a read-check-write.
     """
     lock_rows(db, User, user.id)
-    angles = (settings.heading_start_deg, settings.latitude_start_deg, settings.latitude_step_deg)
-    if not all(math.isfinite(a) for a in angles) or abs(settings.latitude_step_deg) < 1:
-        raise UserError(
-            "lab.bad_angles",
-        )
-    if settings.rotation not in ("ccw", "cw"):
-        raise UserError("rotation.unknown", rotation=str(settings.rotation)[:20])
+    problems = settings_problems(settings, practice=assignment is None)
+    if problems:
+        raise FieldProblems(problems)
     if assignment is not None:
         existing = db.exec(
             select(LabSession).where(
@@ -106,12 +126,6 @@ def start_session(
         session.title = session.title or assignment.title
         ensure_partner_code(db, session, assignment)
     else:
-        if settings.latitude_deg is None or settings.earth_rate_deg_h is None:
-            raise UserError("lab.station_required")
-        if not (math.isfinite(settings.latitude_deg) and -90 <= settings.latitude_deg <= 90):
-            raise UserError("lab.bad_latitude")
-        if not (math.isfinite(settings.earth_rate_deg_h) and 0 < settings.earth_rate_deg_h < 1000):
-            raise UserError("lab.bad_earth_rate")
         session.latitude_deg = settings.latitude_deg
         session.earth_rate_deg_h = settings.earth_rate_deg_h
         session.simulator_preset = settings.preset if settings.preset in PRESETS else "teaching-fog"

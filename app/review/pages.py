@@ -9,11 +9,11 @@ from fastapi import APIRouter, File, Form, Request, UploadFile
 
 from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.allan_summary import dwell_lines, note_lines, term_rows
-from app.core.exceptions import UserError
+from app.core.exceptions import FieldProblems, UserError
 from app.core.presets import PRESETS
 from app.core.readings import parse_decimal
 from app.courses import characterisation
-from app.courses.assignment_form import form_values, parse_assignment_form
+from app.courses.assignment_form import form_context, form_values, parse_assignment_form
 from app.lab.chart_texts import class_text
 from app.lab.charts import class_error_figure, class_histogram_figure
 from app.review.deps import TeacherAssignment
@@ -35,6 +35,12 @@ def assignment_dashboard(
     db: SessionDep,
     status: str = "",
 ):
+    return render(request, "review/dashboard.html", dashboard_context(request, target, db, status))
+
+
+def dashboard_context(request: Request, target, db, status: str = "", **extra) -> dict:
+    """What the assignment's dashboard shows (``extra``: the settings form as typed and
+    its refused fields, after a refused change)."""
     course, assignment = target.course, target.assignment
     _ = translator(request_language(request))
     rows = class_rows(db, assignment)
@@ -52,26 +58,24 @@ def assignment_dashboard(
             "dwell": dwell_lines(stored["dwell"], _),
             "notes": note_lines(stored.get("notes", []), _),
         }
-    return render(
-        request,
-        "review/dashboard.html",
-        {
-            "course": course,
-            "assignment": assignment,
-            "rows": rows,
-            "counts": status_counts(rows),
-            "figures": figures,
-            "figure_texts": figure_texts,
-            "status_filter": status,
-            "timezone": course.timezone,
-            "form": form_values(assignment, course.timezone),
-            "characterisation": stored,
-            "characterisation_words": words,
-            "presets": sorted(PRESETS),
-            "plotly_url": request.app.state.plotly_url,
-            "passback": passback_state(db, assignment.id),
-        },
-    )
+    return {
+        "course": course,
+        "assignment": assignment,
+        "rows": rows,
+        "counts": status_counts(rows),
+        "figures": figures,
+        "figure_texts": figure_texts,
+        "status_filter": status,
+        "timezone": course.timezone,
+        "form": form_values(assignment, course.timezone),
+        "characterisation": stored,
+        "characterisation_words": words,
+        "presets": sorted(PRESETS),
+        "plotly_url": request.app.state.plotly_url,
+        "passback": passback_state(db, assignment.id),
+        **form_context(),
+        **extra,
+    }
 
 
 @router.post(
@@ -88,10 +92,15 @@ def update_settings(
     values["methods"] = form.getlist("methods")
     try:
         updated = parse_assignment_form(values, course.timezone)
-    except UserError as problem:
-        response = redirect(f"/courses/{course.id}/assignments/{assignment.id}#settings")
-        flash(response, request, problem.key, "error", **problem.params)
-        return response
+    except FieldProblems as refused:  # the form again, as typed, every refused field marked
+        context = dashboard_context(
+            request,
+            target,
+            db,
+            form={**form_values(assignment, course.timezone), **values},
+            **form_context(refused.problems),
+        )
+        return render(request, "review/dashboard.html", context, 400)
     kept = {"id", "course_id", "created_at", "gyro_characterisation"}  # not on this form
     for name, value in updated.model_dump(exclude=kept).items():
         setattr(assignment, name, value)
