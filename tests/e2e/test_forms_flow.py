@@ -1,0 +1,106 @@
+"""Issue 34: a refused form comes back with everything typed, every refused field marked
+beside it in the reader's language, and the focus (and the view) on the first one -- in a
+real browser at a phone's and a laptop's width, in English and Chinese."""
+
+from __future__ import annotations
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.e2e.conftest import log_in
+
+pytestmark = pytest.mark.e2e
+
+WIDTHS = (390, 1366)
+LANGUAGES = {  # locale: words the refusal must show
+    "en-US": {
+        "latitude": "The latitude must be between −90° and 90°.",
+        "rate": "The Earth rate must be a positive number of °/h.",
+        "number": "Type a number from -90 to 90.",
+        "tolerance": "Type a number from 0 to 180.",
+    },
+    "zh-CN": {
+        "latitude": "纬度必须在 −90° 到 90° 之间。",
+        "rate": "地球自转角速度必须是正数（°/h）。",
+        "number": "请输入 -90 到 90 之间的数。",
+        "tolerance": "请输入 0 到 180 之间的数。",
+    },
+}
+
+
+def focused_name(page) -> str | None:
+    return page.evaluate("document.activeElement && document.activeElement.name")
+
+
+def in_view(page, selector: str) -> bool:
+    """Whether the element is inside the window as the page opens (no scrolling needed)."""
+    box = page.locator(selector).bounding_box()
+    size = page.viewport_size
+    return box is not None and 0 <= box["y"] and box["y"] + box["height"] <= size["height"]
+
+
+@pytest.mark.parametrize("locale", list(LANGUAGES))
+def test_a_refused_practice_session_keeps_what_the_student_typed(demo_server, new_page, locale):
+    server, credentials = demo_server
+    words = LANGUAGES[locale]
+    page = new_page(locale)
+    log_in(page, server.url, "student2", credentials["student2"])
+    for width in WIDTHS:
+        page.set_viewport_size({"width": width, "height": 844})
+        page.goto(f"{server.url}/lab")
+        form = page.locator("#new-session")
+        form.locator("input[name=title]").fill(f"Roof lab {width}")
+        form.locator("select[name=station]").select_option("custom")
+        form.locator("input[name=latitude_deg]").fill("91")
+        form.locator("input[name=earth_rate_deg_h]").fill("0")
+        form.locator("input[name=rotation][value=cw]").check()
+        form.locator("input[name=heading_start_deg]").fill("12,5")
+        form.locator("select[name=preset]").select_option("navigation-fog")
+        with page.expect_navigation():
+            form.locator("button[type=submit]").click()
+        form = page.locator("#new-session")
+        expect(form.locator("input[name=title]")).to_have_value(f"Roof lab {width}")
+        expect(form.locator("select[name=station]")).to_have_value("custom")
+        expect(form.locator("input[name=latitude_deg]")).to_have_value("91")
+        expect(form.locator("input[name=earth_rate_deg_h]")).to_have_value("0")
+        expect(form.locator("input[name=rotation][value=cw]")).to_be_checked()
+        expect(form.locator("input[name=heading_start_deg]")).to_have_value("12,5")
+        expect(form.locator("select[name=preset]")).to_have_value("navigation-fog")
+        expect(form.locator("#error-latitude_deg")).to_have_text(words["latitude"])
+        expect(form.locator("#error-earth_rate_deg_h")).to_have_text(words["rate"])
+        assert focused_name(page) == "latitude_deg"
+        assert in_view(page, "#error-latitude_deg"), f"the message is off screen at {width} px"
+
+
+@pytest.mark.parametrize("locale", list(LANGUAGES))
+def test_a_refused_assignment_shows_every_problem_beside_its_field(
+    demo_server, new_page, locale
+):
+    server, credentials = demo_server
+    words = LANGUAGES[locale]
+    page = new_page(locale)
+    log_in(page, server.url, "teacher", credentials["teacher"])
+    page.goto(f"{server.url}/courses")
+    page.locator("a[href^='/courses/']").first.click()
+    course_url = page.url
+    for width in WIDTHS:
+        page.set_viewport_size({"width": width, "height": 844})
+        page.goto(course_url)
+        form = page.locator("#new-assignment")
+        form.locator("input[name=title]").fill(f"Week 3 ({width})")
+        form.locator("input[name=latitude_deg]").fill("north")
+        form.locator("summary", has_text="").last.click()  # the advanced settings
+        form.locator("input[name=tolerance_heading_deg]").fill("-1")
+        with page.expect_navigation():
+            form.locator("button[type=submit]").click()
+        form = page.locator("#new-assignment")
+        expect(form.locator("input[name=title]")).to_have_value(f"Week 3 ({width})")
+        expect(form.locator("input[name=latitude_deg]")).to_have_value("north")
+        expect(form.locator("input[name=tolerance_heading_deg]")).to_have_value("-1")
+        expect(form.locator("#error-latitude_deg")).to_have_text(words["number"])
+        # the folded section holding a refused field is open, its message visible
+        expect(form.locator("#error-tolerance_heading_deg")).to_have_text(words["tolerance"])
+        expect(form.locator("#error-tolerance_heading_deg")).to_be_visible()
+        expect(form.locator(".form-problems li")).to_have_count(2)
+        assert focused_name(page) == "latitude_deg"
+        assert in_view(page, "#error-latitude_deg"), f"the message is off screen at {width} px"
