@@ -279,6 +279,23 @@ class Attempt(SQLModel, table=True):
     seen_at: datetime | None = None  # the student opened the work after either
 
 
+class GradeAmendment(SQLModel, table=True):
+    """A released grade changed afterwards: what it was, who changed it, when and why (the
+    student sees the change, the LMS gets the new score; the history is kept)."""
+
+    __tablename__ = "grade_amendment"
+    id: int | None = Field(default=None, primary_key=True)
+    attempt_id: int = Field(foreign_key="attempt.id", index=True, ondelete="CASCADE")
+    teacher_id: int | None = Field(default=None, foreign_key="user.id", ondelete="SET NULL")
+    amended_at: datetime = Field(default_factory=utcnow)
+    reason: str = Field(max_length=2000)
+    points_before: float | None = None
+    points_after: float | None = None
+    letter_before: str | None = Field(default=None, max_length=32)
+    letter_after: str | None = Field(default=None, max_length=32)
+    feedback_before: str = Field(default="", max_length=20_000)
+
+
 class SessionMember(SQLModel, table=True):
     """A lab partner: a student who shares another student's session for an assignment
     (sees it, records and submits in it, gets its grade)."""

@@ -13,8 +13,17 @@ from datetime import UTC, datetime, timedelta
 import pytest
 from sqlmodel import select
 
+from app.core.exceptions import UserError
 from app.db import read_session, write_session
-from app.models import Assignment, Attempt, Course, Extension, LabSession, utcnow
+from app.models import (
+    Assignment,
+    Attempt,
+    Course,
+    Extension,
+    GradeAmendment,
+    LabSession,
+    utcnow,
+)
 from tests.factories import (
     browser,
     csrf_from,
@@ -95,10 +104,10 @@ def test_a_rubric_sums_its_criteria(world):
         {"name": "纬度与地速", "points": 20.0},
     ]
     # a rubric that does not add up to the maximum is refused with a clear message
-    post_form(teacher, f"{base}/settings", {**form, "max_points": "60"}, page=base)
-    assert "add up to 50, not the maximum 60" in teacher.get(base).text
-    post_form(teacher, f"{base}/settings", {**form, "rubric": "no points here"}, page=base)
-    assert "Rubric line 1" in teacher.get(base).text
+    refused = post_form(teacher, f"{base}/settings", {**form, "max_points": "60"}, page=base)
+    assert refused.status_code == 400 and "add up to 50, not the maximum 60" in refused.text
+    refused = post_form(teacher, f"{base}/settings", {**form, "rubric": "no points"}, page=base)
+    assert refused.status_code == 400 and "Rubric line 1" in refused.text
     _, session_id = submitted(world, "s1")
     page = teacher.get(f"/review/sessions/{session_id}").text
     assert 'name="rubric-0"' in page and 'name="points"' not in page
@@ -350,3 +359,65 @@ def test_csrf_protects_the_desk(world):
     assert status_of(session_id) == "submitted"
     with read_session() as db:
         assert db.exec(select(Extension)).all() == []
+
+
+def test_a_released_grade_is_amended_with_a_reason_the_student_sees(world):
+    teacher = browser(world, "teacher1")
+    student, session_id = submitted(world, "s1")
+    review(teacher, session_id, points="78", feedback="Good.", action="release")
+    assert status_of(session_id) == "graded"
+    student.get(f"/lab/sessions/{session_id}")  # seen
+    assert latest(session_id).seen_at is not None
+    # a change without a reason is refused, everything typed kept, nothing changed
+    answer = review(teacher, session_id, points="87", feedback="Good, re-marked.", action="amend")
+    assert answer.status_code == 400
+    assert "Say why the grade changes" in answer.text
+    assert "Good, re-marked.</textarea>" in answer.text and 'value="87"' in answer.text
+    assert latest(session_id).points == 78
+    # a plain save of a released review stays refused
+    assert review(teacher, session_id, points="90", action="save").status_code == 303
+    assert latest(session_id).points == 78
+    # with a reason: the grade changes, the history keeps the old one, the student is told
+    answer = review(
+        teacher,
+        session_id,
+        points="87",
+        feedback="Good, re-marked.",
+        reason="Part B was marked against the wrong latitude.",
+        action="amend",
+    )
+    assert answer.status_code == 303
+    attempt = latest(session_id)
+    assert attempt.points == 87 and attempt.feedback == "Good, re-marked."
+    assert attempt.seen_at is None and status_of(session_id) == "graded"
+    with read_session() as db:
+        (change,) = db.exec(select(GradeAmendment)).all()
+    assert (change.points_before, change.points_after) == (78, 87)
+    assert change.feedback_before == "Good." and change.teacher_id is not None
+    desk = teacher.get(f"/review/sessions/{session_id}").text
+    assert "78 → 87" in desk and "wrong latitude" in desk
+    page = student.get(f"/lab/sessions/{session_id}").text
+    assert "87 / 100" in page and "78 → 87" in page
+    assert "Part B was marked against the wrong latitude." in page
+    # only a released grade is amended
+    _, other = submitted(world, "s2")
+    refused = review(teacher, other, points="50", reason="x", action="amend")
+    assert refused.status_code == 409 and "Only a released grade can be amended" in refused.text
+    assert latest(other).points is None
+
+
+def test_an_amendment_by_any_caller_sends_the_new_score(world):
+    """grading.amend owns its effects, as release does (called as a script would)."""
+    from app.review import grading
+
+    teacher = browser(world, "teacher1")
+    _, session_id = submitted(world, "s1")
+    review(teacher, session_id, points="40", action="release")
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        attempt = db.get(Attempt, latest(session_id).id)
+        fixed = grading.Review("ok", {}, 45.0, {}, None)
+        with pytest.raises(UserError):
+            grading.amend(db, session, attempt, fixed, "  ", None)
+        assert grading.amend(db, session, attempt, fixed, "typo", None) == 0  # no LMS here
+    assert latest(session_id).points == 45

@@ -13,6 +13,7 @@ from app.lab.partners import in_sessions_of
 from app.models import (
     Assignment,
     Attempt,
+    GradeAmendment,
     LabSession,
     SessionStatus,
     User,
@@ -76,6 +77,19 @@ def released_grade(session: LabSession, attempts: list[Attempt], assignment) -> 
     if session.status != SessionStatus.graded or not attempts:
         return ""
     return grade_text(attempts[-1], assignment)
+
+
+def amendments_of(db: Session, attempt: Attempt | None) -> list[GradeAmendment]:
+    """The changes made to an attempt's released grade, oldest first."""
+    if attempt is None:
+        return []
+    return list(
+        db.exec(
+            select(GradeAmendment)
+            .where(GradeAmendment.attempt_id == attempt.id)
+            .order_by(GradeAmendment.amended_at, GradeAmendment.id)
+        ).all()
+    )
 
 
 def shown_to_student(attempt: Attempt) -> bool:

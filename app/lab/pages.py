@@ -16,7 +16,13 @@ from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.core.units import UNITS
 from app.courses import deadlines
-from app.lab.attempts import comments_of, mark_seen, released_grade, shown_to_student
+from app.lab.attempts import (
+    amendments_of,
+    comments_of,
+    mark_seen,
+    released_grade,
+    shown_to_student,
+)
 from app.lab.chart_texts import (
     allan_text,
     compass_summary,
@@ -242,6 +248,7 @@ def session_view(
         "feedback_attempt": latest if given else None,
         "position_feedback": comments_of(latest) if given else {},
         "grade": released_grade(session, attempts, assignment) or None,
+        "amendments": amendments_of(db, latest) if given and latest.released_at else [],
         "attempt_results": [(a, json.loads(a.results_json)) for a in attempts],
         "attempt_reviews": {
             a.number: {"feedback": a.feedback, "comments": comments_of(a)}

@@ -9,11 +9,18 @@ from datetime import datetime
 from fastapi import APIRouter, BackgroundTasks, Request
 from sqlmodel import select
 
-from app.accounts.deps import CsrfProtected
+from app.accounts.deps import CsrfProtected, TeacherUser
 from app.core.exceptions import UserError
 from app.courses import deadlines
 from app.lab import partners
-from app.lab.attempts import comments_of, grade_text, latest_attempt, rubric_of, rubric_scores_of
+from app.lab.attempts import (
+    amendments_of,
+    comments_of,
+    grade_text,
+    latest_attempt,
+    rubric_of,
+    rubric_scores_of,
+)
 from app.lab.pages import UNIT_NAMES, session_view
 from app.lab.truth import auto_check, session_truth
 from app.models import Attempt, SessionStatus, User
@@ -55,6 +62,7 @@ def desk_view(request: Request, target, db) -> dict:
             "rubric": rubric_of(assignment),
             "rubric_scores": rubric_scores_of(latest),
             "grade": grade_text(latest, assignment),
+            "amendments": amendments_of(db, latest),
             "student": db.get(User, session.owner_id),
             "members": partners.members_of(db, session),
             "course": course,
@@ -87,6 +95,8 @@ def typed_review(form, rubric: list[dict], problem: UserError) -> dict:
     invalid = "points" if field == "points" and not rubric else ""
     if field in names:
         invalid = f"rubric-{names.index(field)}"
+    elif field == "reason":
+        invalid = "reason"
     elif problem.key == "review.points_required":  # released with no points: the first gap
         empty = [i for i in range(len(rubric)) if not fields.get(f"rubric-{i}", "").strip()]
         invalid = f"rubric-{empty[0]}" if empty else "" if rubric else "points"
@@ -100,6 +110,7 @@ def typed_review(form, rubric: list[dict], problem: UserError) -> dict:
         "rubric": {str(i): fields.get(f"rubric-{i}", "")[:32] for i in range(len(rubric))},
         "points": fields.get("points", "")[:32],
         "letter": fields.get("letter", "")[:32],
+        "reason": fields.get("reason", "")[: grading.MAX_REASON],
         "invalid": invalid,
     }
 
@@ -108,23 +119,33 @@ def typed_review(form, rubric: list[dict], problem: UserError) -> dict:
 def save_review(
     request: Request,
     target: ReviewableSession,
+    teacher: TeacherUser,
     db: SessionDep,
     form: FormDep,
     background: BackgroundTasks,
 ):
     """The review of the latest attempt (feedback, comments, points, rubric, letter);
-    ``action`` = save | return | release; ``go`` = next | previous after saving."""
+    ``action`` = save | return | release, or amend (a released grade, with a ``reason``);
+    ``go`` = next | previous after saving."""
     session, assignment = target.session, target.assignment
     response = redirect(f"/review/sessions/{session.id}")
     attempt = latest_attempt(db, session.id)
     action = str(form.get("action", "save"))
+    graded = session.status == SessionStatus.graded
     try:
         if attempt is None:
             raise UserError("review.nothing_submitted", status=409)
-        if session.status == SessionStatus.graded:
+        if graded and action != "amend":
             raise UserError("review.already_released", status=409)
         review = grading.parse_review({k: str(v) for k, v in form.items()}, assignment)
-        grading.store_review(attempt, review)
+        if action == "amend":
+            queued = grading.amend(
+                db, session, attempt, review, str(form.get("reason", "")), teacher.id
+            )
+            if queued:
+                background.add_task(lms_outbox.wake_sender)
+        else:
+            grading.store_review(attempt, review)
         if action == "return":
             grading.return_for_revision(db, session, attempt)
         elif action == "release":
@@ -133,7 +154,7 @@ def save_review(
                 background.add_task(lms_outbox.wake_sender)
     except UserError as problem:
         db.rollback()
-        if attempt is None or session.status == SessionStatus.graded:  # no form to fill
+        if attempt is None or (graded and action != "amend"):  # no form to fill
             flash(response, request, problem.key, "error", **problem.params)
             return response
         # the page again, with everything typed and the refused field marked (a redirect
@@ -148,7 +169,11 @@ def save_review(
     db.add(attempt)
     db.add(session)
     db.commit()
-    key = {"return": "review.returned", "release": "review.released"}.get(action, "review.saved")
+    key = {
+        "return": "review.returned",
+        "release": "review.released",
+        "amend": "review.amended",
+    }.get(action, "review.saved")
     step = grading.neighbours(db, session)
     go = str(form.get("go", ""))
     target_id = None

@@ -18,6 +18,7 @@ from app.lab.attempts import latest_attempt, rubric_of
 from app.models import (
     Assignment,
     Attempt,
+    GradeAmendment,
     LabSession,
     SessionStatus,
     User,
@@ -121,6 +122,48 @@ def release(db: Session, session: LabSession, attempt: Attempt) -> int:
     attempt.released_at = utcnow()
     attempt.seen_at = None
     session.status = SessionStatus.graded
+    session.updated_at = utcnow()
+    db.add(attempt)
+    db.add(session)
+    return queue_release(db, session, attempt)
+
+
+MAX_REASON = 2_000
+
+
+def amend(
+    db: Session,
+    session: LabSession,
+    attempt: Attempt,
+    review: Review,
+    reason: str,
+    teacher_id: int | None,
+) -> int:
+    """Change a released grade: the review is replaced, the change (what the grade was,
+    who changed it, when and why) is kept as a :class:`GradeAmendment`, the student is
+    notified again (``seen_at`` reset) and the new score is queued for every LMS student
+    of the session; returns how many grade posts were queued.  The caller commits."""
+    reason = reason.strip()[:MAX_REASON]
+    if session.status != SessionStatus.graded or attempt.released_at is None:
+        raise UserError("review.amend_not_released", status=409)
+    if not reason:
+        raise UserError("review.amend_reason_required", field="reason")
+    if review.points is None:
+        raise UserError("review.points_required")
+    db.add(
+        GradeAmendment(
+            attempt_id=attempt.id,
+            teacher_id=teacher_id,
+            reason=reason,
+            points_before=attempt.points,
+            points_after=review.points,
+            letter_before=attempt.letter,
+            letter_after=review.letter,
+            feedback_before=attempt.feedback,
+        )
+    )
+    store_review(attempt, review)
+    attempt.seen_at = None
     session.updated_at = utcnow()
     db.add(attempt)
     db.add(session)
