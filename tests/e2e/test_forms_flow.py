@@ -36,7 +36,7 @@ def in_view(page, selector: str) -> bool:
     """Whether the element is inside the window as the page opens (no scrolling needed)."""
     box = page.locator(selector).bounding_box()
     size = page.viewport_size
-    return box is not None and 0 <= box["y"] and box["y"] + box["height"] <= size["height"]
+    return box is not None and box["y"] >= 0 and box["y"] + box["height"] <= size["height"]
 
 
 @pytest.mark.parametrize("locale", list(LANGUAGES))
@@ -73,9 +73,7 @@ def test_a_refused_practice_session_keeps_what_the_student_typed(demo_server, ne
 
 
 @pytest.mark.parametrize("locale", list(LANGUAGES))
-def test_a_refused_assignment_shows_every_problem_beside_its_field(
-    demo_server, new_page, locale
-):
+def test_a_refused_assignment_shows_every_problem_beside_its_field(demo_server, new_page, locale):
     server, credentials = demo_server
     words = LANGUAGES[locale]
     page = new_page(locale)
@@ -104,3 +102,45 @@ def test_a_refused_assignment_shows_every_problem_beside_its_field(
         expect(form.locator(".form-problems li")).to_have_count(2)
         assert focused_name(page) == "latitude_deg"
         assert in_view(page, "#error-latitude_deg"), f"the message is off screen at {width} px"
+
+
+def test_a_released_grade_is_amended_and_the_student_sees_why(demo_server, new_page):
+    """A teacher (English, a laptop) corrects a released grade; the student (Chinese, a
+    phone) sees the new grade, the old one and the reason."""
+    server, credentials = demo_server
+    teacher = new_page("en-US")
+    teacher.set_viewport_size({"width": 1366, "height": 900})
+    log_in(teacher, server.url, "teacher", credentials["teacher"])
+    teacher.get_by_role("link", name="Demo: FOG north-finding lab 光纤陀螺寻北实验").click()
+    teacher.locator("#assignments a", has_text="Four-position north finding").first.click()
+    teacher.locator("#class-table tr[data-username='student2'] a").click()
+    desk = teacher.url
+    teacher.fill("input[name=points]", "80")
+    teacher.once("dialog", lambda dialog: dialog.accept())
+    with teacher.expect_navigation():
+        teacher.locator("#release-button").click()
+    expect(teacher.locator("#session-status")).to_have_text("graded")
+    teacher.fill("input[name=points]", "85")
+    with teacher.expect_navigation():  # no reason: refused, the points typed are kept
+        teacher.locator("#amend-button").click()
+    expect(teacher.locator("#review-error")).to_contain_text("Say why the grade changes")
+    expect(teacher.locator("input[name=points]")).to_have_value("85")
+    assert focused_name(teacher) == "reason"
+    teacher.fill("textarea[name=reason]", "Part B was marked against the wrong latitude.")
+    with teacher.expect_navigation():
+        teacher.locator("#amend-button").click()
+    assert teacher.url.startswith(desk)
+    expect(teacher.locator("#grade-history")).to_contain_text("80 → 85")
+
+    student = new_page("zh-CN")
+    student.set_viewport_size({"width": 390, "height": 844})
+    log_in(student, server.url, "student2", credentials["student2"])
+    student.goto(f"{server.url}/lab")
+    student.locator("#sessions a").first.click()
+    expect(student.locator("#grade")).to_have_text("85 / 100")
+    history = student.locator("#grade-history")
+    expect(history).to_contain_text("成绩更改记录")
+    expect(history).to_contain_text("80 → 85")
+    expect(history).to_contain_text("Part B was marked against the wrong latitude.")
+    box = history.bounding_box()
+    assert box is not None and box["x"] >= 0 and box["x"] + box["width"] <= 390
