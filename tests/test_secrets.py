@@ -55,6 +55,7 @@ def built_class_zip(teacher, world) -> int:  # noqa: F811
 
 
 @pytest.mark.slow  # every GET route, its PDFs and the class zip rendered
+@pytest.mark.one_backend  # what a page shows does not depend on the database: SQLite only
 def test_no_response_carries_a_secret(world):  # noqa: F811
     with write_session() as db:
         assignment = db.get(Assignment, world["assignment"])

@@ -65,9 +65,26 @@ def parse_decimal(text: str) -> float:
 
 
 def parse_typed_number(text: str) -> float:
-    """One number typed in a form field, as people write it: surrounding spaces, a decimal
-    comma ("12,5") and the minus sign "−" (U+2212) are taken; else as
-    :func:`parse_decimal` (which raises ValueError)."""
+    """One number typed in a form field, as people write it.
+
+    Surrounding spaces, one decimal comma ("12,5" → 12.5) and the minus sign "−"
+    (U+2212) are taken; the rest is :func:`parse_decimal`'s plain decimal.
+
+    Parameters
+    ----------
+    text : str
+        What was typed in the field.
+
+    Returns
+    -------
+    float
+        The number.
+
+    Raises
+    ------
+    ValueError
+        When it is not one number (as :func:`parse_decimal`).
+    """
     text = text.strip().replace("\u2212", "-")
     if "," in text and "." not in text and text.count(",") == 1:
         text = text.replace(",", ".")
