@@ -88,6 +88,7 @@ def test_a_cold_run_is_flagged_in_words_and_its_sigma_holds_the_warm_up(
 
 
 @pytest.mark.slow
+@pytest.mark.one_backend  # the words of a PDF, not the database
 def test_the_pdf_report_says_the_gyro_was_warming_up(student_client, monkeypatch):
     from app.lab import stream
     from tests.factories import pdf_text
