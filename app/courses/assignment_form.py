@@ -16,6 +16,7 @@ from pydantic import (
     ConfigDict,
     Field,
     ValidationError,
+    ValidationInfo,
     field_validator,
 )
 
@@ -45,6 +46,7 @@ def _typed_number(value: Any) -> Any:
 
 
 Optional = Annotated[Any, BeforeValidator(_blank_is_none)]
+NUMBER_TYPES = (float, float | None)
 
 
 class AssignmentForm(BaseModel):
@@ -98,25 +100,13 @@ class AssignmentForm(BaseModel):
             return value
         return int(number) if math.isfinite(number) else value
 
-    @field_validator(
-        "latitude_deg",
-        "earth_rate_deg_h",
-        "azimuth_min_deg",
-        "azimuth_max_deg",
-        "turn_on_bias_max_deg_h",
-        "indexing_sigma_arcsec",
-        "table_tilt_max_deg",
-        "misalignment_max_deg",
-        "true_heading_deg",
-        "tolerance_heading_deg",
-        "tolerance_latitude_pct",
-        "tolerance_earth_rate_pct",
-        "max_points",
-        mode="before",
-    )
+    @field_validator("*", mode="before")
     @classmethod
-    def _as_typed(cls, value: Any) -> Any:
-        return _typed_number(value)
+    def _as_typed(cls, value: Any, info: ValidationInfo) -> Any:
+        """Every number field takes a number as people type it ("12,5", "−3")."""
+        if cls.model_fields[info.field_name].annotation in NUMBER_TYPES:
+            return _typed_number(value)
+        return value
 
     def assignment(self, course_id: int = 0, zone_name: str | None = None) -> Assignment:
         """The unsaved assignment (the form's rules are checked by ``rule_problems``)."""
