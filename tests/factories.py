@@ -411,6 +411,7 @@ ACCESS = {
     "GET /lab/sessions/{session_id}/state": "owner",
     "POST /lab/sessions/{session_id}/leave": "owner",
     "POST /lab/join-group": "user",
+    "GET /lab/sessions/{session_id}/grid.json": "owner",
     "GET /lab/sessions/{session_id}/results.json": "owner",
     "POST /lab/sessions/{session_id}/submit": "owner",
     "GET /lab/sessions/{session_id}/export.csv": "owner",

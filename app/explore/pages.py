@@ -20,7 +20,7 @@ from app.explore.scenarios import (
     heading_error_curves,
 )
 from app.explore.schemas import ExplorerQuery
-from app.web.i18n import translator
+from app.web.i18n import client_messages, translator
 from app.web.render import render, request_language
 
 router = APIRouter(prefix="/explore", tags=["pages: explorer"], include_in_schema=False)
@@ -40,7 +40,7 @@ def explorer_page(request: Request, user: CurrentUser):
             "presets": sorted(PRESETS),
             "defaults": ExplorerQuery().model_dump(),
             "plotly_url": request.app.state.plotly_url,
-            "messages": {key: _(key) for key in JS_MESSAGES},
+            "messages": client_messages(JS_MESSAGES, _.language),
             "scenario_texts": {key: _(f"scenario_text.{key}") for key in SCENARIOS},
         },
     )

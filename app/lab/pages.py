@@ -55,7 +55,7 @@ from app.models import (
     SessionStatus,
 )
 from app.web.deps import SessionDep
-from app.web.i18n import translator
+from app.web.i18n import client_messages, translator
 from app.web.render import (
     csrf_token_for,
     render,
@@ -127,7 +127,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         "minReadings": session.min_readings,
         "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
         "plane": session.sim_plane_dial_deg,
-        "messages": {key: _(key) for key in JS_MESSAGES},
+        "messages": client_messages(JS_MESSAGES, _.language),
         "version": session.updated_at.isoformat(),
         "shared": len(group["members"]) > 1,
     }
@@ -293,6 +293,9 @@ JS_MESSAGES = (
     "js.partner_recording",
     "js.part_heading",
     "js.part_latitude",
+    "js.grid_loaded",
+    "js.grid_not_loaded",
+    "js.grid_unchanged",
 )
 
 

@@ -18,6 +18,7 @@ from app.core.readings import Readings, parse_readings_csv
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.deps import ManualSession, OwnedSession, SimulatorSession
 from app.lab.exports import Selection, readings_csv, session_json
+from app.lab.grid import grid_readings
 from app.lab.result_cache import results_of
 from app.lab.schemas import CsvUpload, ManualReadings, Plane, Trim, Turn
 from app.lab.service import record_positions, recordable_session
@@ -25,7 +26,7 @@ from app.lab.sim import nominal_angle, position_count, wait_for_gyro, warm_up_st
 from app.lab.store import POSITIONS, check_position, set_symmetric_order
 from app.lab.submissions import submit
 from app.lab.trim import trim_position
-from app.models import InputMethod, LabSession
+from app.models import InputMethod, LabSession, Part
 from app.web.deps import ObjectId, ReadOnlySession, RowWriteSession, SessionDep
 from app.web.exports import attachment
 from app.web.render import flash, redirect
@@ -216,6 +217,12 @@ def wait_for_warm_up(
     state = warm_up_state(session)
     flash(response, request, "sim.waited", "success", minutes=state["on_minutes"])
     return response
+
+
+@router.get("/sessions/{session_id}/grid.json")
+def grid_endpoint(session: OwnedSession, db: SessionDep, part: Part = Part.heading):
+    """The saved readings of one part, for the typed grid to load back for editing."""
+    return grid_readings(db, session, part)
 
 
 @router.get("/sessions/{session_id}/results.json")

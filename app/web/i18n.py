@@ -106,6 +106,24 @@ def translate(key: str, language: str, **params: object) -> str:
     return text.format(**params) if params else text
 
 
+@lru_cache(maxsize=64)
+def client_messages(keys: tuple[str, ...], language: str) -> dict[str, str | dict[str, str]]:
+    """A page script's messages, placeholders left in; a plural message as
+    ``{"one", "other"}`` (the script picks the form by its ``n``)."""
+    out: dict[str, str | dict[str, str]] = {}
+    for key in keys:
+        text, plural_language = _message(key, language)
+        if plural_language is None:
+            out[key] = text
+        else:
+            catalogue_ = translations(plural_language)
+            out[key] = {
+                "one": catalogue_.ngettext(key, key, 1),
+                "other": catalogue_.ngettext(key, key, 2),
+            }
+    return out
+
+
 @lru_cache(maxsize=8192)
 def _message(key: str, language: str) -> tuple[str, str | None]:
     """The catalogue's text of ``key`` (a page asks for ~250 of them; the catalogues never

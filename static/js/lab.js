@@ -5,8 +5,12 @@
   "use strict";
   const config = JSON.parse(document.getElementById("lab-config").textContent);
   const figures = JSON.parse(document.getElementById("lab-figures").textContent);
-  const t = (key, params = {}) =>
-    (config.messages[key] || key).replace(/\{(\w+)\}/g, (_, name) => params[name] ?? "");
+  // A message in the page's language; a plural one arrives as {one, other}, chosen by n.
+  const t = (key, params = {}) => {
+    let text = config.messages[key] || key;
+    if (typeof text === "object") text = Number(params.n) === 1 ? text.one : text.other;
+    return text.replace(/\{(\w+)\}/g, (_, name) => params[name] ?? "");
+  };
   const base = `/lab/sessions/${config.sessionId}`;
   const MAX_FILE_BYTES = 5_000_000;
   const LIVE_WINDOW = 600;
@@ -69,7 +73,19 @@
         Number(axis.dataset.position) === position || Number(axis.dataset.return) === position,
       );
     });
+    section.querySelectorAll(".readings-grid").forEach((grid) => markColumn(grid, position));
     updateTurnHint(part);
+  }
+  // The chosen position's column of the typed grid is marked and scrolled into view.
+  function markColumn(grid, position) {
+    grid.querySelectorAll("tr").forEach((row) => {
+      [...row.children].forEach((cell, index) => cell.classList.toggle("column-selected", index === position));
+    });
+    const header = grid.querySelectorAll("thead th")[position];
+    const wrap = grid.closest(".grid-wrap");
+    if (header && wrap && wrap.scrollWidth > wrap.clientWidth) {
+      wrap.scrollLeft = Math.max(0, header.offsetLeft - wrap.clientWidth / 3);
+    }
   }
 
   // The chosen tab and position survive the reload that follows each save.
@@ -179,6 +195,7 @@
         }
         body.appendChild(row);
       }
+      markColumn(panel.querySelector(".readings-grid"), selected[panel.dataset.part]);
     }
 
     function cellAt(row, column) {
@@ -198,7 +215,7 @@
         }
         if (parsed.value !== undefined) count += 1;
       });
-      status.textContent = problem || (count ? t("js.grid_ok", { count }) : "");
+      status.textContent = problem || (count ? t("js.grid_ok", { n: count }) : "");
       status.classList.toggle("error-text", Boolean(problem));
       return !problem;
     }
@@ -260,16 +277,69 @@
       body.querySelectorAll("input").forEach((input) => { input.value = ""; });
       validate();
     });
+    // The readings already saved come back into the grid, so that a typo is corrected in
+    // place.  Only the columns that differ from what was loaded are saved (each as a new
+    // take; the old one stays in the history); a change of unit changes them all.
+    const unitSelect = panel.querySelector(".unit");
+    let loaded = { unit: null, columns: {} };
+    function columnValues(column) {
+      const values = [];
+      body.querySelectorAll(`input[data-column="${column}"]`).forEach((input) => {
+        const parsed = parseCell(input.value);
+        if (parsed.value !== undefined) values.push(parsed.value);
+      });
+      return values;
+    }
+    async function loadSaved() {
+      let saved;
+      try {
+        const response = await fetch(`${base}/grid.json?part=${panel.dataset.part}`, { headers: { Accept: "application/json" } });
+        if (!response.ok) return;
+        saved = await response.json();
+      } catch (error) {
+        return;
+      }
+      const shown = [];
+      const notes = [];
+      const longest = Math.max(0, ...Object.values(saved.positions).map((p) => (p.values || []).length));
+      if (longest > body.rows.length) addRows(longest - body.rows.length);
+      Object.entries(saved.positions).forEach(([position, entry]) => {
+        if (!entry.values) {
+          notes.push(t("js.grid_not_loaded", { position, n: entry.n }));
+          return;
+        }
+        entry.values.forEach((value, row) => { cellAt(row, Number(position) - 1).value = String(value); });
+        loaded.columns[position] = entry.values;
+        shown.push(position);
+      });
+      if (shown.length) {
+        loaded.unit = saved.unit;
+        if ([...unitSelect.options].some((option) => option.value === saved.unit)) unitSelect.value = saved.unit;
+      }
+      validate();
+      const parts = [];
+      if (shown.length) parts.push(t("js.grid_loaded", { positions: shown.join(", ") }));
+      status.textContent = [...parts, ...notes, status.textContent].join(" ").trim();
+    }
+    function changedColumns() {
+      const data = {};
+      for (let column = 1; column <= columns; column += 1) {
+        const values = columnValues(column);
+        if (!values.length) continue;
+        const before = loaded.columns[column];
+        const same = before && unitSelect.value === loaded.unit && before.length === values.length &&
+          before.every((value, i) => value === values[i]);
+        if (!same) data[column] = values;
+      }
+      return data;
+    }
+
     panel.querySelector(".save-manual").addEventListener("click", async () => {
       if (!validate()) return;
-      const data = {};
-      body.querySelectorAll("input").forEach((input) => {
-        const parsed = parseCell(input.value);
-        if (parsed.value === undefined) return;
-        (data[input.dataset.column] ||= []).push(parsed.value);
-      });
+      const data = changedColumns();
       if (!Object.keys(data).length) {
-        status.textContent = t("js.grid_empty");
+        const anything = [...body.querySelectorAll("input")].some((input) => input.value.trim() !== "");
+        status.textContent = t(anything ? "js.grid_unchanged" : "js.grid_empty");
         status.classList.add("error-text");
         return;
       }
@@ -284,6 +354,7 @@
       }
     });
     addRows(Math.max(10, config.minReadings));
+    loadSaved();
   }
   document.querySelectorAll('.method-panel[data-method="manual"]').forEach(setupGrid);
 

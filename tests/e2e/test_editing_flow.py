@@ -1,0 +1,75 @@
+"""Issue 34 item 5: a student's saved readings come back into the typed grid, a typo is
+corrected in place, and only that position is saved again (a new take; the old one kept
+in the history) -- in a real browser, at a phone's and a laptop's width, in both languages."""
+
+from __future__ import annotations
+
+import pytest
+from playwright.sync_api import expect
+
+from tests.e2e.conftest import STUDENT_PASSWORD, log_in
+from tests.e2e.test_lab_flow import start_practice, table
+
+pytestmark = pytest.mark.e2e
+
+WORDS = {
+    "en": {"loaded": "Your saved readings are in the grid", "unchanged": "Nothing changed"},
+    "zh-CN": {"loaded": "表格中已载入已保存的读数", "unchanged": "没有改动"},
+}
+
+
+def paste(page, selector: str, text: str) -> None:
+    """A block pasted into the first cell, as from a spreadsheet."""
+    page.locator(selector).first.click()
+    page.evaluate(
+        """([selector, text]) => {
+            const data = new DataTransfer();
+            data.setData('text/plain', text);
+            document.querySelector(selector).dispatchEvent(
+                new ClipboardEvent('paste', {clipboardData: data, bubbles: true}));
+        }""",
+        [selector, text],
+    )
+
+
+@pytest.mark.parametrize(("language", "width"), [("en", 1366), ("zh-CN", 390)])
+def test_saved_readings_come_back_and_one_typo_is_corrected(live_server, new_page, language, width):
+    page = new_page()
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    page.context.add_cookies([{"name": "gyrolab_lang", "value": language, "url": live_server.url}])
+    page.set_viewport_size({"width": width, "height": 844})
+    start_practice(page, live_server.url)
+    rows = table("handout_horizontal.csv")
+    cells = "#part-heading .readings-grid tbody input"
+    paste(page, cells, "\n".join("\t".join(row) for row in rows))
+    with page.expect_navigation():
+        page.locator("#part-heading .save-manual").click()
+
+    # after the reload the grid holds what was saved, every position, as typed
+    grid = page.locator("#part-heading .readings-grid tbody tr")
+    status = page.locator("#part-heading .grid-status")
+    expect(status).to_contain_text(WORDS[language]["loaded"])
+    for r in (0, 5, len(rows) - 1):
+        for c in range(4):
+            expect(grid.nth(r).locator("input").nth(c)).to_have_value(rows[r][c])
+
+    # choosing position 2 marks its column; one typo corrected there and saved
+    page.locator("#part-heading .step[data-position='2']").click()
+    expect(page.locator("#part-heading .readings-grid thead th").nth(2)).to_have_class(
+        "column-selected"
+    )
+    typo = grid.nth(3).locator("input").nth(1)
+    assert typo.is_visible()
+    typo.fill("-3,25")  # a decimal comma, as typed on a Chinese or German keyboard
+    with page.expect_navigation():
+        page.locator("#part-heading .save-manual").click()
+    expect(grid.nth(3).locator("input").nth(1)).to_have_value("-3.25")
+    expect(grid.nth(4).locator("input").nth(1)).to_have_value(rows[4][1])
+    history = page.locator("#take-history tbody tr")
+    expect(history).to_have_count(5)  # four takes, and position 2 taken again
+    expect(page.locator("#take-history tbody tr.muted")).to_have_count(1)  # the old take
+
+    # saving an unchanged grid stores nothing and says so
+    page.locator("#part-heading .save-manual").click()
+    expect(status).to_contain_text(WORDS[language]["unchanged"])
+    expect(history).to_have_count(5)
