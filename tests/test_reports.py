@@ -125,6 +125,12 @@ def test_an_attempts_report_never_changes_and_the_review_appears_once_given(worl
     review(teacher, session_id, feedback="Well done.", points="88", action="release")
     second = flat(pdf_text(report(student, session_id, 2).content))
     assert "Well done." in second and "88 / 100" in second and "Second thoughts." in second
+    # graded work can no longer change: its plain download is the graded attempt's report
+    graded = report(student, session_id)
+    assert "attempt-2.pdf" in graded.headers["content-disposition"]
+    text = flat(pdf_text(graded.content))
+    assert "Submitted attempt 2" in text and "Current data" not in text
+    assert "Well done." in text and "88 / 100" in text
 
 
 @pytest.mark.one_backend  # the layout of a long record; its queries are the ones above

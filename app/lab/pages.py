@@ -45,14 +45,13 @@ from app.lab.sim import (
     position_count,
     warm_up_state,
 )
-from app.lab.store import PARTS, take_history
+from app.lab.store import PARTS, is_editable, take_history
 from app.lab.truth import auto_check, session_truth, truth_visible
 from app.models import (
     Assignment,
     Attempt,
     Course,
     LabSession,
-    SessionStatus,
 )
 from app.web.deps import SessionDep
 from app.web.i18n import client_messages, translator
@@ -156,14 +155,6 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
             "editable": editable,
             "reviewer": False,
         },
-    )
-
-
-def is_editable(session: LabSession) -> bool:
-    """Whether the student may still record: not graded, and not an assignment's
-    submitted work."""
-    return session.status != SessionStatus.graded and not (
-        session.assignment_id and session.status == SessionStatus.submitted
     )
 
 

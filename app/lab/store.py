@@ -103,6 +103,15 @@ def check_editable(session: LabSession) -> None:
         raise UserError("lab.awaiting_review", status=409)
 
 
+def is_editable(session: LabSession) -> bool:
+    """Whether the student may still record (:func:`check_editable` would let them)."""
+    try:
+        check_editable(session)
+    except UserError:
+        return False
+    return True
+
+
 def reopen(session: LabSession) -> None:
     """An edit after submitting (or after the work came back) starts the next attempt."""
     session.updated_at = utcnow()

@@ -19,6 +19,7 @@ from app.lab.attempts import comments_of, grade_text, shown_to_student
 from app.lab.exports import Selection, solve_takes
 from app.lab.partners import members_of
 from app.lab.results import PartResult
+from app.lab.store import is_editable
 from app.lab.truth import AutoCheck, Truth, auto_check, session_truth, truth_visible
 from app.models import Assignment, Attempt, Course, LabSession, User, utcnow
 
@@ -76,9 +77,14 @@ def _attempt(db: Session, session: LabSession, number: int) -> Attempt:
     return attempt
 
 
+def _number(attempt: Attempt) -> int:
+    return attempt.number
+
+
 def build_report(db: Session, session: LabSession, attempt_number: int | None = None) -> Report:
     """The report of ``session``: attempt ``attempt_number`` as submitted, or, with None,
-    the current data and discussion draft.
+    the current data and discussion draft -- unless the work can no longer change (graded,
+    or an assignment's awaiting review): then its latest attempt, with its review.
 
     The review (feedback, position comments) appears once the teacher has returned or
     released that attempt, the grade once it is released, and the secret truth under the
@@ -86,7 +92,10 @@ def build_report(db: Session, session: LabSession, attempt_number: int | None = 
     assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
     course = db.get(Course, assignment.course_id) if assignment else None
     attempts = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
-    attempt = _attempt(db, session, attempt_number) if attempt_number is not None else None
+    if attempt_number is not None:
+        attempt = _attempt(db, session, attempt_number)
+    else:  # work that can no longer change is reported as it was submitted (and graded)
+        attempt = None if is_editable(session) else max(attempts, key=_number, default=None)
     selection = Selection(session.id, attempt.id if attempt else None)
     takes = selection.takes(db)
     report = Report(

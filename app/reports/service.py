@@ -23,9 +23,10 @@ def report_response(
     named after the session's owner, title and attempt: from the PDF cache when nothing
     it shows has changed, else rendered in one of the process's render slots, one at a
     time per requester (:mod:`app.web.work_slots`)."""
-    content = cached_pdf(build_report(db, session, attempt), language, requester_id)
+    report = build_report(db, session, attempt)
+    content = cached_pdf(report, language, requester_id)
     owner = db.get(User, session.owner_id)
-    version = f"attempt-{attempt}" if attempt is not None else "current"
+    version = f"attempt-{report.attempt.number}" if report.attempt is not None else "current"
     return Response(
         content,
         media_type="application/pdf",

@@ -4,10 +4,13 @@ real browser at a phone's and a laptop's width, in English and Chinese."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from playwright.sync_api import expect
 
 from tests.e2e.conftest import log_in
+from tests.factories import pdf_text
 
 pytestmark = pytest.mark.e2e
 
@@ -148,3 +151,9 @@ def test_a_released_grade_is_amended_and_the_student_sees_why(demo_server, new_p
     expect(history).to_contain_text("Part B was marked against the wrong latitude.")
     box = history.bounding_box()
     assert box is not None and box["x"] >= 0 and box["x"] + box["width"] <= 390
+    # the graded work's report is the graded attempt's: its grade, not "current data"
+    with student.expect_download() as download:
+        student.locator("#report-link").click()
+    assert "attempt-1" in download.value.suggested_filename
+    text = " ".join(pdf_text(Path(download.value.path()).read_bytes()).split())
+    assert "第 1 次提交" in text and "85 / 100" in text
