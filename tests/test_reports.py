@@ -30,6 +30,7 @@ from tests.factories import (
     submit,
     token_for,
 )
+from tests.test_partners import allow_groups, code_of, join
 
 pytestmark = pytest.mark.slow  # PDF rendering (WeasyPrint, matplotlib)
 
@@ -176,12 +177,14 @@ def start_practice(client) -> int:
 
 @pytest.mark.one_backend  # PDF rendering; the class rows are the dashboard's (both backends)
 def test_the_class_zip_holds_each_submitted_students_latest_report(world):
+    allow_groups(world)
     for username in ("s1", "s2"):
         student = browser(world, username)
         session_id = start(student, world)
+        if username == "s2":  # s3 is s2's lab partner: one report, named after both
+            assert join(browser(world, "s3"), code_of(session_id)).status_code == 303
         do_lab(student, session_id)
         submit(student, session_id)
-    browser(world, "s3")  # enrolled, nothing submitted: no report
     teacher = browser(world, "teacher1")
     base = f"/courses/{world['course']}/assignments/{world['assignment']}"
     started = post_form(teacher, f"{base}/reports", page=base)
@@ -203,8 +206,9 @@ def test_the_class_zip_holds_each_submitted_students_latest_report(world):
     assert response.status_code == 200
     assert response.headers["content-type"] == "application/zip"
     archive = zipfile.ZipFile(io.BytesIO(response.content))
-    assert sorted(archive.namelist()) == ["s1_attempt-1.pdf", "s2_attempt-1.pdf"]
-    assert "学生2 (s2)" in pdf_text(archive.read("s2_attempt-1.pdf"))
+    assert sorted(archive.namelist()) == ["s1_attempt-1.pdf", "s2+s3_attempt-1.pdf"]
+    shared = pdf_text(archive.read("s2+s3_attempt-1.pdf"))
+    assert "学生2 (s2)" in shared and "学生3 (s3)" in shared
     # the teacher's copy of one student's report, from the review desk
     review_page = teacher.get(f"/review/sessions/{session_id}").text
     assert f"/review/sessions/{session_id}/report.pdf?attempt=1" in review_page

@@ -34,7 +34,7 @@ from tests.factories import (
 def grade_cells(page: str) -> list[str]:
     """The grades a student's dashboard shows, one per assignment (exact, not a substring
     test: a random CSRF token on the page may contain "A-")."""
-    return [cell.strip() for cell in re.findall(r'<td class="grade">([^<]*)</td>', page)]
+    return [cell.strip() for cell in re.findall(r'<td class="grade"[^>]*>([^<]*)</td>', page)]
 
 
 def session_of(session_id) -> LabSession:
@@ -285,7 +285,7 @@ def test_csv_export_opens_in_excel_with_chinese_names(world):
     assert rows[1]["Status"] == "not started" and rows[1]["Azimuth of position 1 (°)"] == ""
     teacher.post("/lang", data={"lang": "zh", "csrf_token": csrf_from(teacher, base)})
     chinese = teacher.get(f"{base}/export.csv").content.decode("utf-8-sig")
-    assert chinese.startswith("用户名,姓名,状态") and ",已提交," in chinese
+    assert chinese.startswith("用户名,姓名,实验搭档,状态") and ",已提交," in chinese
     archive = zipfile.ZipFile(io.BytesIO(teacher.get(f"{base}/export.zip").content))
     names = set(archive.namelist())
     assert {"class.csv", "s1/attempt-1.csv", "s1/attempt-1.json"} <= names

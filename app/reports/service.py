@@ -55,12 +55,13 @@ def cached_pdf(report: Report, language: str, requester_id: int | None) -> bytes
 
 def submitted_sessions(db: Session, assignment: Assignment) -> list[tuple[str, int, int]]:
     """(file stem, session id, latest attempt number) of every submitted session; a group's
-    shared session once, named after the first of its members in the class list (the
-    report itself names them all)."""
-    seen: dict[int, tuple[str, int, int]] = {}
+    shared session once, its stem naming every member in class-list order
+    ("student1+student2"), so that the zip shows whose report each file is."""
+    members: dict[int, list[str]] = {}
+    latest: dict[int, int] = {}
     for row in class_rows(db, assignment):
-        if row.session is None or not row.attempts or row.session.id in seen:
+        if row.session is None or not row.attempts:
             continue
-        stem = safe_name(row.student.username)
-        seen[row.session.id] = (stem, row.session.id, row.attempts[-1].number)
-    return sorted(seen.values())
+        members.setdefault(row.session.id, []).append(safe_name(row.student.username))
+        latest[row.session.id] = row.attempts[-1].number
+    return sorted(("+".join(names), sid, latest[sid]) for sid, names in members.items())

@@ -19,6 +19,7 @@ from datetime import UTC
 from fastapi.responses import StreamingResponse
 from sqlmodel import Session
 
+from app.lab.attempts import comments_of, rubric_of, rubric_scores_of
 from app.lab.exports import Selection, readings_csv, session_json
 from app.models import Assignment, Attempt, Course
 from app.review.service import StudentRow, class_rows
@@ -29,6 +30,7 @@ from app.web.work_slots import held_while_streaming
 COLUMNS = (
     "username",
     "display_name",
+    "partners",
     "status",
     "attempts",
     "submitted_at_utc",
@@ -45,27 +47,54 @@ COLUMNS = (
     "max_points",
     "letter_grade",
     "released",
+    "feedback",
+    "position_comments",
     "flags",
     "identical_data_with",
 )
 
 
 def export_rows(
-    rows: list[StudentRow], _: Callable[..., str] | None = None, zone_name: str | None = None
+    rows: list[StudentRow],
+    _: Callable[..., str] | None = None,
+    zone_name: str | None = None,
+    rubric: list[dict] | None = None,
 ) -> list[list]:
-    """The assignment CSV: identifiers, status, results, errors, grade, late flag; in the
-    reader's words when ``_`` is given (times then in ``zone_name``), else machine names."""
+    """The assignment CSV: identifiers and lab partners, status, results, errors, grade,
+    feedback, late flag, then one column per rubric criterion; in the reader's words when
+    ``_`` is given (times then in ``zone_name``), else machine names."""
 
-    def word(key: str, machine: str) -> str:
-        return _(key) if _ else machine
+    def word(key: str, machine: str, **params) -> str:
+        return _(key, **params) if _ else machine
+
+    def part_name(key: str) -> str:  # "heading-2" -> "A2" (machine names: as it is)
+        if not _:
+            return key
+        part, _sep, position = key.partition("-")
+        return f"{word(f'lab.part_short_{part}', part)}{position}"
 
     shown_zone = zone(zone_name) if _ else UTC
+    rubric = rubric or []
     header = [
         (_("export.submitted_at", zone=shown_zone.key) if _ else name)
         if name == "submitted_at_utc"
         else word(f"export.{name}", name)
         for name in COLUMNS
     ]
+    header += [
+        word(
+            "export.rubric_column",
+            f"rubric_{i}:{item['name']}",
+            n=i,
+            name=item["name"],
+            points=f"{float(item.get('points', 0)):g}",
+        )
+        for i, item in enumerate(rubric, 1)
+    ]
+    members: dict[int, list[str]] = {}  # a shared session's students, in class-list order
+    for row in rows:
+        if row.session is not None:
+            members.setdefault(row.session.id, []).append(row.student.username)
     out = [header]
     for row in rows:
         heading = row.results.get("heading") or {}
@@ -75,10 +104,15 @@ def export_rows(
         if submitted is not None:
             aware = submitted if submitted.tzinfo else submitted.replace(tzinfo=UTC)
             submitted = aware.astimezone(shown_zone)
+        group = members.get(row.session.id, []) if row.session is not None else []
+        comments = comments_of(row.latest)
+        scores = rubric_scores_of(row.latest)
+
         out.append(
             [
                 row.student.username,
                 row.student.display_name,
+                ";".join(name for name in group if name != row.student.username),
                 word(f"status.{row.status}", row.status),
                 len(row.attempts),
                 submitted.strftime("%Y-%m-%d %H:%M:%S") if submitted else "",
@@ -97,11 +131,18 @@ def export_rows(
                 f"{row.max_points:g}",
                 row.letter,
                 word("export.yes", "yes") if row.released else word("export.no", "no"),
+                row.latest.feedback if row.latest else "",
+                "; ".join(f"{part_name(k)}: {v}" for k, v in sorted(comments.items())),
                 ";".join(sorted({f["key"].split(".")[-1] for f in row.flags})),
                 ";".join(row.duplicate_of),
+                *(_score(scores.get(str(i))) for i in range(len(rubric))),
             ]
         )
     return out
+
+
+def _score(value: float | None) -> str:
+    return "" if value is None else f"{value:g}"
 
 
 def _num(value: float | None) -> str:
@@ -118,7 +159,9 @@ def class_table_response(
 ) -> StreamingResponse:
     """The class table as CSV (UTF-8 with BOM, cells safe to open in a spreadsheet); with
     ``course`` and ``_``, in the teacher's language and named after course and assignment."""
-    rows = export_rows(class_rows(db, assignment), _, course.timezone if course else None)
+    rows = export_rows(
+        class_rows(db, assignment), _, course.timezone if course else None, rubric_of(assignment)
+    )
     names = [course.name, assignment.title] if course else [f"assignment-{assignment.id}"]
     return StreamingResponse(
         csv_table(rows),
@@ -138,7 +181,7 @@ def class_zip_response(
         for row in rows
         if row.session is not None and row.attempts
     ]
-    blocks = assignment_zip(export_rows(rows, _, course.timezone), work)
+    blocks = assignment_zip(export_rows(rows, _, course.timezone, rubric_of(assignment)), work)
     return StreamingResponse(
         held_while_streaming("exports", requester_id, blocks),
         media_type="application/zip",
