@@ -17,7 +17,7 @@ from io import BytesIO
 
 from babel import Locale
 from babel.dates import format_datetime as babel_format_datetime
-from babel.dates import match_skeleton
+from babel.dates import get_timezone_name, match_skeleton
 from babel.messages.mofile import write_mo
 from babel.messages.pofile import read_po
 from babel.numbers import format_decimal
@@ -168,7 +168,19 @@ def _formatted(value: datetime, language: str, date, time, zone) -> str:
         for skeleton in (date, time)
         if skeleton
     ]
+    if time and zone is not None:  # a wall-clock time says which wall: "20:05 China Time"
+        parts.append(zone_label(zone, language))
     return " ".join(parts)
+
+
+@lru_cache(maxsize=256)
+def zone_label(zone: tzinfo, language: str) -> str:
+    """A time zone as the reader's locale names it (CLDR, via Babel): "China Time" /
+    "中国时间", "Central European Time" / "中欧时间"; "UTC" for UTC itself."""
+    key = getattr(zone, "key", "")
+    if zone is UTC or key in ("UTC", "Etc/UTC", "Etc/GMT", "GMT"):
+        return "UTC"
+    return get_timezone_name(zone, width="long", locale=_locale(language), uncommon=False)
 
 
 @lru_cache
