@@ -218,3 +218,19 @@ def test_no_words_in_two_languages_are_kept_in_python():
                 if {"en", "zh-CN"} <= keys:
                     found.append(f"{path.name}:{node.lineno}")
     assert not found
+
+
+def test_a_time_shown_names_its_zone_in_the_readers_language():
+    from datetime import UTC, datetime
+    from zoneinfo import ZoneInfo
+
+    from app.web.i18n import format_datetime
+
+    moment = datetime(2026, 12, 1, 10, 0, tzinfo=UTC)
+    shanghai = ZoneInfo("Asia/Shanghai")
+    assert format_datetime(moment, "en", "yMMMd", "Hm", shanghai) == "Dec 1, 2026 18:00 China Time"
+    assert (
+        format_datetime(moment, "zh-CN", "yMMMd", "Hm", shanghai) == "2026年12月1日 18:00 中国时间"
+    )
+    assert format_datetime(moment, "en", None, "Hms", ZoneInfo("UTC")) == "10:00:00 UTC"
+    assert format_datetime(moment, "en", "yMMMd", None, shanghai) == "Dec 1, 2026"  # a date alone
