@@ -188,3 +188,14 @@ def test_imported_student_must_change_password(teacher_client, app):
     with TestClient(app, follow_redirects=False) as browser:
         assert login(browser, "2024002", password).headers["location"] == "/account/password"
         assert browser.get(f"/courses/{course_id}").headers["location"] == "/account/password"
+
+
+def test_a_list_of_existing_accounts_is_not_called_new_accounts(teacher_client):
+    make_user("2024300", Role.student)
+    course_id = create_course(teacher_client)
+    response = import_file(teacher_client, course_id, b"2024300,Old\n")
+    assert response.status_code == 200
+    assert "<h1>Class list added</h1>" in response.text
+    assert "New student accounts" not in response.text and 'id="credentials"' not in response.text
+    fresh = import_file(teacher_client, course_id, "2024301,新同学\n".encode())
+    assert "<h1>New student accounts</h1>" in fresh.text
