@@ -147,17 +147,18 @@ def format_datetime(
     date: str | None = "yMMMd",
     time: str | None = "Hm",
     zone: tzinfo | None = None,
+    with_zone: bool = True,
 ) -> str:
     """A date and time the way the reader's locale writes them, from CLDR skeletons
     (Babel): "Nov 22, 2026 20:05" / "2026年11月22日 20:05"; "" for None.  Stored times
     are UTC; ``zone`` (the course's) gives the wall clock shown."""
     if value is None:
         return ""
-    return _formatted(value, language, date, time, zone)
+    return _formatted(value, language, date, time, zone, with_zone)
 
 
 @lru_cache(maxsize=8192)
-def _formatted(value: datetime, language: str, date, time, zone) -> str:
+def _formatted(value: datetime, language: str, date, time, zone, with_zone: bool = True) -> str:
     """format_datetime's work, remembered: a page of a class formats the same submission
     times on every refresh, and Babel's formatting is the slow part of it."""
     if zone is not None:
@@ -168,7 +169,7 @@ def _formatted(value: datetime, language: str, date, time, zone) -> str:
         for skeleton in (date, time)
         if skeleton
     ]
-    if time and zone is not None:  # a wall-clock time says which wall: "20:05 China Time"
+    if time and zone is not None and with_zone:  # which wall clock: "20:05 China Time"
         parts.append(zone_label(zone, language))
     return " ".join(parts)
 

@@ -20,8 +20,9 @@ from app.web.i18n import (
     negotiate,
     normalise,
     translator,
+    zone_label,
 )
-from app.web.local_time import zone
+from app.web.local_time import zone as zone_of
 from app.web.signing import signed, unsigned
 
 SESSION_COOKIE = "gyrolab_session"
@@ -115,7 +116,7 @@ def render(
     language = request_language(request)
     _ = translator(language)
     # times are shown in the page's course's zone, else the server's (never "UTC" to a user)
-    shown_zone = zone((context or {}).get("timezone"))
+    shown_zone = zone_of((context or {}).get("timezone"))
     flashes = [
         {"kind": item.get("kind", "info"), "text": _(item["key"], **item.get("params", {}))}
         for item in _take_flashes(request)
@@ -124,9 +125,11 @@ def render(
         "request": request,
         "_": _,
         "lang": language,
-        "when": lambda value, date="yMMMd", time="Hm", tz=None: format_datetime(
-            value, language, date, time, zone(tz) if tz else shown_zone
+        # a table's column of times names the zone once, in its heading: zone=False there
+        "when": lambda value, date="yMMMd", time="Hm", tz=None, zone=True: format_datetime(
+            value, language, date, time, zone_of(tz) if tz else shown_zone, zone
         ),
+        "zone_text": zone_label(shown_zone, language),
         "zone_name": shown_zone.key,
         "num": lambda value, digits=3: format_number(value, language, digits),
         "user": getattr(request.state, "user", None),

@@ -13,8 +13,16 @@ from tests.e2e.test_lab_flow import start_practice, table
 pytestmark = pytest.mark.e2e
 
 WORDS = {
-    "en": {"loaded": "Your saved readings are in the grid", "unchanged": "Nothing changed"},
-    "zh-CN": {"loaded": "表格中已载入已保存的读数", "unchanged": "没有改动"},
+    "en": {
+        "loaded": "Your saved readings are in the grid",
+        "unchanged": "Nothing changed",
+        "download": "Download plot as a PNG",
+    },
+    "zh-CN": {
+        "loaded": "表格中已载入已保存的读数",
+        "unchanged": "没有改动",
+        "download": "下载图表（PNG）",  # the chart toolbar speaks the page's language too
+    },
 }
 
 
@@ -52,6 +60,9 @@ def test_saved_readings_come_back_and_one_typo_is_corrected(live_server, new_pag
     for r in (0, 5, len(rows) - 1):
         for c in range(4):
             expect(grid.nth(r).locator("input").nth(c)).to_have_value(rows[r][c])
+
+    toolbar = page.locator("#part-heading .modebar-btn[data-title]").first
+    expect(toolbar).to_have_attribute("data-title", WORDS[language]["download"])
 
     # choosing position 2 marks its column; one typo corrected there and saved
     page.locator("#part-heading .step[data-position='2']").click()
