@@ -233,3 +233,20 @@ def test_a_refusal_never_prints_a_non_finite_sigma():
             _check_significant(0.0, sigma, "horizontal", 1.0)
         message = english(caught.value).lower()
         assert "nan" not in message and "inf" not in message
+
+
+def test_when_one_sigma_differs_from_s_over_root_n_every_sigma_is_shown():
+    """Position 2's readings are all equal (σ2 is the quantisation floor, not s/√n = 0);
+    the other positions' σ equal their s/√n and are shown as well, never left blank."""
+    positions = [
+        [10.74, 10.65, 10.84, 10.65],
+        [2.79] * 4,
+        [-8.95, -9.04, -8.86, -8.95],
+        [-0.94, -0.85, -1.03, -0.94],
+    ]
+    result = solve_heading(positions, ANGLES)
+    text = render_text(explain_heading(result), translator("en"))
+    means = [line for line in text.splitlines() if re.match(r"\s*ω\d = ", line)]
+    assert len(means) == 4
+    for i, (line, sigma) in enumerate(zip(means, result.fit.position_sigmas, strict=True), 1):
+        assert f"σ{i} = {sigma:.3f}" in line, line

@@ -58,15 +58,19 @@ MODEL_NOTES = {
 
 def _means_step(fit) -> Step:
     sigmas = fit.position_sigmas or [None] * len(fit.stats)
+    # σi is shown when the model's σ differs from s/√n at any position -- and then at every
+    # position, so that one equal to s/√n never reads as a missing number
+    shows_sigma = any(
+        sigma is not None and (s.sem is None or abs(sigma - s.sem) > 5e-4)
+        for s, sigma in zip(fit.stats, sigmas, strict=True)
+    )
     lines = []
-    shows_sigma = False
     for i, (s, sigma) in enumerate(zip(fit.stats, sigmas, strict=True), start=1):
         line = f"ω{i} = {_f(s.mean)} °/h   (n = {s.n}"
         if s.sem is not None:
             line += f", s = {_f(s.std)}, s/√n = {_f(s.sem)}"
-        if sigma is not None and (s.sem is None or abs(sigma - s.sem) > 5e-4):
+        if shows_sigma and sigma is not None:
             line += f", σ{i} = {_f(sigma)}"
-            shows_sigma = True
         lines.append(line + ")")
     return Step(
         Words("steps.means"),
