@@ -236,15 +236,17 @@ def test_a_refusal_never_prints_a_non_finite_sigma():
 
 
 def test_when_one_sigma_differs_from_s_over_root_n_every_sigma_is_shown():
-    """Position 2's readings are all equal (σ2 is the quantisation floor, not s/√n = 0);
-    the other positions' σ equal their s/√n and are shown as well, never left blank."""
+    """Positions 1, 2 and 4 have 4 readings (σ widened by Student's t), position 3 has
+    2000 (σ3 = s/√n to the digits shown): σ3 is shown too, never left blank."""
+    rng = np.random.default_rng(5)
+    counts = (4, 4, 2000, 4)
     positions = [
-        [10.74, 10.65, 10.84, 10.65],
-        [2.79] * 4,
-        [-8.95, -9.04, -8.86, -8.95],
-        [-0.94, -0.85, -1.03, -0.94],
+        10 * np.cos(np.radians(30 + alpha)) + rng.normal(0, 0.3, n)
+        for alpha, n in zip(ANGLES, counts, strict=True)
     ]
     result = solve_heading(positions, ANGLES)
+    sem3 = positions[2].std(ddof=1) / math.sqrt(2000)
+    assert round(result.fit.position_sigmas[2], 3) == round(sem3, 3)
     text = render_text(explain_heading(result), translator("en"))
     means = [line for line in text.splitlines() if re.match(r"\s*ω\d = ", line)]
     assert len(means) == 4
