@@ -287,6 +287,7 @@ JS_MESSAGES = (
     "js.grid_loaded",
     "js.grid_not_loaded",
     "js.grid_unchanged",
+    "source.simulator",
 )
 
 

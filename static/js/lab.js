@@ -568,6 +568,12 @@
           remember(part, { position: Math.min(frame.position + 1, 4) });
           finish(t("js.done_trim", { n: frame.n }));
           socket.close();
+          // the position is stored now: its step says so before any reload
+          const step = document.querySelector(`.step[data-part="${part}"][data-position="${frame.position}"]`);
+          if (step) {
+            step.classList.add("done");
+            step.querySelector(".step-status").textContent = `n = ${frame.n} · ${t("source.simulator")}`;
+          }
           // the whole recording, for choosing where the transient ends (or keeping it all)
           Plotly.react(chart, [{ x: recorded.t, y: recorded.v, mode: "lines", type: "scatter", line: { width: 1 } }], chart.layout, plotConfig);
           trimRange.max = String(Math.max(0, recorded.v.length - config.minReadings));

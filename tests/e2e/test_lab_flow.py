@@ -119,6 +119,8 @@ def test_student_records_everything_from_the_simulated_gyro_and_submits(live_ser
             # live n, mean, σ and σ/√n while recording; afterwards a chance to trim
             expect(section.locator(".trim-box")).to_be_visible(timeout=20_000)
             expect(section.locator(".live-n")).to_have_text("300")  # 30 s at 10 Hz
+            # stored already: its step says so while the trim is still being chosen
+            expect(step.locator(".step-status")).to_have_text("n = 300 · simulated gyro")
             if part == "heading" and position == 1:
                 section.locator(".projector-toggle").click()
                 expect(section.locator(".live-panel.projector .live-n")).to_have_text("300")
