@@ -8,7 +8,7 @@ import pytest
 from playwright.sync_api import expect
 
 from tests.e2e.conftest import STUDENT_PASSWORD, log_in
-from tests.e2e.test_lab_flow import start_practice, table
+from tests.e2e.test_lab_flow import paste, start_practice, table
 
 pytestmark = pytest.mark.e2e
 
@@ -24,20 +24,6 @@ WORDS = {
         "download": "下载图表（PNG）",  # the chart toolbar speaks the page's language too
     },
 }
-
-
-def paste(page, selector: str, text: str) -> None:
-    """A block pasted into the first cell, as from a spreadsheet."""
-    page.locator(selector).first.click()
-    page.evaluate(
-        """([selector, text]) => {
-            const data = new DataTransfer();
-            data.setData('text/plain', text);
-            document.querySelector(selector).dispatchEvent(
-                new ClipboardEvent('paste', {clipboardData: data, bubbles: true}));
-        }""",
-        [selector, text],
-    )
 
 
 @pytest.mark.parametrize(("language", "width"), [("en", 1366), ("zh-CN", 390)])

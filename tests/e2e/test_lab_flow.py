@@ -30,6 +30,20 @@ def start_practice(page, url: str, preset: str | None = None) -> None:
     page.wait_for_load_state("load")
 
 
+def paste(page, selector: str, text: str) -> None:
+    """A block pasted into the first cell matching ``selector``, as from a spreadsheet."""
+    page.locator(selector).first.click()
+    page.evaluate(
+        """([selector, text]) => {
+            const data = new DataTransfer();
+            data.setData('text/plain', text);
+            document.querySelector(selector).dispatchEvent(
+                new ClipboardEvent('paste', {clipboardData: data, bubbles: true}));
+        }""",
+        [selector, text],
+    )
+
+
 def test_student_types_the_handout_tables(any_live_server, new_page):
     live_server = any_live_server
     page = new_page()
@@ -63,17 +77,7 @@ def test_student_types_the_handout_tables(any_live_server, new_page):
     lines = ["序号\t位置1\t位置2\t位置3\t位置4"]
     lines += [f"{n}\t" + "\t".join(row) for n, row in enumerate(table("handout_vertical.csv"), 1)]
     text = "\n".join(lines)
-    first = page.locator("#part-latitude .readings-grid tbody input").first
-    first.click()
-    page.evaluate(
-        """([selector, text]) => {
-            const data = new DataTransfer();
-            data.setData('text/plain', text);
-            document.querySelector(selector).dispatchEvent(
-                new ClipboardEvent('paste', {clipboardData: data, bubbles: true}));
-        }""",
-        ["#part-latitude .readings-grid tbody input", text],
-    )
+    paste(page, "#part-latitude .readings-grid tbody input", text)
     expect(page.locator("#part-latitude .grid-status")).to_contain_text("Pasted 10 rows")
     expect(page.locator("#part-latitude .grid-status")).to_contain_text("header row skipped")
     expect(page.locator("#part-latitude .grid-status")).to_contain_text("row-number column")
