@@ -25,7 +25,16 @@ LAYOUT = {
     "margin": {"l": 60, "r": 20, "t": 50, "b": 50},
     "height": 320,
     "font": {"family": "system-ui, 'PingFang SC', 'Noto Sans CJK SC', sans-serif"},
-    "legend": {"orientation": "h", "y": -0.25},
+    # the legend at the foot of the whole figure (not of the plot area), so it never sits on
+    # the x axis's title however narrow the screen; it pushes the bottom margin as it wraps
+    "legend": {
+        "orientation": "h",
+        "x": 0,
+        "xanchor": "left",
+        "y": 0,
+        "yref": "container",
+        "yanchor": "bottom",
+    },
 }
 
 
@@ -73,7 +82,10 @@ def readings_figure(part_result, _: Callable[..., str]) -> dict:
         "layout": {
             **LAYOUT,
             "title": titled(_("chart.readings_title")),
-            "xaxis": {"title": {"text": _("chart.time_s") if timed else _("chart.reading_number")}},
+            "xaxis": {
+                "title": {"text": _("chart.time_s") if timed else _("chart.reading_number")},
+                "automargin": True,
+            },
             "yaxis": {"title": {"text": _("chart.rate_deg_h")}},
         },
     }
@@ -117,7 +129,7 @@ def fit_figure(part_result, _: Callable[..., str]) -> dict | None:
         "layout": {
             **LAYOUT,
             "title": titled(_("chart.fit_title")),
-            "xaxis": {"title": {"text": axis}},
+            "xaxis": {"title": {"text": axis}, "automargin": True},
             "yaxis": {"title": {"text": _("chart.rate_deg_h")}},
         },
     }
@@ -212,7 +224,7 @@ def allan_figure(part_result, _: Callable[..., str], minimum_samples: int = 1000
         "layout": {
             **LAYOUT,
             "title": titled(_("chart.allan_title", n=longest.take.position)),
-            "xaxis": {"type": "log", "title": {"text": "τ (s)"}},
+            "xaxis": {"type": "log", "title": {"text": "τ (s)"}, "automargin": True},
             "yaxis": {"type": "log", "title": {"text": _("chart.adev")}},
         },
     }

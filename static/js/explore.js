@@ -1,5 +1,5 @@
 // Error-analysis explorer: every change of a control asks the server for new curves
-// (debounced) and redraws both charts with Plotly.react.
+// (debounced) and redraws the charts (static/js/charts.js draws each once it is in view).
 (() => {
   "use strict";
   const config = JSON.parse(document.getElementById("explorer-config").textContent);
@@ -8,6 +8,8 @@
   const form = document.getElementById("explorer-form");
   const info = document.getElementById("run-info");
   const colors = { two: "#D55E00", four: "#0072B2", seeker: "#009E73" };  // Okabe–Ito, as the lab's charts
+  // at the foot of the whole figure, never on the x axis's title (as the lab's charts)
+  const LEGEND = { orientation: "h", x: 0, xanchor: "left", y: 0, yref: "container", yanchor: "bottom" };
   let timer = null;
   let generation = 0;
   const round = (value, digits = 3) => (value === null || !Number.isFinite(value) ? "—" : Number(value.toFixed(digits)).toString());
@@ -89,37 +91,37 @@
                     marker: { color: colors[curve.method], size: 8, symbol: { two: "circle", four: "diamond", seeker: "square" }[curve.method] },
                     error_y: { type: "data", array: curve.mc_std_deg, visible: true } });
     });
-    Plotly.react("heading-chart", traces, {
+    GyroCharts.show("heading-chart", { data: traces, layout: {
       title: { text: t("explore.chart_title") }, height: 420, margin: { l: 60, r: 20, t: 50, b: 60 },
-      xaxis: { title: { text: t("explore.axis_azimuth") }, range: [0, 360], dtick: 45 },
-      yaxis: { title: { text: t("explore.axis_error") }, zeroline: true },
-      legend: { orientation: "h", y: -0.2 },
-    }, { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] });
+      xaxis: { title: { text: t("explore.axis_azimuth") }, range: [0, 360], dtick: 45, automargin: true },
+      yaxis: { title: { text: t("explore.axis_error") }, zeroline: true, automargin: true },
+      legend: LEGEND,
+    }});
     info.textContent = t("explore.runs_used", { runs: data.info.runs, points: data.info.points,
                                                  total: data.info.simulated_runs, seconds: data.info.seconds });
     const dwell = data.dwell;
     const floor = dwell.dwell_s.map(() => dwell.floor_deg);
-    Plotly.react("dwell-chart", [
+    GyroCharts.show("dwell-chart", { data: [
       { x: dwell.dwell_s, y: dwell.sigma_deg, mode: "lines", name: t("explore.expected"), line: { width: 3, color: "#0072B2" } },
       { x: dwell.dwell_s, y: dwell.white_only_deg, mode: "lines", name: t("explore.white_only"), line: { dash: "dot", color: "#5d6b7a" } },
       { x: dwell.dwell_s, y: floor, mode: "lines", name: t("explore.floor"), line: { dash: "dash", color: "#D55E00" } },
-    ], {
+    ], layout: {
       title: { text: t("explore.dwell_title") }, height: 340, margin: { l: 60, r: 20, t: 50, b: 60 },
-      xaxis: { type: "log", title: { text: t("explore.dwell_axis") } },
-      yaxis: { type: "log", title: { text: t("explore.sigma_axis") } },
-      legend: { orientation: "h", y: -0.3 },
+      xaxis: { type: "log", title: { text: t("explore.dwell_axis") }, automargin: true },
+      yaxis: { type: "log", title: { text: t("explore.sigma_axis") }, automargin: true },
+      legend: LEGEND,
       shapes: dwell.knee_s ? [{ type: "line", x0: dwell.knee_s, x1: dwell.knee_s, yref: "paper", y0: 0, y1: 1, line: { color: "#E69F00", dash: "dot" } }] : [],
-    }, { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] });
+    }});
     const orderColors = { "1234": "#D55E00", "1324": "#E69F00", "12344321": "#0072B2" };
-    Plotly.react("order-chart", Object.entries(data.orders.orders).map(([order, errors]) => ({
+    GyroCharts.show("order-chart", { data: Object.entries(data.orders.orders).map(([order, errors]) => ({
       x: data.orders.azimuth_deg, y: errors, mode: "lines", name: t(`explore.order_${order}`),
       line: { color: orderColors[order], width: order === "12344321" ? 3 : 2, dash: order === "1324" ? "dash" : "solid" },
-    })), {
+    })), layout: {
       title: { text: t("explore.orders_title") }, height: 340, margin: { l: 60, r: 20, t: 50, b: 60 },
-      xaxis: { title: { text: t("explore.axis_azimuth") }, range: [0, 360], dtick: 45 },
-      yaxis: { title: { text: t("explore.axis_error") }, zeroline: true },
-      legend: { orientation: "h", y: -0.3 },
-    }, { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] });
+      xaxis: { title: { text: t("explore.axis_azimuth") }, range: [0, 360], dtick: 45, automargin: true },
+      yaxis: { title: { text: t("explore.axis_error") }, zeroline: true, automargin: true },
+      legend: LEGEND,
+    }});
   }
 
   function schedule() {

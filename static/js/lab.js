@@ -17,11 +17,7 @@
   const selected = { heading: 1, latitude: 1 };
 
   // --- charts -----------------------------------------------------------------------------
-  const plotConfig = { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] };
-  document.querySelectorAll(".chart[data-figure]").forEach((element) => {
-    const figure = figures[element.dataset.figure];
-    if (figure && window.Plotly) Plotly.newPlot(element, figure.data, figure.layout, plotConfig);
-  });
+  GyroCharts.showAll(figures);
 
   async function postJson(path, body) {
     const response = await fetch(base + path, {
@@ -461,7 +457,7 @@
 
     function markTrim(count) {
       const cut = recorded.t[count] ?? recorded.t[0];
-      Plotly.relayout(chart, {
+      if (chart.data) Plotly.relayout(chart, {
         shapes: count > 0 ? [{ type: "rect", xref: "x", yref: "paper", x0: recorded.t[0], x1: cut, y0: 0, y1: 1,
           fillcolor: "#d1495b", opacity: 0.15, line: { width: 0 } }] : [],
       });
@@ -553,12 +549,13 @@
           trimBox.hidden = true;
           panel.querySelector(".live-title").textContent = t("js.position", { n: frame.position });
           showStats([]);
-          Plotly.newPlot(chart, [{ x: [], y: [], mode: "lines", type: "scatter", line: { width: 1 } }], {
+          // the live chart starts with what has arrived by the time plotly is here
+          GyroCharts.plotly().then((P) => P.newPlot(chart, [{ x: recorded.t.slice(-LIVE_WINDOW), y: recorded.v.slice(-LIVE_WINDOW), mode: "lines", type: "scatter", line: { width: 1 } }], {
             margin: { l: 60, r: 10, t: 10, b: 40 }, height: 220,
             xaxis: { title: { text: t("chart.time_s") } }, yaxis: { title: { text: t("chart.rate_deg_h") } },
-          }, plotConfig);
+          }, GyroCharts.options)).catch(() => {});
         } else if (frame.type === "samples") {
-          Plotly.extendTraces(chart, { x: [frame.t], y: [frame.v] }, [0], LIVE_WINDOW);
+          if (chart.data) Plotly.extendTraces(chart, { x: [frame.t], y: [frame.v] }, [0], LIVE_WINDOW);
           progress.value = frame.done;
           recorded.t.push(...frame.t);
           recorded.v.push(...frame.v);
@@ -575,7 +572,7 @@
             step.querySelector(".step-status").textContent = `n = ${frame.n} · ${t("source.simulator")}`;
           }
           // the whole recording, for choosing where the transient ends (or keeping it all)
-          Plotly.react(chart, [{ x: recorded.t, y: recorded.v, mode: "lines", type: "scatter", line: { width: 1 } }], chart.layout, plotConfig);
+          if (chart.data) Plotly.react(chart, [{ x: recorded.t, y: recorded.v, mode: "lines", type: "scatter", line: { width: 1 } }], chart.layout, GyroCharts.options);
           trimRange.max = String(Math.max(0, recorded.v.length - config.minReadings));
           trimRange.value = "0";
           markTrim(0);

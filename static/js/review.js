@@ -3,12 +3,7 @@
   "use strict";
   const data = document.getElementById("lab-figures");
   const figures = data ? JSON.parse(data.textContent) : {};
-  document.querySelectorAll(".chart[data-figure]").forEach((element) => {
-    const figure = figures[element.dataset.figure];
-    if (figure && window.Plotly) {
-      Plotly.newPlot(element, figure.data, figure.layout, { responsive: true, displaylogo: false, modeBarButtonsToRemove: ["select2d", "lasso2d", "autoScale2d", "toggleSpikelines", "hoverClosestCartesian", "hoverCompareCartesian"] });
-    }
-  });
+  GyroCharts.showAll(figures);
 
   document.querySelectorAll("table.sortable").forEach((table) => {
     table.querySelectorAll("th[data-sort]").forEach((header, column) => {

@@ -47,6 +47,7 @@ def test_saved_readings_come_back_and_one_typo_is_corrected(live_server, new_pag
         for c in range(4):
             expect(grid.nth(r).locator("input").nth(c)).to_have_value(rows[r][c])
 
+    page.locator("#part-heading .chart[data-figure]").first.scroll_into_view_if_needed()
     toolbar = page.locator("#part-heading .modebar-btn[data-title]").first
     expect(toolbar).to_have_attribute("data-title", WORDS[language]["download"])
 

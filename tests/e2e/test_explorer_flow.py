@@ -26,6 +26,7 @@ def test_slider_and_scenarios_update_the_chart(live_server, new_page, locale):
     log_in(page, live_server.url, "student", STUDENT_PASSWORD)
     page.goto(f"{live_server.url}/explore")
     expect(page.locator("#run-info")).not_to_be_empty()
+    page.locator("#heading-chart").scroll_into_view_if_needed()  # drawn once in view
     page.select_option("#scenario", "indexing-tilt-10")
     expect(page.locator("#scenario-text")).not_to_be_empty()
     page.wait_for_function("() => document.getElementById('heading-chart').data.length === 2")
@@ -40,4 +41,5 @@ def test_slider_and_scenarios_update_the_chart(live_server, new_page, locale):
     page.wait_for_function("() => document.getElementById('heading-chart').data.length === 4")
     names = trace_names(page)
     assert any("四位置法" in n or "four-position" in n for n in names)
+    page.locator("#dwell-chart").scroll_into_view_if_needed()
     expect(page.locator("#dwell-chart .main-svg").first).to_be_visible()

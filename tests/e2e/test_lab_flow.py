@@ -91,8 +91,10 @@ def test_student_types_the_handout_tables(any_live_server, new_page):
     expect(page.locator("#summary-latitude .earth-rate")).to_contain_text("15.133")
     expect(page.locator("#summary-latitude .eta-phi")).to_have_text("2.00 %")
     expect(page.locator("#summary-latitude .eta-omega")).to_have_text("0.62 %")
-    expect(page.locator(".chart[data-figure='heading-fit'] .main-svg").first).to_be_visible()
-    expect(page.locator(".chart[data-figure='heading-compass'] .main-svg").first).to_be_visible()
+    for name in ("heading-fit", "heading-compass"):  # charts are drawn as they come into view
+        chart = page.locator(f".chart[data-figure='{name}']")
+        chart.scroll_into_view_if_needed()
+        expect(chart.locator(".main-svg").first).to_be_visible()
 
 
 def test_student_records_everything_from_the_simulated_gyro_and_submits(live_server, new_page):
