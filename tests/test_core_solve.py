@@ -121,6 +121,44 @@ def test_least_squares_equals_closed_form(rotation):
     assert result.azimuth_sigma_deg == pytest.approx(math.degrees(expected), rel=1e-9)
 
 
+@pytest.mark.parametrize("rotation", ["ccw", "cw"])
+def test_the_bias_sigma_is_that_of_the_mean_of_four_means(rotation):
+    """b = (m1 + m2 + m3 + m4)/4, so σ_b = √(σ1² + σ2² + σ3² + σ4²)/4 with each σi the
+    Student-t-widened s_i/√n_i; the latitude part fits the same sinusoid."""
+    rng = np.random.default_rng(3)
+    positions = [
+        rng.normal(mean, sd, n)
+        for mean, sd, n in zip(
+            [11.0, -0.3, -11.6, 0.2], [0.05, 0.2, 0.1, 0.4], [12, 20, 30, 15], strict=True
+        )
+    ]
+    k = [student_t.ppf(0.5 + 0.6826894921 / 2, p.size - 1) for p in positions]
+    sigmas = [ki * p.std(ddof=1) / math.sqrt(p.size) for ki, p in zip(k, positions, strict=True)]
+    expected = math.sqrt(sum(s * s for s in sigmas)) / 4
+    heading = solve_heading(positions, heading_angles(4, rotation))
+    latitude = solve_latitude(positions, elevation_angles(4))
+    assert heading.bias_sigma_deg_h == pytest.approx(expected, rel=1e-9)
+    assert latitude.bias_sigma_deg_h == pytest.approx(expected, rel=1e-9)
+    assert heading.to_json()["bias_sigma_deg_h"] == heading.bias_sigma_deg_h
+
+
+def test_the_bias_sigma_matches_the_spread_of_b_over_repeated_runs():
+    """Monte Carlo of the whole solve (white noise, 30 readings a position): the standard
+    deviation of b over 2,000 runs against the mean of the σ_b each run reports."""
+    rng = np.random.default_rng(11)
+    means = np.array([11.5, 0.4, -11.5, -0.4]) + 0.8
+    biases, sigmas = [], []
+    for _ in range(2000):
+        positions = [rng.normal(m, 0.3, 30) for m in means]
+        result = solve_heading(positions, heading_angles(4, "ccw"))
+        biases.append(result.bias_deg_h)
+        sigmas.append(result.bias_sigma_deg_h)
+    spread = float(np.std(biases, ddof=1))
+    assert spread == pytest.approx(0.3 / math.sqrt(30) / 2, rel=0.05)  # σ/√n over 2
+    # Student-t widening (29 dof) makes each reported σ_b a little larger than the spread
+    assert float(np.mean(sigmas)) == pytest.approx(spread, rel=0.06)
+
+
 def test_latitude_closed_form():
     w = [11.14, 9.82, -11.82, -9.92]
     result = solve_latitude([[v, v] for v in w], elevation_angles(4))

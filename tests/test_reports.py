@@ -86,6 +86,12 @@ def test_the_handout_report_holds_the_pages_numbers_in_both_languages(world):
     assert "Submitted attempt 1" in text and "学生1 (s1)" in text
     assert "The bias cancels in ω1 − ω3." in text and "误差主要来自读数噪声。" in text
     assert "Figure 4." in text  # readings and fit, per part
+    for part in ("heading", "latitude"):  # each part's bias with its 1σ, as on the page
+        bias, sigma = results[part]["bias_deg_h"], results[part]["bias_sigma_deg_h"]
+        assert f"{bias:.3f} ± {sigma:.3f} °/h" in page
+        assert f"{bias:.3f} °/h {sigma:.3f} °/h" in text
+    # both parts assume white noise: the footnote is printed once, for both
+    assert text.count("Uncertainties assume white noise") == 1
 
     chinese = flat(pdf_text(report(student, session_id, attempt=1, language="zh-CN").content))
     assert "实验报告" in chinese and "计算过程" in chinese and "第 1 次提交" in chinese

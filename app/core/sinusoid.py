@@ -64,6 +64,14 @@ class SinusoidFit:
         return float(math.sqrt(max(self.cov[3, 3], 0.0)))
 
     @property
+    def bias_sigma(self) -> float | None:
+        """1σ of the bias b, √(Cov β)_bb; for four positions 90° apart with independent
+        means b = (m1 + m2 + m3 + m4)/4, so σ_b = √(σ1² + σ2² + σ3² + σ4²)/4."""
+        if self.cov is None:
+            return None
+        return float(math.sqrt(max(float(self.cov[2, 2]), 0.0)))
+
+    @property
     def position_sigmas(self) -> list[float] | None:
         """The 1σ(-equivalent) of each position mean that the fit propagates."""
         return None if self.noise is None else [float(x) for x in self.noise.sigmas]

@@ -105,6 +105,10 @@ class HeadingResult:
     def bias_deg_h(self) -> float:
         return self.fit.b
 
+    @property
+    def bias_sigma_deg_h(self) -> float | None:
+        return self.fit.bias_sigma
+
     def to_json(self) -> dict:
         return {
             "part": "heading",
@@ -120,6 +124,7 @@ class HeadingResult:
             "rotate_deg": self.rotate_deg,
             "then_axis_points": self.then_axis_points,
             "bias_deg_h": self.fit.b,
+            "bias_sigma_deg_h": self.bias_sigma_deg_h,
             "amplitude_deg_h": self.amplitude_deg_h,
             "amplitude_sigma_deg_h": self.amplitude_sigma_deg_h,
             "closure_residual_deg_h": self.closure_residual_deg_h,
@@ -299,6 +304,10 @@ class LatitudeResult:
         return self.fit.b
 
     @property
+    def bias_sigma_deg_h(self) -> float | None:
+        return self.fit.bias_sigma
+
+    @property
     def latitude_error_deg(self) -> float | None:
         """φ − φ0 in degrees: meaningful near the equator, where the percent explodes."""
         if self.true_latitude_deg is None:
@@ -318,6 +327,7 @@ class LatitudeResult:
             "earth_rate_deg_h": self.earth_rate_deg_h,
             "earth_rate_sigma_deg_h": self.earth_rate_sigma_deg_h,
             "bias_deg_h": self.fit.b,
+            "bias_sigma_deg_h": self.bias_sigma_deg_h,
             "latitude_error_percent": self.latitude_error_percent,
             "latitude_error_deg": self.latitude_error_deg,
             "earth_rate_error_percent": self.earth_rate_error_percent,

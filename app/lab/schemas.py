@@ -177,6 +177,7 @@ class HeadingOut(BaseModel):
     rotate_deg: float
     then_axis_points: Literal["north", "south"]
     bias_deg_h: float
+    bias_sigma_deg_h: float | None = Field(None, description="1σ of the bias b (°/h)")
     amplitude_deg_h: float
     amplitude_sigma_deg_h: float | None
     closure_residual_deg_h: float | None
@@ -208,6 +209,7 @@ class LatitudeOut(BaseModel):
     earth_rate_deg_h: float
     earth_rate_sigma_deg_h: float | None
     bias_deg_h: float
+    bias_sigma_deg_h: float | None = Field(None, description="1σ of the bias b (°/h)")
     latitude_error_percent: float | None
     latitude_error_deg: float | None = Field(description="φ − φ0 (°)")
     earth_rate_error_percent: float

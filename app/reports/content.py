@@ -58,6 +58,17 @@ class Report:
         samples attached to the PDF as CSV."""
         return self.longest_record <= FULL_TABLE_LIMIT
 
+    @property
+    def uncertainty_notes(self) -> list[tuple[list[str], str]]:
+        """What each part's 1σ assumes, one note per model: (the parts it covers, the
+        model), so two parts with the same model share one footnote."""
+        notes: dict[str, list[str]] = {}
+        for part, outcome in self.results.items():
+            model = outcome.result.fit.uncertainty_model if outcome.result else None
+            if model:
+                notes.setdefault(model, []).append(part)
+        return [(parts, model) for model, parts in notes.items()]
+
     def readings_rows(self, part: str) -> list[list[float | None]]:
         """Row i: the i-th used reading of each position (None past a shorter record)."""
         positions = [self.results[part].positions[k] for k in sorted(self.results[part].positions)]
