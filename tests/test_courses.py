@@ -10,6 +10,7 @@ from app.models import Course, Enrollment, Role, User
 from tests.factories import (
     create_course,
     credentials_from,
+    form_state,
     import_file,
     login,
     make_course,
@@ -39,8 +40,10 @@ def test_create_rename_archive(teacher_client):
 
 def test_empty_course_name_is_refused(teacher_client):
     response = post_form(teacher_client, "/courses", {"name": "   "})
-    assert response.status_code == 303
-    assert "Give the course a name" in teacher_client.get("/").text
+    assert response.status_code == 400  # the dashboard again, the message beside the name
+    kept = form_state(response.text, "new-course")
+    assert kept.refused == ["name"] and kept.autofocus == "name"
+    assert kept.errors == {"name": "Give the course a name."}
 
 
 def test_import_roster_creates_accounts_with_one_time_passwords(teacher_client, client):

@@ -9,7 +9,7 @@ from sqlalchemy import func, or_
 from sqlmodel import select
 
 from app.accounts.deps import AdminUser, CsrfProtected
-from app.accounts.roster_csv import USERNAME_RE
+from app.accounts.roster_csv import person_problems
 from app.accounts.security import generate_password
 from app.accounts.service import NewCredential, create_user, may_reset_password
 from app.accounts.service import reset_password as give_new_password
@@ -70,14 +70,10 @@ def create_account(
     role: Annotated[str, Form(max_length=16)] = "student",
 ):
     form = {"username": username, "display_name": display_name, "role": role}
-    error = None
-    if not USERNAME_RE.match(username.strip()):
-        error, params = "roster.bad_username", {"value": username}
-    elif not display_name.strip():
-        error, params = "roster.no_name", {"value": username}
-    elif role not in set(Role):
-        error, params = "admin.bad_role", {}
-    if error is None:
+    problems = person_problems(username.strip(), display_name.strip())
+    if role not in set(Role):
+        problems["role"] = UserError("admin.bad_role")
+    if not problems:
         password = generate_password()
         try:
             user = create_user(
@@ -88,11 +84,11 @@ def create_account(
                 password=password,
                 must_change_password=True,
             )
-        except UserError as failure:
+        except UserError as failure:  # the username is taken
             db.rollback()
-            error, params = failure.key, failure.params
-    if error is not None:
-        context = accounts_context(db, "", form=form, error=error, error_params=params)
+            problems["username"] = failure
+    if problems:  # the form again as typed, each refused field marked
+        context = accounts_context(db, "", form=form, create_problems=problems)
         return render(request, "admin/accounts.html", context, 400)
     db.commit()
     credential = NewCredential(user.username, user.display_name, password)

@@ -9,6 +9,7 @@ from fastapi import APIRouter, Form, Request
 
 from app.accounts.deps import CsrfProtected, CurrentUser, OptionalUser
 from app.accounts.security import (
+    MIN_PASSWORD_LENGTH,
     create_session,
     hash_password,
     log_in,
@@ -18,6 +19,7 @@ from app.accounts.security import (
 )
 from app.accounts.sso import signs_in_elsewhere, sso_enabled
 from app.config import Settings
+from app.core.exceptions import UserError
 from app.models import AuthSession, User, utcnow
 from app.web.deps import RowWriteSession, SessionDep, SettingsDep
 from app.web.i18n import normalise
@@ -123,6 +125,21 @@ def password_page(request: Request, user: CurrentUser, db: SessionDep, settings:
     )
 
 
+def password_form_problems(
+    user: User, current: str, new: str, confirm: str
+) -> dict[str, UserError]:
+    """Every problem of the change-password form at once, by field (in the form's order)."""
+    problems: dict[str, UserError] = {}
+    if not verify_password(current, user.password_hash):
+        problems["current_password"] = UserError("password.wrong_current")
+    weakness = "password.unchanged" if new == current else password_problem(new, user.username)
+    if weakness:
+        problems["new_password"] = UserError(weakness, minimum=MIN_PASSWORD_LENGTH)
+    if new != confirm:
+        problems["confirm_password"] = UserError("password.mismatch")
+    return problems
+
+
 @router.post("/account/password", dependencies=[CsrfProtected])
 def change_password(
     request: Request,
@@ -133,17 +150,9 @@ def change_password(
     new_password: Annotated[str, Form(max_length=1000)] = "",
     confirm_password: Annotated[str, Form(max_length=1000)] = "",
 ):
-    error = None
-    if not verify_password(current_password, user.password_hash):
-        error = "password.wrong_current"
-    elif new_password != confirm_password:
-        error = "password.mismatch"
-    elif new_password == current_password:
-        error = "password.unchanged"
-    else:
-        error = password_problem(new_password, user.username)
-    if error:
-        context = {"forced": user.must_change_password, "error": error}
+    problems = password_form_problems(user, current_password, new_password, confirm_password)
+    if problems:  # every problem beside its field; the passwords are never sent back
+        context = {"forced": user.must_change_password, "problems": problems}
         return render(request, "auth/password.html", context, 400)
     db_user = db.get(User, user.id)
     db_user.password_hash = hash_password(new_password)

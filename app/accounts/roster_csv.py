@@ -20,6 +20,23 @@ MAX_ROSTER_BYTES = 1_000_000
 MAX_ROSTER_ROWS = 2000
 USERNAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}$")
 EMAIL_RE = re.compile(r"^[^@\s]+@[^@\s]+\.[^@\s]+$")
+MAX_NAME = 128
+
+
+def person_problems(username: str, display_name: str, email: str = "") -> dict[str, UserError]:
+    """Every problem with one person typed into a form, at once: field name → UserError
+    (in the form's order; empty when all is well).  The values arrive stripped."""
+    problems: dict[str, UserError] = {}
+    if not USERNAME_RE.match(username):
+        problems["username"] = UserError("roster.bad_username", value=username)
+    if not display_name:
+        problems["display_name"] = UserError("roster.name_required")
+    elif len(display_name) > MAX_NAME:
+        problems["display_name"] = UserError("roster.name_too_long", value=username)
+    if email and not EMAIL_RE.match(email):
+        problems["email"] = UserError("roster.bad_email", value=email)
+    return problems
+
 
 HEADER_NAMES = {
     "username": {
@@ -120,7 +137,7 @@ def parse_roster(data: bytes) -> RosterParse:
         if not name:
             problems.append(RosterProblem(number, "roster.no_name", {"value": username}))
             continue
-        if len(name) > 128:
+        if len(name) > MAX_NAME:
             problems.append(RosterProblem(number, "roster.name_too_long", {"value": username}))
             continue
         if email and not EMAIL_RE.match(email):

@@ -30,8 +30,17 @@ def create_token(
     scopes: Annotated[list[str] | None, Form()] = None,
 ):
     chosen = tuple(s for s in (scopes or []) if s in ("read", "upload"))
-    if not name.strip() or "read" not in chosen:
-        context = {"tokens": user_tokens(db, user), "error": "tokens.invalid"}
+    problems = {}
+    if not name.strip():
+        problems["name"] = UserError("tokens.name_required")
+    if "read" not in chosen:
+        problems["scopes"] = UserError("tokens.read_required")
+    if problems:  # the form again as typed (name and scopes), each problem beside its field
+        context = {
+            "tokens": user_tokens(db, user),
+            "problems": problems,
+            "typed": {"name": name, "scopes": chosen},
+        }
         return render(request, "auth/tokens.html", context, 400)
     raw, record = new_token(db, user, kind="personal", name=name.strip(), scopes=chosen)
     db.commit()

@@ -8,7 +8,7 @@ from fastapi import APIRouter, File, Form, Request, UploadFile
 from sqlmodel import Session, select
 
 from app.accounts.deps import CsrfProtected, TeacherUser
-from app.accounts.roster_csv import MAX_ROSTER_BYTES, USERNAME_RE, parse_roster
+from app.accounts.roster_csv import MAX_ROSTER_BYTES, parse_roster, person_problems
 from app.accounts.service import (
     NewCredential,
     add_student,
@@ -22,6 +22,7 @@ from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.courses.assignment_form import form_context, form_values
 from app.courses.deps import TeacherCourse
+from app.courses.listing import teacher_dashboard
 from app.models import Assignment, Course, Enrollment, LtiContext, LtiPlatform, User
 from app.web.deps import ObjectId, SessionDep
 from app.web.exports import credentials_data_url
@@ -72,16 +73,20 @@ def course_list(teacher: TeacherUser):
 
 @router.post("", dependencies=[CsrfProtected])
 def create_course(request: Request, teacher: TeacherUser, db: SessionDep, name: NameField = ""):
-    if not name.strip():
-        response = redirect("/")
-        flash(response, request, "course.name_required", "error")
-        return response
+    if not name.strip():  # the dashboard again, the name as typed and its message beside it
+        context = teacher_dashboard(db, teacher)
+        context.update(course_name=name, course_problems=_name_problem())
+        return render(request, "dashboard/teacher.html", context, 400)
     course = Course(name=name.strip(), teacher_id=teacher.id)
     db.add(course)
     db.commit()
     response = redirect(f"/courses/{course.id}")
     flash(response, request, "course.created", "success", name=course.name)
     return response
+
+
+def _name_problem() -> dict[str, UserError]:
+    return {"name": UserError("course.name_required")}
 
 
 def course_context(db: Session, course: Course, **extra) -> dict:
@@ -118,10 +123,11 @@ def rename_course(
     db: SessionDep,
     name: NameField = "",
 ):
-    response = redirect(f"/courses/{course.id}")
     if not name.strip():
-        flash(response, request, "course.name_required", "error")
-        return response
+        context = course_context(db, course, settings_typed={"name": name})
+        context["settings_problems"] = _name_problem()
+        return render(request, "courses/detail.html", context, 400)
+    response = redirect(f"/courses/{course.id}")
     course.name = name.strip()
     db.add(course)
     db.commit()
@@ -138,12 +144,13 @@ def set_course_timezone(
     timezone: Annotated[str, Form(max_length=64)] = "",
 ):
     """The zone due dates are typed and shown in (stored times stay UTC)."""
-    response = redirect(f"/courses/{course.id}")
     try:
         course.timezone = valid_zone_name(timezone)
     except UserError as problem:
-        flash(response, request, problem.key, "error", **problem.params)
-        return response
+        db.rollback()
+        context = course_context(db, course, settings_problems={"timezone": problem})
+        return render(request, "courses/detail.html", context, 400)
+    response = redirect(f"/courses/{course.id}")
     db.add(course)
     db.commit()
     flash(response, request, "course.timezone_saved", "success", zone=course.timezone)
@@ -176,26 +183,18 @@ def add_student_by_hand(
     display_name: NameField = "",
     email: Annotated[str, Form(max_length=254)] = "",
 ):
-    context = course_context(
-        db, course, form={"username": username, "display_name": display_name, "email": email}
-    )
-    if not USERNAME_RE.match(username.strip()):
-        context["add_error"] = "roster.bad_username"
-        context["add_error_params"] = {"value": username}
-        return render(request, "courses/detail.html", context, 400)
-    if not display_name.strip():
-        context["add_error"] = "roster.no_name"
-        context["add_error_params"] = {"value": username}
-        return render(request, "courses/detail.html", context, 400)
-    try:
-        credential = add_student(
-            db, course, username.strip(), display_name.strip(), email.strip() or None
-        )
-    except UserError as error:
-        db.rollback()
-        context = course_context(db, course, form=context["form"])
-        context["add_error"] = error.key
-        context["add_error_params"] = {**error.params, "code": course.join_code}
+    typed = {"username": username, "display_name": display_name, "email": email}
+    problems = person_problems(username.strip(), display_name.strip(), email.strip())
+    if not problems:
+        try:
+            credential = add_student(
+                db, course, username.strip(), display_name.strip(), email.strip() or None
+            )
+        except UserError as error:  # the account named cannot join (a teacher's, consent)
+            db.rollback()
+            problems = {"username": error}
+    if problems:  # the page again: everything typed, each refused field marked
+        context = course_context(db, course, form=typed, add_problems=problems)
         return render(request, "courses/detail.html", context, 400)
     db.commit()
     if credential is None:

@@ -6,6 +6,7 @@ from fastapi import APIRouter, Request
 from sqlmodel import select
 
 from app.accounts.deps import CurrentUser
+from app.courses.listing import teacher_dashboard
 from app.lab.attempts import latest_attempt, notices, released_grade, shown_to_student
 from app.lab.partners import in_sessions_of
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User
@@ -20,18 +21,7 @@ def dashboard(request: Request, user: CurrentUser, db: SessionDep):
     if user.role == Role.admin:
         return redirect("/admin/accounts")
     if user.role == Role.teacher:
-        courses = db.exec(
-            select(Course)
-            .where(Course.teacher_id == user.id)
-            .order_by(Course.archived, Course.name)
-        ).all()
-        counts = {
-            course.id: len(
-                db.exec(select(Enrollment.id).where(Enrollment.course_id == course.id)).all()
-            )
-            for course in courses
-        }
-        return render(request, "dashboard/teacher.html", {"courses": courses, "counts": counts})
+        return render(request, "dashboard/teacher.html", teacher_dashboard(db, user))
     rows = db.exec(
         select(Course, User)
         .join(Enrollment, Enrollment.course_id == Course.id)

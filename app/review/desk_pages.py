@@ -197,9 +197,11 @@ def save_extension(request: Request, target: ReviewableSession, db: SessionDep, 
     if text and not form.get("remove"):
         try:
             due = local_input_to_utc(datetime.fromisoformat(text[:32]), course.timezone)
-        except ValueError:
-            flash(response, request, "assignment.bad_due", "error")
-            return response
+        except ValueError:  # the desk again: the date as typed, its message beside it
+            view = desk_view(request, target, db)
+            view["extension_typed"] = text[:64]
+            view["extension_problems"] = {"due_at": UserError("assignment.bad_due")}
+            return render(request, "review/submission.html", view, 400)
     deadlines.set_extension(db, assignment, session.owner_id, due)
     db.commit()
     flash(

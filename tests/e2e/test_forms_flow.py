@@ -157,3 +157,59 @@ def test_a_released_grade_is_amended_and_the_student_sees_why(demo_server, new_p
     assert "attempt-1" in download.value.suggested_filename
     text = " ".join(pdf_text(Path(download.value.path()).read_bytes()).split())
     assert "第 1 次提交" in text and "85 / 100" in text
+
+
+OTHER_FORMS = {  # language: the refusals of the roster, token and password forms
+    "en": (
+        "is not a valid username",
+        "Every token needs at least the read scope.",
+        "The current password is wrong.",
+    ),
+    "zh-CN": ("不是有效的用户名", "令牌至少需要“读取”权限。", "当前密码不正确。"),
+}
+
+
+def test_the_roster_token_and_password_forms_keep_what_was_typed(demo_server, new_page):
+    server, credentials = demo_server
+    page = new_page()
+    log_in(page, server.url, "teacher", credentials["teacher"])
+    for language, width, _words in in_each_language_and_width(page, server.url):
+        username_word, scope_word, password_word = OTHER_FORMS[language]
+        where = f"{language} at {width} px"
+
+        page.goto(f"{server.url}/courses/1")
+        form = page.locator("#add-student")
+        form.locator("input[name=username]").fill("wang wu")
+        form.locator("input[name=display_name]").fill("王五")
+        form.locator("input[name=email]").fill("wang@example.org")
+        with page.expect_navigation():
+            form.locator("button[type=submit]").click()
+        form = page.locator("#add-student")
+        expect(form.locator("input[name=display_name]")).to_have_value("王五")
+        expect(form.locator("input[name=email]")).to_have_value("wang@example.org")
+        expect(form.locator("#error-username")).to_contain_text(username_word)
+        assert focused_name(page) == "username", where
+        assert in_view(page, "#field-username"), where
+
+        page.goto(f"{server.url}/account/tokens")
+        form = page.locator("#token-form")
+        form.locator("input[name=name]").fill("bench PC")
+        form.locator("input[value=read]").uncheck()
+        with page.expect_navigation():
+            form.locator("button[type=submit]").click()
+        form = page.locator("#token-form")
+        expect(form.locator("input[name=name]")).to_have_value("bench PC")
+        expect(form.locator("input[value=upload]")).to_be_checked()
+        expect(form.locator("input[value=read]")).not_to_be_checked()
+        expect(form.locator("#error-scopes")).to_have_text(scope_word)
+        assert focused_name(page) == "scopes", where
+
+        page.goto(f"{server.url}/account/password")
+        form = page.locator("#password-form")
+        form.locator("input[name=current_password]").fill("not-my-password")
+        form.locator("input[name=new_password]").fill("a-new-password-1")
+        form.locator("input[name=confirm_password]").fill("a-new-password-1")
+        with page.expect_navigation():
+            form.locator("button[type=submit]").click()
+        expect(page.locator("#error-current_password")).to_have_text(password_word)
+        assert focused_name(page) == "current_password", where
