@@ -145,7 +145,7 @@ def main(argv: list[str]) -> int:
         return subprocess.call([*pytest, *quick, *rest])
     # one worker more than cores: a browser test's worker waits on Chromium and the server
     # (2 cores: the suite 295 s with 2 workers, 266 s with 3)
-    pytest += ["-n", str((os.cpu_count() or 1) + 1)]
+    pytest += ["-n", str((os.cpu_count() or 1) + 1), "--durations=15"]
     ensure_test_programs()
     for check in (["ruff", "check", "."], ["ruff", "format", "--check", "."], ["lint-imports"]):
         say(" ".join(check))

@@ -429,11 +429,13 @@ ACCESS = {
     "PUT /api/v1/sessions/{session_id}/{part}/positions/{position}": "owner",
     "POST /api/v1/sessions/{session_id}/{part}/positions/{position}/samples": "owner",
     "GET /api/v1/sessions/{session_id}/results": "owner",
+    "GET /api/v1/sessions/{session_id}/plan": "owner",
     "GET /api/v1/sessions/{session_id}/report.pdf": "owner",
     "POST /api/v1/sessions/{session_id}/submit": "owner",
     "PUT /api/v1/sessions/{session_id}/{part}/positions/{position}/trim": "owner",
     "GET /api/v1/courses": "teacher-any",
     "GET /api/v1/assignments/{assignment_id}/submissions": "teacher",
+    "GET /api/v1/assignments/{assignment_id}/accuracy": "teacher",
     "GET /api/v1/assignments/{assignment_id}/export.csv": "teacher",
 }
 

@@ -21,12 +21,14 @@ from app.core.jsonsafe import json_safe
 from app.db import read_session
 from app.lab import sessions as labsessions
 from app.lab.partners import in_sessions_of
+from app.lab.planner import session_plan
 from app.lab.result_cache import CachedResults, cached_results
 from app.lab.results_read import cached_results_for_token
 from app.lab.schemas import (
     AttemptOut,
     HeadingSettings,
     LatitudeSettings,
+    PlanOut,
     PositionSummary,
     PositionUpload,
     ResultsOut,
@@ -267,6 +269,15 @@ def session_results_entry(
     with read_session() as db:
         caller = require_scope(api_caller(request, db, settings), "read")
         return cached_results(db, own_session(db, caller.user, session_id))
+
+
+@router.get("/sessions/{session_id}/plan", response_model=PlanOut)
+def get_plan(session: ReadableSession, db: SessionDep):
+    """The accuracy planner of the session's station: the expected 1σ of the heading, the
+    latitude and the Earth rate for each dwell per position, four positions or the
+    symmetric eight, from the gyro's noise model (the teacher's Allan characterisation of
+    the station, else the simulated gyro's preset)."""
+    return session_plan(db, session).to_json()
 
 
 @router.get("/sessions/{session_id}/results", response_model=ResultsOut)

@@ -35,6 +35,7 @@ from app.lab.chart_texts import (
 from app.lab.charts import allan_figure, compass_figure, fit_figure, readings_figure
 from app.lab.deps import OwnedSession
 from app.lab.partner_pages import partner_view
+from app.lab.planner import plan_view, session_plan
 from app.lab.result_cache import CACHE, cached_results
 from app.lab.results import session_results
 from app.lab.service import allowed_methods
@@ -231,6 +232,7 @@ def session_view(
         "drawing": drawing_coordinates(session),
         "positions": range(1, position_count(session) + 1),
         "preset": PRESETS.get(session.simulator_preset),
+        "plan": plan_view(session_plan(db, session)),
         "warm_up": warm_up_state(session) if session.simulator_preset in PRESETS else None,
         "error_text": lambda error: error_text(error, _),
         "truth": truth,

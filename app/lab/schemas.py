@@ -285,3 +285,29 @@ class Trim(BaseModel):
 
 class Plane(BaseModel):
     dial_deg: float = Field(ge=-360, le=360, allow_inf_nan=False, strict=True)
+
+
+class PlanPointOut(BaseModel):
+    order: Literal["1234", "12344321"] = Field(
+        description="four positions, or the symmetric eight (1-2-3-4-4-3-2-1)"
+    )
+    dwell_s: float = Field(description="recording time per position (s)")
+    total_s: float = Field(description="recording time of the whole part, turns not counted")
+    heading_sigma_deg: float = Field(description="expected 1σ of the heading, over azimuths")
+    latitude_sigma_deg: float
+    earth_rate_sigma_deg_h: float
+
+
+class PlanOut(BaseModel):
+    """The accuracy planner: the gyro's noise alone (not indexing or reading errors)."""
+
+    points: list[PlanPointOut]
+    best: dict[str, PlanPointOut] = Field(description="per order, the smallest heading σ")
+    near_best: dict[str, PlanPointOut] = Field(
+        description="per order, the shortest dwell within 10 % of the best heading σ"
+    )
+    source: Literal["station", "preset"] = Field(
+        description="the Allan characterisation uploaded for the station, or the preset's model"
+    )
+    preset: str | None
+    quoted_dwell_s: float

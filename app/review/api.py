@@ -9,9 +9,10 @@ from sqlmodel import select
 from app.accounts.api_auth import TeacherCaller
 from app.lab.attempts import grade_text
 from app.models import Assignment, Course
+from app.review.accuracy import class_accuracy
 from app.review.deps import teachers_assignment
 from app.review.exports import class_table_response
-from app.review.schemas import CourseOut, SubmissionRow
+from app.review.schemas import ClassAccuracyOut, CourseOut, SubmissionRow
 from app.review.service import class_rows
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS
@@ -76,6 +77,14 @@ def list_submissions(assignment_id: ObjectId, caller: TeacherCaller, db: Session
             )
         )
     return rows
+
+
+@router.get("/assignments/{assignment_id}/accuracy", response_model=ClassAccuracyOut)
+def class_accuracy_api(assignment_id: ObjectId, caller: TeacherCaller, db: SessionDep):
+    """Teachers: the class's errors against the accuracy planner's 1σ for each group's
+    dwell and order -- whether the scatter agrees with the gyro's noise (χ², 95 %)."""
+    assignment = teachers_assignment(db, caller.user, assignment_id)
+    return class_accuracy(assignment, class_rows(db, assignment))
 
 
 @router.get(

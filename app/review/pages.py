@@ -16,6 +16,8 @@ from app.courses import characterisation
 from app.courses.assignment_form import form_context, form_values, parse_assignment_form
 from app.lab.chart_texts import class_text
 from app.lab.charts import class_error_figure, class_histogram_figure
+from app.lab.planner import assignment_plan, plan_view
+from app.review.accuracy import accuracy_rows, class_accuracy
 from app.review.deps import TeacherAssignment
 from app.review.exports import class_table_response, class_zip_response
 from app.review.lms_outbox import passback_state
@@ -49,6 +51,7 @@ def dashboard_context(request: Request, target, db, status: str = "", **extra) -
         "class-histogram": class_histogram_figure(rows, _),
     }
     summary, table = class_text(rows, _)
+    accuracy = accuracy_rows(class_accuracy(assignment, rows))
     figure_texts = dict.fromkeys(figures, {"summary": summary, "table": table})
     stored = characterisation.summary_of(assignment, with_time=True)
     words = None
@@ -73,6 +76,8 @@ def dashboard_context(request: Request, target, db, status: str = "", **extra) -
         "presets": sorted(PRESETS),
         "plotly_url": request.app.state.plotly_url,
         "passback": passback_state(db, assignment.id),
+        "accuracy": accuracy,
+        "plan": plan_view(assignment_plan(assignment)),
         **form_context(),
         **extra,
     }

@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 from datetime import datetime
+from typing import Literal
 
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
 
 
 class CourseOut(BaseModel):
@@ -31,3 +32,22 @@ class SubmissionRow(BaseModel):
     points: float | None
     max_points: float
     released: bool
+
+
+class AccuracyRow(BaseModel):
+    groups: int = Field(description="submitted groups compared")
+    ratio: float = Field(description="R = RMS of error/predicted σ over the groups")
+    low: float = Field(description="R's 95 % range with only the gyro's noise: lower end")
+    high: float
+    verdict: Literal["agrees", "larger", "smaller", "too_few"]
+    median_dwell_s: float
+    predicted_sigma: float = Field(description="the plan's 1σ at the median dwell")
+    measured_rms: float = Field(description="RMS of the groups' errors against their truth")
+
+
+class ClassAccuracyOut(BaseModel):
+    """Per quantity (heading °, latitude °, earth_rate °/h): the class against the plan."""
+
+    heading: AccuracyRow | None = None
+    latitude: AccuracyRow | None = None
+    earth_rate: AccuracyRow | None = None

@@ -31,13 +31,12 @@ def session_with_results(page, base_url: str) -> str:
 
 
 @pytest.mark.parametrize("language", ["en", "zh-CN"])
-@pytest.mark.parametrize("width", [390, 1366])
 def test_charts_are_drawn_as_they_come_into_view_with_legends_clear_of_the_axes(
-    demo_server, new_page, language, width
+    demo_server, new_page, language
 ):
     server, credentials = demo_server
     page = new_page()
-    page.set_viewport_size({"width": width, "height": 844})
+    page.set_viewport_size({"width": 390, "height": 844})
     page.context.add_cookies([{"name": "gyrolab_lang", "value": language, "url": server.url}])
     log_in(page, server.url, "student1", credentials["student1"])
     fetched = []
@@ -51,13 +50,15 @@ def test_charts_are_drawn_as_they_come_into_view_with_legends_clear_of_the_axes(
     page.wait_for_timeout(500)
     assert fetched == [] and page.locator(".chart .main-svg").count() == 0
 
-    for index in range(charts.count()):
-        chart = charts.nth(index)
-        chart.scroll_into_view_if_needed()
-        expect(chart.locator(".main-svg").first).to_be_visible()
-        name = chart.get_attribute("data-figure")
-        where = f"{name}, {language}, {width} px"
-        assert chart.evaluate(OVERLAPS) == [], f"legend on the x axis: {where}"
+    for width in (390, 1366):  # a phone, then the same page widened (plotly redraws)
+        page.set_viewport_size({"width": width, "height": 844})
+        for index in range(charts.count()):
+            chart = charts.nth(index)
+            chart.scroll_into_view_if_needed()
+            expect(chart.locator(".main-svg").first).to_be_visible()
+            page.wait_for_timeout(100 if width == 390 else 300)  # a resize redraw settles
+            where = f"{chart.get_attribute('data-figure')}, {language}, {width} px"
+            assert chart.evaluate(OVERLAPS) == [], f"legend on the x axis: {where}"
     assert len(fetched) == 1, "plotly is fetched once, however many charts"
 
     # the toolbar speaks the page's language once plotly has arrived
