@@ -1,0 +1,357 @@
+"""Evidence that readings came from the instrument: checks a teacher can act on, each with
+its numbers, none an accusation (lab-reference §6 for the noise model).
+
+Each check compares one take (one position's readings) or one part (its positions) with
+what the station's gyro -- its noise model, or the simulated gyro's preset -- makes:
+
+* **scatter**: the readings' spread against the model's.  For a stationary gyro the
+  expected sample variance of n readings is E[s²] = n/(n − 1)·(σ₁² − σ²_mean), σ₁² the
+  variance of one reading and σ²_mean that of their mean (both from
+  :meth:`GyroNoise.mean_covariance`), plus u²/12 for typed values rounded to a step u
+  coarser than the gyro's own.  With ν = Σ(n_i − 1) over the part's positions,
+  ν·s²_pooled/E[s²] is close to χ²_ν; far outside it the readings are smoother (invented,
+  smoothed) or noisier than the gyro makes.
+* **smoothness**: the lag-1 autocorrelation r₁ of the readings (each position's mean
+  removed) against the model's ρ₁ = Cov(x_i, x_i+1)/σ₁²; a running average raises it, so
+  r₁ − ρ₁ above a few 1/√N is flagged.
+* **last digits** (typed readings): the last typed digit is uniform when the scatter is
+  several steps wide; Pearson's χ² with 9 degrees of freedom.
+* **off the grid** (the simulated gyro): its readings are whole multiples of its output
+  step (angle pulses over one sample); typed ones rounded to a finer step stay on it.
+* **copies**: a position's readings equal to another take's (of the class, another
+  attempt, the handout's example) after an offset -- and, when the readings take many
+  values, after reordering.
+* **too close to the truth**: |error| far below its σ (|z| < 0.0025 has probability 0.2 %
+  for an honest result).
+
+The thresholds are set so that honest simulated classes are flagged at most 1 % of the
+time; bench/bench_evidence.py measures the false-alarm and detection rates.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from app.core.noise_model import GyroNoise, Window
+
+SCATTER_P = 1e-5  # two-sided tail of χ²_ν for the scatter check
+SMOOTH_SIGMAS = 4.0  # r₁ − ρ₁ above this many 1/√N
+DIGITS_P = 1e-4
+DIGITS_MIN_READINGS = 40
+DIGITS_MIN_STEPS = 3.0  # the scatter spans at least this many typed steps
+COPY_MIN_READINGS = 8
+COPY_MIN_LEVELS = 3  # a copy needs readings that take at least this many values
+COPY_MIN_BITS = 32.0  # and Σ n·H bits of pattern (a chance match ≈ 2^−32 per pair of parts)
+HANDOUT_MIN_BITS = 12.0  # against the handout's eight columns only: ≈ 8·2^−12 per take
+REORDER_LEVELS = 0.6  # reordering is checked when the distinct values are ≥ 60 % of n
+TRUTH_Z = 0.0025
+OFF_GRID_SHARE = 0.2  # honest readings of a simulated gyro are all on its grid
+HANDOUT = Path(__file__).with_name("data")
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """One finding: what it is (a message key's last part), where, and its numbers."""
+
+    # scatter_low | scatter_high | smooth | digits | off_grid | copy | handout | too_close
+    check: str
+    part: str
+    numbers: dict = field(default_factory=dict)
+
+    def to_json(self) -> dict:
+        return {"check": self.check, "part": self.part, **self.numbers}
+
+
+# --- the model's expectations -----------------------------------------------------------
+
+
+@lru_cache(maxsize=1024)
+def reading_moments(noise: GyroNoise, rate_hz: float, count: int) -> tuple[float, float, float]:
+    """(σ₁², ρ₁, σ²_mean) for ``count`` readings at ``rate_hz`` from a warm gyro."""
+    dt = 1.0 / rate_hz
+    pair = noise.mean_covariance([Window(0.0, dt), Window(dt, dt)], warm_up=False)
+    whole = noise.mean_covariance([Window(0.0, count * dt)], warm_up=False)
+    one = float(pair[0, 0])
+    rho = float(pair[0, 1]) / one if one > 0 else 0.0
+    return one, rho, float(whole[0, 0])
+
+
+def typed_step(values: np.ndarray) -> float | None:
+    """The step the values were written to (0.01 for "10.74"), or None for full floats."""
+    for decimals in range(7):
+        scaled = values * 10.0**decimals
+        if np.all(np.abs(scaled - np.round(scaled)) < 1e-9 * np.maximum(1.0, np.abs(scaled))):
+            return 10.0**-decimals
+    return None
+
+
+def expected_variance(noise: GyroNoise, rate_hz: float, count: int, step: float | None) -> float:
+    """E[s²] of ``count`` readings, rounding to ``step`` included when it is coarser than
+    the gyro's own output step (module docstring)."""
+    one, _rho, mean = reading_moments(noise, rate_hz, count)
+    variance = count / (count - 1) * max(one - mean, 0.0)
+    own_step = 3600.0 * noise.angle_lsb_deg * rate_hz
+    if step is not None and step > 1.5 * own_step:
+        variance += step * step / 12.0
+    return variance
+
+
+# --- the checks -------------------------------------------------------------------------
+
+
+def scatter_and_smoothness(
+    part: str, positions: Sequence[np.ndarray], noise: GyroNoise, rate_hz: float
+) -> list[Evidence]:
+    """The scatter and lag-1 checks of one part's positions (module docstring)."""
+    from scipy.stats import chi2
+
+    usable = [np.asarray(v, float) for v in positions if np.asarray(v).size >= 3]
+    if not usable:
+        return []
+    found = []
+    dof = sum(v.size - 1 for v in usable)
+    observed = sum(float(np.sum((v - v.mean()) ** 2)) for v in usable)
+    expected = sum(
+        (v.size - 1) * expected_variance(noise, rate_hz, v.size, typed_step(v)) for v in usable
+    )
+    if expected > 0:
+        statistic = dof * observed / expected
+        ratio = math.sqrt(observed / expected)
+        low, high = chi2.ppf(SCATTER_P / 2, dof), chi2.ppf(1 - SCATTER_P / 2, dof)
+        numbers = {
+            "ratio": round(ratio, 3),
+            "low": round(math.sqrt(low / dof), 3),
+            "high": round(math.sqrt(high / dof), 3),
+            "readings": dof + len(usable),
+        }
+        if statistic < low:
+            found.append(Evidence("scatter_low", part, numbers))
+        elif statistic > high:
+            found.append(Evidence("scatter_high", part, numbers))
+    lagged = [(v[:-1] - v.mean(), v[1:] - v.mean()) for v in usable]
+    pairs = sum(a.size for a, _ in lagged)
+    variance = sum(float(np.sum((v - v.mean()) ** 2)) for v in usable)
+    if variance > 0 and pairs >= 20:
+        r1 = sum(float(np.dot(a, b)) for a, b in lagged) / variance
+        rho = float(np.mean([reading_moments(noise, rate_hz, v.size)[1] for v in usable]))
+        if r1 - rho > SMOOTH_SIGMAS / math.sqrt(pairs):
+            found.append(
+                Evidence(
+                    "smooth",
+                    part,
+                    {"r1": round(r1, 3), "expected": round(rho, 3), "pairs": pairs},
+                )
+            )
+    return found
+
+
+def last_digits(
+    part: str, positions: Sequence[np.ndarray], noise_sd: float, own_step: float = 0.0
+) -> list[Evidence]:
+    """Pearson's χ² of the last typed digit against uniform (typed readings only).  Not
+    tested when the scatter spans few typed steps, or when the gyro's own output step
+    ``own_step`` is coarser than the typed one (its readings then sit on its own grid)."""
+    from scipy.stats import chi2
+
+    values = np.concatenate([np.asarray(v, float) for v in positions])
+    step = typed_step(values)
+    if (
+        step is None
+        or values.size < DIGITS_MIN_READINGS
+        or noise_sd < DIGITS_MIN_STEPS * step
+        or own_step > 0.5 * step
+    ):
+        return []
+    digits = np.abs(np.round(values / step)).astype(np.int64) % 10
+    counts = np.bincount(digits, minlength=10)
+    expected = values.size / 10.0
+    statistic = float(np.sum((counts - expected) ** 2) / expected)
+    p = float(chi2.sf(statistic, 9))
+    if p < DIGITS_P:
+        top = int(np.argmax(counts))
+        return [
+            Evidence(
+                "digits",
+                part,
+                {"digit": top, "share": round(counts[top] / values.size, 3), "p": p},
+            )
+        ]
+    return []
+
+
+def off_grid(part: str, positions: Sequence[np.ndarray], own_step: float) -> list[Evidence]:
+    """Readings between the simulated gyro's output steps: it only ever shows multiples of
+    ``own_step`` (its angle pulses over one sample), so a reading more than half a typed
+    step away from every multiple did not come from it."""
+    values = np.concatenate([np.asarray(v, float) for v in positions])
+    step = typed_step(values) or 0.0
+    if values.size == 0 or own_step <= 0 or own_step < 2.0 * step:
+        return []
+    distance = np.abs(values / own_step - np.round(values / own_step)) * own_step
+    share = float(np.mean(distance > step / 2.0 + 1e-6 * own_step))
+    if share > OFF_GRID_SHARE:
+        return [Evidence("off_grid", part, {"share": round(share, 3), "step": own_step})]
+    return []
+
+
+@dataclass(frozen=True)
+class Pattern:
+    """A take's readings without their offset: whole steps above the smallest reading
+    (on the typed step, divided by their common factor so that 10.7, 10.8 and 10.73,
+    10.83 read alike), and how much a chance match is ruled out: n·H bits, H the entropy
+    of the steps' distribution."""
+
+    levels: np.ndarray
+    bits: float
+
+    @property
+    def reorderable(self) -> bool:
+        """Readings that take many values: a match after sorting still means something."""
+        return np.unique(self.levels).size >= REORDER_LEVELS * self.levels.size
+
+
+def pattern(values: np.ndarray) -> Pattern | None:
+    """The take's :class:`Pattern`, or None for fewer than 8 readings or 3 values."""
+    values = np.asarray(values, float)
+    if values.size < COPY_MIN_READINGS:
+        return None
+    spread = float(np.ptp(values))
+    step = typed_step(values) or (spread * 1e-6 if spread > 0 else 1.0)  # full floats
+    levels = np.round((values - values.min()) / step).astype(np.int64)
+    common = int(np.gcd.reduce(levels)) if np.any(levels) else 1
+    levels //= max(common, 1)
+    _, counts = np.unique(levels, return_counts=True)
+    if counts.size < COPY_MIN_LEVELS:
+        return None
+    share = counts / values.size
+    return Pattern(levels, values.size * float(-np.sum(share * np.log2(share))))
+
+
+def _digest(arrays: Sequence[np.ndarray]) -> str:
+    digest = hashlib.sha256()
+    for levels in arrays:
+        digest.update(levels.tobytes() + b"|")
+    return digest.hexdigest()
+
+
+def copy_keys(positions: Sequence[np.ndarray], min_bits: float = COPY_MIN_BITS) -> list[str]:
+    """Offset-free keys of one part (or of one take, given alone): its positions' patterns
+    in order, and sorted within each position when every position takes many values.  No
+    key when the patterns together carry fewer than ``min_bits`` bits: honest readings
+    quantised to a few steps could then share one by chance."""
+    patterns = [pattern(v) for v in positions]
+    if not patterns or any(p is None for p in patterns):
+        return []
+    if sum(p.bits for p in patterns) < min_bits:
+        return []
+    keys = ["o" + _digest([p.levels for p in patterns])]
+    if all(p.reorderable for p in patterns):
+        keys.append("s" + _digest([np.sort(p.levels) for p in patterns]))
+    return keys
+
+
+@lru_cache(maxsize=1)
+def handout_keys() -> dict[str, str]:
+    """The copy keys of every column of the handout's two tables → "heading-1" etc."""
+    keys = {}
+    for part, name in (("heading", "handout_horizontal.csv"), ("latitude", "handout_vertical.csv")):
+        with (HANDOUT / name).open(encoding="utf-8") as handle:
+            rows = list(csv.DictReader(handle))
+        for column in rows[0]:
+            if not column.startswith("position_"):
+                continue
+            values = np.array([float(row[column]) for row in rows])
+            for key in copy_keys([values], HANDOUT_MIN_BITS):
+                keys[key] = f"{part}-{column.removeprefix('position_')}"
+    return keys
+
+
+def too_close(part: str, error: float | None, sigma: float | None) -> list[Evidence]:
+    """A result far closer to the truth than its own σ allows (|z| < 0.0025)."""
+    if error is None or sigma is None or not sigma > 0 or not math.isfinite(error):
+        return []
+    z = abs(error) / sigma
+    if z < TRUTH_Z:
+        return [Evidence("too_close", part, {"z": round(z, 4), "sigma": sigma})]
+    return []
+
+
+# --- a part, and a class ----------------------------------------------------------------
+
+
+def part_evidence(
+    part: str,
+    positions: Sequence[np.ndarray],
+    typed: bool,
+    noise: GyroNoise,
+    rate_hz: float,
+    *,
+    simulated: bool = False,
+) -> list[Evidence]:
+    """Every check of one part that needs only its own readings: scatter and smoothness
+    against the gyro, last digits when typed, the output grid when the station's gyro is
+    the simulated one (``simulated``), and the handout's example."""
+    positions = [np.asarray(v, float) for v in positions]
+    found = scatter_and_smoothness(part, positions, noise, rate_hz)
+    if simulated:
+        found += off_grid(part, positions, 3600.0 * noise.angle_lsb_deg * rate_hz)
+    if typed and positions:
+        counts = [v.size for v in positions if v.size >= 2]
+        if counts:
+            step = typed_step(np.concatenate(positions))
+            sd = math.sqrt(expected_variance(noise, rate_hz, int(np.median(counts)), step))
+            found += last_digits(part, positions, sd, 3600.0 * noise.angle_lsb_deg * rate_hz)
+    handout = handout_keys()
+    matches = sorted(
+        {
+            handout[key]
+            for v in positions
+            for key in copy_keys([v], HANDOUT_MIN_BITS)
+            if key in handout
+        }
+    )
+    if matches:
+        found.append(Evidence("handout", part, {"columns": matches}))
+    return found
+
+
+def class_copies(
+    takes: Sequence[tuple[str, str, Sequence[np.ndarray]]],
+) -> dict[str, list[Evidence]]:
+    """Parts of different groups whose readings match after an offset per position (or,
+    where every position takes many values, after reordering within positions too).
+
+    Parameters
+    ----------
+    takes : sequence of (group, part, positions)
+        Every part of the class (and of earlier attempts or years, under their own group
+        names), its positions' readings in order.
+
+    Returns
+    -------
+    dict
+        group → one "copy" finding per part, naming the other groups it matches.
+    """
+    owners: dict[str, set[str]] = {}
+    keyed = [(group, part, copy_keys(positions)) for group, part, positions in takes]
+    for group, _part, keys in keyed:
+        for key in keys:
+            owners.setdefault(key, set()).add(group)
+    found: dict[str, dict[str, set[str]]] = {}
+    for group, part, keys in keyed:
+        for key in keys:
+            others = owners[key] - {group}
+            if others:
+                found.setdefault(group, {}).setdefault(part, set()).update(others)
+    return {
+        group: [Evidence("copy", part, {"others": sorted(o)}) for part, o in sorted(parts.items())]
+        for group, parts in found.items()
+    }

@@ -1,0 +1,100 @@
+"""The data evidence on readings it did not make: the tests' own noise generator (white
+and Kasdin flicker noise, tests/noise_sources.py), the handout's tables, and closed forms.
+bench/bench_evidence.py measures the rates on whole simulated classes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from app.core.data_evidence import (
+    class_copies,
+    last_digits,
+    off_grid,
+    part_evidence,
+    reading_moments,
+    too_close,
+)
+from app.core.noise_model import GyroNoise
+from tests.factories import handout
+from tests.noise_sources import static_record
+
+NOISE = GyroNoise(arw_deg_rt_h=0.02, bias_instability_deg_h=0.05)
+RATE = 10.0
+
+
+def honest_part(seed: int, count: int = 300) -> list[np.ndarray]:
+    record = static_record(4 * count / RATE / 3600.0, RATE, arw=0.02, flicker=0.05, seed=seed)
+    return [record[k * count : (k + 1) * count] + 11.0 * np.cos(k * np.pi / 2) for k in range(4)]
+
+
+def test_one_readings_variance_is_the_white_density_times_the_rate():
+    """White noise alone: σ₁² = (60N)²·f, no correlation between readings."""
+    one, rho, mean = reading_moments(GyroNoise(arw_deg_rt_h=0.02), RATE, 100)
+    assert one == pytest.approx((60 * 0.02) ** 2 * RATE, rel=1e-9)
+    assert rho == pytest.approx(0.0, abs=1e-12)
+    assert mean == pytest.approx(one / 100, rel=1e-9)
+
+
+def test_honest_independent_records_are_not_flagged():
+    flagged = [
+        e.check
+        for seed in range(40)
+        for e in part_evidence("heading", honest_part(seed), False, NOISE, RATE)
+    ]
+    assert flagged == []
+
+
+def test_smoothed_and_invented_readings_are_found():
+    kernel = np.ones(5) / 5
+    smoothed = [np.convolve(v, kernel, mode="valid") for v in honest_part(1)]
+    checks = {e.check for e in part_evidence("heading", smoothed, False, NOISE, RATE)}
+    assert "smooth" in checks and "scatter_low" in checks
+    noisier = [v + np.random.default_rng(2).normal(0, 10, v.size) for v in honest_part(2)]
+    assert {e.check for e in part_evidence("heading", noisier, False, NOISE, RATE)} == {
+        "scatter_high"
+    }
+
+
+def test_a_preferred_last_digit_is_found_only_where_digits_should_be_uniform():
+    rng = np.random.default_rng(3)
+    honest = [np.round(11 + rng.normal(0, 0.5, 15), 2) for _ in range(4)]
+    assert last_digits("heading", honest, 0.5) == []
+    leaning = [np.round(v * 20) / 20 for v in honest]  # every reading ends in 0 or 5
+    found = last_digits("heading", leaning, 0.5)
+    assert found and found[0].check == "digits" and found[0].numbers["digit"] in (0, 5)
+    assert last_digits("heading", leaning, 0.5, own_step=0.1) == []  # the gyro's own grid
+
+
+def test_readings_between_the_simulated_gyros_steps_are_found():
+    on = [np.round(np.random.default_rng(4).normal(11, 0.2, 12) / 0.1) * 0.1 for _ in range(4)]
+    assert off_grid("heading", on, 0.1) == []
+    off = [np.round(v + 0.03, 2) for v in on]
+    assert off_grid("heading", off, 0.1)[0].numbers["share"] == 1.0
+
+
+def test_a_part_copied_with_offsets_or_reordered_is_found_and_honest_parts_are_not():
+    parts = {f"g{seed}": honest_part(seed, 30) for seed in range(20)}
+    copied = [v + 0.37 for v in parts["g3"]]
+    shuffled = [np.random.default_rng(5).permutation(v) - 1.1 for v in parts["g7"]]
+    takes = [(group, "heading", positions) for group, positions in parts.items()]
+    takes += [("copier", "heading", copied), ("shuffler", "heading", shuffled)]
+    found = class_copies(takes)
+    assert found["copier"][0].numbers["others"] == ["g3"]
+    assert found["shuffler"][0].numbers["others"] == ["g7"]
+    assert set(found) == {"copier", "g3", "shuffler", "g7"}
+
+
+def test_the_handout_retyped_is_found():
+    table = handout("handout_horizontal.csv")
+    positions = [np.array(table[k]) for k in sorted(table)]
+    found = part_evidence("heading", positions, True, NOISE, RATE)
+    assert any(e.check == "handout" and "heading-1" in e.numbers["columns"] for e in found)
+    shifted = [v + 0.2 for v in positions]  # with an offset too
+    assert any(e.check == "handout" for e in part_evidence("heading", shifted, True, NOISE, RATE))
+
+
+def test_a_result_far_closer_than_its_sigma_is_found():
+    assert too_close("heading", 0.0001, 0.1)[0].numbers["z"] == 0.001
+    assert too_close("heading", 0.01, 0.1) == []
+    assert too_close("heading", None, 0.1) == []
