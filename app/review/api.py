@@ -74,6 +74,7 @@ def list_submissions(assignment_id: ObjectId, caller: TeacherCaller, db: Session
                 points=row.points,
                 max_points=assignment.max_points,
                 released=row.released,
+                evidence=row.evidence,
             )
         )
     return rows

@@ -26,6 +26,8 @@ from app.lab.truth import auto_check, session_truth
 from app.models import Attempt, SessionStatus, User
 from app.review import grading, lms_outbox
 from app.review.deps import ReviewableSession, TeacherAssignment
+from app.review.evidence import finding_text
+from app.review.service import class_rows
 from app.web.deps import FormDep, SessionDep
 from app.web.i18n import translator
 from app.web.local_time import local_input_to_utc, utc_to_local_input
@@ -81,6 +83,11 @@ def desk_view(request: Request, target, db) -> dict:
             "interrupted": None,
             "typed": None,
             "problem": None,
+            "evidence_row": next(
+                (r for r in class_rows(db, assignment) if r.session and r.session.id == session.id),
+                None,
+            ),
+            "evidence_text": lambda finding: finding_text(finding, _),
         }
     )
     return view

@@ -22,6 +22,7 @@ from sqlmodel import Session
 from app.lab.attempts import comments_of, rubric_of, rubric_scores_of
 from app.lab.exports import Selection, readings_csv, session_json
 from app.models import Assignment, Attempt, Course
+from app.review.evidence import finding_text
 from app.review.service import StudentRow, class_rows
 from app.web.exports import ZIP_BLOCK, attachment, csv_table, safe_name
 from app.web.local_time import zone
@@ -51,6 +52,7 @@ COLUMNS = (
     "position_comments",
     "flags",
     "identical_data_with",
+    "data_evidence",
 )
 
 
@@ -135,6 +137,9 @@ def export_rows(
                 "; ".join(f"{part_name(k)}: {v}" for k, v in sorted(comments.items())),
                 ";".join(sorted({f["key"].split(".")[-1] for f in row.flags})),
                 ";".join(row.duplicate_of),
+                " | ".join(finding_text(f, _) for f in row.evidence)
+                if _
+                else ";".join(f"{f['part']}:{f['check']}" for f in row.evidence),
                 *(_score(scores.get(str(i))) for i in range(len(rubric))),
             ]
         )

@@ -32,6 +32,12 @@ class SubmissionRow(BaseModel):
     points: float | None
     max_points: float
     released: bool
+    evidence: list[dict] = Field(
+        default_factory=list,
+        description="data evidence on the readings the group recorded itself: "
+        "check (scatter_low, scatter_high, smooth, digits, off_grid, copy, handout, "
+        "too_close), part, and the check's numbers",
+    )
 
 
 class AccuracyRow(BaseModel):

@@ -25,6 +25,7 @@ from app.models import (
     SessionStatus,
     User,
 )
+from app.review.evidence import SessionEvidence, class_findings, session_evidence
 
 STATUSES = tuple(SessionStatus)
 
@@ -73,6 +74,8 @@ class StudentRow:
     group: list[str] = field(default_factory=list)  # lab partners sharing the session
     due_at: datetime | None = None  # this student's due date (an extension, or the class's)
     extended: bool = False
+    data_evidence: SessionEvidence | None = None  # its own readings' findings and copy keys
+    evidence: list[dict] = field(default_factory=list)  # all findings (app/review/evidence.py)
 
     @property
     def submitted_at(self) -> datetime | None:
@@ -110,8 +113,9 @@ class StudentRow:
 
 def data_summaries(
     db: Session, assignment: Assignment, by_id: dict[int, LabSession]
-) -> dict[int, tuple[list[dict], tuple[str | None, str | None], list]]:
-    """Each session's data flags, fingerprints and current takes: computed from the samples
+) -> dict[int, tuple[list[dict], tuple[str | None, str | None], list, SessionEvidence]]:
+    """Each session's data flags, fingerprints, current takes and data evidence (its own
+    readings' findings and copy keys): computed from the samples
     once per version of its data (``result_cache.data_keys``), so that the dashboard
     reads samples only of the sessions that changed since it was last drawn."""
     keys = data_keys(db, list(by_id.values()), assignment)
@@ -124,12 +128,13 @@ def data_summaries(
                 data_flags(by_id[session_id], data),
                 data_fingerprint(data),
                 [item.slim().take for item in positions],
+                session_evidence(assignment, by_id[session_id], data),
             )
             SUMMARIES.put(keys[session_id], summary)
             summaries[session_id] = summary
         for session_id in changed:
             if summaries[session_id] is None:  # no recording yet
-                summaries[session_id] = ([], (None, None), [])
+                summaries[session_id] = ([], (None, None), [], SessionEvidence())
                 SUMMARIES.put(keys[session_id], summaries[session_id])
     return summaries
 
@@ -186,7 +191,9 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
             )
             continue
         history = attempts.get(session.id, [])
-        flags, prints, takes = summaries.get(session.id, ([], (None, None), []))
+        flags, prints, takes, evidence = summaries.get(
+            session.id, ([], (None, None), [], SessionEvidence())
+        )
         results = latest_results(history)
         truth = session_truth(db, session, assignment, takes)
         check = auto_check(results, truth, assignment) if history else None
@@ -202,6 +209,7 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
             any(a.late for a in history),
             prints=prints,
             group=groups.get(session.id, []),
+            data_evidence=evidence,
             **due,
         )
         rows.append(row)
@@ -217,6 +225,7 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
                 if u != row.student.username and same_session.get(u) != row.session.id
             ]
             row.duplicate_of.extend(u for u in others if u not in row.duplicate_of)
+    class_findings(rows)
     return rows
 
 

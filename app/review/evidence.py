@@ -1,0 +1,111 @@
+"""Data evidence for the teacher (``app.core.data_evidence``): whether each group's
+readings look like the station's gyro made them, and whether two groups' readings match.
+
+Only readings the students recorded themselves are checked (typed, pasted, uploaded, sent
+by the bridge): the simulated gyro's recordings are made by the server.  The gyro is the
+one the teacher characterised for the assignment, else the simulated gyro's preset --
+whose output grid is then known too.  Students never see any of this."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from app.core.data_evidence import copy_keys, part_evidence, too_close
+from app.lab.planner import gyro_model
+from app.models import Assignment, InputMethod, LabSession
+
+EVIDENCE_VERSION = 1  # part of the summary cache's key: bump when the checks change
+
+
+@dataclass
+class SessionEvidence:
+    """One session's own findings, its parts' copy keys, and the parts it recorded."""
+
+    findings: list[dict] = field(default_factory=list)
+    keys: dict[str, list[str]] = field(default_factory=dict)  # part → copy keys
+    recorded: set[str] = field(default_factory=set)  # parts with readings of its own
+
+
+def session_evidence(assignment: Assignment, session: LabSession, data: dict) -> SessionEvidence:
+    """The checks that need only this session's current readings (``data``: part →
+    position → PositionData)."""
+    noise, rate_hz, source = gyro_model(assignment, session.simulator_preset)
+    out = SessionEvidence()
+    for part, positions in sorted(data.items()):
+        items = [positions[k] for k in sorted(positions)]
+        own = [item for item in items if item.take.source != InputMethod.simulator]
+        if len(own) < 3:
+            continue
+        values = [item.values for item in own]
+        typed = any(item.take.source == InputMethod.manual for item in own)
+        found = part_evidence(part, values, typed, noise, rate_hz, simulated=source == "preset")
+        out.findings += [finding.to_json() for finding in found]
+        out.keys[part] = copy_keys(values)
+        out.recorded.add(part)
+    return out
+
+
+def class_findings(rows) -> None:
+    """Complete each row's ``evidence``: its own findings, the parts whose readings match
+    another group's, and results far closer to the truth than their σ (parts the group
+    recorded itself, from the attempt the teacher grades)."""
+    owners: dict[tuple[str, str], set[str]] = {}
+    for row in rows:
+        if row.session is None or row.data_evidence is None:
+            continue
+        for part, keys in row.data_evidence.keys.items():
+            for key in keys:
+                owners.setdefault((part, key), set()).add(group_name(row))
+    for row in rows:
+        if row.session is None or row.data_evidence is None:
+            continue
+        found = list(row.data_evidence.findings)
+        for part, keys in sorted(row.data_evidence.keys.items()):
+            others = set().union(*(owners[(part, key)] for key in keys)) - {group_name(row)}
+            if others:
+                found.append({"check": "copy", "part": part, "others": sorted(others)})
+        if row.latest is not None:
+            found += [f.to_json() for f in result_findings(row)]
+        row.evidence = found
+
+
+def result_findings(row) -> list:
+    """``too_close`` for each part the group recorded itself."""
+    recorded = row.data_evidence.recorded
+    found = []
+    heading, latitude = row.results.get("heading"), row.results.get("latitude")
+    if "heading" in recorded and heading:
+        found += too_close("heading", row.check_error("heading"), heading.get("azimuth_sigma_deg"))
+    if "latitude" in recorded and latitude:
+        found += too_close(
+            "latitude", latitude.get("latitude_error_deg"), latitude.get("latitude_sigma_deg")
+        )
+    return found
+
+
+def group_name(row) -> str:
+    """A group as the teacher knows it: its members' usernames (one, or partners)."""
+    return "+".join(row.group) if row.group else row.student.username
+
+
+def finding_text(finding: dict, _) -> str:
+    """A finding in the teacher's words and language, with its numbers."""
+    params = {k: v for k, v in finding.items() if k not in ("check", "part")}
+    params["part"] = _(f"lab.part_short_{finding['part']}")
+    if "share" in params:
+        params["share"] = f"{100 * params['share']:.0f} %"
+    if "p" in params:
+        params["p"] = f"{params['p']:.1g}"
+    if "sigma" in params:
+        params["sigma"] = f"{params['sigma']:.3g}"
+    if "others" in params:
+        params["others"] = ", ".join(params["others"])
+    if "columns" in params:
+        params["columns"] = ", ".join(
+            _(f"lab.part_short_{c.split('-')[0]}") + c.split("-")[1] for c in params["columns"]
+        )
+    return _(f"evidence.{finding['check']}", **params)
+
+
+def badge_text(finding: dict, _) -> str:
+    return f"{_('lab.part_short_' + finding['part'])}: {_('evidence.badge_' + finding['check'])}"

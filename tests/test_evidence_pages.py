@@ -1,0 +1,111 @@
+"""Data evidence where the teacher works: the class table's badges, the grading desk's
+sentences, the API and the class CSV -- and never on the student's pages (issue 35,
+item 1)."""
+
+from __future__ import annotations
+
+import csv
+import html
+import io
+
+import numpy as np
+
+from tests.factories import (
+    API,
+    HEADING,
+    VERTICAL,
+    browser,
+    do_lab,
+    save_manual,
+    start,
+    submit,
+    token_for,
+)
+
+
+def honest_columns(seed: int, mean: float = 11.0) -> dict[int, list[float]]:
+    """12 readings a position as the teaching FOG shows them: whole 0.1 °/h steps."""
+    rng = np.random.default_rng(seed)
+    means = (mean, 0.3, -mean, -0.3)
+    return {
+        k + 1: [round(float(v), 1) for v in np.round(rng.normal(m, 0.1, 12) / 0.1) * 0.1]
+        for k, m in enumerate(means)
+    }
+
+
+def hand_in(world, name: str, heading, vertical):
+    student = browser(world, name)
+    session_id = start(student, world)
+    assert save_manual(student, session_id, "heading", heading).status_code == 200
+    assert save_manual(student, session_id, "latitude", vertical).status_code == 200
+    submit(student, session_id)
+    return student, session_id
+
+
+def test_the_teacher_sees_the_evidence_and_the_student_does_not(world):
+    # s1 types the handout's tables; s2 copies s1 with an offset; s3 types honest readings
+    s1, first = hand_in(world, "s1", HEADING, VERTICAL)
+    shifted = {k: [round(v + 0.2, 2) for v in column] for k, column in HEADING.items()}
+    hand_in(world, "s2", shifted, VERTICAL)
+    s3, third = hand_in(world, "s3", honest_columns(1), honest_columns(2, 9.8))
+
+    teacher = browser(world, "teacher1")
+    page = teacher.get(f"/courses/{world['course']}/assignments/{world['assignment']}").text
+    assert 'data-check="handout"' in page and 'data-check="copy"' in page
+    assert "A: handout&#39;s data" in page or "A: handout's data" in html.unescape(page)
+
+    auth = token_for(teacher, "teacher1")
+    rows = {
+        row["username"]: row
+        for row in teacher.get(
+            f"{API}/assignments/{world['assignment']}/submissions", headers=auth
+        ).json()
+    }
+    checks = {
+        name: {(f["part"], f["check"]) for f in row["evidence"]} for name, row in rows.items()
+    }
+    assert ("heading", "handout") in checks["s1"] and ("heading", "copy") in checks["s1"]
+    assert ("heading", "copy") in checks["s2"] and ("heading", "handout") in checks["s2"]
+    copy = next(
+        f for f in rows["s2"]["evidence"] if f["check"] == "copy" and f["part"] == "heading"
+    )
+    assert copy["others"] == ["s1"]
+    assert checks["s3"] == set()  # honest readings on the gyro's steps: nothing
+    # the handout's readings sit between the simulated teaching FOG's 0.1 °/h steps
+    assert ("heading", "off_grid") in checks["s1"]
+
+    desk = html.unescape(teacher.get(f"/review/sessions/{first}").text)
+    assert "Data evidence" in desk
+    assert "Part A: readings match the handout's example table (A1, A2, A3, A4)" in desk
+    assert "Nothing unusual" in html.unescape(teacher.get(f"/review/sessions/{third}").text)
+    chinese = teacher.get(f"/review/sessions/{first}", headers={"Accept-Language": "zh-CN"})
+    assert "数据证据" in chinese.text and "讲义示例表" in chinese.text
+
+    exported = teacher.get(
+        f"/courses/{world['course']}/assignments/{world['assignment']}/export.csv"
+    ).content.decode("utf-8-sig")
+    header, *body = list(csv.reader(io.StringIO(exported)))
+    column = header.index("Data evidence")
+    assert any("handout's example table" in line[column] for line in body)
+
+    for student, session_id in ((s1, first), (s3, third)):  # students never see it
+        own = html.unescape(student.get(f"/lab/sessions/{session_id}").text)
+        assert "Data evidence" not in own and "handout's example table" not in own
+        assert "data-check" not in own
+
+
+def test_typed_parts_are_checked_from_the_sessions_current_data(world):
+    from app.db import read_session
+    from app.lab.results import current_data
+    from app.models import Assignment, LabSession
+    from app.review.evidence import session_evidence
+
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    do_lab(student, session_id)
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        assignment = db.get(Assignment, world["assignment"])
+        evidence = session_evidence(assignment, session, current_data(db, session))
+    assert evidence.recorded == {"heading", "latitude"}  # typed: both parts checked
+    assert {f["check"] for f in evidence.findings} >= {"handout", "off_grid"}
