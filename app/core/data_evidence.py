@@ -75,7 +75,24 @@ class Evidence:
 
 @lru_cache(maxsize=1024)
 def reading_moments(noise: GyroNoise, rate_hz: float, count: int) -> tuple[float, float, float]:
-    """(σ₁², ρ₁, σ²_mean) for ``count`` readings at ``rate_hz`` from a warm gyro."""
+    """The model's moments of ``count`` consecutive readings from a warm gyro.
+
+    Parameters
+    ----------
+    noise : GyroNoise
+        The gyro's noise terms.
+    rate_hz : float
+        Readings per second.
+    count : int
+        How many readings.
+
+    Returns
+    -------
+    tuple of float
+        σ₁² (one reading's variance, (°/h)²), ρ₁ = Cov(x_i, x_i+1)/σ₁², and σ²_mean (the
+        variance of their mean), from :meth:`GyroNoise.mean_covariance` of one-sample
+        windows and of the whole record.
+    """
     dt = 1.0 / rate_hz
     pair = noise.mean_covariance([Window(0.0, dt), Window(dt, dt)], warm_up=False)
     whole = noise.mean_covariance([Window(0.0, count * dt)], warm_up=False)
@@ -85,7 +102,19 @@ def reading_moments(noise: GyroNoise, rate_hz: float, count: int) -> tuple[float
 
 
 def typed_step(values: np.ndarray) -> float | None:
-    """The step the values were written to (0.01 for "10.74"), or None for full floats."""
+    """The decimal step the values were written to.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        Readings.
+
+    Returns
+    -------
+    float or None
+        10⁻ᵈ for the fewest decimals d ≤ 6 that hold every value (0.01 for "10.74"), or
+        None for full-precision floats.
+    """
     for decimals in range(7):
         scaled = values * 10.0**decimals
         if np.all(np.abs(scaled - np.round(scaled)) < 1e-9 * np.maximum(1.0, np.abs(scaled))):
@@ -94,8 +123,25 @@ def typed_step(values: np.ndarray) -> float | None:
 
 
 def expected_variance(noise: GyroNoise, rate_hz: float, count: int, step: float | None) -> float:
-    """E[s²] of ``count`` readings, rounding to ``step`` included when it is coarser than
-    the gyro's own output step (module docstring)."""
+    """The expected sample variance of ``count`` readings.
+
+    Parameters
+    ----------
+    noise : GyroNoise
+        The gyro's noise terms.
+    rate_hz : float
+        Readings per second.
+    count : int
+        How many readings (≥ 2).
+    step : float or None
+        The step they were typed to.
+
+    Returns
+    -------
+    float
+        E[s²] = n/(n − 1)·(σ₁² − σ²_mean), plus u²/12 when the typed step u is coarser
+        than the gyro's own output step (module docstring).
+    """
     one, _rho, mean = reading_moments(noise, rate_hz, count)
     variance = count / (count - 1) * max(one - mean, 0.0)
     own_step = 3600.0 * noise.angle_lsb_deg * rate_hz
@@ -110,7 +156,25 @@ def expected_variance(noise: GyroNoise, rate_hz: float, count: int, step: float 
 def scatter_and_smoothness(
     part: str, positions: Sequence[np.ndarray], noise: GyroNoise, rate_hz: float
 ) -> list[Evidence]:
-    """The scatter and lag-1 checks of one part's positions (module docstring)."""
+    """The scatter and lag-1 checks of one part's positions (module docstring).
+
+    Parameters
+    ----------
+    part : str
+        "heading" or "latitude".
+    positions : sequence of numpy.ndarray
+        Each position's readings (°/h).
+    noise : GyroNoise
+        The station's gyro.
+    rate_hz : float
+        Its readings per second.
+
+    Returns
+    -------
+    list of Evidence
+        ``scatter_low``/``scatter_high`` when ν·s²/E[s²] is outside χ²_ν's central
+        1 − 10⁻⁵, ``smooth`` when r₁ − ρ₁ > 4/√N.
+    """
     from scipy.stats import chi2
 
     usable = [np.asarray(v, float) for v in positions if np.asarray(v).size >= 3]
@@ -156,9 +220,26 @@ def scatter_and_smoothness(
 def last_digits(
     part: str, positions: Sequence[np.ndarray], noise_sd: float, own_step: float = 0.0
 ) -> list[Evidence]:
-    """Pearson's χ² of the last typed digit against uniform (typed readings only).  Not
-    tested when the scatter spans few typed steps, or when the gyro's own output step
-    ``own_step`` is coarser than the typed one (its readings then sit on its own grid)."""
+    """Pearson's χ² of the last typed digit against uniform (typed readings only).
+
+    Parameters
+    ----------
+    part : str
+        "heading" or "latitude".
+    positions : sequence of numpy.ndarray
+        Each position's readings (°/h).
+    noise_sd : float
+        The readings' expected standard deviation (°/h).
+    own_step : float
+        The gyro's own output step (°/h); 0 for none.
+
+    Returns
+    -------
+    list of Evidence
+        ``digits`` when p < 10⁻⁴ with 9 degrees of freedom; nothing tested under 40
+        readings, when the scatter spans fewer than 3 typed steps, or when the gyro's own
+        step is coarser than the typed one (its readings then sit on its own grid).
+    """
     from scipy.stats import chi2
 
     values = np.concatenate([np.asarray(v, float) for v in positions])
@@ -188,9 +269,24 @@ def last_digits(
 
 
 def off_grid(part: str, positions: Sequence[np.ndarray], own_step: float) -> list[Evidence]:
-    """Readings between the simulated gyro's output steps: it only ever shows multiples of
-    ``own_step`` (its angle pulses over one sample), so a reading more than half a typed
-    step away from every multiple did not come from it."""
+    """Readings between the simulated gyro's output steps.
+
+    Parameters
+    ----------
+    part : str
+        "heading" or "latitude".
+    positions : sequence of numpy.ndarray
+        Each position's readings (°/h).
+    own_step : float
+        The simulated gyro's output step q = 3600·lsb·f (°/h): its angle pulses over one
+        sample, so every reading it shows is a whole multiple of q.
+
+    Returns
+    -------
+    list of Evidence
+        ``off_grid`` when more than 20 % of the readings lie more than half a typed step
+        from every multiple of q (tested only when q is at least twice the typed step).
+    """
     values = np.concatenate([np.asarray(v, float) for v in positions])
     step = typed_step(values) or 0.0
     if values.size == 0 or own_step <= 0 or own_step < 2.0 * step:
@@ -219,7 +315,18 @@ class Pattern:
 
 
 def pattern(values: np.ndarray) -> Pattern | None:
-    """The take's :class:`Pattern`, or None for fewer than 8 readings or 3 values."""
+    """A take's readings without their offset.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        One position's readings.
+
+    Returns
+    -------
+    Pattern or None
+        Its :class:`Pattern`; None for fewer than 8 readings or 3 distinct values.
+    """
     values = np.asarray(values, float)
     if values.size < COPY_MIN_READINGS:
         return None
@@ -243,10 +350,22 @@ def _digest(arrays: Sequence[np.ndarray]) -> str:
 
 
 def copy_keys(positions: Sequence[np.ndarray], min_bits: float = COPY_MIN_BITS) -> list[str]:
-    """Offset-free keys of one part (or of one take, given alone): its positions' patterns
-    in order, and sorted within each position when every position takes many values.  No
-    key when the patterns together carry fewer than ``min_bits`` bits: honest readings
-    quantised to a few steps could then share one by chance."""
+    """Offset-free keys of one part (or of one take, given alone).
+
+    Parameters
+    ----------
+    positions : sequence of numpy.ndarray
+        The positions' readings, in order.
+    min_bits : float
+        The least Σ n·H a key needs: honest readings quantised to a few steps could
+        otherwise share one by chance (about 2^−bits per pair).
+
+    Returns
+    -------
+    list of str
+        The positions' patterns in order, and sorted within each position when every
+        position takes many values; empty below ``min_bits``.
+    """
     patterns = [pattern(v) for v in positions]
     if not patterns or any(p is None for p in patterns):
         return []
@@ -259,8 +378,15 @@ def copy_keys(positions: Sequence[np.ndarray], min_bits: float = COPY_MIN_BITS) 
 
 
 @lru_cache(maxsize=1)
-def handout_keys() -> dict[str, str]:
-    """The copy keys of every column of the handout's two tables → "heading-1" etc."""
+def _handout_keys() -> dict[str, str]:
+    """The handout's tables as copy keys.
+
+    Returns
+    -------
+    dict
+        The key of each column of the handout's two tables (at 12 bits: only eight
+        columns to match against) → "heading-1" … "latitude-4".
+    """
     keys = {}
     for part, name in (("heading", "handout_horizontal.csv"), ("latitude", "handout_vertical.csv")):
         with (HANDOUT / name).open(encoding="utf-8") as handle:
@@ -275,7 +401,23 @@ def handout_keys() -> dict[str, str]:
 
 
 def too_close(part: str, error: float | None, sigma: float | None) -> list[Evidence]:
-    """A result far closer to the truth than its own σ allows (|z| < 0.0025)."""
+    """A result far closer to the truth than its own σ allows.
+
+    Parameters
+    ----------
+    part : str
+        "heading" or "latitude".
+    error : float or None
+        The result's error against the truth.
+    sigma : float or None
+        Its 1σ, same unit.
+
+    Returns
+    -------
+    list of Evidence
+        ``too_close`` when |z| = |error|/σ < 0.0025, which an honest result does with
+        probability 0.2 % (normal errors).
+    """
     if error is None or sigma is None or not sigma > 0 or not math.isfinite(error):
         return []
     z = abs(error) / sigma
@@ -296,9 +438,28 @@ def part_evidence(
     *,
     simulated: bool = False,
 ) -> list[Evidence]:
-    """Every check of one part that needs only its own readings: scatter and smoothness
-    against the gyro, last digits when typed, the output grid when the station's gyro is
-    the simulated one (``simulated``), and the handout's example."""
+    """Every check of one part that needs only its own readings.
+
+    Parameters
+    ----------
+    part : str
+        "heading" or "latitude".
+    positions : sequence of numpy.ndarray
+        The positions' readings (°/h), in order.
+    typed : bool
+        Whether they were typed (the last-digit check).
+    noise : GyroNoise
+        The station's gyro.
+    rate_hz : float
+        Its readings per second.
+    simulated : bool
+        The station's gyro is the simulated one, whose output grid is known.
+
+    Returns
+    -------
+    list of Evidence
+        Scatter and smoothness, the output grid, last digits, the handout's tables.
+    """
     positions = [np.asarray(v, float) for v in positions]
     found = scatter_and_smoothness(part, positions, noise, rate_hz)
     if simulated:
@@ -309,7 +470,7 @@ def part_evidence(
             step = typed_step(np.concatenate(positions))
             sd = math.sqrt(expected_variance(noise, rate_hz, int(np.median(counts)), step))
             found += last_digits(part, positions, sd, 3600.0 * noise.angle_lsb_deg * rate_hz)
-    handout = handout_keys()
+    handout = _handout_keys()
     matches = sorted(
         {
             handout[key]
