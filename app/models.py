@@ -323,6 +323,21 @@ class ExternalIdentity(SQLModel, table=True):
     last_login_at: datetime | None = None
 
 
+class EvidenceNote(SQLModel, table=True):
+    """A teacher has looked at one data-evidence finding of a session (its check and part),
+    with an optional note; the finding stays, marked as seen."""
+
+    __tablename__ = "evidence_note"
+    __table_args__ = (UniqueConstraint("session_id", "check", "part"),)
+    id: int | None = Field(default=None, primary_key=True)
+    session_id: int = Field(foreign_key="lab_session.id", index=True, ondelete="CASCADE")
+    check: str = Field(max_length=16)
+    part: str = Field(max_length=16)
+    note: str = Field(default="", max_length=2000)
+    teacher_id: int | None = Field(default=None, foreign_key="user.id", ondelete="SET NULL")
+    seen_at: datetime = Field(default_factory=utcnow)
+
+
 class Extension(SQLModel, table=True):
     """A later due date for one student of one assignment."""
 

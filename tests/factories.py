@@ -400,6 +400,7 @@ ACCESS = {
     "GET /review/sessions/{session_id}": "review",
     "POST /review/sessions/{session_id}/feedback": "review",
     "POST /review/sessions/{session_id}/extension": "review",
+    "POST /review/sessions/{session_id}/evidence": "review",
     "POST /courses/{course_id}/assignments/{assignment_id}/release": "teacher",
     "GET /lab/sessions/{session_id}": "owner",
     "POST /lab/sessions/{session_id}/manual": "owner",

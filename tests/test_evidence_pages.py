@@ -16,6 +16,7 @@ from tests.factories import (
     VERTICAL,
     browser,
     do_lab,
+    post_form,
     save_manual,
     start,
     submit,
@@ -109,3 +110,49 @@ def test_typed_parts_are_checked_from_the_sessions_current_data(world):
         evidence = session_evidence(assignment, session, current_data(db, session))
     assert evidence.recorded == {"heading", "latitude"}  # typed: both parts checked
     assert {f["check"] for f in evidence.findings} >= {"handout", "off_grid"}
+
+
+def test_a_finding_is_marked_seen_with_a_note_and_stays(world):
+    s1, first = hand_in(world, "s1", HEADING, VERTICAL)
+    teacher = browser(world, "teacher1")
+    page = f"/review/sessions/{first}"
+    note = "Asked them: they typed the handout to try the grid. 已沟通。"
+    response = post_form(
+        teacher,
+        f"{page}/evidence",
+        {"check": "handout", "part": "heading", "note": note},
+        page=page,
+    )
+    assert response.status_code == 303
+    desk = html.unescape(teacher.get(page).text)
+    assert note in desk and "Seen by Teacher One" in desk
+    assert 'data-check="handout" data-part="heading" class="seen"' in desk
+    dashboard = teacher.get(f"/courses/{world['course']}/assignments/{world['assignment']}").text
+    assert 'class="badge evidence seen" data-check="handout"' in dashboard
+    auth = token_for(teacher, "teacher1")
+    rows = teacher.get(f"{API}/assignments/{world['assignment']}/submissions", headers=auth)
+    (handout_finding,) = [
+        f for f in rows.json()[0]["evidence"] if f["check"] == "handout" and f["part"] == "heading"
+    ]
+    assert handout_finding["seen"]["note"] == note  # the finding stays, marked
+
+    # marking again replaces the note; nonsense is refused with a message, nothing stored
+    post_form(
+        teacher, f"{page}/evidence", {"check": "handout", "part": "heading", "note": ""}, page=page
+    )
+    assert note not in html.unescape(teacher.get(page).text)
+    bad = post_form(teacher, f"{page}/evidence", {"check": "nope", "part": "heading"}, page=page)
+    assert bad.status_code == 303
+    assert "There is no such finding" in html.unescape(teacher.get(page).text)
+    long = post_form(
+        teacher,
+        f"{page}/evidence",
+        {"check": "copy", "part": "heading", "note": "x" * 2001},
+        page=page,
+    )
+    assert long.status_code == 303
+    assert "longer than 2000 characters" in html.unescape(teacher.get(page).text)
+
+    # a student cannot mark anything, not even on their own session
+    refused = post_form(s1, f"{page}/evidence", {"check": "handout", "part": "heading"}, page="/")
+    assert refused.status_code in (403, 404)

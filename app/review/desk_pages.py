@@ -24,7 +24,7 @@ from app.lab.attempts import (
 from app.lab.pages import UNIT_NAMES, session_view
 from app.lab.truth import auto_check, session_truth
 from app.models import Attempt, SessionStatus, User
-from app.review import grading, lms_outbox
+from app.review import evidence, grading, lms_outbox
 from app.review.deps import ReviewableSession, TeacherAssignment
 from app.review.evidence import finding_text
 from app.review.service import class_rows
@@ -191,6 +191,35 @@ def save_review(
     if target_id is not None:
         response = redirect(f"/review/sessions/{target_id}")
     flash(response, request, key, "success")
+    return response
+
+
+@router.post("/review/sessions/{session_id}/evidence", dependencies=[CsrfProtected])
+def mark_evidence_seen(
+    request: Request,
+    target: ReviewableSession,
+    teacher: TeacherUser,
+    db: SessionDep,
+    form: FormDep,
+):
+    """Mark one data-evidence finding as seen, with a note (the finding itself stays)."""
+    session = target.session
+    response = redirect(f"/review/sessions/{session.id}#data-evidence")
+    try:
+        evidence.mark_seen(
+            db,
+            session,
+            teacher.id,
+            str(form.get("check", ""))[:32],
+            str(form.get("part", ""))[:32],
+            str(form.get("note", "")),
+        )
+    except UserError as problem:
+        db.rollback()
+        flash(response, request, problem.key, "error", **problem.params)
+        return response
+    db.commit()
+    flash(response, request, "evidence.marked", "success")
     return response
 
 

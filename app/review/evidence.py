@@ -10,9 +10,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from sqlmodel import Session, select
+
 from app.core.data_evidence import copy_keys, part_evidence, too_close
+from app.core.exceptions import UserError
 from app.lab.planner import gyro_model
-from app.models import Assignment, InputMethod, LabSession
+from app.lab.store import PARTS
+from app.models import Assignment, EvidenceNote, InputMethod, LabSession, User, utcnow
 
 EVIDENCE_VERSION = 1  # part of the summary cache's key: bump when the checks change
 
@@ -45,10 +49,12 @@ def session_evidence(assignment: Assignment, session: LabSession, data: dict) ->
     return out
 
 
-def class_findings(rows) -> None:
+def class_findings(rows, notes: dict | None = None) -> None:
     """Complete each row's ``evidence``: its own findings, the parts whose readings match
     another group's, and results far closer to the truth than their σ (parts the group
-    recorded itself, from the attempt the teacher grades)."""
+    recorded itself, from the attempt the teacher grades); each marked ``seen`` where a
+    teacher has looked (``notes``: :func:`seen_notes`)."""
+    notes = notes or {}
     owners: dict[tuple[str, str], set[str]] = {}
     for row in rows:
         if row.session is None or row.data_evidence is None:
@@ -66,6 +72,10 @@ def class_findings(rows) -> None:
                 found.append({"check": "copy", "part": part, "others": sorted(others)})
         if row.latest is not None:
             found += [f.to_json() for f in result_findings(row)]
+        for finding in found:
+            seen = notes.get((row.session.id, finding["check"], finding["part"]))
+            if seen is not None:
+                finding["seen"] = seen
         row.evidence = found
 
 
@@ -90,7 +100,7 @@ def group_name(row) -> str:
 
 def finding_text(finding: dict, _) -> str:
     """A finding in the teacher's words and language, with its numbers."""
-    params = {k: v for k, v in finding.items() if k not in ("check", "part")}
+    params = {k: v for k, v in finding.items() if k not in ("check", "part", "seen")}
     params["part"] = _(f"lab.part_short_{finding['part']}")
     if "share" in params:
         params["share"] = f"{100 * params['share']:.0f} %"
@@ -109,3 +119,59 @@ def finding_text(finding: dict, _) -> str:
 
 def badge_text(finding: dict, _) -> str:
     return f"{_('lab.part_short_' + finding['part'])}: {_('evidence.badge_' + finding['check'])}"
+
+
+# --- a teacher has looked ---------------------------------------------------------------
+
+CHECKS = (
+    "scatter_low",
+    "scatter_high",
+    "smooth",
+    "digits",
+    "off_grid",
+    "copy",
+    "handout",
+    "too_close",
+)
+MAX_NOTE = 2000
+
+
+def mark_seen(
+    db: Session, session: LabSession, teacher_id: int, check: str, part: str, note: str
+) -> EvidenceNote:
+    """Mark one finding of ``session`` as seen by the teacher, with a note (a second mark
+    replaces the note).  The finding itself stays: it is the readings' evidence."""
+    if check not in CHECKS or part not in PARTS:
+        raise UserError("evidence.bad_finding")
+    note = note.strip()
+    if len(note) > MAX_NOTE:
+        raise UserError("evidence.note_too_long", limit=MAX_NOTE)
+    record = db.exec(
+        select(EvidenceNote).where(
+            EvidenceNote.session_id == session.id,
+            EvidenceNote.check == check,
+            EvidenceNote.part == part,
+        )
+    ).first() or EvidenceNote(session_id=session.id, check=check, part=part)
+    record.note, record.teacher_id, record.seen_at = note, teacher_id, utcnow()
+    db.add(record)
+    return record
+
+
+def seen_notes(db: Session, session_ids: list[int]) -> dict[tuple[int, str, str], dict]:
+    """(session, check, part) → {"note", "seen_at", "by"} of the findings marked seen."""
+    if not session_ids:
+        return {}
+    rows = db.exec(
+        select(EvidenceNote, User.display_name)
+        .join(User, User.id == EvidenceNote.teacher_id, isouter=True)
+        .where(EvidenceNote.session_id.in_(session_ids))
+    ).all()
+    return {
+        (note.session_id, note.check, note.part): {
+            "note": note.note,
+            "seen_at": note.seen_at,
+            "by": name or "",
+        }
+        for note, name in rows
+    }
