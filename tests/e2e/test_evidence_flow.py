@@ -62,3 +62,12 @@ def test_the_desk_shows_the_evidence_of_typed_readings(demo_server, new_page):
         assert not teacher.evaluate(
             "() => document.documentElement.scrollWidth > window.innerWidth + 1"
         ), f"{language} at {width} px"
+
+    # marked as seen with a note: the finding stays, with who looked and what they noted
+    finding = teacher.locator("#data-evidence li[data-check='handout']")
+    finding.locator("input[name=note]").fill("已与学生沟通 talked with them")
+    with teacher.expect_navigation():
+        finding.locator("button[type=submit]").click()
+    finding = teacher.locator("#data-evidence li[data-check='handout']")
+    expect(finding).to_have_class("seen")
+    expect(finding.locator(".seen-note")).to_contain_text("talked with them")
