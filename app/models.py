@@ -338,6 +338,18 @@ class EvidenceNote(SQLModel, table=True):
     seen_at: datetime = Field(default_factory=utcnow)
 
 
+class BoardSnapshot(SQLModel, table=True):
+    """The class board as it stood at one moment, kept with the assignment (JSON of
+    app/review/board.py's data)."""
+
+    __tablename__ = "board_snapshot"
+    id: int | None = Field(default=None, primary_key=True)
+    assignment_id: int = Field(foreign_key="assignment.id", index=True, ondelete="CASCADE")
+    teacher_id: int | None = Field(default=None, foreign_key="user.id", ondelete="SET NULL")
+    created_at: datetime = Field(default_factory=utcnow)
+    data: str = Field(max_length=2_000_000)
+
+
 class Extension(SQLModel, table=True):
     """A later due date for one student of one assignment."""
 

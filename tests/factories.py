@@ -401,6 +401,10 @@ ACCESS = {
     "POST /review/sessions/{session_id}/feedback": "review",
     "POST /review/sessions/{session_id}/extension": "review",
     "POST /review/sessions/{session_id}/evidence": "review",
+    "GET /courses/{course_id}/assignments/{assignment_id}/board": "teacher",
+    "GET /courses/{course_id}/assignments/{assignment_id}/board.json": "teacher",
+    "POST /courses/{course_id}/assignments/{assignment_id}/board/snapshots": "teacher",
+    "GET /courses/{course_id}/assignments/{assignment_id}/board/snapshots/{snapshot_id}": "teacher",
     "POST /courses/{course_id}/assignments/{assignment_id}/release": "teacher",
     "GET /lab/sessions/{session_id}": "owner",
     "POST /lab/sessions/{session_id}/manual": "owner",
@@ -437,6 +441,7 @@ ACCESS = {
     "GET /api/v1/courses": "teacher-any",
     "GET /api/v1/assignments/{assignment_id}/submissions": "teacher",
     "GET /api/v1/assignments/{assignment_id}/accuracy": "teacher",
+    "GET /api/v1/assignments/{assignment_id}/board": "teacher",
     "GET /api/v1/assignments/{assignment_id}/export.csv": "teacher",
 }
 

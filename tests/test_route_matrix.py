@@ -15,6 +15,7 @@ from starlette.websockets import WebSocketDisconnect
 from app.db import read_session, write_session
 from app.models import (
     ApiToken,
+    BoardSnapshot,
     LtiContext,
     LtiPlatform,
     LtiResourceLink,
@@ -97,8 +98,10 @@ def build_ids(app) -> dict:
             content=b"PK\x05\x06" + bytes(18),
         )
         db.add(job)
+        snapshot = BoardSnapshot(assignment_id=world["assignment"], data='{"groups": []}')
+        db.add(snapshot)
         db.flush()
-        job_id = job.id
+        job_id, snapshot_id = job.id, snapshot.id
     return {
         "course_id": world["course"],
         "assignment_id": world["assignment"],
@@ -113,6 +116,7 @@ def build_ids(app) -> dict:
         "link_id": link_id,
         "token": "not-a-token",
         "job_id": job_id,
+        "snapshot_id": snapshot_id,
     }
 
 

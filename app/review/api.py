@@ -7,9 +7,11 @@ from fastapi.responses import Response
 from sqlmodel import select
 
 from app.accounts.api_auth import TeacherCaller
+from app.core.jsonsafe import json_safe
 from app.lab.attempts import grade_text
 from app.models import Assignment, Course
 from app.review.accuracy import class_accuracy
+from app.review.board import board_data
 from app.review.deps import teachers_assignment
 from app.review.exports import class_table_response
 from app.review.schemas import ClassAccuracyOut, CourseOut, SubmissionRow
@@ -86,6 +88,18 @@ def class_accuracy_api(assignment_id: ObjectId, caller: TeacherCaller, db: Sessi
     dwell and order -- whether the scatter agrees with the gyro's noise (χ², 95 %)."""
     assignment = teachers_assignment(db, caller.user, assignment_id)
     return class_accuracy(assignment, class_rows(db, assignment))
+
+
+@router.get("/assignments/{assignment_id}/board", response_model=dict)
+def class_board_api(
+    assignment_id: ObjectId, caller: TeacherCaller, db: SessionDep, names: bool = False
+):
+    """Teachers: the class board -- each group's heading error, latitude and Earth rate with
+    its 1σ (submitted attempt, else current data), the pooled latitude and Earth rate with
+    their standard errors (inverse-variance weighted, Birge-widened), outliers beyond 3σ.
+    Groups are numbered; ``names=true`` adds their usernames."""
+    assignment = teachers_assignment(db, caller.user, assignment_id)
+    return json_safe(board_data(db, assignment, class_rows(db, assignment), names))
 
 
 @router.get(
