@@ -70,3 +70,17 @@ def test_the_board_pools_the_class_and_names_nobody_unless_asked(world):
 
     chinese = teacher.get(base, headers={"Accept-Language": "zh-CN"}).text
     assert "全班共同测量地球" in chinese and "地球自转角速度 15.133" in chinese
+
+
+def test_a_group_with_only_the_heading_part_is_on_the_board(world):
+    from tests.factories import HEADING, save_manual
+
+    student = browser(world, "s1")
+    session_id = start(student, world)
+    assert save_manual(student, session_id, "heading", HEADING).status_code == 200
+    teacher = browser(world, "teacher1")
+    base = f"/courses/{world['course']}/assignments/{world['assignment']}/board"
+    page = teacher.get(base)
+    assert page.status_code == 200 and "Groups with results: 1" in page.text
+    group = teacher.get(f"{base}.json").json()["board"]["groups"][0]
+    assert group["earth_rate_deg_h"] is None and group["heading_error_deg"] is not None

@@ -20,6 +20,16 @@ from app.core.sinusoid import wrap180
 from app.lab.result_cache import cached_results
 from app.models import Assignment
 
+VALUES = (
+    "amplitude_deg_h",
+    "amplitude_sigma_deg_h",
+    "heading_error_deg",
+    "heading_sigma_deg",
+    "latitude_deg",
+    "latitude_sigma_deg",
+    "earth_rate_deg_h",
+    "earth_rate_sigma_deg_h",
+)
 OUTLIER_Z = 3.0  # a group this many of its own σ from the pooled value is marked
 
 
@@ -88,6 +98,7 @@ def board_data(db: Session, assignment: Assignment, rows, names: bool = False) -
             "submitted": bool(row.results),
             "true_latitude_deg": row.session.latitude_deg,
             "true_earth_rate_deg_h": row.session.earth_rate_deg_h,
+            **dict.fromkeys(VALUES),  # every quantity present, None until measured
         }
         if heading:
             point["amplitude_deg_h"] = heading.get("amplitude_deg_h")
