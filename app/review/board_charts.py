@@ -52,8 +52,21 @@ def per_group_figure(
                 "line": {"width": 0},
             }
         )
+    # the truth and the band are shapes, which plotly's autorange ignores: an unseen point
+    # at each keeps them in view
+    anchors = [truth] if truth is not None else []
+    if pool is not None:
+        anchors += [pool["value"] - pool["standard_error"], pool["value"] + pool["standard_error"]]
     return {
         "data": [
+            {
+                "type": "scatter",
+                "mode": "markers",
+                "x": [x[0]] * len(anchors) if x else [],
+                "y": anchors,
+                "marker": {"opacity": 0},
+                "hoverinfo": "skip",
+            },
             {
                 "type": "scatter",
                 "mode": "markers",
@@ -70,11 +83,11 @@ def per_group_figure(
                     "color": [PALETTE[1] if p["outlier"] else PALETTE[0] for p in groups],
                     "symbol": ["diamond" if p["outlier"] else "circle" for p in groups],
                 },
-            }
+            },
         ],
         "layout": {
             **BIG,
-            "title": titled(title),
+            "title": {**titled(title), "font": {"size": 22}},
             "xaxis": {"automargin": True, "tickangle": -30 if len(x) > 8 else 0},
             "yaxis": {"title": {"text": axis}, "automargin": True},
             "shapes": shapes,
@@ -115,7 +128,7 @@ def cos_latitude_figure(board: dict, _: Callable[..., str]) -> dict:
         ],
         "layout": {
             **BIG,
-            "title": titled(_("board.cos_title")),
+            "title": {**titled(_("board.cos_title")), "font": {"size": 22}},
             "xaxis": {"title": {"text": "cos φ"}, "automargin": True},
             "yaxis": {"title": {"text": _("board.amplitude_axis")}, "automargin": True},
         },
