@@ -75,6 +75,9 @@ def test_no_response_carries_a_secret(world):  # noqa: F811
     teacher_api = token_for(teacher, "teacher1")
     ensure_key()
     job_id = built_class_zip(teacher, world)
+    board = f"/courses/{world['course']}/assignments/{world['assignment']}/board"
+    kept = post_form(teacher, f"{board}/snapshots", page=board)
+    snapshot_id = int(kept.headers["location"].rsplit("/", 1)[1])
     secrets = secrets_in_database()
     ids = {
         "course_id": world["course"],
@@ -90,6 +93,7 @@ def test_no_response_carries_a_secret(world):  # noqa: F811
         "link_id": 1,
         "platform_id": 1,
         "job_id": job_id,
+        "snapshot_id": snapshot_id,
     }
     checked = 0
     for route in ACCESS:
