@@ -29,16 +29,21 @@ def test_slider_and_scenarios_update_the_chart(live_server, new_page, locale):
     page.locator("#heading-chart").scroll_into_view_if_needed()  # drawn once in view
     page.select_option("#scenario", "indexing-tilt-10")
     expect(page.locator("#scenario-text")).not_to_be_empty()
-    page.wait_for_function("() => document.getElementById('heading-chart').data.length === 2")
+    # the chart is drawn once plotly has arrived (static/js/charts.js): until then no .data
+    page.wait_for_function(
+        "() => (document.getElementById('heading-chart').data || []).length === 2"
+    )
     before = first_y(page)
     assert before == pytest.approx(0.15, abs=0.2)  # ≈ δ/2 = 0.125° with a ripple
     slider = page.locator("#indexing_arcsec")
     slider.fill("1800")  # a bigger indexing error: the curve must move
     page.wait_for_function(
-        f"() => document.getElementById('heading-chart').data[1].y[3] > {before} * 1.5"
+        f"() => (document.getElementById('heading-chart').data || [])[1]?.y[3] > {before} * 1.5"
     )
     page.locator("input[name=method][value=both]").check()
-    page.wait_for_function("() => document.getElementById('heading-chart').data.length === 4")
+    page.wait_for_function(
+        "() => (document.getElementById('heading-chart').data || []).length === 4"
+    )
     names = trace_names(page)
     assert any("四位置法" in n or "four-position" in n for n in names)
     page.locator("#dwell-chart").scroll_into_view_if_needed()
