@@ -74,3 +74,11 @@ def test_the_class_table_names_partners_and_holds_the_review(world):
     assert {"s1/attempt-1.csv", "s2/attempt-1.csv", "s2/attempt-1.json"} <= names
     zipped = {row["Username"]: row for row in rows_of(archive.read("class.csv").decode())}
     assert zipped["s2"]["Lab partners"] == "s1"
+    # the class as a whole: the board (one point per session, named), the accuracy against
+    # the planner, and the plan itself
+    board = json.loads(archive.read("class-board.json"))
+    assert board["names_shown"] is True and len(board["groups"]) >= 1
+    assert board["earth_rate"]["groups"] == len(board["groups"])
+    assert "heading" in json.loads(archive.read("class-accuracy.json"))
+    plan = json.loads(archive.read("accuracy-plan.json"))
+    assert plan["source"] == "preset" and len(plan["points"]) == 22

@@ -19,9 +19,13 @@ from datetime import UTC
 from fastapi.responses import StreamingResponse
 from sqlmodel import Session
 
+from app.core.jsonsafe import json_safe
 from app.lab.attempts import comments_of, rubric_of, rubric_scores_of
 from app.lab.exports import Selection, readings_csv, session_json
+from app.lab.planner import assignment_plan
 from app.models import Assignment, Attempt, Course
+from app.review.accuracy import class_accuracy
+from app.review.board import board_data
 from app.review.evidence import finding_text
 from app.review.service import StudentRow, class_rows
 from app.web.exports import ZIP_BLOCK, attachment, csv_table, safe_name
@@ -186,7 +190,14 @@ def class_zip_response(
         for row in rows
         if row.session is not None and row.attempts
     ]
-    blocks = assignment_zip(export_rows(rows, _, course.timezone, rubric_of(assignment)), work)
+    summaries = {  # the class's measurement as a whole, as the board and the planner show it
+        "class-board.json": json_safe(board_data(db, assignment, rows, names=True)),
+        "class-accuracy.json": json_safe(class_accuracy(assignment, rows)),
+        "accuracy-plan.json": json_safe(assignment_plan(assignment).to_json()),
+    }
+    blocks = assignment_zip(
+        export_rows(rows, _, course.timezone, rubric_of(assignment)), work, summaries
+    )
     return StreamingResponse(
         held_while_streaming("exports", requester_id, blocks),
         media_type="application/zip",
@@ -218,12 +229,18 @@ def attempts_summary(attempts: list[Attempt]) -> list[dict]:
     ]
 
 
-def assignment_zip(class_table: list[list], work: list[SubmittedWork]) -> Iterator[bytes]:
-    """``class.csv`` and, per student, every submitted attempt's own data (CSV and JSON):
-    built in a temporary file (spilled to disk past 8 MB), then sent block by block."""
+def assignment_zip(
+    class_table: list[list], work: list[SubmittedWork], summaries: dict | None = None
+) -> Iterator[bytes]:
+    """``class.csv``, the class-wide ``summaries`` (name → JSON-able: the board, the
+    accuracy against the planner, the plan) and, per student, every submitted attempt's
+    own data (CSV and JSON): built in a temporary file (spilled to disk past 8 MB), then
+    sent block by block."""
     with tempfile.SpooledTemporaryFile(max_size=8 * 1024 * 1024) as spool:
         with zipfile.ZipFile(spool, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as archive:
             _write_text(archive, "class.csv", csv_table(class_table))
+            for name, content in (summaries or {}).items():
+                _write_text(archive, name, [json.dumps(content, ensure_ascii=False, indent=1)])
             for item in work:
                 stem = safe_name(item.username)
                 summary = attempts_summary(item.attempts)
