@@ -4,6 +4,7 @@ planner predicts for its dwell and order (``app.core.accuracy_plan.scatter_agree
 from __future__ import annotations
 
 import statistics
+from functools import lru_cache
 
 import numpy as np
 
@@ -12,6 +13,8 @@ from app.lab.planner import gyro_model, two_figures
 from app.models import Assignment
 
 QUANTITIES = ("heading", "latitude", "earth_rate")
+# a class shares a few dwells and one station: each plan point is worked out once
+planned = lru_cache(maxsize=4096)(plan_point)
 _ORDER_OF = {len(stops): order for order, stops in ORDERS.items()}  # 4 → 1234, 8 → 1234…
 
 
@@ -50,7 +53,7 @@ def class_accuracy(assignment: Assignment, rows) -> dict:
             if order is None or count < 1:
                 continue  # a plan exists for four positions and the symmetric eight
             dwell = count / rate_hz
-            point = plan_point(
+            point = planned(
                 noise, rate_hz, dwell, order, session.latitude_deg, session.earth_rate_deg_h
             )
             sigma = {
