@@ -304,6 +304,15 @@ def build_world(app, teacher) -> dict:
     return {"course": course_id, "assignment": assignment_id, "app": app}
 
 
+def set_assignment(world, **fields):
+    """Change the world's assignment's columns directly (settings a test needs)."""
+    with write_session() as db:
+        assignment = db.get(Assignment, world["assignment"])
+        for key, value in fields.items():
+            setattr(assignment, key, value)
+        db.add(assignment)
+
+
 def browser(world, username):
     client = TestClient(world["app"], follow_redirects=False)
     login(client, username)

@@ -31,6 +31,7 @@ from tests.factories import (
     form_state,
     post_form,
     review,
+    set_assignment,
     start,
     submit,
     without_tokens,
@@ -55,14 +56,6 @@ def latest(session_id: int) -> Attempt:
         return db.exec(
             select(Attempt).where(Attempt.session_id == session_id).order_by(Attempt.number.desc())
         ).first()
-
-
-def set_assignment(world, **fields):
-    with write_session() as db:
-        assignment = db.get(Assignment, world["assignment"])
-        for key, value in fields.items():
-            setattr(assignment, key, value)
-        db.add(assignment)
 
 
 def test_points_are_checked_against_the_maximum(world):

@@ -13,16 +13,8 @@ from app.core.accuracy_plan import plan_point
 from app.core.noise_model import GyroNoise
 from app.core.presets import PRESETS
 from app.db import write_session
-from app.models import Assignment, LabSession
-from tests.factories import API, browser, do_lab, start, submit, token_for
-
-
-def set_assignment(world, **fields):
-    with write_session() as db:
-        assignment = db.get(Assignment, world["assignment"])
-        for key, value in fields.items():
-            setattr(assignment, key, value)
-        db.add(assignment)
+from app.models import LabSession
+from tests.factories import API, browser, do_lab, set_assignment, start, submit, token_for
 
 
 def test_the_student_sees_the_plan_before_recording_and_the_api_gives_the_same(world):

@@ -13,7 +13,7 @@ from datetime import timedelta
 import pytest
 from sqlmodel import select
 
-from app.db import read_session, write_session
+from app.db import read_session
 from app.lab.truth import Truth, auto_check, draw_truth, heading_error
 from app.models import Assignment, Attempt, LabSession, Role, utcnow
 from tests.factories import (
@@ -26,6 +26,7 @@ from tests.factories import (
     post_form,
     review,
     save_manual,
+    set_assignment,
     start,
     submit,
 )
@@ -163,14 +164,6 @@ def test_release_needs_a_grade_and_a_submission(world):
     assert session_of(session_id).status == "submitted"
     assert "Enter the points" in answer.text and "Nearly there.</textarea>" in answer.text
     assert 'id="points" inputmode="decimal" value="" aria-invalid="true"' in answer.text
-
-
-def set_assignment(world, **fields):
-    with write_session() as db:
-        assignment = db.get(Assignment, world["assignment"])
-        for key, value in fields.items():
-            setattr(assignment, key, value)
-        db.add(assignment)
 
 
 def test_late_submission_is_accepted_and_flagged(world):

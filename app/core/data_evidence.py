@@ -18,9 +18,9 @@ what the station's gyro -- its noise model, or the simulated gyro's preset -- ma
   several steps wide; Pearson's χ² with 9 degrees of freedom.
 * **off the grid** (the simulated gyro): its readings are whole multiples of its output
   step (angle pulses over one sample); typed ones rounded to a finer step stay on it.
-* **copies**: a position's readings equal to another take's (of the class, another
-  attempt, the handout's example) after an offset -- and, when the readings take many
-  values, after reordering.
+* **copies** (offset-free patterns, ``app.core.data_copies``): a part's readings equal
+  to another group's, or a position's to the handout's example, after an offset -- and,
+  when the readings take many values, after reordering.
 * **too close to the truth**: |error| far below its σ (|z| < 0.0025 has probability 0.2 %
   for an honest result).
 
@@ -30,16 +30,14 @@ time; bench/bench_evidence.py measures the false-alarm and detection rates.
 
 from __future__ import annotations
 
-import csv
-import hashlib
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
+from app.core.data_copies import copy_keys, handout_matches, typed_step
 from app.core.noise_model import GyroNoise, Window
 
 SCATTER_P = 1e-5  # two-sided tail of χ²_ν for the scatter check
@@ -47,14 +45,8 @@ SMOOTH_SIGMAS = 4.0  # r₁ − ρ₁ above this many 1/√N
 DIGITS_P = 1e-4
 DIGITS_MIN_READINGS = 40
 DIGITS_MIN_STEPS = 3.0  # the scatter spans at least this many typed steps
-COPY_MIN_READINGS = 8
-COPY_MIN_LEVELS = 3  # a copy needs readings that take at least this many values
-COPY_MIN_BITS = 32.0  # and Σ n·H bits of pattern (a chance match ≈ 2^−32 per pair of parts)
-HANDOUT_MIN_BITS = 12.0  # against the handout's eight columns only: ≈ 8·2^−12 per take
-REORDER_LEVELS = 0.6  # reordering is checked when the distinct values are ≥ 60 % of n
 TRUTH_Z = 0.0025
 OFF_GRID_SHARE = 0.2  # honest readings of a simulated gyro are all on its grid
-HANDOUT = Path(__file__).with_name("data")
 
 
 @dataclass(frozen=True)
@@ -99,27 +91,6 @@ def reading_moments(noise: GyroNoise, rate_hz: float, count: int) -> tuple[float
     one = float(pair[0, 0])
     rho = float(pair[0, 1]) / one if one > 0 else 0.0
     return one, rho, float(whole[0, 0])
-
-
-def typed_step(values: np.ndarray) -> float | None:
-    """The decimal step the values were written to.
-
-    Parameters
-    ----------
-    values : numpy.ndarray
-        Readings.
-
-    Returns
-    -------
-    float or None
-        10⁻ᵈ for the fewest decimals d ≤ 6 that hold every value (0.01 for "10.74"), or
-        None for full-precision floats.
-    """
-    for decimals in range(7):
-        scaled = values * 10.0**decimals
-        if np.all(np.abs(scaled - np.round(scaled)) < 1e-9 * np.maximum(1.0, np.abs(scaled))):
-            return 10.0**-decimals
-    return None
 
 
 def expected_variance(noise: GyroNoise, rate_hz: float, count: int, step: float | None) -> float:
@@ -298,108 +269,6 @@ def off_grid(part: str, positions: Sequence[np.ndarray], own_step: float) -> lis
     return []
 
 
-@dataclass(frozen=True)
-class Pattern:
-    """A take's readings without their offset: whole steps above the smallest reading
-    (on the typed step, divided by their common factor so that 10.7, 10.8 and 10.73,
-    10.83 read alike), and how much a chance match is ruled out: n·H bits, H the entropy
-    of the steps' distribution."""
-
-    levels: np.ndarray
-    bits: float
-
-    @property
-    def reorderable(self) -> bool:
-        """Readings that take many values: a match after sorting still means something."""
-        return np.unique(self.levels).size >= REORDER_LEVELS * self.levels.size
-
-
-def pattern(values: np.ndarray) -> Pattern | None:
-    """A take's readings without their offset.
-
-    Parameters
-    ----------
-    values : numpy.ndarray
-        One position's readings.
-
-    Returns
-    -------
-    Pattern or None
-        Its :class:`Pattern`; None for fewer than 8 readings or 3 distinct values.
-    """
-    values = np.asarray(values, float)
-    if values.size < COPY_MIN_READINGS:
-        return None
-    spread = float(np.ptp(values))
-    step = typed_step(values) or (spread * 1e-6 if spread > 0 else 1.0)  # full floats
-    levels = np.round((values - values.min()) / step).astype(np.int64)
-    common = int(np.gcd.reduce(levels)) if np.any(levels) else 1
-    levels //= max(common, 1)
-    _, counts = np.unique(levels, return_counts=True)
-    if counts.size < COPY_MIN_LEVELS:
-        return None
-    share = counts / values.size
-    return Pattern(levels, values.size * float(-np.sum(share * np.log2(share))))
-
-
-def _digest(arrays: Sequence[np.ndarray]) -> str:
-    digest = hashlib.sha256()
-    for levels in arrays:
-        digest.update(levels.tobytes() + b"|")
-    return digest.hexdigest()
-
-
-def copy_keys(positions: Sequence[np.ndarray], min_bits: float = COPY_MIN_BITS) -> list[str]:
-    """Offset-free keys of one part (or of one take, given alone).
-
-    Parameters
-    ----------
-    positions : sequence of numpy.ndarray
-        The positions' readings, in order.
-    min_bits : float
-        The least Σ n·H a key needs: honest readings quantised to a few steps could
-        otherwise share one by chance (about 2^−bits per pair).
-
-    Returns
-    -------
-    list of str
-        The positions' patterns in order, and sorted within each position when every
-        position takes many values; empty below ``min_bits``.
-    """
-    patterns = [pattern(v) for v in positions]
-    if not patterns or any(p is None for p in patterns):
-        return []
-    if sum(p.bits for p in patterns) < min_bits:
-        return []
-    keys = ["o" + _digest([p.levels for p in patterns])]
-    if all(p.reorderable for p in patterns):
-        keys.append("s" + _digest([np.sort(p.levels) for p in patterns]))
-    return keys
-
-
-@lru_cache(maxsize=1)
-def _handout_keys() -> dict[str, str]:
-    """The handout's tables as copy keys.
-
-    Returns
-    -------
-    dict
-        The key of each column of the handout's two tables (at 12 bits: only eight
-        columns to match against) → "heading-1" … "latitude-4".
-    """
-    keys = {}
-    for part, name in (("heading", "handout_horizontal.csv"), ("latitude", "handout_vertical.csv")):
-        with (HANDOUT / name).open(encoding="utf-8") as handle:
-            rows = list(csv.DictReader(handle))
-        for column in rows[0]:
-            if not column.startswith("position_"):
-                continue
-            values = np.array([float(row[column]) for row in rows])
-            for key in copy_keys([values], HANDOUT_MIN_BITS):
-                keys[key] = f"{part}-{column.removeprefix('position_')}"
-    return keys
-
-
 def too_close(part: str, error: float | None, sigma: float | None) -> list[Evidence]:
     """A result far closer to the truth than its own σ allows.
 
@@ -470,15 +339,7 @@ def part_evidence(
             step = typed_step(np.concatenate(positions))
             sd = math.sqrt(expected_variance(noise, rate_hz, int(np.median(counts)), step))
             found += last_digits(part, positions, sd, 3600.0 * noise.angle_lsb_deg * rate_hz)
-    handout = _handout_keys()
-    matches = sorted(
-        {
-            handout[key]
-            for v in positions
-            for key in copy_keys([v], HANDOUT_MIN_BITS)
-            if key in handout
-        }
-    )
+    matches = handout_matches(positions)
     if matches:
         found.append(Evidence("handout", part, {"columns": matches}))
     return found

@@ -12,7 +12,8 @@ from dataclasses import dataclass, field
 
 from sqlmodel import Session, select
 
-from app.core.data_evidence import copy_keys, part_evidence, too_close
+from app.core.data_copies import copy_keys
+from app.core.data_evidence import part_evidence, too_close
 from app.core.exceptions import UserError
 from app.lab.planner import gyro_model
 from app.lab.store import PARTS
