@@ -187,10 +187,12 @@ def test_database(tmp_path, monkeypatch, backend, request) -> Iterator[TestDatab
 def forget_process_caches() -> None:
     """Each test starts like a fresh worker: no cached results, no leased rate windows."""
     from app.accounts.rate_leases import LEASES
+    from app.lab.recent_samples import RECENT
     from app.lab.result_cache import CACHE, SUMMARIES
     from app.reports.pdf_cache import pdf_cache
 
     CACHE.clear()
+    RECENT.clear()
     SUMMARIES.clear()
     pdf_cache().clear()
     LEASES.clear()

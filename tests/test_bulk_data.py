@@ -8,9 +8,10 @@ from sqlalchemy import event
 from sqlmodel import select
 
 from app.db import get_engine, read_session, write_session
+from app.lab.recent_samples import RECENT
 from app.lab.results import current_data, iter_current_data
 from app.lab.samples import CHUNK_SAMPLES
-from app.lab.store import load_samples, store_take
+from app.lab.store import append_samples, load_samples, store_take
 from app.models import Assignment, Enrollment, LabSession, Role, Take
 from app.review.service import class_rows
 from tests.factories import make_course, make_user
@@ -124,3 +125,80 @@ def test_dashboard_queries_do_not_grow_with_the_class(app):
     assert large == small
     # identical data shows up as duplicates (the fingerprints are still computed)
     assert all(row.duplicate_of == [] for row in rows)
+
+
+def test_just_written_samples_are_not_read_back_and_equal_what_the_database_holds(app):
+    student = make_user("s", Role.student)
+    session_id = add_session(student.id, None, seed=4)
+    reads: list[str] = []
+
+    def count(_conn, _cursor, statement, *_args) -> None:
+        reads.append(statement)
+
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        event.listen(get_engine(), "before_cursor_execute", count)
+        try:
+            held = current_data(db, session)
+        finally:
+            event.remove(get_engine(), "before_cursor_execute", count)
+        assert not any("sample_chunk" in statement.lower() for statement in reads)
+        RECENT.clear()
+        read = current_data(db, session)
+    assert held.keys() == read.keys() == {"heading", "latitude"}
+    for part in held:
+        assert list(held[part]) == list(read[part]) == [1, 2, 3, 4]
+        for position, item in held[part].items():
+            again = read[part][position]
+            assert item.take.id == again.take.id
+            np.testing.assert_array_equal(item.values, again.values)
+            assert (item.times is None) == (again.times is None)
+            assert (item.mean, item.std) == (again.mean, again.std)
+            assert not item.values.flags.writeable  # shared between requests
+
+
+def test_a_rolled_back_or_appended_take_is_read_from_the_database(app):
+    student = make_user("s", Role.student)
+    session_id = add_session(student.id, None, seed=5)
+    RECENT.clear()
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        store_take(
+            db,
+            session,
+            part="heading",
+            position=2,
+            angle_deg=0.0,
+            values=np.full(12, 99.0),
+            times=None,
+            source="api",
+        )
+        db.rollback()
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        take = db.exec(
+            select(Take).where(
+                Take.session_id == session_id,
+                Take.part == "heading",
+                Take.position == 2,
+                Take.superseded_at.is_(None),
+            )
+        ).one()
+        assert RECENT.get(take) is None
+        assert current_data(db, session)["heading"][2].values.max() < 20.0
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        take, added = append_samples(
+            db,
+            session,
+            part="heading",
+            position=2,
+            angle_deg=0.0,
+            values=np.full(3, 12.5),
+            times=None,
+        )
+        assert added == 3
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        item = current_data(db, session)["heading"][2]
+        assert item.values.size == 15 and item.values[-1] == 12.5

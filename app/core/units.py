@@ -79,8 +79,11 @@ def to_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:
         ``readings.out_of_range`` when a finite reading overflows on conversion (1e306 °/s).
     """
     array = np.asarray(values, dtype=float)
+    factor = TO_DEG_PER_HOUR[canonical_unit(unit)]
+    if factor == 1.0:
+        return array  # already °/h: no copy of a large upload
     with np.errstate(over="ignore"):
-        converted = array * TO_DEG_PER_HOUR[canonical_unit(unit)]
+        converted = array * factor
     if not np.all(np.isfinite(converted)) and np.all(np.isfinite(array)):
         raise UserError(
             "readings.out_of_range",

@@ -77,7 +77,7 @@ def parse_raw(
     item = np.dtype(code).itemsize * width
     if len(body) % item:
         raise UserError("api.binary_length", size=len(body), item=item)
-    array = np.frombuffer(body, dtype=code).astype(np.float64)
+    array = np.frombuffer(body, dtype=code).astype(np.float64, copy=False)  # read-only
     if width == 3:
         rows = array.reshape(-1, 3)
         values, times = _columns(rows[:, :2])

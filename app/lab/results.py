@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from itertools import pairwise
+from itertools import groupby, pairwise
 from types import SimpleNamespace
 
 import numpy as np
@@ -17,10 +17,11 @@ from app.core.drift_check import warm_up_message
 from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude
 from app.core.noise_model import GyroNoise, Window
-from app.core.record_checks import record_gaps, warm_up_change
+from app.core.record_checks import count_spikes, record_gaps, warm_up_change
 from app.core.solve import solve_heading, solve_latitude
 from app.courses.characterisation import StationNoise, station_noise
-from app.lab.samples import unpack
+from app.lab.recent_samples import RECENT
+from app.lab.samples import unpack_all
 from app.lab.sim import preset_for
 from app.lab.store import PARTS
 from app.models import (
@@ -108,12 +109,12 @@ SessionData = dict[str, dict[int, PositionData]]  # part → position → data
 
 
 def _assemble(take: Take, rows: list[SampleChunk]) -> PositionData:
-    values = np.concatenate([unpack(r.values) for r in rows]) if rows else np.empty(0)
+    values = unpack_all([r.values for r in rows])
     times = temperatures = None
     if rows and all(r.times is not None for r in rows):
-        times = np.concatenate([unpack(r.times) for r in rows])
+        times = unpack_all([r.times for r in rows])
     if rows and all(r.temperatures is not None for r in rows):
-        temperatures = np.concatenate([unpack(r.temperatures) for r in rows])
+        temperatures = unpack_all([r.temperatures for r in rows])
     return PositionData.of(take, values, times, temperatures)
 
 
@@ -150,8 +151,31 @@ def iter_current_data(db: Session, *where) -> Iterator[tuple[int, SessionData]]:
 
 
 def current_data(db: Session, session: LabSession) -> SessionData:
-    """All current positions of one session with their samples (two queries)."""
-    return dict(iter_current_data(db, LabSession.id == session.id)).get(session.id, {})
+    """All current positions of one session with their samples: the takes, then the
+    samples of those this process has not just written (``recent_samples``)."""
+    takes = db.exec(
+        select(Take)
+        .where(Take.session_id == session.id, Take.superseded_at.is_(None))
+        .order_by(Take.part, Take.position)
+    ).all()
+    data: SessionData = {}
+    unread: dict[int, Take] = {}
+    for take in takes:
+        held = RECENT.get(take)
+        if held is None:
+            unread[take.id] = take
+        else:
+            data.setdefault(take.part, {})[take.position] = PositionData.of(take, *held)
+    if unread:
+        rows = db.exec(
+            select(SampleChunk)
+            .where(SampleChunk.take_id.in_(list(unread)))
+            .order_by(SampleChunk.take_id, SampleChunk.seq)
+        ).all()
+        for take_id, group in groupby(rows, key=lambda row: row.take_id):
+            take = unread[take_id]
+            data.setdefault(take.part, {})[take.position] = _assemble(take, list(group))
+    return {part: dict(sorted(data[part].items())) for part in sorted(data)}
 
 
 def simulated_noise(session: LabSession, ordered: list[PositionData]) -> dict:
@@ -283,10 +307,8 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
                 )
             )
         if item.values.size >= 2:
-            stds[position] = float(item.values.std(ddof=1))
-            median = float(np.median(item.values))
-            mad = float(np.median(np.abs(item.values - median))) * 1.4826
-            outliers = int(np.sum(np.abs(item.values - median) > 6 * mad)) if mad > 0 else 0
+            stds[position] = item.std
+            outliers = count_spikes(item.values)
             if outliers:
                 flags.append(flag("flag.spikes", position=position, n=outliers))
         if item.times is not None:

@@ -18,6 +18,17 @@ def unpack(blob: bytes | None) -> np.ndarray:
     return np.frombuffer(blob, dtype=DTYPE).astype(float)
 
 
+def unpack_all(blobs: list[bytes | None]) -> np.ndarray:
+    """Several chunks' samples as one array (one copy, whatever the number of chunks)."""
+    parts = [np.frombuffer(blob, dtype=DTYPE) for blob in blobs if blob]
+    out = np.empty(sum(part.size for part in parts), dtype=float)
+    start = 0
+    for part in parts:
+        out[start : start + part.size] = part
+        start += part.size
+    return out
+
+
 def chunks(
     values: np.ndarray,
     times: np.ndarray | None = None,

@@ -13,6 +13,7 @@ from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
 from app.lab.quota import check_storage
+from app.lab.recent_samples import hold
 from app.lab.samples import chunks, unpack
 from app.lab.sim import FIRST_PASS, position_count
 from app.models import (
@@ -178,6 +179,7 @@ def store_take(
     )
     db.add(take)
     db.flush()
+    hold(db, take, values, times, temperatures)
     for seq, value_blob, time_blob, temperature_blob in chunks(values, times, temperatures):
         db.add(
             SampleChunk(
@@ -374,7 +376,7 @@ def _check_temperatures(position: int, temperatures: np.ndarray | None, n_values
 def _check_values(session: LabSession, position: int, values: np.ndarray) -> None:
     if not np.all(np.isfinite(values)):
         raise UserError("readings.not_finite", position=position)
-    if values.size and float(np.max(np.abs(values))) > PLAUSIBLE_RATE_DEG_H:
+    if values.size and max(float(values.max()), -float(values.min())) > PLAUSIBLE_RATE_DEG_H:
         raise UserError(
             "lab.implausible_rate",
             position=position,
