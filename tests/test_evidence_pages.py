@@ -9,7 +9,10 @@ import html
 import io
 
 import numpy as np
+from sqlmodel import select
 
+from app.db import read_session
+from app.models import EvidenceNote
 from tests.factories import (
     API,
     HEADING,
@@ -141,13 +144,17 @@ def test_a_finding_is_marked_seen_with_a_note_and_stays(world):
         teacher, f"{page}/evidence", {"check": "handout", "part": "heading", "note": ""}, page=page
     )
     assert note not in html.unescape(teacher.get(page).text)
-    bad = post_form(teacher, f"{page}/evidence", {"check": "nope", "part": "heading"}, page=page)
-    assert bad.status_code == 303
-    assert "There is no such finding" in html.unescape(teacher.get(page).text)
+    for check in ("nope", "smooth"):  # not a check; a check this session has no finding of
+        bad = post_form(teacher, f"{page}/evidence", {"check": check, "part": "heading"}, page=page)
+        assert bad.status_code == 303
+        assert "There is no such finding" in html.unescape(teacher.get(page).text)
+    with read_session() as db:
+        marks = db.exec(select(EvidenceNote).where(EvidenceNote.session_id == first)).all()
+        assert [(m.check, m.part) for m in marks] == [("handout", "heading")]
     long = post_form(
         teacher,
         f"{page}/evidence",
-        {"check": "copy", "part": "heading", "note": "x" * 2001},
+        {"check": "handout", "part": "heading", "note": "x" * 2001},
         page=page,
     )
     assert long.status_code == 303

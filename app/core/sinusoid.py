@@ -336,7 +336,7 @@ def fit_sinusoid(
         raise UserError("readings.angles_degenerate")
     mapping = np.linalg.solve(normal, design.T * counts)  # L = (XᵀNX)⁻¹XᵀN
     a, c, b, *rest = mapping @ means
-    noise = position_noise(arrays, angles, position_cov=position_cov)
+    noise = position_noise(arrays, angles, position_cov=position_cov, stds=[s.std for s in stats])
     if noise is not None and indexing_sigma_deg > 0:
         slope = -a * np.sin(radians) + c * np.cos(radians)  # ∂ω/∂α at each stop, per rad
         extra = (slope * math.radians(indexing_sigma_deg)) ** 2

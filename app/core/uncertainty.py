@@ -195,6 +195,7 @@ def position_noise(
     angles_deg: np.ndarray,
     *,
     position_cov: np.ndarray | None = None,
+    stds: Sequence[float | None] | None = None,
 ) -> PositionNoise | None:
     """The covariance model of the position means, or None when nothing estimates it.
 
@@ -211,6 +212,9 @@ def position_noise(
         The positions' angles (°).
     position_cov : numpy.ndarray, optional
         Σ from a known noise model ((°/h)²).
+    stds : sequence of float, optional
+        Each position's sample standard deviation (ddof = 1) when already known
+        (``sinusoid.position_stats``), so that a long record is not read twice.
 
     Returns
     -------
@@ -227,12 +231,12 @@ def position_noise(
     if min(counts) >= 2:
         sigmas = []
         floor = None  # found only when needed: it sorts every record (reading_step)
-        for array in arrays:
+        for k, array in enumerate(arrays):
             if np.ptp(array) == 0.0:  # all identical: rounding is the only error left
                 floor = quantisation_floor(arrays) if floor is None else floor
                 sigmas.append(floor)
             else:
-                std = float(array.std(ddof=1))
+                std = float(array.std(ddof=1)) if stds is None or stds[k] is None else stds[k]
                 sigmas.append(t_factor(array.size - 1) * std / math.sqrt(array.size))
         return PositionNoise.independent(sigmas, "white")
     means = np.array([float(array.mean()) for array in arrays])

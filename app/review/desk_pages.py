@@ -27,7 +27,7 @@ from app.models import Attempt, SessionStatus, User
 from app.review import evidence, grading, lms_outbox
 from app.review.deps import ReviewableSession, TeacherAssignment
 from app.review.evidence import finding_text
-from app.review.service import class_rows
+from app.review.service import session_row
 from app.web.deps import FormDep, SessionDep
 from app.web.i18n import translator
 from app.web.local_time import local_input_to_utc, utc_to_local_input
@@ -83,10 +83,7 @@ def desk_view(request: Request, target, db) -> dict:
             "interrupted": None,
             "typed": None,
             "problem": None,
-            "evidence_row": next(
-                (r for r in class_rows(db, assignment) if r.session and r.session.id == session.id),
-                None,
-            ),
+            "evidence_row": session_row(db, assignment, session),
             "evidence_text": lambda finding: finding_text(finding, _),
         }
     )
@@ -206,9 +203,11 @@ def mark_evidence_seen(
     session = target.session
     response = redirect(f"/review/sessions/{session.id}#data-evidence")
     try:
+        row = session_row(db, target.assignment, session)
         evidence.mark_seen(
             db,
             session,
+            row.evidence if row is not None else [],
             teacher.id,
             str(form.get("check", ""))[:32],
             str(form.get("part", ""))[:32],

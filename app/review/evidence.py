@@ -138,11 +138,20 @@ MAX_NOTE = 2000
 
 
 def mark_seen(
-    db: Session, session: LabSession, teacher_id: int, check: str, part: str, note: str
+    db: Session,
+    session: LabSession,
+    findings: list[dict],
+    teacher_id: int,
+    check: str,
+    part: str,
+    note: str,
 ) -> EvidenceNote:
     """Mark one finding of ``session`` as seen by the teacher, with a note (a second mark
-    replaces the note).  The finding itself stays: it is the readings' evidence."""
+    replaces the note).  Only a finding the session has now (``findings``: its class row's
+    ``evidence``) can be marked.  The finding itself stays: it is the readings' evidence."""
     if check not in CHECKS or part not in PARTS:
+        raise UserError("evidence.bad_finding")
+    if not any(f["check"] == check and f["part"] == part for f in findings):
         raise UserError("evidence.bad_finding")
     note = note.strip()
     if len(note) > MAX_NOTE:

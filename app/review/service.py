@@ -76,6 +76,7 @@ class StudentRow:
     extended: bool = False
     data_evidence: SessionEvidence | None = None  # its own readings' findings and copy keys
     evidence: list[dict] = field(default_factory=list)  # all findings (app/review/evidence.py)
+    _errors: dict | None = field(default=None, repr=False, compare=False)  # check_error's
 
     @property
     def submitted_at(self) -> datetime | None:
@@ -108,7 +109,9 @@ class StudentRow:
     def check_error(self, name: str) -> float | None:
         if self.check is None:
             return None
-        return next((c.error for c in self.check.checks if c.name == name), None)
+        if self._errors is None:
+            self._errors = {c.name: c.error for c in reversed(self.check.checks)}
+        return self._errors.get(name)
 
 
 def data_summaries(
@@ -227,6 +230,14 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
             row.duplicate_of.extend(u for u in others if u not in row.duplicate_of)
     class_findings(rows, seen_notes(db, [row.session.id for row in rows if row.session]))
     return rows
+
+
+def session_row(db: Session, assignment: Assignment, session: LabSession) -> StudentRow | None:
+    """The class row of ``session`` (its data evidence needs the whole class: copies)."""
+    return next(
+        (row for row in class_rows(db, assignment) if row.session and row.session.id == session.id),
+        None,
+    )
 
 
 def status_counts(rows: list[StudentRow]) -> dict[str, int]:
