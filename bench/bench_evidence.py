@@ -1,9 +1,10 @@
 """False alarms and detections of the data evidence (app/core/data_evidence.py).
 
 Honest classes of 60 from the simulated gyro -- every preset, every recording method
-(the simulator's samples, a CSV export of them at 6 decimals, 12 readings a position typed
-at 2 decimals), warm or started cold -- and planted cases in the same classes: numbers
-invented around the right means, another group's take copied with an offset, readings
+(the simulator's samples with their times, a CSV export of them at 6 decimals with times
+at 3, 12 readings a position typed at 2 decimals), warm or started cold -- and planted
+cases in the same classes: numbers invented around the right means, another group's take
+copied with an offset, readings
 smoothed with a 5-point running average, and the handout's own tables retyped.  A part
 (four positions) counts as flagged when any check fires on it.
 
@@ -34,8 +35,12 @@ PLANTS = ("invented", "copied", "smoothed", "handout")
 HANDOUT = Path(__file__).resolve().parent.parent / "app" / "core" / "data"
 
 
+TIMES: dict[tuple[str, int, str, bool], dict] = {}  # the honest parts' reading times
+
+
 def honest_parts(preset_name: str, student: int, method: str, cold: bool) -> dict:
-    """One student's two parts as the method records them: part → list of 4 arrays."""
+    """One student's two parts as the method records them: part → list of 4 arrays (the
+    simulator's and the CSV's reading times, CSV at 3 decimals, kept in ``TIMES``)."""
     preset = PRESETS[preset_name]
     dwell = DWELL_S.get(preset_name, 60.0)
     rng = np.random.default_rng(student)
@@ -48,8 +53,12 @@ def honest_parts(preset_name: str, student: int, method: str, cold: bool) -> dic
         )
         if method == "simulator":
             parts[part] = run.positions
+            TIMES.setdefault((preset_name, student, method, cold), {})[part] = run.times_s
         elif method == "csv":
             parts[part] = [np.round(v, 6) for v in run.positions]
+            TIMES.setdefault((preset_name, student, method, cold), {})[part] = [
+                np.round(t, 3) for t in run.times_s
+            ]
         else:
             parts[part] = [np.round(v[:TYPED_READINGS], 2) for v in run.positions]
     return parts
@@ -123,8 +132,13 @@ def evaluate(preset_name: str, method: str, cold: bool, students: int, grid: boo
     flagged: dict[str, set[str]] = {}
     for group, parts in groups.items():
         plant_typed = typed or group.startswith(("invented", "handout"))
+        timed = (
+            TIMES.get((preset_name, int(group[1:]), method, cold), {}) if group in honest else {}
+        )
         for part, positions in parts.items():
-            found = part_evidence(part, positions, plant_typed, noise, rate, simulated=grid)
+            found = part_evidence(
+                part, positions, plant_typed, noise, rate, simulated=grid, times=timed.get(part)
+            )
             found += [e for e in copies.get(group, []) if e.part == part]
             if found:
                 flagged.setdefault(group, set()).update(e.check for e in found)

@@ -13,6 +13,7 @@ from app.core.data_evidence import (
     off_grid,
     part_evidence,
     reading_moments,
+    recording_times,
     too_close,
 )
 from app.core.noise_model import GyroNoise
@@ -98,3 +99,25 @@ def test_a_result_far_closer_than_its_sigma_is_found():
     assert too_close("heading", 0.0001, 0.1)[0].numbers["z"] == 0.001
     assert too_close("heading", 0.01, 0.1) == []
     assert too_close("heading", None, 0.1) == []
+
+
+def test_reading_times_out_of_order_or_at_another_step_are_found():
+    rng = np.random.default_rng(11)
+    rate = 10.0
+    # an instrument clock at 10 Hz with 1 ms of jitter: consistent
+    honest = [np.arange(600) / rate + rng.normal(0.0, 1e-3, 600) + 300.0 * k for k in range(4)]
+    assert recording_times("heading", honest, rate) == []
+    assert recording_times("heading", [None, None, None, None], rate) == []
+    # one reading a second at a 10 Hz station: another output setting, or timed by hand
+    (slow,) = recording_times("heading", [np.arange(60.0) + 100 * k for k in range(4)], rate)
+    assert slow.check == "time_step" and slow.numbers == {"step": 1.0, "expected": 0.1}
+    # 4 % off is within the tolerance of a clock
+    assert recording_times("heading", [np.arange(60) * 0.104 for _ in range(4)], rate) == []
+    # two files joined in the wrong order: the clock jumps back once
+    joined = np.r_[np.arange(30, 60), np.arange(30)] / rate
+    (backwards,) = recording_times("latitude", [joined, *honest[1:]], rate)
+    assert backwards.check == "time_order" and backwards.numbers == {"n": 1}
+    assert backwards.part == "latitude"
+    # repeated time stamps (typed by hand to the second) are out of order too
+    stamped = [np.repeat(np.arange(10.0), 10) / 10 for _ in range(4)]
+    assert {e.check for e in recording_times("heading", stamped, rate)} == {"time_order"}

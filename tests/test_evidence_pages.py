@@ -21,6 +21,7 @@ from tests.factories import (
     do_lab,
     post_form,
     save_manual,
+    set_assignment,
     start,
     submit,
     token_for,
@@ -163,3 +164,35 @@ def test_a_finding_is_marked_seen_with_a_note_and_stays(world):
     # a student cannot mark anything, not even on their own session
     refused = post_form(s1, f"{page}/evidence", {"check": "handout", "part": "heading"}, page="/")
     assert refused.status_code in (403, 404)
+
+
+def test_readings_sent_with_times_at_another_step_are_shown_to_the_teacher(world):
+    from app.core.presets import PRESETS
+
+    set_assignment(world, allowed_methods="manual,csv,simulator,api")
+    student = browser(world, "s3")
+    session_id = start(student, world)
+    auth = token_for(student, "s3")
+    interval = 1.0 / PRESETS["teaching-fog"].sample_rate_hz
+    for part, columns in (("heading", honest_columns(3)), ("latitude", honest_columns(4, 9.8))):
+        for k, column in columns.items():
+            times = [1000.0 * k + i * interval / 10 for i in range(len(column))]  # 10× too fast
+            reply = student.put(
+                f"{API}/sessions/{session_id}/{part}/positions/{k}",
+                json={"samples": column, "times_s": times},
+                headers=auth,
+            )
+            assert reply.status_code == 200, reply.text
+    teacher = browser(world, "teacher1")
+    desk = html.unescape(teacher.get(f"/review/sessions/{session_id}").text)
+    step = f"{interval / 10:.4g}"
+    assert f"Part A: the readings are {step} s apart, but this station's gyro gives one" in desk
+    assert f"every {interval:.4g} s" in desk
+    chinese = html.unescape(
+        teacher.get(f"/review/sessions/{session_id}", headers={"Accept-Language": "zh-CN"}).text
+    )
+    assert f"读数间隔为 {step} 秒" in chinese
+    dashboard = teacher.get(f"/courses/{world['course']}/assignments/{world['assignment']}").text
+    assert 'data-check="time_step"' in dashboard
+    own = html.unescape(student.get(f"/lab/sessions/{session_id}").text)
+    assert "s apart" not in own and "data-check" not in own

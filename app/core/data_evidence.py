@@ -23,6 +23,11 @@ what the station's gyro -- its noise model, or the simulated gyro's preset -- ma
   when the readings take many values, after reordering.
 * **too close to the truth**: |error| far below its σ (|z| < 0.0025 has probability 0.2 %
   for an honest result).
+* **times** (readings sent with their times: a file, the API, the bridge): a gyro's clock
+  only runs forward, so a reading timed at or before the one before it was not recorded
+  in that order; and the readings' median time step is the gyro's sample interval 1/f --
+  a step more than 5 % off says the readings came from another instrument or setting, or
+  were timed by hand.
 
 The thresholds are set so that honest simulated classes are flagged at most 1 % of the
 time; bench/bench_evidence.py measures the false-alarm and detection rates.
@@ -47,13 +52,15 @@ DIGITS_MIN_READINGS = 40
 DIGITS_MIN_STEPS = 3.0  # the scatter spans at least this many typed steps
 TRUTH_Z = 0.0025
 OFF_GRID_SHARE = 0.2  # honest readings of a simulated gyro are all on its grid
+TIME_STEP_TOLERANCE = 0.05  # the median time step against the gyro's 1/f
 
 
 @dataclass(frozen=True)
 class Evidence:
     """One finding: what it is (a message key's last part), where, and its numbers."""
 
-    # scatter_low | scatter_high | smooth | digits | off_grid | copy | handout | too_close
+    # scatter_low | scatter_high | smooth | digits | off_grid | copy | handout | too_close |
+    # time_order | time_step
     check: str
     part: str
     numbers: dict = field(default_factory=dict)
@@ -269,6 +276,43 @@ def off_grid(part: str, positions: Sequence[np.ndarray], own_step: float) -> lis
     return []
 
 
+def recording_times(
+    part: str, times: Sequence[np.ndarray | None], rate_hz: float
+) -> list[Evidence]:
+    """Readings whose times do not fit how the gyro records: out of order, or at a step
+    other than its sample interval.
+
+    Parameters
+    ----------
+    part : str
+        "heading" or "latitude".
+    times : sequence of numpy.ndarray or None
+        Each position's reading times (s), None where the readings came without times.
+    rate_hz : float
+        The station's gyro's readings per second, f.
+
+    Returns
+    -------
+    list of Evidence
+        ``time_order`` when some Δtᵢ ≤ 0 (with how many); ``time_step`` when the median of
+        the positions' median steps, T̂, differs from 1/f by more than 5 %:
+        |T̂·f − 1| > 0.05.  Positions without times, or with fewer than 3, are left out.
+    """
+    steps = [np.diff(np.asarray(t, float)) for t in times if t is not None and len(t) >= 3]
+    if not steps:
+        return []
+    found = []
+    backwards = sum(int(np.count_nonzero(d <= 0)) for d in steps)
+    if backwards:
+        found.append(Evidence("time_order", part, {"n": backwards}))
+    typical = float(np.median([np.median(d) for d in steps]))
+    if rate_hz > 0 and typical > 0 and abs(typical * rate_hz - 1.0) > TIME_STEP_TOLERANCE:
+        found.append(
+            Evidence("time_step", part, {"step": round(typical, 6), "expected": 1.0 / rate_hz})
+        )
+    return found
+
+
 def too_close(part: str, error: float | None, sigma: float | None) -> list[Evidence]:
     """A result far closer to the truth than its own σ allows.
 
@@ -306,6 +350,7 @@ def part_evidence(
     rate_hz: float,
     *,
     simulated: bool = False,
+    times: Sequence[np.ndarray | None] | None = None,
 ) -> list[Evidence]:
     """Every check of one part that needs only its own readings.
 
@@ -323,11 +368,14 @@ def part_evidence(
         Its readings per second.
     simulated : bool
         The station's gyro is the simulated one, whose output grid is known.
+    times : sequence of numpy.ndarray or None, optional
+        Each position's reading times (s) where they came with the readings.
 
     Returns
     -------
     list of Evidence
-        Scatter and smoothness, the output grid, last digits, the handout's tables.
+        Scatter and smoothness, the output grid, last digits, the handout's tables, the
+        recording times.
     """
     positions = [np.asarray(v, float) for v in positions]
     found = scatter_and_smoothness(part, positions, noise, rate_hz)
@@ -342,6 +390,8 @@ def part_evidence(
     matches = handout_matches(positions)
     if matches:
         found.append(Evidence("handout", part, {"columns": matches}))
+    if times is not None:
+        found += recording_times(part, times, rate_hz)
     return found
 
 

@@ -19,8 +19,6 @@ from app.lab.planner import gyro_model
 from app.lab.store import PARTS
 from app.models import Assignment, EvidenceNote, InputMethod, LabSession, User, utcnow
 
-EVIDENCE_VERSION = 1  # part of the summary cache's key: bump when the checks change
-
 
 @dataclass
 class SessionEvidence:
@@ -43,7 +41,15 @@ def session_evidence(assignment: Assignment, session: LabSession, data: dict) ->
             continue
         values = [item.values for item in own]
         typed = any(item.take.source == InputMethod.manual for item in own)
-        found = part_evidence(part, values, typed, noise, rate_hz, simulated=source == "preset")
+        found = part_evidence(
+            part,
+            values,
+            typed,
+            noise,
+            rate_hz,
+            simulated=source == "preset",
+            times=[item.times for item in own],
+        )
         out.findings += [finding.to_json() for finding in found]
         out.keys[part] = copy_keys(values)
         out.recorded.add(part)
@@ -109,6 +115,9 @@ def finding_text(finding: dict, _) -> str:
         params["p"] = f"{params['p']:.1g}"
     if "sigma" in params:
         params["sigma"] = f"{params['sigma']:.3g}"
+    for name in ("step", "expected"):
+        if name in params:
+            params[name] = f"{params[name]:.4g}"
     if "others" in params:
         params["others"] = ", ".join(params["others"])
     if "columns" in params:
@@ -133,6 +142,8 @@ CHECKS = (
     "copy",
     "handout",
     "too_close",
+    "time_order",
+    "time_step",
 )
 MAX_NOTE = 2000
 

@@ -36,7 +36,7 @@ class SubmissionRow(BaseModel):
         default_factory=list,
         description="data evidence on the readings the group recorded itself: "
         "check (scatter_low, scatter_high, smooth, digits, off_grid, copy, handout, "
-        "too_close), part, and the check's numbers",
+        "too_close, time_order, time_step), part, and the check's numbers",
     )
 
 
