@@ -4,9 +4,9 @@ Honest classes of 60 from the simulated gyro -- every preset, every recording me
 (the simulator's samples with their times, a CSV export of them at 6 decimals with times
 at 3, 12 readings a position typed at 2 decimals), warm or started cold -- and planted
 cases in the same classes: numbers invented around the right means, another group's take
-copied with an offset, readings
-smoothed with a 5-point running average, and the handout's own tables retyped.  A part
-(four positions) counts as flagged when any check fires on it.
+copied with an offset, readings smoothed with a 5-point running average, and the
+handout's own tables retyped.  A part (four positions) counts as flagged when any check
+fires on it.
 
     .venv/bin/python bench/bench_evidence.py [--students 60] [--presets teaching-fog ...]
 """
