@@ -19,6 +19,7 @@ from swagger_ui_bundle import swagger_ui_path
 
 from app import __version__
 from app.config import get_settings
+from app.lab.copy_index import index_earlier_attempts
 from app.lti import grades as lms_grades
 from app.paths import STATIC_DIR
 from app.routes import include_routers, read_only_routes
@@ -80,6 +81,7 @@ def create_app(*, migrate_on_start: bool = True) -> FastAPI:
             from app.migrate import upgrade_to_head
 
             upgrade_to_head()
+        index_earlier_attempts()
         # restore refuses while this lock is held (app/serving_lock.py)
         serving = hold_while_serving(get_settings().database_url)
         # grades released for an LMS are posted (and retried) by every worker

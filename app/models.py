@@ -268,6 +268,8 @@ class Attempt(SQLModel, table=True):
     submitted_at: datetime = Field(default_factory=utcnow)
     late: bool = False
     discussion: str = Field(default="", max_length=DISCUSSION_MAX)  # frozen with the attempt
+    # its readings' copy keys are in ``copy_key`` (app/lab/copy_index.py)
+    copy_indexed: bool = False
     # the teacher's review of this attempt: it stays with the attempt it was written on
     feedback: str = Field(default="", max_length=20_000)
     feedback_positions: str = Field(default="{}", max_length=20_000)  # JSON {"heading-1": "..."}
@@ -336,6 +338,36 @@ class EvidenceNote(SQLModel, table=True):
     note: str = Field(default="", max_length=2000)
     teacher_id: int | None = Field(default=None, foreign_key="user.id", ondelete="SET NULL")
     seen_at: datetime = Field(default_factory=utcnow)
+
+
+class ReadingArchive(SQLModel, table=True):
+    """Readings of an earlier year a teacher uploaded (a class zip or readings CSV this or
+    another GyroLab exported): only their copy keys are kept, to find copies of them."""
+
+    __tablename__ = "reading_archive"
+    id: int | None = Field(default=None, primary_key=True)
+    teacher_id: int = Field(foreign_key="user.id", index=True, ondelete="CASCADE")
+    name: str = Field(max_length=200)  # the file's name, as uploaded
+    groups: int = 0  # the attempts (or files) whose readings gave keys
+    uploaded_at: datetime = Field(default_factory=utcnow)
+
+
+class CopyKey(SQLModel, table=True):
+    """One offset-free pattern of a part's readings (``app.core.data_copies.copy_keys``):
+    of a submitted attempt, or of an uploaded archive's group (``label``, ``attempt``)."""
+
+    __tablename__ = "copy_key"
+    id: int | None = Field(default=None, primary_key=True)
+    key: str = Field(max_length=72, index=True)
+    part: str = Field(max_length=8)
+    attempt_id: int | None = Field(
+        default=None, foreign_key="attempt.id", index=True, ondelete="CASCADE"
+    )
+    archive_id: int | None = Field(
+        default=None, foreign_key="reading_archive.id", index=True, ondelete="CASCADE"
+    )
+    label: str = Field(default="", max_length=200)  # an archive's group
+    attempt: int | None = None  # an archive's attempt number
 
 
 class BoardSnapshot(SQLModel, table=True):

@@ -26,7 +26,7 @@ from app.lti import pages as lti_pages
 from app.reports import api as report_api
 from app.reports import pages as report_pages
 from app.review import api as review_api
-from app.review import board_pages, desk_pages
+from app.review import archive_pages, board_pages, desk_pages
 from app.review import pages as review_pages
 from app.web.deps import Locking, declared_locking, lockings_declared
 
@@ -55,6 +55,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     review_pages.router,
     board_pages.router,
     desk_pages.router,
+    archive_pages.router,
     report_pages.router,
     stream.router,
     token_pages.router,

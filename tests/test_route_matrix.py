@@ -19,6 +19,7 @@ from app.models import (
     LtiContext,
     LtiPlatform,
     LtiResourceLink,
+    ReadingArchive,
     ReportJob,
     Role,
     User,
@@ -100,8 +101,10 @@ def build_ids(app) -> dict:
         db.add(job)
         snapshot = BoardSnapshot(assignment_id=world["assignment"], data='{"groups": []}')
         db.add(snapshot)
+        archive = ReadingArchive(teacher_id=teacher_id, name="2025.zip", groups=1)
+        db.add(archive)
         db.flush()
-        job_id, snapshot_id = job.id, snapshot.id
+        job_id, snapshot_id, archive_id = job.id, snapshot.id, archive.id
     return {
         "course_id": world["course"],
         "assignment_id": world["assignment"],
@@ -117,6 +120,7 @@ def build_ids(app) -> dict:
         "token": "not-a-token",
         "job_id": job_id,
         "snapshot_id": snapshot_id,
+        "archive_id": archive_id,
     }
 
 

@@ -94,6 +94,7 @@ def test_no_response_carries_a_secret(world):  # noqa: F811
         "platform_id": 1,
         "job_id": job_id,
         "snapshot_id": snapshot_id,
+        "archive_id": 1,
     }
     checked = 0
     for route in ACCESS:

@@ -158,6 +158,12 @@ def current_data(db: Session, session: LabSession) -> SessionData:
         .where(Take.session_id == session.id, Take.superseded_at.is_(None))
         .order_by(Take.part, Take.position)
     ).all()
+    return takes_data(db, takes)
+
+
+def takes_data(db: Session, takes: list[Take]) -> SessionData:
+    """Given takes (one per part and position) with their samples: those this process has
+    just written from memory (``recent_samples``), the others in one query."""
     data: SessionData = {}
     unread: dict[int, Take] = {}
     for take in takes:

@@ -11,8 +11,9 @@ from app import __version__
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
 from app.courses.deadlines import due_for
+from app.lab.copy_index import index_attempt
 from app.lab.result_cache import cached_results
-from app.lab.results import results_json
+from app.lab.results import results_json, takes_data
 from app.lab.store import check_editable, current_takes
 from app.models import (
     Assignment,
@@ -68,6 +69,8 @@ def submit(db: Session, session: LabSession) -> Attempt:
     session.updated_at = utcnow()
     db.add(attempt)
     db.add(session)
+    db.flush()  # the attempt's id, for its copy keys
+    index_attempt(db, attempt, takes_data(db, takes))
     return attempt
 
 

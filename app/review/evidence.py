@@ -15,6 +15,7 @@ from sqlmodel import Session, select
 from app.core.data_copies import copy_keys
 from app.core.data_evidence import part_evidence, too_close
 from app.core.exceptions import UserError
+from app.lab.copy_index import own_positions
 from app.lab.planner import gyro_model
 from app.lab.store import PARTS
 from app.models import Assignment, EvidenceNote, InputMethod, LabSession, User, utcnow
@@ -35,9 +36,8 @@ def session_evidence(assignment: Assignment, session: LabSession, data: dict) ->
     noise, rate_hz, source = gyro_model(assignment, session.simulator_preset)
     out = SessionEvidence()
     for part, positions in sorted(data.items()):
-        items = [positions[k] for k in sorted(positions)]
-        own = [item for item in items if item.take.source != InputMethod.simulator]
-        if len(own) < 3:
+        own = own_positions(positions)
+        if not own:
             continue
         values = [item.values for item in own]
         typed = any(item.take.source == InputMethod.manual for item in own)
@@ -56,12 +56,13 @@ def session_evidence(assignment: Assignment, session: LabSession, data: dict) ->
     return out
 
 
-def class_findings(rows, notes: dict | None = None) -> None:
+def class_findings(rows, notes: dict | None = None, earlier: dict | None = None) -> None:
     """Complete each row's ``evidence``: its own findings, the parts whose readings match
-    another group's, and results far closer to the truth than their σ (parts the group
-    recorded itself, from the attempt the teacher grades); each marked ``seen`` where a
-    teacher has looked (``notes``: :func:`seen_notes`)."""
-    notes = notes or {}
+    another group's, or readings submitted earlier (``earlier``: session → part → sources,
+    ``app.review.earlier_copies``), and results far closer to the truth than their σ
+    (parts the group recorded itself, from the attempt the teacher grades); each marked
+    ``seen`` where a teacher has looked (``notes``: :func:`seen_notes`)."""
+    notes, earlier = notes or {}, earlier or {}
     owners: dict[tuple[str, str], set[str]] = {}
     for row in rows:
         if row.session is None or row.data_evidence is None:
@@ -77,6 +78,8 @@ def class_findings(rows, notes: dict | None = None) -> None:
             others = set().union(*(owners[(part, key)] for key in keys)) - {group_name(row)}
             if others:
                 found.append({"check": "copy", "part": part, "others": sorted(others)})
+        for part, sources in sorted(earlier.get(row.session.id, {}).items()):
+            found.append({"check": "copy_earlier", "part": part, "sources": sources})
         if row.latest is not None:
             found += [f.to_json() for f in result_findings(row)]
         for finding in found:
@@ -120,11 +123,35 @@ def finding_text(finding: dict, _) -> str:
             params[name] = f"{params[name]:.4g}"
     if "others" in params:
         params["others"] = ", ".join(params["others"])
+    if "sources" in params:
+        params["sources"] = "; ".join(source_text(source, _) for source in params["sources"])
     if "columns" in params:
         params["columns"] = ", ".join(
             _(f"lab.part_short_{c.split('-')[0]}") + c.split("-")[1] for c in params["columns"]
         )
     return _(f"evidence.{finding['check']}", **params)
+
+
+def source_text(source: dict, _) -> str:
+    """Where earlier readings were submitted: a group, its attempts, and the assignment
+    (this one, another of the teacher's) or the uploaded archive."""
+    attempts = ", ".join(str(n) for n in source.get("attempts", [])) or "—"
+    if "archive" in source:
+        return _(
+            "evidence.source_archive",
+            group=source["group"],
+            attempts=attempts,
+            archive=source["archive"],
+        )
+    if source.get("same"):
+        return _("evidence.source_same", group=source["group"], attempts=attempts)
+    return _(
+        "evidence.source_other",
+        group=source["group"],
+        attempts=attempts,
+        assignment=source["assignment"],
+        course=source["course"],
+    )
 
 
 def badge_text(finding: dict, _) -> str:
@@ -140,6 +167,7 @@ CHECKS = (
     "digits",
     "off_grid",
     "copy",
+    "copy_earlier",
     "handout",
     "too_close",
     "time_order",

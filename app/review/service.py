@@ -25,6 +25,7 @@ from app.models import (
     SessionStatus,
     User,
 )
+from app.review.earlier_copies import earlier_copies
 from app.review.evidence import SessionEvidence, class_findings, seen_notes, session_evidence
 
 STATUSES = tuple(SessionStatus)
@@ -228,7 +229,8 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
                 if u != row.student.username and same_session.get(u) != row.session.id
             ]
             row.duplicate_of.extend(u for u in others if u not in row.duplicate_of)
-    class_findings(rows, seen_notes(db, [row.session.id for row in rows if row.session]))
+    sessions_seen = seen_notes(db, [row.session.id for row in rows if row.session])
+    class_findings(rows, sessions_seen, earlier_copies(db, assignment, rows))
     return rows
 
 
