@@ -218,7 +218,7 @@ def test_a_copy_of_an_uploaded_class_zip_is_found(world):
     assert "Nothing uploaded yet" in shown(teacher2)
     assert upload(teacher2, "lab 2025.zip", exported).status_code == 303
     page = shown(teacher2)
-    assert "lab 2025.zip: the readings of 1 attempts are kept" in page
+    assert "lab 2025.zip: the readings of 1 attempt are kept" in page
     assert "lab 2025.zip" in page.split('id="archives"')[1]
     s4 = browser(world, "s4")
     session_id = new_session(s4, assignment_id=str(assignment_id))
@@ -255,7 +255,7 @@ def test_one_readings_csv_is_an_archive_too(world):
     other_teachers_class(world)
     teacher2 = browser(world, "teacher2")
     assert upload(teacher2, "group7.csv", readings).status_code == 303
-    assert "group7.csv: the readings of 1 attempts are kept" in shown(teacher2)
+    assert "group7.csv: the readings of 1 attempt are kept" in shown(teacher2)
     with read_session() as db:
         labels = {
             (k.label, k.attempt, k.part) for k in db.exec(select(CopyKey)).all() if k.archive_id

@@ -196,3 +196,52 @@ def test_readings_sent_with_times_at_another_step_are_shown_to_the_teacher(world
     assert 'data-check="time_step"' in dashboard
     own = html.unescape(student.get(f"/lab/sessions/{session_id}").text)
     assert "s apart" not in own and "data-check" not in own
+
+
+def test_each_finding_has_its_chart_beside_the_gyros(world):
+    import json
+    import re
+
+    set_assignment(world, simulator_preset="navigation-fog")  # σ ≈ 0.38 °/h, a fine grid
+    rng = np.random.default_rng(5)
+    means = (11.0, 0.3, -11.0, -0.3)
+    # typed to 0.01 °/h, but every reading ends in 0 or 5: a preferred last digit
+    heading = {
+        k + 1: [round(float(v), 2) for v in np.round(rng.normal(m, 0.38, 12) / 0.05) * 0.05]
+        for k, m in enumerate(means)
+    }
+    student, session_id = hand_in(world, "s1", heading, honest_columns(6, 9.8))
+    teacher = browser(world, "teacher1")
+    auth = token_for(teacher, "teacher1")
+    rows = teacher.get(f"{API}/assignments/{world['assignment']}/submissions", headers=auth)
+    row = rows.json()[0]
+    digits = next(f for f in row["evidence"] if f["check"] == "digits")
+    assert digits["part"] == "heading" and sum(digits["counts"][d] for d in (0, 5)) == 48
+
+    page = teacher.get(f"/review/sessions/{session_id}").text
+    assert 'data-figure="evidence-heading"' in page
+    assert 'data-figure="evidence-digits-heading"' in page
+    figures = json.loads(
+        html.unescape(re.search(r'id="evidence-figures">(.*?)</script>', page, re.S).group(1))
+    )
+    bars = figures["evidence-digits-heading"]["data"][0]["y"]
+    assert bars == digits["counts"]  # the chart shows the numbers the finding used
+    beside = figures["evidence-heading"]["data"]
+    group = [t for t in beside if t["xaxis"] == "x"]
+    gyro = [t for t in beside if t["xaxis"] == "x2"]
+    assert [len(t["y"]) for t in group] == [len(t["y"]) for t in gyro] == [12, 12, 12, 12]
+    assert all(abs(sum(t["y"])) < 1e-4 for t in group)  # about each position's mean (5 d.p.)
+    text = html.unescape(page)
+    labels = [a["text"] for a in figures["evidence-heading"]["layout"]["annotations"]]
+    assert labels == ["This group", "The station's gyro (a draw of its model)"]
+    assert "readings the station's gyro makes at the same counts" in text
+    zh = html.unescape(
+        teacher.get(f"/review/sessions/{session_id}", headers={"Accept-Language": "zh-CN"}).text
+    )
+    assert "读数与实验台陀螺的对照" in zh and "各末位数字出现的次数" in zh
+    again = teacher.get(f"/review/sessions/{session_id}").text  # one draw per session
+    assert re.search(r'id="evidence-figures">(.*?)</script>', again, re.S).group(1) == re.search(
+        r'id="evidence-figures">(.*?)</script>', page, re.S
+    ).group(1)
+    own = student.get(f"/lab/sessions/{session_id}").text
+    assert "evidence-figures" not in own and "evidence-heading" not in own

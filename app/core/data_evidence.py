@@ -214,9 +214,10 @@ def last_digits(
     Returns
     -------
     list of Evidence
-        ``digits`` when p < 10⁻⁴ with 9 degrees of freedom; nothing tested under 40
-        readings, when the scatter spans fewer than 3 typed steps, or when the gyro's own
-        step is coarser than the typed one (its readings then sit on its own grid).
+        ``digits`` (with each digit's count) when p < 10⁻⁴ with 9 degrees of freedom;
+        nothing tested under 40 readings, when the scatter spans fewer than 3 typed steps,
+        or when the gyro's own step is coarser than the typed one (its readings then sit
+        on its own grid).
     """
     from scipy.stats import chi2
 
@@ -240,7 +241,12 @@ def last_digits(
             Evidence(
                 "digits",
                 part,
-                {"digit": top, "share": round(counts[top] / values.size, 3), "p": p},
+                {
+                    "digit": top,
+                    "share": round(counts[top] / values.size, 3),
+                    "p": p,
+                    "counts": counts.tolist(),
+                },
             )
         ]
     return []

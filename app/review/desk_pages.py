@@ -7,6 +7,8 @@ import json
 from datetime import datetime
 
 from fastapi import APIRouter, BackgroundTasks, Request
+from jinja2.utils import htmlsafe_json_dumps
+from markupsafe import Markup
 from sqlmodel import select
 
 from app.accounts.deps import CsrfProtected, TeacherUser
@@ -22,11 +24,13 @@ from app.lab.attempts import (
     rubric_scores_of,
 )
 from app.lab.pages import UNIT_NAMES, session_view
+from app.lab.results import current_data
 from app.lab.truth import auto_check, session_truth
 from app.models import Attempt, SessionStatus, User
 from app.review import evidence, grading, lms_outbox
 from app.review.deps import ReviewableSession, TeacherAssignment
 from app.review.evidence import finding_text
+from app.review.evidence_charts import evidence_figures
 from app.review.service import session_row
 from app.web.deps import FormDep, SessionDep
 from app.web.i18n import translator
@@ -54,6 +58,11 @@ def desk_view(request: Request, target, db) -> dict:
     latest = attempts[-1] if attempts else None
     check = auto_check(json.loads(latest.results_json), truth, assignment) if latest else None
     due = deadlines.due_for(db, assignment, session.owner_id)
+    evidence_row = session_row(db, assignment, session)
+    charts = {}
+    if evidence_row is not None and evidence_row.evidence:
+        data = current_data(db, session)
+        charts = evidence_figures(assignment, session, data, evidence_row.evidence, _)
     view.update(
         {
             "truth": truth,
@@ -83,8 +92,12 @@ def desk_view(request: Request, target, db) -> dict:
             "interrupted": None,
             "typed": None,
             "problem": None,
-            "evidence_row": session_row(db, assignment, session),
+            "evidence_row": evidence_row,
             "evidence_text": lambda finding: finding_text(finding, _),
+            "evidence_figures": {key: text for key, (_figure, text) in charts.items()},
+            "evidence_figures_json": Markup(
+                htmlsafe_json_dumps({key: figure for key, (figure, _text) in charts.items()})
+            ),
         }
     )
     return view

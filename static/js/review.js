@@ -1,8 +1,11 @@
 // Teacher pages: draw the server-built plotly figures and sort the class table by column.
 (() => {
   "use strict";
-  const data = document.getElementById("lab-figures");
-  const figures = data ? JSON.parse(data.textContent) : {};
+  const figures = {};
+  ["lab-figures", "evidence-figures"].forEach((id) => {
+    const data = document.getElementById(id);
+    if (data) Object.assign(figures, JSON.parse(data.textContent));
+  });
   GyroCharts.showAll(figures);
 
   document.querySelectorAll("table.sortable").forEach((table) => {
