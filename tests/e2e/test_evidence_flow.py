@@ -59,6 +59,11 @@ def test_the_desk_shows_the_evidence_of_typed_readings(demo_server, new_page):
         expect(card.locator("h2")).to_have_text(title)
         expect(card.locator("li[data-check='handout']")).to_contain_text(sentence)
         expect(card.locator("li[data-check='handout']")).to_contain_text("A1")
+        # the part's readings drawn beside a draw of the station's gyro
+        chart = card.locator(".chart[data-figure='evidence-heading']")
+        chart.scroll_into_view_if_needed()
+        expect(chart.locator(".main-svg").first).to_be_visible()
+        expect(chart.locator(".xtick")).not_to_have_count(0)
         assert not teacher.evaluate(
             "() => document.documentElement.scrollWidth > window.innerWidth + 1"
         ), f"{language} at {width} px"
