@@ -53,7 +53,7 @@ def pages_of(page, url: str, role: str) -> list[str]:
         assignment = demo.first.get_attribute("href")
         page.goto(url + assignment)
         review = page.locator("#class-table a[href^='/review/']").first.get_attribute("href")
-        paths += ["/courses", course, assignment, review]
+        paths += ["/courses", course, assignment, review, "/review/archives"]
     else:
         page.goto(f"{url}/lab")
         paths += [page.locator("main a[href^='/lab/sessions/']").first.get_attribute("href")]
