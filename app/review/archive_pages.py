@@ -37,9 +37,10 @@ def upload_archive(
             raise UserError("archive.no_file")
         with pool("analysis").slot(teacher.id):
             groups = archives.read_archive(readings.filename or "", readings.file)
-    except UserError as error:
-        flash(response, request, error.key, "error", **error.params)
-        return response
+    except UserError as error:  # the page again, the refusal beside the file field
+        listed = archives.teacher_archives(db, teacher.id)
+        view = {"archives": listed, "problems": {"readings": error}}
+        return render(request, "review/archives.html", view, 400)
     stored = archives.store_archive(db, teacher.id, readings.filename or "", groups)
     db.commit()
     flash(response, request, "archive.stored", "success", name=stored.name, n=stored.groups)
