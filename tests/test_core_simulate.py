@@ -18,6 +18,7 @@ from app.core.simulate import (
     simulate_run,
     simulate_static,
     true_rate,
+    turn_on_bias_deg_h,
 )
 from app.core.sinusoid import heading_angles
 
@@ -233,3 +234,14 @@ def test_mems_cannot_find_north_in_a_lab_period():
             continue
         bad += abs(result.azimuth_error_deg) > 10
     assert bad >= 12
+
+
+@pytest.mark.parametrize("name", sorted(PRESETS))
+def test_the_turn_on_bias_is_the_streams_without_building_it(name):
+    """The lab page asks for the session's turn-on bias on every view: drawn from the
+    stream's own seed, it is the stream's value exactly, and it varies with the seed."""
+    preset = PRESETS[name]
+    draws = [turn_on_bias_deg_h(preset, seed) for seed in range(40)]
+    assert draws == [GyroStream(preset, seed).turn_on_bias_deg_h for seed in range(40)]
+    if preset.turn_on_bias_sigma_deg_h:
+        assert np.std(draws) == pytest.approx(preset.turn_on_bias_sigma_deg_h, rel=0.4)

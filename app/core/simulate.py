@@ -141,6 +141,31 @@ def true_rate(
 # --- the sensor: a resumable stream ----------------------------------------------------------
 
 
+def _turn_on_draw(run_seq: np.random.SeedSequence, sigma_deg_h: float) -> float:
+    """This switch-on's bias b₀ ~ N(0, σ_on²), from the stream's fourth seed."""
+    return float(np.random.Generator(np.random.PCG64(run_seq)).normal(0.0, 1.0) * sigma_deg_h)
+
+
+def turn_on_bias_deg_h(preset: GyroPreset, seed: int) -> float:
+    """The turn-on bias a :class:`GyroStream` of ``preset`` and ``seed`` has, without
+    building the stream (its correlated components cost ~0.5 ms to set up).
+
+    Parameters
+    ----------
+    preset : GyroPreset
+        Its ``turn_on_bias_sigma_deg_h`` is σ_on.
+    seed : int
+        The stream's seed.
+
+    Returns
+    -------
+    float
+        b₀ (°/h), equal to ``GyroStream(preset, seed).turn_on_bias_deg_h``.
+    """
+    run_seq = np.random.SeedSequence(seed).spawn(4)[3]
+    return _turn_on_draw(run_seq, preset.turn_on_bias_sigma_deg_h)
+
+
 class GyroStream:
     """Sensor errors for consecutive samples; ``read(true_rates)`` consumes the next block."""
 
@@ -149,8 +174,7 @@ class GyroStream:
         arw_seq, gm_seq, rrw_seq, run_seq = np.random.SeedSequence(seed).spawn(4)
         self._arw = np.random.Generator(np.random.PCG64(arw_seq))
         self._rrw = np.random.Generator(np.random.PCG64(rrw_seq))
-        run = np.random.Generator(np.random.PCG64(run_seq))
-        self.turn_on_bias_deg_h = float(run.normal(0.0, 1.0) * preset.turn_on_bias_sigma_deg_h)
+        self.turn_on_bias_deg_h = _turn_on_draw(run_seq, preset.turn_on_bias_sigma_deg_h)
         dt = preset.dt_s
         terms = flicker_components(preset.bias_instability_deg_h, preset.flicker_band_s)
         if preset.markov_sigma_deg_h > 0 and preset.markov_corr_time_s > 0:

@@ -138,15 +138,17 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         except OperationalError:  # a read-only database: the notice simply stays
             db.rollback()
     course = db.get(Course, assignment.course_id) if assignment else None
+    history = take_history(db, session.id)
+    current = [take for take in history if take.superseded_at is None]
     return render(
         request,
         "lab/session.html",
         {
-            **session_view(db, session, assignment, attempts, _, editable=editable),
+            **session_view(db, session, assignment, attempts, _, editable=editable, takes=current),
             "due": deadlines.due_for(db, assignment, session.owner_id),
             "timezone": course.timezone if course else None,
             **group,
-            "history": take_history(db, session.id),
+            "history": history,
             "methods": allowed_methods(db, session),
             "units": UNITS,
             "unit_names": UNIT_NAMES,
@@ -193,12 +195,14 @@ def session_view(
     *,
     reviewer: bool = False,
     editable: bool = False,
+    takes: list | None = None,
 ) -> dict:
     """What both the student's page and the teacher's review show of a session.
 
     A review belongs to its attempt: the student sees the latest attempt's review once the
     teacher returned or released it -- also while re-recording, until the next submission
-    -- and earlier attempts' reviews with those attempts."""
+    -- and earlier attempts' reviews with those attempts.  ``takes``: the session's
+    current takes where the caller has them (one query fewer)."""
     solved: dict = {}
     entry = cached_results(db, session, assignment, on_miss=solved.update)
     results = entry.parts
@@ -210,7 +214,7 @@ def session_view(
     latest = attempts[-1] if attempts else None
     given = latest is not None and (reviewer or shown_to_student(latest))
     visible = truth_visible(session, assignment, len(attempts))
-    truth = session_truth(db, session, assignment) if visible else None
+    truth = session_truth(db, session, assignment, takes) if visible else None
     check = None
     if truth is not None and assignment is not None and attempts:
         check = auto_check(json.loads(attempts[-1].results_json), truth, assignment)

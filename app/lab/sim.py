@@ -16,7 +16,13 @@ from datetime import UTC, datetime
 import numpy as np
 
 from app.core.presets import PRESETS
-from app.core.simulate import GyroStream, axis_vectors, read_dial, true_rate
+from app.core.simulate import (
+    GyroStream,
+    axis_vectors,
+    read_dial,
+    true_rate,
+    turn_on_bias_deg_h,
+)
 from app.models import LabSession, utcnow
 
 MAX_DWELL_S = 1800.0
@@ -50,7 +56,7 @@ def turn_on_bias(session: LabSession) -> float:
     """The session's turn-on bias: drawn by its assignment, else by the preset's model."""
     if session.sim_turn_on_bias_deg_h is not None:
         return session.sim_turn_on_bias_deg_h
-    return GyroStream(preset_for(session), derived_seed(session, "power-on")).turn_on_bias_deg_h
+    return turn_on_bias_deg_h(preset_for(session), derived_seed(session, "power-on"))
 
 
 def indexing_error_deg(session: LabSession, turn: int | str) -> float:
