@@ -21,8 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
-from app.core.data_evidence import class_copies, part_evidence
+from app.core.data_evidence import class_copies, off_grid, part_evidence
 from app.core.noise_model import GyroNoise
+from app.core.output_grid import class_step
 from app.core.presets import PRESETS
 from app.core.simulate import Setup, simulate_run
 from app.core.sinusoid import elevation_angles, heading_angles
@@ -59,8 +60,9 @@ def honest_parts(preset_name: str, student: int, method: str, cold: bool) -> dic
             TIMES.setdefault((preset_name, student, method, cold), {})[part] = [
                 np.round(t, 3) for t in run.times_s
             ]
-        else:
-            parts[part] = [np.round(v[:TYPED_READINGS], 2) for v in run.positions]
+        else:  # typed as people round: most to 2 decimals, some to 1, a few to 3
+            decimals = int(rng.choice([2, 1, 3], p=[0.7, 0.2, 0.1]))
+            parts[part] = [np.round(v[:TYPED_READINGS], decimals) for v in run.positions]
     return parts
 
 
@@ -130,6 +132,21 @@ def evaluate(preset_name: str, method: str, cold: bool, students: int, grid: boo
     ]
     copies = class_copies(takes)
     flagged: dict[str, set[str]] = {}
+    if not grid:  # a real gyro's output step, as the class's own readings show it
+        whole = {g: {p: np.concatenate(v) for p, v in parts.items()} for g, parts in groups.items()}
+        class_parts = [v for g in honest for v in whole[g].values()]
+        model_step = 3600.0 * noise.angle_lsb_deg * rate  # the characterisation's quantisation
+        honest_step = class_step(class_parts, model_step)
+        for group, parts in groups.items():
+            # each planted group is one case in a class of honest students
+            step = (
+                honest_step
+                if group in honest
+                else class_step(class_parts + list(whole[group].values()), model_step)
+            )
+            for part, positions in parts.items():
+                if step and off_grid(part, positions, step):
+                    flagged.setdefault(group, set()).add("off_class_grid")
     for group, parts in groups.items():
         plant_typed = typed or group.startswith(("invented", "handout"))
         timed = (

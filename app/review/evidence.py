@@ -10,11 +10,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import numpy as np
 from sqlmodel import Session, select
 
 from app.core.data_copies import copy_keys
-from app.core.data_evidence import part_evidence, too_close
+from app.core.data_evidence import off_grid, part_evidence, too_close
 from app.core.exceptions import UserError
+from app.core.output_grid import class_step
 from app.lab.copy_index import own_positions
 from app.lab.planner import gyro_model
 from app.lab.store import PARTS
@@ -28,13 +30,19 @@ class SessionEvidence:
     findings: list[dict] = field(default_factory=list)
     keys: dict[str, list[str]] = field(default_factory=dict)  # part → copy keys
     recorded: set[str] = field(default_factory=set)  # parts with readings of its own
+    # part → its first readings, for the class's output step (a real gyro's grid unknown)
+    readings: dict[str, np.ndarray] = field(default_factory=dict)
+    model_step: float = 0.0  # the station's gyro's rate step 3600·LSB·f (°/h), 0 if none
+
+
+GRID_READINGS = 2000  # readings of each part kept for the class's output step
 
 
 def session_evidence(assignment: Assignment, session: LabSession, data: dict) -> SessionEvidence:
     """The checks that need only this session's current readings (``data``: part →
     position → PositionData)."""
     noise, rate_hz, source = gyro_model(assignment, session.simulator_preset)
-    out = SessionEvidence()
+    out = SessionEvidence(model_step=3600.0 * noise.angle_lsb_deg * rate_hz)
     for part, positions in sorted(data.items()):
         own = own_positions(positions)
         if not own:
@@ -53,6 +61,8 @@ def session_evidence(assignment: Assignment, session: LabSession, data: dict) ->
         out.findings += [finding.to_json() for finding in found]
         out.keys[part] = copy_keys(values)
         out.recorded.add(part)
+        if source != "preset":  # the simulated gyro's grid is known: checked above
+            out.readings[part] = np.concatenate(values)[:GRID_READINGS]
     return out
 
 
@@ -63,6 +73,7 @@ def class_findings(rows, notes: dict | None = None, earlier: dict | None = None)
     (parts the group recorded itself, from the attempt the teacher grades); each marked
     ``seen`` where a teacher has looked (``notes``: :func:`seen_notes`)."""
     notes, earlier = notes or {}, earlier or {}
+    off_class = class_grid_findings(rows)
     owners: dict[tuple[str, str], set[str]] = {}
     for row in rows:
         if row.session is None or row.data_evidence is None:
@@ -73,7 +84,7 @@ def class_findings(rows, notes: dict | None = None, earlier: dict | None = None)
     for row in rows:
         if row.session is None or row.data_evidence is None:
             continue
-        found = list(row.data_evidence.findings)
+        found = list(row.data_evidence.findings) + off_class.get(row.session.id, [])
         for part, keys in sorted(row.data_evidence.keys.items()):
             others = set().union(*(owners[(part, key)] for key in keys)) - {group_name(row)}
             if others:
@@ -87,6 +98,32 @@ def class_findings(rows, notes: dict | None = None, earlier: dict | None = None)
             if seen is not None:
                 finding["seen"] = seen
         row.evidence = found
+
+
+def class_grid_findings(rows) -> dict[int, list[dict]]:
+    """``off_class_grid`` for parts whose readings lie between the output steps that the
+    rest of the class's readings keep to (``app.core.output_grid``), where the station's
+    gyro is a real one whose grid is not known in advance."""
+    parts = [
+        (row.session.id, part, values)
+        for row in rows
+        if row.session is not None and row.data_evidence is not None
+        for part, values in sorted(row.data_evidence.readings.items())
+    ]
+    model_step = max(
+        (row.data_evidence.model_step for row in rows if row.data_evidence is not None),
+        default=0.0,
+    )
+    step = class_step([values for _sid, _part, values in parts], model_step)
+    found: dict[int, list[dict]] = {}
+    if step is None:
+        return found
+    for session_id, part, values in parts:
+        for finding in off_grid(part, [values], step):
+            found.setdefault(session_id, []).append(
+                {**finding.to_json(), "check": "off_class_grid"}
+            )
+    return found
 
 
 def result_findings(row) -> list:
@@ -166,6 +203,7 @@ CHECKS = (
     "smooth",
     "digits",
     "off_grid",
+    "off_class_grid",
     "copy",
     "copy_earlier",
     "handout",

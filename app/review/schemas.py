@@ -35,8 +35,8 @@ class SubmissionRow(BaseModel):
     evidence: list[dict] = Field(
         default_factory=list,
         description="data evidence on the readings the group recorded itself: "
-        "check (scatter_low, scatter_high, smooth, digits, off_grid, copy, copy_earlier, "
-        "handout, too_close, time_order, time_step), part, and the check's numbers "
+        "check (scatter_low, scatter_high, smooth, digits, off_grid, off_class_grid, copy, "
+        "copy_earlier, handout, too_close, time_order, time_step), part, and the check's numbers "
         "(copy_earlier: sources, each a group with its attempts and its assignment and "
         "course, or the uploaded archive)",
     )
