@@ -80,7 +80,18 @@ def part_candidate(values: np.ndarray) -> float | None:
 
 
 def is_decimal_step(step: float) -> bool:
-    """Whether ``step`` is 1, 2 or 5 times a power of ten: a step people round to."""
+    """Whether ``step`` is 1, 2 or 5 times a power of ten: a step people round to.
+
+    Parameters
+    ----------
+    step : float
+        A candidate output step q > 0 (°/h).
+
+    Returns
+    -------
+    bool
+        True when q = m·10ᵏ with m ∈ {1, 2, 5} (to 10⁻⁶), k = ⌊log₁₀ q⌋.
+    """
     exponent = math.floor(math.log10(step))
     mantissa = step / 10.0**exponent
     return any(abs(mantissa - m) < 1e-6 for m in (1.0, 2.0, 5.0, 10.0))
