@@ -23,7 +23,7 @@ import numpy as np
 
 from app.core.data_evidence import class_copies, off_grid, part_evidence
 from app.core.noise_model import GyroNoise
-from app.core.output_grid import class_step
+from app.core.output_grid import GridPart, class_step
 from app.core.presets import PRESETS
 from app.core.simulate import Setup, simulate_run
 from app.core.sinusoid import elevation_angles, heading_angles
@@ -133,7 +133,10 @@ def evaluate(preset_name: str, method: str, cold: bool, students: int, grid: boo
     copies = class_copies(takes)
     flagged: dict[str, set[str]] = {}
     if not grid:  # a real gyro's output step, as the class's own readings show it
-        whole = {g: {p: np.concatenate(v) for p, v in parts.items()} for g, parts in groups.items()}
+        whole = {
+            g: {p: GridPart.of(np.concatenate(v)) for p, v in parts.items()}
+            for g, parts in groups.items()
+        }
         class_parts = [v for g in honest for v in whole[g].values()]
         model_step = 3600.0 * noise.angle_lsb_deg * rate  # the characterisation's quantisation
         honest_step = class_step(class_parts, model_step)

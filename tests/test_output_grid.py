@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from app.core.data_evidence import off_grid
-from app.core.output_grid import class_step, on_step, part_candidate
+from app.core.output_grid import GridPart, class_step, on_step, part_candidate
 from app.review.evidence import SessionEvidence, class_grid_findings, finding_text
 from app.web.i18n import translator
 from tests.noise_sources import static_record
@@ -114,7 +114,9 @@ def test_a_part_proposes_its_smallest_gap_only_when_its_readings_lie_on_it():
 def rows_of(parts: dict[int, list[np.ndarray]]) -> list:
     rows = []
     for session_id, positions in parts.items():
-        evidence = SessionEvidence(readings={"heading": together(positions)}, model_step=0.09)
+        evidence = SessionEvidence(
+            readings={"heading": GridPart.of(together(positions))}, model_step=0.09
+        )
         rows.append(SimpleNamespace(session=SimpleNamespace(id=session_id), data_evidence=evidence))
     return rows
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -27,7 +28,7 @@ ON_GRID_SHARE = 0.8  # a part lies on a step when this share of its readings do
 MIN_LEVELS = 3  # a part proposes a step when its readings take at least 3 values
 
 
-def on_step(values: np.ndarray, step: float) -> float:
+def on_step(values: np.ndarray, step: float, typed: float | None = None) -> float:
     """The share of readings within half their typed step of a whole multiple of ``step``.
 
     Parameters
@@ -36,6 +37,9 @@ def on_step(values: np.ndarray, step: float) -> float:
         One part's readings (°/h).
     step : float
         A candidate output step q (°/h).
+    typed : float, optional
+        The readings' typed step u where the caller knows it (``typed_step``, 0 for
+        full-precision numbers).
 
     Returns
     -------
@@ -46,7 +50,8 @@ def on_step(values: np.ndarray, step: float) -> float:
     """
     if values.size == 0 or step <= 0:
         return 0.0
-    typed = typed_step(values) or 0.0
+    if typed is None:
+        typed = typed_step(values) or 0.0
     if step < 2.0 * typed:
         return 1.0
     distance = np.abs(values - step * np.round(values / step))
@@ -79,6 +84,22 @@ def part_candidate(values: np.ndarray) -> float | None:
     return float(f"{step:.9g}")
 
 
+@dataclass(frozen=True)
+class GridPart:
+    """One part's readings with what the class step asks of them, found once: its typed
+    step u (0 for full-precision numbers) and the step it proposes (None if none)."""
+
+    values: np.ndarray
+    typed: float
+    candidate: float | None
+
+    @classmethod
+    def of(cls, values: np.ndarray) -> GridPart:
+        values = np.asarray(values, float)
+        typed = (typed_step(values) or 0.0) if values.size else 0.0
+        return cls(values, typed, part_candidate(values))
+
+
 def is_decimal_step(step: float) -> bool:
     """Whether ``step`` is 1, 2 or 5 times a power of ten: a step people round to.
 
@@ -97,15 +118,16 @@ def is_decimal_step(step: float) -> bool:
     return any(abs(mantissa - m) < 1e-6 for m in (1.0, 2.0, 5.0, 10.0))
 
 
-def class_step(parts: Sequence[np.ndarray], model_step: float = 0.0) -> float | None:
+def class_step(parts: Sequence[np.ndarray | GridPart], model_step: float = 0.0) -> float | None:
     """The class's output step: the coarsest step proposed by some part on which at least
     80 % of the class's parts (and at least 8) lie.
 
     Parameters
     ----------
-    parts : sequence of numpy.ndarray
+    parts : sequence of numpy.ndarray or GridPart
         Every part of the class the students recorded themselves (each its positions'
-        readings together, °/h).
+        readings together, °/h), or its :class:`GridPart` where the caller keeps one
+        (the proposal sorts every reading).
     model_step : float
         The rate step of the station's noise model, q_m = 3600·LSB·f (°/h), from its
         Allan characterisation's quantisation term; 0 when it has none.
@@ -127,14 +149,15 @@ def class_step(parts: Sequence[np.ndarray], model_step: float = 0.0) -> float | 
     grid), so a class that rounded everything to one decimal proposes its rounding, and
     the test of a part (``off_grid``) is skipped where q < 2u.
     """
-    parts = [np.asarray(p, float) for p in parts if np.asarray(p).size]
-    if len(parts) < GRID_MIN_PARTS:
+    found = [p if isinstance(p, GridPart) else GridPart.of(p) for p in parts]
+    found = [p for p in found if p.values.size]
+    if len(found) < GRID_MIN_PARTS:
         return None
-    candidates = sorted({c for c in map(part_candidate, parts) if c is not None}, reverse=True)
-    for step in candidates:
+    proposed = sorted({p.candidate for p in found if p.candidate is not None}, reverse=True)
+    for step in proposed:
         if is_decimal_step(step) and not (model_step > 0 and 0.5 <= step / model_step <= 2.0):
             continue
-        support = sum(on_step(p, step) >= ON_GRID_SHARE for p in parts)
-        if support >= GRID_MIN_PARTS and support >= GRID_SUPPORT * len(parts):
+        support = sum(on_step(p.values, step, p.typed) >= ON_GRID_SHARE for p in found)
+        if support >= GRID_MIN_PARTS and support >= GRID_SUPPORT * len(found):
             return step
     return None

@@ -16,7 +16,7 @@ from sqlmodel import Session, select
 from app.core.data_copies import copy_keys
 from app.core.data_evidence import off_grid, part_evidence, too_close
 from app.core.exceptions import UserError
-from app.core.output_grid import class_step
+from app.core.output_grid import GridPart, class_step
 from app.lab.copy_index import own_positions
 from app.lab.planner import gyro_model
 from app.lab.store import PARTS
@@ -31,7 +31,7 @@ class SessionEvidence:
     keys: dict[str, list[str]] = field(default_factory=dict)  # part → copy keys
     recorded: set[str] = field(default_factory=set)  # parts with readings of its own
     # part → its first readings, for the class's output step (a real gyro's grid unknown)
-    readings: dict[str, np.ndarray] = field(default_factory=dict)
+    readings: dict[str, GridPart] = field(default_factory=dict)
     model_step: float = 0.0  # the station's gyro's rate step 3600·LSB·f (°/h), 0 if none
 
 
@@ -62,7 +62,7 @@ def session_evidence(assignment: Assignment, session: LabSession, data: dict) ->
         out.keys[part] = copy_keys(values)
         out.recorded.add(part)
         if source != "preset":  # the simulated gyro's grid is known: checked above
-            out.readings[part] = np.concatenate(values)[:GRID_READINGS]
+            out.readings[part] = GridPart.of(np.concatenate(values)[:GRID_READINGS])
     return out
 
 
@@ -105,21 +105,21 @@ def class_grid_findings(rows) -> dict[int, list[dict]]:
     rest of the class's readings keep to (``app.core.output_grid``), where the station's
     gyro is a real one whose grid is not known in advance."""
     parts = [
-        (row.session.id, part, values)
+        (row.session.id, part, readings)
         for row in rows
         if row.session is not None and row.data_evidence is not None
-        for part, values in sorted(row.data_evidence.readings.items())
+        for part, readings in sorted(row.data_evidence.readings.items())
     ]
     model_step = max(
         (row.data_evidence.model_step for row in rows if row.data_evidence is not None),
         default=0.0,
     )
-    step = class_step([values for _sid, _part, values in parts], model_step)
+    step = class_step([readings for _sid, _part, readings in parts], model_step)
     found: dict[int, list[dict]] = {}
     if step is None:
         return found
-    for session_id, part, values in parts:
-        for finding in off_grid(part, [values], step):
+    for session_id, part, readings in parts:
+        for finding in off_grid(part, [readings.values], step):
             found.setdefault(session_id, []).append(
                 {**finding.to_json(), "check": "off_class_grid"}
             )
