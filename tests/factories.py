@@ -469,6 +469,9 @@ ACCESS = {
     "GET /api/v1/assignments/{assignment_id}/accuracy": "teacher",
     "GET /api/v1/assignments/{assignment_id}/board": "teacher",
     "GET /api/v1/assignments/{assignment_id}/export.csv": "teacher",
+    "GET /api/v1/archives": "teacher-any",
+    "POST /api/v1/archives": "teacher-any",
+    "DELETE /api/v1/archives/{archive_id}": "teacher",
 }
 
 

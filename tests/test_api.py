@@ -327,7 +327,7 @@ def test_must_change_password_users_get_no_token(client):
 def test_openapi_documents_every_route(client):
     schema = client.get("/openapi.json").json()
     paths = schema["paths"]
-    assert len(paths) == 17
+    assert len(paths) == 19
     for path, operations in paths.items():
         for method, operation in operations.items():
             assert operation.get("summary"), (method, path)

@@ -305,3 +305,56 @@ def test_bad_uploads_are_refused_and_nothing_is_kept(world, monkeypatch):
         assert len(db.exec(select(ReadingArchive)).all()) == 1
     zh = teacher2.get("/review/archives", headers={"Accept-Language": "zh-CN"}).text
     assert "往届读数" in zh and "上传读数" in zh
+
+
+def test_earlier_readings_through_the_api(world):
+    """The same upload as the page's, by a script with a teacher's token: listed, matched,
+    refused with JSON in both languages, and deleted only by its owner."""
+    original = honest_columns(81)
+    student, session_id = hand_in(world, "s1", original, honest_columns(82, 9.8))
+    readings = student.get(f"/lab/sessions/{session_id}/export.csv").content
+    _, assignment_id = other_teachers_class(world)
+    teacher2 = browser(world, "teacher2")
+    auth = token_for(teacher2, "teacher2")
+    assert teacher2.get(f"{API}/archives", headers=auth).json() == []
+
+    made = teacher2.post(
+        f"{API}/archives", files={"readings": ("2025 group 3.csv", readings)}, headers=auth
+    )
+    assert made.status_code == 201, made.text
+    kept = made.json()
+    assert (kept["name"], kept["groups"]) == ("2025 group 3.csv", 1)
+    assert [a["id"] for a in teacher2.get(f"{API}/archives", headers=auth).json()] == [kept["id"]]
+    s4 = browser(world, "s4")
+    copied = new_session(s4, assignment_id=str(assignment_id))
+    assert save_manual(s4, copied, "heading", shifted(original, -0.4)).status_code == 200
+    submit(s4, copied)
+    rows = teacher2.get(f"{API}/assignments/{assignment_id}/submissions", headers=auth).json()
+    assert earlier(rows[0]["evidence"]) == [
+        {"group": "2025 group 3", "attempts": [], "archive": "2025 group 3.csv"}
+    ]
+
+    for files, message_en, message_zh in (
+        (None, "Choose a file to upload.", "请选择"),
+        ({"readings": ("x.csv", b"a,b\n1,2\n")}, "No readings recorded by students", "没有"),
+    ):
+        for language, message in (("en", message_en), ("zh-CN", message_zh)):
+            refused = teacher2.post(
+                f"{API}/archives", files=files, headers={**auth, "Accept-Language": language}
+            )
+            assert refused.status_code == 400, refused.text
+            assert message in refused.json()["detail"]
+    assert len(teacher2.get(f"{API}/archives", headers=auth).json()) == 1
+
+    teacher1 = browser(world, "teacher1")
+    other = token_for(teacher1, "teacher1")
+    assert teacher1.delete(f"{API}/archives/{kept['id']}", headers=other).status_code == 404
+    assert teacher1.get(f"{API}/archives", headers=other).json() == []
+    assert teacher2.delete(f"{API}/archives/{kept['id']}", headers=auth).status_code == 204
+    assert teacher2.delete(f"{API}/archives/{kept['id']}", headers=auth).status_code == 404
+    with read_session() as db:
+        assert db.exec(select(CopyKey).where(CopyKey.archive_id.is_not(None))).all() == []
+    # a cookie caller needs the CSRF header for the change, as on every API route
+    assert (
+        teacher2.post(f"{API}/archives", files={"readings": ("y.csv", readings)}).status_code == 403
+    )

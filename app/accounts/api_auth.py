@@ -3,7 +3,7 @@
 ``Authorization: Bearer <token>`` (a personal access token with scopes, or a one-hour
 log-in token), else the browser's session cookie with the CSRF token in ``X-CSRF-Token``
 for changes.  Both count against the same per-minute rate.  A route's signature says who
-may call it: ``ReadCaller``, ``UploadCaller``, ``TeacherCaller``.
+may call it: ``ReadCaller``, ``UploadCaller``, ``TeacherCaller``, ``TeacherUploadCaller``.
 """
 
 from __future__ import annotations
@@ -92,3 +92,4 @@ AnyCaller = Annotated[Caller, Depends(api_caller)]
 ReadCaller = Annotated[Caller, Depends(scoped("read"))]
 UploadCaller = Annotated[Caller, Depends(scoped("upload"))]
 TeacherCaller = Annotated[Caller, Depends(scoped("read", teacher=True))]
+TeacherUploadCaller = Annotated[Caller, Depends(scoped("upload", teacher=True))]

@@ -1,20 +1,24 @@
-"""REST API v1, teachers: their courses, an assignment's submissions, the class table."""
+"""REST API v1, teachers: their courses, an assignment's submissions, the class table, the
+readings of earlier years kept to find copies of them."""
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from typing import Annotated
+
+from fastapi import APIRouter, File, UploadFile
 from fastapi.responses import Response
 from sqlmodel import select
 
-from app.accounts.api_auth import TeacherCaller
+from app.accounts.api_auth import TeacherCaller, TeacherUploadCaller
 from app.core.jsonsafe import json_safe
 from app.lab.attempts import grade_text
-from app.models import Assignment, Course
+from app.models import Assignment, Course, ReadingArchive
+from app.review import archives
 from app.review.accuracy import class_accuracy
 from app.review.board import board_data
 from app.review.deps import teachers_assignment
 from app.review.exports import class_table_response
-from app.review.schemas import ClassAccuracyOut, CourseOut, SubmissionRow
+from app.review.schemas import ArchiveOut, ClassAccuracyOut, CourseOut, SubmissionRow
 from app.review.service import class_rows
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS
@@ -111,3 +115,40 @@ def export_submissions(assignment_id: ObjectId, caller: TeacherCaller, db: Sessi
     """Teachers: the class table as CSV (UTF-8 with BOM)."""
     assignment = teachers_assignment(db, caller.user, assignment_id)
     return class_table_response(db, assignment)
+
+
+def _archive_out(archive: ReadingArchive) -> ArchiveOut:
+    return ArchiveOut(
+        id=archive.id, name=archive.name, groups=archive.groups, uploaded_at=archive.uploaded_at
+    )
+
+
+@router.get("/archives", response_model=list[ArchiveOut])
+def list_archives(caller: TeacherCaller, db: SessionDep):
+    """Teachers: their uploads of earlier years' readings, newest first."""
+    return [_archive_out(a) for a in archives.teacher_archives(db, caller.user.id)]
+
+
+@router.post("/archives", response_model=ArchiveOut, status_code=201)
+def upload_archive(
+    caller: TeacherUploadCaller,
+    db: SessionDep,
+    readings: Annotated[UploadFile | None, File(description="a class zip or readings CSV")] = None,
+):
+    """Teachers (``upload`` scope): readings of an earlier year -- a class zip as GyroLab
+    exports it (``<group>/attempt-<n>.csv``) or one readings CSV -- whose copy keys are kept
+    so that copies of them in the teacher's courses are flagged (``copy_earlier``).  Only
+    the keys and the groups' labels are stored, never the readings."""
+    stored = archives.upload_archive(
+        db, caller.user.id, readings and readings.filename, readings and readings.file
+    )
+    db.commit()
+    return _archive_out(stored)
+
+
+@router.delete("/archives/{archive_id}", status_code=204, response_class=Response)
+def delete_archive(archive_id: ObjectId, caller: TeacherUploadCaller, db: SessionDep):
+    """Teachers (``upload`` scope): forget an upload and its keys (another teacher's: 404)."""
+    archives.delete_archive(db, caller.user.id, archive_id)
+    db.commit()
+    return Response(status_code=204)

@@ -11,7 +11,6 @@ from app.core.exceptions import UserError
 from app.review import archives
 from app.web.deps import ObjectId, SessionDep
 from app.web.render import flash, redirect, render
-from app.web.work_slots import pool
 
 router = APIRouter(tags=["pages: review"], include_in_schema=False)
 PAGE = "/review/archives"
@@ -33,15 +32,13 @@ def upload_archive(
     """A class zip or readings CSV of an earlier year → its copy keys, kept."""
     response = redirect(PAGE)
     try:
-        if readings is None:
-            raise UserError("archive.no_file")
-        with pool("analysis").slot(teacher.id):
-            groups = archives.read_archive(readings.filename or "", readings.file)
+        stored = archives.upload_archive(
+            db, teacher.id, readings and readings.filename, readings and readings.file
+        )
     except UserError as error:  # the page again, the refusal beside the file field
         listed = archives.teacher_archives(db, teacher.id)
         view = {"archives": listed, "problems": {"readings": error}}
         return render(request, "review/archives.html", view, 400)
-    stored = archives.store_archive(db, teacher.id, readings.filename or "", groups)
     db.commit()
     flash(response, request, "archive.stored", "success", name=stored.name, n=stored.groups)
     return response

@@ -20,6 +20,7 @@ from app.core.data_copies import copy_keys
 from app.core.exceptions import UserError
 from app.lab.copy_index import MIN_OWN_POSITIONS
 from app.models import CopyKey, InputMethod, ReadingArchive
+from app.web.work_slots import pool
 
 MAX_MEMBERS = 20_000  # CSV files in one zip
 MAX_UNPACKED = 256 * 1024 * 1024  # bytes of CSV read from one upload
@@ -148,6 +149,25 @@ def store_archive(
                     )
                 )
     return archive
+
+
+def upload_archive(
+    db: Session, teacher_id: int, name: str | None, handle: BinaryIO | None
+) -> ReadingArchive:
+    """An uploaded file (the page's form and ``POST /api/v1/archives`` share this): read in
+    the teacher's analysis slot, its keys kept under the teacher.  Nothing is stored when
+    the file is refused (the caller commits).
+
+    Raises
+    ------
+    UserError
+        No file, or the file is refused (:func:`read_archive`).
+    """
+    if handle is None:
+        raise UserError("archive.no_file")
+    with pool("analysis").slot(teacher_id):
+        groups = read_archive(name or "", handle)
+    return store_archive(db, teacher_id, name or "", groups)
 
 
 def teacher_archives(db: Session, teacher_id: int) -> list[ReadingArchive]:

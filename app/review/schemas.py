@@ -15,6 +15,15 @@ class CourseOut(BaseModel):
     assignments: list[dict]
 
 
+class ArchiveOut(BaseModel):
+    """An upload of earlier years' readings: only its copy keys are kept."""
+
+    id: int
+    name: str = Field(description="the file's name, as uploaded")
+    groups: int = Field(description="the attempts (or files) whose readings gave copy keys")
+    uploaded_at: datetime
+
+
 class SubmissionRow(BaseModel):
     username: str
     display_name: str
