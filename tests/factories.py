@@ -24,11 +24,20 @@ from app.models import Assignment, Role, User
 
 
 def pdf_text(content: bytes) -> str:
-    """The text of every page of a PDF, with the names and contents of its attachments."""
+    """The text of every page of a PDF, with the names and contents of its attachments.
+
+    The pages' text by PDFium (pypdfium2; pypdf's extraction gives the same words but took
+    0.5 s a report), the attachments by pypdf."""
+    import pypdfium2
     from pypdf import PdfReader
 
+    document = pypdfium2.PdfDocument(content)
+    try:
+        pages = [page.get_textpage().get_text_range() for page in document]
+    finally:
+        document.close()
+    text = "\n".join(pages).replace("\r\n", "\n")
     reader = PdfReader(io.BytesIO(content))
-    text = "\n".join(page.extract_text() or "" for page in reader.pages)
     for name, blobs in reader.attachments.items():
         text += "\n" + name + "\n" + "".join(b.decode("utf-8", "replace") for b in blobs)
     return text
