@@ -15,7 +15,9 @@ serialised, and the plotly figures per language as the page embeds them.
 
 from __future__ import annotations
 
+import functools
 import hashlib
+import operator
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
@@ -156,14 +158,18 @@ NOT_IN_RESULTS = frozenset(
 )
 
 
+@functools.cache
+def _result_columns(model: type) -> Callable[[object], tuple]:
+    """A getter of the model's result columns' values, in table order (found once)."""
+    names = [c.name for c in model.__table__.columns if c.name not in NOT_IN_RESULTS]
+    getter = operator.attrgetter(*names)
+    return getter if len(names) > 1 else lambda record: (getter(record),)
+
+
 def _row(record) -> tuple:
     if record is None:
         return ()
-    return tuple(
-        getattr(record, column.name)
-        for column in type(record).__table__.columns
-        if column.name not in NOT_IN_RESULTS
-    )
+    return _result_columns(type(record))(record)
 
 
 KEY_COLUMNS = (
