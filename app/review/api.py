@@ -139,9 +139,7 @@ def upload_archive(
     exports it (``<group>/attempt-<n>.csv``) or one readings CSV -- whose copy keys are kept
     so that copies of them in the teacher's courses are flagged (``copy_earlier``).  Only
     the keys and the groups' labels are stored, never the readings."""
-    stored = archives.upload_archive(
-        db, caller.user.id, readings and readings.filename, readings and readings.file
-    )
+    stored = archives.upload_archive(db, caller.user.id, readings)
     db.commit()
     return _archive_out(stored)
 

@@ -32,9 +32,7 @@ def upload_archive(
     """A class zip or readings CSV of an earlier year → its copy keys, kept."""
     response = redirect(PAGE)
     try:
-        stored = archives.upload_archive(
-            db, teacher.id, readings and readings.filename, readings and readings.file
-        )
+        stored = archives.upload_archive(db, teacher.id, readings)
     except UserError as error:  # the page again, the refusal beside the file field
         listed = archives.teacher_archives(db, teacher.id)
         view = {"archives": listed, "problems": {"readings": error}}

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import BinaryIO
 
 import numpy as np
+from fastapi import UploadFile
 from sqlmodel import Session, func, select
 
 from app.core.data_copies import copy_keys
@@ -151,9 +152,7 @@ def store_archive(
     return archive
 
 
-def upload_archive(
-    db: Session, teacher_id: int, name: str | None, handle: BinaryIO | None
-) -> ReadingArchive:
+def upload_archive(db: Session, teacher_id: int, upload: UploadFile | None) -> ReadingArchive:
     """An uploaded file (the page's form and ``POST /api/v1/archives`` share this): read in
     the teacher's analysis slot, its keys kept under the teacher.  Nothing is stored when
     the file is refused (the caller commits).
@@ -163,11 +162,12 @@ def upload_archive(
     UserError
         No file, or the file is refused (:func:`read_archive`).
     """
-    if handle is None:
+    if upload is None:
         raise UserError("archive.no_file")
+    name = upload.filename or ""
     with pool("analysis").slot(teacher_id):
-        groups = read_archive(name or "", handle)
-    return store_archive(db, teacher_id, name or "", groups)
+        groups = read_archive(name, upload.file)
+    return store_archive(db, teacher_id, name, groups)
 
 
 def teacher_archives(db: Session, teacher_id: int) -> list[ReadingArchive]:
