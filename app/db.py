@@ -6,7 +6,9 @@ next sample offset, attempt numbers, throttle windows) is correct without per-si
 * SQLite: WAL journal, a busy timeout, foreign keys ON, and ``BEGIN IMMEDIATE`` for write
   transactions (a deferred ``BEGIN`` that reads and later writes fails with "database is
   locked" under concurrency). Read-only requests keep a deferred ``BEGIN`` so readers never
-  queue behind writers.
+  queue behind writers.  A process's writers take turns in the order they asked
+  (``app.writer_turn``) before ``BEGIN IMMEDIATE``, instead of sleeping in SQLite's busy
+  handler.
 * PostgreSQL: reads run in REPEATABLE READ (one snapshot per request, like SQLite);
   readers take no lock.  Writers come in two kinds, both under READ COMMITTED (each
   statement after a lock sees every earlier writer's commit):
@@ -32,10 +34,13 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 from functools import lru_cache
+from weakref import WeakKeyDictionary
 
 from sqlalchemy import Engine, event, text
 from sqlalchemy.engine import make_url
 from sqlmodel import Session, create_engine, select
+
+from app.writer_turn import WriterTurn
 
 BUSY_TIMEOUT_MS = 10_000
 WRITE_LOCK_KEY = 0x6779726F  # "gyro": the advisory lock every PostgreSQL writer takes
@@ -139,9 +144,73 @@ def _sqlite_engine(url: str) -> Engine:
     @event.listens_for(engine, "begin")
     def _on_begin(connection) -> None:
         immediate = connection.get_execution_options().get(WRITER_OPTION, False)
-        connection.exec_driver_sql("BEGIN IMMEDIATE" if immediate else "BEGIN")
+        if not immediate:
+            connection.exec_driver_sql("BEGIN")
+            return
+        raw = connection.connection.dbapi_connection
+        if turns is not None and turns.acquire(raw):
+            try:
+                connection.exec_driver_sql("BEGIN IMMEDIATE")
+            except BaseException:
+                turns.hand_on(raw)
+                raise
+        else:
+            connection.exec_driver_sql("BEGIN IMMEDIATE")
 
+    turns = None if in_memory else _TurnsOnEngine(engine)
+    if turns is not None:
+        _TURNS[engine] = turns
     return engine
+
+
+_TURNS: WeakKeyDictionary[Engine, _TurnsOnEngine] = WeakKeyDictionary()
+
+
+def writer_turn(engine: Engine) -> WriterTurn | None:
+    """The queue of a file SQLite engine's writers (None for other engines)."""
+    turns = _TURNS.get(engine)
+    return None if turns is None else turns.turn
+
+
+class _TurnsOnEngine:
+    """An engine's writers take turns (``WriterTurn``) from ``BEGIN IMMEDIATE`` until the
+    connection's commit or rollback has finished (or the connection is closed)."""
+
+    def __init__(self, engine: Engine) -> None:
+        self.turn = WriterTurn()
+        self.holders: set[int] = set()  # id() of the DBAPI connections that hold the turn
+        dialect = engine.dialect
+        commit, rollback = dialect.do_commit, dialect.do_rollback
+
+        def do_commit(connection) -> None:
+            try:
+                commit(connection)
+            finally:
+                self.hand_on(connection)
+
+        def do_rollback(connection) -> None:
+            try:
+                rollback(connection)
+            finally:
+                self.hand_on(connection)
+
+        dialect.do_commit, dialect.do_rollback = do_commit, do_rollback
+        event.listen(engine, "close", lambda raw, _record: self.hand_on(raw))
+        event.listen(engine, "invalidate", lambda raw, _record, _error: self.hand_on(raw))
+
+    def acquire(self, raw) -> bool:
+        """Wait for the turn (at most the busy timeout): whether this connection holds it."""
+        if not self.turn.acquire(BUSY_TIMEOUT_MS / 1000):
+            return False
+        self.holders.add(id(raw))
+        return True
+
+    def hand_on(self, connection) -> None:
+        """The turn to the next writer, if this connection (DBAPI or pooled) holds it."""
+        key = id(getattr(connection, "dbapi_connection", connection))
+        if key in self.holders:
+            self.holders.discard(key)
+            self.turn.release()
 
 
 def _postgres_engine(url: str) -> Engine:
