@@ -332,8 +332,9 @@ def put_trim(
 @router.post(
     "/sessions/{session_id}/submit", response_model=AttemptOut, dependencies=[RowWriteSession]
 )
-def submit_session(session: Annotated[LabSession, Depends(submittable_session)], db: SessionDep):
+def submit_session(session_id: ObjectId, caller: UploadCaller, db: SessionDep):
     """Freeze the data and results as a new attempt (the assignment's rules apply)."""
+    session = own_session(db, caller.user, session_id)  # the write lock, in this trip
     attempt = submit(db, session)
     db.commit()
     return AttemptOut(

@@ -21,7 +21,7 @@ from app.lab.exports import Selection, readings_csv, session_json
 from app.lab.grid import grid_readings
 from app.lab.result_cache import results_of
 from app.lab.schemas import CsvUpload, ManualReadings, Plane, Trim, Turn
-from app.lab.service import record_positions, recordable_session
+from app.lab.service import own_session, record_positions, recordable_session
 from app.lab.sim import nominal_angle, position_count, wait_for_gyro, warm_up_state
 from app.lab.store import POSITIONS, check_position, set_symmetric_order
 from app.lab.submissions import submit
@@ -137,8 +137,13 @@ def save_csv(
 
 
 @router.post("/sessions/{session_id}/turn", dependencies=[CsrfProtected, RowWriteSession])
-def turn_table(session: SimulatorSession, db: SessionDep, body: Annotated[Turn, Body()]):
+def turn_table(
+    session_id: ObjectId, user: CurrentUser, db: SessionDep, body: Annotated[Turn, Body()]
+):
     """Turn the virtual turntable; every real turn gets a new indexing error."""
+    # the session is read here, not in a dependency: the write lock is taken and released
+    # in one trip to the thread pool (see ``recordable_session``)
+    session = recordable_session(db, user, session_id, InputMethod.simulator)
     check_position(session, body.part, body.position)
     field = f"sim_table_{body.part}"
     if getattr(session, field) != body.position:
@@ -233,7 +238,8 @@ def results_endpoint(session: OwnedSession, db: SessionDep):
 
 
 @router.post("/sessions/{session_id}/submit", dependencies=[CsrfProtected, RowWriteSession])
-def submit_session(request: Request, session: OwnedSession, db: SessionDep):
+def submit_session(request: Request, session_id: ObjectId, user: CurrentUser, db: SessionDep):
+    session = own_session(db, user, session_id)  # the write lock, in the handler's own trip
     response = redirect(f"/lab/sessions/{session.id}")
     try:
         attempt = submit(db, session)
