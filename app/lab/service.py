@@ -19,7 +19,7 @@ from app.core.units import canonical_unit, to_deg_per_hour
 from app.db import lock_rows
 from app.lab.partners import is_member
 from app.lab.sim import nominal_angle
-from app.lab.store import append_samples, check_position, store_take
+from app.lab.store import NewTake, append_samples, check_position, store_take, store_takes
 from app.models import Assignment, InputMethod, LabSession, Take, User
 
 
@@ -122,18 +122,14 @@ def record_positions(
     times: dict[int, np.ndarray] | None = None,
 ) -> list[int]:
     """Store several positions at once (a grid or a file); returns the positions saved."""
+    takes = []
     for position, values in sorted(columns.items()):
-        record_position(
-            db,
-            session,
-            part=part,
-            position=position,
-            values=values,
-            source=source,
-            unit=unit,
-            times=(times or {}).get(position),
-            angle_deg=(angles or {}).get(position),
+        check_position(session, part, position)
+        reading = Reading.of(session, part, position, values, unit, (angles or {}).get(position))
+        takes.append(
+            NewTake(position, reading.angle_deg, reading.values, (times or {}).get(position))
         )
+    store_takes(db, session, part=part, takes=takes, source=source, unit=canonical_unit(unit))
     return sorted(columns)
 
 

@@ -7,6 +7,7 @@ Every number comes from ``app.core``; this module only moves data in and out.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from sqlmodel import Session, select
@@ -120,6 +121,18 @@ def reopen(session: LabSession) -> None:
         session.status = SessionStatus.in_progress
 
 
+@dataclass(frozen=True)
+class NewTake:
+    """One position's readings to store: values in °/h, optional times (s) and case
+    temperatures (°C), and the dial angle."""
+
+    position: int
+    angle_deg: float
+    values: np.ndarray
+    times: np.ndarray | None = None
+    temperatures: np.ndarray | None = None
+
+
 def store_take(
     db: Session,
     session: LabSession,
@@ -134,10 +147,82 @@ def store_take(
     check_minimum: bool = True,
     temperatures: np.ndarray | None = None,
 ) -> Take:
-    """Add a take (values in °/h, optional times in s and case temperatures in °C) and
-    supersede the previous one; the caller commits once, so the position is either fully
-    saved or not at all."""
+    """Add a take (values in °/h) and supersede the previous one (:func:`store_takes`)."""
+    new = NewTake(position, angle_deg, values, times, temperatures)
+    return store_takes(
+        db, session, part=part, takes=[new], source=source, unit=unit, check_minimum=check_minimum
+    )[0]
+
+
+def store_takes(
+    db: Session,
+    session: LabSession,
+    *,
+    part: str,
+    takes: list[NewTake],
+    source: str,
+    unit: str = "deg/h",
+    check_minimum: bool = True,
+) -> list[Take]:
+    """Add a take for each of ``takes`` (positions of one part) and supersede the previous
+    ones; the caller commits once, so the positions are either all saved or none.
+
+    Every position is checked, in order, before anything is written; then the previous
+    takes are read in one query and the new ones inserted in one flush (the write lock is
+    held for one round of statements, not one per position)."""
     check_editable(session)
+    for new in takes:
+        _check_new_take(db, session, part, new, check_minimum)
+    now = utcnow()
+    positions = [new.position for new in takes]
+    for old in db.exec(
+        select(Take).where(
+            Take.session_id == session.id,
+            Take.part == part,
+            Take.position.in_(positions),
+            Take.superseded_at.is_(None),
+        )
+    ).all():
+        old.superseded_at = now
+        db.add(old)
+    rows = [
+        Take(
+            session_id=session.id,
+            part=part,
+            position=new.position,
+            angle_deg=new.angle_deg,
+            source=source,
+            unit=unit,
+            n_samples=int(new.values.size),
+        )
+        for new in takes
+    ]
+    db.add_all(rows)
+    db.flush()
+    for take, new in zip(rows, takes, strict=True):
+        hold(db, take, new.values, new.times, new.temperatures)
+        for seq, value_blob, time_blob, temperature_blob in chunks(
+            new.values, new.times, new.temperatures
+        ):
+            db.add(
+                SampleChunk(
+                    take_id=take.id,
+                    seq=seq,
+                    values=value_blob,
+                    times=time_blob,
+                    temperatures=temperature_blob,
+                )
+            )
+    reopen(session)
+    db.add(session)
+    return rows
+
+
+def _check_new_take(
+    db: Session, session: LabSession, part: str, new: NewTake, check_minimum: bool
+) -> None:
+    """A position's readings checked before they are stored (the storage quota counted)."""
+    position, values = new.position, new.values
     check_position(session, part, position)
     if values.size == 0:
         raise UserError("readings.empty_position", position=position)
@@ -147,9 +232,9 @@ def store_take(
             limit=MAX_SAMPLES_PER_POSITION,
         )
     _check_values(session, position, values)
-    _check_angle_and_times(position, angle_deg, times, values.size)
-    _check_temperatures(position, temperatures, values.size)
-    check_storage(db, session, values, times, temperatures)
+    _check_angle_and_times(position, new.angle_deg, new.times, values.size)
+    _check_temperatures(position, new.temperatures, values.size)
+    check_storage(db, session, values, new.times, new.temperatures)
     if check_minimum and values.size < session.min_readings:
         raise UserError(
             "lab.too_few_readings",
@@ -157,42 +242,6 @@ def store_take(
             n=int(values.size),
             minimum=session.min_readings,
         )
-    now = utcnow()
-    for old in db.exec(
-        select(Take).where(
-            Take.session_id == session.id,
-            Take.part == part,
-            Take.position == position,
-            Take.superseded_at.is_(None),
-        )
-    ).all():
-        old.superseded_at = now
-        db.add(old)
-    take = Take(
-        session_id=session.id,
-        part=part,
-        position=position,
-        angle_deg=angle_deg,
-        source=source,
-        unit=unit,
-        n_samples=int(values.size),
-    )
-    db.add(take)
-    db.flush()
-    hold(db, take, values, times, temperatures)
-    for seq, value_blob, time_blob, temperature_blob in chunks(values, times, temperatures):
-        db.add(
-            SampleChunk(
-                take_id=take.id,
-                seq=seq,
-                values=value_blob,
-                times=time_blob,
-                temperatures=temperature_blob,
-            )
-        )
-    reopen(session)
-    db.add(session)
-    return take
 
 
 def append_samples(
