@@ -171,6 +171,23 @@ def test_only_readings_the_students_recorded_have_keys():
     assert part_keys({"heading": mixed}) == {}  # two positions of its own: no evidence
 
 
+def test_the_samples_read_for_keys_are_only_those_that_can_have_keys():
+    from types import SimpleNamespace
+
+    from app.lab.copy_index import keyable_takes
+
+    def take(part, position, source):
+        return SimpleNamespace(part=part, position=position, source=source)
+
+    typed = [take("heading", k, "manual") for k in (1, 2, 3, 4)]
+    simulated = [take("latitude", k, "simulator") for k in (1, 2, 3, 4)]
+    mixed = [take("latitude", 1, "csv"), take("latitude", 2, "csv")] + simulated[2:]
+    assert keyable_takes(typed + simulated) == typed
+    assert keyable_takes(simulated) == []  # a streamed session: nothing is read
+    assert keyable_takes(mixed) == []  # two positions of its own
+    assert keyable_takes(typed[:3] + mixed) == typed[:3]
+
+
 def read_all(model):
     with read_session() as db:
         return list(db.exec(select(model)).all())

@@ -40,8 +40,20 @@ def part_keys(data: SessionData) -> dict[str, list[str]]:
     return out
 
 
-def index_attempt(db: Session, attempt: Attempt, data: SessionData) -> None:
-    """Keep the copy keys of ``attempt``'s data (``attempt`` must have its id)."""
+def keyable_takes(takes: list[Take]) -> list[Take]:
+    """The takes whose readings can have copy keys (:func:`own_positions`' rule, decided
+    before any sample is read): a part's own takes when it has at least three."""
+    own: dict[str, list[Take]] = {}
+    for take in takes:
+        if take.source != InputMethod.simulator:
+            own.setdefault(take.part, []).append(take)
+    return [take for group in own.values() if len(group) >= MIN_OWN_POSITIONS for take in group]
+
+
+def index_attempt(db: Session, attempt: Attempt, takes: list[Take]) -> None:
+    """Keep the copy keys of ``attempt``'s takes (``attempt`` must have its id); only the
+    samples that can have keys are read (none for a session streamed from the simulator)."""
+    data = takes_data(db, keyable_takes(takes))
     for part, keys in part_keys(data).items():
         for key in keys:
             db.add(CopyKey(key=key, part=part, attempt_id=attempt.id))
@@ -67,8 +79,7 @@ def index_unindexed(db: Session, limit: int = BACKFILL_BATCH) -> int:
         .with_for_update(skip_locked=True)
     ).all()
     for attempt in attempts:
-        data = takes_data(db, attempt_takes(db, attempt))
-        index_attempt(db, attempt, data)
+        index_attempt(db, attempt, attempt_takes(db, attempt))
     return len(attempts)
 
 

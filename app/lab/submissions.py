@@ -13,7 +13,7 @@ from app.core.jsonsafe import json_safe
 from app.courses.deadlines import due_for
 from app.lab.copy_index import index_attempt
 from app.lab.result_cache import cached_results
-from app.lab.results import results_json, takes_data
+from app.lab.results import results_json
 from app.lab.store import check_editable, current_takes
 from app.models import (
     Assignment,
@@ -70,7 +70,7 @@ def submit(db: Session, session: LabSession) -> Attempt:
     db.add(attempt)
     db.add(session)
     db.flush()  # the attempt's id, for its copy keys
-    index_attempt(db, attempt, takes_data(db, takes))
+    index_attempt(db, attempt, takes)
     return attempt
 
 
