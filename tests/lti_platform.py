@@ -104,6 +104,7 @@ class PlatformState:
     fail_scores: int = 0  # answer this many score posts with 503
     last_id_token: str | None = None
     tokens_issued: int = 0
+    refusals: list[str] = field(default_factory=list)  # why token requests were refused
     registration_token: str = "registration-token-1"  # what the LMS admin's page hands out
     registered: dict | None = None  # the tool configuration GyroLab sent (dynamic registration)
     storage_target: str | None = None  # offer platform storage (LTI Client Side OIDC Launch)
@@ -343,6 +344,7 @@ def create_platform_app(state: PlatformState) -> FastAPI:
         try:
             answer = platform.get_access_token(form)
         except Exception as error:  # noqa: BLE001 -- refused assertion
+            state.refusals.append(f"{type(error).__name__}: {error}")
             return JSONResponse({"error": "invalid_client", "detail": str(error)}, 400)
         state.tokens_issued += 1
         return answer

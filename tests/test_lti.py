@@ -404,7 +404,7 @@ def test_a_grade_the_platform_refuses_is_kept_shown_and_retried(lti):
             if post.tries:
                 break
         time.sleep(0.05)
-    assert post.status == "pending" and "503" in post.last_error
+    assert post.status == "pending" and "503" in post.last_error, lti.platform.refusals
     page = without_tokens(teacher.get(str(dashboard.url)).text)
     assert "0 grades received by the learning platform, 1 waiting" in page
     assert "The last attempt failed" in page
