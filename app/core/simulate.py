@@ -219,7 +219,6 @@ class GyroStream:
         if p.warmup_bias_deg_h and p.warmup_time_constant_s > 0:
             rate = rate + p.warmup_bias_deg_h * self._warmup_decay(n)
         white = self._arw.standard_normal(n)
-        rrw_noise = self._rrw.standard_normal(n)
         if p.arw_deg_rt_h:
             rate = rate + p.white_sigma_deg_h * white
         if self._correlated and n:
@@ -231,7 +230,8 @@ class GyroStream:
                 values, _ = lfilter([1.0], [1.0, -phi], drive, zi=[phi * state])
                 component[2] = float(values[-1])
                 rate = rate + values
-        if p.rrw_deg_h_rt_h and n:
+        if p.rrw_deg_h_rt_h and n:  # its own stream: not drawn when the preset has none
+            rrw_noise = self._rrw.standard_normal(n)
             steps = p.rrw_deg_h_rt_h * math.sqrt(p.dt_s / SECONDS_PER_HOUR) * rrw_noise
             walk = np.cumsum(np.concatenate([[self._rrw_state], steps]))[1:]
             self._rrw_state = float(walk[-1])
