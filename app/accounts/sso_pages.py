@@ -6,6 +6,8 @@ client; the database work runs on the thread pool, as everywhere else."""
 
 from __future__ import annotations
 
+import logging
+
 from fastapi import APIRouter, Request
 from sqlmodel import select
 from starlette.concurrency import run_in_threadpool
@@ -19,6 +21,8 @@ from app.db import write_session
 from app.models import LtiPlatform
 from app.web.i18n import translator
 from app.web.render import SESSION_COOKIE, redirect, render, request_language, set_cookie
+
+log = logging.getLogger("gyrolab.sso")
 
 router = APIRouter(tags=["pages: account"], include_in_schema=False)
 NEXT_KEY = "sso_next"
@@ -147,5 +151,9 @@ def _failed(request: Request, settings: Settings, error: Exception):
         reason = translator(request_language(request))(found[0], **found[1])
     else:
         reason = getattr(error, "description", None) or getattr(error, "error", None) or error
+    # an error without words (a network time-out) is named by its kind, on the page and in
+    # the log, where an administrator looks when sign-in stops working
+    reason = str(reason) or type(error).__name__
+    log.warning("single sign-on failed: %s: %s", type(error).__name__, reason)
     context = login_view(settings, error="sso.failed", reason=str(reason)[:200])
     return render(request, "auth/login.html", context, 400)
