@@ -46,6 +46,11 @@ def _serve(args: argparse.Namespace) -> int:
         # requests (uvicorn's 5 s default closed them while a client was sending its next
         # request on them: "connection reset" under load) and than a proxy's idle timeout.
         timeout_keep_alive=KEEP_ALIVE_S,
+        # The stream's frames (a few hundred bytes of JSON, five a second) are sent as they
+        # are: compressing each one cost more of the worker's one core than anything else
+        # in a frame (py-spy under the 60-student load test), to save bytes no network here
+        # is short of.
+        ws_per_message_deflate=False,
     )
     return 0
 
