@@ -87,6 +87,7 @@ class Tally:
     acknowledged: dict[tuple[int, str, int], int] = field(default_factory=dict)
     frames: int = 0
     streamed_samples: int = 0
+    ws_extensions: set[str] = field(default_factory=set)  # what the server agreed to
 
     async def request(
         self, client: httpx.AsyncClient, method: str, url: str, route: str, ok=(200,), **kw
@@ -123,6 +124,7 @@ async def stream_all_positions(
     start = time.perf_counter()
     async with connect(ws_url, additional_headers=headers, max_size=2**22) as ws:
         tally.latencies["WS connect"].append(time.perf_counter() - start)
+        tally.ws_extensions.update(extension.name for extension in ws.protocol.extensions)
         for part in PARTS:
             for position in range(1, 5):
                 if position > 1:
@@ -381,6 +383,8 @@ def report(name: str, tally: Tally, wall: float, lost: int, checked: int, worker
         f"- stream frame lag behind the simulated clock: p50 {percentile_ms(tally.frame_lags, 50)}"
         f" ms, p95 {percentile_ms(tally.frame_lags, 95)} ms, p99"
         f" {percentile_ms(tally.frame_lags, 99)} ms, max {percentile_ms(tally.frame_lags, 100)} ms",
+        "- WebSocket extensions the server agreed to: "
+        + (", ".join(sorted(tally.ws_extensions)) or "none"),
         "",
         "| route | count | p50 ms | p95 ms | p99 ms | max ms |",
         "|---|---:|---:|---:|---:|---:|",
