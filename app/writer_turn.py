@@ -26,28 +26,35 @@ class WriterTurn:
     def __init__(self) -> None:
         self._mutex = threading.Lock()
         self._held = False
+        self._holder: int | None = None  # the thread that holds the turn
         self._waiting: deque[threading.Lock] = deque()
 
     def acquire(self, timeout: float) -> bool:
-        """Wait up to ``timeout`` seconds for the turn: whether it was granted."""
+        """Wait up to ``timeout`` seconds for the turn: whether it was granted.  A thread
+        that already holds it is not granted a second one and does not wait (a write
+        opened inside another meets SQLite's lock at once, as it would without the queue)."""
+        me = threading.get_ident()
         with self._mutex:
             if not self._held:
-                self._held = True
+                self._held, self._holder = True, me
                 return True
+            if self._holder == me:
+                return False
             signal = threading.Lock()
             signal.acquire()
             self._waiting.append(signal)
-        if signal.acquire(timeout=timeout):
-            return True
+        granted = signal.acquire(timeout=timeout)
         with self._mutex:
-            if signal in self._waiting:
+            if not granted and signal in self._waiting:
                 self._waiting.remove(signal)
                 return False
-        return True  # handed over just as the wait ran out: the turn is ours
+            self._holder = me  # granted, or handed over just as the wait ran out
+        return True
 
     def release(self) -> None:
         """Hand the turn to the writer that has waited longest, or free it."""
         with self._mutex:
+            self._holder = None
             if self._waiting:
                 self._waiting.popleft().release()
             else:

@@ -49,12 +49,34 @@ def test_the_turn_goes_to_writers_in_the_order_they_asked():
 def test_a_writer_that_waited_too_long_leaves_the_queue():
     turn = WriterTurn()
     assert turn.acquire(timeout=1)
-    started = time.monotonic()
-    assert not turn.acquire(timeout=0.05)
-    assert time.monotonic() - started >= 0.05
+    waited: list[tuple[bool, float]] = []
+
+    def writer() -> None:
+        started = time.monotonic()
+        waited.append((turn.acquire(timeout=0.05), time.monotonic() - started))
+
+    thread = threading.Thread(target=writer)
+    thread.start()
+    thread.join(5)
+    assert waited and waited[0][0] is False and waited[0][1] >= 0.05
     assert turn.queued == 0
     turn.release()
     assert turn.acquire(timeout=0)  # the one who gave up is not handed the turn
+
+
+def test_a_writer_inside_a_write_of_its_own_thread_does_not_wait_for_its_own_turn():
+    turn = WriterTurn()
+    assert turn.acquire(timeout=1)
+    started = time.monotonic()
+    assert not turn.acquire(timeout=5)  # at once: it would wait for itself
+    assert time.monotonic() - started < 1
+    other: list[bool] = []
+    thread = threading.Thread(target=lambda: other.append(turn.acquire(timeout=5)))
+    thread.start()
+    wait_until(lambda: turn.queued == 1)  # another thread still queues
+    turn.release()
+    thread.join(5)
+    assert other == [True]
 
 
 @pytest.fixture
