@@ -73,3 +73,32 @@ def test_the_lab_sessions_writes_lock_rows_and_everything_else_is_exclusive():
             assert path.startswith(("/lab/sessions", "/api/v1/sessions", "/log")) or (
                 path == "/api/v1/auth/token"
             ), path
+
+
+def test_row_writes_read_what_they_lock_in_the_handler_not_in_a_dependency():
+    """Dependencies and the handler run on separate trips to the thread pool; a write lock
+    taken by a dependency's query would be held across the gap (bench/README.md, issue 32).
+    Only the caller's log-in is looked up in a dependency, and that without the lock
+    (accounts.deps.load_login)."""
+    from app.accounts.api_auth import api_caller
+    from app.accounts.deps import csrf_protect, current_user, optional_user
+    from app.web.deps import get_db
+
+    login_lookups = {csrf_protect, current_user, optional_user, api_caller}
+
+    def readers_of_the_session(dependant) -> set:
+        found = set()
+        for sub in dependant.dependencies:
+            if any(inner.call is get_db for inner in sub.dependencies):
+                found.add(sub.call)
+            found |= readers_of_the_session(sub)
+        return found
+
+    checked = 0
+    for route in api_routes():
+        if declared_locking(route) is not Locking.rows or not route.methods - {"GET", "HEAD"}:
+            continue
+        checked += 1
+        extra = readers_of_the_session(route.dependant) - login_lookups
+        assert not extra, (route.path, sorted(getattr(c, "__name__", str(c)) for c in extra))
+    assert checked >= 15

@@ -15,7 +15,7 @@ from fastapi import APIRouter, Depends, Path, Request
 from fastapi.responses import JSONResponse, Response
 from sqlmodel import Session, select
 
-from app.accounts.api_auth import ReadCaller, UploadCaller, api_caller, require_scope
+from app.accounts.api_auth import Caller, ReadCaller, UploadCaller, api_caller, require_scope
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
 from app.db import read_session
@@ -39,7 +39,7 @@ from app.lab.schemas import (
     TrimOut,
     UploadOut,
 )
-from app.lab.service import append_readings, own_session, record_position, require_method
+from app.lab.service import append_readings, own_session, record_position, recordable_session
 from app.lab.store import POSITIONS, current_takes
 from app.lab.submissions import submit
 from app.lab.trim import trim_position
@@ -85,18 +85,27 @@ def session_out(db: Session, session: LabSession) -> SessionOut:
     )
 
 
-def uploadable_session(session_id: ObjectId, caller: UploadCaller, db: SessionDep) -> LabSession:
-    """The caller's own session, when its assignment allows uploaded readings."""
-    session = own_session(db, caller.user, session_id)
-    require_method(db, session, InputMethod.api)
-    return session
+def own_session_id(session_id: ObjectId, caller: UploadCaller) -> int:
+    """The id of the caller's own session (404 for anyone else's), checked without the
+    write lock (see lab.deps.OwnSessionId)."""
+    with read_session() as db:
+        own_session(db, caller.user, session_id)
+    return session_id
+
+
+CallersSessionId = Annotated[int, Depends(own_session_id)]
+
+
+def uploadable_session(db: Session, caller: Caller, session_id: int) -> LabSession:
+    """The caller's own session, when its assignment allows uploaded readings (read in the
+    handler, not a dependency: see lab.deps)."""
+    return recordable_session(db, caller.user, session_id, InputMethod.api)
 
 
 def readable_session(session_id: ObjectId, caller: ReadCaller, db: SessionDep) -> LabSession:
     return own_session(db, caller.user, session_id)
 
 
-UploadableSession = Annotated[LabSession, Depends(uploadable_session)]
 ReadableSession = Annotated[LabSession, Depends(readable_session)]
 
 
@@ -190,14 +199,16 @@ def get_session(session: ReadableSession, db: SessionDep):
     dependencies=[RowWriteSession],
 )
 def put_position(
+    session_id: CallersSessionId,
     part: PartPath,
     position: PositionPath,
     upload: Upload,
-    session: UploadableSession,
+    caller: UploadCaller,
     db: SessionDep,
 ):
     """Replace this position's readings (the previous take stays in the history).
     Atomic: on any error nothing is stored."""
+    session = uploadable_session(db, caller, session_id)
     upload.checked()
     take = record_position(
         db,
@@ -228,14 +239,16 @@ def put_position(
     dependencies=[RowWriteSession],
 )
 def append_position(
+    session_id: CallersSessionId,
     part: PartPath,
     position: PositionPath,
     upload: Upload,
-    session: UploadableSession,
+    caller: UploadCaller,
     db: SessionDep,
 ):
     """Append readings to this position (streaming devices).  With ``offset`` (the index
     of the first sample) a retried batch is stored once; a gap answers 409."""
+    session = uploadable_session(db, caller, session_id)
     upload.checked()
     take, added = append_readings(
         db,
@@ -300,10 +313,6 @@ def results_body(entry: CachedResults) -> bytes:
     return entry.payload
 
 
-def submittable_session(session_id: ObjectId, caller: UploadCaller, db: SessionDep) -> LabSession:
-    return own_session(db, caller.user, session_id)
-
-
 @router.put(
     "/sessions/{session_id}/{part}/positions/{position}/trim",
     response_model=TrimOut,
@@ -313,11 +322,13 @@ def put_trim(
     part: PartPath,
     position: PositionPath,
     body: TrimIn,
-    session: Annotated[LabSession, Depends(submittable_session)],
+    session_id: CallersSessionId,
+    caller: UploadCaller,
     db: SessionDep,
 ):
     """Leave out the first ``trim`` readings of a position (the transient after turning the
     table); 0 restores them.  Stored as a trim on the take: no sample is deleted."""
+    session = own_session(db, caller.user, session_id)
     take = trim_position(db, session, part=part, position=position, trim=body.trim)
     db.commit()
     return TrimOut(
@@ -332,9 +343,9 @@ def put_trim(
 @router.post(
     "/sessions/{session_id}/submit", response_model=AttemptOut, dependencies=[RowWriteSession]
 )
-def submit_session(session_id: ObjectId, caller: UploadCaller, db: SessionDep):
+def submit_session(session_id: CallersSessionId, caller: UploadCaller, db: SessionDep):
     """Freeze the data and results as a new attempt (the assignment's rules apply)."""
-    session = own_session(db, caller.user, session_id)  # the write lock, in this trip
+    session = own_session(db, caller.user, session_id)
     attempt = submit(db, session)
     db.commit()
     return AttemptOut(

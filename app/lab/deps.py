@@ -1,5 +1,11 @@
-"""The lab's objects as dependencies: a route's signature says whose session it reaches
-and which way of recording it needs."""
+"""The lab's objects as dependencies: a route's signature says whose session it reaches.
+
+Routes that read get the session (:data:`OwnedSession`).  Routes that change one get its
+id, checked in a read snapshot (:data:`OwnSessionId`: anyone else's is a 404 before the
+request's body is even looked at), and read it again in their handler
+(``lab.service.own_session`` / ``recordable_session``): dependencies and the handler run
+on separate trips to the thread pool, and the write lock a dependency's query took would be
+held across the gap (tests/test_locking.py holds every row-writing route to this)."""
 
 from __future__ import annotations
 
@@ -8,8 +14,9 @@ from typing import Annotated
 from fastapi import Depends
 
 from app.accounts.deps import CurrentUser
-from app.lab.service import own_session, require_method
-from app.models import InputMethod, LabSession
+from app.db import read_session
+from app.lab.service import own_session
+from app.models import LabSession
 from app.web.deps import ObjectId, SessionDep
 
 
@@ -21,15 +28,12 @@ def owned_session(session_id: ObjectId, user: CurrentUser, db: SessionDep) -> La
 OwnedSession = Annotated[LabSession, Depends(owned_session)]
 
 
-def recordable(method: InputMethod):
-    """A dependency: the user's own session, when its assignment allows ``method``."""
-
-    def dependency(session: OwnedSession, db: SessionDep) -> LabSession:
-        require_method(db, session, method)
-        return session
-
-    return dependency
+def own_session_id(session_id: ObjectId, user: CurrentUser) -> int:
+    """The id of the logged-in user's own session (404 for anyone else's), checked without
+    the write lock."""
+    with read_session() as db:
+        own_session(db, user, session_id)
+    return session_id
 
 
-ManualSession = Annotated[LabSession, Depends(recordable(InputMethod.manual))]
-SimulatorSession = Annotated[LabSession, Depends(recordable(InputMethod.simulator))]
+OwnSessionId = Annotated[int, Depends(own_session_id)]

@@ -11,7 +11,8 @@ from sqlmodel import Session
 from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
 from app.lab import partners
-from app.lab.deps import OwnedSession
+from app.lab.deps import OwnedSession, OwnSessionId
+from app.lab.service import own_session
 from app.models import LabSession, User
 from app.web.deps import RowWriteSession, SessionDep
 from app.web.render import flash, redirect
@@ -66,8 +67,9 @@ def join_group(
 
 
 @router.post("/sessions/{session_id}/leave", dependencies=[CsrfProtected, RowWriteSession])
-def leave_group(request: Request, session: OwnedSession, user: CurrentUser, db: SessionDep):
+def leave_group(request: Request, session_id: OwnSessionId, user: CurrentUser, db: SessionDep):
     """A partner leaves the group (only before recording starts)."""
+    session = own_session(db, user, session_id)
     try:
         partners.leave(db, user, session)
     except UserError as problem:

@@ -16,7 +16,7 @@ from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
 from app.core.readings import Readings, parse_readings_csv
 from app.core.units import canonical_unit, to_deg_per_hour
-from app.lab.deps import ManualSession, OwnedSession, SimulatorSession
+from app.lab.deps import OwnedSession, OwnSessionId
 from app.lab.exports import Selection, readings_csv, session_json
 from app.lab.grid import grid_readings
 from app.lab.result_cache import results_of
@@ -33,12 +33,20 @@ from app.web.render import flash, redirect
 from app.web.work_slots import held_while_streaming
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
+# A route that changes a session reads it in its handler, after ``OwnSessionId`` checked
+# it is the caller's (lab.deps: why).
 
 MAX_CSV_CHARS = 5_000_000
 
 
 @router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected, RowWriteSession])
-def save_manual(session: ManualSession, db: SessionDep, body: Annotated[ManualReadings, Body()]):
+def save_manual(
+    session_id: OwnSessionId,
+    user: CurrentUser,
+    db: SessionDep,
+    body: Annotated[ManualReadings, Body()],
+):
+    session = recordable_session(db, user, session_id, InputMethod.manual)
     columns = {k: np.asarray(v, dtype=float) for k, v in body.columns.items() if len(v)}
     if not columns:
         raise UserError("readings.none")
@@ -138,11 +146,9 @@ def save_csv(
 
 @router.post("/sessions/{session_id}/turn", dependencies=[CsrfProtected, RowWriteSession])
 def turn_table(
-    session_id: ObjectId, user: CurrentUser, db: SessionDep, body: Annotated[Turn, Body()]
+    session_id: OwnSessionId, user: CurrentUser, db: SessionDep, body: Annotated[Turn, Body()]
 ):
     """Turn the virtual turntable; every real turn gets a new indexing error."""
-    # the session is read here, not in a dependency: the write lock is taken and released
-    # in one trip to the thread pool (see ``recordable_session``)
     session = recordable_session(db, user, session_id, InputMethod.simulator)
     check_position(session, body.part, body.position)
     field = f"sim_table_{body.part}"
@@ -159,18 +165,24 @@ def turn_table(
 
 
 @router.post("/sessions/{session_id}/trim", dependencies=[CsrfProtected, RowWriteSession])
-def trim_recording(session: OwnedSession, db: SessionDep, body: Annotated[Trim, Body()]):
+def trim_recording(
+    session_id: OwnSessionId, user: CurrentUser, db: SessionDep, body: Annotated[Trim, Body()]
+):
     """Leave out the first readings of a position (the transient after turning the table):
     stored as a trim, no sample deleted."""
+    session = own_session(db, user, session_id)
     take = trim_position(db, session, part=body.part, position=body.position, trim=body.trim)
     db.commit()
     return {"trim_start": take.trim_start, "n_used": take.n_samples - take.trim_start}
 
 
 @router.post("/sessions/{session_id}/plane", dependencies=[CsrfProtected, RowWriteSession])
-def set_plane(session: SimulatorSession, db: SessionDep, body: Annotated[Plane, Body()]):
+def set_plane(
+    session_id: OwnSessionId, user: CurrentUser, db: SessionDep, body: Annotated[Plane, Body()]
+):
     """Turn the horizontal dial for part B: the gyro then turns in that vertical plane
     (north if part A's result was right, as at the real bench)."""
+    session = recordable_session(db, user, session_id, InputMethod.simulator)
     session.sim_plane_dial_deg = round(body.dial_deg, 3)
     session.sim_turns += 1
     db.add(session)
@@ -181,11 +193,13 @@ def set_plane(session: SimulatorSession, db: SessionDep, body: Annotated[Plane, 
 @router.post("/sessions/{session_id}/order", dependencies=[CsrfProtected, RowWriteSession])
 def set_order(
     request: Request,
-    session: OwnedSession,
+    session_id: OwnSessionId,
+    user: CurrentUser,
     db: SessionDep,
     symmetric: Annotated[str, Form(max_length=8)] = "",
 ):
     """Record in the order 1-2-3-4 or the symmetric 1-2-3-4-4-3-2-1 (positions 5–8)."""
+    session = own_session(db, user, session_id)
     response = redirect(f"/lab/sessions/{session.id}")
     try:
         if symmetric not in ("on", "off"):
@@ -203,11 +217,13 @@ def set_order(
 @router.post("/sessions/{session_id}/wait", dependencies=[CsrfProtected, RowWriteSession])
 def wait_for_warm_up(
     request: Request,
-    session: SimulatorSession,
+    session_id: OwnSessionId,
+    user: CurrentUser,
     db: SessionDep,
     minutes: Annotated[str, Form(max_length=8)] = "",
 ):
     """Let the simulated gyro warm up: its clock runs on by the minutes asked (1–60)."""
+    session = recordable_session(db, user, session_id, InputMethod.simulator)
     response = redirect(f"/lab/sessions/{session.id}#sim-warm-up")
     try:
         wanted = int(minutes)
@@ -238,8 +254,8 @@ def results_endpoint(session: OwnedSession, db: SessionDep):
 
 
 @router.post("/sessions/{session_id}/submit", dependencies=[CsrfProtected, RowWriteSession])
-def submit_session(request: Request, session_id: ObjectId, user: CurrentUser, db: SessionDep):
-    session = own_session(db, user, session_id)  # the write lock, in the handler's own trip
+def submit_session(request: Request, session_id: OwnSessionId, user: CurrentUser, db: SessionDep):
+    session = own_session(db, user, session_id)
     response = redirect(f"/lab/sessions/{session.id}")
     try:
         attempt = submit(db, session)

@@ -11,7 +11,8 @@ from fastapi.responses import JSONResponse, Response
 
 from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
-from app.lab.deps import OwnedSession
+from app.lab.deps import OwnedSession, OwnSessionId
+from app.lab.service import own_session
 from app.models import DISCUSSION_MAX
 from app.reports.class_zip import find_job, job_state, start_class_zip
 from app.reports.discussion import save_discussion
@@ -103,10 +104,12 @@ def _zip_base(target) -> str:
 @router.post("/lab/sessions/{session_id}/discussion", dependencies=[CsrfProtected, RowWriteSession])
 def save_discussion_page(
     request: Request,
-    session: OwnedSession,
+    session_id: OwnSessionId,
+    user: CurrentUser,
     db: SessionDep,
     discussion: Annotated[str, Form(max_length=DISCUSSION_MAX * 2)] = "",
 ):
+    session = own_session(db, user, session_id)
     response = redirect(f"/lab/sessions/{session.id}#discussion")
     try:
         save_discussion(db, session, discussion)
