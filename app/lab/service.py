@@ -19,7 +19,7 @@ from app.core.units import canonical_unit, to_deg_per_hour
 from app.db import lock_rows
 from app.lab.partners import is_member
 from app.lab.sim import nominal_angle
-from app.lab.store import NewTake, append_samples, check_position, store_take, store_takes
+from app.lab.store import NewTake, append_samples, check_position, store_takes
 from app.models import Assignment, InputMethod, LabSession, Take, User
 
 
@@ -94,20 +94,10 @@ def record_position(
     temperatures: np.ndarray | None = None,
 ) -> Take:
     """Store one position's readings (in ``unit``) as a new take, replacing the last."""
-    check_position(session, part, position)
-    reading = Reading.of(session, part, position, values, unit, angle_deg)
-    return store_take(
-        db,
-        session,
-        part=part,
-        position=position,
-        angle_deg=reading.angle_deg,
-        values=reading.values,
-        times=times,
-        source=source,
-        unit=reading.unit,
-        temperatures=temperatures,
-    )
+    new = _new_take(session, part, position, values, unit, angle_deg, times, temperatures)
+    return store_takes(
+        db, session, part=part, takes=[new], source=source, unit=canonical_unit(unit)
+    )[0]
 
 
 def record_positions(
@@ -122,15 +112,22 @@ def record_positions(
     times: dict[int, np.ndarray] | None = None,
 ) -> list[int]:
     """Store several positions at once (a grid or a file); returns the positions saved."""
-    takes = []
-    for position, values in sorted(columns.items()):
-        check_position(session, part, position)
-        reading = Reading.of(session, part, position, values, unit, (angles or {}).get(position))
-        takes.append(
-            NewTake(position, reading.angle_deg, reading.values, (times or {}).get(position))
-        )
+    angles, times = angles or {}, times or {}
+    takes = [
+        _new_take(session, part, position, values, unit, angles.get(position), times.get(position))
+        for position, values in sorted(columns.items())
+    ]
     store_takes(db, session, part=part, takes=takes, source=source, unit=canonical_unit(unit))
     return sorted(columns)
+
+
+def _new_take(
+    session, part, position, values, unit, angle_deg, times=None, temperatures=None
+) -> NewTake:
+    """One position's readings in °/h at their dial angle, its number checked first."""
+    check_position(session, part, position)
+    reading = Reading.of(session, part, position, values, unit, angle_deg)
+    return NewTake(position, reading.angle_deg, reading.values, times, temperatures)
 
 
 def append_readings(

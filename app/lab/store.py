@@ -1,12 +1,12 @@
 """A lab session's recordings in the database: takes (one per recording of a position,
-never deleted, superseded by a re-recording), their samples, and the checks on them.
+never deleted, superseded by a re-recording), their samples, and the checks on them (the
+readings' own checks: ``lab.reading_checks``).
 
 Every number comes from ``app.core``; this module only moves data in and out.
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,6 +14,7 @@ from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
 from app.lab.quota import check_storage
+from app.lab.reading_checks import check_angle_and_times, check_temperatures, check_values
 from app.lab.recent_samples import hold
 from app.lab.samples import chunks, unpack
 from app.lab.sim import FIRST_PASS, position_count
@@ -30,7 +31,6 @@ from app.models import (
 PARTS = tuple(Part)
 POSITIONS = 8  # the most a part can have: the symmetric order 1-2-3-4-4-3-2-1
 MAX_SAMPLES_PER_POSITION = 1_000_000
-PLAUSIBLE_RATE_DEG_H = 7200.0  # 2 °/s: a gyro at rest reads Earth's rate plus its bias
 
 
 def current_takes(db: Session, session_id: int) -> list[Take]:
@@ -231,9 +231,9 @@ def _check_new_take(
             "lab.too_many_samples",
             limit=MAX_SAMPLES_PER_POSITION,
         )
-    _check_values(session, position, values)
-    _check_angle_and_times(position, new.angle_deg, new.times, values.size)
-    _check_temperatures(position, new.temperatures, values.size)
+    check_values(session, position, values)
+    check_angle_and_times(position, new.angle_deg, new.times, values.size)
+    check_temperatures(position, new.temperatures, values.size)
     check_storage(db, session, values, new.times, new.temperatures)
     if check_minimum and values.size < session.min_readings:
         raise UserError(
@@ -310,9 +310,9 @@ def append_samples(
             "lab.too_many_samples",
             limit=MAX_SAMPLES_PER_POSITION,
         )
-    _check_values(session, position, values)
-    _check_angle_and_times(position, angle_deg, times, values.size)
-    _check_temperatures(position, temperatures, values.size)
+    check_values(session, position, values)
+    check_angle_and_times(position, angle_deg, times, values.size)
+    check_temperatures(position, temperatures, values.size)
     existing = db.exec(
         select(SampleChunk).where(SampleChunk.take_id == take.id).order_by(SampleChunk.seq)
     ).all()
@@ -383,50 +383,3 @@ def _copy_take(db: Session, take: Take, rows: list[SampleChunk]) -> tuple[Take, 
     ]
     db.add_all(copied)
     return copy, copied
-
-
-MAX_ANGLE_DEG = 3600.0  # ten turns of the dial: anything beyond is a typing mistake
-
-
-def _check_angle_and_times(
-    position: int, angle_deg: float, times: np.ndarray | None, n_values: int
-) -> None:
-    if not math.isfinite(angle_deg) or abs(angle_deg) > MAX_ANGLE_DEG:
-        raise UserError(
-            "lab.bad_angle",
-            position=position,
-            limit=MAX_ANGLE_DEG,
-        )
-    if times is not None and (times.size != n_values or not np.all(np.isfinite(times))):
-        raise UserError(
-            "lab.bad_times",
-            position=position,
-        )
-
-
-PLAUSIBLE_TEMPERATURE_C = 200.0  # a case temperature beyond ±200 °C is a decoding error
-
-
-def _check_temperatures(position: int, temperatures: np.ndarray | None, n_values: int) -> None:
-    if temperatures is None:
-        return
-    if (
-        temperatures.size != n_values
-        or not np.all(np.isfinite(temperatures))
-        or float(np.max(np.abs(temperatures), initial=0.0)) > PLAUSIBLE_TEMPERATURE_C
-    ):
-        raise UserError(
-            "lab.bad_temperatures",
-            position=position,
-            limit=PLAUSIBLE_TEMPERATURE_C,
-        )
-
-
-def _check_values(session: LabSession, position: int, values: np.ndarray) -> None:
-    if not np.all(np.isfinite(values)):
-        raise UserError("readings.not_finite", position=position)
-    if values.size and max(float(values.max()), -float(values.min())) > PLAUSIBLE_RATE_DEG_H:
-        raise UserError(
-            "lab.implausible_rate",
-            position=position,
-        )
