@@ -155,5 +155,5 @@ def _failed(request: Request, settings: Settings, error: Exception):
     # the log, where an administrator looks when sign-in stops working
     reason = str(reason) or type(error).__name__
     log.warning("single sign-on failed: %s: %s", type(error).__name__, reason)
-    context = login_view(settings, error="sso.failed", reason=str(reason)[:200])
+    context = login_view(settings, error="sso.failed", reason=reason[:200])
     return render(request, "auth/login.html", context, 400)
