@@ -50,6 +50,30 @@ def cpu_seconds(pids: list[int]) -> float:
     return total / TICKS
 
 
+def thread_cpu(pids: list[int]) -> float:
+    """CPU seconds of every thread of these processes (schedstat: nanoseconds)."""
+    total = 0
+    for pid in pids:
+        for task in Path(f"/proc/{pid}/task").glob("*"):
+            try:
+                total += int((task / "schedstat").read_text().split()[0])
+            except (OSError, ValueError, IndexError):
+                continue
+    return total / 1e9
+
+
+def postgres_pids() -> list[int]:
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if (entry / "comm").read_text().strip() == "postgres":
+                    pids.append(int(entry.name))
+            except OSError:
+                continue
+    return pids
+
+
 def server_pids(root: int) -> list[int]:
     """The server process and its worker processes."""
     pids = [root]

@@ -41,6 +41,8 @@ from websockets.asyncio.client import connect
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from capacity import cpu_seconds, postgres_pids, server_pids  # noqa: E402  (bench/)
+
 from tests.e2e.conftest import running_server  # noqa: E402
 from tests.pgserver import PostgresServer  # noqa: E402
 
@@ -88,6 +90,7 @@ class Tally:
     frames: int = 0
     streamed_samples: int = 0
     ws_extensions: set[str] = field(default_factory=set)  # what the server agreed to
+    cpu: tuple[float, float, float] = (0.0, 0.0, 0.0)  # s: server, PostgreSQL, load generator
 
     async def request(
         self, client: httpx.AsyncClient, method: str, url: str, route: str, ok=(200,), **kw
@@ -383,6 +386,8 @@ def report(name: str, tally: Tally, wall: float, lost: int, checked: int, worker
         f"- stream frame lag behind the simulated clock: p50 {percentile_ms(tally.frame_lags, 50)}"
         f" ms, p95 {percentile_ms(tally.frame_lags, 95)} ms, p99"
         f" {percentile_ms(tally.frame_lags, 99)} ms, max {percentile_ms(tally.frame_lags, 100)} ms",
+        f"- CPU used during the class: server {tally.cpu[0]:.1f} s, PostgreSQL"
+        f" {tally.cpu[1]:.1f} s, load generator {tally.cpu[2]:.1f} s",
         "- WebSocket extensions the server agreed to: "
         + (", ".join(sorted(tally.ws_extensions)) or "none"),
         "",
@@ -433,7 +438,17 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
                     text, passed = asyncio.run(login_burst(server.url, args.students))
                     name = "SQLite" if backend == "sqlite" else "PostgreSQL"
                     return f"### {name} ({workers} worker{'s' * (workers > 1)})\n{text}", passed
+                pids = server_pids(server.process.pid)
+
+                def cpu() -> tuple[float, float, float]:
+                    # whole processes (threads that have ended included), in clock ticks
+                    database = cpu_seconds(postgres_pids()) if backend == "postgresql" else 0.0
+                    return cpu_seconds(pids), database, time.process_time()
+
+                before = cpu()
                 tally, wall = asyncio.run(run_class(server.url, course, assignment, args))
+                after = cpu()
+                tally.cpu = tuple(b - a for a, b in zip(before, after, strict=True))
             lost, checked = lost_samples(tally, database_url)
             if tally.errors:  # keep the server's log for the post-mortem
                 kept = Path(tempfile.gettempdir()) / f"gyrolab-load-{backend}-server.log"

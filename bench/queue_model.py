@@ -2,40 +2,56 @@
 
     .venv/bin/python bench/queue_model.py [--students 60 120] [--backend sqlite|postgresql]
                                           [--measure 3] [--compare FILE ...]
+                                          [--costs FILE] [--department STUDENTS WORKERS ...]
 
 1. Measure: the load test's own scenario (``load_test.student``) runs for ``--measure``
    students one after another -- nothing else runs -- against a real server, and every
    request's CPU is read: the server's (all its threads, ``/proc/<pid>/task/*/schedstat``,
-   nanoseconds), PostgreSQL's (every ``postgres`` process) and the load generator's own
-   (``time.process_time``).  What a student's stream costs besides its requests (frames,
-   the saves at each position's end) is divided by the frames it received.
+   nanoseconds; a thread that ends keeps its last reading), of it the event loop's (the
+   worker's main thread), PostgreSQL's (every ``postgres`` process) and the load
+   generator's own (``time.process_time``).  A probe loaded into that server only
+   (``bench/probe/sitecustomize.py``) counts each request's SQLite calls and thread-pool
+   trips: the places where its threads give up the interpreter.  What a student's stream
+   costs besides its requests (frames, the saves at each position's end) is divided by
+   the frames it received.  The CPU of one password check is measured in process.
 2. Predict: a discrete-event simulation replays the scenario for N students -- the same
-   start times as the load test, each request's client work, then the server's, then
-   PostgreSQL's, then the client's again; each stream position 15 frames 0.2 s apart --
-   on processor-sharing pools: the load generator (one core: one Python thread), the
-   server (one core per worker: the GIL), PostgreSQL; all on the machine's cores (when
-   more is asked of them than they have, every pool slows in proportion).
+   start times as the load test; each request's client work, the event loop's first half
+   (the request read and routed), a write place (state-changing requests: 8 per worker,
+   ``web.write_admission``), the threads' work (on SQLite inside the one write lock for
+   the writes; a log-in's password hash outside the interpreter, at most 4 at once), the
+   database's, the event loop's second half, the client's again; each stream position
+   15 frames 0.2 s apart.  Each worker's interpreter runs one thread at a time, handed on
+   round robin when a thread gives it up (at each counted call or trip; the event loop
+   at each wake-up) or after 5 ms with others waiting (CPython's GIL); the event loop
+   runs its tasks one by one.  The load generator is one Python thread; every pool shares
+   the machine's cores (when more is asked of them than they have, each slows in
+   proportion).
 3. Compare: ``--compare`` reads the tables ``load_test.py`` printed and puts each route's
-   measured p95 beside the prediction.
+   measured p95 beside the prediction, and the CPU the run used beside the CPU the costs
+   ask for.
 
-What the model leaves out, on purpose: SQLite's one writer (its lock is held 0.2–6 ms a
-write, ``bench/README.md``: < 5 % busy at 60 students), the write admission queue (8 per
-worker) and the interpreter's 5 ms thread switch interval.  Where measured and predicted
-part, those are the first suspects.
+What the model still leaves out: the kernel's scheduling of threads on the cores (a
+thread holding the interpreter can be descheduled), the cost of handing the interpreter
+on, and that a class's requests cost less CPU each than one student's alone (the CPU
+check: 0.64–0.87× on the server).  ``bench/README.md`` has how far it is from measured.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import heapq
+import json
 import os
 import random
 import re
+import struct
 import sys
 import tempfile
 import time
 from collections import defaultdict
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -45,7 +61,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import load_test  # noqa: E402  (bench/, the script's folder)
-from capacity import server_pids  # noqa: E402
+from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
 
 from tests.e2e.conftest import running_server  # noqa: E402
 from tests.pgserver import PostgresServer  # noqa: E402
@@ -59,59 +75,87 @@ STREAM = "stream frame"
 # --- 1. measuring CPU per request ----------------------------------------------------------
 
 
-def thread_cpu(pids: list[int]) -> float:
-    """CPU seconds of every thread of these processes (schedstat: nanoseconds)."""
-    total = 0
-    for pid in pids:
-        for task in Path(f"/proc/{pid}/task").glob("*"):
-            try:
-                total += int((task / "schedstat").read_text().split()[0])
-            except (OSError, ValueError, IndexError):
-                continue
-    return total / 1e9
+PROBE = Path(__file__).resolve().parent / "probe"  # its sitecustomize counts GIL releases
 
 
-def postgres_pids() -> list[int]:
-    pids = []
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                if (entry / "comm").read_text().strip() == "postgres":
-                    pids.append(int(entry.name))
-            except OSError:
-                continue
-    return pids
+def thread_cpu_of(pid: int, tid: int) -> float:
+    """CPU seconds of one thread (schedstat), 0 if it is gone."""
+    try:
+        return int(Path(f"/proc/{pid}/task/{tid}/schedstat").read_text().split()[0]) / 1e9
+    except (OSError, ValueError, IndexError):
+        return 0.0
+
+
+def probe_counts(path: Path) -> tuple[int, int]:
+    """The server's SQLite calls and thread-pool trips so far, as the probe counted them."""
+    return struct.unpack("<2q", path.read_bytes())
 
 
 class CostTally(load_test.Tally):
-    """The load test's tally, also recording each request's CPU: server, database, client."""
+    """The load test's tally, also recording each request's cost: server CPU, database CPU,
+    client CPU, and the times the server's thread gave up the interpreter."""
 
-    def __init__(self, server: list[int]):
+    def __init__(self, server: list[int], probe: Path):
         super().__init__()
-        self.server = server
-        self.costs: dict[str, list[tuple[float, float, float]]] = defaultdict(list)
+        self.server, self.probe = server, probe
+        self.costs: dict[str, list[tuple[float, ...]]] = defaultdict(list)
+        self.threads: dict[tuple[int, str], float] = {}  # CPU last seen, ended threads kept
 
-    def snapshot(self) -> tuple[float, float]:
-        return thread_cpu(self.server), thread_cpu(postgres_pids())
+    def snapshot(self) -> tuple[float, float, float, float]:
+        """Server CPU, database CPU, SQLite calls, thread-pool trips, the event loops' CPU
+        (the workers' main
+        threads) so far.  The thread pool's idle threads end after a while: each thread's
+        CPU is kept as last seen, so an ended thread's work is not lost from the total."""
+        for pid in self.server:
+            for task in Path(f"/proc/{pid}/task").glob("*"):
+                self.threads[pid, task.name] = thread_cpu_of(pid, int(task.name)) or (
+                    self.threads.get((pid, task.name), 0.0)
+                )
+        loops = sum(self.threads.get((pid, str(pid)), 0.0) for pid in self.server)
+        return (
+            sum(self.threads.values()),
+            thread_cpu(postgres_pids()),
+            *probe_counts(self.probe),
+            loops,
+        )
 
     async def request(self, client, method, url, route, ok=(200,), **kw):
-        server0, pg0 = self.snapshot()
+        before = self.snapshot()
         client0 = time.process_time()
         try:
             return await super().request(client, method, url, route, ok=ok, **kw)
         finally:
             client_cpu = time.process_time() - client0
-            server1, pg1 = self.snapshot()
-            self.costs[route].append((server1 - server0, pg1 - pg0, client_cpu))
+            server, db, calls, trips, loop = np.subtract(self.snapshot(), before)
+            self.costs[route].append((server, db, client_cpu, calls, trips, loop))
 
     def timed_total(self) -> np.ndarray:
-        """(server, database, client) CPU of every timed request so far."""
+        """(server, database, client, calls, trips, loop) of every timed request so far."""
         rows = [cost for values in self.costs.values() for cost in values]
-        return np.sum(rows, axis=0) if rows else np.zeros(3)
+        return np.sum(rows, axis=0) if rows else np.zeros(6)
 
 
-def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, float]]:
-    """Mean (server, database, client) CPU seconds per route and per stream frame."""
+@contextlib.contextmanager
+def probed_server(probe: Path) -> Iterator[None]:
+    """Servers started inside load the probe (bench/probe/sitecustomize.py), counting into
+    ``probe``."""
+    saved = {name: os.environ.get(name) for name in ("GYROLAB_BENCH_PROBE", "PYTHONPATH")}
+    os.environ["GYROLAB_BENCH_PROBE"] = str(probe)
+    os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(PROBE), saved["PYTHONPATH"]]))
+    try:
+        yield
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, float, float]]:
+    """Per route and per stream frame, the means of: CPU seconds of the server, the
+    database and the client; the server's SQLite calls and thread-pool trips (the probe
+    does not count psycopg's calls); the CPU seconds of it on the event loop."""
     args = argparse.Namespace(students=students, dwell=60.0, speed=20.0, ramp=0.0)
     with tempfile.TemporaryDirectory(prefix="gyrolab-model-") as var:
         pg = None
@@ -125,9 +169,14 @@ def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, 
             env = {**os.environ, "GYROLAB_VAR_DIR": var, "GYROLAB_DATABASE_URL": database_url}
             course, assignment = load_test.seed(env, students + 1)
             url = database_url if backend == "postgresql" else None
-            with running_server(Path(var), *serve_args, database_url=url) as server:
+            probe = Path(var) / "probe.bin"
+            probe.write_bytes(bytes(16))
+            with (
+                probed_server(probe),
+                running_server(Path(var), *serve_args, database_url=url) as server,
+            ):
                 pids = server_pids(server.process.pid)
-                tally = CostTally(pids)
+                tally = CostTally(pids, probe)
                 stream = []
 
                 async def everyone():
@@ -137,11 +186,12 @@ def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, 
                         students, server.url, assignment, load_test.Tally(), args
                     )
                     for index in range(students):
-                        before = np.array([*tally.snapshot(), time.process_time()])
+                        before = np.array(tally.snapshot())
+                        before = np.insert(before, 2, time.process_time())
                         timed = tally.timed_total()
                         frames = tally.frames
                         await load_test.student(index, server.url, assignment, tally, args)
-                        after = np.array([*tally.snapshot(), time.process_time()])
+                        after = np.insert(np.array(tally.snapshot()), 2, time.process_time())
                         outside = (after - before) - (tally.timed_total() - timed)
                         stream.append(outside / max(tally.frames - frames, 1))
                     await teacher_costs(tally, server.url, course, assignment)
@@ -173,6 +223,19 @@ async def teacher_costs(tally, base: str, course: int, assignment: int) -> None:
             await tally.request(client, "GET", path, "GET dashboard (teacher)")
 
 
+def password_hash_cpu(tries: int = 5) -> float:
+    """CPU seconds of one password check (argon2id at the app's cost), median of ``tries``."""
+    from app.accounts.security import hash_password, verify_password
+
+    stored = hash_password("queue-model-pass")
+    spent = []
+    for _ in range(tries):
+        began = time.thread_time()
+        verify_password("queue-model-pass", stored)
+        spent.append(time.thread_time() - began)
+    return float(np.median(spent))
+
+
 # --- 2. the simulation ---------------------------------------------------------------------
 
 
@@ -198,22 +261,39 @@ def student_script():
     yield "request", "POST /lab/sessions/{id}/submit"
 
 
-# SQLite's one writer: a write request's server work runs holding the lock (log-in: only
-# its last 2 ms -- the password hash comes first, without it).  PostgreSQL: row locks, none.
+# SQLite's one writer: a write request's server work runs holding the lock.  A log-in
+# writes twice (its attempt is charged, then uncharged with the session row added), each
+# time for LOGIN_LOCKED_S; its password hash comes between, outside the lock and outside
+# the interpreter (argon2-cffi releases the GIL), in one of ``login_hash_slots`` (4) per
+# worker.  PostgreSQL: row locks, none.
 WRITES = {
     "POST /lab/sessions",
     "POST /lab/sessions/{id}/csv",
     "POST /lab/sessions/{id}/submit",
     "POST /lab/sessions/{id}/turn",
 }
-LOGIN_LOCKED_S = 0.002
+LOGIN = "POST /login"
+LOGIN_LOCKED_S = 0.001
+# state-changing requests wait for one of a worker's write places (web.write_admission,
+# GYROLAB_WRITE_CONCURRENCY) and hold it until the server has answered; the CSV preview is
+# declared read-only and passes
+WRITE_SLOTS = 8
+HASH_SLOTS = 4
+
+
+SWITCH_INTERVAL_S = 0.005  # CPython's sys.getswitchinterval()
 
 
 class Job:
-    __slots__ = ("pool", "left", "done")
+    """CPU work in one pool; in the server's, cut into ``segments`` by the places where
+    the thread gives up the interpreter (and queues for it again)."""
 
-    def __init__(self, pool: str, work: float, done):
+    __slots__ = ("pool", "left", "done", "segment", "segment_left", "worker")
+
+    def __init__(self, pool: str, work: float, done, segments: float = 1.0, worker: int = 0):
         self.pool, self.left, self.done = pool, max(work, 1e-6), done
+        self.segment = self.segment_left = self.left / max(segments, 1.0)
+        self.worker = worker
 
 
 def simulate(
@@ -224,13 +304,30 @@ def simulate(
     ramp: float = 3.0,
     one_writer: bool = True,
     clients_elsewhere: bool = False,
+    hash_s: float = 0.0,
+    write_slots: int = WRITE_SLOTS,
+    switch_interval_s: float = SWITCH_INTERVAL_S,
+    teacher: bool = True,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``one_writer``: write requests hold one lock while the server works on them;
     ``clients_elsewhere``: the clients are browsers on their own machines (a department),
-    not a load generator sharing the server's cores."""
+    not a load generator sharing the server's cores; ``hash_s``: the CPU of a log-in's
+    password hash (its part of the log-in's server CPU runs outside the interpreter);
+    ``write_slots``: each worker's write places (0: no admission queue);
+    ``teacher``: a teacher's dashboard is read every 2 s while the class runs;
+    ``switch_interval_s``: each worker's interpreter runs one thread at a time, handed on
+    round robin when the thread gives it up (a database call, a trip to the thread pool)
+    or after this long with others waiting (0: the server's work is shared evenly instead,
+    as processor sharing).
+
+    The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
+    back queues behind the threads already waiting; the one holding it keeps it until
+    it gives it up or another has waited ``switch_interval_s``.  A request that makes
+    many short database calls therefore waits about one turn of the others per call."""
     capacity = {"client": float("inf") if clients_elsewhere else 1.0}
-    capacity |= {"server": float(workers), "db": cores}
+    capacity |= {"server": float(workers), "db": cores, "hash": float(HASH_SLOTS * workers)}
+    capacity["loop"] = float(workers)
     now = 0.0
     jobs: list[Job] = []
     timers: list[tuple[float, int, object]] = []  # (time, tie-break, callback)
@@ -241,44 +338,122 @@ def simulate(
     def at(when: float, callback) -> None:
         heapq.heappush(timers, (when, next(order), callback))
 
-    lock_queue: list = []
-    lock_held = [False]
+    class Gate:
+        """A FIFO semaphore of the simulation: ``enter(start)`` runs ``start`` when a place
+        is free; ``leave()`` hands the place to the next in line."""
 
-    def locked(start) -> None:
-        if lock_held[0]:
-            lock_queue.append(start)
-        else:
-            lock_held[0] = True
-            start()
+        def __init__(self, places: float) -> None:
+            self.places, self.waiting = places, []
 
-    def unlock() -> None:
-        if lock_queue:
-            lock_queue.pop(0)()
-        else:
-            lock_held[0] = False
+        def enter(self, start) -> None:
+            if self.places > 0:
+                self.places -= 1
+                start()
+            else:
+                self.waiting.append(start)
+
+        def leave(self) -> None:
+            if self.waiting:
+                self.waiting.pop(0)()
+            else:
+                self.places += 1
+
+    spent: dict[str, float] = defaultdict(float)  # CPU asked of each, s
+    lock = Gate(1)
+    lock_held: list[float] = []  # how long each write held it, s
+    slots = Gate(write_slots * workers if write_slots else float("inf"))
+
+    interpreters: list[list[Job]] = [[] for _ in range(workers)]  # [0] holds it
+    turn_ends = [0.0] * workers
+    pick = random.Random(2026)
+
+    def server_job(work: float, done, releases: float, worker: int) -> None:
+        job = Job("server", work, done, releases + 1, worker)
+        if not switch_interval_s:
+            jobs.append(job)
+            return
+        queue = interpreters[worker]
+        queue.append(job)
+        if len(queue) <= 2:  # it now holds the interpreter, or is the first to wait
+            turn_ends[worker] = now + switch_interval_s
+
+    loops: list[list[list]] = [[] for _ in range(workers)]  # [work left, done] in order
+
+    def loop_task(work: float, done, worker: int, wakeups: float) -> None:
+        """Work on the worker's event loop: one thread, one task after another, each
+        taking the interpreter ``wakeups`` times (uvloop's callbacks take it one by one)."""
+        tasks = loops[worker]
+        tasks.append([max(work, 1e-6), done, wakeups])
+        if len(tasks) == 1:  # the loop wakes up and wants the interpreter
+            loop_thread = Job("loop", tasks[0][0], None, wakeups, worker)
+            if not switch_interval_s:
+                jobs.append(loop_thread)
+                return
+            queue = interpreters[worker]
+            queue.append(loop_thread)
+            if len(queue) <= 2:
+                turn_ends[worker] = now + switch_interval_s
 
     def phases(route: str, then) -> None:
-        server, db, client = costs[route]
-        stages = [("client", client / 2), ("server", server), ("db", db), ("client", client / 2)]
-        if one_writer and route == "POST /login":
-            stages[1:2] = [("server", server - LOGIN_LOCKED_S), ("lock", LOGIN_LOCKED_S)]
+        server, db, client, calls, trips, loop = costs[route]
+        releases = calls + trips  # a thread gives the interpreter up at each, and
+        # the event loop at each wake-up: the request's bytes, its answer, each trip's end
+        worker = pick.randrange(workers)  # the kernel hands connections to workers
+        spent["server"] += server
+        spent["db"] += db
+        spent["client"] += client
+        slotted = route in WRITES or route == LOGIN
+        threads = max(server - loop - (hash_s if route == LOGIN else 0.0), 1e-6)
+        if route == LOGIN:
+            if one_writer:
+                locked = min(LOGIN_LOCKED_S, threads / 3)
+                work = [("server", threads - 2 * locked), ("lock", locked), ("hash", hash_s),
+                        ("lock", locked)]  # fmt: skip
+            else:
+                work = [("server", threads), ("hash", hash_s)]
         elif one_writer and route in WRITES:
-            stages[1] = ("lock", server)
+            work = [("lock", threads)]
+        else:
+            work = [("server", threads)]
+        stages = [("client", client / 2), ("loop", loop / 2)]
+        stages += [("enter", 0.0)] if slotted else []
+        stages += [*work, ("db", db)]
+        stages += [("leave", 0.0)] if slotted else []
+        stages += [("loop", loop / 2), ("client", client / 2)]
 
         def run(i: int) -> None:
             if i == len(stages):
                 then()
                 return
             pool, work = stages[i]
-            if pool == "lock":
+            if pool == "enter":
+                slots.enter(lambda: run(i + 1))
+            elif pool == "leave":
+                slots.leave()
+                run(i + 1)
+            elif pool == "lock":
 
                 def release() -> None:
-                    unlock()
+                    lock_held.append(now - taken[0])
+                    lock.leave()
                     run(i + 1)
 
-                locked(lambda: jobs.append(Job("server", work, release)))
-                return
-            jobs.append(Job(pool, work, lambda: run(i + 1)))
+                def take() -> None:
+                    taken[0] = now
+                    server_job(work, release, share(work), worker)
+
+                taken = [0.0]
+                lock.enter(take)
+            elif pool == "server":
+                server_job(work, lambda: run(i + 1), share(work), worker)
+            elif pool == "loop":
+                loop_task(work, lambda: run(i + 1), worker, 1 + trips / 2)
+            else:
+                jobs.append(Job(pool, work, lambda: run(i + 1)))
+
+        def share(work: float) -> float:
+            """This stage's part of the request's releases (in proportion to its CPU)."""
+            return releases * work / threads
 
         run(0)
 
@@ -310,46 +485,97 @@ def simulate(
         for j in range(1, FRAMES_PER_POSITION + 1):
             at(now + j * FRAME_SECONDS, lambda: phases(STREAM, frame_done))
 
-    def teacher() -> None:
+    def watch() -> None:
         if finished[0] < students:
-            request("GET dashboard (teacher)", lambda: at(now + TEACHER_PERIOD_S, teacher))
+            request("GET dashboard (teacher)", lambda: at(now + TEACHER_PERIOD_S, watch))
 
     for index in range(students):
         start = random.Random(index).uniform(0, ramp)  # the load test's ramp
         at(start, lambda: run_student(student_script()))
-    at(0.0, teacher)
+    if teacher:
+        at(0.0, watch)
 
-    while jobs or timers:
+    def running() -> list[Job]:
+        return [queue[0] for queue in interpreters if queue]
+
+    while jobs or timers or any(interpreters):
         counts = defaultdict(int)
         for job in jobs:
             counts[job.pool] += 1
+        holders = running()
+        if holders:
+            counts["server"] += len(holders)
         demand = {pool: min(n, capacity[pool]) for pool, n in counts.items()}
         shared = [pool for pool in demand if not (clients_elsewhere and pool == "client")]
         asked = sum(demand[pool] for pool in shared)
         scale = min(1.0, cores / asked) if asked else 1.0
         rate = {pool: demand[pool] * (scale if pool in shared else 1.0) / counts[pool]
                 for pool in counts}  # fmt: skip
+        if holders:
+            rate["interpreter"] = scale  # a holder runs on one core, shared with the rest
         next_done = min((job.left / rate[job.pool] for job in jobs), default=float("inf"))
+        for job in holders:
+            next_done = min(next_done, min(job.left, job.segment_left) / rate["interpreter"])
+            if len(interpreters[job.worker]) > 1:
+                next_done = min(next_done, max(turn_ends[job.worker] - now, 0.0))
         next_timer = timers[0][0] - now if timers else float("inf")
         step = min(next_done, next_timer)
         for job in jobs:
             job.left -= rate[job.pool] * step
+        for job in holders:
+            job.left -= rate["interpreter"] * step
+            job.segment_left -= rate["interpreter"] * step
         now += step
         done = [job for job in jobs if job.left <= 1e-9]
         jobs = [job for job in jobs if job.left > 1e-9]
+        for job in [job for job in done if job.pool == "loop"]:  # processor sharing only
+            done.remove(job)
+            tasks = loops[job.worker]
+            done.append(Job("loop", 0.0, tasks.pop(0)[1]))
+            if tasks:
+                jobs.append(Job("loop", tasks[0][0], None, tasks[0][2], job.worker))
+        for job in holders:
+            queue = interpreters[job.worker]
+            if job.left <= 1e-9 and job.pool == "loop":
+                tasks = loops[job.worker]
+                done.append(Job("loop", 0.0, tasks.pop(0)[1]))
+                if tasks:  # its next callback takes the interpreter again, behind others
+                    job.left, job.segment = tasks[0][0], tasks[0][0] / tasks[0][2]
+                    job.segment_left = job.segment
+                    queue.append(queue.pop(0))
+                else:
+                    queue.pop(0)  # the loop goes back to waiting for sockets
+            elif job.left <= 1e-9:
+                queue.pop(0)
+                done.append(job)
+            elif job.segment_left <= 1e-9:  # a call, or the loop's next callback: queues again
+                job.segment_left = job.segment
+                queue.append(queue.pop(0))
+            elif len(queue) > 1 and now >= turn_ends[job.worker] - 1e-12:
+                queue.append(queue.pop(0))  # another waited a whole interval
+            else:
+                continue
+            turn_ends[job.worker] = now + switch_interval_s
         for job in done:
             job.done()
         while timers and timers[0][0] <= now + 1e-12:
             _, _, callback = heapq.heappop(timers)
             callback()
-    return {"latencies": latencies, "wall": now}
+    return {"latencies": latencies, "wall": now, "cpu": dict(spent), "lock held": lock_held}
 
 
 # --- 3. measured against predicted -----------------------------------------------------------
 
 
-def measured_p95(path: Path) -> dict[str, dict[int, float]]:
-    """Per backend heading ("SQLite", "PostgreSQL") → route → p95 ms, from load_test's output."""
+CPU_LINE = re.compile(
+    r"CPU used during the class: server ([\d.]+) s, PostgreSQL ([\d.]+) s, "
+    r"load generator ([\d.]+) s"
+)
+
+
+def measured_p95(path: Path) -> dict[str, dict[str, float]]:
+    """Per backend heading ("SQLite", "PostgreSQL") → route → p95 ms, from load_test's output
+    (and, under the keys "cpu server", "cpu db", "cpu client", the CPU the run used, s)."""
     tables: dict[str, dict[str, float]] = {}
     backend = None
     for line in path.read_text().splitlines():
@@ -357,6 +583,10 @@ def measured_p95(path: Path) -> dict[str, dict[int, float]]:
         if heading:
             backend = heading.group(1)
             tables.setdefault(backend, {})
+        used = CPU_LINE.search(line)
+        if backend and used:
+            for key, value in zip(("server", "db", "client"), used.groups(), strict=True):
+                tables[backend][f"cpu {key}"] = float(value)
         cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
         if backend and len(cells) == 6 and cells[1].isdigit():
             tables[backend][cells[0]] = float(cells[3])
@@ -373,16 +603,42 @@ def main() -> int:
     parser.add_argument(
         "--department",
         type=int,
-        nargs=2,
-        metavar=("STUDENTS", "WORKERS"),
-        help="also predict a department: STUDENTS at once on WORKERS workers, one core each "
-        "(clients are browsers elsewhere; each worker simulated with its share of students)",
+        nargs="+",
+        metavar="N",
+        help="also predict a department: STUDENTS WORKERS [WORKERS ...] -- STUDENTS starting "
+        "within a minute on each number of WORKERS, one core each (clients are browsers "
+        "elsewhere; each worker simulated with its share of students)",
+    )
+    parser.add_argument(
+        "--switch-interval",
+        type=float,
+        default=SWITCH_INTERVAL_S * 1000,
+        help="ms; 0 shares each worker's interpreter evenly (processor sharing) instead",
+    )
+    parser.add_argument(
+        "--write-slots", type=int, default=WRITE_SLOTS, help="per worker; 0: no admission queue"
+    )
+    parser.add_argument(
+        "--costs",
+        type=Path,
+        help="read the CPU per request from this JSON file if it exists, else measure and "
+        "write it there (to try the model again without measuring again)",
     )
     args = parser.parse_args()
-    costs = measure_costs(args.backend, args.measure)
-    print(f"CPU per request, {args.backend}, ms (server / database / load generator):")
-    for route, (server, db, client) in sorted(costs.items()):
-        print(f"  {route:42s} {server * 1000:7.2f} {db * 1000:7.2f} {client * 1000:7.2f}")
+    if args.costs and args.costs.exists():
+        saved = json.loads(args.costs.read_text())
+        costs = {route: tuple(value) for route, value in saved["costs"].items()}
+        hash_s = saved["hash_s"]
+    else:
+        costs, hash_s = measure_costs(args.backend, args.measure), password_hash_cpu()
+        if args.costs:
+            args.costs.write_text(json.dumps({"costs": costs, "hash_s": hash_s}, indent=1))
+    print(f"a log-in's password hash: {hash_s * 1000:.1f} ms of CPU, outside the interpreter")
+    print(f"per request, {args.backend}: CPU ms (server, of it on the event loop / database /"
+          " load generator), SQLite calls, thread-pool trips")  # fmt: skip
+    for route, (server, db, client, calls, trips, loop) in sorted(costs.items()):
+        print(f"  {route:42s} {server * 1000:6.2f}, {loop * 1000:5.2f} {db * 1000:6.2f}"
+              f" {client * 1000:6.2f} {calls:6.1f} {trips:5.1f}")  # fmt: skip
     workers = 1 if args.backend == "sqlite" else 2
     measured = {}
     for path in args.compare:
@@ -390,10 +646,28 @@ def main() -> int:
             measured[(backend, _students_of(path))] = table
     name = "SQLite" if args.backend == "sqlite" else "PostgreSQL"
     for students in args.students:
-        result = simulate(costs, students, workers, args.cores, one_writer=workers == 1)
         table = measured.get((name, students), {})
+
+        result = simulate(
+            costs,
+            students,
+            workers,
+            args.cores,
+            one_writer=workers == 1,
+            hash_s=hash_s,
+            write_slots=args.write_slots,
+            switch_interval_s=args.switch_interval / 1000,
+        )
         print(f"\n{students} students, {name}, {workers} worker(s): predicted wall "
               f"{result['wall']:.1f} s")  # fmt: skip
+        for key, label in (("server", "server"), ("db", "PostgreSQL"), ("client", "load gen.")):
+            asked, used = result["cpu"].get(key, 0.0), table.get(f"cpu {key}")
+            if used:
+                print(f"  CPU of the {label}: {asked:.1f} s from the costs per request, "
+                      f"{used:.1f} s used in the measured run ({used / asked:.2f}×)")  # fmt: skip
+        if result["lock held"]:
+            held = np.percentile(result["lock held"], [50, 95]) * 1000
+            print(f"  SQLite's write lock held (wall) p50 {held[0]:.1f} ms, p95 {held[1]:.1f} ms")
         print(f"  {'route':42s} {'p50':>6s} {'p95':>6s} {'measured p95':>13s} {'error':>6s}")
         for route, values in sorted(result["latencies"].items()):
             p50, p95 = (np.percentile(values, q) * 1000 for q in (50, 95))
@@ -402,15 +676,35 @@ def main() -> int:
             shown = f"{seen:.0f}" if seen else "-"
             print(f"  {route:42s} {p50:6.0f} {p95:6.0f} {shown:>13s} {error:>6s}")
     if args.department:
-        students, workers = args.department
-        share = -(-students // workers)
-        result = simulate(costs, share, 1, 1.0, ramp=60.0, one_writer=False, clients_elsewhere=True)
-        print(f"\ndepartment: {students} students within a minute on {workers} workers "
-              f"({share} per worker and core, PostgreSQL's CPU included in that core)")  # fmt: skip
-        for route, values in sorted(result["latencies"].items()):
-            p50, p95 = (np.percentile(values, q) * 1000 for q in (50, 95))
-            print(f"  {route:42s} {p50:6.0f} {p95:6.0f}")
+        department(costs, hash_s, args.department[0], args.department[1:], args.switch_interval)
     return 0
+
+
+DEPARTMENT_ROUTES = {
+    "GET /lab/sessions/{id}": "lab page",
+    "GET /lab/sessions/{id}/results.json": "results",
+    "POST /lab/sessions/{id}/csv": "CSV save",
+    "POST /lab/sessions/{id}/submit": "submit",
+    "POST /login": "log-in",
+}
+
+
+def department(costs, hash_s: float, students: int, workers: list[int], switch_ms: float):
+    """p95 per route of ``students`` starting within a minute, for each number of workers
+    (one core each, PostgreSQL's CPU counted in it; browsers elsewhere)."""
+    print(f"\ndepartment: {students} students starting within a minute, PostgreSQL; p95 ms "
+          "(one core per worker, the database's CPU included in it)")  # fmt: skip
+    header = " ".join(f"{name:>9s}" for name in DEPARTMENT_ROUTES.values())
+    print(f"  {'workers':>7s} {'each':>5s} {header} {'worst':>9s}")
+    for count in workers:
+        share = -(-students // count)
+        result = simulate(
+            costs, share, 1, 1.0, ramp=60.0, one_writer=False, clients_elsewhere=True,
+            hash_s=hash_s, switch_interval_s=switch_ms / 1000,
+        )  # fmt: skip
+        p95 = {route: np.percentile(v, 95) * 1000 for route, v in result["latencies"].items()}
+        row = " ".join(f"{p95.get(route, float('nan')):9.0f}" for route in DEPARTMENT_ROUTES)
+        print(f"  {count:7d} {share:5d} {row} {max(p95.values()):9.0f}")
 
 
 def _students_of(path: Path) -> int | None:

@@ -45,5 +45,6 @@ def test_load_test_runs_clean(database, request):
     assert done.returncode == 0, done.stdout + done.stderr
     assert "errors: 0; lost samples: 0 of 48 positions checked" in done.stdout
     assert "| POST /lab/sessions/{id}/submit | 3 |" in done.stdout
+    assert "CPU used during the class: server " in done.stdout  # the queueing model's check
     # frames go uncompressed: compressing each cost most of a frame's CPU (bench/README.md)
     assert "WebSocket extensions the server agreed to: none" in done.stdout

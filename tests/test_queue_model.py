@@ -1,0 +1,68 @@
+"""The load test's queueing model (bench/queue_model.py): its simulation against cases
+whose answer is known without it."""
+
+from __future__ import annotations
+
+import sys
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+
+import queue_model  # noqa: E402  (bench/)
+
+MS = 1e-3
+
+
+def costs(server=4 * MS, db=1 * MS, client=2 * MS, calls=10.0, trips=4.0, loop=1 * MS):
+    """The same (server, database, client, SQLite calls, thread trips, loop) for every
+    route; stream frames cost a tenth."""
+    routes = {route for kind, route in queue_model.student_script() if kind == "request"}
+    table = {route: (server, db, client, calls, trips, loop) for route in routes}
+    table["GET dashboard (teacher)"] = (server, db, client, calls, trips, loop)
+    table[queue_model.STREAM] = (server / 10, db / 10, client / 10, 1.0, 0.0, loop / 10)
+    return table
+
+
+def test_a_student_alone_waits_for_nothing_but_the_work_of_each_request():
+    result = queue_model.simulate(
+        costs(), students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
+    )
+    expected = Counter(route for kind, route in queue_model.student_script() if kind == "request")
+    assert {route: len(v) for route, v in result["latencies"].items()} == expected
+    for route, latencies in result["latencies"].items():
+        # client + server (its event loop's part included) + database, nothing waited
+        assert latencies == pytest.approx([7 * MS] * len(latencies), abs=1e-5), route
+
+
+def test_every_request_of_a_class_is_answered_and_the_cores_are_never_overdrawn():
+    students, cores = 40, 2.0
+    result = queue_model.simulate(costs(), students, workers=1, cores=cores, teacher=False)
+    expected = Counter(route for kind, route in queue_model.student_script() if kind == "request")
+    counts = {route: len(v) for route, v in result["latencies"].items()}
+    assert counts == {route: n * students for route, n in expected.items()}
+    cpu = sum(result["cpu"].values())
+    assert result["wall"] >= cpu / cores
+
+
+def test_many_short_calls_wait_a_turn_of_the_busy_threads_at_each_call():
+    """CPython's GIL: a thread that gives the interpreter up at each database call queues
+    again behind threads that hold it for their whole interval.  Writes of 60 short calls
+    among reads that never give it up: evenly shared (processor sharing), the writes wait
+    far less and the reads more -- the convoy the switch interval makes."""
+    mixed = costs(server=8 * MS, calls=0.0, trips=0.0)
+    for route in mixed:
+        if route.startswith("POST"):
+            mixed[route] = (3 * MS, 1 * MS, 2 * MS, 60.0, 4.0, 1 * MS)
+    shared = queue_model.simulate(mixed, 40, 1, 2.0, teacher=False, switch_interval_s=0.0)
+    turns = queue_model.simulate(mixed, 40, 1, 2.0, teacher=False)
+
+    def p95(result: dict, route: str) -> float:
+        return float(np.percentile(result["latencies"][route], 95))
+
+    write, read = "POST /lab/sessions/{id}/csv", "GET /lab/sessions/{id}/results.json"
+    assert p95(turns, write) > 2 * p95(shared, write)
+    assert p95(turns, read) < p95(shared, read)
