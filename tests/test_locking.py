@@ -102,3 +102,55 @@ def test_row_writes_read_what_they_lock_in_the_handler_not_in_a_dependency():
         extra = readers_of_the_session(route.dependant) - login_lookups
         assert not extra, (route.path, sorted(getattr(c, "__name__", str(c)) for c in extra))
     assert checked >= 15
+
+
+def test_a_save_and_a_submit_write_in_the_same_few_statements_however_many_positions(
+    student_client,
+):
+    """Under load each statement inside the write lock is a wait for the interpreter
+    (bench/README.md, issue 32): the takes of a file, their samples, the takes they
+    supersede and the takes a submission freezes are each written in one statement."""
+    import re
+
+    from sqlalchemy import event
+    from sqlalchemy.engine import Engine
+
+    from tests.factories import DATA, new_session, post_form, post_json, save_manual
+
+    written: list[str] = []
+    shape = re.compile(r"(INSERT INTO \w+|UPDATE \w+ SET \w+|DELETE FROM \w+)")
+
+    def count(conn, cursor, statement, parameters, context, executemany) -> None:
+        found = shape.match(statement.lstrip())
+        if found:
+            written.append(found.group(1))
+
+    event.listen(Engine, "before_cursor_execute", count)
+    try:
+        session_id = new_session(student_client)
+        page = f"/lab/sessions/{session_id}"
+        text = (DATA / "handout_horizontal.csv").read_text()
+        saved = {}
+        for attempt in ("first", "again"):  # again: the four it saved are superseded
+            written.clear()
+            body = {"part": "heading", "unit": "deg/h", "text": text}
+            assert post_json(student_client, f"{page}/csv", body, page).status_code == 200
+            saved[attempt] = list(written)
+        written.clear()
+        one = save_manual(student_client, session_id, "latitude", {"1": [10.0] * 10})
+        assert one.status_code == 200
+        saved["one"] = list(written)
+        columns = {str(p): [10.0 + p] * 10 for p in range(1, 5)}
+        assert save_manual(student_client, session_id, "latitude", columns).status_code == 200
+        written.clear()
+        submitted = post_form(student_client, f"{page}/submit", {}, page=page)
+        frozen = list(written)
+    finally:
+        event.remove(Engine, "before_cursor_execute", count)
+    # four positions, or four superseded as well, cost what one position does
+    assert saved["first"] == saved["again"] == saved["one"], saved
+    assert saved["one"].count("INSERT INTO take") == 1
+    assert saved["one"].count("INSERT INTO sample_chunk") == 1
+    # eight takes frozen in one statement
+    assert submitted.status_code == 303, submitted.text
+    assert frozen.count("UPDATE take SET frozen") == 1, frozen

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from sqlalchemy import insert, update
 from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
@@ -167,52 +168,55 @@ def store_takes(
     """Add a take for each of ``takes`` (positions of one part) and supersede the previous
     ones; the caller commits once, so the positions are either all saved or none.
 
-    Every position is checked, in order, before anything is written; then the previous
-    takes are read in one query and the new ones inserted in one flush (the write lock is
-    held for one round of statements, not one per position)."""
+    Every position is checked, in order, before anything is written; then one statement
+    supersedes the previous takes, one inserts the new ones and one their samples (the
+    write lock is held for a few statements, not a few per position: under load each is a
+    wait for the interpreter, bench/README.md)."""
     check_editable(session)
+    positions = [new.position for new in takes]
+    if not positions:
+        raise UserError("readings.none")
+    if len(set(positions)) != len(positions):
+        raise ValueError("store_takes: one take per position")
     for new in takes:
         _check_new_take(db, session, part, new, check_minimum)
-    now = utcnow()
-    positions = [new.position for new in takes]
-    for old in db.exec(
-        select(Take).where(
+    db.exec(
+        update(Take)
+        .where(
             Take.session_id == session.id,
             Take.part == part,
             Take.position.in_(positions),
             Take.superseded_at.is_(None),
         )
-    ).all():
-        old.superseded_at = now
-        db.add(old)
-    rows = [
-        Take(
-            session_id=session.id,
-            part=part,
-            position=new.position,
-            angle_deg=new.angle_deg,
-            source=source,
-            unit=unit,
-            n_samples=int(new.values.size),
-        )
+        .values(superseded_at=utcnow())
+    )
+    fields = [
+        {
+            "session_id": session.id,
+            "part": part,
+            "position": new.position,
+            "angle_deg": new.angle_deg,
+            "source": source,
+            "unit": unit,
+            "n_samples": int(new.values.size),
+        }
         for new in takes
     ]
-    db.add_all(rows)
-    db.flush()
+    # one INSERT … RETURNING for all; the rows come back in no promised order, so each is
+    # matched to its position
+    inserted = {take.position: take for take in db.scalars(insert(Take).returning(Take), fields)}
+    rows = [inserted[position] for position in positions]
+    blocks = []
     for take, new in zip(rows, takes, strict=True):
         hold(db, take, new.values, new.times, new.temperatures)
-        for seq, value_blob, time_blob, temperature_blob in chunks(
-            new.values, new.times, new.temperatures
-        ):
-            db.add(
-                SampleChunk(
-                    take_id=take.id,
-                    seq=seq,
-                    values=value_blob,
-                    times=time_blob,
-                    temperatures=temperature_blob,
-                )
+        blocks += [
+            {"take_id": take.id, "seq": seq, "values": value_blob, "times": time_blob,
+             "temperatures": temperature_blob}
+            for seq, value_blob, time_blob, temperature_blob in chunks(
+                new.values, new.times, new.temperatures
             )
+        ]  # fmt: skip
+    db.exec(insert(SampleChunk).values(blocks))  # one statement, not one per block
     reopen(session)
     db.add(session)
     return rows

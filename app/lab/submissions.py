@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+from sqlalchemy import update
 from sqlmodel import Session, select
 
 from app import __version__
@@ -21,6 +22,7 @@ from app.models import (
     LabSession,
     LatePolicy,
     SessionStatus,
+    Take,
     utcnow,
 )
 
@@ -53,9 +55,8 @@ def submit(db: Session, session: LabSession) -> Attempt:
     if all(outcome.result is None for outcome in results.values()):
         raise UserError("lab.nothing_to_submit")
     takes = current_takes(db, session.id)
-    for take in takes:  # an attempt's takes never change again (appends copy them)
-        take.frozen = True
-        db.add(take)
+    # an attempt's takes never change again (appends copy them): one statement for all
+    db.exec(update(Take).where(Take.id.in_([take.id for take in takes])).values(frozen=True))
     attempt = Attempt(
         session_id=session.id,
         number=len(previous) + 1,
@@ -64,6 +65,7 @@ def submit(db: Session, session: LabSession) -> Attempt:
         submitted_at=now,
         late=late,
         discussion=session.discussion,
+        copy_indexed=True,  # its copy keys are added below, in this same transaction
     )
     session.status = SessionStatus.submitted
     session.updated_at = utcnow()
