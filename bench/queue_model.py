@@ -33,7 +33,10 @@
 What the model still leaves out: the kernel's scheduling of threads on the cores (a
 thread holding the interpreter can be descheduled), the cost of handing the interpreter
 on, and that a class's requests cost less CPU each than one student's alone (the CPU
-check: 0.64–0.87× on the server).  ``bench/README.md`` has how far it is from measured.
+check: 0.64–0.87× on the server), and whatever makes the measured writes queue for their
+places (p50 ≈ 0.5 s at 60 students on SQLite, where it predicts ≈ 0.15 s; it predicted a
+cut in the writes' statements would halve their p95, and the load test did not move).
+``bench/README.md`` has how far it is from measured.
 """
 
 from __future__ import annotations
