@@ -1,30 +1,50 @@
-"""A probe for ``queue_model.py``'s measuring run, loaded by the server only when
-``GYROLAB_BENCH_PROBE`` names a 16-byte file: it counts, in that file, the places where a
-request's thread gives up the interpreter -- SQLite calls (execute and fetch: each runs
-``sqlite3_step`` with the GIL released) and trips to the thread pool (anyio's
-``to_thread.run_sync``).  Not part of the app; never on its path otherwise."""
+"""Probes for the benchmarks, loaded by a server only when this folder is on its
+``PYTHONPATH`` and one of these names a file (never part of the app otherwise):
+
+``GYROLAB_BENCH_PROBE`` (``queue_model.py``'s measuring run): a 16-byte file in which it
+counts the places where a request's thread gives up the interpreter -- SQLite calls
+(execute and fetch: each runs ``sqlite3_step`` with the GIL released) and trips to the
+thread pool (anyio's ``to_thread.run_sync``).
+
+``GYROLAB_BENCH_LOCK_TRACE`` (a load test): a file to which each SQLite write transaction
+appends one line, ``wall_ms cpu_ms``: how long it held the write lock (``BEGIN
+IMMEDIATE`` to the end of its commit or rollback) and the CPU its thread spent meanwhile.
+"""
 
 import os
 
-_PATH = os.environ.get("GYROLAB_BENCH_PROBE")
+_COUNTS = os.environ.get("GYROLAB_BENCH_PROBE")
+_LOCKS = os.environ.get("GYROLAB_BENCH_LOCK_TRACE")
 
-if _PATH:
-    import mmap
+if _COUNTS or _LOCKS:
     import sqlite3
     import sqlite3.dbapi2
     import struct
+    import time
 
-    _file = open(_PATH, "r+b")  # noqa: SIM115 (held for the process's life)
-    _counts = mmap.mmap(_file.fileno(), 16)
+    if _COUNTS:
+        import mmap
 
-    def _add(slot: int) -> None:
-        (value,) = struct.unpack_from("<q", _counts, slot * 8)
-        struct.pack_into("<q", _counts, slot * 8, value + 1)
+        _file = open(_COUNTS, "r+b")  # noqa: SIM115 (held for the process's life)
+        _counts = mmap.mmap(_file.fileno(), 16)
+
+        def _add(slot: int) -> None:
+            (value,) = struct.unpack_from("<q", _counts, slot * 8)
+            struct.pack_into("<q", _counts, slot * 8, value + 1)
+
+    else:
+
+        def _add(slot: int) -> None:
+            pass
+
+    _trace = os.open(_LOCKS, os.O_WRONLY | os.O_APPEND | os.O_CREAT) if _LOCKS else None
 
     class _CountingCursor(sqlite3.Cursor):
-        def execute(self, *args, **kwargs):
+        def execute(self, sql, *args, **kwargs):
             _add(0)
-            return super().execute(*args, **kwargs)
+            if _trace is not None and sql.startswith("BEGIN IMMEDIATE"):
+                self.connection.began = (time.perf_counter(), time.thread_time())
+            return super().execute(sql, *args, **kwargs)
 
         def executemany(self, *args, **kwargs):
             _add(0)
@@ -43,8 +63,28 @@ if _PATH:
             return super().fetchall()
 
     class _CountingConnection(sqlite3.Connection):
+        began = None
+
         def cursor(self, factory=_CountingCursor):
             return super().cursor(factory)
+
+        def _ended(self) -> None:
+            if self.began is not None and _trace is not None:
+                wall, cpu = time.perf_counter() - self.began[0], time.thread_time() - self.began[1]
+                os.write(_trace, f"{wall * 1000:.3f} {cpu * 1000:.3f}\n".encode())
+            self.began = None
+
+        def commit(self):
+            try:
+                return super().commit()
+            finally:
+                self._ended()
+
+        def rollback(self):
+            try:
+                return super().rollback()
+            finally:
+                self._ended()
 
     _connect = sqlite3.connect
 
