@@ -216,7 +216,9 @@ def store_takes(
                 new.values, new.times, new.temperatures
             )
         ]  # fmt: skip
-    db.exec(insert(SampleChunk).values(blocks))  # one statement, not one per block
+    # one executemany of a statement compiled once (a multi-row VALUES is compiled anew
+    # for every save)
+    db.execute(insert(SampleChunk), blocks)
     reopen(session)
     db.add(session)
     return rows
