@@ -53,7 +53,8 @@ class Settings(BaseSettings):
     # the address people and LMSs reach GyroLab at (LTI registration, behind a proxy);
     # default: the address of the request
     public_url: str = ""
-    # state-changing requests of one worker inside the app at once (web/write_admission.py)
+    # requests of one worker running at once, and state-changing ones (web/admission.py)
+    request_concurrency: int = Field(default=2, ge=1, le=64)
     write_concurrency: int = Field(default=8, ge=1, le=32)
     timezone: str = "Asia/Shanghai"  # a course's default zone for due dates and times
 

@@ -25,9 +25,9 @@ from app.lti import grades as lms_grades
 from app.paths import STATIC_DIR
 from app.routes import include_routers, read_only_routes
 from app.serving_lock import hold_while_serving, release
+from app.web.admission import Admission
 from app.web.errors import register_error_handlers
 from app.web.headers import SecurityHeaders
-from app.web.write_admission import WriteAdmission
 
 API_DESCRIPTION = """REST API of GyroLab, the FOG north-finding teaching lab.
 
@@ -123,7 +123,7 @@ def create_app(*, migrate_on_start: bool = True, freeze_heap: bool = False) -> F
         max_body_size=get_settings().max_body_bytes,
     )
     app.add_middleware(
-        WriteAdmission,
+        Admission,
         max_body=get_settings().max_body_bytes,
         read_only_routes=read_only_routes(),
     )

@@ -95,7 +95,7 @@ def check_locking_declarations(routes: Iterable) -> None:
 
 
 def read_only_routes() -> list[APIRoute]:
-    """The POST routes declared ``ReadOnlySession`` (no write slot: web.write_admission)."""
+    """The POST routes declared ``ReadOnlySession`` (no write slot: web.admission)."""
     return [route for route in api_routes() if declared_locking(route) is Locking.none]
 
 

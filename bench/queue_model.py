@@ -17,7 +17,7 @@
 2. Predict: a discrete-event simulation replays the scenario for N students -- the same
    start times as the load test; each request's client work, the event loop's first half
    (the request read and routed), a write place (state-changing requests: 8 per worker,
-   ``web.write_admission``), the threads' work (on SQLite inside the one write lock for
+   ``web.admission``), the threads' work (on SQLite inside the one write lock for
    the writes; a log-in's password hash outside the interpreter, at most 4 at once), the
    database's, the event loop's second half, the client's again; each stream position
    15 frames 0.2 s apart.  Each worker's interpreter runs one thread at a time, handed on
@@ -277,7 +277,7 @@ WRITES = {
 }
 LOGIN = "POST /login"
 LOGIN_LOCKED_S = 0.001
-# state-changing requests wait for one of a worker's write places (web.write_admission,
+# state-changing requests wait for one of a worker's write places (web.admission,
 # GYROLAB_WRITE_CONCURRENCY) and hold it until the server has answered; the CSV preview is
 # declared read-only and passes
 WRITE_SLOTS = 8

@@ -39,10 +39,10 @@ from app.lab.sim import (
 )
 from app.lab.store import PARTS, POSITIONS
 from app.models import InputMethod, LabSession, User
+from app.web.admission import write_slot
 from app.web.deps import ObjectId
 from app.web.errors import message_for
 from app.web.render import SESSION_COOKIE, request_language
-from app.web.write_admission import write_slot
 
 router = APIRouter(tags=["streams"])
 

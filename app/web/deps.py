@@ -58,7 +58,7 @@ its account and address names (``accounts.security.log_in``); a log-out revokes 
 session row.  On PostgreSQL such writes run side by side; on SQLite they are serialised."""
 ReadOnlySession = Depends(reads_only)
 """On a POST that stores nothing: it reads in a snapshot, takes no write lock and no
-write slot (``web.write_admission``)."""
+write slot (``web.admission``)."""
 _MARKERS = {row_writes: Locking.rows, reads_only: Locking.none}
 
 
