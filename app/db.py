@@ -31,8 +31,9 @@ next sample offset, attempt numbers, throttle windows) is correct without per-si
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from contextvars import ContextVar
 from functools import lru_cache
 from weakref import WeakKeyDictionary
 
@@ -120,6 +121,20 @@ def _has_nul(value) -> bool:
     return False
 
 
+# Set by the web layer for the request being served (web.admission): gives back the
+# request's place among the worker's running requests.  Called, from any thread, before a
+# write may wait for a lock someone else holds -- a request waiting for a lock must not
+# keep the worker's other requests out -- and when a long job takes a pool of its own.
+give_way_hook: ContextVar[Callable[[], None] | None] = ContextVar("give_way_hook", default=None)
+
+
+def give_way() -> None:
+    """Give the running request's place back (nothing outside a request)."""
+    hook = give_way_hook.get()
+    if hook is not None:
+        hook()
+
+
 def _sqlite_engine(url: str) -> Engine:
     # A file database gets as many connections as the thread pool has threads (40), so
     # requests never queue for a connection as well as for the write lock.
@@ -147,6 +162,7 @@ def _sqlite_engine(url: str) -> Engine:
         if not immediate:
             connection.exec_driver_sql("BEGIN")
             return
+        give_way()  # the write lock may be another's for a while
         raw = connection.connection.dbapi_connection
         if turns is not None and turns.acquire(raw):
             try:
@@ -221,6 +237,8 @@ def _postgres_engine(url: str) -> Engine:
     @event.listens_for(engine, "begin")
     def _on_begin(connection) -> None:
         kind = connection.get_execution_options().get(WRITER_OPTION, False)
+        if kind:
+            give_way()  # its lock may be another's for a while
         if kind == ROW_WRITER:
             connection.exec_driver_sql(f"SELECT pg_advisory_xact_lock_shared({WRITE_LOCK_KEY})")
         elif kind:
@@ -272,6 +290,7 @@ def lock_rows(session: Session, model, *ids: int) -> bool:
     each other in a cycle."""
     if not ids or not is_row_writer(session) or session.get_bind().dialect.name != "postgresql":
         return False
+    give_way()
     session.exec(select(model.id).where(model.id.in_(ids)).order_by(model.id).with_for_update())
     return True
 
@@ -282,6 +301,7 @@ def lock_keys(session: Session, *keys: str) -> bool:
     exist yet (the throttle's counts, then a new row); taken in sorted order."""
     if not keys or not is_row_writer(session) or session.get_bind().dialect.name != "postgresql":
         return False
+    give_way()
     for key in sorted(set(keys)):
         session.exec(
             text("SELECT pg_advisory_xact_lock(:space, hashtext(:key))"),

@@ -11,8 +11,9 @@ import anyio.to_thread
 import httpx
 
 from app.config import get_settings
+from app.db import give_way
 from app.routes import read_only_routes
-from app.web.admission import Admission, step_aside
+from app.web.admission import Admission
 
 
 class Inside:
@@ -31,7 +32,7 @@ class Inside:
             if not message.get("more_body"):
                 break
         if scope["path"] == "/heavy":  # a long job that has taken a pool slot of its own
-            await anyio.to_thread.run_sync(step_aside)
+            await anyio.to_thread.run_sync(give_way)
             await self.release.wait()
             await send({"type": "http.response.start", "status": 200, "headers": []})
             await send({"type": "http.response.body", "body": b"done"})

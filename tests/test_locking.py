@@ -154,3 +154,25 @@ def test_a_save_and_a_submit_write_in_the_same_few_statements_however_many_posit
     # eight takes frozen in one statement
     assert submitted.status_code == 303, submitted.text
     assert frozen.count("UPDATE take SET frozen") == 1, frozen
+
+
+@pytest.mark.parametrize("rows", [False, True])
+def test_a_write_gives_its_requests_place_back_before_it_may_wait_for_a_lock(app, rows):
+    """A request waiting for a lock must not keep the worker's other requests out
+    (web.admission): the write's begin calls the request's give-way hook, a read's not."""
+    from sqlmodel import select
+
+    from app.db import give_way_hook, read_session, write_session
+    from app.models import User
+
+    calls: list[str] = []
+    token = give_way_hook.set(lambda: calls.append("gave way"))
+    try:
+        with read_session() as db:
+            db.exec(select(User.id)).first()
+        assert calls == []
+        with write_session(rows=rows) as db:
+            db.exec(select(User.id)).first()
+            assert calls, "the write began without giving way"
+    finally:
+        give_way_hook.reset(token)

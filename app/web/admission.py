@@ -11,9 +11,12 @@ request holding SQLite's write lock gets a sliver too: a CSV save held the lock 
   thread and no interpreter.  A place is held until the response *starts*: a streamed
   export or report body goes on without one.  Routes that mostly wait on another server
   (single sign-on, LTI launches and registration, an LMS roster or grade) do not take one.
-  Long jobs bounded by a pool of their own (``web.work_slots``: PDF reports, the class
-  zip, an Allan analysis) give their place back when they take their slot
-  (:func:`step_aside`).
+  A request gives its place back (``db.give_way``) when it is about to wait for a lock
+  another may hold -- a write's ``BEGIN IMMEDIATE`` on SQLite, its advisory or row locks
+  on PostgreSQL -- so that writers waiting on a backup, another process or each other
+  never keep the worker's reads out; and when a long job takes a slot of a pool of its own
+  (``web.work_slots``: PDF reports, the class zip, an Allan analysis).  The lock holder
+  thus shares the interpreter with at most the few admitted requests.
 - **write places**: at most ``GYROLAB_WRITE_CONCURRENCY`` (default 8) state-changing
   requests or stream saves hold threads at once (:func:`write_slot`).  Before, a queue of
   writers filled every thread of the pool, each waiting for the write lock, and the writer
@@ -31,21 +34,19 @@ from __future__ import annotations
 import asyncio
 import re
 import weakref
-from collections.abc import AsyncIterator, Callable, Sequence
+from collections.abc import AsyncIterator, Sequence
 from contextlib import asynccontextmanager
-from contextvars import ContextVar
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from app.config import get_settings
+from app.db import give_way_hook
 
 SAFE_METHODS = {"GET", "HEAD", "OPTIONS"}
 # routes whose time is spent waiting on another server: they take no work place
 WAITING_ON_OTHERS = re.compile(r"^/login/sso(/|$)|/lti(/|$)")
 _write_places: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 _work_places: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-# how the running request gives its work place back, from any thread
-_give_back: ContextVar[Callable[[], None] | None] = ContextVar("work_place", default=None)
 
 
 def _semaphore(places: weakref.WeakKeyDictionary, size: int) -> asyncio.Semaphore:
@@ -62,14 +63,6 @@ async def write_slot() -> AsyncIterator[None]:
     """One of the worker's places for a state-changing operation (waits on the loop)."""
     async with _semaphore(_write_places, get_settings().write_concurrency):
         yield
-
-
-def step_aside() -> None:
-    """Give the running request's work place back (from its thread or the loop): what it
-    does next is bounded elsewhere.  Nothing outside a request or after the first call."""
-    give_back = _give_back.get()
-    if give_back is not None:
-        give_back()
 
 
 class Admission:
@@ -112,7 +105,7 @@ class Admission:
                 holding = False
                 work.release()
 
-        _give_back.set(lambda: loop.call_soon_threadsafe(give_back))
+        give_way_hook.set(lambda: loop.call_soon_threadsafe(give_back))
 
         async def send_then_give_back(message: Message) -> None:
             if message["type"] == "http.response.start":

@@ -14,7 +14,7 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 
 from app.core.exceptions import UserError
-from app.web.admission import step_aside
+from app.db import give_way
 
 
 class WorkPool:
@@ -33,7 +33,7 @@ class WorkPool:
 
     def take(self, person_id: int) -> None:
         """A slot for ``person_id``, or a UserError (429 / 503) at once.  The request
-        then gives its work place back (``web.admission.step_aside``): the long job is
+        then gives its work place back (``db.give_way``): the long job is
         bounded here and does not keep the worker's other requests waiting."""
         with self._lock:
             if person_id in self._people:
@@ -43,7 +43,7 @@ class WorkPool:
                     self.busy_key, status=503, headers={"Retry-After": str(self.retry_s)}
                 )
             self._people.add(person_id)
-        step_aside()
+        give_way()
 
     def give_back(self, person_id: int) -> None:
         with self._lock:
