@@ -162,16 +162,19 @@ def _sqlite_engine(url: str) -> Engine:
         if not immediate:
             connection.exec_driver_sql("BEGIN")
             return
-        give_way()  # the write lock may be another's for a while
         raw = connection.connection.dbapi_connection
-        if turns is not None and turns.acquire(raw):
-            try:
-                connection.exec_driver_sql("BEGIN IMMEDIATE")
-            except BaseException:
-                turns.hand_on(raw)
-                raise
-        else:
+        if turns is None:
+            give_way()
             connection.exec_driver_sql("BEGIN IMMEDIATE")
+            return
+        if not turns.acquire(raw):
+            _begin_immediate(raw)  # waited the busy timeout: SQLite's lock without a turn
+            return
+        try:
+            _begin_immediate(raw)
+        except BaseException:
+            turns.hand_on(raw)
+            raise
 
     turns = None if in_memory else _TurnsOnEngine(engine)
     if turns is not None:
@@ -180,6 +183,28 @@ def _sqlite_engine(url: str) -> Engine:
 
 
 _TURNS: WeakKeyDictionary[Engine, _TurnsOnEngine] = WeakKeyDictionary()
+# how long a writer waits for its process's turn before it gives its request's place back
+# (web.admission): a turn normally comes within a few writes of 2-20 ms
+TURN_PATIENCE_S = 0.05
+
+
+def _begin_immediate(raw) -> None:
+    """``BEGIN IMMEDIATE``; if another process holds SQLite's write lock (a backup, the
+    CLI, a second server), the request gives its place back first (``give_way``): that
+    wait can last the busy timeout."""
+    import sqlite3
+
+    raw.execute("PRAGMA busy_timeout=0")
+    try:
+        raw.execute("BEGIN IMMEDIATE")
+    except sqlite3.OperationalError as error:
+        if "locked" not in str(error) and "busy" not in str(error):
+            raise
+        give_way()
+        raw.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
+        raw.execute("BEGIN IMMEDIATE")
+    else:
+        raw.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
 
 
 def writer_turn(engine: Engine) -> WriterTurn | None:
@@ -215,8 +240,9 @@ class _TurnsOnEngine:
         event.listen(engine, "invalidate", lambda raw, _record, _error: self.hand_on(raw))
 
     def acquire(self, raw) -> bool:
-        """Wait for the turn (at most the busy timeout): whether this connection holds it."""
-        if not self.turn.acquire(BUSY_TIMEOUT_MS / 1000):
+        """Wait for the turn (at most the busy timeout): whether this connection holds it.
+        A writer still waiting after ``TURN_PATIENCE_S`` gives its request's place back."""
+        if not self.turn.acquire(BUSY_TIMEOUT_MS / 1000, TURN_PATIENCE_S, give_way):
             return False
         self.holders.add(id(raw))
         return True

@@ -29,10 +29,12 @@ class WriterTurn:
         self._holder: int | None = None  # the thread that holds the turn
         self._waiting: deque[threading.Lock] = deque()
 
-    def acquire(self, timeout: float) -> bool:
+    def acquire(self, timeout: float, patience: float = 0.0, impatient=None) -> bool:
         """Wait up to ``timeout`` seconds for the turn: whether it was granted.  A thread
         that already holds it is not granted a second one and does not wait (a write
-        opened inside another meets SQLite's lock at once, as it would without the queue)."""
+        opened inside another meets SQLite's lock at once, as it would without the queue).
+        ``impatient``: called once if the turn has not come within ``patience`` seconds
+        (the writer keeps its place in the queue)."""
         me = threading.get_ident()
         with self._mutex:
             if not self._held:
@@ -43,7 +45,13 @@ class WriterTurn:
             signal = threading.Lock()
             signal.acquire()
             self._waiting.append(signal)
-        granted = signal.acquire(timeout=timeout)
+        if impatient is not None and 0 < patience < timeout:
+            granted = signal.acquire(timeout=patience)
+            if not granted:
+                impatient()
+                granted = signal.acquire(timeout=timeout - patience)
+        else:
+            granted = signal.acquire(timeout=timeout)
         with self._mutex:
             if not granted and signal in self._waiting:
                 self._waiting.remove(signal)

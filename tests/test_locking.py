@@ -156,23 +156,79 @@ def test_a_save_and_a_submit_write_in_the_same_few_statements_however_many_posit
     assert frozen.count("UPDATE take SET frozen") == 1, frozen
 
 
-@pytest.mark.parametrize("rows", [False, True])
-def test_a_write_gives_its_requests_place_back_before_it_may_wait_for_a_lock(app, rows):
-    """A request waiting for a lock must not keep the worker's other requests out
-    (web.admission): the write's begin calls the request's give-way hook, a read's not."""
+def _gives_way(rows: bool, while_waiting=None) -> list[float]:
+    """When (s after the write began) a write gave its request's place back; with
+    ``while_waiting`` holding a lock from elsewhere until it returns."""
+    import threading
+    import time
+
     from sqlmodel import select
 
     from app.db import give_way_hook, read_session, write_session
     from app.models import User
 
-    calls: list[str] = []
-    token = give_way_hook.set(lambda: calls.append("gave way"))
+    began = time.perf_counter()
+    calls: list[float] = []
+    token = give_way_hook.set(lambda: calls.append(time.perf_counter() - began))
     try:
         with read_session() as db:
             db.exec(select(User.id)).first()
-        assert calls == []
+        assert calls == [], "a read gave way"
+        holder = threading.Thread(target=while_waiting) if while_waiting else None
+        if holder:
+            holder.start()
+        began = time.perf_counter()
         with write_session(rows=rows) as db:
             db.exec(select(User.id)).first()
-            assert calls, "the write began without giving way"
+        if holder:
+            holder.join()
     finally:
         give_way_hook.reset(token)
+    return calls
+
+
+@pytest.mark.sqlite_only
+@pytest.mark.parametrize("rows", [False, True])
+def test_an_sqlite_write_keeps_its_place_unless_it_must_wait_for_another(app, rows):
+    """A request waiting for a lock must not keep the worker's other requests out
+    (web.admission), but one that gets it at once keeps its place: a write gives way when
+    another process holds SQLite's write lock, or its process's turn is slow to come."""
+    import sqlite3
+    import threading
+    import time
+
+    from app.config import get_settings
+    from app.db import get_engine, writer_turn
+
+    assert _gives_way(rows) == []  # nobody else writing
+    path = get_settings().database_url.removeprefix("sqlite:///")
+    other = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+    other.execute("BEGIN IMMEDIATE")  # another process's write, for 0.3 s
+    release = threading.Timer(0.3, lambda: other.execute("COMMIT"))
+    release.start()
+    waited = _gives_way(rows)
+    release.join()
+    other.close()
+    assert len(waited) == 1 and waited[0] < 0.2, waited  # gave way, then waited
+    turn, taken = writer_turn(get_engine()), threading.Event()
+
+    def another_writer() -> None:  # this process's turn, held by another thread for 0.3 s
+        assert turn.acquire(1.0)
+        taken.set()
+        time.sleep(0.3)
+        turn.release()
+
+    writer = threading.Thread(target=another_writer)
+    writer.start()
+    taken.wait()
+    waited = _gives_way(rows)
+    writer.join()
+    assert len(waited) == 1 and 0.04 <= waited[0] < 0.25, waited  # after its patience
+
+
+@pytest.mark.postgres_only
+@pytest.mark.parametrize("rows", [False, True])
+def test_a_postgresql_write_gives_way_before_its_locks(app, rows):
+    """PostgreSQL's writers take an advisory lock (shared for a row writer, exclusive for
+    the rest) that a teacher's write may hold: they give their place back first."""
+    assert len(_gives_way(rows)) >= 1

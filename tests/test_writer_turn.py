@@ -149,3 +149,36 @@ def test_readers_and_memory_databases_take_no_turn(file_engine):
     finally:
         turn.release()
     assert writer_turn(make_engine("sqlite://")) is None
+
+
+def test_an_impatient_writer_is_told_once_and_keeps_its_place_in_the_queue():
+    """After ``patience`` the waiter's callback runs (its request gives its place back,
+    web.admission); it still gets the turn before those who asked after it."""
+    turn = WriterTurn()
+    assert turn.acquire(1.0)
+    order: list[str] = []
+    told: list[float] = []
+    began = time.perf_counter()
+
+    def waiter(name: str, patience: float) -> None:
+        def impatient() -> None:
+            told.append(time.perf_counter() - began)
+
+        assert turn.acquire(5.0, patience, impatient)
+        order.append(name)
+        turn.release()
+
+    first = threading.Thread(target=waiter, args=("first", 0.05))
+    first.start()
+    while turn.queued < 1:
+        time.sleep(0.001)
+    second = threading.Thread(target=waiter, args=("second", 0.0))
+    second.start()
+    while turn.queued < 2:
+        time.sleep(0.001)
+    time.sleep(0.2)
+    turn.release()
+    first.join()
+    second.join()
+    assert order == ["first", "second"]
+    assert len(told) == 1 and 0.04 <= told[0] < 0.2, told
