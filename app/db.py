@@ -32,13 +32,14 @@ next sample offset, attempt numbers, throttle windows) is correct without per-si
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from contextvars import ContextVar
 from functools import lru_cache
 from weakref import WeakKeyDictionary
 
 from sqlalchemy import Engine, event, text
 from sqlalchemy.engine import make_url
+from sqlalchemy.exc import DBAPIError
 from sqlmodel import Session, create_engine, select
 
 from app.writer_turn import WriterTurn
@@ -194,17 +195,22 @@ def _begin_immediate(raw) -> None:
     wait can last the busy timeout."""
     import sqlite3
 
-    raw.execute("PRAGMA busy_timeout=0")
     try:
-        raw.execute("BEGIN IMMEDIATE")
-    except sqlite3.OperationalError as error:
-        if "locked" not in str(error) and "busy" not in str(error):
-            raise
-        give_way()
-        raw.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
-        raw.execute("BEGIN IMMEDIATE")
-    else:
-        raw.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
+        raw.execute("PRAGMA busy_timeout=0")
+        try:
+            raw.execute("BEGIN IMMEDIATE")
+        except sqlite3.OperationalError as error:
+            if "locked" not in str(error) and "busy" not in str(error):
+                raise
+            give_way()
+            raw.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
+            raw.execute("BEGIN IMMEDIATE")
+        else:
+            raw.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
+    except sqlite3.Error as error:  # as SQLAlchemy raises it: "locked" still answers 503
+        with suppress(sqlite3.Error):
+            raw.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
+        raise DBAPIError.instance("BEGIN IMMEDIATE", None, error, sqlite3.Error) from error
 
 
 def writer_turn(engine: Engine) -> WriterTurn | None:
