@@ -31,6 +31,7 @@ next sample offset, attempt numbers, throttle windows) is correct without per-si
 
 from __future__ import annotations
 
+import sqlite3
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from contextvars import ContextVar
@@ -164,12 +165,9 @@ def _sqlite_engine(url: str) -> Engine:
             connection.exec_driver_sql("BEGIN")
             return
         raw = connection.connection.dbapi_connection
-        if turns is None:
-            give_way()
-            connection.exec_driver_sql("BEGIN IMMEDIATE")
-            return
-        if not turns.acquire(raw):
-            _begin_immediate(raw)  # waited the busy timeout: SQLite's lock without a turn
+        if turns is None or not turns.acquire(raw):
+            # a memory database, or the busy timeout waited: SQLite's lock without a turn
+            _begin_immediate(raw)
             return
         try:
             _begin_immediate(raw)
@@ -193,8 +191,6 @@ def _begin_immediate(raw) -> None:
     """``BEGIN IMMEDIATE``; if another process holds SQLite's write lock (a backup, the
     CLI, a second server), the request gives its place back first (``give_way``): that
     wait can last the busy timeout."""
-    import sqlite3
-
     try:
         raw.execute("PRAGMA busy_timeout=0")
         try:
@@ -322,7 +318,6 @@ def lock_rows(session: Session, model, *ids: int) -> bool:
     each other in a cycle."""
     if not ids or not is_row_writer(session) or session.get_bind().dialect.name != "postgresql":
         return False
-    give_way()
     session.exec(select(model.id).where(model.id.in_(ids)).order_by(model.id).with_for_update())
     return True
 
@@ -333,7 +328,6 @@ def lock_keys(session: Session, *keys: str) -> bool:
     exist yet (the throttle's counts, then a new row); taken in sorted order."""
     if not keys or not is_row_writer(session) or session.get_bind().dialect.name != "postgresql":
         return False
-    give_way()
     for key in sorted(set(keys)):
         session.exec(
             text("SELECT pg_advisory_xact_lock(:space, hashtext(:key))"),

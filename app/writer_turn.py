@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import threading
 from collections import deque
+from collections.abc import Callable
 
 
 class WriterTurn:
@@ -29,7 +30,9 @@ class WriterTurn:
         self._holder: int | None = None  # the thread that holds the turn
         self._waiting: deque[threading.Lock] = deque()
 
-    def acquire(self, timeout: float, patience: float = 0.0, impatient=None) -> bool:
+    def acquire(
+        self, timeout: float, patience: float = 0.0, impatient: Callable[[], None] | None = None
+    ) -> bool:
         """Wait up to ``timeout`` seconds for the turn: whether it was granted.  A thread
         that already holds it is not granted a second one and does not wait (a write
         opened inside another meets SQLite's lock at once, as it would without the queue).

@@ -105,7 +105,8 @@ class Admission:
                 holding = False
                 work.release()
 
-        give_way_hook.set(lambda: loop.call_soon_threadsafe(give_back))
+        # from any thread; nothing to schedule once the place is back
+        give_way_hook.set(lambda: holding and loop.call_soon_threadsafe(give_back))
 
         async def send_then_give_back(message: Message) -> None:
             if message["type"] == "http.response.start":
