@@ -164,13 +164,19 @@ def _sqlite_engine(url: str) -> Engine:
         if not immediate:
             connection.exec_driver_sql("BEGIN")
             return
-        raw = connection.connection.dbapi_connection
+        fairy = connection.connection
+        raw = fairy.dbapi_connection
+        busy_ms = fairy.info.get("busy_timeout_ms")
+        if busy_ms is None:  # as the connection was set up (a test may shorten it)
+            busy_ms = fairy.info["busy_timeout_ms"] = raw.execute("PRAGMA busy_timeout").fetchone()[
+                0
+            ]
         if turns is None or not turns.acquire(raw):
             # a memory database, or the busy timeout waited: SQLite's lock without a turn
-            _begin_immediate(raw)
+            _begin_immediate(raw, busy_ms)
             return
         try:
-            _begin_immediate(raw)
+            _begin_immediate(raw, busy_ms)
         except BaseException:
             turns.hand_on(raw)
             raise
@@ -187,10 +193,10 @@ _TURNS: WeakKeyDictionary[Engine, _TurnsOnEngine] = WeakKeyDictionary()
 TURN_PATIENCE_S = 0.05
 
 
-def _begin_immediate(raw) -> None:
+def _begin_immediate(raw, busy_ms: int) -> None:
     """``BEGIN IMMEDIATE``; if another process holds SQLite's write lock (a backup, the
     CLI, a second server), the request gives its place back first (``give_way``): that
-    wait can last the busy timeout."""
+    wait can last the busy timeout, ``busy_ms``, which the connection has again after."""
     try:
         raw.execute("PRAGMA busy_timeout=0")
         try:
@@ -199,13 +205,13 @@ def _begin_immediate(raw) -> None:
             if "locked" not in str(error) and "busy" not in str(error):
                 raise
             give_way()
-            raw.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
+            raw.execute(f"PRAGMA busy_timeout={busy_ms}")
             raw.execute("BEGIN IMMEDIATE")
         else:
-            raw.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
+            raw.execute(f"PRAGMA busy_timeout={busy_ms}")
     except sqlite3.Error as error:  # as SQLAlchemy raises it: "locked" still answers 503
         with suppress(sqlite3.Error):
-            raw.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
+            raw.execute(f"PRAGMA busy_timeout={busy_ms}")
         raise DBAPIError.instance("BEGIN IMMEDIATE", None, error, sqlite3.Error) from error
 
 

@@ -232,3 +232,31 @@ def test_a_postgresql_write_gives_way_before_its_locks(app, rows):
     """PostgreSQL's writers take an advisory lock (shared for a row writer, exclusive for
     the rest) that a teacher's write may hold: they give their place back first."""
     assert len(_gives_way(rows)) >= 1
+
+
+@pytest.mark.sqlite_only
+def test_a_write_leaves_the_connections_own_busy_timeout(app):
+    """``BEGIN IMMEDIATE`` is tried without the busy wait first; the connection then has
+    the busy timeout it was set up with again (a deployment or a test may shorten it), not
+    the default."""
+    from sqlalchemy import event, text
+
+    from app.db import BUSY_TIMEOUT_MS, get_engine, write_session
+
+    engine = get_engine()
+
+    def shorten(dbapi_connection, _record) -> None:
+        dbapi_connection.execute("PRAGMA busy_timeout = 321")
+
+    event.listen(engine, "connect", shorten)
+    engine.dispose()
+    try:
+        with write_session() as db:
+            during = db.exec(text("PRAGMA busy_timeout")).scalar_one()
+        with engine.connect() as connection:
+            after = connection.exec_driver_sql("PRAGMA busy_timeout").scalar_one()
+    finally:
+        event.remove(engine, "connect", shorten)
+        engine.dispose()
+    assert BUSY_TIMEOUT_MS != 321
+    assert during == after == 321
