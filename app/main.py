@@ -61,16 +61,29 @@ def plotly_gzip() -> bytes:
 
 class SsoSessionCookie:
     """Starlette's SessionMiddleware on single sign-on's own paths only: every other
-    request passes untouched (no cookie parsed or signature checked on the hot paths)."""
+    request passes untouched (no cookie parsed or signature checked on the hot paths).  The
+    cookie is signed with a key derived from the settings' secret key when the request is
+    served (one app serves whatever settings are in force: a test's own var dir)."""
 
     def __init__(self, app: ASGIApp, **options) -> None:
         self.app = app
-        self.with_session = SessionMiddleware(app, **options)
+        self.options = options
         self.prefix = options["path"]
+        self._by_secret: dict[str, SessionMiddleware] = {}
+
+    def _with_session(self) -> SessionMiddleware:
+        secret = hashlib.sha256(f"sso:{get_settings().secret_key}".encode()).hexdigest()
+        middleware = self._by_secret.get(secret)
+        if middleware is None:
+            if len(self._by_secret) >= 4:  # one key in a deployment; a few in tests
+                self._by_secret.clear()
+            middleware = SessionMiddleware(self.app, secret_key=secret, **self.options)
+            self._by_secret[secret] = middleware
+        return middleware
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] == "http" and scope["path"].startswith(self.prefix):
-            await self.with_session(scope, receive, send)
+            await self._with_session()(scope, receive, send)
         else:
             await self.app(scope, receive, send)
 
@@ -131,7 +144,6 @@ def create_app(*, migrate_on_start: bool = True, freeze_heap: bool = False) -> F
     # for those two paths only, ten minutes)
     app.add_middleware(
         SsoSessionCookie,
-        secret_key=hashlib.sha256(f"sso:{get_settings().secret_key}".encode()).hexdigest(),
         session_cookie="gyrolab_sso",
         path="/login/sso",
         max_age=600,

@@ -203,11 +203,22 @@ def var_dir(test_database) -> Path:
     return get_settings().var_dir
 
 
+_APPS: dict = {}
+
+
 @pytest.fixture
 def app(var_dir):
+    """The app, built once per test process: FastAPI builds each included router's routes
+    when a request first reaches it, ~100 ms an app, which every test paid again.  Nothing
+    in it belongs to one test: the settings it reads when built (the body limit) are every
+    test's, the rest (database, secret key, var dir) is read per request or per start-up,
+    and each test's client runs the start-up again."""
     from app.main import create_app
 
-    return create_app(migrate_on_start=False)
+    key = get_settings().max_body_bytes
+    if key not in _APPS:
+        _APPS[key] = create_app(migrate_on_start=False)
+    return _APPS[key]
 
 
 @pytest.fixture(scope="module")
