@@ -104,6 +104,18 @@ def freeze_start_up_heap() -> None:
     gc.freeze()
 
 
+def build_routes(app: FastAPI) -> None:
+    """Have FastAPI build every included router's routes now, at start-up.
+
+    FastAPI builds an included router's routes (their dependencies, their models) when a
+    request first reaches it: ≈ 100 ms for all of GyroLab's, paid by a worker's first
+    requests and left out of the frozen start-up heap.  A path that matches nothing
+    reaches every router."""
+    scope = {"type": "http", "method": "GET", "path": "/-/build-routes", "root_path": ""}
+    for route in app.router.routes:
+        route.matches(scope)
+
+
 def create_app(*, migrate_on_start: bool = True, freeze_heap: bool = False) -> FastAPI:
     """The app; ``freeze_heap`` for a served worker (:func:`freeze_start_up_heap`)."""
 
@@ -114,6 +126,7 @@ def create_app(*, migrate_on_start: bool = True, freeze_heap: bool = False) -> F
 
             upgrade_to_head()
         index_earlier_attempts()
+        build_routes(_app)
         if freeze_heap:
             freeze_start_up_heap()
         # restore refuses while this lock is held (app/serving_lock.py)
