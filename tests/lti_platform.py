@@ -78,13 +78,43 @@ def platform_key() -> str:
 
 
 @functools.cache
+def loaded_key(private_pem: str) -> rsa.RSAPrivateKey:
+    """A private key loaded once (loading checks the key: ~30 ms for 2048 bits)."""
+    return serialization.load_pem_private_key(private_pem.encode(), None)
+
+
+@functools.cache
 def public_of(private_pem: str) -> str:
-    key = serialization.load_pem_private_key(private_pem.encode(), None)
     return (
-        key.public_key()
+        loaded_key(private_pem)
+        .public_key()
         .public_bytes(serialization.Encoding.PEM, serialization.PublicFormat.SubjectPublicKeyInfo)
         .decode()
     )
+
+
+@functools.cache
+def _jwk_of(pem: str) -> tuple:
+    return tuple(Registration.get_jwk(pem).items())
+
+
+class PlatformRegistration(Registration):
+    """lti1p3platform's registration, signing with the platform's key loaded once: the
+    library loads the PEM again for every token it signs and for every key id it names."""
+
+    def get_jwks(self) -> list[dict]:
+        public_key = self.get_platform_public_key()
+        return [dict(_jwk_of(public_key))] if public_key else []
+
+    def get_kid(self) -> str | None:
+        private_key = self.get_platform_private_key()
+        return dict(_jwk_of(private_key)).get("kid") if private_key else None
+
+    def platform_encode_and_sign(self, payload: dict, expiration: int | None = None) -> str:
+        if expiration:
+            payload.update({"iat": int(time.time()), "exp": int(time.time()) + expiration})
+        key = loaded_key(self.get_platform_private_key())
+        return jwt.encode(payload, key, algorithm="RS256", headers={"kid": self.get_kid()})
 
 
 @dataclass
@@ -112,7 +142,7 @@ class PlatformState:
     @property
     def registration(self) -> Registration:
         return (
-            Registration()
+            PlatformRegistration()
             .set_iss(self.url)
             .set_client_id(CLIENT_ID)
             .set_deployment_id(DEPLOYMENT_ID)
@@ -190,7 +220,7 @@ class PlatformLaunch(LTIAdvantageMessageLaunchAbstract):
             kid = jwt.get_unverified_header(launch["id_token"])["kid"]
             if self.state.tamper:
                 claims = self.state.tamper(claims)
-            key = new_private_key() if self.state.forge else self.state.private_key
+            key = new_private_key() if self.state.forge else loaded_key(self.state.private_key)
             launch["id_token"] = jwt.encode(claims, key, algorithm="RS256", headers={"kid": kid})
         self.state.last_id_token = launch["id_token"]
         return launch
