@@ -31,18 +31,20 @@ next sample offset, attempt numbers, throttle windows) is correct without per-si
 
 from __future__ import annotations
 
+import os
 import sqlite3
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager, suppress
 from contextvars import ContextVar
 from functools import lru_cache
-from weakref import WeakKeyDictionary
+from weakref import WeakKeyDictionary, finalize
 
 from sqlalchemy import Engine, event, text
 from sqlalchemy.engine import make_url
 from sqlalchemy.exc import DBAPIError
 from sqlmodel import Session, create_engine, select
 
+from app.wal_checkpoint import BACKSTOP_PAGES, CHECKPOINTS
 from app.writer_turn import WriterTurn
 
 BUSY_TIMEOUT_MS = 10_000
@@ -156,6 +158,8 @@ def _sqlite_engine(url: str) -> Engine:
         cursor.execute(f"PRAGMA busy_timeout={BUSY_TIMEOUT_MS}")
         cursor.execute("PRAGMA foreign_keys=ON")
         cursor.execute("PRAGMA synchronous=NORMAL")
+        if not in_memory:  # checkpoints by the process's thread (app.wal_checkpoint)
+            cursor.execute(f"PRAGMA wal_autocheckpoint={BACKSTOP_PAGES}")
         cursor.close()
 
     @event.listens_for(engine, "begin")
@@ -184,6 +188,9 @@ def _sqlite_engine(url: str) -> Engine:
     turns = None if in_memory else _TurnsOnEngine(engine)
     if turns is not None:
         _TURNS[engine] = turns
+        path = os.path.abspath(make_url(url).database)
+        CHECKPOINTS.watch(path)
+        finalize(engine, CHECKPOINTS.unwatch, path)
     return engine
 
 

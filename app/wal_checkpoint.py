@@ -1,0 +1,124 @@
+"""SQLite's write-ahead log copied back into the database file by a thread of its own.
+
+In WAL mode a commit appends the changed pages to ``gyrolab.db-wal``; a *checkpoint*
+copies them into ``gyrolab.db``.  By default the connection whose commit takes the log
+past 1,000 pages (4 MB) runs that checkpoint itself, inside its request: a 1e6-sample
+upload (8 MB) paid ≈ 18 ms of its ≈ 50 ms copying its own pages a second time (issue 32,
+bench/README.md).  Here a process's connections leave checkpoints to one daemon thread
+that looks at each database's log a few times a second and checkpoints it when it has
+changed.  The checkpoint is SQLite's PASSIVE one, the kind the connections ran: it waits
+for no reader or writer and copies what it can, so a request never waits for it and the
+database is as safe as before (a commit is durable once in the log, which SQLite replays
+after a crash).
+
+A connection still checkpoints itself once the log reaches ``BACKSTOP_PAGES`` (a process
+whose thread cannot keep up, or a long command-line import).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sqlite3
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+from urllib.parse import quote
+
+BACKSTOP_PAGES = 16_384  # 64 MB of 4 KiB pages: where a connection checkpoints itself
+LOOK_EVERY_S = 0.25  # how often the thread looks at the logs
+
+
+@dataclass
+class Checkpoint:
+    """What SQLite reported: whether it had to stop short (``busy``), the frames in the
+    log and the frames now in the database file (-1 when the database is not in WAL)."""
+
+    busy: int
+    log_frames: int
+    checkpointed_frames: int
+
+
+def checkpoint(path: str | Path) -> Checkpoint | None:
+    """One PASSIVE checkpoint of the database at ``path``; None where it cannot be opened
+    or written (gone, read-only, a full disk: the next commit's log is simply longer)."""
+    try:
+        connection = sqlite3.connect(
+            f"file:{quote(str(path))}?mode=rw", uri=True, timeout=0, isolation_level=None
+        )
+    except sqlite3.Error:
+        return None
+    try:
+        return Checkpoint(*connection.execute("PRAGMA wal_checkpoint(PASSIVE)").fetchone())
+    except sqlite3.Error:
+        return None
+    finally:
+        connection.close()
+
+
+class Checkpointer:
+    """The thread that checkpoints the databases it watches when their log changes."""
+
+    def __init__(self, interval_s: float = LOOK_EVERY_S) -> None:
+        self.interval_s = interval_s
+        self._watched: dict[str, int] = {}  # path → engines using it
+        self._seen: dict[str, tuple[int, int] | None] = {}  # path → the log's (mtime, size)
+        self._lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+        self.last: dict[str, Checkpoint] = {}  # path → the last checkpoint's report
+
+    def watch(self, path: str) -> None:
+        """Checkpoint ``path``'s log from now on (once per engine that uses it)."""
+        with self._lock:
+            self._watched[path] = self._watched.get(path, 0) + 1
+            self._seen.setdefault(path, None)
+            if self._thread is None or not self._thread.is_alive():
+                self._thread = threading.Thread(
+                    target=self._run, name="gyrolab-wal-checkpoint", daemon=True
+                )
+                self._thread.start()
+
+    def unwatch(self, path: str) -> None:
+        """One engine fewer uses ``path`` (the last one gone: no longer watched)."""
+        with self._lock:
+            left = self._watched.get(path, 0) - 1
+            if left > 0:
+                self._watched[path] = left
+            else:
+                self._watched.pop(path, None)
+                self._seen.pop(path, None)
+                self.last.pop(path, None)
+
+    def watching(self, path: str) -> bool:
+        with self._lock:
+            return path in self._watched
+
+    def look(self) -> None:
+        """Checkpoint every watched database whose log changed since the last look."""
+        with self._lock:
+            paths = list(self._watched)
+        for path in paths:
+            try:
+                status = os.stat(f"{path}-wal")
+            except OSError:
+                continue  # no log (yet, or any more)
+            mark = (status.st_mtime_ns, status.st_size)
+            if self._seen.get(path) == mark:
+                continue
+            report = checkpoint(path)
+            with self._lock:
+                if path in self._watched:
+                    self._seen[path] = mark
+                    if report is not None:
+                        self.last[path] = report
+
+    def _run(self) -> None:
+        stop = threading.Event()  # never set: a daemon thread ends with its process
+        while not stop.wait(self.interval_s):
+            try:
+                self.look()
+            except Exception:  # noqa: BLE001 -- the connections' backstop still checkpoints
+                logging.getLogger(__name__).exception("WAL checkpoint failed")
+
+
+CHECKPOINTS = Checkpointer()

@@ -1,0 +1,100 @@
+"""SQLite's log checkpointed by a thread of the process, not by the request whose commit
+made it long (app.wal_checkpoint)."""
+
+from __future__ import annotations
+
+import gc
+import os
+import sqlite3
+import time
+
+import pytest
+
+from app.wal_checkpoint import BACKSTOP_PAGES, CHECKPOINTS, Checkpointer, checkpoint
+
+BLOB = 8_000_000  # a 1e6-sample upload's bytes
+
+
+def wal_database(path, autocheckpoint: int | None) -> sqlite3.Connection:
+    connection = sqlite3.connect(path, isolation_level=None)
+    connection.execute("PRAGMA journal_mode=WAL")
+    if autocheckpoint is not None:
+        connection.execute(f"PRAGMA wal_autocheckpoint={autocheckpoint}")
+    connection.execute("CREATE TABLE t (b BLOB)")
+    return connection
+
+
+def write_blob(connection: sqlite3.Connection) -> None:
+    connection.execute("BEGIN IMMEDIATE")
+    connection.execute("INSERT INTO t VALUES (?)", (os.urandom(BLOB),))
+    connection.execute("COMMIT")
+
+
+def test_a_commit_leaves_the_copy_into_the_database_file_to_the_checkpoint(tmp_path):
+    """SQLite's default has the committing connection copy the log into the file (the
+    8 MB twice in the request); GyroLab's connections leave it to ``checkpoint``."""
+    default = wal_database(tmp_path / "default.db", autocheckpoint=None)
+    write_blob(default)
+    assert os.path.getsize(tmp_path / "default.db") > BLOB  # copied at the commit
+    default.close()
+
+    ours = wal_database(tmp_path / "ours.db", autocheckpoint=BACKSTOP_PAGES)
+    write_blob(ours)
+    assert os.path.getsize(tmp_path / "ours.db") < BLOB // 10  # still only in the log
+    report = checkpoint(tmp_path / "ours.db")
+    assert report.busy == 0 and report.log_frames == report.checkpointed_frames > BLOB // 4096
+    assert os.path.getsize(tmp_path / "ours.db") > BLOB
+    cursor = ours.execute("SELECT length(b) FROM t")
+    assert cursor.fetchone() == (BLOB,)
+    ours.close()
+
+
+def test_the_thread_checkpoints_a_watched_database_once_its_log_changes(tmp_path):
+    path = str(tmp_path / "watched.db")
+    connection = wal_database(path, autocheckpoint=BACKSTOP_PAGES)
+    checkpointer = Checkpointer(interval_s=0.02)
+    checkpointer.watch(path)
+    write_blob(connection)
+    deadline = time.monotonic() + 20
+    while (report := checkpointer.last.get(path)) is None or report.checkpointed_frames < 100:
+        assert time.monotonic() < deadline, "no checkpoint"
+        time.sleep(0.02)
+    assert report.busy == 0 and report.checkpointed_frames == report.log_frames
+    assert os.path.getsize(path) > BLOB
+    checkpointer.unwatch(path)
+    assert not checkpointer.watching(path)
+    connection.close()
+
+
+def test_a_database_that_is_gone_or_read_only_is_left_alone(tmp_path):
+    gone = tmp_path / "gone.db"
+    assert checkpoint(gone) is None
+    assert not gone.exists()  # not created by looking
+    checkpointer = Checkpointer()
+    checkpointer.watch(str(gone))
+    (tmp_path / "gone.db-wal").write_bytes(b"")  # a log left behind
+    checkpointer.look()
+    assert checkpointer.last == {} and not gone.exists()
+
+
+@pytest.mark.sqlite_only
+def test_the_apps_connections_leave_checkpoints_to_the_thread_while_the_engine_lives(
+    test_database, tmp_path
+):
+    from sqlalchemy import text
+
+    from app.db import get_engine, make_engine
+
+    with get_engine().connect() as connection:
+        assert connection.execute(text("PRAGMA wal_autocheckpoint")).scalar() == BACKSTOP_PAGES
+    assert CHECKPOINTS.watching(os.path.abspath(test_database.path))
+
+    path = tmp_path / "own.db"
+    engine = make_engine(f"sqlite:///{path}")
+    with engine.connect() as connection:
+        connection.execute(text("SELECT 1"))
+    assert CHECKPOINTS.watching(str(path))
+    engine.dispose()
+    del engine, connection
+    gc.collect()
+    assert not CHECKPOINTS.watching(str(path))
