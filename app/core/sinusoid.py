@@ -242,12 +242,14 @@ def _clean_positions(positions: Sequence[Sequence[float]]) -> list[np.ndarray]:
             ) from error
         if array.size == 0:
             raise UserError("readings.empty_position", position=index)
-        if not np.all(np.isfinite(array)):
-            raise UserError(
-                "readings.not_finite",
-                position=index,
-            )
-        if np.any(np.abs(array) > MAX_RATE_DEG_H):
+        # two passes that allocate nothing (NaN fails both comparisons); which check
+        # failed is looked for only then
+        if not (array.min() >= -MAX_RATE_DEG_H and array.max() <= MAX_RATE_DEG_H):
+            if not np.all(np.isfinite(array)):
+                raise UserError(
+                    "readings.not_finite",
+                    position=index,
+                )
             raise UserError(
                 "readings.out_of_range",
                 position=index,
