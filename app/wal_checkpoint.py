@@ -5,8 +5,11 @@ copies them into ``gyrolab.db``.  By default the connection whose commit takes t
 past 1,000 pages (4 MB) runs that checkpoint itself, inside its request: a 1e6-sample
 upload (8 MB) paid ≈ 18 ms of its ≈ 50 ms copying its own pages a second time (issue 32,
 bench/README.md).  Here a process's connections leave checkpoints to one daemon thread
-that looks at each database's log a few times a second and checkpoints it when it has
-changed.  The checkpoint is SQLite's PASSIVE one, the kind the connections ran: it waits
+that looks at each database's log a few times a second and checkpoints it once 1,000
+pages wait to be copied -- SQLite's own threshold, so there are as many checkpoints as
+before, each outside a request.  It counts them in the WAL index (``-shm``; its header's
+``mxFrame`` less the checkpoint's ``nBackfill``: https://www.sqlite.org/walformat.html,
+§2.2).  The checkpoint is SQLite's PASSIVE one, the kind the connections ran: it waits
 for no reader or writer and copies what it can, so a request never waits for it and the
 database is as safe as before (a commit is durable once in the log, which SQLite replays
 after a crash).
@@ -18,15 +21,17 @@ whose thread cannot keep up, or a long command-line import).
 from __future__ import annotations
 
 import logging
-import os
 import sqlite3
+import struct
 import threading
 from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import quote
 
 BACKSTOP_PAGES = 16_384  # 64 MB of 4 KiB pages: where a connection checkpoints itself
+CHECKPOINT_PAGES = 1_000  # SQLite's default threshold, now the thread's
 LOOK_EVERY_S = 0.25  # how often the thread looks at the logs
+_MX_FRAME, _N_BACKFILL = 16, 96  # byte offsets in the WAL index (native byte order)
 
 
 @dataclass
@@ -37,6 +42,21 @@ class Checkpoint:
     busy: int
     log_frames: int
     checkpointed_frames: int
+
+
+def pages_waiting(path: str | Path) -> int | None:
+    """Pages in ``path``'s log not yet copied into the database file, read from the WAL
+    index without a connection or a lock (None: no index, e.g. no connection open)."""
+    try:
+        with open(f"{path}-shm", "rb") as index:
+            header = index.read(_N_BACKFILL + 4)
+    except OSError:
+        return None
+    if len(header) < _N_BACKFILL + 4:
+        return None
+    (frames,) = struct.unpack_from("=I", header, _MX_FRAME)
+    (copied,) = struct.unpack_from("=I", header, _N_BACKFILL)
+    return max(frames - copied, 0)
 
 
 def checkpoint(path: str | Path) -> Checkpoint | None:
@@ -57,12 +77,12 @@ def checkpoint(path: str | Path) -> Checkpoint | None:
 
 
 class Checkpointer:
-    """The thread that checkpoints the databases it watches when their log changes."""
+    """The thread that checkpoints the databases it watches once ``threshold`` pages wait."""
 
-    def __init__(self, interval_s: float = LOOK_EVERY_S) -> None:
+    def __init__(self, interval_s: float = LOOK_EVERY_S, threshold: int = CHECKPOINT_PAGES) -> None:
         self.interval_s = interval_s
+        self.threshold = threshold
         self._watched: dict[str, int] = {}  # path → engines using it
-        self._seen: dict[str, tuple[int, int] | None] = {}  # path → the log's (mtime, size)
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         self.last: dict[str, Checkpoint] = {}  # path → the last checkpoint's report
@@ -71,7 +91,6 @@ class Checkpointer:
         """Checkpoint ``path``'s log from now on (once per engine that uses it)."""
         with self._lock:
             self._watched[path] = self._watched.get(path, 0) + 1
-            self._seen.setdefault(path, None)
             if self._thread is None or not self._thread.is_alive():
                 self._thread = threading.Thread(
                     target=self._run, name="gyrolab-wal-checkpoint", daemon=True
@@ -86,7 +105,6 @@ class Checkpointer:
                 self._watched[path] = left
             else:
                 self._watched.pop(path, None)
-                self._seen.pop(path, None)
                 self.last.pop(path, None)
 
     def watching(self, path: str) -> bool:
@@ -94,22 +112,17 @@ class Checkpointer:
             return path in self._watched
 
     def look(self) -> None:
-        """Checkpoint every watched database whose log changed since the last look."""
+        """Checkpoint every watched database with ``threshold`` pages or more waiting."""
         with self._lock:
             paths = list(self._watched)
         for path in paths:
-            try:
-                status = os.stat(f"{path}-wal")
-            except OSError:
-                continue  # no log (yet, or any more)
-            mark = (status.st_mtime_ns, status.st_size)
-            if self._seen.get(path) == mark:
+            waiting = pages_waiting(path)
+            if waiting is None or waiting < self.threshold:
                 continue
             report = checkpoint(path)
-            with self._lock:
-                if path in self._watched:
-                    self._seen[path] = mark
-                    if report is not None:
+            if report is not None:
+                with self._lock:
+                    if path in self._watched:
                         self.last[path] = report
 
     def _run(self) -> None:

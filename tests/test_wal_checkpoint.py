@@ -6,11 +6,19 @@ from __future__ import annotations
 import gc
 import os
 import sqlite3
+import struct
 import time
 
 import pytest
 
-from app.wal_checkpoint import BACKSTOP_PAGES, CHECKPOINTS, Checkpointer, checkpoint
+from app.wal_checkpoint import (
+    BACKSTOP_PAGES,
+    CHECKPOINT_PAGES,
+    CHECKPOINTS,
+    Checkpointer,
+    checkpoint,
+    pages_waiting,
+)
 
 BLOB = 8_000_000  # a 1e6-sample upload's bytes
 
@@ -49,30 +57,45 @@ def test_a_commit_leaves_the_copy_into_the_database_file_to_the_checkpoint(tmp_p
     ours.close()
 
 
-def test_the_thread_checkpoints_a_watched_database_once_its_log_changes(tmp_path):
+def test_the_thread_checkpoints_a_watched_database_once_a_thousand_pages_wait(tmp_path):
+    """As many checkpoints as SQLite's own threshold makes, each outside a request."""
     path = str(tmp_path / "watched.db")
     connection = wal_database(path, autocheckpoint=BACKSTOP_PAGES)
+    connection.execute("INSERT INTO t VALUES (?)", (os.urandom(40_000),))
+    small = pages_waiting(path)
+    assert 10 <= small < CHECKPOINT_PAGES
+    looking = Checkpointer(interval_s=3600)  # not started: looks only when told
+    looking.watch(path)
+    looking.look()
+    assert looking.last == {} and pages_waiting(path) == small  # too few to copy yet
+    looking.unwatch(path)
+
     checkpointer = Checkpointer(interval_s=0.02)
     checkpointer.watch(path)
     write_blob(connection)
+    assert pages_waiting(path) > CHECKPOINT_PAGES
     deadline = time.monotonic() + 20
-    while (report := checkpointer.last.get(path)) is None or report.checkpointed_frames < 100:
+    while (report := checkpointer.last.get(path)) is None:
         assert time.monotonic() < deadline, "no checkpoint"
         time.sleep(0.02)
-    assert report.busy == 0 and report.checkpointed_frames == report.log_frames
+    assert report.busy == 0 and report.checkpointed_frames == report.log_frames > small
+    assert pages_waiting(path) == 0
     assert os.path.getsize(path) > BLOB
     checkpointer.unwatch(path)
     assert not checkpointer.watching(path)
     connection.close()
 
 
-def test_a_database_that_is_gone_or_read_only_is_left_alone(tmp_path):
+def test_a_database_that_is_gone_is_left_alone(tmp_path):
     gone = tmp_path / "gone.db"
-    assert checkpoint(gone) is None
+    assert checkpoint(gone) is None and pages_waiting(gone) is None
     assert not gone.exists()  # not created by looking
-    checkpointer = Checkpointer()
+    checkpointer = Checkpointer(interval_s=3600)
     checkpointer.watch(str(gone))
-    (tmp_path / "gone.db-wal").write_bytes(b"")  # a log left behind
+    index = bytearray(200)  # an index left behind, 5,000 pages waiting
+    struct.pack_into("=I", index, 16, 5000)
+    (tmp_path / "gone.db-shm").write_bytes(bytes(index))
+    assert pages_waiting(gone) == 5000
     checkpointer.look()
     assert checkpointer.last == {} and not gone.exists()
 
