@@ -172,9 +172,8 @@ def _sqlite_engine(url: str) -> Engine:
         raw = fairy.dbapi_connection
         busy_ms = fairy.info.get("busy_timeout_ms")
         if busy_ms is None:  # as the connection was set up (a test may shorten it)
-            busy_ms = fairy.info["busy_timeout_ms"] = raw.execute("PRAGMA busy_timeout").fetchone()[
-                0
-            ]
+            (busy_ms,) = raw.execute("PRAGMA busy_timeout").fetchone()
+            fairy.info["busy_timeout_ms"] = busy_ms
         if turns is None or not turns.acquire(raw):
             # a memory database, or the busy timeout waited: SQLite's lock without a turn
             _begin_immediate(raw, busy_ms)
