@@ -16,15 +16,16 @@
    the frames it received.  The CPU of one password check is measured in process.
 2. Predict: a discrete-event simulation replays the scenario for N students -- the same
    start times as the load test; each request's client work, the event loop's first half
-   (the request read and routed), a write place (state-changing requests: 8 per worker,
-   ``web.admission``), the threads' work (on SQLite inside the one write lock for
-   the writes; a log-in's password hash outside the interpreter, at most 4 at once), the
-   database's, the event loop's second half, the client's again; each stream position
-   15 frames 0.2 s apart.  Each worker's interpreter runs one thread at a time, handed on
-   round robin when a thread gives it up (at each counted call or trip; the event loop
-   at each wake-up) or after 5 ms with others waiting (CPython's GIL); the event loop
-   runs its tasks one by one.  The load generator is one Python thread; every pool shares
-   the machine's cores (when more is asked of them than they have, each slows in
+   (the request read and routed), a work place (every HTTP request: 2 per worker,
+   ``web.admission``; a write waiting over 50 ms for the write lock gives it back), a write
+   place (state-changing requests: 8 per worker), the threads' work (on SQLite inside the
+   one write lock for the writes; a log-in's password hash outside the interpreter, at most
+   4 at once), the database's, the event loop's second half, the client's again; each
+   stream position 15 frames 0.2 s apart. Each worker's interpreter runs one thread at a
+   time, handed on round robin when a thread gives it up (at each counted call or trip; the
+   event loop at each wake-up) or after 5 ms with others waiting (CPython's GIL); the event
+   loop runs its tasks one by one. The load generator is one Python thread; every pool
+   shares the machine's cores (when more is asked of them than they have, each slows in
    proportion).
 3. Compare: ``--compare`` reads the tables ``load_test.py`` printed and puts each route's
    measured p95 beside the prediction, and the CPU the run used beside the CPU the costs
@@ -281,6 +282,8 @@ LOGIN_LOCKED_S = 0.001
 # GYROLAB_WRITE_CONCURRENCY) and hold it until the server has answered; the CSV preview is
 # declared read-only and passes
 WRITE_SLOTS = 8
+WORK_PLACES = 2  # GYROLAB_REQUEST_CONCURRENCY: HTTP requests inside a worker at once
+TURN_PATIENCE_S = 0.05  # app.db: a write waiting longer for the lock gives its place back
 HASH_SLOTS = 4
 
 
@@ -311,6 +314,7 @@ def simulate(
     write_slots: int = WRITE_SLOTS,
     switch_interval_s: float = SWITCH_INTERVAL_S,
     teacher: bool = True,
+    work_places: int = WORK_PLACES,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``one_writer``: write requests hold one lock while the server works on them;
@@ -318,6 +322,10 @@ def simulate(
     not a load generator sharing the server's cores; ``hash_s``: the CPU of a log-in's
     password hash (its part of the log-in's server CPU runs outside the interpreter);
     ``write_slots``: each worker's write places (0: no admission queue);
+    ``work_places``: HTTP requests inside each worker at once, the rest waiting on its
+    event loop from when their body has arrived to when a place is free; a write that
+    waits for the write lock longer than ``TURN_PATIENCE_S`` gives its place back (0: no
+    limit);
     ``teacher``: a teacher's dashboard is read every 2 s while the class runs;
     ``switch_interval_s``: each worker's interpreter runs one thread at a time, handed on
     round robin when the thread gives it up (a database call, a trip to the thread pool)
@@ -365,6 +373,7 @@ def simulate(
     lock = Gate(1)
     lock_held: list[float] = []  # how long each write held it, s
     slots = Gate(write_slots * workers if write_slots else float("inf"))
+    places = [Gate(work_places if work_places else float("inf")) for _ in range(workers)]
 
     interpreters: list[list[Job]] = [[] for _ in range(workers)]  # [0] holds it
     turn_ends = [0.0] * workers
@@ -418,18 +427,37 @@ def simulate(
             work = [("lock", threads)]
         else:
             work = [("server", threads)]
+        http = route != STREAM  # a stream frame arrives on its WebSocket: no place
         stages = [("client", client / 2), ("loop", loop / 2)]
+        stages += [("admit", 0.0)] if http else []
         stages += [("enter", 0.0)] if slotted else []
         stages += [*work, ("db", db)]
         stages += [("leave", 0.0)] if slotted else []
+        stages += [("dismiss", 0.0)] if http else []
         stages += [("loop", loop / 2), ("client", client / 2)]
+        holding = [False]  # whether this request holds one of its worker's places
+
+        def give_back() -> None:
+            if holding[0]:
+                holding[0] = False
+                places[worker].leave()
 
         def run(i: int) -> None:
             if i == len(stages):
                 then()
                 return
             pool, work = stages[i]
-            if pool == "enter":
+            if pool == "admit":
+
+                def admitted() -> None:
+                    holding[0] = True
+                    run(i + 1)
+
+                places[worker].enter(admitted)
+            elif pool == "dismiss":
+                give_back()
+                run(i + 1)
+            elif pool == "enter":
                 slots.enter(lambda: run(i + 1))
             elif pool == "leave":
                 slots.leave()
@@ -445,8 +473,15 @@ def simulate(
                     taken[0] = now
                     server_job(work, release, share(work), worker)
 
-                taken = [0.0]
+                taken: list[float | None] = [None]
                 lock.enter(take)
+                if taken[0] is None and holding[0]:  # waiting; past its patience it gives way
+
+                    def impatient() -> None:
+                        if taken[0] is None:
+                            give_back()
+
+                    at(now + TURN_PATIENCE_S, impatient)
             elif pool == "server":
                 server_job(work, lambda: run(i + 1), share(work), worker)
             elif pool == "loop":
@@ -622,6 +657,9 @@ def main() -> int:
         "--write-slots", type=int, default=WRITE_SLOTS, help="per worker; 0: no admission queue"
     )
     parser.add_argument(
+        "--work-places", type=int, default=WORK_PLACES, help="per worker; 0: no limit"
+    )
+    parser.add_argument(
         "--costs",
         type=Path,
         help="read the CPU per request from this JSON file if it exists, else measure and "
@@ -660,6 +698,7 @@ def main() -> int:
             hash_s=hash_s,
             write_slots=args.write_slots,
             switch_interval_s=args.switch_interval / 1000,
+            work_places=args.work_places,
         )
         print(f"\n{students} students, {name}, {workers} worker(s): predicted wall "
               f"{result['wall']:.1f} s")  # fmt: skip

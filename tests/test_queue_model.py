@@ -57,8 +57,11 @@ def test_many_short_calls_wait_a_turn_of_the_busy_threads_at_each_call():
     for route in mixed:
         if route.startswith("POST"):
             mixed[route] = (3 * MS, 1 * MS, 2 * MS, 60.0, 4.0, 1 * MS)
-    shared = queue_model.simulate(mixed, 40, 1, 2.0, teacher=False, switch_interval_s=0.0)
-    turns = queue_model.simulate(mixed, 40, 1, 2.0, teacher=False)
+    # every request inside at once (no work places): the interpreter alone decides
+    shared = queue_model.simulate(
+        mixed, 40, 1, 2.0, teacher=False, switch_interval_s=0.0, work_places=0
+    )
+    turns = queue_model.simulate(mixed, 40, 1, 2.0, teacher=False, work_places=0)
 
     def p95(result: dict, route: str) -> float:
         return float(np.percentile(result["latencies"][route], 95))
@@ -66,3 +69,17 @@ def test_many_short_calls_wait_a_turn_of_the_busy_threads_at_each_call():
     write, read = "POST /lab/sessions/{id}/csv", "GET /lab/sessions/{id}/results.json"
     assert p95(turns, write) > 2 * p95(shared, write)
     assert p95(turns, read) < p95(shared, read)
+
+
+def test_a_request_waits_for_a_work_place():
+    """Two students arrive together at a worker with one place: the second's first request
+    waits the first's whole stay (its threads' and database work), then takes as long."""
+    table = costs(server=20 * MS, db=0.0, client=0.0, calls=0.0, trips=0.0, loop=0.0)
+    for places, expected in ((1, [20 * MS, 40 * MS]), (0, [40 * MS, 40 * MS])):
+        result = queue_model.simulate(
+            table, 2, 1, 2.0, ramp=0.0, teacher=False, switch_interval_s=0.0,
+            work_places=places,
+        )  # fmt: skip
+        first = sorted(result["latencies"]["GET /login"])
+        # one place: one after the other; unlimited: both share the one interpreter
+        assert first == pytest.approx(expected, abs=1e-4), places
