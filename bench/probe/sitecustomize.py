@@ -9,12 +9,41 @@ thread pool (anyio's ``to_thread.run_sync``).
 ``GYROLAB_BENCH_LOCK_TRACE`` (a load test): a file to which each SQLite write transaction
 appends one line, ``wall_ms cpu_ms``: how long it held the write lock (``BEGIN
 IMMEDIATE`` to the end of its commit or rollback) and the CPU its thread spent meanwhile.
+
+``GYROLAB_BENCH_SERVER_TIMES`` (a load test): a file to which each HTTP request appends
+``method path ms``: from when the app is called (uvicorn has read the request's head) to
+its answer's start -- the server's part of the latency the load generator measures.
 """
 
 import os
 
 _COUNTS = os.environ.get("GYROLAB_BENCH_PROBE")
 _LOCKS = os.environ.get("GYROLAB_BENCH_LOCK_TRACE")
+_TIMES = os.environ.get("GYROLAB_BENCH_SERVER_TIMES")
+
+if _TIMES:
+    import time as _time
+
+    from fastapi import applications as _applications
+
+    _times = os.open(_TIMES, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+    _call = _applications.FastAPI.__call__
+
+    async def _timed_call(self, scope, receive, send):
+        if scope["type"] != "http":
+            return await _call(self, scope, receive, send)
+        began = _time.perf_counter()
+
+        async def timed_send(message):
+            if message["type"] == "http.response.start":
+                took = (_time.perf_counter() - began) * 1000
+                line = f"{scope['method']} {scope['path']} {took:.3f}\n"
+                os.write(_times, line.encode())
+            await send(message)
+
+        return await _call(self, scope, receive, timed_send)
+
+    _applications.FastAPI.__call__ = _timed_call
 
 if _COUNTS or _LOCKS:
     import sqlite3
