@@ -11,8 +11,9 @@ appends one line, ``wall_ms cpu_ms``: how long it held the write lock (``BEGIN
 IMMEDIATE`` to the end of its commit or rollback) and the CPU its thread spent meanwhile.
 
 ``GYROLAB_BENCH_SERVER_TIMES`` (a load test): a file to which each HTTP request appends
-``method path ms``: from when the app is called (uvicorn has read the request's head) to
-its answer's start -- the server's part of the latency the load generator measures.
+``method path ms waited_ms``: from when the app is called (uvicorn has read the request's
+head) to its answer's start -- the server's part of the latency the load generator
+measures -- and of it the wait before the app proper began (the body, a work place).
 """
 
 import os
@@ -25,6 +26,7 @@ if _TIMES:
     import time as _time
 
     from fastapi import applications as _applications
+    from starlette.middleware import exceptions as _exceptions
 
     _times = os.open(_TIMES, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
     _call = _applications.FastAPI.__call__
@@ -33,17 +35,28 @@ if _TIMES:
         if scope["type"] != "http":
             return await _call(self, scope, receive, send)
         began = _time.perf_counter()
+        scope["bench.admitted"] = None
 
         async def timed_send(message):
             if message["type"] == "http.response.start":
                 took = (_time.perf_counter() - began) * 1000
-                line = f"{scope['method']} {scope['path']} {took:.3f}\n"
+                admitted = scope["bench.admitted"]
+                waited = (admitted - began) * 1000 if admitted else took
+                line = f"{scope['method']} {scope['path']} {took:.3f} {waited:.3f}\n"
                 os.write(_times, line.encode())
             await send(message)
 
         return await _call(self, scope, receive, timed_send)
 
     _applications.FastAPI.__call__ = _timed_call
+    _inner = _exceptions.ExceptionMiddleware.__call__  # the next app inside the admission
+
+    async def _admitted(self, scope, receive, send):
+        if "bench.admitted" in scope and scope["bench.admitted"] is None:
+            scope["bench.admitted"] = _time.perf_counter()
+        return await _inner(self, scope, receive, send)
+
+    _exceptions.ExceptionMiddleware.__call__ = _admitted
 
 if _COUNTS or _LOCKS:
     import sqlite3
