@@ -160,6 +160,7 @@ def _sqlite_engine(url: str) -> Engine:
         cursor.execute("PRAGMA synchronous=NORMAL")
         if not in_memory:  # checkpoints by the process's thread (app.wal_checkpoint)
             cursor.execute(f"PRAGMA wal_autocheckpoint={BACKSTOP_PAGES}")
+            cursor.execute("PRAGMA journal_size_limit=0")  # the log emptied when restarted
         cursor.close()
 
     @event.listens_for(engine, "begin")

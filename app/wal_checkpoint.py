@@ -5,14 +5,18 @@ copies them into ``gyrolab.db``.  By default the connection whose commit takes t
 past 1,000 pages (4 MB) runs that checkpoint itself, inside its request: a 1e6-sample
 upload (8 MB) paid ≈ 18 ms of its ≈ 50 ms copying its own pages a second time (issue 32,
 bench/README.md).  Here a process's connections leave checkpoints to one daemon thread
-that looks at each database's log a few times a second and checkpoints it once 1,000
-pages wait to be copied -- SQLite's own threshold, so there are as many checkpoints as
-before, each outside a request.  It counts them in the WAL index (``-shm``; its header's
-``mxFrame`` less the checkpoint's ``nBackfill``: https://www.sqlite.org/walformat.html,
-§2.2).  The checkpoint is SQLite's PASSIVE one, the kind the connections ran: it waits
-for no reader or writer and copies what it can, so a request never waits for it and the
-database is as safe as before (a commit is durable once in the log, which SQLite replays
-after a crash).
+that looks at each database's log a few times a second and checkpoints it once it holds
+1,000 pages -- SQLite's own threshold, so there are about as many checkpoints as before,
+each outside a request.  It learns that from the log file's size and time (``os.stat``):
+the connections set ``journal_size_limit = 0``, so SQLite empties the log whenever it
+starts it again after a complete checkpoint, and its size is what was written since.
+The thread never opens the log or its index itself: closing any descriptor of a file
+drops every POSIX lock the process holds on it -- SQLite's locks on the index included
+(another process then took the write lock while this one held it: the concurrency test
+caught that in a first version).  The checkpoint is SQLite's PASSIVE one, the kind the
+connections ran: it waits for no reader or writer and copies what it can, so a request
+never waits for it and the database is as safe as before (a commit is durable once in
+the log, which SQLite replays after a crash).
 
 A connection still checkpoints itself once the log reaches ``BACKSTOP_PAGES`` (a process
 whose thread cannot keep up, or a long command-line import).
@@ -21,8 +25,8 @@ whose thread cannot keep up, or a long command-line import).
 from __future__ import annotations
 
 import logging
+import os
 import sqlite3
-import struct
 import threading
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +35,7 @@ from urllib.parse import quote
 BACKSTOP_PAGES = 16_384  # 64 MB of 4 KiB pages: where a connection checkpoints itself
 CHECKPOINT_PAGES = 1_000  # SQLite's default threshold, now the thread's
 LOOK_EVERY_S = 0.25  # how often the thread looks at the logs
-_MX_FRAME, _N_BACKFILL = 16, 96  # byte offsets in the WAL index (native byte order)
+FRAME_BYTES = 4096 + 24  # a page in the log: the page (SQLite's default size) and its header
 
 
 @dataclass
@@ -44,19 +48,15 @@ class Checkpoint:
     checkpointed_frames: int
 
 
-def pages_waiting(path: str | Path) -> int | None:
-    """Pages in ``path``'s log not yet copied into the database file, read from the WAL
-    index without a connection or a lock (None: no index, e.g. no connection open)."""
+def log_pages(path: str | Path) -> tuple[int, int] | None:
+    """The pages in ``path``'s log since SQLite last started it (its size over a frame's),
+    and the log's modification time (ns); None when there is no log.  ``os.stat`` only:
+    no descriptor of the log is opened (see the module)."""
     try:
-        with open(f"{path}-shm", "rb") as index:
-            header = index.read(_N_BACKFILL + 4)
+        status = os.stat(f"{path}-wal")
     except OSError:
         return None
-    if len(header) < _N_BACKFILL + 4:
-        return None
-    (frames,) = struct.unpack_from("=I", header, _MX_FRAME)
-    (copied,) = struct.unpack_from("=I", header, _N_BACKFILL)
-    return max(frames - copied, 0)
+    return status.st_size // FRAME_BYTES, status.st_mtime_ns
 
 
 def checkpoint(path: str | Path) -> Checkpoint | None:
@@ -83,6 +83,7 @@ class Checkpointer:
         self.interval_s = interval_s
         self.threshold = threshold
         self._watched: dict[str, int] = {}  # path → engines using it
+        self._checked: dict[str, int] = {}  # path → the log's mtime when last checkpointed
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         self.last: dict[str, Checkpoint] = {}  # path → the last checkpoint's report
@@ -105,6 +106,7 @@ class Checkpointer:
                 self._watched[path] = left
             else:
                 self._watched.pop(path, None)
+                self._checked.pop(path, None)
                 self.last.pop(path, None)
 
     def watching(self, path: str) -> bool:
@@ -112,17 +114,23 @@ class Checkpointer:
             return path in self._watched
 
     def look(self) -> None:
-        """Checkpoint every watched database with ``threshold`` pages or more waiting."""
+        """Checkpoint every watched database whose log holds ``threshold`` pages or more
+        and has changed since its last checkpoint here (one that readers kept from
+        finishing is tried again once more is written, as SQLite's own would be)."""
         with self._lock:
             paths = list(self._watched)
         for path in paths:
-            waiting = pages_waiting(path)
-            if waiting is None or waiting < self.threshold:
+            log = log_pages(path)
+            if log is None:
+                continue
+            pages, changed = log
+            if pages < self.threshold or self._checked.get(path) == changed:
                 continue
             report = checkpoint(path)
-            if report is not None:
-                with self._lock:
-                    if path in self._watched:
+            with self._lock:
+                if path in self._watched:
+                    self._checked[path] = changed
+                    if report is not None:
                         self.last[path] = report
 
     def _run(self) -> None:

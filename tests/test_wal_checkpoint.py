@@ -6,7 +6,8 @@ from __future__ import annotations
 import gc
 import os
 import sqlite3
-import struct
+import subprocess
+import sys
 import time
 
 import pytest
@@ -17,24 +18,27 @@ from app.wal_checkpoint import (
     CHECKPOINTS,
     Checkpointer,
     checkpoint,
-    pages_waiting,
+    log_pages,
 )
 
 BLOB = 8_000_000  # a 1e6-sample upload's bytes
 
 
 def wal_database(path, autocheckpoint: int | None) -> sqlite3.Connection:
+    """A WAL database; ``autocheckpoint`` and an emptied log as GyroLab's connections
+    have them (None: SQLite's defaults)."""
     connection = sqlite3.connect(path, isolation_level=None)
     connection.execute("PRAGMA journal_mode=WAL")
     if autocheckpoint is not None:
         connection.execute(f"PRAGMA wal_autocheckpoint={autocheckpoint}")
+        connection.execute("PRAGMA journal_size_limit=0")
     connection.execute("CREATE TABLE t (b BLOB)")
     return connection
 
 
-def write_blob(connection: sqlite3.Connection) -> None:
+def write_blob(connection: sqlite3.Connection, size: int = BLOB) -> None:
     connection.execute("BEGIN IMMEDIATE")
-    connection.execute("INSERT INTO t VALUES (?)", (os.urandom(BLOB),))
+    connection.execute("INSERT INTO t VALUES (?)", (os.urandom(size),))
     connection.execute("COMMIT")
 
 
@@ -57,45 +61,81 @@ def test_a_commit_leaves_the_copy_into_the_database_file_to_the_checkpoint(tmp_p
     ours.close()
 
 
+def test_the_log_is_measured_from_where_sqlite_last_started_it(tmp_path):
+    path = tmp_path / "measured.db"
+    connection = wal_database(path, autocheckpoint=BACKSTOP_PAGES)
+    write_blob(connection)
+    assert log_pages(path)[0] > BLOB // 4096
+    checkpoint(path)
+    write_blob(connection, 40_000)  # the next writer starts the log again, emptied
+    assert 10 <= log_pages(path)[0] < 20
+    connection.close()
+
+
 def test_the_thread_checkpoints_a_watched_database_once_a_thousand_pages_wait(tmp_path):
-    """As many checkpoints as SQLite's own threshold makes, each outside a request."""
+    """About as many checkpoints as SQLite's own threshold makes, each outside a request."""
     path = str(tmp_path / "watched.db")
     connection = wal_database(path, autocheckpoint=BACKSTOP_PAGES)
-    connection.execute("INSERT INTO t VALUES (?)", (os.urandom(40_000),))
-    small = pages_waiting(path)
-    assert 10 <= small < CHECKPOINT_PAGES
-    looking = Checkpointer(interval_s=3600)  # not started: looks only when told
+    write_blob(connection, 40_000)
+    looking = Checkpointer(interval_s=3600)  # its thread waits an hour: looks when told
     looking.watch(path)
     looking.look()
-    assert looking.last == {} and pages_waiting(path) == small  # too few to copy yet
+    assert looking.last == {}  # too few pages to copy yet
     looking.unwatch(path)
 
     checkpointer = Checkpointer(interval_s=0.02)
     checkpointer.watch(path)
     write_blob(connection)
-    assert pages_waiting(path) > CHECKPOINT_PAGES
+    assert log_pages(path)[0] > CHECKPOINT_PAGES
     deadline = time.monotonic() + 20
     while (report := checkpointer.last.get(path)) is None:
         assert time.monotonic() < deadline, "no checkpoint"
         time.sleep(0.02)
-    assert report.busy == 0 and report.checkpointed_frames == report.log_frames > small
-    assert pages_waiting(path) == 0
+    assert report.busy == 0 and report.checkpointed_frames == report.log_frames > 1000
     assert os.path.getsize(path) > BLOB
     checkpointer.unwatch(path)
     assert not checkpointer.watching(path)
     connection.close()
 
 
+def test_looking_never_drops_the_write_lock_this_process_holds(tmp_path):
+    """Closing a descriptor of the log or its index would drop every POSIX lock the process
+    holds on it: another process could then write while this one holds SQLite's write
+    lock (a first version read the index: the concurrency test caught it)."""
+    path = str(tmp_path / "locked.db")
+    connection = wal_database(path, autocheckpoint=BACKSTOP_PAGES)
+    write_blob(connection)
+    holder = sqlite3.connect(path, isolation_level=None, timeout=0)
+    holder.execute("BEGIN IMMEDIATE")
+    checkpointer = Checkpointer(interval_s=3600)
+    checkpointer.watch(path)
+    checkpointer.look()
+    assert checkpointer.last[path].checkpointed_frames > 0  # it did look, and copy
+    other_process = (
+        "import sqlite3, sys\n"
+        "c = sqlite3.connect(sys.argv[1], isolation_level=None, timeout=0)\n"
+        "try:\n"
+        "    c.execute('BEGIN IMMEDIATE')\n"
+        "    print('took the lock')\n"
+        "except sqlite3.OperationalError as error:\n"
+        "    print(error)\n"
+    )
+    answer = subprocess.run(
+        [sys.executable, "-c", other_process, path], capture_output=True, text=True, check=True
+    )
+    assert answer.stdout.strip() == "database is locked"
+    holder.execute("ROLLBACK")
+    holder.close()
+    connection.close()
+
+
 def test_a_database_that_is_gone_is_left_alone(tmp_path):
     gone = tmp_path / "gone.db"
-    assert checkpoint(gone) is None and pages_waiting(gone) is None
+    assert checkpoint(gone) is None and log_pages(gone) is None
     assert not gone.exists()  # not created by looking
     checkpointer = Checkpointer(interval_s=3600)
     checkpointer.watch(str(gone))
-    index = bytearray(200)  # an index left behind, 5,000 pages waiting
-    struct.pack_into("=I", index, 16, 5000)
-    (tmp_path / "gone.db-shm").write_bytes(bytes(index))
-    assert pages_waiting(gone) == 5000
+    (tmp_path / "gone.db-wal").write_bytes(b"\0" * (2 * CHECKPOINT_PAGES * 4120))  # left behind
     checkpointer.look()
     assert checkpointer.last == {} and not gone.exists()
 
@@ -110,6 +150,7 @@ def test_the_apps_connections_leave_checkpoints_to_the_thread_while_the_engine_l
 
     with get_engine().connect() as connection:
         assert connection.execute(text("PRAGMA wal_autocheckpoint")).scalar() == BACKSTOP_PAGES
+        assert connection.execute(text("PRAGMA journal_size_limit")).scalar() == 0
     assert CHECKPOINTS.watching(os.path.abspath(test_database.path))
 
     path = tmp_path / "own.db"
