@@ -128,10 +128,16 @@ class Checkpointer:
                 continue
             report = checkpoint(path)
             with self._lock:
-                if path in self._watched:
+                if path not in self._watched:
+                    continue
+                # done with this state of the log once the checkpoint saw all of it; a
+                # write still going (its pages in the file, its commit not yet) is looked
+                # at again, unless a second look sees nothing new (a log some other
+                # program restarted without emptying it)
+                if report is None or report.log_frames >= pages or report == self.last.get(path):
                     self._checked[path] = changed
-                    if report is not None:
-                        self.last[path] = report
+                if report is not None:
+                    self.last[path] = report
 
     def _run(self) -> None:
         stop = threading.Event()  # never set: a daemon thread ends with its process
