@@ -83,7 +83,10 @@ class Checkpointer:
         self.interval_s = interval_s
         self.threshold = threshold
         self._watched: dict[str, int] = {}  # path → engines using it
-        self._checked: dict[str, int] = {}  # path → the log's mtime when last checkpointed
+        # path → the log's (pages, mtime) when last done with: the size as well as the time,
+        # as a file's time moves in the kernel's clock ticks (a few ms) and a commit's last
+        # frame can land in the tick of the look before it
+        self._checked: dict[str, tuple[int, int]] = {}
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         self.last: dict[str, Checkpoint] = {}  # path → the last checkpoint's report
@@ -123,8 +126,8 @@ class Checkpointer:
             log = log_pages(path)
             if log is None:
                 continue
-            pages, changed = log
-            if pages < self.threshold or self._checked.get(path) == changed:
+            pages = log[0]
+            if pages < self.threshold or self._checked.get(path) == log:
                 continue
             report = checkpoint(path)
             with self._lock:
@@ -135,7 +138,7 @@ class Checkpointer:
                 # at again, unless a second look sees nothing new (a log some other
                 # program restarted without emptying it)
                 if report is None or report.log_frames >= pages or report == self.last.get(path):
-                    self._checked[path] = changed
+                    self._checked[path] = log
                 if report is not None:
                     self.last[path] = report
 

@@ -16,6 +16,7 @@ from app.wal_checkpoint import (
     BACKSTOP_PAGES,
     CHECKPOINT_PAGES,
     CHECKPOINTS,
+    Checkpoint,
     Checkpointer,
     checkpoint,
     log_pages,
@@ -164,3 +165,30 @@ def test_the_apps_connections_leave_checkpoints_to_the_thread_while_the_engine_l
     del engine, connection
     gc.collect()
     assert not CHECKPOINTS.watching(str(path))
+
+
+def test_a_commit_in_the_same_clock_tick_as_the_last_look_is_still_checkpointed(monkeypatch):
+    """Two looks during an 8 MB write copy only what was committed before it (the second
+    sees nothing new and is done with that state); the write's commit then lands within
+    the same tick of the file clock -- the log's time unchanged, only its size grown -- and
+    must still be checkpointed (a full run with four test workers once waited forever)."""
+    import app.wal_checkpoint as wal
+
+    tick = 1_700_000_000_000_000_000  # the log's modification time, one coarse tick
+    logs = iter([(1500, tick), (1900, tick), (1960, tick), (1960, tick)])
+    committed = iter([13, 13, 1960, 1960])
+    seen: list[int] = []
+    monkeypatch.setattr(wal, "log_pages", lambda path: next(logs))
+
+    def fake_checkpoint(path):
+        frames = next(committed)
+        seen.append(frames)
+        return Checkpoint(0, frames, frames)
+
+    monkeypatch.setattr(wal, "checkpoint", fake_checkpoint)
+    looking = Checkpointer(interval_s=3600)
+    looking._watched["db"] = 1  # watched, without starting the thread
+    for _ in range(4):
+        looking.look()
+    assert seen == [13, 13, 1960]  # the commit copied once; the fourth look has nothing new
+    assert looking.last["db"] == Checkpoint(0, 1960, 1960)
