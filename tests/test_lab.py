@@ -282,6 +282,27 @@ def test_re_recording_keeps_history(student_client):
     assert "replaced" in page
 
 
+def test_a_long_history_shows_its_latest_recordings_and_keeps_the_older_current_ones(
+    student_client,
+):
+    """Part A saved once, then part B fourteen times: 60 recordings.  The page lists the
+    50 most recent (all of part B) and says so; part A's result, from recordings older
+    than those listed, is still there."""
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    for _ in range(14):
+        save_manual(student_client, session_id, "latitude", handout("handout_vertical.csv"))
+    page = student_client.get(f"/lab/sessions/{session_id}").text
+    history = page.split('id="take-history"', 1)[1].split("</section>", 1)[0]
+    assert history.count("<tr") == 1 + 50  # the head row and the 50 most recent
+    assert "The 50 most recent of 60 recordings are shown" in history
+    # part A's four are older than all of those listed
+    assert history.count("<td>A</td>") == 0 and history.count("<td>B</td>") == 50
+    assert "-10.75°" in page  # part A's θ, from its current (older) takes
+    zh = student_client.get(f"/lab/sessions/{session_id}", headers={"Accept-Language": "zh-CN"})
+    assert "仅显示 60 次记录中最近的 50 次" in zh.text
+
+
 def test_submit_freezes_an_attempt_and_edits_start_a_new_one(student_client):
     session_id = new_session(student_client)
     page = f"/lab/sessions/{session_id}"

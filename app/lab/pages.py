@@ -46,7 +46,7 @@ from app.lab.sim import (
     position_count,
     warm_up_state,
 )
-from app.lab.store import PARTS, is_editable, take_history
+from app.lab.store import PARTS, current_takes, is_editable, take_history
 from app.lab.truth import auto_check, session_truth, truth_visible
 from app.models import (
     Assignment,
@@ -138,8 +138,11 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         except OperationalError:  # a read-only database: the notice simply stays
             db.rollback()
     course = db.get(Course, assignment.course_id) if assignment else None
-    history = take_history(db, session.id)
-    current = [take for take in history if take.superseded_at is None]
+    history, recordings = take_history(db, session.id)
+    if recordings > len(history):  # some current takes may be older than those shown
+        current = current_takes(db, session.id)
+    else:
+        current = [take for take in history if take.superseded_at is None]
     return render(
         request,
         "lab/session.html",
@@ -149,6 +152,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
             "timezone": course.timezone if course else None,
             **group,
             "history": history,
+            "recordings": recordings,
             "methods": allowed_methods(db, session),
             "units": UNITS,
             "unit_names": UNIT_NAMES,
