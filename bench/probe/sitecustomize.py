@@ -14,6 +14,10 @@ IMMEDIATE`` to the end of its commit or rollback) and the CPU its thread spent m
 ``method path ms waited_ms``: from when the app is called (uvicorn has read the request's
 head) to its answer's start -- the server's part of the latency the load generator
 measures -- and of it the wait before the app proper began (the body, a work place).
+
+``GYROLAB_BENCH_GC`` (a load test): a file to which each of the process's garbage
+collections appends ``pid generation ms collected``, and a full one also how many objects the
+collector now keeps in its oldest generation, and of which types most (``type:count``).
 """
 
 import os
@@ -21,6 +25,30 @@ import os
 _COUNTS = os.environ.get("GYROLAB_BENCH_PROBE")
 _LOCKS = os.environ.get("GYROLAB_BENCH_LOCK_TRACE")
 _TIMES = os.environ.get("GYROLAB_BENCH_SERVER_TIMES")
+_GC = os.environ.get("GYROLAB_BENCH_GC")
+
+if _GC:
+    import gc as _gc
+    import time as _gc_time
+
+    _gc_file = os.open(_GC, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+    _gc_began = [0.0]
+
+    def _gc_timed(phase, info):
+        if phase == "start":
+            _gc_began[0] = _gc_time.perf_counter()
+            return
+        took = (_gc_time.perf_counter() - _gc_began[0]) * 1000
+        line = f"{os.getpid()} {info['generation']} {took:.3f} {info['collected']}"
+        if info["generation"] == 2:
+            from collections import Counter
+
+            kept = _gc.get_objects(2)
+            kinds = Counter(type(o).__qualname__ for o in kept).most_common(8)
+            line += f" {len(kept)} " + " ".join(f"{k}:{n}" for k, n in kinds)
+        os.write(_gc_file, (line + "\n").encode())
+
+    _gc.callbacks.append(_gc_timed)
 
 if _TIMES:
     import time as _time
