@@ -64,6 +64,18 @@ def test_a_recording_continues_the_sessions_one_noise_timeline():
     assert np.array_equal(values, again)  # deterministic from the stored seed and clock
 
 
+def test_a_live_recording_read_frame_by_frame_is_the_same_timeline():
+    """The stream asks for a few samples per frame and the take makes its noise ahead in
+    blocks: the same samples and times as one read, across several blocks."""
+    lab = session(11, "tactical-fog")
+    whole_values, whole_times = SimulatedTake(lab, "latitude", 2, start_s=40.0).next(3000)
+    take = SimulatedTake(lab, "latitude", 2, start_s=40.0)
+    pieces = [take.next(count) for count in [1, 40, 39, 1500, 7, 1413]]
+    assert np.array_equal(np.concatenate([v for v, _ in pieces]), whole_values)
+    assert np.array_equal(np.concatenate([t for _, t in pieces]), whole_times)
+    assert take.end_s == whole_times[-1] + 0.1
+
+
 def test_slow_bias_carries_across_positions_as_the_noise_model_says():
     """Means of two 300 s recordings of the teaching gyro 20 s apart, over 400 sessions:
     their covariance matches the continuous-timeline covariance of app.core.noise_model

@@ -30,6 +30,7 @@ MAX_SETTLE_S = 120.0
 MAX_PAUSE_S = 1800.0  # a longer pause between recordings counts as 30 min of gyro time
 POWER_CYCLE_S = 6 * 3600.0  # after 6 h of gyro time the timeline starts a new power cycle
 HISTORY_BLOCK = 200_000
+READ_AHEAD = 1_024  # samples of a live recording's noise made at a time (≈ 1 ms)
 
 
 def new_truth() -> tuple[int, float]:
@@ -225,6 +226,7 @@ class SimulatedTake:
             self.stream.read(np.zeros(block))
             index -= block
         self.produced = 0
+        self._ahead, self._used = np.empty(0), 0  # noise made ahead, and how much is used
 
     @property
     def end_s(self) -> float:
@@ -232,8 +234,20 @@ class SimulatedTake:
         return (self.first_index + self.produced) / self.rate_hz
 
     def next(self, count: int) -> tuple[np.ndarray, np.ndarray]:
-        """The next ``count`` samples and their gyro times (s since switch-on)."""
-        values = self.stream.read(np.full(count, self.true_rate), self.up)
+        """The next ``count`` samples and their gyro times (s since switch-on).
+
+        The gyro's noise is made ``READ_AHEAD`` samples at a time and handed out in the
+        pieces asked for: a live recording asks for a few samples per frame, and making
+        them frame by frame cost a numpy call per noise component each time (≈ 0.3 ms of
+        the server's 0.6 ms per frame).  The samples are the same, however they are cut
+        (``GyroStream`` reads any chunking identically)."""
+        while self._ahead.size - self._used < count:
+            block = max(READ_AHEAD, count - (self._ahead.size - self._used))
+            made = self.stream.read(np.full(block, self.true_rate), self.up)
+            self._ahead = np.concatenate([self._ahead[self._used :], made])
+            self._used = 0
+        values = self._ahead[self._used : self._used + count]
+        self._used += count
         times = (self.first_index + self.produced + np.arange(count)) / self.rate_hz
         self.produced += count
         return values, times
