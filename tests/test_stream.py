@@ -322,3 +322,30 @@ def test_a_save_that_waits_past_the_busy_timeout_says_so_and_the_stream_stays(
         assert frames[-1]["type"] == "error" and "very busy" in frames[-1]["message"]
         frames = record(ws, part="heading", position=1, dwell_s=2, speed=60)
         assert frames[-1]["type"] == "saved"
+
+
+def test_the_gyros_history_is_replayed_off_the_event_loop(student_client, monkeypatch):
+    """A recording late in a session replays up to 6 h of the gyro's noise before its
+    first sample (≈ 60 ms at 10 Hz): never on the event loop, where it would hold up every
+    other student's frames."""
+    import asyncio
+
+    from app.lab import stream
+
+    on_loop = []
+
+    class Watched(SimulatedTake):
+        def __init__(self, *args, **kwargs):
+            try:
+                asyncio.get_running_loop()
+                on_loop.append(True)
+            except RuntimeError:
+                on_loop.append(False)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(stream, "SimulatedTake", Watched)
+    monkeypatch.setattr(stream, "MAX_SPEED", 6000.0)
+    session_id = new_session(student_client, preset="tactical-fog")
+    with connect(student_client, session_id) as ws:
+        frames = record(ws, part="heading", position=1, dwell_s=20, speed=6000)
+    assert frames[-1]["type"] == "saved" and on_loop == [False]

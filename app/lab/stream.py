@@ -199,7 +199,9 @@ async def _record(
         raise UserError("stream.turn_first", position=position)
     async with write_slot():
         session = await run_in_threadpool(_mark_started, session_id, part, position)
-    take = SimulatedTake(session, part, position, settle)
+    # the take replays the gyro's noise since switch-on (up to 6 h: 216,000 samples at
+    # 10 Hz, ≈ 60 ms): in the pool, so that the other students' frames are not held up
+    take = await run_in_threadpool(SimulatedTake, session, part, position, settle)
     total = max(1, int(round(dwell * take.rate_hz)))
     await websocket.send_json(
         {
