@@ -238,8 +238,9 @@ class SimulatedTake:
 
         The gyro's noise is made ``READ_AHEAD`` samples at a time and handed out in the
         pieces asked for: a live recording asks for a few samples per frame, and making
-        them frame by frame cost a numpy call per noise component each time (≈ 0.3 ms of
-        the server's 0.6 ms per frame).  The samples are the same, however they are cut
+        them frame by frame cost a numpy call per noise component (19 for the tactical
+        FOG) each time -- ≈ 1.2 s of the 60-student class's ≈ 16 s of server CPU
+        (bench/README.md).  The samples are the same, however they are cut
         (``GyroStream`` reads any chunking identically)."""
         while self._ahead.size - self._used < count:
             block = max(READ_AHEAD, count - (self._ahead.size - self._used))
