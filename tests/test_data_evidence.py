@@ -121,3 +121,20 @@ def test_reading_times_out_of_order_or_at_another_step_are_found():
     # repeated time stamps (typed by hand to the second) are out of order too
     stamped = [np.repeat(np.arange(10.0), 10) / 10 for _ in range(4)]
     assert {e.check for e in recording_times("heading", stamped, rate)} == {"time_order"}
+
+
+@pytest.mark.parametrize("count", [1, 30, 512, 513, 3000])
+def test_the_typed_step_is_the_fewest_decimals_that_write_every_reading(count):
+    """Readings written to d decimals (as text, then parsed) give 10⁻ᵈ whether typed_step
+    checks every d at once (≤ 512 readings) or one at a time; full floats give None."""
+    from app.core.data_copies import typed_step
+
+    rng = np.random.default_rng(count)
+    for decimals in range(7):
+        raw = rng.normal(-11.0, 0.05, count)
+        written = np.array([float(f"{x:.{decimals}f}") for x in raw])
+        # the fewest decimals whose text gives back every reading (a few may end in 0)
+        fewer = next(d for d in range(7) if all(float(f"{x:.{d}f}") == x for x in written))
+        assert typed_step(written) == pytest.approx(10.0**-fewer)
+    assert typed_step(rng.normal(-11.0, 0.05, count)) is None
+    assert typed_step(np.full(count, np.nan)) is None

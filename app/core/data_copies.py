@@ -33,29 +33,48 @@ def typed_step(values: np.ndarray) -> float | None:
     -------
     float or None
         10⁻ᵈ for the fewest decimals d ≤ 6 that hold every value (0.01 for "10.74"), or
-        None for full-precision floats.
+        None for full-precision floats: d holds them when every |x·10ᵈ − round(x·10ᵈ)| <
+        10⁻⁹·max(1, |x·10ᵈ|).
     """
-    for decimals in range(7):
-        scaled = values * 10.0**decimals
-        if np.all(np.abs(scaled - np.round(scaled)) < 1e-9 * np.maximum(1.0, np.abs(scaled))):
-            return 10.0**-decimals
-    return None
+    values = np.asarray(values, float)
+    if values.size > _AT_ONCE:  # one decimal count at a time: the least memory
+        for decimals in range(_DECIMALS.size):
+            if _holds(values * _DECIMALS[decimals]).all():
+                return 10.0**-decimals
+        return None
+    fits = _holds(np.multiply.outer(_DECIMALS, values)).all(axis=1)  # all seven at once
+    first = int(np.argmax(fits))
+    return 10.0**-first if fits[first] else None
+
+
+_DECIMALS = 10.0 ** np.arange(7)  # 10ᵈ for d = 0 … 6
+_AT_ONCE = 512  # readings up to which typed_step checks every d in one pass
+
+
+def _holds(scaled: np.ndarray) -> np.ndarray:
+    """Whether each scaled value is a whole number to 10⁻⁹ of its size (typed_step)."""
+    with np.errstate(invalid="ignore"):
+        return np.abs(scaled - np.round(scaled)) < 1e-9 * np.maximum(1.0, np.abs(scaled))
 
 
 @dataclass(frozen=True)
 class Pattern:
     """A take's readings without their offset: whole steps above the smallest reading
     (on the typed step, divided by their common factor so that 10.7, 10.8 and 10.73,
-    10.83 read alike), and how much a chance match is ruled out: n·H bits, H the entropy
-    of the steps' distribution."""
+    10.83 read alike; read-only), how much a chance match is ruled out: n·H bits, H the
+    entropy of the steps' distribution, and how many distinct steps there are."""
 
     levels: np.ndarray
     bits: float
+    distinct: int
 
     @property
     def reorderable(self) -> bool:
         """Readings that take many values: a match after sorting still means something."""
-        return np.unique(self.levels).size >= REORDER_LEVELS * self.levels.size
+        return self.distinct >= REORDER_LEVELS * self.levels.size
+
+
+REMEMBERED_READINGS = 4096  # patterns of takes up to this size are remembered (below)
 
 
 def pattern(values: np.ndarray) -> Pattern | None:
@@ -70,20 +89,38 @@ def pattern(values: np.ndarray) -> Pattern | None:
     -------
     Pattern or None
         Its :class:`Pattern`; None for fewer than 8 readings or 3 distinct values.
+
+    Notes
+    -----
+    A part's patterns are asked for twice (its copy keys, and each position alone against
+    the handout's columns), so the last 1,024 patterns of takes of ≤ 4,096 readings are
+    remembered by the readings' bytes.
     """
     values = np.asarray(values, float)
     if values.size < COPY_MIN_READINGS:
         return None
+    if values.size <= REMEMBERED_READINGS:
+        return _remembered_pattern(values.tobytes())
+    return _pattern(values)
+
+
+@lru_cache(maxsize=1024)
+def _remembered_pattern(readings: bytes) -> Pattern | None:
+    return _pattern(np.frombuffer(readings, dtype=float))
+
+
+def _pattern(values: np.ndarray) -> Pattern | None:
     spread = float(np.ptp(values))
     step = typed_step(values) or (spread * 1e-6 if spread > 0 else 1.0)  # full floats
     levels = np.round((values - values.min()) / step).astype(np.int64)
     common = int(np.gcd.reduce(levels)) if np.any(levels) else 1
     levels //= max(common, 1)
+    levels.flags.writeable = False  # shared by every caller of a remembered pattern
     _, counts = np.unique(levels, return_counts=True)
     if counts.size < COPY_MIN_LEVELS:
         return None
     share = counts / values.size
-    return Pattern(levels, values.size * float(-np.sum(share * np.log2(share))))
+    return Pattern(levels, values.size * float(-np.sum(share * np.log2(share))), counts.size)
 
 
 def _digest(arrays: Sequence[np.ndarray]) -> str:
