@@ -39,6 +39,12 @@ def records():
     yield "periodic with the sample's stride", periodic
     yield "a step", np.r_[np.zeros(n // 2), np.ones(n - n // 2)] + rng.normal(0, 1e-3, n)
     yield "short", rng.normal(0.0, 1.0, 50)
+    # a position's usual record (≤ 4,096 readings: the median by a sort), odd and even
+    for count in (2, 3, 10, 11, 600, 4096, 4097):
+        few = np.round(rng.normal(11.0, 0.05, count), 2)
+        few[count // 2] += 1.0  # a spike, once the record is long enough to show one
+        yield f"{count} typed readings", few
+    yield "ten, one of them NaN", np.r_[rng.normal(0.0, 1.0, 9), np.nan]
 
 
 @pytest.mark.parametrize(("name", "values"), list(records()), ids=[n for n, _ in records()])

@@ -3,6 +3,8 @@ and a gyro still warming up (its case temperature changing while recording)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -29,7 +31,7 @@ def record_gaps(times_s: np.ndarray) -> tuple[int, int]:
     if times.size < 3:
         return 0, 0
     steps = np.diff(times)
-    interval = float(np.median(steps))
+    interval = _median(steps)
     if not np.isfinite(interval) or interval <= 0:
         return 0, 0
     multiples = np.rint(steps / interval)
@@ -69,6 +71,18 @@ MAD_TO_SIGMA = 1.4826  # 1/Φ⁻¹(3/4): the MAD of normal readings is 0.6745 σ
 _SAMPLED = 16_384  # readings looked at to bracket the median of a long record
 
 
+def _median(x: np.ndarray) -> float:
+    """``np.median`` of a 1-d array, the same value: by a sort up to 4,096 readings (a
+    position's usual record), where ``np.median``'s own overhead (≈ 9 µs) is most of it
+    (10 readings: 0.8 against 10.6 µs; 600: 2.1 against 10.0; 4,096: 12.7 against 17.2)."""
+    if x.size > 4096 or x.size == 0:
+        return float(np.median(x))
+    ordered = np.sort(x)
+    if np.isnan(ordered[-1]):  # NaN sorts last; np.median gives NaN
+        return math.nan
+    return float((ordered[(x.size - 1) // 2] + ordered[x.size // 2]) / 2)
+
+
 def count_spikes(values: np.ndarray, limit: float = SPIKE_LIMIT) -> int:
     """The number of readings further than ``limit`` robust σ from the record's median.
 
@@ -103,9 +117,9 @@ def count_spikes(values: np.ndarray, limit: float = SPIKE_LIMIT) -> int:
         return 0
     if n >= 4 * _SAMPLED and _certainly_none(x, limit):
         return 0
-    median = float(np.median(x))
+    median = _median(x)
     deviation = np.abs(x - median)
-    sigma = MAD_TO_SIGMA * float(np.median(deviation))
+    sigma = MAD_TO_SIGMA * _median(deviation)
     return int(np.count_nonzero(deviation > limit * sigma)) if sigma > 0 else 0
 
 
