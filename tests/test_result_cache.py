@@ -209,3 +209,28 @@ def test_the_results_blocks_are_rendered_once_per_key_language_and_editable(
     save_manual(student_client, session_id, "heading", {2: [5.0] * 9 + [5.5]})
     assert "5.050" in student_client.get(page).text  # a new key: rendered again
     assert rendered[-1] == ("zh-CN", True)
+
+
+def test_the_figure_bytes_held_are_the_sum_over_the_entries_held():
+    """The running total the byte bound uses, after any mix of additions, additions to an
+    entry already dropped, racing puts and evictions, equals the sum counted afresh."""
+    import random
+
+    from app.lab.result_cache import figure_bytes
+
+    rng = random.Random(20261125)
+    cache = ResultCache(max_entries=6, max_figure_bytes=900)
+    taken: list[CachedResults] = []
+    for _ in range(2000):
+        action = rng.random()
+        if action < 0.3:
+            taken.append(cache.put(CachedResults(rng.choice("abcdefghij"), {})))
+        elif taken and action < 0.65:
+            text = "f" * rng.randrange(0, 300)
+            cache.add_figures(rng.choice(taken), rng.choice(["en", "zh-CN"]), ({}, text))
+        elif taken:
+            blocks = {"heading": "b" * rng.randrange(0, 300)}
+            cache.add_blocks(rng.choice(taken), rng.choice(["en", "zh-CN"]), True, blocks)
+        held = list(cache._entries.values())
+        assert cache.held_bytes == sum(figure_bytes(e) for e in held)
+        assert len(held) <= 6 and (len(held) == 1 or cache.held_bytes <= 900)
