@@ -175,6 +175,28 @@ def test_password_hashing_is_bounded(client, teacher, monkeypatch):
     assert login(client, "teacher1").status_code == 303
 
 
+def test_a_log_in_gives_its_work_place_back_while_it_hashes(app, teacher, monkeypatch):
+    """argon2id runs outside the interpreter lock, bounded by the hash slots: the request's
+    place (web.admission) is another request's meanwhile, given back before the hash."""
+    from app.accounts import security
+    from app.db import give_way_hook
+
+    events: list[str] = []
+    hash_check = security.password_matches
+    monkeypatch.setattr(
+        security,
+        "password_matches",
+        lambda *args: events.append("hash") or hash_check(*args),
+    )
+    token = give_way_hook.set(lambda: events.append("gave way"))
+    try:
+        with write_session() as db:
+            outcome = security.log_in(db, "teacher1", PASSWORD, "127.0.0.1", get_settings())
+    finally:
+        give_way_hook.reset(token)
+    assert outcome.user is not None and "gave way" in events[: events.index("hash")]
+
+
 def test_idle_session_expires(client, teacher):
     login(client, "teacher1")
     with write_session() as db:

@@ -16,7 +16,7 @@ from sqlalchemy import delete, update
 from sqlmodel import Session, select
 
 from app.config import Settings
-from app.db import lock_keys
+from app.db import give_way, lock_keys
 from app.models import ApiToken, AuthSession, LoginFailure, User, utcnow
 from app.web.signing import signed, token_digest, unsigned
 
@@ -271,6 +271,9 @@ def log_in(
     db.add_all(charges)
     user = db.exec(select(User).where(User.username == normalise_username(username))).first()
     db.commit()
+    # argon2id runs outside the interpreter lock, bounded by its own slots: the request's
+    # work place (``web.admission``) goes to another request meanwhile
+    give_way()
     slots = _hash_slots(settings.login_hash_slots)
     if not slots.acquire(timeout=HASH_WAIT_SECONDS):
         _uncharge(db, charges)
