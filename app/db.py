@@ -126,9 +126,11 @@ def _has_nul(value) -> bool:
 
 
 # Set by the web layer for the request being served (web.admission): gives back the
-# request's place among the worker's running requests.  Called, from any thread, before a
-# write may wait for a lock someone else holds -- a request waiting for a lock must not
+# request's place among the worker's running requests.  Called, from any thread, when a
+# write must wait for a lock someone else holds -- a request waiting for a lock must not
 # keep the worker's other requests out -- and when a long job takes a pool of its own.
+# (PostgreSQL's row locks, held for another write of the same rows' few milliseconds, are
+# waited for with the place kept.)
 give_way_hook: ContextVar[Callable[[], None] | None] = ContextVar("give_way_hook", default=None)
 
 
@@ -278,12 +280,15 @@ def _postgres_engine(url: str) -> Engine:
     @event.listens_for(engine, "begin")
     def _on_begin(connection) -> None:
         kind = connection.get_execution_options().get(WRITER_OPTION, False)
-        if kind:
-            give_way()  # its lock may be another's for a while
-        if kind == ROW_WRITER:
-            connection.exec_driver_sql(f"SELECT pg_advisory_xact_lock_shared({WRITE_LOCK_KEY})")
-        elif kind:
-            connection.exec_driver_sql(f"SELECT pg_advisory_xact_lock({WRITE_LOCK_KEY})")
+        if not kind:
+            return
+        shared = "_shared" if kind == ROW_WRITER else ""
+        taken = connection.exec_driver_sql(
+            f"SELECT pg_try_advisory_xact_lock{shared}({WRITE_LOCK_KEY})"
+        ).scalar()
+        if not taken:  # another holds it, maybe for a while: wait without a work place
+            give_way()
+            connection.exec_driver_sql(f"SELECT pg_advisory_xact_lock{shared}({WRITE_LOCK_KEY})")
 
     return engine
 

@@ -228,10 +228,38 @@ def test_an_sqlite_write_keeps_its_place_unless_it_must_wait_for_another(app, ro
 
 @pytest.mark.postgres_only
 @pytest.mark.parametrize("rows", [False, True])
-def test_a_postgresql_write_gives_way_before_its_locks(app, rows):
+def test_a_postgresql_write_keeps_its_place_unless_another_holds_its_lock(app, rows):
     """PostgreSQL's writers take an advisory lock (shared for a row writer, exclusive for
-    the rest) that a teacher's write may hold: they give their place back first."""
-    assert len(_gives_way(rows)) >= 1
+    the rest) that a teacher's write may hold: a writer that gets it at once keeps its
+    place; one that must wait gives its place back first, then waits."""
+    import threading
+    import time
+
+    from app.db import WRITE_LOCK_KEY, get_engine
+
+    assert _gives_way(rows) == []
+    held, release = threading.Event(), threading.Event()
+
+    def hold_exclusively() -> None:
+        with get_engine().connect() as connection:
+            connection.exec_driver_sql(f"SELECT pg_advisory_lock({WRITE_LOCK_KEY})")
+            held.set()
+            release.wait(5)
+            connection.exec_driver_sql(f"SELECT pg_advisory_unlock({WRITE_LOCK_KEY})")
+            connection.commit()
+
+    def hold_then_let_go() -> None:
+        held.wait(5)
+        threading.Timer(0.2, release.set).start()
+
+    holder = threading.Thread(target=hold_exclusively)
+    holder.start()
+    held.wait(5)
+    began = time.perf_counter()
+    calls = _gives_way(rows, hold_then_let_go)
+    holder.join()
+    assert len(calls) == 1 and calls[0] < 0.15, calls  # at once, not after the wait
+    assert time.perf_counter() - began >= 0.2  # and it did wait for the lock
 
 
 @pytest.mark.sqlite_only

@@ -11,11 +11,13 @@ request holding SQLite's write lock gets a sliver too: a CSV save held the lock 
   thread and no interpreter.  A place is held until the response *starts*: a streamed
   export or report body goes on without one.  Routes that mostly wait on another server
   (single sign-on, LTI launches and registration, an LMS roster or grade) do not take one.
-  A request gives its place back (``db.give_way``) when it is about to wait for a lock
-  another may hold -- a write's ``BEGIN IMMEDIATE`` on SQLite, its advisory or row locks
-  on PostgreSQL -- so that writers waiting on a backup, another process or each other
-  never keep the worker's reads out; and when a long job takes a slot of a pool of its own
-  (``web.work_slots``: PDF reports, the class zip, an Allan analysis).  The lock holder
+  A request gives its place back (``db.give_way``) when it must wait for a lock another
+  holds -- a write's ``BEGIN IMMEDIATE`` on SQLite, or its turn, once slow to come; the
+  writers' advisory lock on PostgreSQL (tried first: a row writer's shared lock is almost
+  always free at once) -- so that writers waiting on a backup, another process or each
+  other never keep the worker's reads out; when a log-in hashes its password (outside the
+  interpreter, bounded by its own slots); and when a long job takes a slot of a pool of its
+  own (``web.work_slots``: PDF reports, the class zip, an Allan analysis).  The lock holder
   thus shares the interpreter with at most the few admitted requests.
 - **write places**: at most ``GYROLAB_WRITE_CONCURRENCY`` (default 8) state-changing
   requests or stream saves hold threads at once (:func:`write_slot`).  Before, a queue of
