@@ -234,3 +234,39 @@ def test_the_figure_bytes_held_are_the_sum_over_the_entries_held():
         held = list(cache._entries.values())
         assert cache.held_bytes == sum(figure_bytes(e) for e in held)
         assert len(held) <= 6 and (len(held) == 1 or cache.held_bytes <= 900)
+
+
+def test_a_first_view_draws_the_cached_result_without_solving_it_again(student_client, monkeypatch):
+    """The page's figures draw the samples beside the fit: once the result is cached (a
+    save or the JSON read solved it), the first view reads the samples and solves
+    nothing; what it draws is what a fresh solve of the same data draws."""
+    from app.lab import pages, results
+    from app.lab.result_cache import cached_results
+    from app.web.i18n import translator
+
+    session_id = new_session(student_client)
+    save_manual(student_client, session_id, "heading", handout("handout_horizontal.csv"))
+    save_manual(student_client, session_id, "latitude", handout("handout_vertical.csv"))
+    result_cache.CACHE.clear()
+    heading(student_client, session_id)  # solved and cached, no figures yet
+    solved: list[str] = []
+    solve = results.solve_part
+    monkeypatch.setattr(
+        results,
+        "solve_part",
+        lambda session, part, *a: solved.append(part) or solve(session, part, *a),
+    )
+    page = student_client.get(f"/lab/sessions/{session_id}")
+    assert page.status_code == 200
+    assert solved == []
+    _ = translator("en")
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        entry = cached_results(db, session)
+        drawn = pages._figures(results.with_samples(db, session, entry.parts), _)
+        fresh = pages._figures(results.session_results(db, session), _)
+    assert solved == ["heading", "latitude"]  # the fresh solve only
+    assert json.dumps(drawn, sort_keys=True, default=str) == json.dumps(
+        fresh, sort_keys=True, default=str
+    )
+    assert {"heading-readings", "heading-fit", "latitude-readings"} <= set(drawn[0])

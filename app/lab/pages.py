@@ -37,7 +37,7 @@ from app.lab.deps import OwnedSession
 from app.lab.partner_pages import partner_view
 from app.lab.planner import plan_view, session_plan
 from app.lab.result_cache import CACHE, cached_results
-from app.lab.results import session_results
+from app.lab.results import with_samples
 from app.lab.service import allowed_methods
 from app.lab.sim import (
     FIRST_PASS,
@@ -107,7 +107,7 @@ def _cached_figures(db: Session, session: LabSession, entry, solved: dict, _):
     language = _.language
     cached = entry.figures.get(language)
     if cached is None:
-        figures, texts = _figures(solved or session_results(db, session), _)
+        figures, texts = _figures(solved or with_samples(db, session, entry.parts), _)
         cached = (texts, Markup(htmlsafe_json_dumps(figures)))
         CACHE.add_figures(entry, language, cached)
     return cached

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from itertools import groupby, pairwise
 from types import SimpleNamespace
 
@@ -362,6 +362,14 @@ def session_results(db: Session, session: LabSession) -> dict[str, PartResult]:
     data = current_data(db, session)
     station = station_noise_for(db, session)
     return {part: solve_part(session, part, data.get(part, {}), station) for part in PARTS}
+
+
+def with_samples(db: Session, session: LabSession, parts: dict[str, PartResult]) -> dict:
+    """Cached (slim) results with their positions' samples read again -- what a solve of
+    the same data gives, without solving it again (the page's figures draw the samples
+    beside the fit; solving was half of a session's first view)."""
+    data = current_data(db, session)
+    return {part: replace(outcome, positions=data.get(part, {})) for part, outcome in parts.items()}
 
 
 def results_json(results: dict[str, PartResult]) -> dict:
