@@ -270,3 +270,20 @@ def test_a_first_view_draws_the_cached_result_without_solving_it_again(student_c
         fresh, sort_keys=True, default=str
     )
     assert {"heading-readings", "heading-fit", "latitude-readings"} <= set(drawn[0])
+
+
+def test_the_class_wide_keys_are_each_sessions_own_key(student_client):
+    """The dashboard's keys (one query for a class, read through Core) are the keys each
+    session's own page and API use (the ORM): a summary kept under one is found by the
+    other."""
+    from app.lab.result_cache import data_keys
+
+    recorded = new_session(student_client)
+    save_manual(student_client, recorded, "heading", handout("handout_horizontal.csv"))
+    save_manual(student_client, recorded, "latitude", handout("handout_vertical.csv"))
+    empty = new_session(student_client)
+    with read_session() as db:
+        sessions = [db.get(LabSession, recorded), db.get(LabSession, empty)]
+        keys = data_keys(db, sessions, None)
+        assert keys == {s.id: data_key(db, s, None) for s in sessions}
+        assert len(set(keys.values())) == 2

@@ -241,13 +241,13 @@ def data_keys(
 ) -> dict[int, str]:
     """:func:`data_key` of many sessions of one assignment, in one query."""
     by_session: dict[int, list] = {session.id: [] for session in sessions}
-    rows = db.exec(
+    rows = db.connection().execute(  # columns through Core: no ORM row processing
         select(Take.session_id, *KEY_COLUMNS)
         .where(Take.session_id.in_(list(by_session)), Take.superseded_at.is_(None))
         .order_by(Take.session_id, Take.part, Take.position)
-    ).all()
-    for session_id, *take in rows:
-        by_session[session_id].append(take)
+    )
+    for row in rows:
+        by_session[row[0]].append(row[1:])
     assignment_row = _row(assignment)
     return {s.id: _digest(by_session[s.id], s, assignment_row) for s in sessions}
 
