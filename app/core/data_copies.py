@@ -74,7 +74,7 @@ class Pattern:
         return self.distinct >= REORDER_LEVELS * self.levels.size
 
 
-REMEMBERED_READINGS = 4096  # patterns of takes up to this size are remembered (below)
+REMEMBERED_READINGS = 1024  # patterns of takes up to this size are remembered (below)
 
 
 def pattern(values: np.ndarray) -> Pattern | None:
@@ -93,8 +93,8 @@ def pattern(values: np.ndarray) -> Pattern | None:
     Notes
     -----
     A part's patterns are asked for twice (its copy keys, and each position alone against
-    the handout's columns), so the last 1,024 patterns of takes of ≤ 4,096 readings are
-    remembered by the readings' bytes.
+    the handout's columns, one right after the other), so the last 256 patterns of takes
+    of ≤ 1,024 readings are remembered by the readings' bytes (≤ 16 kB each, 4 MB in all).
     """
     values = np.asarray(values, float)
     if values.size < COPY_MIN_READINGS:
@@ -104,7 +104,7 @@ def pattern(values: np.ndarray) -> Pattern | None:
     return _pattern(values)
 
 
-@lru_cache(maxsize=1024)
+@lru_cache(maxsize=256)
 def _remembered_pattern(readings: bytes) -> Pattern | None:
     return _pattern(np.frombuffer(readings, dtype=float))
 

@@ -147,10 +147,11 @@ def latest_results(attempts: list[Attempt]) -> dict:
     return _parsed_results(attempts[-1].results_json) if attempts else {}
 
 
-@lru_cache(maxsize=4096)
+@lru_cache(maxsize=1024)
 def _parsed_results(results_json: str) -> dict:
     """A submitted attempt's results never change, and the dashboard reads every one of
-    its class's on each view (≈ 25 µs each to parse): parsed once, by their text."""
+    its class's on each view (≈ 25 µs each to parse): parsed once, by their text (the
+    last 1,024: a few classes' worth, ≈ 20 kB each with the text)."""
     return json.loads(results_json)
 
 
