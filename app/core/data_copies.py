@@ -36,7 +36,7 @@ def typed_step(values: np.ndarray) -> float | None:
         None for full-precision floats: d holds them when every |x·10ᵈ − round(x·10ᵈ)| <
         10⁻⁹·max(1, |x·10ᵈ|).
     """
-    values = np.asarray(values, float)
+    values = np.asarray(values, float).ravel()
     if values.size > _AT_ONCE:  # one decimal count at a time: the least memory
         for decimals in range(_DECIMALS.size):
             if _holds(values * _DECIMALS[decimals]).all():
