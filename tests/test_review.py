@@ -375,3 +375,37 @@ def test_teacher_can_try_the_assignment_as_a_student(world):
     do_lab(teacher, session_id)
     results = teacher.get(f"/lab/sessions/{session_id}/results.json").json()
     assert results["heading"]["theta_deg"] == pytest.approx(-10.753, abs=1e-3)
+
+
+def test_the_dashboards_cells_show_each_number_and_sort_by_it():
+    """What the class table shows in its number cells and sorts them by (``data-value``):
+    a heading error signed but sorted by its size, an empty cell a dash with no key."""
+    from datetime import UTC, datetime
+    from types import SimpleNamespace
+
+    from app.review.dashboard_cells import EMPTY, row_cells
+    from app.web.render import time_formatter
+
+    errors = {"heading": -0.5549, "latitude": 1.2849, "earth_rate": None}
+    row = SimpleNamespace(
+        results={
+            "heading": {"azimuth_deg": 181.4516},
+            "latitude": {"latitude_deg": 40.4412, "earth_rate_deg_h": 15.10612},
+        },
+        submitted_at=datetime(2026, 11, 25, 1, 55, tzinfo=UTC),
+        check_error=errors.get,
+    )
+    cells = row_cells(row, time_formatter("en", "Asia/Shanghai"))
+    assert (cells.heading.text, cells.heading.value) == ("181.45°", "181.4516")
+    assert (cells.heading_error.text, cells.heading_error.value) == ("-0.55°", "0.5549")
+    assert (cells.latitude.text, cells.latitude_error.text) == ("40.44°", "1.28 %")
+    assert (cells.earth_rate.text, cells.earth_rate.value) == ("15.106", "15.10612")
+    assert (cells.earth_rate_error.text, cells.earth_rate_error.value) == (EMPTY, "")
+    assert cells.submitted == type(cells.submitted)("Nov 25 09:55", "2026-11-25T01:55:00+00:00")
+    chinese = row_cells(row, time_formatter("zh-CN", "Asia/Shanghai")).submitted.text
+    assert chinese == "11月25日 09:55"  # the course's wall clock, its zone in the heading
+    nothing = row_cells(
+        SimpleNamespace(results={}, submitted_at=None, check_error=lambda _: None),
+        time_formatter("en", None),
+    )
+    assert {getattr(nothing, name) for name in nothing.__slots__} == {type(nothing.heading)()}

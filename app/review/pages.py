@@ -18,6 +18,7 @@ from app.lab.chart_texts import class_text
 from app.lab.charts import class_error_figure, class_histogram_figure
 from app.lab.planner import assignment_plan, plan_view
 from app.review.accuracy import accuracy_rows, class_accuracy
+from app.review.dashboard_cells import class_cells
 from app.review.deps import TeacherAssignment
 from app.review.evidence import badge_text, finding_text
 from app.review.exports import class_table_response, class_zip_response
@@ -25,7 +26,7 @@ from app.review.lms_outbox import passback_state
 from app.review.service import class_rows, status_counts
 from app.web.deps import FormDep, SessionDep
 from app.web.i18n import translator
-from app.web.render import flash, redirect, render, request_language
+from app.web.render import flash, redirect, render, request_language, time_formatter
 from app.web.work_slots import pool
 
 router = APIRouter(tags=["pages: review"], include_in_schema=False)
@@ -45,7 +46,8 @@ def dashboard_context(request: Request, target, db, status: str = "", **extra) -
     """What the assignment's dashboard shows (``extra``: the settings form as typed and
     its refused fields, after a refused change)."""
     course, assignment = target.course, target.assignment
-    _ = translator(request_language(request))
+    language = request_language(request)
+    _ = translator(language)
     rows = class_rows(db, assignment)
     figures = {
         "class-errors": class_error_figure(rows, _),
@@ -66,6 +68,7 @@ def dashboard_context(request: Request, target, db, status: str = "", **extra) -
         "course": course,
         "assignment": assignment,
         "rows": rows,
+        "cells": class_cells(rows, time_formatter(language, course.timezone)),
         "counts": status_counts(rows),
         "figures": figures,
         "figure_texts": figure_texts,

@@ -120,13 +120,24 @@ def csrf_token_for(request: Request) -> str:
     return existing
 
 
+def time_formatter(language: str, timezone: str | None):
+    """A page's ``when(value, date="yMMMd", time="Hm", tz=None, zone=True)``: a stored
+    (UTC) time in the reader's locale, on the wall clock of ``timezone`` (the page's
+    course's), else the server's -- never "UTC" to a user; ``zone=False`` leaves the
+    zone's name out (a table's column names it once, in its heading)."""
+    shown_zone = zone_of(timezone)
+    return lambda value, date="yMMMd", time="Hm", tz=None, zone=True: format_datetime(
+        value, language, date, time, zone_of(tz) if tz else shown_zone, zone
+    )
+
+
 def render(
     request: Request, template: str, context: dict[str, Any] | None = None, status_code: int = 200
 ) -> HTMLResponse:
     language = request_language(request)
     _ = translator(language)
-    # times are shown in the page's course's zone, else the server's (never "UTC" to a user)
-    shown_zone = zone_of((context or {}).get("timezone"))
+    timezone = (context or {}).get("timezone")
+    shown_zone = zone_of(timezone)
     flashes = [
         {"kind": item.get("kind", "info"), "text": _(item["key"], **item.get("params", {}))}
         for item in _take_flashes(request)
@@ -135,10 +146,7 @@ def render(
         "request": request,
         "_": _,
         "lang": language,
-        # a table's column of times names the zone once, in its heading: zone=False there
-        "when": lambda value, date="yMMMd", time="Hm", tz=None, zone=True: format_datetime(
-            value, language, date, time, zone_of(tz) if tz else shown_zone, zone
-        ),
+        "when": time_formatter(language, timezone),
         "zone_text": zone_label(shown_zone, language),
         "zone_name": shown_zone.key,
         "num": lambda value, digits=3: format_number(value, language, digits),
