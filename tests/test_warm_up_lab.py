@@ -81,7 +81,15 @@ def test_a_cold_run_is_flagged_in_words_and_its_sigma_holds_the_warm_up(
               page=f"/lab/sessions/{warm}")  # fmt: skip
     record_heading(student_client, warm, 100)
     again = student_client.get(f"/lab/sessions/{warm}/results.json").json()["heading"]
-    assert not again["warm_up"]["flagged"]
+    # the model sees a warm gyro; the closure and trend witnesses are 3σ tests of the noise,
+    # which flag ≈ 1 % of warm runs by chance (seen once in a full run: "assert not flagged"
+    # failed), so only a drift they see could flag this run, never the warm-up model
+    assert "model" not in again["warm_up"]["witnesses"]
+    assert not again["warm_up"]["flagged"] or set(again["warm_up"]["witnesses"]) <= {
+        "closure",
+        "trend",
+        "combined",
+    }
     # the σ's warm-up part is the model's (deterministic); the scatter's part is random
     # (the two σ compared directly failed once in a full run: 0.133 vs 0.128)
     assert again["warm_up"]["warm_up_share"] < results["warm_up"]["warm_up_share"] / 2
