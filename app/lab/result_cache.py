@@ -81,23 +81,21 @@ class ResultCache:
     def add_figures(
         self, entry: CachedResults, language: str, figures: tuple[dict[str, dict], Markup]
     ) -> None:
-        with self._lock:
-            held = self._holds(entry)
-            if held:
-                self._bytes -= figure_bytes(entry)
-            entry.figures[language] = figures
-            if held:
-                self._bytes += figure_bytes(entry)
-                self._trim()
+        self._add(entry, entry.figures, language, figures)
 
     def add_blocks(
         self, entry: CachedResults, language: str, editable: bool, blocks: dict[str, Markup]
     ) -> None:
+        self._add(entry, entry.blocks, (language, editable), blocks)
+
+    def _add(self, entry: CachedResults, kept: dict, key, value) -> None:
+        """``kept[key] = value`` in one of ``entry``'s dicts, the running total adjusted
+        while the entry is held (a request may add to one already dropped)."""
         with self._lock:
-            held = self._holds(entry)
+            held = self._entries.get(entry.key) is entry
             if held:
                 self._bytes -= figure_bytes(entry)
-            entry.blocks[(language, editable)] = blocks
+            kept[key] = value
             if held:
                 self._bytes += figure_bytes(entry)
                 self._trim()
@@ -111,10 +109,6 @@ class ResultCache:
     def held_bytes(self) -> int:
         """The figure bytes of the entries held (the running total)."""
         return self._bytes
-
-    def _holds(self, entry: CachedResults) -> bool:
-        """Whether ``entry`` is still held (a request may add to one already dropped)."""
-        return self._entries.get(entry.key) is entry
 
     def _trim(self) -> None:
         while len(self._entries) > self.max_entries:
