@@ -343,14 +343,15 @@ def lock_rows(session: Session, model, *ids: int) -> bool:
 def lock_keys(session: Session, *keys: str) -> bool:
     """Transaction-scoped advisory locks on names (a log-in's account and address) in a
     row writer's transaction on PostgreSQL, for a read-check-write over rows that do not
-    exist yet (the throttle's counts, then a new row); taken in sorted order."""
+    exist yet (the throttle's counts, then a new row); taken in sorted order, in one
+    statement (one round trip: a class logs in at once)."""
     if not keys or not is_row_writer(session) or session.get_bind().dialect.name != "postgresql":
         return False
-    for key in sorted(set(keys)):
-        session.exec(
-            text("SELECT pg_advisory_xact_lock(:space, hashtext(:key))"),
-            params={"space": NAMED_LOCKS, "key": key},
-        )
+    names = sorted(set(keys))
+    # a select list is evaluated left to right, so every caller takes them in one order
+    calls = ", ".join(f"pg_advisory_xact_lock(:space, hashtext(:k{i}))" for i in range(len(names)))
+    params = {"space": NAMED_LOCKS} | {f"k{i}": name for i, name in enumerate(names)}
+    session.exec(text(f"SELECT {calls}"), params=params)
     return True
 
 
