@@ -498,3 +498,28 @@ def test_a_hash_of_other_parameters_is_replaced_at_the_next_log_in(client, teach
     assert verify_password(PASSWORD, stored())
     client.cookies.clear()
     assert login(client, "teacher1").status_code == 303
+
+
+def test_a_request_finds_its_caller_in_one_statement(client, student):
+    """The log-in session and its user come in one joined statement (was two: every
+    request of a class pays for each round trip)."""
+    from sqlalchemy import event
+    from sqlalchemy.engine import Engine
+
+    assert login(client, "student1").status_code == 303
+    statements: list[str] = []
+
+    def count(conn, cursor, statement, parameters, context, executemany) -> None:
+        statements.append(" ".join(statement.split()))
+
+    event.listen(Engine, "before_cursor_execute", count)
+    try:
+        assert client.get("/lab").status_code == 200
+    finally:
+        event.remove(Engine, "before_cursor_execute", count)
+    logins = [s for s in statements if "FROM auth_session" in s]
+    assert len(logins) == 1 and "JOIN" in logins[0], statements
+    by_id = [
+        s for s in statements if s.startswith("SELECT") and "FROM user WHERE" in s.replace('"', "")
+    ]
+    assert by_id == [], statements
