@@ -329,12 +329,18 @@ def is_row_writer(session: Session) -> bool:
     return bind.get_execution_options().get(WRITER_OPTION) == ROW_WRITER
 
 
+def locks_rows(session: Session) -> bool:
+    """Whether this session's writes lock the rows they read-check-write: a row writer's
+    transaction on PostgreSQL (SQLite's single writer needs no locks)."""
+    return is_row_writer(session) and session.get_bind().dialect.name == "postgresql"
+
+
 def lock_rows(session: Session, model, *ids: int) -> bool:
     """``SELECT … FOR UPDATE`` of these rows in a row writer's transaction (held until it
     ends; SQLite's single writer needs none): whether rows were locked.  Callers lock in
     one order -- a lab session, then its owner -- so that two row writers never wait for
     each other in a cycle."""
-    if not ids or not is_row_writer(session) or session.get_bind().dialect.name != "postgresql":
+    if not ids or not locks_rows(session):
         return False
     session.exec(select(model.id).where(model.id.in_(ids)).order_by(model.id).with_for_update())
     return True
@@ -345,7 +351,7 @@ def lock_keys(session: Session, *keys: str) -> bool:
     row writer's transaction on PostgreSQL, for a read-check-write over rows that do not
     exist yet (the throttle's counts, then a new row); taken in sorted order, in one
     statement (one round trip: a class logs in at once)."""
-    if not keys or not is_row_writer(session) or session.get_bind().dialect.name != "postgresql":
+    if not keys or not locks_rows(session):
         return False
     names = sorted(set(keys))
     # a select list is evaluated left to right, so every caller takes them in one order

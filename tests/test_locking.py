@@ -288,3 +288,34 @@ def test_a_write_leaves_the_connections_own_busy_timeout(app):
         engine.dispose()
     assert BUSY_TIMEOUT_MS != 321
     assert during == after == 321
+
+
+def test_a_write_to_ones_own_session_reads_it_as_locked_in_one_statement(student_client, backend):
+    """On PostgreSQL a row writer locks its session's row and its owner's: the owner's own
+    session is read already locked (``SELECT … FOR UPDATE``, as of the lock), not read,
+    locked and read again (three round trips inside the write)."""
+    from sqlalchemy import event
+    from sqlalchemy.engine import Engine
+
+    from tests.factories import new_session, save_manual
+
+    session_id = new_session(student_client)
+    statements: list[str] = []
+
+    def count(conn, cursor, statement, parameters, context, executemany) -> None:
+        statements.append(" ".join(statement.split()))
+
+    event.listen(Engine, "before_cursor_execute", count)
+    try:
+        saved = save_manual(student_client, session_id, "latitude", {"1": [10.0] * 10})
+    finally:
+        event.remove(Engine, "before_cursor_execute", count)
+    assert saved.status_code == 200, saved.text
+    locked = [s for s in statements if s.endswith("FOR UPDATE")]
+    if backend == "sqlite":
+        assert locked == [], statements
+        return
+    begun = next(i for i, s in enumerate(statements) if "pg_try_advisory_xact_lock" in s)
+    inside = [s for s in statements[begun:] if "FROM lab_session" in s]
+    assert len(inside) == 1 and inside[0].endswith("FOR UPDATE"), statements
+    assert [s for s in locked if 'FROM "user"' in s] != [], statements

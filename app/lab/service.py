@@ -12,11 +12,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from sqlmodel import Session
+from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
 from app.core.units import canonical_unit, to_deg_per_hour
-from app.db import lock_rows
+from app.db import lock_rows, locks_rows
 from app.lab.partners import is_member
 from app.lab.sim import nominal_angle
 from app.lab.store import NewTake, append_samples, check_position, store_takes
@@ -36,6 +36,16 @@ def own_session(db: Session, user: User, session_id: int) -> LabSession:
     answers 404.  In a row writer's transaction the session's row and its owner's are
     locked first (``db.lock_rows``: offsets, attempt numbers and the storage quota are
     read-check-writes), so writes to one session queue and others' proceed."""
+    if locks_rows(db):  # the usual case, the owner's own session: read as locked, at once
+        session = db.exec(
+            select(LabSession)
+            .where(LabSession.id == session_id, LabSession.owner_id == user.id)
+            .with_for_update()
+            .execution_options(populate_existing=True)
+        ).first()
+        if session is not None:
+            lock_rows(db, User, user.id)
+            return session
     session = db.get(LabSession, session_id)
     if session is None or not is_member(db, session, user):
         raise UserError("lab.no_such_session", status=404)
