@@ -140,11 +140,13 @@ class CostTally(load_test.Tally):
 
 
 @contextlib.contextmanager
-def probed_server(probe: Path) -> Iterator[None]:
+def probed_server(probe: Path, attributed: Path) -> Iterator[None]:
     """Servers started inside load the probe (bench/probe/sitecustomize.py), counting into
-    ``probe``."""
-    saved = {name: os.environ.get(name) for name in ("GYROLAB_BENCH_PROBE", "PYTHONPATH")}
+    ``probe`` and writing each request's own CPU to ``attributed``."""
+    names = ("GYROLAB_BENCH_PROBE", "GYROLAB_BENCH_REQUEST_CPU", "PYTHONPATH")
+    saved = {name: os.environ.get(name) for name in names}
     os.environ["GYROLAB_BENCH_PROBE"] = str(probe)
+    os.environ["GYROLAB_BENCH_REQUEST_CPU"] = str(attributed)
     os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(PROBE), saved["PYTHONPATH"]]))
     try:
         yield
@@ -175,8 +177,11 @@ def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, 
             url = database_url if backend == "postgresql" else None
             probe = Path(var) / "probe.bin"
             probe.write_bytes(bytes(16))
+            attributed = Path(var) / "request-cpu.txt"
+            attributed.touch()
+            warm = [0]
             with (
-                probed_server(probe),
+                probed_server(probe, attributed),
                 running_server(Path(var), *serve_args, database_url=url) as server,
             ):
                 pids = server_pids(server.process.pid)
@@ -189,6 +194,7 @@ def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, 
                     await load_test.student(
                         students, server.url, assignment, load_test.Tally(), args
                     )
+                    warm[0] = attributed.stat().st_size
                     for index in range(students):
                         before = np.array(tally.snapshot())
                         before = np.insert(before, 2, time.process_time())
@@ -201,12 +207,63 @@ def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, 
                     await teacher_costs(tally, server.url, course, assignment)
 
                 asyncio.run(everyone())
+            with attributed.open("rb") as lines:
+                lines.seek(warm[0])
+                own = attributed_costs(lines.read().decode())
         finally:
             if pg is not None:
                 pg.stop()
     costs = {route: tuple(np.mean(values, axis=0)) for route, values in tally.costs.items()}
     costs[STREAM] = tuple(np.mean(stream, axis=0))  # what a stream costs per frame received
-    return costs
+    return costs, own
+
+
+# --- 1b. CPU per request inside a class ------------------------------------------------------
+
+
+ID_IN_PATH = re.compile(r"/\d+")
+
+
+def route_of(method: str, path: str) -> str:
+    """The load test's name of a request (ids replaced; the teacher's page by its role)."""
+    if path.startswith("/courses/"):
+        return "GET dashboard (teacher)"
+    return f"{method} {ID_IN_PATH.sub('/{id}', path)}"
+
+
+def attributed_costs(text: str) -> dict[str, tuple[float, float]]:
+    """From the probe's per-request lines (``GYROLAB_BENCH_REQUEST_CPU``): per route the
+    mean CPU seconds (on the event loop, in the thread pool) of its own task; for the
+    stream, per message sent (the WebSockets' whole CPU over their frames)."""
+    spent: dict[str, list[tuple[float, float]]] = defaultdict(list)
+    stream = np.zeros(3)
+    for line in text.splitlines():
+        kind, method, path, loop_ms, threads_ms, frames = line.split()
+        cpu = (float(loop_ms) / 1000, float(threads_ms) / 1000)
+        if kind == "websocket":
+            stream += (*cpu, int(frames))
+        else:
+            spent[route_of(method, path)].append(cpu)
+    means = {route: tuple(np.mean(values, axis=0)) for route, values in spent.items()}
+    if stream[2]:
+        means[STREAM] = (stream[0] / stream[2], stream[1] / stream[2])
+    return means
+
+
+def in_class(costs, own, seen):
+    """The costs per request with each route's own CPU as a class spent it (``seen``, from
+    the probe in a load test) instead of as one student alone spent it (``own``); what the
+    probe does not see (the server's socket work, the collector) stays as one student's.
+    Routes the class run did not see keep one student's costs."""
+    adjusted = dict(costs)
+    for route, (server, db, client, calls, trips, loop) in costs.items():
+        if route not in seen or route not in own:
+            continue
+        (loop_alone, threads_alone), (loop_class, threads_class) = own[route], seen[route]
+        loop_now = max(loop - loop_alone + loop_class, 0.0)
+        server_now = max(server - loop_alone - threads_alone + loop_class + threads_class, 1e-6)
+        adjusted[route] = (server_now, db, client, calls, trips, min(loop_now, server_now))
+    return adjusted
 
 
 async def teacher_costs(tally, base: str, course: int, assignment: int) -> None:
@@ -665,15 +722,34 @@ def main() -> int:
         help="read the CPU per request from this JSON file if it exists, else measure and "
         "write it there (to try the model again without measuring again)",
     )
+    parser.add_argument(
+        "--class-cpu",
+        type=Path,
+        help="each route's own CPU as a class spent it: the file a load test's server wrote "
+        "with the probe (PYTHONPATH=bench/probe GYROLAB_BENCH_REQUEST_CPU=FILE load_test.py), "
+        "in place of one student's alone",
+    )
     args = parser.parse_args()
     if args.costs and args.costs.exists():
         saved = json.loads(args.costs.read_text())
         costs = {route: tuple(value) for route, value in saved["costs"].items()}
+        own = {route: tuple(value) for route, value in saved.get("own", {}).items()}
         hash_s = saved["hash_s"]
     else:
-        costs, hash_s = measure_costs(args.backend, args.measure), password_hash_cpu()
+        (costs, own), hash_s = measure_costs(args.backend, args.measure), password_hash_cpu()
         if args.costs:
-            args.costs.write_text(json.dumps({"costs": costs, "hash_s": hash_s}, indent=1))
+            saved = {"costs": costs, "own": own, "hash_s": hash_s}
+            args.costs.write_text(json.dumps(saved, indent=1))
+    if args.class_cpu:
+        if not own:
+            parser.error("--class-cpu needs costs measured with each request's own CPU")
+        seen = attributed_costs(args.class_cpu.read_text())
+        costs = in_class(costs, own, seen)
+        print(f"each route's own CPU as the class in {args.class_cpu} spent it:")
+        for route in sorted(set(seen) & set(own)):
+            alone, there = sum(own[route]) * 1000, sum(seen[route]) * 1000
+            print(f"  {route:42s} alone {alone:6.2f} ms, in the class {there:6.2f} ms"
+                  f" ({there / alone:.2f}×)")  # fmt: skip
     print(f"a log-in's password hash: {hash_s * 1000:.1f} ms of CPU, outside the interpreter")
     print(f"per request, {args.backend}: CPU ms (server, of it on the event loop / database /"
           " load generator), SQLite calls, thread-pool trips")  # fmt: skip

@@ -83,3 +83,86 @@ def test_a_request_waits_for_a_work_place():
         first = sorted(result["latencies"]["GET /login"])
         # one place: one after the other; unlimited: both share the one interpreter
         assert first == pytest.approx(expected, abs=1e-4), places
+
+
+PROBED_APP = """
+import asyncio, sys, time
+import httpx
+from fastapi import FastAPI
+
+app = FastAPI()
+
+def burn(seconds):
+    began = time.thread_time()
+    while time.thread_time() - began < seconds:
+        pass
+
+@app.get("/on-the-loop/{n}")
+async def on_the_loop(n: int):
+    burn(0.03)
+    await asyncio.sleep(0.01)  # waiting costs nothing
+    burn(0.01)
+    return {}
+
+@app.get("/in-a-thread/{n}")
+def in_a_thread(n: int):
+    burn(0.03)
+    return {}
+
+async def main():
+    transport = httpx.ASGITransport(app=app)
+    async with httpx.AsyncClient(transport=transport, base_url="http://t") as client:
+        await client.get("/on-the-loop/0")  # first calls: the framework's own set-up
+        await client.get("/in-a-thread/0")
+        await asyncio.gather(client.get("/on-the-loop/1"), client.get("/in-a-thread/2"))
+
+asyncio.run(main())
+"""
+
+
+def test_the_probe_gives_each_request_the_cpu_of_its_own_task(tmp_path):
+    """``GYROLAB_BENCH_REQUEST_CPU``: CPU its coroutine spent on the event loop and its
+    functions in the thread pool, by the thread's CPU clock (work that burns a known amount
+    of CPU; waiting counts nothing), requests running at once kept apart."""
+    import os
+    import subprocess
+
+    out = tmp_path / "cpu.txt"
+    probe = Path(queue_model.__file__).parent / "probe"
+    env = {**os.environ, "PYTHONPATH": str(probe), "GYROLAB_BENCH_REQUEST_CPU": str(out)}
+    subprocess.run([sys.executable, "-c", PROBED_APP], env=env, check=True, timeout=60)
+    rows = {}
+    for line in out.read_text().splitlines():
+        kind, method, path, loop_ms, threads_ms, frames = line.split()
+        rows[path] = (kind, method, float(loop_ms), float(threads_ms), int(frames))
+    loop_kind, _, loop_ms, loop_threads, _ = rows["/on-the-loop/1"]
+    assert loop_kind == "http" and 40 <= loop_ms < 60 and loop_threads == 0
+    _, _, thread_loop, threads_ms, _ = rows["/in-a-thread/2"]
+    assert 30 <= threads_ms < 45 and thread_loop < 10
+    means = queue_model.attributed_costs(out.read_text())
+    assert 0.040 <= means["GET /on-the-loop/{id}"][0] < 0.060  # both calls of the route
+    assert means["GET /on-the-loop/{id}"][1] == 0
+
+
+def test_class_costs_replace_each_routes_own_cpu_and_keep_the_rest():
+    lines = "\n".join(
+        [
+            "http GET /lab/sessions/12 3.000 5.000 0",
+            "http GET /lab/sessions/13 1.000 3.000 0",
+            "http GET /courses/4/assignments/7 2.000 10.000 0",
+            "websocket WS /lab/sessions/12/stream 30.000 10.000 20",
+            "websocket WS /lab/sessions/13/stream 10.000 10.000 20",
+        ]
+    )
+    seen = queue_model.attributed_costs(lines)
+    assert seen["GET /lab/sessions/{id}"] == pytest.approx((2 * MS, 4 * MS))
+    assert seen["GET dashboard (teacher)"] == pytest.approx((2 * MS, 10 * MS))
+    assert seen[queue_model.STREAM] == pytest.approx((1 * MS, 0.5 * MS))  # per frame sent
+    table = costs(server=10 * MS, loop=3 * MS)
+    own = {"GET /lab/sessions/{id}": (2 * MS, 6 * MS)}  # 8 of its 10 ms: the rest unseen
+    adjusted = queue_model.in_class(table, own, seen)
+    server, db, client, calls, trips, loop = adjusted["GET /lab/sessions/{id}"]
+    assert server == pytest.approx(10 * MS - 8 * MS + 6 * MS)
+    assert loop == pytest.approx(3 * MS - 2 * MS + 2 * MS)
+    assert (db, client, calls, trips) == table["GET /lab/sessions/{id}"][1:5]
+    assert adjusted["POST /login"] == table["POST /login"]  # not seen alone: unchanged

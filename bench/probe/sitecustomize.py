@@ -15,6 +15,13 @@ IMMEDIATE`` to the end of its commit or rollback) and the CPU its thread spent m
 head) to its answer's start -- the server's part of the latency the load generator
 measures -- and of it the wait before the app proper began (the body, a work place).
 
+``GYROLAB_BENCH_REQUEST_CPU`` (a load test, or ``queue_model.py``'s measuring run): a
+file to which each HTTP request and each WebSocket appends ``kind method path loop_ms
+threads_ms frames``: the CPU its own task spent on the event loop (each step of the app's
+coroutine, timed by the thread's CPU clock) and in the thread pool (each function it sent
+there), and for a WebSocket the messages it sent.  What no request's task runs -- the
+server reading and writing sockets, the collector, other threads -- is not in it.
+
 ``GYROLAB_BENCH_GC`` (a load test): a file to which each of the process's garbage
 collections appends ``pid generation ms collected``, and a full one also how many objects the
 collector now keeps in its oldest generation, and of which types most (``type:count``).
@@ -26,6 +33,7 @@ _COUNTS = os.environ.get("GYROLAB_BENCH_PROBE")
 _LOCKS = os.environ.get("GYROLAB_BENCH_LOCK_TRACE")
 _TIMES = os.environ.get("GYROLAB_BENCH_SERVER_TIMES")
 _GC = os.environ.get("GYROLAB_BENCH_GC")
+_CPU = os.environ.get("GYROLAB_BENCH_REQUEST_CPU")
 
 if _GC:
     import gc as _gc
@@ -173,3 +181,74 @@ if _COUNTS or _LOCKS:
         return await _run_sync(*args, **kwargs)
 
     anyio.to_thread.run_sync = _counting_run_sync
+
+if _CPU:
+    import contextvars
+    import time as _cpu_time
+    import types
+
+    import anyio.to_thread as _to_thread
+    from fastapi import applications as _cpu_applications
+
+    _cpu_file = os.open(_CPU, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+    _spent = contextvars.ContextVar("gyrolab_bench_spent", default=None)
+
+    @types.coroutine
+    def _timed_steps(awaitable, spent):
+        """Drive ``awaitable`` step by step, adding each step's CPU (this thread's clock)."""
+        steps = awaitable.__await__()
+        value, error = None, None
+        while True:
+            began = _cpu_time.thread_time()
+            try:
+                yielded = steps.throw(error) if error is not None else steps.send(value)
+            except StopIteration as stop:
+                spent[0] += _cpu_time.thread_time() - began
+                return stop.value
+            spent[0] += _cpu_time.thread_time() - began
+            try:
+                value, error = (yield yielded), None
+            except BaseException as raised:  # noqa: BLE001 (handed on to the coroutine)
+                value, error = None, raised
+
+    _cpu_call = _cpu_applications.FastAPI.__call__
+
+    async def _cpu_timed_call(self, scope, receive, send):
+        if scope["type"] not in ("http", "websocket"):
+            return await _cpu_call(self, scope, receive, send)
+        spent = [0.0, 0.0, 0]
+        token = _spent.set(spent)
+
+        async def counting_send(message):
+            if message["type"] == "websocket.send":
+                spent[2] += 1
+            await send(message)
+
+        try:
+            return await _timed_steps(_cpu_call(self, scope, receive, counting_send), spent)
+        finally:
+            _spent.reset(token)
+            line = (
+                f"{scope['type']} {scope.get('method', 'WS')} {scope['path']}"
+                f" {spent[0] * 1000:.3f} {spent[1] * 1000:.3f} {spent[2]}\n"
+            )
+            os.write(_cpu_file, line.encode())
+
+    _cpu_applications.FastAPI.__call__ = _cpu_timed_call
+    _cpu_run_sync = _to_thread.run_sync
+
+    async def _cpu_timed_run_sync(func, *args, **kwargs):
+        spent = _spent.get()
+        if spent is None:
+            return await _cpu_run_sync(func, *args, **kwargs)
+
+        def timed(*call_args):
+            began = _cpu_time.thread_time()
+            try:
+                return func(*call_args)
+            finally:
+                spent[1] += _cpu_time.thread_time() - began
+
+        return await _cpu_run_sync(timed, *args, **kwargs)
+
+    _to_thread.run_sync = _cpu_timed_run_sync
