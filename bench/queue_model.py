@@ -56,6 +56,7 @@ import tempfile
 import time
 from collections import defaultdict
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -158,10 +159,11 @@ def probed_server(probe: Path, attributed: Path) -> Iterator[None]:
                 os.environ[name] = value
 
 
-def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, float, float]]:
+def measure_costs(backend: str, students: int) -> tuple[dict, dict]:
     """Per route and per stream frame, the means of: CPU seconds of the server, the
     database and the client; the server's SQLite calls and thread-pool trips (the probe
-    does not count psycopg's calls); the CPU seconds of it on the event loop."""
+    does not count psycopg's calls); the CPU seconds of it on the event loop.  And, as
+    ``attributed_costs`` reads them, each route's means of its own task's CPU."""
     args = argparse.Namespace(students=students, dwell=60.0, speed=20.0, ramp=0.0)
     with tempfile.TemporaryDirectory(prefix="gyrolab-model-") as var:
         pg = None
@@ -218,54 +220,6 @@ def measure_costs(backend: str, students: int) -> dict[str, tuple[float, float, 
     return costs, own
 
 
-# --- 1b. CPU per request inside a class ------------------------------------------------------
-
-
-ID_IN_PATH = re.compile(r"/\d+")
-
-
-def route_of(method: str, path: str) -> str:
-    """The load test's name of a request (ids replaced; the teacher's page by its role)."""
-    if path.startswith("/courses/"):
-        return "GET dashboard (teacher)"
-    return f"{method} {ID_IN_PATH.sub('/{id}', path)}"
-
-
-def attributed_costs(text: str) -> dict[str, tuple[float, float]]:
-    """From the probe's per-request lines (``GYROLAB_BENCH_REQUEST_CPU``): per route the
-    mean CPU seconds (on the event loop, in the thread pool) of its own task; for the
-    stream, per message sent (the WebSockets' whole CPU over their frames)."""
-    spent: dict[str, list[tuple[float, float]]] = defaultdict(list)
-    stream = np.zeros(3)
-    for line in text.splitlines():
-        kind, method, path, loop_ms, threads_ms, frames = line.split()
-        cpu = (float(loop_ms) / 1000, float(threads_ms) / 1000)
-        if kind == "websocket":
-            stream += (*cpu, int(frames))
-        else:
-            spent[route_of(method, path)].append(cpu)
-    means = {route: tuple(np.mean(values, axis=0)) for route, values in spent.items()}
-    if stream[2]:
-        means[STREAM] = (stream[0] / stream[2], stream[1] / stream[2])
-    return means
-
-
-def in_class(costs, own, seen):
-    """The costs per request with each route's own CPU as a class spent it (``seen``, from
-    the probe in a load test) instead of as one student alone spent it (``own``); what the
-    probe does not see (the server's socket work, the collector) stays as one student's.
-    Routes the class run did not see keep one student's costs."""
-    adjusted = dict(costs)
-    for route, (server, db, client, calls, trips, loop) in costs.items():
-        if route not in seen or route not in own:
-            continue
-        (loop_alone, threads_alone), (loop_class, threads_class) = own[route], seen[route]
-        loop_now = max(loop - loop_alone + loop_class, 0.0)
-        server_now = max(server - loop_alone - threads_alone + loop_class + threads_class, 1e-6)
-        adjusted[route] = (server_now, db, client, calls, trips, min(loop_now, server_now))
-    return adjusted
-
-
 async def teacher_costs(tally, base: str, course: int, assignment: int) -> None:
     import httpx
 
@@ -295,6 +249,81 @@ def password_hash_cpu(tries: int = 5) -> float:
         verify_password("queue-model-pass", stored)
         spent.append(time.thread_time() - began)
     return float(np.median(spent))
+
+
+# --- 1b. CPU per request inside a class ------------------------------------------------------
+
+
+ID_IN_PATH = re.compile(r"/\d+")
+
+
+def route_of(method: str, path: str) -> str:
+    """The load test's name of a request (ids replaced; the teacher's page by its role)."""
+    if path.startswith("/courses/"):
+        return "GET dashboard (teacher)"
+    return f"{method} {ID_IN_PATH.sub('/{id}', path)}"
+
+
+@dataclass
+class ClassCpu:
+    """What the probe saw of a class: per route the mean CPU seconds (on the event loop,
+    in the thread pool) of its own task (the stream: per frame of samples), how many, and
+    their sum."""
+
+    means: dict[str, tuple[float, float]]
+    counts: dict[str, int]
+    total_s: float
+
+
+def attributed_costs(text: str) -> ClassCpu:
+    """From the probe's per-request lines (``GYROLAB_BENCH_REQUEST_CPU``): per route the
+    mean CPU seconds (on the event loop, in the thread pool) of its own task; for the
+    stream, per frame of samples sent (the WebSockets' whole CPU over their frames)."""
+    spent: dict[str, list[tuple[float, float]]] = defaultdict(list)
+    stream = np.zeros(3)
+    for line in text.splitlines():
+        kind, method, path, loop_ms, threads_ms, frames = line.split()
+        cpu = (float(loop_ms) / 1000, float(threads_ms) / 1000)
+        if kind == "websocket":
+            stream += (*cpu, int(frames))
+        else:
+            spent[route_of(method, path)].append(cpu)
+    means = {route: tuple(np.mean(values, axis=0)) for route, values in spent.items()}
+    counts = {route: len(values) for route, values in spent.items()}
+    total = sum(float(np.sum(values)) for values in spent.values()) + stream[0] + stream[1]
+    if stream[2]:
+        means[STREAM] = (stream[0] / stream[2], stream[1] / stream[2])
+        counts[STREAM] = int(stream[2])
+    return ClassCpu(means, counts, float(total))
+
+
+def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None):
+    """The costs per request as a class spent them.  Each route's own CPU (its task's,
+    ``seen`` by the probe in a load test) replaces one student's alone (``own``).  What the
+    probe does not see -- the server's socket work, the collector; per frame of a lone
+    stream, most of its cost -- is shared out in a class; with ``used`` (the CPU the same
+    run used: "server", "client" seconds) each route's unseen part is scaled so that the
+    class's requests and frames add up to the server's CPU, and the load generator's per
+    request to its own.  Routes the class run did not see keep one student's costs."""
+    shared = routes = [r for r in costs if r in seen.means and r in own]
+    unseen = {r: costs[r][0] - sum(own[r]) for r in routes}
+    scale = client_scale = 1.0
+    if used:
+        alone_unseen = sum(seen.counts[r] * max(unseen[r], 0.0) for r in shared)
+        if alone_unseen > 0:
+            scale = max(used["server"] - seen.total_s, 0.0) / alone_unseen
+        asked = sum(seen.counts[r] * costs[r][2] for r in shared)
+        client_scale = used["client"] / asked if asked > 0 else 1.0
+    adjusted = dict(costs)
+    for route in routes:
+        server, db, client, calls, trips, loop = costs[route]
+        loop_alone, (loop_class, threads_class) = own[route][0], seen.means[route]
+        loop_unseen = max(loop - loop_alone, 0.0)
+        threads_unseen = max(unseen[route] - loop_unseen, 0.0)
+        loop_now = loop_class + scale * loop_unseen
+        server_now = max(loop_now + threads_class + scale * threads_unseen, 1e-6)
+        adjusted[route] = (server_now, db, client * client_scale, calls, trips, loop_now)
+    return adjusted, scale, client_scale
 
 
 # --- 2. the simulation ---------------------------------------------------------------------
@@ -729,6 +758,12 @@ def main() -> int:
         "with the probe (PYTHONPATH=bench/probe GYROLAB_BENCH_REQUEST_CPU=FILE load_test.py), "
         "in place of one student's alone",
     )
+    parser.add_argument(
+        "--class-run",
+        type=Path,
+        help="with --class-cpu: what load_test.py printed in that run; its CPU totals scale "
+        "what no request's own task does, and the load generator's CPU per request",
+    )
     args = parser.parse_args()
     if args.costs and args.costs.exists():
         saved = json.loads(args.costs.read_text())
@@ -744,12 +779,21 @@ def main() -> int:
         if not own:
             parser.error("--class-cpu needs costs measured with each request's own CPU")
         seen = attributed_costs(args.class_cpu.read_text())
-        costs = in_class(costs, own, seen)
+        used = None
+        if args.class_run:
+            table = next(iter(measured_p95(args.class_run).values()))
+            used = {"server": table["cpu server"], "client": table["cpu client"]}
+        costs, scale, client_scale = in_class(costs, own, seen, used)
         print(f"each route's own CPU as the class in {args.class_cpu} spent it:")
-        for route in sorted(set(seen) & set(own)):
-            alone, there = sum(own[route]) * 1000, sum(seen[route]) * 1000
+        for route in sorted(set(seen.means) & set(own)):
+            alone, there = sum(own[route]) * 1000, sum(seen.means[route]) * 1000
             print(f"  {route:42s} alone {alone:6.2f} ms, in the class {there:6.2f} ms"
                   f" ({there / alone:.2f}×)")  # fmt: skip
+        if used:
+            print(
+                f"  what no request's own task does: {scale:.2f}× one student's, and the load"
+                f" generator's CPU per request {client_scale:.2f}× (the CPU that run used)"
+            )
     print(f"a log-in's password hash: {hash_s * 1000:.1f} ms of CPU, outside the interpreter")
     print(f"per request, {args.backend}: CPU ms (server, of it on the event loop / database /"
           " load generator), SQLite calls, thread-pool trips")  # fmt: skip

@@ -140,8 +140,8 @@ def test_the_probe_gives_each_request_the_cpu_of_its_own_task(tmp_path):
     _, _, thread_loop, threads_ms, _ = rows["/in-a-thread/2"]
     assert 30 <= threads_ms < 45 and thread_loop < 10
     means = queue_model.attributed_costs(out.read_text())
-    assert 0.040 <= means["GET /on-the-loop/{id}"][0] < 0.060  # both calls of the route
-    assert means["GET /on-the-loop/{id}"][1] == 0
+    assert 0.040 <= means.means["GET /on-the-loop/{id}"][0] < 0.060  # both calls of the route
+    assert means.means["GET /on-the-loop/{id}"][1] == 0
 
 
 def test_class_costs_replace_each_routes_own_cpu_and_keep_the_rest():
@@ -155,14 +155,34 @@ def test_class_costs_replace_each_routes_own_cpu_and_keep_the_rest():
         ]
     )
     seen = queue_model.attributed_costs(lines)
-    assert seen["GET /lab/sessions/{id}"] == pytest.approx((2 * MS, 4 * MS))
-    assert seen["GET dashboard (teacher)"] == pytest.approx((2 * MS, 10 * MS))
-    assert seen[queue_model.STREAM] == pytest.approx((1 * MS, 0.5 * MS))  # per frame sent
+    assert seen.means["GET /lab/sessions/{id}"] == pytest.approx((2 * MS, 4 * MS))
+    assert seen.means["GET dashboard (teacher)"] == pytest.approx((2 * MS, 10 * MS))
+    assert seen.means[queue_model.STREAM] == pytest.approx((1 * MS, 0.5 * MS))  # per frame
+    assert seen.counts == {"GET /lab/sessions/{id}": 2, "GET dashboard (teacher)": 1,
+                           queue_model.STREAM: 40}  # fmt: skip
+    assert seen.total_s == pytest.approx(84 * MS)
     table = costs(server=10 * MS, loop=3 * MS)
     own = {"GET /lab/sessions/{id}": (2 * MS, 6 * MS)}  # 8 of its 10 ms: the rest unseen
-    adjusted = queue_model.in_class(table, own, seen)
+    adjusted, scale, _ = queue_model.in_class(table, own, seen)
     server, db, client, calls, trips, loop = adjusted["GET /lab/sessions/{id}"]
+    assert scale == 1.0
     assert server == pytest.approx(10 * MS - 8 * MS + 6 * MS)
     assert loop == pytest.approx(3 * MS - 2 * MS + 2 * MS)
     assert (db, client, calls, trips) == table["GET /lab/sessions/{id}"][1:5]
     assert adjusted["POST /login"] == table["POST /login"]  # not seen alone: unchanged
+
+
+def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
+    """The unseen part of each request is scaled so that the class's requests and frames
+    ask the server for the CPU the run used, and the load generator likewise."""
+    lines = "\n".join(["http GET /lab/sessions/12 1.000 3.000 0"] * 10)
+    seen = queue_model.attributed_costs(lines)
+    table = costs(server=10 * MS, loop=3 * MS, client=2 * MS)
+    own = {"GET /lab/sessions/{id}": (2 * MS, 6 * MS)}  # unseen alone: 2 ms, 1 of it the loop's
+    used = {"server": 0.07, "client": 0.01}  # 40 ms seen, so 30 ms for 10 × 2 ms unseen
+    adjusted, scale, client_scale = queue_model.in_class(table, own, seen, used)
+    server, db, client, calls, trips, loop = adjusted["GET /lab/sessions/{id}"]
+    assert scale == pytest.approx(1.5) and client_scale == pytest.approx(0.5)
+    assert 10 * server == pytest.approx(used["server"])
+    assert 10 * client == pytest.approx(used["client"])
+    assert loop == pytest.approx(1 * MS + 1.5 * 1 * MS)

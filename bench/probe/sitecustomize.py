@@ -19,7 +19,7 @@ measures -- and of it the wait before the app proper began (the body, a work pla
 file to which each HTTP request and each WebSocket appends ``kind method path loop_ms
 threads_ms frames``: the CPU its own task spent on the event loop (each step of the app's
 coroutine, timed by the thread's CPU clock) and in the thread pool (each function it sent
-there), and for a WebSocket the messages it sent.  What no request's task runs -- the
+there), and for a WebSocket the frames of samples it sent.  What no request's task runs -- the
 server reading and writing sockets, the collector, other threads -- is not in it.
 
 ``GYROLAB_BENCH_GC`` (a load test): a file to which each of the process's garbage
@@ -191,6 +191,7 @@ if _CPU:
     from fastapi import applications as _cpu_applications
 
     _cpu_file = os.open(_CPU, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+    _SAMPLES = '"type":"samples"'  # how the stream's frames of samples begin
     _spent = contextvars.ContextVar("gyrolab_bench_spent", default=None)
 
     @types.coroutine
@@ -220,8 +221,8 @@ if _CPU:
         token = _spent.set(spent)
 
         async def counting_send(message):
-            if message["type"] == "websocket.send":
-                spent[2] += 1
+            if message["type"] == "websocket.send" and _SAMPLES in (message.get("text") or "")[:32]:
+                spent[2] += 1  # a frame of samples (not "started" or "saved")
             await send(message)
 
         try:
