@@ -319,3 +319,34 @@ def test_a_write_to_ones_own_session_reads_it_as_locked_in_one_statement(student
     inside = [s for s in statements[begun:] if "FROM lab_session" in s]
     assert len(inside) == 1 and inside[0].endswith("FOR UPDATE"), statements
     assert [s for s in locked if 'FROM "user"' in s] != [], statements
+
+
+def test_a_streamed_position_marks_its_session_locked_in_one_statement(student_client, backend):
+    """The stream's writes (a position started, saved, cleared) read their session as
+    locked in one statement too; a session gone meanwhile is the stream's error message,
+    not a crash."""
+    import pytest
+    from sqlalchemy import event
+    from sqlalchemy.engine import Engine
+
+    from app.core.exceptions import UserError
+    from app.lab import stream
+    from tests.factories import new_session
+
+    session_id = new_session(student_client)
+    statements: list[str] = []
+
+    def count(conn, cursor, statement, parameters, context, executemany) -> None:
+        statements.append(" ".join(statement.split()))
+
+    event.listen(Engine, "before_cursor_execute", count)
+    try:
+        marked = stream._mark_started(session_id, "heading", 1)
+    finally:
+        event.remove(Engine, "before_cursor_execute", count)
+    assert (marked.stream_part, marked.stream_position) == ("heading", 1)
+    reads = [s for s in statements if "FROM lab_session" in s]
+    assert len(reads) == 1, statements
+    assert reads[0].endswith("FOR UPDATE") == (backend == "postgresql"), statements
+    with pytest.raises(UserError):
+        stream._mark_started(session_id + 1000, "heading", 1)

@@ -37,14 +37,8 @@ def own_session(db: Session, user: User, session_id: int) -> LabSession:
     locked first (``db.lock_rows``: offsets, attempt numbers and the storage quota are
     read-check-writes), so writes to one session queue and others' proceed."""
     if locks_rows(db):  # the usual case, the owner's own session: read as locked, at once
-        session = db.exec(
-            select(LabSession)
-            .where(LabSession.id == session_id, LabSession.owner_id == user.id)
-            .with_for_update()
-            .execution_options(populate_existing=True)
-        ).first()
+        session = locked_session(db, session_id, owner_id=user.id)
         if session is not None:
-            lock_rows(db, User, user.id)
             return session
     session = db.get(LabSession, session_id)
     if session is None or not is_member(db, session, user):
@@ -52,6 +46,23 @@ def own_session(db: Session, user: User, session_id: int) -> LabSession:
     if lock_rows(db, LabSession, session.id):
         lock_rows(db, User, session.owner_id)
         db.refresh(session)  # as of the lock: an earlier writer may just have changed it
+    return session
+
+
+def locked_session(db: Session, session_id: int, owner_id: int | None = None) -> LabSession | None:
+    """In a row writer's transaction on PostgreSQL: the session (of ``owner_id``, when
+    given) read as it is once locked (``SELECT … FOR UPDATE``), then its owner's row locked
+    -- two statements where a read, two locks and a re-read took four.  Elsewhere the
+    session as read (SQLite's single writer needs no locks).  None: no such session."""
+    if not locks_rows(db):
+        session = db.get(LabSession, session_id)
+        return session if session is None or owner_id in (None, session.owner_id) else None
+    query = select(LabSession).where(LabSession.id == session_id)
+    if owner_id is not None:
+        query = query.where(LabSession.owner_id == owner_id)
+    session = db.exec(query.with_for_update().execution_options(populate_existing=True)).first()
+    if session is not None:
+        lock_rows(db, User, session.owner_id)
     return session
 
 

@@ -28,8 +28,8 @@ from starlette.concurrency import run_in_threadpool
 from app.accounts.deps import login_for_cookie
 from app.config import get_settings
 from app.core.exceptions import UserError
-from app.db import database_busy, lock_rows, read_session, write_session
-from app.lab.service import record_position, recordable_session
+from app.db import database_busy, read_session, write_session
+from app.lab.service import locked_session, record_position, recordable_session
 from app.lab.sim import (
     MAX_DWELL_S,
     MAX_SETTLE_S,
@@ -74,10 +74,9 @@ def _owner(websocket: WebSocket, session_id: int) -> tuple[User, LabSession] | N
 
 def _locked(db, session_id: int) -> LabSession:
     """The session in a row writer's transaction, its rows locked (see own_session)."""
-    session = db.get(LabSession, session_id)
-    if lock_rows(db, LabSession, session_id):
-        lock_rows(db, User, session.owner_id)
-        db.refresh(session)
+    session = locked_session(db, session_id)
+    if session is None:  # deleted while streaming: the stream's write fails, not a 500
+        raise UserError("lab.no_such_session", status=404)
     return session
 
 
