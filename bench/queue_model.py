@@ -430,6 +430,9 @@ def simulate(
     timers: list[tuple[float, int, object]] = []  # (time, tie-break, callback)
     order = iter(range(10**9))
     latencies: dict[str, list[float]] = defaultdict(list)
+    # per HTTP request: (waited for a work place, from asking for it to the answer), s --
+    # what the probe's GYROLAB_BENCH_SERVER_TIMES measures in the server
+    inside: dict[str, list[tuple[float, float]]] = defaultdict(list)
     finished = [0]
 
     def at(when: float, callback) -> None:
@@ -522,6 +525,7 @@ def simulate(
         stages += [("dismiss", 0.0)] if http else []
         stages += [("loop", loop / 2), ("client", client / 2)]
         holding = [False]  # whether this request holds one of its worker's places
+        asked, waited = [0.0], [0.0]  # when it asked for a place, how long it waited
 
         def give_back() -> None:
             if holding[0]:
@@ -534,13 +538,16 @@ def simulate(
                 return
             pool, work = stages[i]
             if pool == "admit":
+                asked[0] = now
 
                 def admitted() -> None:
                     holding[0] = True
+                    waited[0] = now - asked[0]
                     run(i + 1)
 
                 places[worker].enter(admitted)
             elif pool == "dismiss":
+                inside[route].append((waited[0], now - asked[0]))
                 give_back()
                 run(i + 1)
             elif pool == "enter":
@@ -685,7 +692,13 @@ def simulate(
         while timers and timers[0][0] <= now + 1e-12:
             _, _, callback = heapq.heappop(timers)
             callback()
-    return {"latencies": latencies, "wall": now, "cpu": dict(spent), "lock held": lock_held}
+    return {
+        "latencies": latencies,
+        "server": inside,
+        "wall": now,
+        "cpu": dict(spent),
+        "lock held": lock_held,
+    }
 
 
 # --- 3. measured against predicted -----------------------------------------------------------
@@ -757,6 +770,15 @@ def main() -> int:
         help="each route's own CPU as a class spent it: the file a load test's server wrote "
         "with the probe (PYTHONPATH=bench/probe GYROLAB_BENCH_REQUEST_CPU=FILE load_test.py), "
         "in place of one student's alone",
+    )
+    parser.add_argument(
+        "--server-times",
+        type=Path,
+        nargs="*",
+        default=[],
+        help="what the probe's GYROLAB_BENCH_SERVER_TIMES wrote in the compared runs (one "
+        "file per --students count, in order): the server's part of each latency, and of "
+        "it the wait for a work place, measured beside predicted",
     )
     parser.add_argument(
         "--class-run",
@@ -837,6 +859,23 @@ def main() -> int:
             error = f"{(p95 - seen) / seen * 100:+.0f} %" if seen else ""
             shown = f"{seen:.0f}" if seen else "-"
             print(f"  {route:42s} {p50:6.0f} {p95:6.0f} {shown:>13s} {error:>6s}")
+        if len(args.server_times) > args.students.index(students):
+            measured_inside = server_times(args.server_times[args.students.index(students)])
+            print(f"  inside the server, p50 / p95 ms: {'waited for a place':>24s}"
+                  f" {'from there to the answer':>26s}")  # fmt: skip
+            print(f"  {'route':42s} {'predicted':>12s} {'measured':>11s}"
+                  f" {'predicted':>12s} {'measured':>11s}")  # fmt: skip
+            for route, pairs in sorted(result["server"].items()):
+                model = np.percentile(np.array(pairs) * 1000, [50, 95], axis=0)
+                seen = measured_inside.get(route)
+                cells = [f"{model[0][0]:5.0f} /{model[1][0]:5.0f}", "-",
+                         f"{model[0][1]:5.0f} /{model[1][1]:5.0f}", "-"]  # fmt: skip
+                if seen is not None:
+                    real = np.percentile(seen, [50, 95], axis=0)
+                    cells[1] = f"{real[0][0]:4.0f} /{real[1][0]:5.0f}"
+                    cells[3] = f"{real[0][1]:4.0f} /{real[1][1]:5.0f}"
+                print(f"  {route:42s} {cells[0]:>12s} {cells[1]:>11s} {cells[2]:>12s}"
+                      f" {cells[3]:>11s}")  # fmt: skip
     if args.department:
         department(costs, hash_s, args.department[0], args.department[1:], args.switch_interval)
     return 0
@@ -867,6 +906,16 @@ def department(costs, hash_s: float, students: int, workers: list[int], switch_m
         p95 = {route: np.percentile(v, 95) * 1000 for route, v in result["latencies"].items()}
         row = " ".join(f"{p95.get(route, float('nan')):9.0f}" for route in DEPARTMENT_ROUTES)
         print(f"  {count:7d} {share:5d} {row} {max(p95.values()):9.0f}")
+
+
+def server_times(path: Path) -> dict[str, np.ndarray]:
+    """Per route, each request's (waited for a work place, server time) in ms, from the
+    probe's ``GYROLAB_BENCH_SERVER_TIMES`` lines (``method path ms waited_ms``)."""
+    rows: dict[str, list[tuple[float, float]]] = defaultdict(list)
+    for line in path.read_text().splitlines():
+        method, route, took, waited = line.split()
+        rows[route_of(method, route)].append((float(waited), float(took)))
+    return {route: np.array(values) for route, values in rows.items()}
 
 
 def _students_of(path: Path) -> int | None:

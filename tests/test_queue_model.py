@@ -186,3 +186,30 @@ def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
     assert 10 * server == pytest.approx(used["server"])
     assert 10 * client == pytest.approx(used["client"])
     assert loop == pytest.approx(1 * MS + 1.5 * 1 * MS)
+
+
+def test_inside_the_server_a_lone_request_waits_for_no_place():
+    """The model's part of each latency inside the server (what the probe's
+    GYROLAB_BENCH_SERVER_TIMES measures): from asking for a work place to the answer,
+    and of it the wait for the place."""
+    result = queue_model.simulate(
+        costs(), students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
+    )
+    for route, pairs in result["server"].items():
+        waited, inside = np.array(pairs).T
+        assert np.all(waited == 0), route
+        # the threads' work (server less its event loop's part) and the database's
+        assert inside == pytest.approx(np.full(len(inside), 4 * MS), abs=1e-5), route
+    crowded = queue_model.simulate(costs(), students=40, workers=1, cores=2.0, teacher=False)
+    waits = np.concatenate([np.array(p)[:, 0] for p in crowded["server"].values()])
+    assert waits.max() > 0 and np.all(waits >= 0)
+
+
+def test_server_times_are_read_per_route(tmp_path):
+    path = tmp_path / "times.txt"
+    path.write_text(
+        "GET /lab/sessions/3 12.5 10.0\nGET /lab/sessions/4 2.5 0.0\nPOST /login 30 1\n"
+    )
+    read = queue_model.server_times(path)
+    assert read["GET /lab/sessions/{id}"].tolist() == [[10.0, 12.5], [0.0, 2.5]]
+    assert read["POST /login"].tolist() == [[1.0, 30.0]]
