@@ -211,7 +211,7 @@ def measure_costs(backend: str, students: int) -> tuple[dict, dict]:
                 asyncio.run(everyone())
             with attributed.open("rb") as lines:
                 lines.seek(warm[0])
-                own = attributed_costs(lines.read().decode())
+                own = attributed_costs(lines.read().decode()).means
         finally:
             if pg is not None:
                 pg.stop()
