@@ -164,8 +164,9 @@ def test_class_costs_replace_each_routes_own_cpu_and_keep_the_rest():
     table = costs(server=10 * MS, loop=3 * MS)
     own = {"GET /lab/sessions/{id}": (2 * MS, 6 * MS)}  # 8 of its 10 ms: the rest unseen
     adjusted, scale, _ = queue_model.in_class(table, own, seen)
-    server, db, client, calls, trips, loop = adjusted["GET /lab/sessions/{id}"]
+    server, db, client, calls, trips, loop, own_loop = adjusted["GET /lab/sessions/{id}"]
     assert scale == 1.0
+    assert own_loop == pytest.approx(2 * MS)  # its task's part: inside its work place
     assert server == pytest.approx(10 * MS - 8 * MS + 6 * MS)
     assert loop == pytest.approx(3 * MS - 2 * MS + 2 * MS)
     assert (db, client, calls, trips) == table["GET /lab/sessions/{id}"][1:5]
@@ -181,7 +182,7 @@ def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
     own = {"GET /lab/sessions/{id}": (2 * MS, 6 * MS)}  # unseen alone: 2 ms, 1 of it the loop's
     used = {"server": 0.07, "client": 0.01}  # 40 ms seen, so 30 ms for 10 × 2 ms unseen
     adjusted, scale, client_scale = queue_model.in_class(table, own, seen, used)
-    server, db, client, calls, trips, loop = adjusted["GET /lab/sessions/{id}"]
+    server, db, client, calls, trips, loop, _ = adjusted["GET /lab/sessions/{id}"]
     assert scale == pytest.approx(1.5) and client_scale == pytest.approx(0.5)
     assert 10 * server == pytest.approx(used["server"])
     assert 10 * client == pytest.approx(used["client"])
@@ -213,3 +214,17 @@ def test_server_times_are_read_per_route(tmp_path):
     read = queue_model.server_times(path)
     assert read["GET /lab/sessions/{id}"].tolist() == [[10.0, 12.5], [0.0, 2.5]]
     assert read["POST /login"].tolist() == [[1.0, 30.0]]
+
+
+def test_the_event_loops_part_inside_the_app_holds_the_work_place():
+    """Routing, dependencies and the answer run on the event loop inside the admission:
+    a request holds its place meanwhile; the server's socket work comes before and after."""
+    table = {route: (*values, 0.6 * MS) for route, values in costs().items()}
+    result = queue_model.simulate(
+        table, students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
+    )
+    for route, pairs in result["server"].items():
+        waited, inside = np.array(pairs).T
+        assert inside == pytest.approx(np.full(len(inside), 4.6 * MS), abs=1e-5), route
+    for route, latencies in result["latencies"].items():  # the same work in all
+        assert latencies == pytest.approx([7 * MS] * len(latencies), abs=1e-5), route
