@@ -28,6 +28,8 @@ from app.serving_lock import hold_while_serving, release
 from app.web.admission import Admission
 from app.web.errors import register_error_handlers
 from app.web.headers import SecurityHeaders
+from app.web.i18n import load_languages
+from app.web.local_time import zone as local_zone
 from app.web.render import compile_templates
 
 API_DESCRIPTION = """REST API of GyroLab, the FOG north-finding teaching lab.
@@ -99,12 +101,14 @@ def freeze_start_up_heap() -> None:
     generation the collector never walks; objects made later are collected as before.
     SciPy's signal and stats modules (the simulated gyro's filters, Student's t of every
     result; otherwise imported by the first stream and the first result: ≈ 1 s and
-    ≈ 0.6 s inside a student's request) are imported first, and the page templates
-    compiled (``compile_templates``), so that they are frozen too."""
+    ≈ 0.6 s inside a student's request) are imported first, the page templates
+    compiled (``compile_templates``) and the languages' catalogues and locale data
+    loaded (``load_languages``), so that they are frozen too."""
     import scipy.signal  # noqa: F401
     import scipy.stats  # noqa: F401
 
     compile_templates()
+    load_languages(local_zone(None))
     gc.collect()
     gc.freeze()
 
