@@ -1,5 +1,5 @@
-"""The load test's queueing model (bench/queue_model.py): its simulation against cases
-whose answer is known without it."""
+"""The load test's queueing model (bench/queue_model.py, queue_sim.py, class_cpu.py): its
+simulation against cases whose answer is known without it, and the class's CPU read."""
 
 from __future__ import annotations
 
@@ -12,7 +12,9 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
 
-import queue_model  # noqa: E402  (bench/)
+import class_cpu  # noqa: E402  (bench/)
+import queue_model  # noqa: E402
+import queue_sim  # noqa: E402
 
 MS = 1e-3
 
@@ -20,18 +22,18 @@ MS = 1e-3
 def costs(server=4 * MS, db=1 * MS, client=2 * MS, calls=10.0, trips=4.0, loop=1 * MS):
     """The same (server, database, client, SQLite calls, thread trips, loop) for every
     route; stream frames cost a tenth."""
-    routes = {route for kind, route in queue_model.student_script() if kind == "request"}
+    routes = {route for kind, route in queue_sim.student_script() if kind == "request"}
     table = {route: (server, db, client, calls, trips, loop) for route in routes}
     table["GET dashboard (teacher)"] = (server, db, client, calls, trips, loop)
-    table[queue_model.STREAM] = (server / 10, db / 10, client / 10, 1.0, 0.0, loop / 10)
+    table[queue_sim.STREAM] = (server / 10, db / 10, client / 10, 1.0, 0.0, loop / 10)
     return table
 
 
 def test_a_student_alone_waits_for_nothing_but_the_work_of_each_request():
-    result = queue_model.simulate(
+    result = queue_sim.simulate(
         costs(), students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
     )
-    expected = Counter(route for kind, route in queue_model.student_script() if kind == "request")
+    expected = Counter(route for kind, route in queue_sim.student_script() if kind == "request")
     assert {route: len(v) for route, v in result["latencies"].items()} == expected
     for route, latencies in result["latencies"].items():
         # client + server (its event loop's part included) + database, nothing waited
@@ -40,8 +42,8 @@ def test_a_student_alone_waits_for_nothing_but_the_work_of_each_request():
 
 def test_every_request_of_a_class_is_answered_and_the_cores_are_never_overdrawn():
     students, cores = 40, 2.0
-    result = queue_model.simulate(costs(), students, workers=1, cores=cores, teacher=False)
-    expected = Counter(route for kind, route in queue_model.student_script() if kind == "request")
+    result = queue_sim.simulate(costs(), students, workers=1, cores=cores, teacher=False)
+    expected = Counter(route for kind, route in queue_sim.student_script() if kind == "request")
     counts = {route: len(v) for route, v in result["latencies"].items()}
     assert counts == {route: n * students for route, n in expected.items()}
     cpu = sum(result["cpu"].values())
@@ -58,10 +60,10 @@ def test_many_short_calls_wait_a_turn_of_the_busy_threads_at_each_call():
         if route.startswith("POST"):
             mixed[route] = (3 * MS, 1 * MS, 2 * MS, 60.0, 4.0, 1 * MS)
     # every request inside at once (no work places): the interpreter alone decides
-    shared = queue_model.simulate(
+    shared = queue_sim.simulate(
         mixed, 40, 1, 2.0, teacher=False, switch_interval_s=0.0, work_places=0
     )
-    turns = queue_model.simulate(mixed, 40, 1, 2.0, teacher=False, work_places=0)
+    turns = queue_sim.simulate(mixed, 40, 1, 2.0, teacher=False, work_places=0)
 
     def p95(result: dict, route: str) -> float:
         return float(np.percentile(result["latencies"][route], 95))
@@ -76,7 +78,7 @@ def test_a_request_waits_for_a_work_place():
     waits the first's whole stay (its threads' and database work), then takes as long."""
     table = costs(server=20 * MS, db=0.0, client=0.0, calls=0.0, trips=0.0, loop=0.0)
     for places, expected in ((1, [20 * MS, 40 * MS]), (0, [40 * MS, 40 * MS])):
-        result = queue_model.simulate(
+        result = queue_sim.simulate(
             table, 2, 1, 2.0, ramp=0.0, teacher=False, switch_interval_s=0.0,
             work_places=places,
         )  # fmt: skip
@@ -139,7 +141,7 @@ def test_the_probe_gives_each_request_the_cpu_of_its_own_task(tmp_path):
     assert loop_kind == "http" and 40 <= loop_ms < 60 and loop_threads == 0
     _, _, thread_loop, threads_ms, _ = rows["/in-a-thread/2"]
     assert 30 <= threads_ms < 45 and thread_loop < 10
-    means = queue_model.attributed_costs(out.read_text())
+    means = class_cpu.attributed_costs(out.read_text())
     assert 0.040 <= means.means["GET /on-the-loop/{id}"][0] < 0.060  # both calls of the route
     assert means.means["GET /on-the-loop/{id}"][1] == 0
 
@@ -154,16 +156,16 @@ def test_class_costs_replace_each_routes_own_cpu_and_keep_the_rest():
             "websocket WS /lab/sessions/13/stream 10.000 10.000 20",
         ]
     )
-    seen = queue_model.attributed_costs(lines)
+    seen = class_cpu.attributed_costs(lines)
     assert seen.means["GET /lab/sessions/{id}"] == pytest.approx((2 * MS, 4 * MS))
     assert seen.means["GET dashboard (teacher)"] == pytest.approx((2 * MS, 10 * MS))
-    assert seen.means[queue_model.STREAM] == pytest.approx((1 * MS, 0.5 * MS))  # per frame
+    assert seen.means[queue_sim.STREAM] == pytest.approx((1 * MS, 0.5 * MS))  # per frame
     assert seen.counts == {"GET /lab/sessions/{id}": 2, "GET dashboard (teacher)": 1,
-                           queue_model.STREAM: 40}  # fmt: skip
+                           queue_sim.STREAM: 40}  # fmt: skip
     assert seen.total_s == pytest.approx(84 * MS)
     table = costs(server=10 * MS, loop=3 * MS)
     own = {"GET /lab/sessions/{id}": (2 * MS, 6 * MS)}  # 8 of its 10 ms: the rest unseen
-    adjusted, scale, _ = queue_model.in_class(table, own, seen)
+    adjusted, scale, _ = class_cpu.in_class(table, own, seen)
     server, db, client, calls, trips, loop, own_loop = adjusted["GET /lab/sessions/{id}"]
     assert scale == 1.0
     assert own_loop == pytest.approx(2 * MS)  # its task's part: inside its work place
@@ -177,11 +179,11 @@ def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
     """The unseen part of each request is scaled so that the class's requests and frames
     ask the server for the CPU the run used, and the load generator likewise."""
     lines = "\n".join(["http GET /lab/sessions/12 1.000 3.000 0"] * 10)
-    seen = queue_model.attributed_costs(lines)
+    seen = class_cpu.attributed_costs(lines)
     table = costs(server=10 * MS, loop=3 * MS, client=2 * MS)
     own = {"GET /lab/sessions/{id}": (2 * MS, 6 * MS)}  # unseen alone: 2 ms, 1 of it the loop's
     used = {"server": 0.07, "client": 0.01}  # 40 ms seen, so 30 ms for 10 × 2 ms unseen
-    adjusted, scale, client_scale = queue_model.in_class(table, own, seen, used)
+    adjusted, scale, client_scale = class_cpu.in_class(table, own, seen, used)
     server, db, client, calls, trips, loop, _ = adjusted["GET /lab/sessions/{id}"]
     assert scale == pytest.approx(1.5) and client_scale == pytest.approx(0.5)
     assert 10 * server == pytest.approx(used["server"])
@@ -193,7 +195,7 @@ def test_inside_the_server_a_lone_request_waits_for_no_place():
     """The model's part of each latency inside the server (what the probe's
     GYROLAB_BENCH_SERVER_TIMES measures): from asking for a work place to the answer,
     and of it the wait for the place."""
-    result = queue_model.simulate(
+    result = queue_sim.simulate(
         costs(), students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
     )
     for route, pairs in result["server"].items():
@@ -201,7 +203,7 @@ def test_inside_the_server_a_lone_request_waits_for_no_place():
         assert np.all(waited == 0), route
         # the threads' work (server less its event loop's part) and the database's
         assert inside == pytest.approx(np.full(len(inside), 4 * MS), abs=1e-5), route
-    crowded = queue_model.simulate(costs(), students=40, workers=1, cores=2.0, teacher=False)
+    crowded = queue_sim.simulate(costs(), students=40, workers=1, cores=2.0, teacher=False)
     waits = np.concatenate([np.array(p)[:, 0] for p in crowded["server"].values()])
     assert waits.max() > 0 and np.all(waits >= 0)
 
@@ -211,7 +213,7 @@ def test_server_times_are_read_per_route(tmp_path):
     path.write_text(
         "GET /lab/sessions/3 12.5 10.0\nGET /lab/sessions/4 2.5 0.0\nPOST /login 30 1\n"
     )
-    read = queue_model.server_times(path)
+    read = class_cpu.server_times(path)
     assert read["GET /lab/sessions/{id}"].tolist() == [[10.0, 12.5], [0.0, 2.5]]
     assert read["POST /login"].tolist() == [[1.0, 30.0]]
 
@@ -220,7 +222,7 @@ def test_the_event_loops_part_inside_the_app_holds_the_work_place():
     """Routing, dependencies and the answer run on the event loop inside the admission:
     a request holds its place meanwhile; the server's socket work comes before and after."""
     table = {route: (*values, 0.6 * MS) for route, values in costs().items()}
-    result = queue_model.simulate(
+    result = queue_sim.simulate(
         table, students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
     )
     for route, pairs in result["server"].items():

@@ -1,0 +1,95 @@
+"""Each request's CPU as a class spent it, from the probe's lines in a load test
+(``bench/probe/sitecustomize.py``: ``GYROLAB_BENCH_REQUEST_CPU``, ``GYROLAB_BENCH_SERVER_TIMES``),
+and the queueing model's costs per request made from them."""
+
+from __future__ import annotations
+
+import re
+from collections import defaultdict
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from queue_sim import STREAM
+
+ID_IN_PATH = re.compile(r"/\d+")
+
+
+def route_of(method: str, path: str) -> str:
+    """The load test's name of a request (ids replaced; the teacher's page by its role)."""
+    if path.startswith("/courses/"):
+        return "GET dashboard (teacher)"
+    return f"{method} {ID_IN_PATH.sub('/{id}', path)}"
+
+
+@dataclass
+class ClassCpu:
+    """What the probe saw of a class: per route the mean CPU seconds (on the event loop,
+    in the thread pool) of its own task (the stream: per frame of samples), how many, and
+    their sum."""
+
+    means: dict[str, tuple[float, float]]
+    counts: dict[str, int]
+    total_s: float
+
+
+def attributed_costs(text: str) -> ClassCpu:
+    """From the probe's per-request lines (``GYROLAB_BENCH_REQUEST_CPU``): per route the
+    mean CPU seconds (on the event loop, in the thread pool) of its own task; for the
+    stream, per frame of samples sent (the WebSockets' whole CPU over their frames)."""
+    spent: dict[str, list[tuple[float, float]]] = defaultdict(list)
+    stream = np.zeros(3)
+    for line in text.splitlines():
+        kind, method, path, loop_ms, threads_ms, frames = line.split()
+        cpu = (float(loop_ms) / 1000, float(threads_ms) / 1000)
+        if kind == "websocket":
+            stream += (*cpu, int(frames))
+        else:
+            spent[route_of(method, path)].append(cpu)
+    means = {route: tuple(np.mean(values, axis=0)) for route, values in spent.items()}
+    counts = {route: len(values) for route, values in spent.items()}
+    total = sum(float(np.sum(values)) for values in spent.values()) + stream[0] + stream[1]
+    if stream[2]:
+        means[STREAM] = (stream[0] / stream[2], stream[1] / stream[2])
+        counts[STREAM] = int(stream[2])
+    return ClassCpu(means, counts, float(total))
+
+
+def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None):
+    """The costs per request as a class spent them.  Each route's own CPU (its task's,
+    ``seen`` by the probe in a load test) replaces one student's alone (``own``).  What the
+    probe does not see -- the server's socket work, the collector; per frame of a lone
+    stream, most of its cost -- is shared out in a class; with ``used`` (the CPU the same
+    run used: "server", "client" seconds) each route's unseen part is scaled so that the
+    class's requests and frames add up to the server's CPU, and the load generator's per
+    request to its own.  Routes the class run did not see keep one student's costs."""
+    shared = routes = [r for r in costs if r in seen.means and r in own]
+    unseen = {r: costs[r][0] - sum(own[r]) for r in routes}
+    scale = client_scale = 1.0
+    if used:
+        alone_unseen = sum(seen.counts[r] * max(unseen[r], 0.0) for r in shared)
+        if alone_unseen > 0:
+            scale = max(used["server"] - seen.total_s, 0.0) / alone_unseen
+        asked = sum(seen.counts[r] * costs[r][2] for r in shared)
+        client_scale = used["client"] / asked if asked > 0 else 1.0
+    adjusted = dict(costs)
+    for route in routes:
+        server, db, client, calls, trips, loop = costs[route]
+        loop_alone, (loop_class, threads_class) = own[route][0], seen.means[route]
+        loop_unseen = max(loop - loop_alone, 0.0)
+        threads_unseen = max(unseen[route] - loop_unseen, 0.0)
+        loop_now = loop_class + scale * loop_unseen
+        server_now = max(loop_now + threads_class + scale * threads_unseen, 1e-6)
+        adjusted[route] = (server_now, db, client * client_scale, calls, trips, loop_now,
+                           loop_class)  # fmt: skip
+    return adjusted, scale, client_scale
+
+
+def server_times(path: Path) -> dict[str, np.ndarray]:
+    """Per route, each request's (waited for a work place, server time) in ms, from the
+    probe's ``GYROLAB_BENCH_SERVER_TIMES`` lines (``method path ms waited_ms``)."""
+    rows: dict[str, list[tuple[float, float]]] = defaultdict(list)
+    for line in path.read_text().splitlines():
+        method, route, took, waited = line.split()
+        rows[route_of(method, route)].append((float(waited), float(took)))
+    return {route: np.array(values) for route, values in rows.items()}
