@@ -215,9 +215,8 @@ def measure_costs(backend: str, students: int) -> tuple[dict, dict]:
 
 
 async def teacher_costs(tally, base: str, course: int, assignment: int) -> None:
-    import httpx
 
-    async with httpx.AsyncClient(base_url=base, timeout=120) as client:
+    async with load_test.browser(base) as client:
         page = await client.get("/login")
         await client.post(
             "/login",
