@@ -10,6 +10,8 @@ import functools
 import io
 import json
 import re
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from unittest import mock
@@ -133,6 +135,25 @@ def _form_token(client: TestClient, page: str) -> str:
     if token is None:
         token = cache[cookies] = csrf_from(client, page)
     return token
+
+
+@contextmanager
+def statements_run() -> Iterator[list[str]]:
+    """Every SQL statement any engine runs meanwhile, whitespace collapsed (round trips
+    counted by the tests of issue 32; BEGIN and COMMIT are not statements here)."""
+    from sqlalchemy import event
+    from sqlalchemy.engine import Engine
+
+    statements: list[str] = []
+
+    def record(conn, cursor, statement, parameters, context, executemany) -> None:
+        statements.append(" ".join(statement.split()))
+
+    event.listen(Engine, "before_cursor_execute", record)
+    try:
+        yield statements
+    finally:
+        event.remove(Engine, "before_cursor_execute", record)
 
 
 def login(client: TestClient, username: str, password: str = PASSWORD, next: str = "/"):

@@ -443,26 +443,15 @@ def test_a_log_in_costs_few_round_trips(client, teacher, backend):
     is a round trip and ≈ 90 µs of the worker's interpreter.  The throttle's locks are one
     statement, its counts one, and a success uncharges its attempt and writes the session
     row in one transaction."""
-    from sqlalchemy import event
-    from sqlalchemy.engine import Engine
-
-    statements: list[str] = []
-
-    def count(conn, cursor, statement, parameters, context, executemany) -> None:
-        statements.append(" ".join(statement.split())[:60])
+    from tests.factories import statements_run
 
     token = csrf_from(client, "/login")
     form = {"username": "teacher1", "password": PASSWORD, "csrf_token": token}
-    event.listen(Engine, "before_cursor_execute", count)
-    try:
+    with statements_run() as succeeded:
         assert client.post("/login", data=form).status_code == 303
-        succeeded = list(statements)
-        statements.clear()
-        client.cookies.pop(SESSION_COOKIE)
+    client.cookies.pop(SESSION_COOKIE)
+    with statements_run() as failed:
         assert client.post("/login", data={**form, "password": "wrong-pass"}).status_code == 401
-        failed = list(statements)
-    finally:
-        event.remove(Engine, "before_cursor_execute", count)
     locks = [s for s in succeeded if "pg_advisory_xact_lock(" in s]
     reads = [s for s in succeeded if s.startswith("SELECT login_failure")]
     assert len(locks) == (1 if backend == "postgresql" else 0), succeeded
@@ -503,20 +492,11 @@ def test_a_hash_of_other_parameters_is_replaced_at_the_next_log_in(client, teach
 def test_a_request_finds_its_caller_in_one_statement(client, student):
     """The log-in session and its user come in one joined statement (was two: every
     request of a class pays for each round trip)."""
-    from sqlalchemy import event
-    from sqlalchemy.engine import Engine
+    from tests.factories import statements_run
 
     assert login(client, "student1").status_code == 303
-    statements: list[str] = []
-
-    def count(conn, cursor, statement, parameters, context, executemany) -> None:
-        statements.append(" ".join(statement.split()))
-
-    event.listen(Engine, "before_cursor_execute", count)
-    try:
+    with statements_run() as statements:
         assert client.get("/lab").status_code == 200
-    finally:
-        event.remove(Engine, "before_cursor_execute", count)
     logins = [s for s in statements if "FROM auth_session" in s]
     assert len(logins) == 1 and "JOIN" in logins[0], statements
     by_id = [

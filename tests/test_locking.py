@@ -294,22 +294,11 @@ def test_a_write_to_ones_own_session_reads_it_as_locked_in_one_statement(student
     """On PostgreSQL a row writer locks its session's row and its owner's: the owner's own
     session is read already locked (``SELECT … FOR UPDATE``, as of the lock), not read,
     locked and read again (three round trips inside the write)."""
-    from sqlalchemy import event
-    from sqlalchemy.engine import Engine
-
-    from tests.factories import new_session, save_manual
+    from tests.factories import new_session, save_manual, statements_run
 
     session_id = new_session(student_client)
-    statements: list[str] = []
-
-    def count(conn, cursor, statement, parameters, context, executemany) -> None:
-        statements.append(" ".join(statement.split()))
-
-    event.listen(Engine, "before_cursor_execute", count)
-    try:
+    with statements_run() as statements:
         saved = save_manual(student_client, session_id, "latitude", {"1": [10.0] * 10})
-    finally:
-        event.remove(Engine, "before_cursor_execute", count)
     assert saved.status_code == 200, saved.text
     locked = [s for s in statements if s.endswith("FOR UPDATE")]
     if backend == "sqlite":
@@ -326,24 +315,14 @@ def test_a_streamed_position_marks_its_session_locked_in_one_statement(student_c
     locked in one statement too; a session gone meanwhile is the stream's error message,
     not a crash."""
     import pytest
-    from sqlalchemy import event
-    from sqlalchemy.engine import Engine
 
     from app.core.exceptions import UserError
     from app.lab import stream
-    from tests.factories import new_session
+    from tests.factories import new_session, statements_run
 
     session_id = new_session(student_client)
-    statements: list[str] = []
-
-    def count(conn, cursor, statement, parameters, context, executemany) -> None:
-        statements.append(" ".join(statement.split()))
-
-    event.listen(Engine, "before_cursor_execute", count)
-    try:
+    with statements_run() as statements:
         marked = stream._mark_started(session_id, "heading", 1)
-    finally:
-        event.remove(Engine, "before_cursor_execute", count)
     assert (marked.stream_part, marked.stream_position) == ("heading", 1)
     reads = [s for s in statements if "FROM lab_session" in s]
     assert len(reads) == 1, statements
