@@ -104,8 +104,9 @@ def _closure_witness(
 
 def _trend_witness(arrays: list[np.ndarray], times: list[np.ndarray]) -> tuple[float, float] | None:
     """Pooled within-position slope of block means, with its Student-t σ (as a z-equivalent)."""
-    from scipy.stats import norm
-    from scipy.stats import t as student_t
+    # scipy.stats' t.sf(x, ν) and norm.isf(p) are these two special functions behind its
+    # generic distribution machinery (which costs ≈ 0.1 ms a call; these ≈ 2 µs)
+    from scipy.special import ndtri, stdtr
 
     sxy = sxx = residual = 0.0
     dof = 0
@@ -113,9 +114,10 @@ def _trend_witness(arrays: list[np.ndarray], times: list[np.ndarray]) -> tuple[f
         blocks = min(MAX_BLOCKS, values.size)
         if blocks < 3:
             continue
-        edges = np.linspace(0, values.size, blocks + 1).astype(int)
-        m = np.array([values[a:b].mean() for a, b in zip(edges[:-1], edges[1:], strict=True)])
-        t = np.array([stamps[a:b].mean() for a, b in zip(edges[:-1], edges[1:], strict=True)])
+        edges = np.linspace(0, values.size, blocks + 1).astype(int)  # no empty block
+        sizes = np.diff(edges)
+        m = np.add.reduceat(values, edges[:-1]) / sizes
+        t = np.add.reduceat(np.asarray(stamps, dtype=float), edges[:-1]) / sizes
         dt, dm = t - t.mean(), m - m.mean()
         if not np.any(dt):
             continue
@@ -132,7 +134,7 @@ def _trend_witness(arrays: list[np.ndarray], times: list[np.ndarray]) -> tuple[f
         return None
     # a t-distributed ratio as the normal σ with the same tail probability
     t_ratio = abs(slope) / scale
-    z = norm.isf(student_t.sf(t_ratio, dof)) if t_ratio > 0 else 0.0
+    z = -float(ndtri(stdtr(dof, -t_ratio))) if t_ratio > 0 else 0.0  # isf(sf(t_ratio))
     sigma = abs(slope) / z if z > 0 else scale
     return slope, float(sigma)
 

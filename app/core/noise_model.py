@@ -173,7 +173,9 @@ class GyroNoise:
         count = len(windows)
         cov = np.zeros((count, count))
         quant = (SECONDS_PER_HOUR * self.angle_lsb_deg) ** 2 / 12.0
-        terms = self.correlated_terms()
+        terms = [(v, t) for v, t in self.correlated_terms() if t > 0]
+        variances = np.array([v for v, _ in terms])
+        corr_times = np.array([t for _, t in terms])
         for i, wi in enumerate(windows):
             for j, wj in enumerate(windows):
                 if i != j and not continuous:
@@ -184,8 +186,9 @@ class GyroNoise:
                     value += self.white_density / li + 2.0 * quant / (li * li)
                 elif abs(wi.end_s - wj.start_s) < 1e-9 or abs(wj.end_s - wi.start_s) < 1e-9:
                     value -= quant / (li * lj)  # a shared end of the rounded angle
-                for variance, corr in terms:
-                    value += variance * _exponential_mean_product(wi, wj, corr) / (li * lj)
+                if terms:
+                    products = _exponential_mean_products(wi, wj, corr_times)
+                    value += float(variances @ products) / (li * lj)
                 if continuous:
                     value += self.rrw_rate * _brownian_integral(wi, wj) / (li * lj)
                 elif i == j:
@@ -201,22 +204,24 @@ class GyroNoise:
         return self.warmup_bias_deg_h**2 * np.outer(profile, profile)
 
 
-def _exponential_mean_product(wi: Window, wj: Window, t: float) -> float:
-    """∫∫ e^(−|s−u|/T) ds du over the two windows (0 without a correlation time)."""
-    if t <= 0:
-        return 0.0
+def _exponential_mean_products(wi: Window, wj: Window, t: np.ndarray) -> np.ndarray:
+    """∫∫ e^(−|s−u|/T) ds du over the two windows, for each correlation time T > 0 in ``t``.
+
+    The same window of length L: 2TL + 2T²·(e^(−L/T) − 1).  Windows [a1, b1] before
+    [a2, b2]: T²·(e^(−(a2−b1)/T) − e^(−(a2−a1)/T) − e^(−(b2−b1)/T) + e^(−(b2−a1)/T)),
+    computed as the equal product T²·e^(−(a2−b1)/T)·(e^(−L1/T) − 1)·(e^(−L2/T) − 1),
+    L1, L2 the lengths: the four-term sum cancels to T²·ε for T ≫ L (at the flicker
+    band's T = 1e5 s, relative error 1e-11 for 60 s windows and 1e-6 for 0.5 s and 2 s
+    ones), the product does not."""
     if wi is wj or (wi.start_s == wj.start_s and wi.length_s == wj.length_s):
         length = wi.length_s
-        return 2.0 * t * length + 2.0 * t * t * math.expm1(-length / t)
+        return 2.0 * t * length + 2.0 * t * t * np.expm1(-length / t)
     first, second = (wi, wj) if wi.start_s <= wj.start_s else (wj, wi)
     if first.end_s > second.start_s + 1e-9:
         raise ValueError("windows overlap")
-    a1, b1, a2, b2 = first.start_s, first.end_s, second.start_s, second.end_s
-    return (t * t) * (
-        math.exp(-(a2 - b1) / t)
-        - math.exp(-(a2 - a1) / t)
-        - math.exp(-(b2 - b1) / t)
-        + math.exp(-(b2 - a1) / t)
+    gap = max(second.start_s - first.end_s, 0.0)
+    return (
+        (t * t) * np.exp(-gap / t) * np.expm1(-first.length_s / t) * np.expm1(-second.length_s / t)
     )
 
 

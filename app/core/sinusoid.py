@@ -15,6 +15,7 @@ on one clock a linear bias drift ḃ·t is fitted as a fourth term.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -80,11 +81,11 @@ class SinusoidFit:
     def uncertainty_model(self) -> str | None:
         return None if self.noise is None else self.noise.model
 
-    @property
+    @functools.cached_property  # read by the fit's σ, the drift check and the page
     def closure_residual(self) -> float | None:
         return closure_residual(self.angles_deg, self.means)
 
-    @property
+    @functools.cached_property
     def closure_sigma(self) -> float | None:
         """σ_d = √(wᵀΣw), w = (1, −1, 1, −1)/2: √(σ1² + σ2² + σ3² + σ4²)/2 for independent
         means, with their correlations under a noise model (None without four positions

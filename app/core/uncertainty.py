@@ -163,8 +163,12 @@ def closure_residual(angles_deg: np.ndarray, means: np.ndarray) -> float | None:
     """
     if angles_deg.size != 4:
         return None
-    steps = np.diff(angles_deg)
-    if not (np.allclose(np.abs(steps), 90.0, atol=1e-6) and np.allclose(steps, steps[0])):
+    steps = [float(step) for step in np.diff(angles_deg)]
+
+    def close(value: float, target: float, atol: float) -> bool:  # numpy.allclose's test
+        return abs(value - target) <= atol + 1e-5 * abs(target)  # (False for NaN)
+
+    if not all(close(abs(s), 90.0, 1e-6) and close(s, steps[0], 1e-8) for s in steps):
         return None
     return float((means[0] + means[2] - means[1] - means[3]) / 2)
 
