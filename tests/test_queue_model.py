@@ -146,6 +146,25 @@ def test_the_probe_gives_each_request_the_cpu_of_its_own_task(tmp_path):
     assert means.means["GET /on-the-loop/{id}"][1] == 0
 
 
+def test_the_profile_probe_writes_each_routes_thread_pool_functions_by_cpu(tmp_path):
+    """``GYROLAB_BENCH_PROFILE``: one cProfile file per route (ids folded), of what its
+    requests ran in the thread pool, timed by the thread's CPU clock; the loop's work is
+    not in it."""
+    import os
+    import pstats
+    import subprocess
+
+    probe = Path(queue_model.__file__).parent / "probe"
+    env = {**os.environ, "PYTHONPATH": str(probe), "GYROLAB_BENCH_PROFILE": str(tmp_path)}
+    subprocess.run([sys.executable, "-c", PROBED_APP], env=env, check=True, timeout=60)
+    files = sorted(path.name.split("-", 1)[1] for path in tmp_path.glob("*.prof"))
+    assert files == ["GET_in_a_thread_id.prof"]  # the loop's route sent nothing there
+    stats = pstats.Stats(str(next(tmp_path.glob("*.prof"))))
+    burnt = [v for (_, _, name), v in stats.stats.items() if name == "in_a_thread"]
+    calls, _, _, cumulative, _ = burnt[0]
+    assert calls == 2 and 0.055 <= cumulative < 0.09  # two requests, 30 ms of CPU each
+
+
 def test_class_costs_replace_each_routes_own_cpu_and_keep_the_rest():
     lines = "\n".join(
         [

@@ -25,6 +25,12 @@ server reading and writing sockets, the collector, other threads -- is not in it
 ``GYROLAB_BENCH_GC`` (a load test): a file to which each of the process's garbage
 collections appends ``pid generation ms collected``, and a full one also how many objects the
 collector now keeps in its oldest generation, and of which types most (``type:count``).
+
+``GYROLAB_BENCH_PROFILE`` (a load test): a folder in which each worker keeps, rewritten
+after every 100 profiled calls (a stopped server may not run its exit code), one
+``cProfile`` file per route (``PID-ROUTE.prof``, for ``pstats``) of every
+function the route's requests sent to the thread pool, timed by the thread's CPU clock --
+where a class's thread-pool CPU goes (``GYROLAB_BENCH_REQUEST_CPU`` says how much).
 """
 
 import os
@@ -34,6 +40,7 @@ _LOCKS = os.environ.get("GYROLAB_BENCH_LOCK_TRACE")
 _TIMES = os.environ.get("GYROLAB_BENCH_SERVER_TIMES")
 _GC = os.environ.get("GYROLAB_BENCH_GC")
 _CPU = os.environ.get("GYROLAB_BENCH_REQUEST_CPU")
+_PROFILE = os.environ.get("GYROLAB_BENCH_PROFILE")
 
 if _GC:
     import gc as _gc
@@ -182,8 +189,10 @@ if _COUNTS or _LOCKS:
 
     anyio.to_thread.run_sync = _counting_run_sync
 
-if _CPU:
+if _CPU or _PROFILE:
     import contextvars
+
+if _CPU:
     import time as _cpu_time
     import types
 
@@ -253,3 +262,68 @@ if _CPU:
         return await _cpu_run_sync(timed, *args, **kwargs)
 
     _to_thread.run_sync = _cpu_timed_run_sync
+
+if _PROFILE:
+    import atexit
+    import cProfile
+    import pstats
+    import re
+    import threading
+    import time as _profile_time
+
+    import anyio.to_thread as _profile_to_thread
+    from fastapi import applications as _profile_applications
+
+    _route = contextvars.ContextVar("gyrolab_bench_route", default=None)
+    _profiles: dict[str, pstats.Stats] = {}
+    _profiled_calls = [0]
+    _profile_clock = _profile_time.thread_time  # CPU: not the waits for the interpreter or a lock
+    _profiles_lock = threading.Lock()
+    _profile_call = _profile_applications.FastAPI.__call__
+
+    async def _routed_call(self, scope, receive, send):
+        if scope["type"] in ("http", "websocket"):
+            name = f"{scope.get('method', 'WS')} {re.sub(r'/[0-9]+', '/{id}', scope['path'])}"
+            token = _route.set(name)
+            try:
+                return await _profile_call(self, scope, receive, send)
+            finally:
+                _route.reset(token)
+        return await _profile_call(self, scope, receive, send)
+
+    _profile_applications.FastAPI.__call__ = _routed_call
+    _profile_run_sync = _profile_to_thread.run_sync
+
+    async def _profiled_run_sync(func, *args, **kwargs):
+        route = _route.get()
+        if route is None:
+            return await _profile_run_sync(func, *args, **kwargs)
+
+        def profiled(*call_args):
+            profile = cProfile.Profile(_profile_clock)
+            try:
+                return profile.runcall(func, *call_args)
+            finally:
+                profile.create_stats()
+                with _profiles_lock:
+                    if route in _profiles:
+                        _profiles[route].add(profile)
+                    else:
+                        _profiles[route] = pstats.Stats(profile)
+                    _profiled_calls[0] += 1
+                    if _profiled_calls[0] % 100 == 0:
+                        _write_profiles()
+
+        return await _profile_run_sync(profiled, *args, **kwargs)
+
+    _profile_to_thread.run_sync = _profiled_run_sync
+
+    def _write_profiles() -> None:
+        for route, stats in _profiles.items():
+            name = re.sub(r"[^A-Za-z0-9]+", "_", route).strip("_")
+            stats.dump_stats(os.path.join(_PROFILE, f"{os.getpid()}-{name}.prof"))
+
+    @atexit.register
+    def _write_at_exit() -> None:
+        with _profiles_lock:
+            _write_profiles()
