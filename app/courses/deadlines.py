@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from datetime import datetime
 
+from sqlalchemy import bindparam
 from sqlmodel import Session, select
 
 from app.models import (
@@ -17,11 +18,15 @@ def due_for(db: Session, assignment: Assignment | None, student_id: int) -> date
     if assignment is None:
         return None
     extension = db.exec(
-        select(Extension).where(
-            Extension.assignment_id == assignment.id, Extension.student_id == student_id
-        )
+        EXTENSION, params={"assignment_id": assignment.id, "student_id": student_id}
     ).first()
     return extension.due_at if extension else assignment.due_at
+
+
+EXTENSION = select(Extension).where(  # built once (the lab pages' and a submit's)
+    Extension.assignment_id == bindparam("assignment_id"),
+    Extension.student_id == bindparam("student_id"),
+)
 
 
 def extensions_of(db: Session, assignment: Assignment) -> dict[int, datetime]:

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 
+from sqlalchemy import bindparam
 from sqlmodel import Session, col, select
 
 from app.lab.partners import in_sessions_of
@@ -19,6 +20,16 @@ from app.models import (
     User,
     utcnow,
 )
+
+# a session's attempts in order (its page, a submit), built once
+ATTEMPTS_OF_SESSION = (
+    select(Attempt).where(Attempt.session_id == bindparam("session_id")).order_by(Attempt.number)
+)
+
+
+def attempts_of(db: Session, session_id: int) -> list[Attempt]:
+    """The session's attempts, first to last."""
+    return list(db.exec(ATTEMPTS_OF_SESSION, params={"session_id": session_id}).all())
 
 
 def rubric_of(assignment: Assignment | None) -> list[dict]:

@@ -9,7 +9,7 @@ from fastapi import APIRouter, Request
 from jinja2.utils import htmlsafe_json_dumps
 from markupsafe import Markup
 from sqlalchemy.exc import OperationalError
-from sqlmodel import Session, select
+from sqlmodel import Session
 
 from app.accounts.deps import CurrentUser
 from app.core.exceptions import UserError
@@ -18,6 +18,7 @@ from app.core.units import UNITS
 from app.courses import deadlines
 from app.lab.attempts import (
     amendments_of,
+    attempts_of,
     comments_of,
     mark_seen,
     released_grade,
@@ -50,7 +51,6 @@ from app.lab.store import PARTS, current_takes, is_editable, take_history
 from app.lab.truth import auto_check, session_truth, truth_visible
 from app.models import (
     Assignment,
-    Attempt,
     Course,
     LabSession,
 )
@@ -116,9 +116,7 @@ def _cached_figures(db: Session, session: LabSession, entry, solved: dict, _):
 @router.get("/sessions/{session_id}")
 def session_page(request: Request, session: OwnedSession, user: CurrentUser, db: SessionDep):
     _ = translator(request_language(request))
-    attempts = db.exec(
-        select(Attempt).where(Attempt.session_id == session.id).order_by(Attempt.number)
-    ).all()
+    attempts = attempts_of(db, session.id)
     assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
     group = partner_view(db, session, assignment, user)
     config = {

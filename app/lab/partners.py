@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import secrets
 
+from sqlalchemy import bindparam
 from sqlmodel import Session, col, func, select
 
 from app.core.exceptions import UserError
@@ -47,13 +48,16 @@ def is_member(db: Session, session: LabSession, user: User) -> bool:
 def members_of(db: Session, session: LabSession) -> list[User]:
     """The owner first, then the partners in the order they joined."""
     owner = db.get(User, session.owner_id)
-    partners = db.exec(
-        select(User)
-        .join(SessionMember, SessionMember.user_id == User.id)
-        .where(SessionMember.session_id == session.id)
-        .order_by(SessionMember.joined_at)
-    ).all()
+    partners = db.exec(PARTNERS, params={"session_id": session.id}).all()
     return [owner, *partners]
+
+
+PARTNERS = (  # built once (a lab page's statement)
+    select(User)
+    .join(SessionMember, SessionMember.user_id == User.id)
+    .where(SessionMember.session_id == bindparam("session_id"))
+    .order_by(SessionMember.joined_at)
+)
 
 
 def in_sessions_of(user_id: int):

@@ -24,6 +24,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from markupsafe import Markup
+from sqlalchemy import bindparam
 from sqlmodel import Session, select
 
 from app.lab.results import PartResult, session_results
@@ -222,12 +223,15 @@ def digest_rows(takes, session_row: tuple, assignment_row: tuple) -> str:
 def data_key(db: Session, session: LabSession, assignment: Assignment | None) -> str:
     """The digest of everything the session's results depend on (one query for the takes;
     the session and assignment rows are the caller's)."""
-    takes = db.exec(
-        select(*KEY_COLUMNS)
-        .where(Take.session_id == session.id, Take.superseded_at.is_(None))
-        .order_by(Take.part, Take.position)
-    ).all()
+    takes = db.exec(CURRENT_TAKE_KEYS, params={"session_id": session.id}).all()
     return _digest(takes, session, _row(assignment))
+
+
+CURRENT_TAKE_KEYS = (  # built once: building it per call cost more than running it
+    select(*KEY_COLUMNS)
+    .where(Take.session_id == bindparam("session_id"), Take.superseded_at.is_(None))
+    .order_by(Take.part, Take.position)
+)
 
 
 def data_keys(

@@ -11,6 +11,7 @@ from itertools import groupby, pairwise
 from types import SimpleNamespace
 
 import numpy as np
+from sqlalchemy import bindparam
 from sqlmodel import Session, select
 
 from app.core.drift_check import warm_up_message
@@ -23,7 +24,7 @@ from app.courses.characterisation import StationNoise, station_noise
 from app.lab.recent_samples import RECENT
 from app.lab.samples import unpack_all
 from app.lab.sim import preset_for
-from app.lab.store import PARTS
+from app.lab.store import PARTS, current_takes
 from app.models import (
     Assignment,
     InputMethod,
@@ -162,15 +163,18 @@ def iter_current_data(db: Session, *where) -> Iterator[tuple[int, SessionData]]:
         yield session_id, data
 
 
+# the samples of several takes, in one statement built once (an expanding IN list)
+CHUNKS_OF_TAKES = (
+    select(SampleChunk)
+    .where(SampleChunk.take_id.in_(bindparam("take_ids", expanding=True)))
+    .order_by(SampleChunk.take_id, SampleChunk.seq)
+)
+
+
 def current_data(db: Session, session: LabSession) -> SessionData:
     """All current positions of one session with their samples: the takes, then the
     samples of those this process has not just written (``recent_samples``)."""
-    takes = db.exec(
-        select(Take)
-        .where(Take.session_id == session.id, Take.superseded_at.is_(None))
-        .order_by(Take.part, Take.position)
-    ).all()
-    return takes_data(db, takes)
+    return takes_data(db, current_takes(db, session.id))
 
 
 def takes_data(db: Session, takes: list[Take]) -> SessionData:
@@ -185,11 +189,7 @@ def takes_data(db: Session, takes: list[Take]) -> SessionData:
         else:
             data.setdefault(take.part, {})[take.position] = PositionData.of(take, *held)
     if unread:
-        rows = db.exec(
-            select(SampleChunk)
-            .where(SampleChunk.take_id.in_(list(unread)))
-            .order_by(SampleChunk.take_id, SampleChunk.seq)
-        ).all()
+        rows = db.exec(CHUNKS_OF_TAKES, params={"take_ids": list(unread)}).all()
         for take_id, group in groupby(rows, key=lambda row: row.take_id):
             take = unread[take_id]
             data.setdefault(take.part, {})[take.position] = _assemble(take, list(group))

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from sqlalchemy import func, insert, update
+from sqlalchemy import bindparam, func, insert, update
 from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
@@ -34,14 +34,17 @@ POSITIONS = 8  # the most a part can have: the symmetric order 1-2-3-4-4-3-2-1
 MAX_SAMPLES_PER_POSITION = 1_000_000
 
 
+# The hot paths' statements are built once with bound parameters (``params=``): building
+# a select and its cache key on every call cost more than running it on SQLite.
+CURRENT_TAKES = (
+    select(Take)
+    .where(Take.session_id == bindparam("session_id"), Take.superseded_at.is_(None))
+    .order_by(Take.part, Take.position)
+)
+
+
 def current_takes(db: Session, session_id: int) -> list[Take]:
-    return list(
-        db.exec(
-            select(Take)
-            .where(Take.session_id == session_id, Take.superseded_at.is_(None))
-            .order_by(Take.part, Take.position)
-        ).all()
-    )
+    return list(db.exec(CURRENT_TAKES, params={"session_id": session_id}).all())
 
 
 HISTORY_ROWS = 50  # the recording history a page shows: the most recent ones
@@ -51,13 +54,16 @@ def take_history(db: Session, session_id: int, limit: int = HISTORY_ROWS) -> tup
     """The session's ``limit`` most recent takes, newest first, and how many it has in
     all (one query: a student who re-records a position 200 times has 800 takes, and the
     page listed every one of them, 30 ms of rendering)."""
-    rows = db.exec(
-        select(Take, func.count().over())
-        .where(Take.session_id == session_id)
-        .order_by(Take.created_at.desc(), Take.id.desc())
-        .limit(limit)
-    ).all()
+    rows = db.exec(TAKE_HISTORY, params={"session_id": session_id, "limit": limit}).all()
     return [take for take, _ in rows], (rows[0][1] if rows else 0)
+
+
+TAKE_HISTORY = (
+    select(Take, func.count().over())
+    .where(Take.session_id == bindparam("session_id"))
+    .order_by(Take.created_at.desc(), Take.id.desc())
+    .limit(bindparam("limit"))
+)
 
 
 def load_samples(db: Session, take: Take) -> tuple[np.ndarray, np.ndarray | None]:

@@ -6,12 +6,13 @@ from __future__ import annotations
 import json
 
 from sqlalchemy import update
-from sqlmodel import Session, select
+from sqlmodel import Session
 
 from app import __version__
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
 from app.courses.deadlines import due_for
+from app.lab.attempts import attempts_of
 from app.lab.copy_index import index_attempt
 from app.lab.result_cache import cached_results
 from app.lab.results import results_json
@@ -34,7 +35,7 @@ def submit(db: Session, session: LabSession) -> Attempt:
     grading, at most ``max_attempts``, and after the due date either refused or flagged late.
     """
     assignment = db.get(Assignment, session.assignment_id) if session.assignment_id else None
-    previous = db.exec(select(Attempt).where(Attempt.session_id == session.id)).all()
+    previous = attempts_of(db, session.id)
     check_editable(session)
     if (
         assignment is not None
