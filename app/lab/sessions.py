@@ -6,6 +6,7 @@ import math
 import random
 from dataclasses import dataclass
 
+from sqlalchemy import bindparam
 from sqlmodel import Session, select
 
 from app.core.exceptions import FieldProblems, UserError
@@ -15,6 +16,15 @@ from app.lab.partners import ensure_partner_code, member_map
 from app.lab.sim import new_truth
 from app.lab.truth import draw_truth
 from app.models import Assignment, Course, Enrollment, LabSession, Role, User, utcnow
+
+# built once with bound parameters (each student's session start runs both)
+ENROLMENT = select(Enrollment).where(
+    Enrollment.course_id == bindparam("course_id"), Enrollment.student_id == bindparam("student_id")
+)
+OWN_SESSION_OF_ASSIGNMENT = select(LabSession).where(
+    LabSession.assignment_id == bindparam("assignment_id"),
+    LabSession.owner_id == bindparam("owner_id"),
+)
 
 
 def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignment:
@@ -28,9 +38,7 @@ def visible_assignment(db: Session, user: User, assignment_id: int) -> Assignmen
             raise UserError("lab.no_such_assignment", status=404)
         return assignment
     enrolled = db.exec(
-        select(Enrollment).where(
-            Enrollment.course_id == assignment.course_id, Enrollment.student_id == user.id
-        )
+        ENROLMENT, params={"course_id": assignment.course_id, "student_id": user.id}
     ).first()
     if enrolled is None or course.archived:
         raise UserError("lab.no_such_assignment", status=404)
@@ -93,9 +101,7 @@ def start_session(
         raise FieldProblems(problems)
     if assignment is not None:
         existing = db.exec(
-            select(LabSession).where(
-                LabSession.assignment_id == assignment.id, LabSession.owner_id == user.id
-            )
+            OWN_SESSION_OF_ASSIGNMENT, params={"assignment_id": assignment.id, "owner_id": user.id}
         ).first()
         if existing is not None:  # one session per student and assignment
             return existing, False

@@ -218,7 +218,7 @@ def store_takes(
     ]
     # one INSERT … RETURNING for all; the rows come back in no promised order, so each is
     # matched to its position
-    inserted = {take.position: take for take in db.scalars(insert(Take).returning(Take), fields)}
+    inserted = {take.position: take for take in db.scalars(INSERT_TAKES, fields)}
     rows = [inserted[position] for position in positions]
     blocks = []
     for take, new in zip(rows, takes, strict=True):
@@ -232,10 +232,14 @@ def store_takes(
         ]  # fmt: skip
     # one executemany of a statement compiled once (a multi-row VALUES is compiled anew
     # for every save)
-    db.execute(insert(SampleChunk), blocks)
+    db.execute(INSERT_CHUNKS, blocks)
     reopen(session)
     db.add(session)
     return rows
+
+
+INSERT_TAKES = insert(Take).returning(Take)  # built once, as the selects above
+INSERT_CHUNKS = insert(SampleChunk)
 
 
 def _check_new_take(
