@@ -11,7 +11,8 @@ from app.db import get_engine, read_session, write_session
 from app.lab.recent_samples import RECENT
 from app.lab.results import current_data, iter_current_data
 from app.lab.samples import CHUNK_SAMPLES
-from app.lab.store import append_samples, load_samples, store_take
+from app.lab.store import load_samples, store_take
+from app.lab.take_appends import append_samples
 from app.models import Assignment, Enrollment, LabSession, Role, Take
 from app.review.service import class_rows
 from tests.factories import make_course, make_user

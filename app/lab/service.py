@@ -19,7 +19,8 @@ from app.core.units import canonical_unit, to_deg_per_hour
 from app.db import lock_rows, locks_rows
 from app.lab.partners import is_member
 from app.lab.sim import nominal_angle
-from app.lab.store import NewTake, append_samples, check_position, store_takes
+from app.lab.store import NewTake, check_position, store_takes
+from app.lab.take_appends import append_samples
 from app.models import Assignment, InputMethod, LabSession, Take, User
 
 
