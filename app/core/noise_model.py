@@ -207,12 +207,10 @@ class GyroNoise:
 def _exponential_mean_products(wi: Window, wj: Window, t: np.ndarray) -> np.ndarray:
     """∫∫ e^(−|s−u|/T) ds du over the two windows, for each correlation time T > 0 in ``t``.
 
-    The same window of length L: 2TL + 2T²·(e^(−L/T) − 1).  Windows [a1, b1] before
-    [a2, b2]: T²·(e^(−(a2−b1)/T) − e^(−(a2−a1)/T) − e^(−(b2−b1)/T) + e^(−(b2−a1)/T)),
-    computed as the equal product T²·e^(−(a2−b1)/T)·(e^(−L1/T) − 1)·(e^(−L2/T) − 1),
-    L1, L2 the lengths: the four-term sum cancels to T²·ε for T ≫ L (at the flicker
-    band's T = 1e5 s, relative error 1e-11 for 60 s windows and 1e-6 for 0.5 s and 2 s
-    ones), the product does not."""
+    One window of length L: 2TL + 2T²·(e^(−L/T) − 1).  Windows [a1, b1] before [a2, b2]:
+    T²·(e^(−(a2−b1)/T) − e^(−(a2−a1)/T) − e^(−(b2−b1)/T) + e^(−(b2−a1)/T)), computed as
+    the equal T²·e^(−(a2−b1)/T)·(e^(−L1/T) − 1)·(e^(−L2/T) − 1): the four-term sum cancels
+    for T ≫ L (1e-6 relative error for 0.5 s windows at T = 1e5 s), the product does not."""
     if wi is wj or (wi.start_s == wj.start_s and wi.length_s == wj.length_s):
         length = wi.length_s
         return 2.0 * t * length + 2.0 * t * t * np.expm1(-length / t)
