@@ -192,11 +192,23 @@ if _COUNTS or _LOCKS:
 if _CPU or _PROFILE:
     import contextvars
 
+    import anyio.to_thread as _to_thread
+
+    def _wrap_thread_pool(wrap) -> None:
+        """Send every function a request gives the thread pool through ``wrap(func)``: the
+        function to run instead, or None to run it as it is."""
+        original = _to_thread.run_sync
+
+        async def run_sync(func, *args, **kwargs):
+            return await original(wrap(func) or func, *args, **kwargs)
+
+        _to_thread.run_sync = run_sync
+
+
 if _CPU:
     import time as _cpu_time
     import types
 
-    import anyio.to_thread as _to_thread
     from fastapi import applications as _cpu_applications
 
     _cpu_file = os.open(_CPU, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
@@ -245,12 +257,11 @@ if _CPU:
             os.write(_cpu_file, line.encode())
 
     _cpu_applications.FastAPI.__call__ = _cpu_timed_call
-    _cpu_run_sync = _to_thread.run_sync
 
-    async def _cpu_timed_run_sync(func, *args, **kwargs):
+    def _timed(func):
         spent = _spent.get()
         if spent is None:
-            return await _cpu_run_sync(func, *args, **kwargs)
+            return None
 
         def timed(*call_args):
             began = _cpu_time.thread_time()
@@ -259,9 +270,9 @@ if _CPU:
             finally:
                 spent[1] += _cpu_time.thread_time() - began
 
-        return await _cpu_run_sync(timed, *args, **kwargs)
+        return timed
 
-    _to_thread.run_sync = _cpu_timed_run_sync
+    _wrap_thread_pool(_timed)
 
 if _PROFILE:
     import atexit
@@ -271,7 +282,6 @@ if _PROFILE:
     import threading
     import time as _profile_time
 
-    import anyio.to_thread as _profile_to_thread
     from fastapi import applications as _profile_applications
 
     _route = contextvars.ContextVar("gyrolab_bench_route", default=None)
@@ -292,12 +302,11 @@ if _PROFILE:
         return await _profile_call(self, scope, receive, send)
 
     _profile_applications.FastAPI.__call__ = _routed_call
-    _profile_run_sync = _profile_to_thread.run_sync
 
-    async def _profiled_run_sync(func, *args, **kwargs):
+    def _profiled(func):
         route = _route.get()
         if route is None:
-            return await _profile_run_sync(func, *args, **kwargs)
+            return None
 
         def profiled(*call_args):
             profile = cProfile.Profile(_profile_clock)
@@ -314,9 +323,9 @@ if _PROFILE:
                     if _profiled_calls[0] % 100 == 0:
                         _write_profiles()
 
-        return await _profile_run_sync(profiled, *args, **kwargs)
+        return profiled
 
-    _profile_to_thread.run_sync = _profiled_run_sync
+    _wrap_thread_pool(_profiled)
 
     def _write_profiles() -> None:
         for route, stats in _profiles.items():
