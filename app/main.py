@@ -23,7 +23,7 @@ from app.config import get_settings
 from app.lab.copy_index import index_earlier_attempts
 from app.lti import grades as lms_grades
 from app.paths import STATIC_DIR
-from app.routes import include_routers, read_only_routes
+from app.routes import EVERY_ROUTER, include_routers, read_only_routes
 from app.serving_lock import hold_while_serving, release
 from app.web.admission import Admission
 from app.web.errors import register_error_handlers
@@ -118,9 +118,15 @@ def build_routes(app: FastAPI) -> None:
 
     FastAPI builds an included router's routes (their dependencies, their models) when a
     request first reaches it: ≈ 100 ms for all of GyroLab's, paid by a worker's first
-    requests and left out of the frozen start-up heap.  A path that matches nothing
-    reaches every router."""
-    scope = {"type": "http", "method": "GET", "path": "/-/build-routes", "root_path": ""}
+    requests and left out of the frozen start-up heap.  A path that matches nothing,
+    let through every router's gate, reaches every router."""
+    scope = {
+        "type": "http",
+        "method": "GET",
+        "path": "/-/build-routes",
+        "root_path": "",
+        EVERY_ROUTER: True,
+    }
     for route in app.router.routes:
         route.matches(scope)
 
