@@ -10,6 +10,7 @@ from fastapi import Depends, Request
 from sqlalchemy import bindparam, update
 from sqlalchemy.exc import DBAPIError
 from sqlmodel import Session, select
+from starlette.concurrency import run_in_threadpool
 
 from app.accounts.security import session_is_live
 from app.config import Settings
@@ -141,41 +142,67 @@ def csrf_protect(
         raise UserError("error.csrf", status=403)
 
 
-def optional_user(request: Request, db: SessionDep, settings: SettingsDep) -> User | None:
-    return load_login(request, db, settings)
+def login_loaded(request: Request) -> bool:
+    """Whether this request's caller has been looked up already (no query needed)."""
+    return getattr(request.state, "auth_loaded", False)
 
 
-def current_user(request: Request, db: SessionDep, settings: SettingsDep) -> User:
-    user = load_login(request, db, settings)
+def checked_login(request: Request, user: User | None, role: Role | None = None) -> User:
+    """The caller, who must be logged in (else the log-in page), have changed a password
+    they were told to change (else that page), and have ``role`` when one is given."""
     if user is None:
         raise LoginRequired()
     if user.must_change_password and request.url.path not in PASSWORD_CHANGE_PATHS:
         raise PasswordChangeRequired()
+    if role is not None and user.role != role:
+        raise UserError("error.forbidden", status=403)
     return user
+
+
+def required_login(
+    request: Request, db: Session, settings: Settings, role: Role | None = None
+) -> User:
+    """:func:`checked_login` of the caller, looked up if need be: for a dependency that
+    loads the route's objects, so that finding the caller and loading them take one trip
+    to the thread pool (each trip costs a worker ≈ 0.1 ms of CPU; bench/README.md,
+    fifteenth part)."""
+    return checked_login(request, load_login(request, db, settings), role)
+
+
+async def optional_user(request: Request, db: SessionDep, settings: SettingsDep) -> User | None:
+    if login_loaded(request):
+        return request.state.user
+    return await run_in_threadpool(load_login, request, db, settings)
+
+
+async def _user_with_role(
+    request: Request, db: Session, settings: Settings, role: Role | None
+) -> User:
+    """The checked caller: without a trip to the thread pool once looked up (by the CSRF
+    check, or by a dependency that loaded the route's objects)."""
+    if login_loaded(request):
+        return checked_login(request, request.state.user, role)
+    return await run_in_threadpool(required_login, request, db, settings, role)
+
+
+async def current_user(request: Request, db: SessionDep, settings: SettingsDep) -> User:
+    return await _user_with_role(request, db, settings, None)
+
+
+async def teacher_user(request: Request, db: SessionDep, settings: SettingsDep) -> User:
+    return await _user_with_role(request, db, settings, Role.teacher)
+
+
+async def student_user(request: Request, db: SessionDep, settings: SettingsDep) -> User:
+    return await _user_with_role(request, db, settings, Role.student)
+
+
+async def admin_user(request: Request, db: SessionDep, settings: SettingsDep) -> User:
+    return await _user_with_role(request, db, settings, Role.admin)
 
 
 CurrentUser = Annotated[User, Depends(current_user)]
 OptionalUser = Annotated[User | None, Depends(optional_user)]
-
-
-def teacher_user(user: CurrentUser) -> User:
-    if user.role != Role.teacher:
-        raise UserError("error.forbidden", status=403)
-    return user
-
-
-def student_user(user: CurrentUser) -> User:
-    if user.role != Role.student:
-        raise UserError("error.forbidden", status=403)
-    return user
-
-
-def admin_user(user: CurrentUser) -> User:
-    if user.role != Role.admin:
-        raise UserError("error.forbidden", status=403)
-    return user
-
-
 TeacherUser = Annotated[User, Depends(teacher_user)]
 AdminUser = Annotated[User, Depends(admin_user)]
 StudentUser = Annotated[User, Depends(student_user)]

@@ -5,16 +5,20 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import Depends
+from fastapi import Depends, Request
 
-from app.accounts.deps import TeacherUser
+from app.accounts.deps import required_login
 from app.core.exceptions import UserError
-from app.models import Course
-from app.web.deps import ObjectId, SessionDep
+from app.models import Course, Role
+from app.web.deps import ObjectId, SessionDep, SettingsDep
 
 
-def teachers_course(course_id: ObjectId, teacher: TeacherUser, db: SessionDep) -> Course:
-    """``/courses/{course_id}`` of the logged-in teacher."""
+def teachers_course(
+    request: Request, course_id: ObjectId, db: SessionDep, settings: SettingsDep
+) -> Course:
+    """``/courses/{course_id}`` of the logged-in teacher (found in the same trip to the
+    thread pool)."""
+    teacher = required_login(request, db, settings, Role.teacher)
     course = db.get(Course, course_id)
     if course is None or course.teacher_id != teacher.id:
         raise UserError("course.no_such_course", status=404)

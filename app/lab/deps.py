@@ -11,18 +11,21 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import Depends
+from fastapi import Depends, Request
 
-from app.accounts.deps import CurrentUser
+from app.accounts.deps import CurrentUser, required_login
 from app.db import read_session
 from app.lab.service import own_session
 from app.models import LabSession
-from app.web.deps import ObjectId, SessionDep
+from app.web.deps import ObjectId, SessionDep, SettingsDep
 
 
-def owned_session(session_id: ObjectId, user: CurrentUser, db: SessionDep) -> LabSession:
-    """The logged-in user's own session (404 for anyone else's)."""
-    return own_session(db, user, session_id)
+def owned_session(
+    request: Request, session_id: ObjectId, db: SessionDep, settings: SettingsDep
+) -> LabSession:
+    """The logged-in user's own session (404 for anyone else's), the user found in the
+    same trip to the thread pool."""
+    return own_session(db, required_login(request, db, settings), session_id)
 
 
 OwnedSession = Annotated[LabSession, Depends(owned_session)]
@@ -30,7 +33,8 @@ OwnedSession = Annotated[LabSession, Depends(owned_session)]
 
 def own_session_id(session_id: ObjectId, user: CurrentUser) -> int:
     """The id of the logged-in user's own session (404 for anyone else's), checked without
-    the write lock."""
+    the write lock (the user, found by the CSRF check before, costs no trip to the thread
+    pool: ``accounts.deps.current_user``)."""
     with read_session() as db:
         own_session(db, user, session_id)
     return session_id

@@ -6,13 +6,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Annotated
 
-from fastapi import Depends
+from fastapi import Depends, Request
 from sqlmodel import Session
 
-from app.accounts.deps import TeacherUser
+from app.accounts.deps import required_login
 from app.core.exceptions import UserError
-from app.models import Assignment, Course, LabSession, User
-from app.web.deps import ObjectId, SessionDep
+from app.models import Assignment, Course, LabSession, Role, User
+from app.web.deps import ObjectId, SessionDep, SettingsDep
 
 
 def teachers_assignment(db: Session, teacher: User, assignment_id: int) -> Assignment:
@@ -31,9 +31,15 @@ class CourseAssignment:
 
 
 def course_assignment(
-    course_id: ObjectId, assignment_id: ObjectId, teacher: TeacherUser, db: SessionDep
+    request: Request,
+    course_id: ObjectId,
+    assignment_id: ObjectId,
+    db: SessionDep,
+    settings: SettingsDep,
 ) -> CourseAssignment:
-    """``/courses/{course_id}/assignments/{assignment_id}`` of the logged-in teacher."""
+    """``/courses/{course_id}/assignments/{assignment_id}`` of the logged-in teacher
+    (found in the same trip to the thread pool)."""
+    teacher = required_login(request, db, settings, Role.teacher)
     assignment = teachers_assignment(db, teacher, assignment_id)
     if assignment.course_id != course_id:
         raise UserError("review.no_such_assignment", status=404)
@@ -50,8 +56,12 @@ class Reviewable:
     course: Course
 
 
-def reviewable_session(session_id: ObjectId, teacher: TeacherUser, db: SessionDep) -> Reviewable:
-    """A session of an assignment in one of the teacher's courses, else 404."""
+def reviewable_session(
+    request: Request, session_id: ObjectId, db: SessionDep, settings: SettingsDep
+) -> Reviewable:
+    """A session of an assignment in one of the teacher's courses, else 404 (the teacher
+    found in the same trip to the thread pool)."""
+    teacher = required_login(request, db, settings, Role.teacher)
     session = db.get(LabSession, session_id)
     if session is None or session.assignment_id is None:
         raise UserError("review.no_such_session", status=404)
