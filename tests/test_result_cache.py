@@ -287,3 +287,44 @@ def test_the_class_wide_keys_are_each_sessions_own_key(student_client):
         keys = data_keys(db, sessions, None)
         assert keys == {s.id: data_key(db, s, None) for s in sessions}
         assert len(set(keys.values())) == 2
+
+
+def test_the_key_of_loaded_takes_is_the_key_read_by_query(student_client):
+    """A page and a submission make the key from the current takes they have loaded (no
+    query of their own): the same key as the query's, for takes read back, trimmed, or
+    stored a moment ago in the same transaction (the source then an ``InputMethod``)."""
+    import numpy as np
+
+    from app.db import write_session
+    from app.lab.store import current_takes, store_take
+    from app.models import InputMethod
+
+    session_id = new_session(student_client)
+    doubled = {k: values * 2 for k, values in handout("handout_horizontal.csv").items()}
+    save_manual(student_client, session_id, "heading", doubled)
+    page = f"/lab/sessions/{session_id}"
+    trimmed = post_json(
+        student_client, f"{page}/trim", {"part": "heading", "position": 2, "trim": 3}, page
+    )
+    assert trimmed.status_code == 200, trimmed.text
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        takes = current_takes(db, session_id)
+        assert len(takes) == 4 and any(take.trim_start == 3 for take in takes)
+        assert data_key(db, session, None, list(reversed(takes))) == data_key(db, session, None)
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        store_take(
+            db,
+            session,
+            part="latitude",
+            position=1,
+            angle_deg=0.0,
+            values=np.full(10, 11.0),
+            times=None,
+            source=InputMethod.csv,
+        )
+        takes = current_takes(db, session_id)
+        before = data_key(db, session, None, takes)
+        assert before == data_key(db, session, None)
+        db.rollback()

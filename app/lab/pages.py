@@ -206,7 +206,7 @@ def session_view(
     -- and earlier attempts' reviews with those attempts.  ``takes``: the session's
     current takes where the caller has them (one query fewer)."""
     solved: dict = {}
-    entry = cached_results(db, session, assignment, on_miss=solved.update)
+    entry = cached_results(db, session, assignment, on_miss=solved.update, takes=takes)
     results = entry.parts
     figure_texts, figures_json = _cached_figures(db, session, entry, solved, _)
     nominal = {

@@ -220,11 +220,29 @@ def digest_rows(takes, session_row: tuple, assignment_row: tuple) -> str:
     return hashlib.blake2b(text.encode(), digest_size=16).hexdigest()
 
 
-def data_key(db: Session, session: LabSession, assignment: Assignment | None) -> str:
-    """The digest of everything the session's results depend on (one query for the takes;
-    the session and assignment rows are the caller's)."""
-    takes = db.exec(CURRENT_TAKE_KEYS, params={"session_id": session.id}).all()
-    return _digest(takes, session, _row(assignment))
+def data_key(
+    db: Session,
+    session: LabSession,
+    assignment: Assignment | None,
+    takes: list[Take] | None = None,
+) -> str:
+    """The digest of everything the session's results depend on (one query for the takes,
+    none when the caller has the current ``takes`` already; the session and assignment
+    rows are the caller's)."""
+    if takes is None:
+        rows = db.exec(CURRENT_TAKE_KEYS, params={"session_id": session.id}).all()
+    else:
+        rows = key_rows(takes)
+    return _digest(rows, session, _row(assignment))
+
+
+def key_rows(takes: list[Take]) -> list[tuple]:
+    """:data:`KEY_COLUMNS` of loaded takes, as :data:`CURRENT_TAKE_KEYS` reads them (in
+    its order, a take's source as the plain text stored)."""
+    return [
+        (t.id, t.part, t.position, t.angle_deg, str(t.source), t.n_samples, t.trim_start)
+        for t in sorted(takes, key=lambda take: (take.part, take.position))
+    ]
 
 
 CURRENT_TAKE_KEYS = (  # built once: building it per call cost more than running it
@@ -256,14 +274,17 @@ def cached_results(
     assignment: Assignment | None = None,
     *,
     on_miss: Callable[[dict[str, PartResult]], None] | None = None,
+    takes: list[Take] | None = None,
 ) -> CachedResults:
     """The session's results for its current data, solved only when that data changed.
 
     ``assignment`` is the session's (looked up when not given).  ``on_miss`` sees the full
-    results (with samples) when they had to be solved, e.g. to draw the figures at once."""
+    results (with samples) when they had to be solved, e.g. to draw the figures at once.
+    ``takes``: the session's current takes, where the caller has loaded them (the key is
+    then made without a query)."""
     if assignment is None and session.assignment_id is not None:
         assignment = db.get(Assignment, session.assignment_id)
-    key = data_key(db, session, assignment)
+    key = data_key(db, session, assignment, takes)
     entry = CACHE.get(key)
     if entry is not None:
         return entry

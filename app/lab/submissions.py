@@ -52,10 +52,10 @@ def submit(db: Session, session: LabSession) -> Attempt:
     late = bool(due and now > due)
     if late and assignment.late_policy == LatePolicy.refuse:
         raise UserError("lab.past_due", status=409)
-    results = cached_results(db, session, assignment).parts
+    takes = current_takes(db, session.id)
+    results = cached_results(db, session, assignment, takes=takes).parts
     if all(outcome.result is None for outcome in results.values()):
         raise UserError("lab.nothing_to_submit")
-    takes = current_takes(db, session.id)
     # an attempt's takes never change again (appends copy them): one statement for all
     db.exec(update(Take).where(Take.id.in_([take.id for take in takes])).values(frozen=True))
     attempt = Attempt(
