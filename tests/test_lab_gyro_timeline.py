@@ -76,6 +76,38 @@ def test_a_live_recording_read_frame_by_frame_is_the_same_timeline():
     assert take.end_s == whole_times[-1] + 0.1
 
 
+def test_a_long_history_is_replayed_once_and_every_take_is_the_same(monkeypatch):
+    """A gyro left on for hours: the state after its history is kept per stream, and each
+    later recording replays only the time since -- the same samples as a replay from
+    switch-on (written out here with the stream's own recursion), whatever is kept, for
+    each session alone, and for a take starting before a kept state."""
+    from app.lab import gyro_history
+
+    gyro_history.KEPT.clear()
+    replayed: list[int] = []
+    replay = gyro_history.replay
+    monkeypatch.setattr(
+        gyro_history, "replay", lambda stream, n: (replayed.append(n), replay(stream, n))
+    )
+
+    def from_switch_on(lab, take, start_s: float, count: int) -> np.ndarray:
+        stream = GyroStream(PRESETS["tactical-fog"], derived_seed(lab, "gyro", 0))
+        stream.turn_on_bias_deg_h = turn_on_bias(lab)
+        stream.read(np.zeros(int(round(start_s * 10))))
+        return stream.read(np.full(count, take.true_rate), take.up)
+
+    first, second = session(21, "tactical-fog"), session(22, "tactical-fog")
+    starts = [(first, 3600.0), (second, 3600.0), (first, 3700.0), (first, 5400.0)]
+    for lab, start in [*starts, (first, 2000.0)]:
+        take = SimulatedTake(lab, "heading", 1, start_s=start)
+        assert np.array_equal(take.next(40)[0], from_switch_on(lab, take, start, 40))
+    # from switch-on, for each session, then only the time since; an earlier start anew
+    assert replayed == [36_000, 36_000, 1_000, 17_000, 20_000]
+    assert SimulatedTake(first, "heading", 1, start_s=30.0).stream.samples_read == 300
+    assert replayed[-1] == 300  # too short a history to be worth keeping
+    gyro_history.KEPT.clear()
+
+
 def test_slow_bias_carries_across_positions_as_the_noise_model_says():
     """Means of two 300 s recordings of the teaching gyro 20 s apart, over 400 sessions:
     their covariance matches the continuous-timeline covariance of app.core.noise_model

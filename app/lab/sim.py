@@ -1,8 +1,9 @@
 """The simulated gyro behind a lab session: secret truth, the virtual turntable, samples.
 
 Everything is derived from the session's secret seed, so any server process produces the
-same samples for the same take (no per-process state), and nothing here is sent to the
-browser except measured readings.
+same samples for the same take (what a process keeps, ``lab.gyro_history``, only saves
+replaying the gyro's history), and nothing here is sent to the browser except measured
+readings.
 """
 
 from __future__ import annotations
@@ -17,19 +18,18 @@ import numpy as np
 
 from app.core.presets import PRESETS
 from app.core.simulate import (
-    GyroStream,
     axis_vectors,
     read_dial,
     true_rate,
     turn_on_bias_deg_h,
 )
+from app.lab.gyro_history import stream_after
 from app.models import LabSession, utcnow
 
 MAX_DWELL_S = 1800.0
 MAX_SETTLE_S = 120.0
 MAX_PAUSE_S = 1800.0  # a longer pause between recordings counts as 30 min of gyro time
 POWER_CYCLE_S = 6 * 3600.0  # after 6 h of gyro time the timeline starts a new power cycle
-HISTORY_BLOCK = 200_000
 READ_AHEAD = 1_024  # samples of a live recording's noise made at a time (≈ 1 ms)
 
 
@@ -198,8 +198,11 @@ class SimulatedTake:
         begin = int(math.ceil((clock + settle_s) * self.rate_hz - 1e-9))
         cycle, index = divmod(begin, int(POWER_CYCLE_S * self.rate_hz))
         self.first_index = begin
-        self.stream = GyroStream(preset, derived_seed(session, "gyro", cycle))
-        self.stream.turn_on_bias_deg_h = turn_on_bias(session)  # one power-on value
+        # the gyro's history since switch-on (slow bias, random walk and warm-up carry over
+        # from every earlier recording, the turns and the waits in between)
+        self.stream = stream_after(
+            preset, derived_seed(session, "gyro", cycle), turn_on_bias(session), index
+        )
         table = table_errors(session)
         nominal = nominal_angle(session, part, position)
         actual = nominal + indexing_error_deg(session, session.sim_turns)
@@ -221,10 +224,6 @@ class SimulatedTake:
         )
         self.true_rate = float(true_rate(session.latitude_deg, vector, session.earth_rate_deg_h))
         self.up = float(vector[2])
-        while index > 0:  # the gyro's history since switch-on, in bounded blocks
-            block = min(index, HISTORY_BLOCK)
-            self.stream.read(np.zeros(block))
-            index -= block
         self.produced = 0
         self._ahead, self._used = np.empty(0), 0  # noise made ahead, and how much is used
 

@@ -1,0 +1,92 @@
+"""The simulated gyro's history since switch-on, replayed once per session and kept.
+
+A recording that starts at gyro time t needs the gyro's noise state at t, which the
+session's seed defines as its history since switch-on read with no rotation
+(``app.lab.sim.SimulatedTake``): t × rate samples to replay -- 216,000 (≈ 60 ms of CPU,
+tactical FOG) for a gyro left on for 6 h while it warms up, and again for every position
+recorded.  The state at the end of a long replay is kept, per stream, so that the
+session's next recording replays only the time since.  It is the same state (a
+``GyroStream`` reads any chunking identically), so every process still gives the same
+samples for the same take; what is kept only saves work, and is bounded.
+"""
+
+from __future__ import annotations
+
+import copy
+import threading
+from collections import OrderedDict
+
+import numpy as np
+
+from app.core.presets import GyroPreset
+from app.core.simulate import GyroStream
+
+HISTORY_BLOCK = 200_000  # samples replayed at a time (bounded memory)
+WORTH_KEEPING = 5_000  # samples; a shorter replay (≈ 2 ms) costs less than copying a state
+KEPT_STREAMS = 256  # one per session recording now: a few kB each
+
+
+class _KeptStates:
+    """A thread-safe LRU of replayed streams by (preset, seed, turn-on bias): each is
+    the state after ``samples_read`` samples of the history, never read further."""
+
+    def __init__(self, size: int = KEPT_STREAMS) -> None:
+        self.size = size
+        self._streams: OrderedDict[tuple, GyroStream] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def latest(self, key: tuple, index: int) -> GyroStream | None:
+        """A copy of the kept state of ``key``, if there is one at or before ``index``."""
+        with self._lock:
+            kept = self._streams.get(key)
+            if kept is None or kept.samples_read > index:
+                return None
+            self._streams.move_to_end(key)
+        return _copy(kept)
+
+    def keep(self, key: tuple, stream: GyroStream) -> None:
+        """Keep ``stream`` itself (the caller reads from a copy)."""
+        with self._lock:
+            self._streams[key] = stream
+            self._streams.move_to_end(key)
+            while len(self._streams) > self.size:
+                self._streams.popitem(last=False)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._streams.clear()
+
+
+KEPT = _KeptStates()
+
+
+def _copy(stream: GyroStream) -> GyroStream:
+    """An independent copy of a stream's state (its random generators too; the preset,
+    immutable, shared)."""
+    return copy.deepcopy(stream, {id(stream.preset): stream.preset})
+
+
+def replay(stream: GyroStream, samples: int) -> None:
+    """Read ``samples`` of the history (no rotation), in bounded blocks."""
+    while samples > 0:
+        block = min(samples, HISTORY_BLOCK)
+        stream.read(np.zeros(block))
+        samples -= block
+
+
+def stream_after(
+    preset: GyroPreset, seed: int, turn_on_bias_deg_h: float, index: int
+) -> GyroStream:
+    """The gyro's stream as it is after ``index`` samples of its history since
+    switch-on: replayed from the latest state kept for it, or from switch-on; a long
+    replay's end state is kept for the next recording."""
+    key = (preset, seed, turn_on_bias_deg_h)
+    stream = KEPT.latest(key, index) if index >= WORTH_KEEPING else None
+    if stream is None:
+        stream = GyroStream(preset, seed)
+        stream.turn_on_bias_deg_h = turn_on_bias_deg_h  # one power-on value
+    replay(stream, index - stream.samples_read)
+    if index >= WORTH_KEEPING:
+        KEPT.keep(key, stream)
+        return _copy(stream)
+    return stream
