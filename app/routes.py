@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Iterator
 
 from fastapi import APIRouter, FastAPI
-from fastapi.routing import APIRoute
+from fastapi.routing import APIRoute, APIWebSocketRoute
 from starlette.routing import Match, get_route_path
 from starlette.types import Scope
 
@@ -119,16 +119,16 @@ class PathGate(APIRouter):
     def __init__(self, router: APIRouter) -> None:
         super().__init__()
         self.include_router(router)
-        paths = [getattr(route, "path", None) for route in iter_routes(router.routes)]
-        self.open = any(not isinstance(path, str) for path in paths)  # nothing to check by
-        fixed = {path for path in paths if isinstance(path, str) and "{" not in path}
+        routes = list(iter_routes(router.routes))
+        paths = [route.path for route in routes if isinstance(route, APIRoute | APIWebSocketRoute)]
+        # a mount or anything else matched otherwise than by its path's pattern: no gate
+        self.open = len(paths) < len(routes)
+        fixed = {path for path in paths if "{" not in path}
         # with and without a trailing slash: the redirect to the other spelling looks too
         self.fixed = frozenset(
             fixed | {path.rstrip("/") or "/" for path in fixed} | {f"{path}/" for path in fixed}
         )
-        self.starts = tuple(
-            sorted({path.split("{", 1)[0] for path in paths if isinstance(path, str)} - fixed)
-        )
+        self.starts = tuple(sorted({path.split("{", 1)[0] for path in paths} - fixed))
 
     def admits(self, scope: Scope) -> bool:
         """Whether a route of this router may match the request's path."""

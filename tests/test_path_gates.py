@@ -52,3 +52,17 @@ def test_every_route_is_still_reached_through_the_gates(client):
     assert client.get("/lab", follow_redirects=False).status_code in (303, 307)
     assert client.get("/login/", follow_redirects=False).status_code in (307, 308)
     assert client.get("/nothing").status_code == 404
+
+
+def test_a_router_with_a_route_matched_otherwise_than_by_its_pattern_is_not_gated():
+    """A mount matches every path under it (its own path has no parameter to show that):
+    a router holding one is let through whatever the path."""
+    from fastapi import APIRouter
+
+    async def files(scope, receive, send) -> None:  # an ASGI app, never called here
+        raise AssertionError
+
+    router = APIRouter()
+    router.mount("/files", files)
+    gate = PathGate(router)
+    assert gate.admits(scope("/files/report.pdf")) and gate.admits(scope("/elsewhere"))
