@@ -13,51 +13,21 @@ samples for the same take; what is kept only saves work, and is bounded.
 from __future__ import annotations
 
 import copy
-import threading
-from collections import OrderedDict
 
 import numpy as np
 
 from app.core.presets import GyroPreset
 from app.core.simulate import GyroStream
+from app.lab.lru import LruCache
 
 HISTORY_BLOCK = 200_000  # samples replayed at a time (bounded memory)
 WORTH_KEEPING = 5_000  # samples; a shorter replay (≈ 2 ms) costs less than copying a state
 KEPT_STREAMS = 256  # one per session recording now: a few kB each
 
 
-class _KeptStates:
-    """A thread-safe LRU of replayed streams by (preset, seed, turn-on bias): each is
-    the state after ``samples_read`` samples of the history, never read further."""
-
-    def __init__(self, size: int = KEPT_STREAMS) -> None:
-        self.size = size
-        self._streams: OrderedDict[tuple, GyroStream] = OrderedDict()
-        self._lock = threading.Lock()
-
-    def latest(self, key: tuple, index: int) -> GyroStream | None:
-        """A copy of the kept state of ``key``, if there is one at or before ``index``."""
-        with self._lock:
-            kept = self._streams.get(key)
-            if kept is None or kept.samples_read > index:
-                return None
-            self._streams.move_to_end(key)
-        return _copy(kept)
-
-    def keep(self, key: tuple, stream: GyroStream) -> None:
-        """Keep ``stream`` itself (the caller reads from a copy)."""
-        with self._lock:
-            self._streams[key] = stream
-            self._streams.move_to_end(key)
-            while len(self._streams) > self.size:
-                self._streams.popitem(last=False)
-
-    def clear(self) -> None:
-        with self._lock:
-            self._streams.clear()
-
-
-KEPT = _KeptStates()
+# (preset, seed, turn-on bias) → the stream after ``samples_read`` samples of its history,
+# never read further (a caller reads from a copy)
+KEPT = LruCache(KEPT_STREAMS)
 
 
 def _copy(stream: GyroStream) -> GyroStream:
@@ -81,12 +51,13 @@ def stream_after(
     switch-on: replayed from the latest state kept for it, or from switch-on; a long
     replay's end state is kept for the next recording."""
     key = (preset, seed, turn_on_bias_deg_h)
-    stream = KEPT.latest(key, index) if index >= WORTH_KEEPING else None
+    kept = KEPT.get(key) if index >= WORTH_KEEPING else None
+    stream = _copy(kept) if kept is not None and kept.samples_read <= index else None
     if stream is None:
         stream = GyroStream(preset, seed)
         stream.turn_on_bias_deg_h = turn_on_bias_deg_h  # one power-on value
     replay(stream, index - stream.samples_read)
     if index >= WORTH_KEEPING:
-        KEPT.keep(key, stream)
+        KEPT.put(key, stream)
         return _copy(stream)
     return stream

@@ -27,6 +27,7 @@ from markupsafe import Markup
 from sqlalchemy import bindparam
 from sqlmodel import Session, select
 
+from app.lab.lru import LruCache
 from app.lab.results import PartResult, session_results
 from app.models import Assignment, LabSession, Take
 
@@ -133,35 +134,9 @@ def figure_bytes(entry: CachedResults) -> int:
 CACHE = ResultCache()
 
 
-class SummaryCache:
-    """A thread-safe LRU of small per-session values keyed like results (e.g. the class
-    dashboard's data flags and fingerprints of a session's current data)."""
-
-    def __init__(self, max_entries: int = 8192):
-        self.max_entries = max_entries
-        self._entries: OrderedDict[str, object] = OrderedDict()
-        self._lock = threading.Lock()
-
-    def get(self, key: str):
-        with self._lock:
-            value = self._entries.get(key)
-            if value is not None:
-                self._entries.move_to_end(key)
-            return value
-
-    def put(self, key: str, value) -> None:
-        with self._lock:
-            self._entries[key] = value
-            self._entries.move_to_end(key)
-            while len(self._entries) > self.max_entries:
-                self._entries.popitem(last=False)
-
-    def clear(self) -> None:
-        with self._lock:
-            self._entries.clear()
-
-
-SUMMARIES = SummaryCache()
+# the class dashboard's data flags and fingerprints of a session's current data, keyed
+# like results
+SUMMARIES = LruCache(8192)
 
 
 # Session columns that change while recording or submitting but never enter a result
