@@ -8,6 +8,7 @@ whose output grid is then known too.  Students never see any of this."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -189,6 +190,26 @@ def source_text(source: dict, _) -> str:
         assignment=source["assignment"],
         course=source["course"],
     )
+
+
+def once_per_finding(text: Callable[[dict], str]) -> Callable[[dict], str]:
+    """``text`` of a finding, made once per distinct finding for one page: a class's
+    findings repeat (the same check with the same numbers for many groups) and the
+    dashboard shows two texts of each (≈ 15 µs a text; 1,200 in a class of 300 who typed
+    their readings).  Findings with a list among their values are made every time."""
+    made: dict[tuple, str] = {}
+
+    def once(finding: dict) -> str:
+        try:
+            key = tuple(finding.items())
+            return made[key]
+        except KeyError:
+            made[key] = value = text(finding)
+            return value
+        except TypeError:  # unhashable (other groups, sources): not kept
+            return text(finding)
+
+    return once
 
 
 def badge_text(finding: dict, _) -> str:

@@ -20,7 +20,7 @@ from app.lab.planner import assignment_plan, plan_view
 from app.review.accuracy import accuracy_rows, class_accuracy
 from app.review.dashboard_cells import class_cells
 from app.review.deps import TeacherAssignment
-from app.review.evidence import badge_text, finding_text
+from app.review.evidence import badge_text, finding_text, once_per_finding
 from app.review.exports import class_table_response, class_zip_response
 from app.review.lms_outbox import passback_state
 from app.review.service import class_rows, status_counts
@@ -81,8 +81,8 @@ def dashboard_context(request: Request, target, db, status: str = "", **extra) -
         "plotly_url": request.app.state.plotly_url,
         "passback": passback_state(db, assignment.id),
         "accuracy": accuracy,
-        "evidence_text": lambda finding: finding_text(finding, _),
-        "evidence_badge": lambda finding: badge_text(finding, _),
+        "evidence_text": once_per_finding(lambda finding: finding_text(finding, _)),
+        "evidence_badge": once_per_finding(lambda finding: badge_text(finding, _)),
         "plan": plan_view(assignment_plan(assignment)),
         **form_context(),
         **extra,
