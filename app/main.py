@@ -111,6 +111,17 @@ def freeze_start_up_heap() -> None:
     load_languages(local_zone(None))
     gc.collect()
     gc.freeze()
+    gc.set_threshold(*YOUNG_COLLECTIONS)
+
+
+# The collector's first threshold: container objects allocated (net) between collections of
+# the young generation.  Python's 700 suits small scripts; a request of a class's pages
+# keeps tens of thousands alive while it runs (the dashboard of 300: ≈ 34,000), so at 700
+# every one was walked ≈ 48 times a request and the survivors promoted until a full
+# collection (13 ms of the dashboard's ≈ 90).  At 50,000 a young collection comes every
+# few requests and walks what is alive then (≈ 20 ms, under the frame budget); the other
+# two thresholds are Python's.  bench/README.md, issue 32.
+YOUNG_COLLECTIONS = (50_000, 10, 10)
 
 
 def build_routes(app: FastAPI) -> None:
