@@ -201,10 +201,12 @@ def forget_process_caches() -> None:
     from app.lab.recent_samples import RECENT
     from app.lab.result_cache import CACHE, SUMMARIES
     from app.reports.pdf_cache import pdf_cache
+    from app.review.take_summaries import TAKE_SUMMARIES
 
     CACHE.clear()
     RECENT.clear()
     SUMMARIES.clear()
+    TAKE_SUMMARIES.clear()
     pdf_cache().clear()
     LEASES.clear()
 

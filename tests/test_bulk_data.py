@@ -9,7 +9,7 @@ from sqlmodel import select
 
 from app.db import get_engine, read_session, write_session
 from app.lab.recent_samples import RECENT
-from app.lab.results import current_data, iter_current_data
+from app.lab.results import current_data
 from app.lab.samples import CHUNK_SAMPLES
 from app.lab.store import load_samples, store_take
 from app.lab.take_appends import append_samples
@@ -55,29 +55,37 @@ def add_session(owner_id: int, assignment_id: int | None, seed: int) -> int:
         return session.id
 
 
-def test_bulk_loading_gives_the_same_arrays_as_take_by_take(app):
+def test_bulk_loading_gives_the_same_arrays_as_take_by_take(app, monkeypatch):
+    from app.lab import results
+
+    monkeypatch.setattr(results, "TAKES_PER_READ", 5)  # several statements, takes split
     student = make_user("s", Role.student)
     ids = [add_session(student.id, None, seed) for seed in range(3)]
+    RECENT.clear()  # read from the database, not from what this process just wrote
     with read_session() as db:
-        bulk = dict(iter_current_data(db, LabSession.id.in_(ids)))
-        assert sorted(bulk) == sorted(ids)
-        for session_id in ids:
-            takes = db.exec(
-                select(Take).where(Take.session_id == session_id, Take.superseded_at.is_(None))
-            ).all()
-            assert len(takes) == 8
-            for take in takes:
-                item = bulk[session_id][take.part][take.position]
-                values, times = load_samples(db, take)
-                assert vars(item.take) == take.model_dump()  # a snapshot of every column
-                np.testing.assert_array_equal(item.values, values)
-                assert (item.times is None) == (times is None)
-                if times is not None:
-                    np.testing.assert_array_equal(item.times, times)
-            assert bulk[session_id]["heading"][1].values.size == 15  # the newer take
-            assert bulk[session_id]["latitude"][2].values.size == CHUNK_SAMPLES + 17
+        takes = db.exec(
+            select(Take).where(Take.session_id.in_(ids), Take.superseded_at.is_(None))
+        ).all()
+        assert len(takes) == 24
+        bulk = {item.take.id: item for item in results.iter_takes_data(db, takes)}
+        assert sorted(bulk) == sorted(take.id for take in takes)
+        for take in takes:
+            item = bulk[take.id]
+            values, times = load_samples(db, take)
+            assert item.take is take
+            np.testing.assert_array_equal(item.values, values[take.trim_start :])
+            assert (item.times is None) == (times is None)
+            if times is not None:
+                np.testing.assert_array_equal(item.times, times)
+        by_position = {(t.session_id, t.part, t.position): bulk[t.id] for t in takes}
+        assert by_position[(ids[0], "heading", 1)].values.size == 15  # the newer take
+        assert by_position[(ids[0], "latitude", 2)].values.size == CHUNK_SAMPLES + 17
         session = db.get(LabSession, ids[1])
-        assert current_data(db, session).keys() == bulk[ids[1]].keys()
+        for part, positions in current_data(db, session).items():
+            for position, item in positions.items():
+                np.testing.assert_array_equal(
+                    item.values, by_position[(ids[1], part, position)].values
+                )
 
 
 def count_queries(run) -> int:

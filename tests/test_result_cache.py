@@ -138,36 +138,129 @@ def test_a_submission_freezes_the_shown_result(student_client, solves):
     assert solves == [session_id]  # the submission and the page after it: no new solve
 
 
-def test_the_dashboard_reads_samples_only_of_sessions_that_changed(app, teacher, monkeypatch):
+def _counted_reads(monkeypatch) -> list[tuple[int, str, int]]:
+    """(session, part, position) of every take whose samples the dashboard reads."""
     from app.review import service
 
+    read: list[tuple[int, str, int]] = []
+    load = service.iter_takes_data
+
+    def counted(db, takes):
+        for item in load(db, takes):
+            read.append((item.take.session_id, item.take.part, item.take.position))
+            yield item
+
+    monkeypatch.setattr(service, "iter_takes_data", counted)
+    return read
+
+
+def test_the_dashboard_reads_samples_only_of_sessions_that_changed(app, teacher, monkeypatch):
     world = build_world(app, teacher)
     sessions = {}
     for name in ("s1", "s2", "s3"):
         client = browser(world, name)
         sessions[name] = start(client, world)
         do_lab(client, sessions[name])
-    read: list[int] = []
-    load = service.iter_current_data
-
-    def counted(db, *where):
-        for session_id, data in load(db, *where):
-            read.append(session_id)
-            yield session_id, data
-
-    monkeypatch.setattr(service, "iter_current_data", counted)
+    read = _counted_reads(monkeypatch)
     teacher_client = browser(world, teacher.username)
     dashboard = f"/courses/{world['course']}/assignments/{world['assignment']}"
     assert teacher_client.get(dashboard).status_code == 200
-    assert sorted(read) == sorted(sessions.values())
+    assert sorted({sid for sid, _part, _position in read}) == sorted(sessions.values())
     read.clear()
     assert teacher_client.get(dashboard).status_code == 200
     assert read == []  # nothing changed: no samples read
     s2 = browser(world, "s2")
     save_manual(s2, sessions["s2"], "heading", {1: [30.0] * 10})  # a spike-free new take
     page = teacher_client.get(dashboard).text
-    assert read == [sessions["s2"]]
+    # typed readings: the changed session's own takes again (its data evidence), no other's
+    assert {sid for sid, _part, _position in read} == {sessions["s2"]}
     assert page.count("学生") >= 3
+
+
+def _simulated_session(owner_id: int, assignment_id: int, seed: int) -> int:
+    """A session of the assignment with both parts as the simulated gyro records them."""
+    import numpy as np
+
+    from app.db import write_session
+    from app.lab.store import store_take
+
+    rng = np.random.default_rng(seed)
+    with write_session() as db:
+        session = LabSession(
+            owner_id=owner_id, assignment_id=assignment_id, title="t", latitude_deg=40.0
+        )
+        db.add(session)
+        db.flush()
+        for part in ("heading", "latitude"):
+            for position in range(1, 5):
+                store_take(
+                    db,
+                    session,
+                    part=part,
+                    position=position,
+                    angle_deg=90.0 * (position - 1),
+                    values=rng.normal(10.0 + position, 0.1, 30),
+                    times=np.arange(30.0) + 40 * position,
+                    source="simulator",
+                )
+        return session.id
+
+
+def test_a_session_recording_position_after_position_is_read_one_take_at_a_time(
+    app, teacher, monkeypatch
+):
+    """The dashboard keeps each take's summary: a new take of a streamed session is the
+    only one read, and the summaries put together equal those made from scratch."""
+    import numpy as np
+
+    from app.db import write_session
+    from app.lab.recent_samples import RECENT
+    from app.lab.store import store_take
+    from app.models import User
+    from app.review.service import class_rows
+    from app.review.take_summaries import TAKE_SUMMARIES
+
+    world = build_world(app, teacher)
+    with read_session() as db:
+        owner = db.exec(select(User).where(User.username == "s1")).one()
+    session_id = _simulated_session(owner.id, world["assignment"], 1)
+    RECENT.clear()
+    read = _counted_reads(monkeypatch)
+    teacher_client = browser(world, teacher.username)
+    dashboard = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    assert teacher_client.get(dashboard).status_code == 200
+    assert sorted(read) == [
+        (session_id, p, k) for p in ("heading", "latitude") for k in (1, 2, 3, 4)
+    ]
+    read.clear()
+    with write_session() as db:  # position 3 recorded again, with a spike this time
+        values = np.random.default_rng(2).normal(13.0, 0.1, 30)
+        values[7] = 40.0
+        store_take(
+            db,
+            db.get(LabSession, session_id),
+            part="heading",
+            position=3,
+            angle_deg=180.0,
+            values=values,
+            times=np.arange(30.0) + 400,
+            source="simulator",
+        )
+    RECENT.clear()
+    assert teacher_client.get(dashboard).status_code == 200
+    assert read == [(session_id, "heading", 3)]
+
+    def summary_of_the_row() -> tuple:
+        with read_session() as db:
+            rows = class_rows(db, db.get(Assignment, world["assignment"]))
+        row = next(r for r in rows if r.session and r.session.id == session_id)
+        return row.flags, row.prints, row.data_evidence
+
+    kept = summary_of_the_row()
+    assert {"key": "flag.spikes", "params": {"position": 3, "n": 1}} in kept[0]
+    result_cache.SUMMARIES.clear()
+    TAKE_SUMMARIES.clear()
+    assert summary_of_the_row() == kept  # from scratch: the same flags, prints, evidence
 
 
 def test_the_results_blocks_are_rendered_once_per_key_language_and_editable(

@@ -240,11 +240,12 @@ ASSIGNMENT_TAKE_KEYS = (  # every session's current takes in an assignment, buil
 )
 
 
-def data_keys(
+def current_take_rows(
     db: Session, sessions: list[LabSession], assignment: Assignment | None
-) -> dict[int, DataKey]:
-    """:func:`data_key` of many sessions of one assignment, in one query (by the
-    assignment when every session is one of its own: no list of ids to send)."""
+) -> dict[int, list[tuple]]:
+    """Each session's current takes as rows of :data:`KEY_COLUMNS`, in part and position
+    order, in one query (by the assignment when every session is one of its own: no list
+    of ids to send)."""
     by_session: dict[int, list] = {session.id: [] for session in sessions}
     connection = db.connection()  # columns through Core: no ORM row processing
     if assignment is not None and all(s.assignment_id == assignment.id for s in sessions):
@@ -258,9 +259,22 @@ def data_keys(
     for row in rows.all():
         kept = by_session.get(row[0])
         if kept is not None:
-            kept.append(row[1:])
+            kept.append(tuple(row[1:]))
+    return by_session
+
+
+def data_keys(
+    db: Session,
+    sessions: list[LabSession],
+    assignment: Assignment | None,
+    take_rows: dict[int, list[tuple]] | None = None,
+) -> dict[int, DataKey]:
+    """:func:`data_key` of many sessions of one assignment, in one query (none when the
+    caller has their :func:`current_take_rows`)."""
+    if take_rows is None:
+        take_rows = current_take_rows(db, sessions, assignment)
     assignment_row = _row(assignment)
-    return {s.id: _digest(by_session[s.id], s, assignment_row) for s in sessions}
+    return {s.id: _digest(take_rows[s.id], s, assignment_row) for s in sessions}
 
 
 def cached_results(

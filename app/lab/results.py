@@ -120,55 +120,40 @@ def _assemble(take: Take, rows: list[SampleChunk]) -> PositionData:
     return PositionData.of(take, values, times, temperatures)
 
 
-_TAKE_COLUMNS = tuple(Take.__table__.columns)
-_CHUNK_AT = len(_TAKE_COLUMNS)  # a row: the take's columns, then its chunk's samples
-
-
-def iter_current_data(db: Session, *where) -> Iterator[tuple[int, SessionData]]:
-    """(session id, its current data) for the sessions matching ``where`` (conditions on
-    LabSession), in one query whatever the number of sessions -- one statement, so it sees
-    one consistent snapshot even under PostgreSQL's READ COMMITTED while students save.
-    Rows are streamed in order, so only one session's samples are in memory at a time.
-    (Every take has at least one chunk: ``store_take`` writes one even for no samples.)
-
-    Columns, not ORM objects (a class's dashboard reads thousands of chunks: loading them
-    as objects was 40 % of its work): each take is a detached snapshot of its columns,
-    as :meth:`PositionData.slim` makes."""
-    rows = db.exec(
-        select(*_TAKE_COLUMNS, SampleChunk.values, SampleChunk.times, SampleChunk.temperatures)
-        .join(SampleChunk, SampleChunk.take_id == Take.id)
-        .join(LabSession, LabSession.id == Take.session_id)
-        .where(Take.superseded_at.is_(None), *where)
-        .order_by(Take.session_id, Take.part, Take.position, SampleChunk.seq)
-        .execution_options(yield_per=64)
-    )
-    session_id: int | None = None
-    data: SessionData = {}
-    take: SimpleNamespace | None = None
-    pending: list[SimpleNamespace] = []
-    for row in rows:
-        if take is None or row.id != take.id:
-            if take is not None:
-                data.setdefault(take.part, {})[take.position] = _assemble(take, pending)
-                pending = []
-                if row.session_id != session_id:
-                    yield session_id, data
-                    data = {}
-            take = SimpleNamespace(**{c.name: row[i] for i, c in enumerate(_TAKE_COLUMNS)})
-            session_id = take.session_id
-        values, times, temperatures = row[_CHUNK_AT:]
-        pending.append(SimpleNamespace(values=values, times=times, temperatures=temperatures))
-    if take is not None:
-        data.setdefault(take.part, {})[take.position] = _assemble(take, pending)
-        yield session_id, data
-
-
 # the samples of several takes, in one statement built once (an expanding IN list)
 CHUNKS_OF_TAKES = (
     select(SampleChunk)
     .where(SampleChunk.take_id.in_(bindparam("take_ids", expanding=True)))
     .order_by(SampleChunk.take_id, SampleChunk.seq)
 )
+
+
+CHUNK_COLUMNS_OF_TAKES = (  # the same through Core: rows, not objects
+    select(SampleChunk.take_id, SampleChunk.values, SampleChunk.times, SampleChunk.temperatures)
+    .where(SampleChunk.take_id.in_(bindparam("take_ids", expanding=True)))
+    .order_by(SampleChunk.take_id, SampleChunk.seq)
+)
+TAKES_PER_READ = 64  # takes whose samples one statement reads (and memory holds) at most
+
+
+def iter_takes_data(db: Session, takes: list) -> Iterator[PositionData]:
+    """Each given take's :class:`PositionData` with its samples, in no set order: those
+    this process has just written from memory (``recent_samples``), the others read
+    :data:`TAKES_PER_READ` takes a statement, so that only so many are in memory at once
+    (``takes``: Take rows or snapshots with their columns)."""
+    unread = []
+    for take in takes:
+        held = RECENT.get(take)
+        if held is None:
+            unread.append(take)
+        else:
+            yield PositionData.of(take, *held)
+    connection = db.connection()
+    for start in range(0, len(unread), TAKES_PER_READ):
+        batch = {take.id: take for take in unread[start : start + TAKES_PER_READ]}
+        rows = connection.execute(CHUNK_COLUMNS_OF_TAKES, {"take_ids": list(batch)}).all()
+        for take_id, group in groupby(rows, key=lambda row: row.take_id):
+            yield _assemble(batch[take_id], list(group))
 
 
 def current_data(db: Session, session: LabSession) -> SessionData:
@@ -301,6 +286,33 @@ def solve_part(
     return outcome
 
 
+@dataclass(frozen=True, slots=True)
+class PositionChecks:
+    """What the data-quality flags need of one position's used readings, made once per
+    take (a class's dashboard keeps them: :mod:`app.review.take_summaries`)."""
+
+    n: int
+    std: float | None
+    spikes: int
+    gaps: int = 0  # lost-reading gaps in a timed record (0 untimed)
+    missing: int = 0
+    warm_up: float | None = None  # the reported temperature's change (°C), when it moved
+
+
+def position_checks(item: PositionData) -> PositionChecks:
+    """:class:`PositionChecks` of a position's readings (with their samples)."""
+    n = int(item.values.size)
+    gaps, missing = record_gaps(item.times) if item.times is not None else (0, 0)
+    return PositionChecks(
+        n,
+        item.std if n >= 2 else None,
+        count_spikes(item.values) if n >= 2 else 0,
+        gaps,
+        missing,
+        warm_up_change(item.temperatures) if item.temperatures is not None else None,
+    )
+
+
 def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[dict]:
     """Data-quality warnings: too few readings, spikes, gaps in a timed record (readings
     lost between the gyro and the server), a gyro still warming up (its reported
@@ -308,35 +320,30 @@ def quality_flags(session: LabSession, data: dict[int, PositionData]) -> list[di
 
     Each flag is ``{"key": message key, "params": {...}}``.
     """
+    return flags_of_checks(session, {k: position_checks(item) for k, item in data.items()})
+
+
+def flags_of_checks(session: LabSession, checks: dict[int, PositionChecks]) -> list[dict]:
+    """:func:`quality_flags` from each position's :class:`PositionChecks`."""
 
     def flag(key: str, **params) -> dict:
         return {"key": key, "params": params}
 
     flags = []
     stds = {}
-    for position, item in sorted(data.items()):
-        if item.values.size < session.min_readings:
+    for position, item in sorted(checks.items()):
+        if item.n < session.min_readings:
             flags.append(
-                flag(
-                    "flag.too_few",
-                    position=position,
-                    n=int(item.values.size),
-                    minimum=session.min_readings,
-                )
+                flag("flag.too_few", position=position, n=item.n, minimum=session.min_readings)
             )
-        if item.values.size >= 2:
+        if item.n >= 2:
             stds[position] = item.std
-            outliers = count_spikes(item.values)
-            if outliers:
-                flags.append(flag("flag.spikes", position=position, n=outliers))
-        if item.times is not None:
-            gaps, missing = record_gaps(item.times)
-            if gaps:
-                flags.append(flag("flag.gaps", position=position, n=gaps, missing=missing))
-        if item.temperatures is not None:
-            change = warm_up_change(item.temperatures)
-            if change is not None:
-                flags.append(flag("flag.warm_up", position=position, change=f"{change:.1f}"))
+            if item.spikes:
+                flags.append(flag("flag.spikes", position=position, n=item.spikes))
+        if item.gaps:
+            flags.append(flag("flag.gaps", position=position, n=item.gaps, missing=item.missing))
+        if item.warm_up is not None:
+            flags.append(flag("flag.warm_up", position=position, change=f"{item.warm_up:.1f}"))
     if len(stds) >= 3:
         typical = float(np.median(list(stds.values())))
         for position, std in stds.items():

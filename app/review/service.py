@@ -8,12 +8,14 @@ import json
 from dataclasses import dataclass, field
 from datetime import datetime
 from functools import lru_cache
+from types import SimpleNamespace
 
-from sqlmodel import Session, select
+from sqlmodel import Session, col, select
 
+from app.lab.copy_index import keyable_takes
 from app.lab.partners import group_names, member_map
-from app.lab.result_cache import SUMMARIES, data_keys
-from app.lab.results import SessionData, iter_current_data, quality_flags
+from app.lab.result_cache import KEY_COLUMNS, SUMMARIES, current_take_rows, data_keys
+from app.lab.results import SessionData, flags_of_checks, iter_takes_data
 from app.lab.store import PARTS
 from app.lab.truth import AutoCheck, Truth, auto_check, session_truth
 from app.models import (
@@ -23,37 +25,38 @@ from app.models import (
     Extension,
     LabSession,
     SessionStatus,
+    Take,
     User,
 )
 from app.review.earlier_copies import earlier_copies
 from app.review.evidence import SessionEvidence, class_findings, seen_notes, session_evidence
+from app.review.take_summaries import TakeSummary, known_summary, take_summary
 
 STATUSES = tuple(SessionStatus)
 
 
-def data_fingerprint(data: SessionData) -> tuple[str | None, str | None]:
-    """(hash of the exact samples, hash of the position means to 0.001 °/h) of current data."""
-    items = sorted(
-        (item for positions in data.values() for item in positions.values()),
-        key=lambda item: (item.take.part, item.take.position),
-    )
-    if not items:
+def data_fingerprint(
+    takes: list, summaries: dict[int, TakeSummary]
+) -> tuple[str | None, str | None]:
+    """(hash of the exact samples, hash of the position means to 0.001 °/h) of current data
+    (``takes``: the current takes in part and position order; ``summaries``: by take id)."""
+    if not takes:
         return None, None
     exact, rounded = hashlib.sha256(), hashlib.sha256()
-    for item in items:
-        take, values = item.take, item.values
-        exact.update(f"{take.part}{take.position}".encode() + values.tobytes())
-        rounded.update(f"{take.part}{take.position}:{item.mean:.3f};".encode())
+    for take in takes:
+        summary = summaries[take.id]
+        exact.update(f"{take.part}{take.position}".encode() + summary.digest)
+        rounded.update(f"{take.part}{take.position}:{summary.mean:.3f};".encode())
     return exact.hexdigest(), rounded.hexdigest()
 
 
-def data_flags(session: LabSession, data: SessionData) -> list[dict]:
+def data_flags(session: LabSession, takes: list, summaries: dict[int, TakeSummary]) -> list[dict]:
     """The data-quality flags the student sees, for every part with a result to flag."""
     flags = []
     for part in PARTS:
-        positions = data.get(part, {})
-        if len(positions) >= 3:
-            flags.extend(quality_flags(session, positions))
+        checks = {t.position: summaries[t.id].checks for t in takes if t.part == part}
+        if len(checks) >= 3:
+            flags.extend(flags_of_checks(session, checks))
     return flags
 
 
@@ -114,32 +117,96 @@ class StudentRow:
         return self._errors.get(name)
 
 
+SAMPLES_PER_READ = 2_000_000  # readings read (and held) at once for the sessions redone
+
+
 def data_summaries(
     db: Session, assignment: Assignment, by_id: dict[int, LabSession]
 ) -> dict[int, tuple[list[dict], tuple[str | None, str | None], list, SessionEvidence]]:
     """Each session's data flags, fingerprints, current takes and data evidence (its own
-    readings' findings and copy keys): computed from the samples
-    once per version of its data (``result_cache.data_keys``), so that the dashboard
-    reads samples only of the sessions that changed since it was last drawn."""
-    keys = data_keys(db, list(by_id.values()), assignment)
+    readings' findings and copy keys): put together once per version of its data
+    (``result_cache.data_keys``) from its takes' summaries (``take_summaries``), so that
+    the dashboard reads the samples only of takes it has not seen, and of the parts whose
+    readings the students recorded themselves in sessions that changed."""
+    sessions = list(by_id.values())
+    take_rows = current_take_rows(db, sessions, assignment)
+    keys = data_keys(db, sessions, assignment, take_rows)
     summaries = {sid: SUMMARIES.get(key) for sid, key in keys.items()}
     changed = [sid for sid, summary in summaries.items() if summary is None]
-    if changed:
-        for session_id, data in iter_current_data(db, LabSession.id.in_(changed)):
-            positions = [item for part in data.values() for item in part.values()]
-            summary = (
-                data_flags(by_id[session_id], data),
-                data_fingerprint(data),
-                [item.slim().take for item in positions],
-                session_evidence(assignment, by_id[session_id], data),
-            )
-            SUMMARIES.put(keys[session_id], summary)
-            summaries[session_id] = summary
-        for session_id in changed:
-            if summaries[session_id] is None:  # no recording yet
-                summaries[session_id] = ([], (None, None), [], SessionEvidence())
-                SUMMARIES.put(keys[session_id], summaries[session_id])
+    created = _creation_times(db, changed)
+    takes = {sid: [_take_snapshot(sid, row, created) for row in take_rows[sid]] for sid in changed}
+    batch: dict[int, list] = {}
+    size = 0
+    for session_id, current in takes.items():  # sessions a batch at a time: memory bounded
+        batch[session_id] = current
+        size += sum(take.n_samples for take in current)
+        if size >= SAMPLES_PER_READ:
+            _summarise(db, assignment, by_id, batch, summaries, keys)
+            batch, size = {}, 0
+    if batch:
+        _summarise(db, assignment, by_id, batch, summaries, keys)
     return summaries
+
+
+_KEY_NAMES = tuple(column.key for column in KEY_COLUMNS)
+
+
+def _creation_times(db: Session, session_ids: list[int]) -> dict[int, datetime]:
+    """take id → creation time, of the current takes of ``session_ids`` (read only for the
+    sessions redone: a class's every take's time cost more to read than its key)."""
+    if not session_ids:
+        return {}
+    return dict(
+        db.connection()
+        .execute(
+            select(Take.id, Take.created_at).where(
+                col(Take.session_id).in_(session_ids), Take.superseded_at.is_(None)
+            )
+        )
+        .all()
+    )
+
+
+def _take_snapshot(session_id: int, row: tuple, created: dict[int, datetime]) -> SimpleNamespace:
+    """A take as :func:`current_take_rows` read it, with its creation time."""
+    columns = dict(zip(_KEY_NAMES, row, strict=True))
+    return SimpleNamespace(session_id=session_id, created_at=created[columns["id"]], **columns)
+
+
+def _summarise(db, assignment, by_id, takes, summaries, keys) -> None:
+    """The summaries of sessions whose data changed (``takes``: their current takes by
+    session id), into ``summaries`` and ``SUMMARIES``: the takes not summarised yet and
+    the takes the data evidence reads are read, in one pass."""
+    session_ids = list(takes)
+    known: dict[int, TakeSummary] = {}
+    keyable = {take.id for sid in session_ids for take in keyable_takes(takes[sid])}
+    wanted = []
+    for sid in session_ids:
+        for take in takes[sid]:
+            summary = known_summary(take)
+            if summary is not None:
+                known[take.id] = summary
+            if summary is None or take.id in keyable:
+                wanted.append(take)
+    own: dict[int, SessionData] = {}
+    for item in iter_takes_data(db, wanted):
+        take = item.take
+        if take.id not in known:
+            known[take.id] = take_summary(item)
+        if take.id in keyable:
+            own.setdefault(take.session_id, {}).setdefault(take.part, {})[take.position] = item
+    for sid in session_ids:
+        session = by_id[sid]
+        current = [take for take in takes[sid] if take.id in known]  # (each has a chunk)
+        data = {part: dict(sorted(p.items())) for part, p in sorted(own.get(sid, {}).items())}
+        summary = (
+            data_flags(session, current, known),
+            data_fingerprint(current, known),
+            current,
+            session_evidence(assignment, session, data) if current else SessionEvidence(),
+        )
+        SUMMARIES.put(keys[sid], summary)
+        summaries[sid] = summary
 
 
 def latest_results(attempts: list[Attempt]) -> dict:
