@@ -4,6 +4,7 @@ a submission share one cached result, which every change of the data replaces.""
 from __future__ import annotations
 
 import json
+from types import SimpleNamespace
 
 import pytest
 from sqlmodel import select
@@ -421,3 +422,71 @@ def test_the_key_of_loaded_takes_is_the_key_read_by_query(student_client):
         before = data_key(db, session, None, takes)
         assert before == data_key(db, session, None)
         db.rollback()
+
+
+def test_takes_changed_while_the_dashboard_reads_them_are_no_error_and_not_kept(
+    app, teacher, monkeypatch
+):
+    """Between the dashboard's list of current takes and its read of their samples a
+    student may record again (the take is superseded) or append readings (its count
+    grows): both are read as they are, and the appended take's summary is not kept under
+    the count it was listed with."""
+    import numpy as np
+
+    from app.db import write_session
+    from app.lab.recent_samples import RECENT
+    from app.lab.store import store_take
+    from app.lab.take_appends import append_samples
+    from app.models import Take, User
+    from app.review import service
+    from app.review.take_summaries import TAKE_SUMMARIES, known_summary
+
+    world = build_world(app, teacher)
+    with read_session() as db:
+        owner = db.exec(select(User).where(User.username == "s1")).one()
+    session_id = _simulated_session(owner.id, world["assignment"], 3)
+    with write_session() as db:  # heading 1 from a script instead: readings can be appended
+        store_take(
+            db,
+            db.get(LabSession, session_id),
+            part="heading",
+            position=1,
+            angle_deg=0.0,
+            values=np.random.default_rng(4).normal(11.0, 0.1, 30),
+            times=None,
+            source="api",
+        )
+    with read_session() as db:
+        assignment = db.get(Assignment, world["assignment"])
+        listed = service.current_take_rows(db, [db.get(LabSession, session_id)], assignment)
+        heading_1 = db.get(Take, listed[session_id][0][0])
+        stale = SimpleNamespace(**heading_1.model_dump())
+    with write_session() as db:
+        session = db.get(LabSession, session_id)
+        append_samples(
+            db,
+            session,
+            part="heading",
+            position=1,
+            angle_deg=0.0,
+            values=np.full(5, 11.0),
+            times=None,
+        )
+        store_take(  # heading 2 recorded again
+            db,
+            session,
+            part="heading",
+            position=2,
+            angle_deg=90.0,
+            values=np.random.default_rng(5).normal(12.0, 0.1, 30),
+            times=None,
+            source="simulator",
+        )
+    monkeypatch.setattr(service, "current_take_rows", lambda *_args: listed)
+    RECENT.clear()
+    result_cache.SUMMARIES.clear()
+    TAKE_SUMMARIES.clear()
+    with read_session() as db:
+        rows = service.class_rows(db, db.get(Assignment, world["assignment"]))
+    assert any(row.session and row.session.id == session_id for row in rows)
+    assert stale.n_samples == 30 and known_summary(stale) is None  # 35 were read

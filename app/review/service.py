@@ -133,8 +133,13 @@ def data_summaries(
     keys = data_keys(db, sessions, assignment, take_rows)
     summaries = {sid: SUMMARIES.get(key) for sid, key in keys.items()}
     changed = [sid for sid, summary in summaries.items() if summary is None]
-    created = _creation_times(db, changed)
-    takes = {sid: [_take_snapshot(sid, row, created) for row in take_rows[sid]] for sid in changed}
+    created = _creation_times(db, [row for sid in changed for row in take_rows[sid]])
+    takes = {
+        sid: [
+            _take_snapshot(sid, row, created[row[0]]) for row in take_rows[sid] if row[0] in created
+        ]  # (a take deleted since it was listed has nothing to read)
+        for sid in changed
+    }
     batch: dict[int, list] = {}
     size = 0
     for session_id, current in takes.items():  # sessions a batch at a time: memory bounded
@@ -151,26 +156,27 @@ def data_summaries(
 _KEY_NAMES = tuple(column.key for column in KEY_COLUMNS)
 
 
-def _creation_times(db: Session, session_ids: list[int]) -> dict[int, datetime]:
-    """take id → creation time, of the current takes of ``session_ids`` (read only for the
-    sessions redone: a class's every take's time cost more to read than its key)."""
-    if not session_ids:
-        return {}
-    return dict(
-        db.connection()
-        .execute(
-            select(Take.id, Take.created_at).where(
-                col(Take.session_id).in_(session_ids), Take.superseded_at.is_(None)
+def _creation_times(db: Session, take_rows: list[tuple]) -> dict[int, datetime]:
+    """take id → creation time, of the takes of ``take_rows`` (read only for the sessions
+    redone: a class's every take's time cost more to read than its key).  By id, so that
+    a take superseded since it was listed is still found."""
+    ids = [row[0] for row in take_rows]
+    created: dict[int, datetime] = {}
+    for start in range(0, len(ids), 1000):
+        created.update(
+            db.connection()
+            .execute(
+                select(Take.id, Take.created_at).where(col(Take.id).in_(ids[start : start + 1000]))
             )
+            .all()
         )
-        .all()
-    )
+    return created
 
 
-def _take_snapshot(session_id: int, row: tuple, created: dict[int, datetime]) -> SimpleNamespace:
+def _take_snapshot(session_id: int, row: tuple, created_at: datetime) -> SimpleNamespace:
     """A take as :func:`current_take_rows` read it, with its creation time."""
     columns = dict(zip(_KEY_NAMES, row, strict=True))
-    return SimpleNamespace(session_id=session_id, created_at=created[columns["id"]], **columns)
+    return SimpleNamespace(session_id=session_id, created_at=created_at, **columns)
 
 
 def _summarise(db, assignment, by_id, takes, summaries, keys) -> None:

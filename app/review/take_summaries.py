@@ -37,11 +37,14 @@ def summary_key(take) -> tuple:
 
 
 def take_summary(item: PositionData) -> TakeSummary:
-    """The summary of a position's readings (with its samples), kept for its take."""
+    """The summary of a position's readings (with its samples), kept for its take when
+    the samples read are the count its row was listed with (readings appended in between
+    are summarised for this view only)."""
     summary = TakeSummary(
         position_checks(item), item.mean, hashlib.sha256(item.values.tobytes()).digest()
     )
-    TAKE_SUMMARIES.put(summary_key(item.take), summary)
+    if item.n + item.trimmed == item.take.n_samples:
+        TAKE_SUMMARIES.put(summary_key(item.take), summary)
     return summary
 
 
