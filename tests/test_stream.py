@@ -116,6 +116,28 @@ def test_recording_needs_the_table_turned_first(student_client):
     assert frames[-1]["type"] == "error" and "Turn the table to position 2" in frames[-1]["message"]
 
 
+def test_a_log_in_ended_during_a_stream_ends_its_next_recording(student_client):
+    """The socket stays open, but each recording checks the log-in again when it starts
+    (with its mark, in one transaction): after a log-out nothing is marked or recorded."""
+    session_id = new_session(student_client, preset="tactical-fog")
+    page = f"/lab/sessions/{session_id}"
+    assert turn(student_client, session_id, "heading", 1).status_code == 200
+    with connect(student_client, session_id) as ws:
+        assert record(ws, part="heading", position=1, dwell_s=3, speed=60)[-1]["type"] == "saved"
+        assert turn(student_client, session_id, "heading", 2).status_code == 200
+        assert post_form(student_client, "/logout", page=page).status_code == 303
+        frames = record(ws, part="heading", position=2, dwell_s=3, speed=60)
+    assert frames[-1]["type"] == "error" and frames[-1]["key"] == "stream.gone"
+    assert [f["type"] for f in frames] == ["error"]  # not started: no samples sent
+    with read_session() as db:
+        session = db.get(LabSession, session_id)
+        assert session.stream_part is None and session.stream_position is None
+        positions = db.exec(
+            select(Take.position).where(Take.session_id == session_id, Take.part == "heading")
+        ).all()
+    assert positions == [1]
+
+
 @pytest.mark.one_backend  # input refused before any write
 @pytest.mark.parametrize(
     ("message", "text"),
