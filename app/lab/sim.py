@@ -13,6 +13,7 @@ import math
 import secrets
 from dataclasses import replace
 from datetime import UTC, datetime
+from functools import lru_cache
 
 import numpy as np
 
@@ -57,7 +58,12 @@ def turn_on_bias(session: LabSession) -> float:
     """The session's turn-on bias: drawn by its assignment, else by the preset's model."""
     if session.sim_turn_on_bias_deg_h is not None:
         return session.sim_turn_on_bias_deg_h
-    return turn_on_bias_deg_h(preset_for(session), derived_seed(session, "power-on"))
+    return _drawn_turn_on_bias(preset_for(session), derived_seed(session, "power-on"))
+
+
+# The draw is a pure function of (preset, seed) and costs ≈ 0.1 ms (a SeedSequence spawned):
+# the class dashboard asks it of every streamed session on every view.
+_drawn_turn_on_bias = lru_cache(maxsize=4096)(turn_on_bias_deg_h)
 
 
 def indexing_error_deg(session: LabSession, turn: int | str) -> float:
