@@ -318,14 +318,16 @@ def test_a_streamed_position_marks_its_session_locked_in_one_statement(student_c
 
     from app.core.exceptions import UserError
     from app.lab import stream
+    from app.web.render import SESSION_COOKIE
     from tests.factories import new_session, statements_run
 
     session_id = new_session(student_client)
-    with statements_run() as statements:
-        marked = stream._mark_started(session_id, "heading", 1)
+    cookie = student_client.cookies.get(SESSION_COOKIE)
+    with statements_run() as statements:  # the log-in checked in the same transaction
+        marked = stream._mark_started(cookie, session_id, "heading", 1)
     assert (marked.stream_part, marked.stream_position) == ("heading", 1)
     reads = [s for s in statements if "FROM lab_session" in s]
     assert len(reads) == 1, statements
     assert reads[0].endswith("FOR UPDATE") == (backend == "postgresql"), statements
     with pytest.raises(UserError):
-        stream._mark_started(session_id + 1000, "heading", 1)
+        stream._mark_started(cookie, session_id + 1000, "heading", 1)
