@@ -165,6 +165,41 @@ def test_the_profile_probe_writes_each_routes_thread_pool_functions_by_cpu(tmp_p
     assert calls == 2 and 0.055 <= cumulative < 0.09  # two requests, 30 ms of CPU each
 
 
+LOCKING_SCRIPT = """
+import sqlite3, sys, time
+connection = sqlite3.connect(sys.argv[1], isolation_level=None)
+connection.execute("CREATE TABLE t (x)")
+for pause in (0.0, 0.03):
+    connection.execute("BEGIN IMMEDIATE")  # as app.db begins: on the connection itself
+    connection.execute("INSERT INTO t VALUES (1)")
+    time.sleep(pause)
+    connection.commit()
+"""
+
+
+def test_the_lock_trace_probe_times_each_write_from_begin_immediate_to_commit(tmp_path):
+    """``GYROLAB_BENCH_LOCK_TRACE``: one line per write transaction, the wall time from
+    ``BEGIN IMMEDIATE`` to its commit and the thread's CPU meanwhile (it once missed
+    every write: the app begins on the connection, not on a cursor)."""
+    import os
+    import subprocess
+
+    probe = Path(queue_model.__file__).parent / "probe"
+    trace = tmp_path / "locks.txt"
+    env = {**os.environ, "PYTHONPATH": str(probe), "GYROLAB_BENCH_LOCK_TRACE": str(trace)}
+    subprocess.run(
+        [sys.executable, "-c", LOCKING_SCRIPT, str(tmp_path / "t.db")],
+        env=env,
+        check=True,
+        timeout=60,
+    )
+    lines = [[float(x) for x in line.split()] for line in trace.read_text().splitlines()]
+    assert len(lines) == 2
+    (_quick_wall, quick_cpu), (paused_wall, paused_cpu) = lines
+    assert quick_cpu >= 0
+    assert paused_wall >= 30 and paused_cpu < paused_wall - 20  # the pause held it, idle
+
+
 def test_class_costs_replace_each_routes_own_cpu_and_keep_the_rest():
     lines = "\n".join(
         [

@@ -153,6 +153,12 @@ if _COUNTS or _LOCKS:
         def cursor(self, factory=_CountingCursor):
             return super().cursor(factory)
 
+        def execute(self, sql, *args, **kwargs):  # the app begins on the connection itself
+            _add(0)
+            if _trace is not None and sql.startswith("BEGIN IMMEDIATE"):
+                self.began = (time.perf_counter(), time.thread_time())
+            return super().execute(sql, *args, **kwargs)
+
         def _ended(self) -> None:
             if self.began is not None and _trace is not None:
                 wall, cpu = time.perf_counter() - self.began[0], time.thread_time() - self.began[1]
