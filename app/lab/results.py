@@ -110,7 +110,7 @@ class PartResult:
 SessionData = dict[str, dict[int, PositionData]]  # part → position → data
 
 
-def _assemble(take: Take, rows: list[SampleChunk]) -> PositionData:
+def _assemble(take: Take, rows: list) -> PositionData:  # rows: a take's chunks, in order
     values = unpack_all([r.values for r in rows])
     times = temperatures = None
     if rows and all(r.times is not None for r in rows):
@@ -120,15 +120,9 @@ def _assemble(take: Take, rows: list[SampleChunk]) -> PositionData:
     return PositionData.of(take, values, times, temperatures)
 
 
-# the samples of several takes, in one statement built once (an expanding IN list)
-CHUNKS_OF_TAKES = (
-    select(SampleChunk)
-    .where(SampleChunk.take_id.in_(bindparam("take_ids", expanding=True)))
-    .order_by(SampleChunk.take_id, SampleChunk.seq)
-)
-
-
-CHUNK_COLUMNS_OF_TAKES = (  # the same through Core: rows, not objects
+# the samples of several takes, in one statement built once (an expanding IN list), through
+# Core: rows, not objects
+CHUNK_COLUMNS_OF_TAKES = (
     select(SampleChunk.take_id, SampleChunk.values, SampleChunk.times, SampleChunk.temperatures)
     .where(SampleChunk.take_id.in_(bindparam("take_ids", expanding=True)))
     .order_by(SampleChunk.take_id, SampleChunk.seq)
@@ -164,20 +158,10 @@ def current_data(db: Session, session: LabSession) -> SessionData:
 
 def takes_data(db: Session, takes: list[Take]) -> SessionData:
     """Given takes (one per part and position) with their samples: those this process has
-    just written from memory (``recent_samples``), the others in one query."""
+    just written from memory (``recent_samples``), the others read (:func:`iter_takes_data`)."""
     data: SessionData = {}
-    unread: dict[int, Take] = {}
-    for take in takes:
-        held = RECENT.get(take)
-        if held is None:
-            unread[take.id] = take
-        else:
-            data.setdefault(take.part, {})[take.position] = PositionData.of(take, *held)
-    if unread:
-        rows = db.exec(CHUNKS_OF_TAKES, params={"take_ids": list(unread)}).all()
-        for take_id, group in groupby(rows, key=lambda row: row.take_id):
-            take = unread[take_id]
-            data.setdefault(take.part, {})[take.position] = _assemble(take, list(group))
+    for item in iter_takes_data(db, takes):
+        data.setdefault(item.take.part, {})[item.take.position] = item
     return {part: dict(sorted(data[part].items())) for part in sorted(data)}
 
 
