@@ -178,6 +178,24 @@ def test_the_dashboard_reads_samples_only_of_sessions_that_changed(app, teacher,
     assert page.count("学生") >= 3
 
 
+def _record(session_id: int, part: str, position: int, values, source: str, times=None) -> None:
+    """A position recorded again, in a transaction of its own (dial angle 90° a step)."""
+    from app.db import write_session
+    from app.lab.store import store_take
+
+    with write_session() as db:
+        store_take(
+            db,
+            db.get(LabSession, session_id),
+            part=part,
+            position=position,
+            angle_deg=90.0 * (position - 1),
+            values=values,
+            times=times,
+            source=source,
+        )
+
+
 def _simulated_session(owner_id: int, assignment_id: int, seed: int) -> int:
     """A session of the assignment with both parts as the simulated gyro records them."""
     import numpy as np
@@ -214,9 +232,7 @@ def test_a_session_recording_position_after_position_is_read_one_take_at_a_time(
     only one read, and the summaries put together equal those made from scratch."""
     import numpy as np
 
-    from app.db import write_session
     from app.lab.recent_samples import RECENT
-    from app.lab.store import store_take
     from app.models import User
     from app.review.service import class_rows
     from app.review.take_summaries import TAKE_SUMMARIES
@@ -234,19 +250,9 @@ def test_a_session_recording_position_after_position_is_read_one_take_at_a_time(
         (session_id, p, k) for p in ("heading", "latitude") for k in (1, 2, 3, 4)
     ]
     read.clear()
-    with write_session() as db:  # position 3 recorded again, with a spike this time
-        values = np.random.default_rng(2).normal(13.0, 0.1, 30)
-        values[7] = 40.0
-        store_take(
-            db,
-            db.get(LabSession, session_id),
-            part="heading",
-            position=3,
-            angle_deg=180.0,
-            values=values,
-            times=np.arange(30.0) + 400,
-            source="simulator",
-        )
+    values = np.random.default_rng(2).normal(13.0, 0.1, 30)
+    values[7] = 40.0  # position 3 recorded again, with a spike this time
+    _record(session_id, "heading", 3, values, "simulator", times=np.arange(30.0) + 400)
     RECENT.clear()
     assert teacher_client.get(dashboard).status_code == 200
     assert read == [(session_id, "heading", 3)]
@@ -435,7 +441,6 @@ def test_takes_changed_while_the_dashboard_reads_them_are_no_error_and_not_kept(
 
     from app.db import write_session
     from app.lab.recent_samples import RECENT
-    from app.lab.store import store_take
     from app.lab.take_appends import append_samples
     from app.models import Take, User
     from app.review import service
@@ -445,17 +450,8 @@ def test_takes_changed_while_the_dashboard_reads_them_are_no_error_and_not_kept(
     with read_session() as db:
         owner = db.exec(select(User).where(User.username == "s1")).one()
     session_id = _simulated_session(owner.id, world["assignment"], 3)
-    with write_session() as db:  # heading 1 from a script instead: readings can be appended
-        store_take(
-            db,
-            db.get(LabSession, session_id),
-            part="heading",
-            position=1,
-            angle_deg=0.0,
-            values=np.random.default_rng(4).normal(11.0, 0.1, 30),
-            times=None,
-            source="api",
-        )
+    # heading 1 from a script instead: readings can be appended
+    _record(session_id, "heading", 1, np.random.default_rng(4).normal(11.0, 0.1, 30), "api")
     with read_session() as db:
         assignment = db.get(Assignment, world["assignment"])
         listed = service.current_take_rows(db, [db.get(LabSession, session_id)], assignment)
@@ -472,16 +468,8 @@ def test_takes_changed_while_the_dashboard_reads_them_are_no_error_and_not_kept(
             values=np.full(5, 11.0),
             times=None,
         )
-        store_take(  # heading 2 recorded again
-            db,
-            session,
-            part="heading",
-            position=2,
-            angle_deg=90.0,
-            values=np.random.default_rng(5).normal(12.0, 0.1, 30),
-            times=None,
-            source="simulator",
-        )
+    heading_2 = np.random.default_rng(5).normal(12.0, 0.1, 30)
+    _record(session_id, "heading", 2, heading_2, "simulator")  # recorded again
     monkeypatch.setattr(service, "current_take_rows", lambda *_args: listed)
     RECENT.clear()
     result_cache.SUMMARIES.clear()
