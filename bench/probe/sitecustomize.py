@@ -2,18 +2,21 @@
 ``PYTHONPATH`` and one of these names a file (never part of the app otherwise):
 
 ``GYROLAB_BENCH_PROBE`` (``queue_model.py``'s measuring run): a 16-byte file in which it
-counts the places where a request's thread gives up the interpreter -- SQLite calls
-(execute and fetch: each runs ``sqlite3_step`` with the GIL released) and trips to the
-thread pool (anyio's ``to_thread.run_sync``).
+counts the places where a request's thread gives up the interpreter -- database calls
+(SQLite's execute and fetch: each runs ``sqlite3_step`` with the GIL released;
+PostgreSQL's round trips: psycopg's statements and its BEGIN, COMMIT and ROLLBACK) and
+trips to the thread pool (anyio's ``to_thread.run_sync``).
 
 ``GYROLAB_BENCH_LOCK_TRACE`` (a load test): a file to which each SQLite write transaction
 appends one line, ``wall_ms cpu_ms``: how long it held the write lock (``BEGIN
 IMMEDIATE`` to the end of its commit or rollback) and the CPU its thread spent meanwhile.
 
 ``GYROLAB_BENCH_SERVER_TIMES`` (a load test): a file to which each HTTP request appends
-``method path ms waited_ms``: from when the app is called (uvicorn has read the request's
-head) to its answer's start -- the server's part of the latency the load generator
-measures -- and of it the wait before the app proper began (the body, a work place).
+``method path ms waited_ms began_s pid``: from when the app is called (uvicorn has read
+the request's head) to its answer's start -- the server's part of the latency the load
+generator measures -- and of it the wait before the app proper began (the body, a work
+place); when it was called (``time.perf_counter``, the machine's monotonic clock, the
+same in every process); and which worker answered.
 
 ``GYROLAB_BENCH_REQUEST_CPU`` (a load test, or ``queue_model.py``'s measuring run): a
 file to which each HTTP request and each WebSocket appends ``kind method path loop_ms
@@ -85,7 +88,10 @@ if _TIMES:
                 took = (_time.perf_counter() - began) * 1000
                 admitted = scope["bench.admitted"]
                 waited = (admitted - began) * 1000 if admitted else took
-                line = f"{scope['method']} {scope['path']} {took:.3f} {waited:.3f}\n"
+                line = (
+                    f"{scope['method']} {scope['path']} {took:.3f} {waited:.3f} {began:.6f}"
+                    f" {os.getpid()}\n"
+                )
                 os.write(_times, line.encode())
             await send(message)
 
@@ -194,6 +200,25 @@ if _COUNTS or _LOCKS:
         return await _run_sync(*args, **kwargs)
 
     anyio.to_thread.run_sync = _counting_run_sync
+
+    try:  # PostgreSQL: each round trip to the server (statements, and BEGIN/COMMIT/ROLLBACK)
+        import psycopg
+        from psycopg import _connection_base
+    except ImportError:
+        psycopg = None
+    if psycopg is not None and _COUNTS:
+
+        def _counting(method):
+            def counted(*args, **kwargs):
+                _add(0)
+                return method(*args, **kwargs)
+
+            return counted
+
+        for _name in ("execute", "executemany"):
+            setattr(psycopg.Cursor, _name, _counting(getattr(psycopg.Cursor, _name)))
+        _base = _connection_base.BaseConnection
+        _base._exec_command = _counting(_base._exec_command)
 
 if _CPU or _PROFILE:
     import contextvars
