@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import re
 from collections import defaultdict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -26,11 +26,12 @@ def route_of(method: str, path: str) -> str:
 class ClassCpu:
     """What the probe saw of a class: per route the mean CPU seconds (on the event loop,
     in the thread pool) of its own task (the stream: per frame of samples), how many, and
-    their sum."""
+    their sum; and per HTTP route each request's own (loop, threads) CPU seconds."""
 
     means: dict[str, tuple[float, float]]
     counts: dict[str, int]
     total_s: float
+    each: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
 
 
 def attributed_costs(text: str) -> ClassCpu:
@@ -52,17 +53,22 @@ def attributed_costs(text: str) -> ClassCpu:
     if stream[2]:
         means[STREAM] = (stream[0] / stream[2], stream[1] / stream[2])
         counts[STREAM] = int(stream[2])
-    return ClassCpu(means, counts, float(total))
+    return ClassCpu(means, counts, float(total), dict(spent))
 
 
-def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None):
+def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, each=False):
     """The costs per request as a class spent them.  Each route's own CPU (its task's,
     ``seen`` by the probe in a load test) replaces one student's alone (``own``).  What the
     probe does not see -- the server's socket work, the collector; per frame of a lone
     stream, most of its cost -- is shared out in a class; with ``used`` (the CPU the same
     run used: "server", "client" seconds) each route's unseen part is scaled so that the
     class's requests and frames add up to the server's CPU, and the load generator's per
-    request to its own.  Routes the class run did not see keep one student's costs."""
+    request to its own.  Routes the class run did not see keep one student's costs.
+
+    ``each``: a route's costs are a list, one per request the class made (its own task's
+    CPU as the probe saw it, the unseen part as above), for the simulation to draw from:
+    a route's CPU varies (a dashboard redoing many sessions, a results read that solves, a
+    young collection run inside a request) and a p95 depends on it, not on the mean."""
     shared = routes = [r for r in costs if r in seen.means and r in own]
     unseen = {r: costs[r][0] - sum(own[r]) for r in routes}
     scale = client_scale = 1.0
@@ -75,21 +81,30 @@ def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None):
     adjusted = dict(costs)
     for route in routes:
         server, db, client, calls, trips, loop = costs[route]
-        loop_alone, (loop_class, threads_class) = own[route][0], seen.means[route]
-        loop_unseen = max(loop - loop_alone, 0.0)
-        threads_unseen = max(unseen[route] - loop_unseen, 0.0)
-        loop_now = loop_class + scale * loop_unseen
-        server_now = max(loop_now + threads_class + scale * threads_unseen, 1e-6)
-        adjusted[route] = (server_now, db, client * client_scale, calls, trips, loop_now,
-                           loop_class)  # fmt: skip
+        loop_unseen = max(loop - own[route][0], 0.0)
+        unseen_now = (scale * loop_unseen, scale * max(unseen[route] - loop_unseen, 0.0))
+        rest = (db, client * client_scale, calls, trips)
+        requests = seen.each.get(route) if each else None
+        mine = requests or [seen.means[route]]
+        made = [_with_own_cpu(rest, unseen_now, *cpu) for cpu in mine]
+        adjusted[route] = made if requests else made[0]
     return adjusted, scale, client_scale
+
+
+def _with_own_cpu(rest, unseen, loop_own: float, threads_own: float) -> tuple[float, ...]:
+    """A request's costs (server, db, client, calls, trips, loop, its own task's loop
+    part) from its own task's CPU on the loop and in threads, and the unseen parts."""
+    db, client, calls, trips = rest
+    loop_now = loop_own + unseen[0]
+    server_now = max(loop_now + threads_own + unseen[1], 1e-6)
+    return (server_now, db, client, calls, trips, loop_now, loop_own)
 
 
 def server_times(path: Path) -> dict[str, np.ndarray]:
     """Per route, each request's (waited for a work place, server time) in ms, from the
-    probe's ``GYROLAB_BENCH_SERVER_TIMES`` lines (``method path ms waited_ms``)."""
+    probe's ``GYROLAB_BENCH_SERVER_TIMES`` lines (``method path ms waited_ms [began_s pid]``)."""
     rows: dict[str, list[tuple[float, float]]] = defaultdict(list)
     for line in path.read_text().splitlines():
-        method, route, took, waited = line.split()
+        method, route, took, waited, *_when_and_where = line.split()
         rows[route_of(method, route)].append((float(waited), float(took)))
     return {route: np.array(values) for route, values in rows.items()}
