@@ -11,6 +11,8 @@ import sys
 from collections import defaultdict
 from pathlib import Path
 
+import numpy as np
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import load_test  # noqa: E402  (bench/, this file's folder)
@@ -18,7 +20,15 @@ import load_test  # noqa: E402  (bench/, this file's folder)
 FRAMES_PER_POSITION = 15  # 3 s of streaming (60 s at 20×), one frame every 0.2 s
 FRAME_SECONDS = 0.2
 TEACHER_PERIOD_S = 2.0
+SAVED = "WS save (last frame → saved)"  # as load_test.py names it
 STREAM = "stream frame"
+# A position streamed: its start (the checks and the mark, in a write transaction) and its
+# save (the readings stored), each with half of what a position's frames cost in threads
+# (the probe sees a stream's whole CPU, not its parts); the frames between cost only the
+# event loop's work and the client's.
+STREAM_START = "stream: a position started"
+STREAM_SAVE = "stream: a position saved"
+STREAMED = {STREAM, STREAM_START, STREAM_SAVE}
 
 
 def student_script():
@@ -53,6 +63,8 @@ WRITES = {
     "POST /lab/sessions/{id}/csv",
     "POST /lab/sessions/{id}/submit",
     "POST /lab/sessions/{id}/turn",
+    STREAM_START,
+    STREAM_SAVE,
 }
 LOGIN = "POST /login"
 LOGIN_LOCKED_S = 0.001
@@ -66,18 +78,35 @@ HASH_SLOTS = 4
 
 
 SWITCH_INTERVAL_S = 0.005  # CPython's sys.getswitchinterval()
+# The interpreter handed to a thread that was waiting for it: from the release to the
+# waiting thread's first instruction (woken by the GIL's condition variable, scheduled on a
+# core) nobody runs Python.  bench/bench_handoffs.py on the 2-core machine, 2026-11-27:
+# mean 30 / 33 / 38 / 39 µs in four runs.  A class's burst hands the interpreter on
+# thousands of times a second: ≈ 15 % of it.
+HANDOFF_S = 35e-6
+# A round trip to PostgreSQL beyond the CPU both sides spend on it (loopback, wake-ups):
+# bench/bench_handoffs.py --postgresql, mean 14 / 20 µs.  A request's thread gives up the
+# interpreter at each round trip, as at each SQLite call, and waits for the server.
+ROUND_TRIP_S = 17e-6
+# A thread woken when more is asked of the cores than they have waits for one: most times
+# a few µs, now and then a whole time slice.  bench/bench_handoffs.py, a wake-up with every
+# core busy less one with a core free, mean: 30 / 101 / 122 / 128 / 158 µs in five runs.
+# Paid at each hand-off of the interpreter and by both wake-ups of a database round trip.
+WAKE_BUSY_S = 120e-6
 
 
 class Job:
     """CPU work in one pool; in the server's, cut into ``segments`` by the places where
-    the thread gives up the interpreter (and queues for it again)."""
+    the thread gives up the interpreter (and queues for it again); ``handing`` is what is
+    left of the hand-off to it (s of wall time: the interpreter is its, not yet running)."""
 
-    __slots__ = ("pool", "left", "done", "segment", "segment_left", "worker")
+    __slots__ = ("pool", "left", "done", "segment", "segment_left", "worker", "handing")
 
     def __init__(self, pool: str, work: float, done, segments: float = 1.0, worker: int = 0):
         self.pool, self.left, self.done = pool, max(work, 1e-6), done
         self.segment = self.segment_left = self.left / max(segments, 1.0)
         self.worker = worker
+        self.handing = 0.0
 
 
 def simulate(
@@ -93,8 +122,15 @@ def simulate(
     switch_interval_s: float = SWITCH_INTERVAL_S,
     teacher: bool = True,
     work_places: int = WORK_PLACES,
+    handoff_s: float = HANDOFF_S,
+    round_trip_s: float = ROUND_TRIP_S,
+    wake_busy_s: float = WAKE_BUSY_S,
+    seed: int = 2026,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
+    ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
+    the server's CPU on its event loop[, of it the request's own task's]), or a list of
+    such, one drawn at random for each request (a class's own requests, ``in_class``);
     ``one_writer``: write requests hold one lock while the server works on them;
     ``clients_elsewhere``: the clients are browsers on their own machines (a department),
     not a load generator sharing the server's cores; ``hash_s``: the CPU of a log-in's
@@ -108,12 +144,25 @@ def simulate(
     ``switch_interval_s``: each worker's interpreter runs one thread at a time, handed on
     round robin when the thread gives it up (a database call, a trip to the thread pool)
     or after this long with others waiting (0: the server's work is shared evenly instead,
-    as processor sharing).
+    as processor sharing); ``handoff_s``: each time the interpreter passes to a thread
+    that was waiting for it, it runs nothing for this long (the waiting thread is woken and
+    scheduled; no CPU is spent); ``round_trip_s``: with ``one_writer`` off (PostgreSQL), a
+    request's database calls are round trips to the database server: its thread's work is
+    cut at each, the database's share done and this long waited, then the interpreter
+    asked for again; ``wake_busy_s``: while more is asked of the cores than they have,
+    each of those wake-ups waits this much longer for a core; ``seed``: which worker each
+    connection reaches and which of a route's measured costs each request draws (the
+    students' start times are the load test's own).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
     it gives it up or another has waited ``switch_interval_s``.  A request that makes
-    many short database calls therefore waits about one turn of the others per call."""
+    many short database calls therefore waits about one turn of the others per call.
+
+    Returns "latencies" (per route, s), "server" (per route, each HTTP request's wait for
+    a work place and time from asking for it to the answer, s), "trace" (each HTTP
+    request's asked / admitted / answered times and route), "wall", "cpu" asked of each
+    pool, and "lock held" (each SQLite write's time holding the lock)."""
     capacity = {"client": float("inf") if clients_elsewhere else 1.0}
     capacity |= {"server": float(workers), "db": cores, "hash": float(HASH_SLOTS * workers)}
     capacity["loop"] = float(workers)
@@ -126,6 +175,8 @@ def simulate(
     # what the probe's GYROLAB_BENCH_SERVER_TIMES measures in the server
     inside: dict[str, list[tuple[float, float]]] = defaultdict(list)
     finished = [0]
+    crowded = [False]  # whether more is asked of the cores than they have, now
+    trace: list[tuple[float, float, float, str]] = []  # asked, admitted, answered, route
 
     def at(when: float, callback) -> None:
         heapq.heappush(timers, (when, next(order), callback))
@@ -151,6 +202,12 @@ def simulate(
                 self.places += 1
 
     spent: dict[str, float] = defaultdict(float)  # CPU asked of each, s
+    streamed = costs[STREAM]
+    streamed = tuple(np.mean(streamed, axis=0)) if isinstance(streamed, list) else streamed
+    server, db, client, calls, trips, loop = streamed[:6]
+    half = FRAMES_PER_POSITION / 2
+    position_half = ((server - loop) * half, db * half, 0.0, calls * half, trips * half, 0.0)
+    frame = (loop, 0.0, client, 0.0, 0.0, loop)
     lock = Gate(1)
     lock_held: list[float] = []  # how long each write held it, s
     slots = Gate(write_slots * workers if write_slots else float("inf"))
@@ -158,7 +215,8 @@ def simulate(
 
     interpreters: list[list[Job]] = [[] for _ in range(workers)]  # [0] holds it
     turn_ends = [0.0] * workers
-    pick = random.Random(2026)
+    pick = random.Random(seed)  # which worker each new connection reaches
+    draw = random.Random(seed + 1)  # which of a route's measured requests this one costs
 
     def server_job(work: float, done, releases: float, worker: int) -> None:
         job = Job("server", work, done, releases + 1, worker)
@@ -187,11 +245,13 @@ def simulate(
             if len(queue) <= 2:
                 turn_ends[worker] = now + switch_interval_s
 
-    def phases(route: str, then) -> None:
-        server, db, client, calls, trips, loop, *inside_place = costs[route]
+    def phases(route: str, then, worker: int, cost: tuple | None = None) -> None:
+        cost = cost or costs[route]
+        if isinstance(cost, list):  # the class's own requests: one drawn at random
+            cost = cost[draw.randrange(len(cost))]
+        server, db, client, calls, trips, loop, *inside_place = cost
         releases = calls + trips  # a thread gives the interpreter up at each, and
         # the event loop at each wake-up: the request's bytes, its answer, each trip's end
-        worker = pick.randrange(workers)  # the kernel hands connections to workers
         spent["server"] += server
         spent["db"] += db
         spent["client"] += client
@@ -208,7 +268,12 @@ def simulate(
             work = [("lock", threads)]
         else:
             work = [("server", threads)]
-        http = route != STREAM  # a stream frame arrives on its WebSocket: no place
+        round_trips = 0 if one_writer else int(round(calls))
+        if round_trips:  # the thread's work between round trips to the database server
+            piece = work[0][1] / (round_trips + 1)
+            trip = [("thread", piece), ("db", db / round_trips), ("wait", round_trip_s)]
+            work[:1] = trip * round_trips + [("thread", piece)]
+        http = route not in STREAMED  # a stream arrives on its WebSocket: no work place
         # the event loop's part inside the app (routing, dependencies, the answer: the
         # request's own task, ``in_class``) runs holding the request's places; the rest
         # (the server reading and writing its socket) before and after
@@ -218,7 +283,7 @@ def simulate(
         stages += [("admit", 0.0)] if http else []
         stages += [("enter", 0.0)] if slotted else []
         stages += [("loop", loop_inside)] if loop_inside else []
-        stages += [*work, ("db", db)]
+        stages += [*work, ("db", db)] if not round_trips else work
         stages += [("leave", 0.0)] if slotted else []
         stages += [("dismiss", 0.0)] if http else []
         stages += [("loop", outside / 2), ("client", client / 2)]
@@ -246,6 +311,7 @@ def simulate(
                 places[worker].enter(admitted)
             elif pool == "dismiss":
                 inside[route].append((waited[0], now - asked[0]))
+                trace.append((asked[0], asked[0] + waited[0], now, route))
                 give_back()
                 run(i + 1)
             elif pool == "enter":
@@ -275,6 +341,10 @@ def simulate(
                     at(now + TURN_PATIENCE_S, impatient)
             elif pool == "server":
                 server_job(work, lambda: run(i + 1), share(work), worker)
+            elif pool == "thread":  # between round trips: only thread-pool trips cut it
+                server_job(work, lambda: run(i + 1), trips * work / threads, worker)
+            elif pool == "wait":  # the server and then this thread woken
+                at(now + work + 2 * wake_busy_s * crowded[0], lambda: run(i + 1))
             elif pool == "loop":
                 loop_task(work, lambda: run(i + 1), worker, 1 + trips / 2)
             else:
@@ -286,41 +356,60 @@ def simulate(
 
         run(0)
 
-    def request(route: str, then) -> None:
+    def request(route: str, then, worker: int) -> None:
         began = now
 
         def answered() -> None:
             latencies[route].append(now - began)
             then()
 
-        phases(route, answered)
+        phases(route, answered, worker)
 
-    def run_student(script) -> None:
+    def run_student(script, http: int, websocket: int) -> None:
+        """The student's next step; ``http``, ``websocket``: the workers its two connections
+        went to (a browser keeps its connection alive between requests: all of them reach
+        the worker that accepted it)."""
         step = next(script, None)
         if step is None:
             finished[0] += 1
             return
         kind, route = step
         if kind == "request":
-            request(route, lambda: run_student(script))
+            request(route, lambda: run_student(script, http, websocket), http)
             return
-        left = [FRAMES_PER_POSITION]
+        left, last_frame = [FRAMES_PER_POSITION], [0.0]
+
+        def started() -> None:
+            for j in range(1, FRAMES_PER_POSITION + 1):
+                at(now + j * FRAME_SECONDS, lambda: phases(STREAM, frame_done, websocket, frame))
 
         def frame_done() -> None:
             left[0] -= 1
             if left[0] == 0:
-                run_student(script)
+                last_frame[0] = now
+                phases(STREAM_SAVE, saved, websocket, position_half)
 
-        for j in range(1, FRAMES_PER_POSITION + 1):
-            at(now + j * FRAME_SECONDS, lambda: phases(STREAM, frame_done))
+        def saved() -> None:
+            latencies[SAVED].append(now - last_frame[0])
+            run_student(script, http, websocket)
+
+        phases(STREAM_START, started, websocket, position_half)
+
+    teachers_worker = pick.randrange(workers)
 
     def watch() -> None:
         if finished[0] < students:
-            request("GET dashboard (teacher)", lambda: at(now + TEACHER_PERIOD_S, watch))
+            request("GET dashboard (teacher)", look_again, teachers_worker)
+
+    def look_again() -> None:
+        at(now + TEACHER_PERIOD_S, watch)
+
+    def arrive() -> None:  # the kernel hands each new connection to a worker
+        run_student(student_script(), pick.randrange(workers), pick.randrange(workers))
 
     for index in range(students):
         start = random.Random(index).uniform(0, ramp)  # the load test's ramp
-        at(start, lambda: run_student(student_script()))
+        at(start, arrive)
     if teacher:
         at(0.0, watch)
 
@@ -332,18 +421,23 @@ def simulate(
         for job in jobs:
             counts[job.pool] += 1
         holders = running()
-        if holders:
-            counts["server"] += len(holders)
+        working = [job for job in holders if job.handing <= 0.0]  # on a core, not waking
+        if working:
+            counts["server"] += len(working)
         demand = {pool: min(n, capacity[pool]) for pool, n in counts.items()}
         shared = [pool for pool in demand if not (clients_elsewhere and pool == "client")]
         asked = sum(demand[pool] for pool in shared)
         scale = min(1.0, cores / asked) if asked else 1.0
+        crowded[0] = asked > cores + 1e-9
         rate = {pool: demand[pool] * (scale if pool in shared else 1.0) / counts[pool]
                 for pool in counts}  # fmt: skip
         if holders:
             rate["interpreter"] = scale  # a holder runs on one core, shared with the rest
         next_done = min((job.left / rate[job.pool] for job in jobs), default=float("inf"))
         for job in holders:
+            if job.handing > 0.0:
+                next_done = min(next_done, job.handing)
+                continue
             next_done = min(next_done, min(job.left, job.segment_left) / rate["interpreter"])
             if len(interpreters[job.worker]) > 1:
                 next_done = min(next_done, max(turn_ends[job.worker] - now, 0.0))
@@ -352,6 +446,9 @@ def simulate(
         for job in jobs:
             job.left -= rate[job.pool] * step
         for job in holders:
+            if job.handing > 0.0:
+                job.handing = job.handing - step if job.handing > step + 1e-15 else 0.0
+                continue
             job.left -= rate["interpreter"] * step
             job.segment_left -= rate["interpreter"] * step
         now += step
@@ -365,6 +462,8 @@ def simulate(
                 jobs.append(Job("loop", tasks[0][0], None, tasks[0][2], job.worker))
         for job in holders:
             queue = interpreters[job.worker]
+            if job.handing > 0.0:
+                continue  # still being handed the interpreter
             if job.left <= 1e-9 and job.pool == "loop":
                 tasks = loops[job.worker]
                 done.append(Job("loop", 0.0, tasks.pop(0)[1]))
@@ -385,6 +484,8 @@ def simulate(
             else:
                 continue
             turn_ends[job.worker] = now + switch_interval_s
+            if queue and queue[0] is not job:  # handed to a thread that waited for it
+                queue[0].handing = handoff_s + wake_busy_s * crowded[0]
         for job in done:
             job.done()
         while timers and timers[0][0] <= now + 1e-12:
@@ -396,4 +497,5 @@ def simulate(
         "wall": now,
         "cpu": dict(spent),
         "lock held": lock_held,
+        "trace": trace,
     }

@@ -34,16 +34,21 @@ def test_a_student_alone_waits_for_nothing_but_the_work_of_each_request():
         costs(), students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
     )
     expected = Counter(route for kind, route in queue_sim.student_script() if kind == "request")
+    saved = result["latencies"].pop(queue_sim.SAVED)
     assert {route: len(v) for route, v in result["latencies"].items()} == expected
     for route, latencies in result["latencies"].items():
         # client + server (its event loop's part included) + database, nothing waited
         assert latencies == pytest.approx([7 * MS] * len(latencies), abs=1e-5), route
+    # each position's save: half of what its 15 frames cost in threads and the database
+    # (a frame: 0.4 ms of server CPU, 0.1 of it the loop's, and 0.1 ms the database's)
+    assert saved == pytest.approx([7.5 * (0.3 + 0.1) * MS] * 8, abs=1e-5)
 
 
 def test_every_request_of_a_class_is_answered_and_the_cores_are_never_overdrawn():
     students, cores = 40, 2.0
     result = queue_sim.simulate(costs(), students, workers=1, cores=cores, teacher=False)
     expected = Counter(route for kind, route in queue_sim.student_script() if kind == "request")
+    assert len(result["latencies"].pop(queue_sim.SAVED)) == 8 * students  # every position
     counts = {route: len(v) for route, v in result["latencies"].items()}
     assert counts == {route: n * students for route, n in expected.items()}
     cpu = sum(result["cpu"].values())
@@ -229,6 +234,55 @@ def test_class_costs_replace_each_routes_own_cpu_and_keep_the_rest():
     assert adjusted["POST /login"] == table["POST /login"]  # not seen alone: unchanged
 
 
+def test_each_request_of_the_class_keeps_its_own_cpu():
+    """A route's requests do not cost the same (a dashboard that redoes many sessions, a
+    results read that solves): with ``each`` the costs are one per request the class made,
+    with the same unseen part, and their mean is the route's mean costs."""
+    lines = "\n".join(
+        [
+            "http GET /lab/sessions/12 3.000 5.000 0",
+            "http GET /lab/sessions/13 1.000 3.000 0",
+            "http GET /lab/sessions/14 2.000 31.000 0",
+        ]
+    )
+    seen = class_cpu.attributed_costs(lines)
+    route = "GET /lab/sessions/{id}"
+    assert np.array(seen.each[route]) == pytest.approx(
+        np.array([(3 * MS, 5 * MS), (1 * MS, 3 * MS), (2 * MS, 31 * MS)])
+    )
+    table = costs(server=10 * MS, loop=3 * MS)
+    own = {route: (2 * MS, 6 * MS)}
+    mean, _, _ = class_cpu.in_class(table, own, seen)
+    each, _, _ = class_cpu.in_class(table, own, seen, each=True)
+    assert isinstance(each[route], list) and len(each[route]) == 3
+    assert [cost[0] for cost in each[route]] == pytest.approx([10 * MS, 6 * MS, 35 * MS])
+    assert np.mean(each[route], axis=0) == pytest.approx(mean[route])
+    assert each["POST /login"] == table["POST /login"]  # not seen: one student's, as before
+
+
+def test_a_route_of_varied_requests_has_the_tail_of_its_slowest():
+    """Costs drawn per request: a lone student's page that costs 1 ms nine times in ten and
+    41 ms once has a p95 near the slow one's; costed at its mean (5 ms) every request
+    takes the mean."""
+    route = "GET /lab/sessions/{id}/results.json"
+    fast, slow = (1 * MS, 0.0, 0.0, 0.0, 0.0, 0.0), (41 * MS, 0.0, 0.0, 0.0, 0.0, 0.0)
+    table = costs(server=1 * MS, db=0.0, client=0.0, calls=0.0, trips=0.0, loop=0.0)
+    varied = dict(table, **{route: [fast] * 9 + [slow]})
+    at_mean = dict(table, **{route: tuple(np.mean(varied[route], axis=0))})
+    latencies = {}
+    for name, chosen in (("varied", varied), ("mean", at_mean)):
+        result = queue_sim.simulate(
+            chosen, 40, 1, 2.0, ramp=600.0, teacher=False, switch_interval_s=0.0
+        )
+        latencies[name] = np.array(result["latencies"][route])
+    # (students spread over ten minutes: now and then two requests meet, ≤ 1 ms apart)
+    assert latencies["mean"] == pytest.approx(np.full(80, 5 * MS), abs=0.5 * MS)
+    varied = latencies["varied"]
+    assert np.all((varied < 3 * MS) | ((varied > 40 * MS) & (varied < 43 * MS)))
+    assert 0.05 < np.mean(varied > 20 * MS) < 0.2
+    assert np.percentile(varied, 95) > 40 * MS > 7 * np.percentile(latencies["mean"], 95)
+
+
 def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
     """The unseen part of each request is scaled so that the class's requests and frames
     ask the server for the CPU the run used, and the load generator likewise."""
@@ -282,8 +336,30 @@ def test_the_event_loops_part_inside_the_app_holds_the_work_place():
     for route, pairs in result["server"].items():
         waited, inside = np.array(pairs).T
         assert inside == pytest.approx(np.full(len(inside), 4.6 * MS), abs=1e-5), route
+    result["latencies"].pop(queue_sim.SAVED)
     for route, latencies in result["latencies"].items():  # the same work in all
         assert latencies == pytest.approx([7 * MS] * len(latencies), abs=1e-5), route
+
+
+def test_each_streamed_position_starts_and_saves_in_the_write_lock():
+    """A position's start (its checks and mark) and its save are writes: on SQLite each
+    holds the one write lock, as the HTTP writes do and a log-in twice; the frames between
+    take no lock (a class whose positions end together queues its saves and turns)."""
+    result = queue_sim.simulate(
+        costs(), students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
+    )
+    writes = sum(
+        1 for kind, route in queue_sim.student_script() if kind == "request" and route in
+        queue_sim.WRITES
+    )  # fmt: skip
+    positions = sum(1 for kind, _ in queue_sim.student_script() if kind == "stream")
+    assert positions == 8
+    assert len(result["lock held"]) == writes + 2 + 2 * positions  # + a log-in's two
+    # a position's start and save each hold it for half its frames' thread work (15 frames
+    # of 0.3 ms); the requests' writes for their threads' 3 ms, a log-in 1 ms twice
+    held = np.array(result["lock held"])
+    assert np.sum(np.isclose(held, 7.5 * 0.3 * MS, atol=1e-5)) == 2 * positions
+    assert np.sum(np.isclose(held, 3 * MS, atol=1e-5)) == writes
 
 
 def test_the_load_tests_browsers_share_one_tls_context():
@@ -295,3 +371,108 @@ def test_the_load_tests_browsers_share_one_tls_context():
 
     made = [load_test.browser(f"http://127.0.0.1:{port}") for port in (8001, 8002)]
     assert all(c._transport._pool._ssl_context is load_test.CLIENT_TLS for c in made)
+
+
+def test_a_hand_off_idles_the_interpreter_only_when_a_thread_waited_for_it():
+    """Each time the interpreter passes to a thread that was waiting for it, nobody runs
+    Python while that thread is woken (``handoff_s``).  A student alone never waits for the
+    interpreter, so hands nothing off: the same latencies with or without it; a crowded
+    class hands off at every call and is slower by it."""
+    alone = {
+        handoff: queue_sim.simulate(costs(), 1, 1, 2.0, ramp=0.0, teacher=False, handoff_s=handoff)[
+            "latencies"
+        ]
+        for handoff in (0.0, 1 * MS)
+    }
+    for route, latencies in alone[0.0].items():
+        assert alone[1 * MS][route] == pytest.approx(latencies, abs=1e-9), route
+    crowded = {
+        handoff: queue_sim.simulate(costs(), 40, 1, 2.0, teacher=False, handoff_s=handoff)
+        for handoff in (0.0, 0.2 * MS)
+    }
+    slow, fast = (crowded[h]["latencies"]["POST /lab/sessions/{id}/csv"] for h in (0.2 * MS, 0))
+    assert np.percentile(slow, 95) > 1.2 * np.percentile(fast, 95)
+    assert crowded[0.2 * MS]["cpu"] == pytest.approx(crowded[0.0]["cpu"])  # idle, not CPU
+
+
+def test_on_postgresql_each_database_call_is_a_round_trip():
+    """With no one writer (PostgreSQL) a request's thread stops at each database call: the
+    database server's share of the work, and ``round_trip_s`` of loopback and wake-ups.  A
+    student alone: each request's latency is its CPU (client, server, database) and one
+    round trip per call (10 calls here); on SQLite the calls run in the thread itself."""
+    postgres = queue_sim.simulate(
+        costs(), 1, 1, 2.0, ramp=0.0, teacher=False, one_writer=False, round_trip_s=0.1 * MS
+    )
+    sqlite = queue_sim.simulate(costs(), 1, 1, 2.0, ramp=0.0, teacher=False, round_trip_s=0.1 * MS)
+    for route in ("GET /lab/sessions/{id}", "POST /lab/sessions/{id}/csv"):
+        assert postgres["latencies"][route] == pytest.approx([8 * MS] * 2, abs=1e-5)
+        assert sqlite["latencies"][route] == pytest.approx([7 * MS] * 2, abs=1e-5)
+
+
+def test_a_wake_up_waits_longer_when_more_is_asked_of_the_cores_than_they_have():
+    """``wake_busy_s`` is paid at each round trip's two wake-ups and each hand-off only
+    while the cores are overdrawn: a student alone on two cores pays nothing; eight at
+    once on half a core (client, worker and database asking for more than it has) pay
+    it at every round trip."""
+
+    def mean_latency(students: int, cores: float, busy: float) -> float:
+        result = queue_sim.simulate(
+            costs(), students, 1, cores, ramp=0.0, teacher=False, one_writer=False,
+            wake_busy_s=busy,
+        )  # fmt: skip
+        return float(np.mean(result["latencies"]["GET /lab/sessions/{id}"]))
+
+    assert mean_latency(1, 2.0, 1 * MS) == pytest.approx(mean_latency(1, 2.0, 0.0), abs=1e-9)
+    assert mean_latency(8, 0.5, 1 * MS) > mean_latency(8, 0.5, 0.0) + 20 * MS
+
+
+def test_a_prediction_is_the_median_of_its_seeds():
+    """Which worker each connection reaches is random: a prediction combines simulations
+    with different seeds -- per route the median p95 and its range."""
+    one = {"latencies": {"GET /lab": [0.010] * 19 + [0.050]}, "server": {}, "cpu": {"server": 1.0},
+           "lock held": [0.001], "wall": 10.0}  # fmt: skip
+    two = {"latencies": {"GET /lab": [0.020] * 20}, "server": {}, "cpu": {"server": 3.0},
+           "lock held": [0.002], "wall": 12.0}  # fmt: skip
+    three = {"latencies": {"GET /lab": [0.030] * 20}, "server": {}, "cpu": {"server": 2.0},
+             "lock held": [], "wall": 11.0}  # fmt: skip
+    combined = queue_model.combine([one, two, three])
+    # the first seed's p95: 10 ms but for one 50 ms in twenty (interpolated: 12 ms)
+    assert combined["p95"]["GET /lab"] == pytest.approx(20.0)
+    assert combined["p95 range"]["GET /lab"] == pytest.approx((12.0, 30.0))
+    assert combined["cpu"]["server"] == pytest.approx(2.0)
+    assert combined["lock held"] == [0.001, 0.002] and combined["wall"] == 11.0
+
+
+PG_CALLS_SCRIPT = """
+import mmap, struct, sys
+from sqlalchemy import create_engine, text
+engine = create_engine(sys.argv[1])
+engine.connect().close()  # the dialect's first connection asks the server about itself
+held = open(sys.argv[2], "r+b")
+counts = mmap.mmap(held.fileno(), 16)
+before = struct.unpack("<2q", counts)[0]
+with engine.begin() as connection:
+    for _ in range(3):
+        connection.execute(text("SELECT 1")).all()
+print(struct.unpack("<2q", counts)[0] - before)
+"""
+
+
+def test_the_probe_counts_each_round_trip_to_postgresql(tmp_path, postgres):
+    """``GYROLAB_BENCH_PROBE`` counts PostgreSQL's round trips as the database calls of a
+    request (psycopg's statements and its BEGIN and COMMIT): three statements in one
+    transaction are five."""
+    import os
+    import subprocess
+
+    _, url = postgres.new_database()
+    probe = Path(queue_model.__file__).parent / "probe"
+    counts = tmp_path / "probe.bin"
+    counts.write_bytes(bytes(16))
+    env = {**os.environ, "PYTHONPATH": str(probe), "GYROLAB_BENCH_PROBE": str(counts)}
+    done = subprocess.run(
+        [sys.executable, "-c", PG_CALLS_SCRIPT, url, str(counts)],
+        env=env, timeout=60, capture_output=True, text=True,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert int(done.stdout) == 5

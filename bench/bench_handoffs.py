@@ -1,0 +1,183 @@
+"""What a hand-off costs on this machine, beyond CPU: the two waits the queueing model
+(``queue_sim.py``) adds to the CPU each request is measured to cost.
+
+    .venv/bin/python bench/bench_handoffs.py [--postgresql]
+
+1. The interpreter handed to a waiting thread.  Thread A runs Python for 2 ms, then makes a
+   call that releases the GIL (an SQLite query of ≈ 0.3 ms); thread B, waiting to run
+   Python, takes it.  The gap is from A's release to B's first instruction: B is woken by
+   the GIL's condition variable and scheduled on a core, and meanwhile nobody runs Python.
+   A class's burst hands the interpreter on thousands of times a second
+   (``queue_sim.HANDOFF_S``).
+2. A wake-up when every core is busy.  Two threads wake each other in turn (an event each
+   way) while one process per core spins: the woken thread waits for a core, most times a
+   few µs, now and then a whole time slice of the scheduler -- the mean is what a class's
+   burst pays at each hand-off and round trip when more is asked of the cores than they
+   have (``queue_sim.WAKE_BUSY_S``: the mean beyond the same wake-up with a core free).
+3. A round trip to PostgreSQL (``--postgresql``: a throw-away server on loopback): the wall
+   time of ``SELECT 1`` less the CPU spent on it by this thread and by the server's
+   backend -- the wake-ups and the loopback between them (``queue_sim.ROUND_TRIP_S``).
+
+Each is printed as p10 / p50 / p90 and mean over several hundred hand-offs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import bisect
+import multiprocessing
+import os
+import sqlite3
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+
+def interpreter_handoffs(count: int = 400) -> np.ndarray:
+    """Seconds from a thread's release of the interpreter to a waiting thread's first
+    instruction, ``count`` times."""
+    clock = time.perf_counter
+    marks: list[float] = []  # thread B's clock readings, as fast as it can take them
+    stop = threading.Event()
+
+    def waiting_thread() -> None:
+        mark = marks.append
+        while not stop.is_set():
+            mark(clock())
+
+    releases: list[float] = []
+
+    def releasing_thread() -> None:
+        connection = sqlite3.connect(":memory:")
+        connection.execute("CREATE TABLE t (x)")
+        connection.executemany("INSERT INTO t VALUES (?)", [(i,) for i in range(20_000)])
+        for _ in range(count):
+            busy_until = clock() + 0.002
+            while clock() < busy_until:  # Python: B waits for the interpreter
+                pass
+            releases.append(clock())
+            connection.execute("SELECT sum(x) FROM t").fetchone()  # B takes it meanwhile
+        connection.close()
+
+    other = threading.Thread(target=waiting_thread)
+    other.start()
+    time.sleep(0.05)
+    releasing = threading.Thread(target=releasing_thread)
+    releasing.start()
+    releasing.join()
+    stop.set()
+    other.join()
+    gaps = []
+    for released in releases:
+        after = bisect.bisect_right(marks, released)
+        if after < len(marks):
+            gaps.append(marks[after] - released)
+    return np.array(gaps)
+
+
+def _spin(stop) -> None:
+    while not stop.is_set():
+        pass
+
+
+def wake_ups(busy_processes: int, count: int = 3000) -> np.ndarray:
+    """Seconds of each wake-up (half a round trip of two threads waking each other) while
+    ``busy_processes`` processes spin; between round trips the waking thread runs Python
+    for 0.5 ms, as a thread holding the interpreter does."""
+    stop = multiprocessing.Event()
+    spinning = [multiprocessing.Process(target=_spin, args=(stop,)) for _ in range(busy_processes)]
+    for process in spinning:
+        process.start()
+    time.sleep(0.3)
+    ping, pong = threading.Event(), threading.Event()
+
+    def answering() -> None:
+        for _ in range(count):
+            ping.wait()
+            ping.clear()
+            pong.set()
+
+    other = threading.Thread(target=answering)
+    other.start()
+    time.sleep(0.05)
+    halves = []
+    try:
+        for _ in range(count):
+            began = time.perf_counter()
+            ping.set()
+            pong.wait()
+            pong.clear()
+            halves.append((time.perf_counter() - began) / 2)
+            busy_until = time.perf_counter() + 0.0005
+            while time.perf_counter() < busy_until:
+                pass
+    finally:
+        other.join()
+        stop.set()
+        for process in spinning:
+            process.join()
+    return np.array(halves)
+
+
+def postgresql_round_trips(count: int = 2000) -> np.ndarray:
+    """Seconds of each ``SELECT 1`` round trip beyond the CPU spent on it (this thread's and
+    the server backend's), against a throw-away server on loopback."""
+    import psycopg
+
+    from tests.pgserver import PostgresServer
+
+    server = PostgresServer().start(durable=True)
+    try:
+        url = server.create_database("gyrolab_handoffs").replace("postgresql+psycopg", "postgresql")
+        with psycopg.connect(url, autocommit=True) as connection:
+            backend = connection.execute("SELECT pg_backend_pid()").fetchone()[0]
+            stat = Path(f"/proc/{backend}/schedstat")
+
+            def backend_cpu() -> float:
+                return int(stat.read_text().split()[0]) / 1e9
+
+            for _ in range(100):  # warm: the statement prepared, the backend's caches
+                connection.execute("SELECT 1").fetchone()
+            beyond = []
+            for _ in range(count):
+                wall, mine, theirs = time.perf_counter(), time.thread_time(), backend_cpu()
+                connection.execute("SELECT 1").fetchone()
+                spent = (time.thread_time() - mine) + (backend_cpu() - theirs)
+                beyond.append(time.perf_counter() - wall - spent)
+                time.sleep(0.0005)  # both sides idle between, as in a request's pauses
+    finally:
+        server.stop()
+    return np.array(beyond)
+
+
+def describe(name: str, seconds: np.ndarray) -> str:
+    p10, p50, p90 = np.percentile(seconds, [10, 50, 90]) * 1e6
+    return (
+        f"{name}: p10 {p10:.0f} µs, p50 {p50:.0f} µs, p90 {p90:.0f} µs,"
+        f" mean {np.mean(seconds) * 1e6:.0f} µs over {len(seconds)}"
+    )
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--postgresql", action="store_true", help="also a PostgreSQL round trip")
+    args = parser.parse_args()
+    print(describe("the interpreter handed to a waiting thread", interpreter_handoffs()))
+    cores = os.cpu_count() or 1
+    free, busy = wake_ups(cores - 1), wake_ups(cores)
+    print(describe(f"a wake-up with a core free ({cores - 1} spinning)", free))
+    print(describe(f"a wake-up with every core busy ({cores} spinning)", busy))
+    print(f"  every core busy: {np.mean(busy - np.mean(free)) * 1e6:.0f} µs more a wake-up, mean")
+    if args.postgresql:
+        print(describe("a PostgreSQL round trip beyond its CPU", postgresql_round_trips()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
