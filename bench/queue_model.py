@@ -3,6 +3,7 @@
     .venv/bin/python bench/queue_model.py [--students 60 120] [--backend sqlite|postgresql]
                                           [--measure 3] [--compare FILE ...]
                                           [--costs FILE] [--department STUDENTS WORKERS ...]
+    .venv/bin/python bench/queue_model.py --costs FILE --class-cpu CPU ... --class-run RUN ...
 
 1. Measure: the load test's own scenario (``load_test.student``) runs for ``--measure``
    students one after another -- nothing else runs -- against a real server, and every
@@ -10,35 +11,43 @@
    nanoseconds; a thread that ends keeps its last reading), of it the event loop's (the
    worker's main thread), PostgreSQL's (every ``postgres`` process) and the load
    generator's own (``time.process_time``).  A probe loaded into that server only
-   (``bench/probe/sitecustomize.py``) counts each request's SQLite calls and thread-pool
-   trips: the places where its threads give up the interpreter.  What a student's stream
-   costs besides its requests (frames, the saves at each position's end) is divided by
-   the frames it received.  The CPU of one password check is measured in process.
+   (``bench/probe/sitecustomize.py``) counts each request's database calls (SQLite's, or
+   PostgreSQL's round trips) and thread-pool trips: the places where its threads give up
+   the interpreter.  What a student's stream costs besides its requests (frames, the saves
+   at each position's end) is divided by the frames it received.  The CPU of one password
+   check is measured in process.  With ``--class-cpu`` each request instead costs what
+   one of the class's own requests of its route cost, drawn at random (the probe's
+   ``GYROLAB_BENCH_REQUEST_CPU`` lines of a load test, ``class_cpu.py``), its unseen part
+   scaled so that the class's CPU adds up to what that run used.
 2. Predict: a discrete-event simulation replays the scenario for N students -- the same
-   start times as the load test; each request's client work, the event loop's first half
-   (the request read and routed), a work place (every HTTP request: 2 per worker,
-   ``web.admission``; a write waiting over 50 ms for the write lock gives it back), a write
-   place (state-changing requests: 8 per worker), the threads' work (on SQLite inside the
-   one write lock for the writes; a log-in's password hash outside the interpreter, at most
-   4 at once), the database's, the event loop's second half, the client's again; each
-   stream position 15 frames 0.2 s apart. Each worker's interpreter runs one thread at a
-   time, handed on round robin when a thread gives it up (at each counted call or trip; the
-   event loop at each wake-up) or after 5 ms with others waiting (CPython's GIL); the event
-   loop runs its tasks one by one. The load generator is one Python thread; every pool
-   shares the machine's cores (when more is asked of them than they have, each slows in
-   proportion).
+   start times as the load test; each student's connection reaches one worker and keeps
+   it; each request's client work, the event loop's first half (the request read and
+   routed), a work place (every HTTP request: 2 per worker, ``web.admission``; a write
+   waiting over 50 ms for the write lock gives it back), a write place (state-changing
+   requests: 8 per worker), the threads' work (on SQLite inside the one write lock for the
+   writes; on PostgreSQL cut at each round trip to the database server, whose share of
+   the work and a round trip's wait come between; a log-in's password hash outside the
+   interpreter, at most 4 at once), the event loop's second half, the client's again;
+   each stream position 15 frames 0.2 s apart. Each worker's interpreter runs one thread
+   at a time, handed on round robin when a thread gives it up (at each counted call or
+   trip; the event loop at each wake-up) or after 5 ms with others waiting (CPython's
+   GIL); each hand-off to a waiting thread leaves the interpreter idle while that thread
+   is woken (``queue_sim.HANDOFF_S``, measured by ``bench_handoffs.py``), longer when more
+   is asked of the cores than they have (``WAKE_BUSY_S``); the event loop runs its tasks
+   one by one. The load generator is one Python thread; every pool shares the machine's
+   cores (when more is asked of them than they have, each slows in proportion).  Each
+   prediction is the median of ``--seeds`` simulations (which worker each connection
+   reaches, which measured costs each request draws).
 3. Compare: ``--compare`` reads the tables ``load_test.py`` printed and puts each route's
-   measured p95 beside the prediction, and the CPU the run used beside the CPU the costs
-   ask for.
+   measured p95 (the median of the runs, and their range) beside the prediction, and the
+   CPU the runs used beside the CPU the costs ask for; with ``--class-cpu`` every
+   ``--class-run`` is predicted from the CPU per request measured in it, then the runs of
+   each class size are summed up: the median predicted and measured p95 per route and
+   each run's error.
 
-What the model still leaves out: the kernel's scheduling of threads on the cores (a
-thread holding the interpreter can be descheduled), the cost of handing the interpreter
-on, and that a class's requests cost less CPU each than one student's alone (the CPU
-check: 0.64–0.87× on the server), and whatever makes the measured writes queue for their
-places (p50 ≈ 0.5 s at 60 students on SQLite, where it predicts ≈ 0.15 s; it predicted a
-cut in the writes' statements would halve their p95, and the load test did not move).
-``bench/README.md`` has how far it is from measured.  The simulation is in ``queue_sim.py``,
-a class's own CPU per request (``--class-cpu``) is read in ``class_cpu.py``.
+``bench/README.md`` has how far it is from measured, and what it still leaves out.  The
+simulation is in ``queue_sim.py``; a class's own CPU per request is read in
+``class_cpu.py``.
 """
 
 from __future__ import annotations
@@ -310,118 +319,244 @@ def main() -> int:
     parser.add_argument(
         "--class-cpu",
         type=Path,
+        nargs="+",
         help="each route's own CPU as a class spent it: the file a load test's server wrote "
         "with the probe (PYTHONPATH=bench/probe GYROLAB_BENCH_REQUEST_CPU=FILE load_test.py), "
-        "in place of one student's alone",
+        "in place of one student's alone; several runs: each predicted from its own",
+    )
+    parser.add_argument(
+        "--seeds",
+        type=int,
+        default=5,
+        help="simulations per prediction, each with its own seed (which worker each "
+        "connection reaches, which measured costs each request draws); the p95 is their "
+        "median",
+    )
+    parser.add_argument(
+        "--mean-costs",
+        action="store_true",
+        help="with --class-cpu: every request of a route costs the route's mean (else each "
+        "simulated request costs one of the class's own requests, drawn at random)",
     )
     parser.add_argument(
         "--server-times",
         type=Path,
         nargs="*",
         default=[],
-        help="what the probe's GYROLAB_BENCH_SERVER_TIMES wrote in the compared runs (one "
-        "file per --students count, in order): the server's part of each latency, and of "
-        "it the wait for a work place, measured beside predicted",
+        help="what the probe's GYROLAB_BENCH_SERVER_TIMES wrote in the --class-run runs (one "
+        "file per run, in order): the server's part of each latency, and of it the wait "
+        "for a work place, measured beside predicted",
     )
     parser.add_argument(
         "--class-run",
         type=Path,
-        help="with --class-cpu: what load_test.py printed in that run; its CPU totals scale "
-        "what no request's own task does, and the load generator's CPU per request",
+        nargs="+",
+        help="with --class-cpu: what load_test.py printed in that run (one per --class-cpu "
+        "file, in order); its class size is the run's, its CPU totals scale what no "
+        "request's own task does and the load generator's CPU per request, and the run is "
+        "predicted and compared",
     )
     args = parser.parse_args()
     if args.costs and args.costs.exists():
         saved = json.loads(args.costs.read_text())
-        costs = {route: tuple(value) for route, value in saved["costs"].items()}
+        alone = {route: tuple(value) for route, value in saved["costs"].items()}
         own = {route: tuple(value) for route, value in saved.get("own", {}).items()}
         hash_s = saved["hash_s"]
     else:
-        (costs, own), hash_s = measure_costs(args.backend, args.measure), password_hash_cpu()
+        (alone, own), hash_s = measure_costs(args.backend, args.measure), password_hash_cpu()
         if args.costs:
-            saved = {"costs": costs, "own": own, "hash_s": hash_s}
+            saved = {"costs": alone, "own": own, "hash_s": hash_s}
             args.costs.write_text(json.dumps(saved, indent=1))
-    if args.class_cpu:
-        if not own:
-            parser.error("--class-cpu needs costs measured with each request's own CPU")
-        seen = attributed_costs(args.class_cpu.read_text())
-        used = None
-        if args.class_run:
-            table = next(iter(measured_p95(args.class_run).values()))
-            used = {"server": table["cpu server"], "client": table["cpu client"]}
-        costs, scale, client_scale = in_class(costs, own, seen, used)
-        print(f"each route's own CPU as the class in {args.class_cpu} spent it:")
-        for route in sorted(set(seen.means) & set(own)):
-            alone, there = sum(own[route]) * 1000, sum(seen.means[route]) * 1000
-            print(f"  {route:42s} alone {alone:6.2f} ms, in the class {there:6.2f} ms"
-                  f" ({there / alone:.2f}×)")  # fmt: skip
-        if used:
-            print(
-                f"  what no request's own task does: {scale:.2f}× one student's, and the load"
-                f" generator's CPU per request {client_scale:.2f}× (the CPU that run used)"
-            )
+    if args.class_cpu and (not own or len(args.class_run or []) != len(args.class_cpu)):
+        parser.error("--class-cpu needs costs measured with each request's own CPU, and one "
+                     "--class-run per --class-cpu file")  # fmt: skip
     print(f"a log-in's password hash: {hash_s * 1000:.1f} ms of CPU, outside the interpreter")
-    print(f"per request, {args.backend}: CPU ms (server, of it on the event loop / database /"
-          " load generator), SQLite calls, thread-pool trips")  # fmt: skip
-    for route, (server, db, client, calls, trips, loop, *_) in sorted(costs.items()):
-        print(f"  {route:42s} {server * 1000:6.2f}, {loop * 1000:5.2f} {db * 1000:6.2f}"
-              f" {client * 1000:6.2f} {calls:6.1f} {trips:5.1f}")  # fmt: skip
     workers = 1 if args.backend == "sqlite" else 2
-    measured = {}
-    for path in args.compare:
-        for backend, table in measured_p95(path).items():
-            measured[(backend, _students_of(path))] = table
     name = "SQLite" if args.backend == "sqlite" else "PostgreSQL"
-    for students in args.students:
-        table = measured.get((name, students), {})
 
-        result = simulate(
-            costs,
-            students,
-            workers,
-            args.cores,
-            one_writer=workers == 1,
-            hash_s=hash_s,
-            write_slots=args.write_slots,
-            switch_interval_s=args.switch_interval / 1000,
-            work_places=args.work_places,
+    def predict(costs: dict, students: int) -> dict:
+        """The class simulated once per seed (which worker each connection reaches, which
+        measured costs each request draws), combined."""
+        return combine(
+            [
+                simulate(
+                    costs,
+                    students,
+                    workers,
+                    args.cores,
+                    one_writer=workers == 1,
+                    hash_s=hash_s,
+                    write_slots=args.write_slots,
+                    switch_interval_s=args.switch_interval / 1000,
+                    work_places=args.work_places,
+                    seed=2026 + seed,
+                )
+                for seed in range(args.seeds)
+            ]
         )
-        print(f"\n{students} students, {name}, {workers} worker(s): predicted wall "
-              f"{result['wall']:.1f} s")  # fmt: skip
-        for key, label in (("server", "server"), ("db", "PostgreSQL"), ("client", "load gen.")):
-            asked, used = result["cpu"].get(key, 0.0), table.get(f"cpu {key}")
-            if used:
-                print(f"  CPU of the {label}: {asked:.1f} s from the costs per request, "
-                      f"{used:.1f} s used in the measured run ({used / asked:.2f}×)")  # fmt: skip
-        if result["lock held"]:
-            held = np.percentile(result["lock held"], [50, 95]) * 1000
-            print(f"  SQLite's write lock held (wall) p50 {held[0]:.1f} ms, p95 {held[1]:.1f} ms")
-        print(f"  {'route':42s} {'p50':>6s} {'p95':>6s} {'measured p95':>13s} {'error':>6s}")
-        for route, values in sorted(result["latencies"].items()):
-            p50, p95 = (np.percentile(values, q) * 1000 for q in (50, 95))
-            seen = table.get(route)
-            error = f"{(p95 - seen) / seen * 100:+.0f} %" if seen else ""
-            shown = f"{seen:.0f}" if seen else "-"
-            print(f"  {route:42s} {p50:6.0f} {p95:6.0f} {shown:>13s} {error:>6s}")
-        if len(args.server_times) > args.students.index(students):
-            measured_inside = server_times(args.server_times[args.students.index(students)])
-            print(f"  inside the server, p50 / p95 ms: {'waited for a place':>24s}"
-                  f" {'from there to the answer':>26s}")  # fmt: skip
-            print(f"  {'route':42s} {'predicted':>12s} {'measured':>11s}"
-                  f" {'predicted':>12s} {'measured':>11s}")  # fmt: skip
-            for route, pairs in sorted(result["server"].items()):
-                model = np.percentile(np.array(pairs) * 1000, [50, 95], axis=0)
-                seen = measured_inside.get(route)
-                cells = [f"{model[0][0]:5.0f} /{model[1][0]:5.0f}", "-",
-                         f"{model[0][1]:5.0f} /{model[1][1]:5.0f}", "-"]  # fmt: skip
-                if seen is not None:
-                    real = np.percentile(seen, [50, 95], axis=0)
-                    cells[1] = f"{real[0][0]:4.0f} /{real[1][0]:5.0f}"
-                    cells[3] = f"{real[0][1]:4.0f} /{real[1][1]:5.0f}"
-                print(f"  {route:42s} {cells[0]:>12s} {cells[1]:>11s} {cells[2]:>12s}"
-                      f" {cells[3]:>11s}")  # fmt: skip
+
+    costs = alone
+    if args.class_cpu:  # each run predicted from the CPU per request measured in it
+        predicted: dict[int, list[tuple[dict, dict]]] = defaultdict(list)
+        for index, (cpu, run) in enumerate(zip(args.class_cpu, args.class_run, strict=True)):
+            students = _students_of(run)
+            costs = class_costs(alone, own, cpu, run, not args.mean_costs)
+            print_costs(costs, args.backend)
+            result = predict(costs, students)
+            table = measured_p95(run)[name]
+            print(f"\n{students} students, {name}, {workers} worker(s), the run in {run}:"
+                  f" predicted wall {result['wall']:.1f} s")  # fmt: skip
+            compare(result, [table])
+            if len(args.server_times) > index:
+                inside_the_server(result, server_times(args.server_times[index]))
+            predicted[students].append((result, table))
+        for students, pairs in sorted(predicted.items()):
+            summary(students, name, pairs)
+    else:
+        measured: dict[tuple[str, int | None], list[dict[str, float]]] = defaultdict(list)
+        for path in args.compare:
+            for backend, table in measured_p95(path).items():
+                measured[(backend, _students_of(path))].append(table)
+        print_costs(costs, args.backend)
+        for students in args.students:
+            runs = measured.get((name, students), [])
+            result = predict(costs, students)
+            print(f"\n{students} students, {name}, {workers} worker(s): predicted wall "
+                  f"{result['wall']:.1f} s; measured runs: {len(runs)}")  # fmt: skip
+            compare(result, runs)
     if args.department:
         department(costs, hash_s, args.department[0], args.department[1:], args.switch_interval)
     return 0
+
+
+def combine(results: list[dict]) -> dict:
+    """Simulations of one class with different seeds as one prediction: per route the
+    median over the seeds of the p50 and p95 (ms) and the p95s' lowest and highest; the
+    CPU asked (the mean), and the waits inside the server and the write lock's holds of
+    all seeds together."""
+    routes = set.intersection(*(set(result["latencies"]) for result in results))
+    p95 = {r: [np.percentile(x["latencies"][r], 95) * 1000 for x in results] for r in routes}
+    p50 = {r: [np.percentile(x["latencies"][r], 50) * 1000 for x in results] for r in routes}
+    server: dict[str, list] = defaultdict(list)
+    for result in results:
+        for route, pairs in result["server"].items():
+            server[route] += pairs
+    keys = set().union(*(result["cpu"] for result in results))
+    return {
+        "p95": {route: float(np.median(values)) for route, values in p95.items()},
+        "p95 range": {route: (min(values), max(values)) for route, values in p95.items()},
+        "p50": {route: float(np.median(values)) for route, values in p50.items()},
+        "cpu": {key: float(np.mean([x["cpu"].get(key, 0.0) for x in results])) for key in keys},
+        "lock held": [held for result in results for held in result["lock held"]],
+        "server": dict(server),
+        "wall": float(np.median([result["wall"] for result in results])),
+        "seeds": len(results),
+    }
+
+
+def summary(students: int, name: str, pairs: list[tuple[dict, dict]]) -> None:
+    """Over the runs at one class size, each predicted from its own CPU: per route the
+    median predicted and measured p95 and the error between them, and each run's error."""
+    print(f"\n{students} students, {name}: {len(pairs)} runs, each predicted from its own CPU"
+          " per request; p95 ms, median over the runs")  # fmt: skip
+    print(f"  {'route':42s} {'predicted':>9s} {'measured':>9s} {'error':>6s}  each run's error")
+    routes = sorted(set.intersection(*(set(r["p95"]) & set(t) for r, t in pairs)))
+    for route in routes:
+        model = [r["p95"][route] for r, _ in pairs]
+        seen = [t[route] for _, t in pairs]
+        each = " ".join(f"{(m - s) / s * 100:+.0f}" for m, s in zip(model, seen, strict=True))
+        middle_model, middle_seen = float(np.median(model)), float(np.median(seen))
+        error = (middle_model - middle_seen) / middle_seen * 100
+        print(f"  {route:42s} {middle_model:9.0f} {middle_seen:9.0f} {error:+5.0f}%  {each}")
+
+
+def class_costs(alone, own, cpu: Path, run: Path | None, each: bool) -> dict:
+    """The costs per request as the class in ``cpu`` (the probe's lines) spent them,
+    printed beside one student's alone; ``run``: what load_test.py printed in that run
+    (its CPU totals); ``each``: a list per route, one per request the class made."""
+    seen = attributed_costs(cpu.read_text())
+    used = None
+    if run:
+        table = next(iter(measured_p95(run).values()))
+        used = {"server": table["cpu server"], "client": table["cpu client"]}
+    costs, scale, client_scale = in_class(alone, own, seen, used, each=each)
+    print(f"\neach route's own CPU as the class in {cpu} spent it:")
+    for route in sorted(set(seen.means) & set(own)):
+        one, there = sum(own[route]) * 1000, sum(seen.means[route]) * 1000
+        spread = ""
+        if route in seen.each:
+            mine = np.sum(seen.each[route], axis=1) * 1000
+            spread = f", p95 {np.percentile(mine, 95):6.2f} ms"
+        print(f"  {route:42s} alone {one:6.2f} ms, in the class {there:6.2f} ms"
+              f" ({there / one:.2f}×){spread}")  # fmt: skip
+    if used:
+        print(
+            f"  what no request's own task does: {scale:.2f}× one student's, and the load"
+            f" generator's CPU per request {client_scale:.2f}× (the CPU that run used)"
+        )
+    return costs
+
+
+def print_costs(costs: dict, backend: str) -> None:
+    """Each route's mean costs per request, as the simulation takes them."""
+    print(f"per request, {backend}: CPU ms (server, of it on the event loop / database /"
+          " load generator), SQLite calls, thread-pool trips (a route's mean)")  # fmt: skip
+    for route, cost in sorted(costs.items()):
+        mean = np.mean(cost, axis=0) if isinstance(cost, list) else cost
+        server, db, client, calls, trips, loop, *_ = mean
+        print(f"  {route:42s} {server * 1000:6.2f}, {loop * 1000:5.2f} {db * 1000:6.2f}"
+              f" {client * 1000:6.2f} {calls:6.1f} {trips:5.1f}")  # fmt: skip
+
+
+def compare(result: dict, runs: list[dict[str, float]]) -> None:
+    """The predicted p50 / p95 of each route (the median over the seeds, and the p95's
+    range) beside the measured runs' p95: their median, lowest and highest (one run's p95
+    moves by tens of per cent from run to run at the same load: the model is held to the
+    median), and the error against the median."""
+    for key, label in (("server", "server"), ("db", "PostgreSQL"), ("client", "load gen.")):
+        asked = result["cpu"].get(key, 0.0)
+        used = [run[f"cpu {key}"] for run in runs if run.get(f"cpu {key}")]
+        if used and asked:
+            middle = float(np.median(used))
+            print(f"  CPU of the {label}: {asked:.1f} s from the costs per request, "
+                  f"{middle:.1f} s used in the measured runs"
+                  f" (median, {middle / asked:.2f}×)")  # fmt: skip
+    if result["lock held"]:
+        held = np.percentile(result["lock held"], [50, 95]) * 1000
+        print(f"  SQLite's write lock held (wall) p50 {held[0]:.1f} ms, p95 {held[1]:.1f} ms")
+    print(f"  {'route':42s} {'p50':>6s} {'p95 (seeds range)':>18s}"
+          f" {'measured p95 median (range)':>28s} {'error':>6s}")  # fmt: skip
+    for route in sorted(result["p95"]):
+        p50, p95 = result["p50"][route], result["p95"][route]
+        low, high = result["p95 range"][route]
+        predicted = f"{p95:.0f} ({low:.0f}–{high:.0f})"
+        seen = [run[route] for run in runs if route in run]
+        shown, error = "-", ""
+        if seen:
+            middle = float(np.median(seen))
+            shown = f"{middle:.0f} ({min(seen):.0f}–{max(seen):.0f})"
+            error = f"{(p95 - middle) / middle * 100:+.0f} %"
+        print(f"  {route:42s} {p50:6.0f} {predicted:>18s} {shown:>28s} {error:>6s}")
+
+
+def inside_the_server(result: dict, measured_inside: dict[str, np.ndarray]) -> None:
+    """The wait for a work place and the time from asking for it to the answer, p50 / p95,
+    predicted beside what the probe measured in the server."""
+    print(f"  inside the server, p50 / p95 ms: {'waited for a place':>24s}"
+          f" {'from there to the answer':>26s}")  # fmt: skip
+    print(f"  {'route':42s} {'predicted':>12s} {'measured':>11s}"
+          f" {'predicted':>12s} {'measured':>11s}")  # fmt: skip
+    for route, pairs in sorted(result["server"].items()):
+        model = np.percentile(np.array(pairs) * 1000, [50, 95], axis=0)
+        seen = measured_inside.get(route)
+        cells = [f"{model[0][0]:5.0f} /{model[1][0]:5.0f}", "-",
+                 f"{model[0][1]:5.0f} /{model[1][1]:5.0f}", "-"]  # fmt: skip
+        if seen is not None:
+            real = np.percentile(seen, [50, 95], axis=0)
+            cells[1] = f"{real[0][0]:4.0f} /{real[1][0]:5.0f}"
+            cells[3] = f"{real[0][1]:4.0f} /{real[1][1]:5.0f}"
+        print(f"  {route:42s} {cells[0]:>12s} {cells[1]:>11s} {cells[2]:>12s}"
+              f" {cells[3]:>11s}")  # fmt: skip
 
 
 DEPARTMENT_ROUTES = {
