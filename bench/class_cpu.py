@@ -5,7 +5,7 @@ and the queueing model's costs per request made from them."""
 from __future__ import annotations
 
 import re
-from collections import defaultdict
+from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -108,3 +108,18 @@ def server_times(path: Path) -> dict[str, np.ndarray]:
         method, route, took, waited, *_when_and_where = line.split()
         rows[route_of(method, route)].append((float(waited), float(took)))
     return {route: np.array(values) for route, values in rows.items()}
+
+
+def worker_shares(path: Path) -> list[float] | None:
+    """Each worker's share of the HTTP requests in the probe's ``GYROLAB_BENCH_SERVER_TIMES``
+    lines (largest first), or None where the lines do not say which worker answered.  The
+    kernel hands each new connection to whichever worker accepts it first, and a browser
+    keeps its connection: not an even split (33 % / 67 % of a 60-student run's requests)."""
+    served: Counter[str] = Counter()
+    for line in path.read_text().splitlines():
+        fields = line.split()
+        if len(fields) < 6:
+            return None
+        served[fields[5]] += 1
+    total = sum(served.values())
+    return sorted((count / total for count in served.values()), reverse=True) if total else None

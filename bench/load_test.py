@@ -50,6 +50,10 @@ from tests.pgserver import PostgresServer  # noqa: E402
 DATA = ROOT / "tests" / "data"
 PASSWORD = "load-test-pass-1"
 CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
+# GYROLAB_BENCH_CLIENT_TIMES=FILE: each HTTP request's ``method path sent_s answered_s``
+# (time.perf_counter, the same clock as the server probe's GYROLAB_BENCH_SERVER_TIMES), to
+# set the client's time of a request beside the server's
+CLIENT_TIMES = os.environ.get("GYROLAB_BENCH_CLIENT_TIMES")
 PARTS = ("heading", "latitude")
 # One TLS context for every simulated browser.  httpx builds a new one per client unless
 # given one, loading the CA bundle: ≈ 28 ms of the load generator's CPU per client, and
@@ -105,6 +109,7 @@ class Tally:
     streamed_samples: int = 0
     ws_extensions: set[str] = field(default_factory=set)  # what the server agreed to
     cpu: tuple[float, float, float] = (0.0, 0.0, 0.0)  # s: server, PostgreSQL, load generator
+    sent: list[str] = field(default_factory=list)  # with CLIENT_TIMES: each request's times
 
     async def request(
         self, client: httpx.AsyncClient, method: str, url: str, route: str, ok=(200,), **kw
@@ -116,6 +121,8 @@ class Tally:
             self.errors.append(f"{route}: {error!r}")
             raise
         self.latencies[route].append(time.perf_counter() - start)
+        if CLIENT_TIMES:
+            self.sent.append(f"{method} {url} {start:.6f} {time.perf_counter():.6f}\n")
         if response.status_code not in ok:
             self.errors.append(f"{route}: HTTP {response.status_code} {response.text[:200]}")
             raise RuntimeError(f"{route} answered {response.status_code}")
@@ -461,6 +468,8 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
 
                 before = cpu()
                 tally, wall = asyncio.run(run_class(server.url, course, assignment, args))
+                if CLIENT_TIMES:
+                    Path(CLIENT_TIMES).write_text("".join(tally.sent))
                 after = cpu()
                 tally.cpu = tuple(b - a for a, b in zip(before, after, strict=True))
             lost, checked = lost_samples(tally, database_url)

@@ -74,7 +74,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 
 import load_test  # noqa: E402  (bench/, the script's folder)
 from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
-from class_cpu import attributed_costs, in_class, server_times  # noqa: E402
+from class_cpu import attributed_costs, in_class, server_times, worker_shares  # noqa: E402
 from queue_sim import STREAM, SWITCH_INTERVAL_S, WORK_PLACES, WRITE_SLOTS, simulate  # noqa: E402
 
 from tests.e2e.conftest import running_server  # noqa: E402
@@ -345,7 +345,8 @@ def main() -> int:
         default=[],
         help="what the probe's GYROLAB_BENCH_SERVER_TIMES wrote in the --class-run runs (one "
         "file per run, in order): the server's part of each latency, and of it the wait "
-        "for a work place, measured beside predicted",
+        "for a work place, measured beside predicted; with several workers, each worker's "
+        "share of the run's requests is its chance of a new connection in the simulation",
     )
     parser.add_argument(
         "--class-run",
@@ -374,9 +375,10 @@ def main() -> int:
     workers = 1 if args.backend == "sqlite" else 2
     name = "SQLite" if args.backend == "sqlite" else "PostgreSQL"
 
-    def predict(costs: dict, students: int) -> dict:
+    def predict(costs: dict, students: int, shares: list[float] | None = None) -> dict:
         """The class simulated once per seed (which worker each connection reaches, which
-        measured costs each request draws), combined."""
+        measured costs each request draws), combined; ``shares``: each worker's chance of
+        a new connection."""
         return combine(
             [
                 simulate(
@@ -390,6 +392,7 @@ def main() -> int:
                     switch_interval_s=args.switch_interval / 1000,
                     work_places=args.work_places,
                     seed=2026 + seed,
+                    worker_shares=shares,
                 )
                 for seed in range(args.seeds)
             ]
@@ -402,13 +405,18 @@ def main() -> int:
             students = _students_of(run)
             costs = class_costs(alone, own, cpu, run, not args.mean_costs)
             print_costs(costs, args.backend)
-            result = predict(costs, students)
+            times = args.server_times[index] if len(args.server_times) > index else None
+            shares = worker_shares(times) if times and workers > 1 else None
+            if shares:
+                print("each worker's share of the run's requests (a new connection's chance):"
+                      f" {' / '.join(f'{share:.0%}' for share in shares)}")  # fmt: skip
+            result = predict(costs, students, shares)
             table = measured_p95(run)[name]
             print(f"\n{students} students, {name}, {workers} worker(s), the run in {run}:"
                   f" predicted wall {result['wall']:.1f} s")  # fmt: skip
             compare(result, [table])
-            if len(args.server_times) > index:
-                inside_the_server(result, server_times(args.server_times[index]))
+            if times:
+                inside_the_server(result, server_times(times))
             predicted[students].append((result, table))
         for students, pairs in sorted(predicted.items()):
             summary(students, name, pairs)

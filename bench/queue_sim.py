@@ -89,13 +89,15 @@ HANDOFF_S = 35e-6
 # interpreter at each round trip, as at each SQLite call, and waits for the server.
 ROUND_TRIP_S = 17e-6
 # A thread woken when more is asked of the cores than they have waits for one: most times
-# a few µs, now and then a whole time slice.  bench/bench_handoffs.py, a wake-up with every
-# core busy less one with a core free, mean: 30 / 101 / 122 / 128 / 158 µs in five runs;
-# in two runs of 3,000, p50 9 µs, 4.4 / 5.2 % over 1 ms (those 1.6 / 1.7 ms on average).
-# Paid at each hand-off of the interpreter and by both wake-ups of a database round trip:
-# as a slice of WAKE_BUSY_S / WAKE_SLICE_SHARE with that chance (the mean, and its tail).
-WAKE_BUSY_S = 120e-6
-WAKE_SLICE_SHARE = 0.05
+# a few µs, now and then a whole time slice, the more often the more is asked.
+# bench/bench_handoffs.py on 2 cores, a wake-up with 2 / 3 / 4 / 6 processes spinning (a
+# demand of 1.5 / 2 / 2.5 / 3.5 cores with the waking thread) less one with a core free:
+# mean 120 / 151 / 324 / 479 µs, p50 9 µs, 5 / 5 / 13 / 19 % over 1 ms (those 1.6-2.4 ms):
+# ≈ 195 µs for each core asked beyond the cores there are (least squares through 0).
+# Paid at each hand-off of the interpreter and by both wake-ups of a database round trip,
+# as a slice of WAKE_SLICE_S with the chance that gives that mean.
+WAKE_BUSY_S = 195e-6
+WAKE_SLICE_S = 2e-3
 
 
 class Job:
@@ -129,6 +131,7 @@ def simulate(
     round_trip_s: float = ROUND_TRIP_S,
     wake_busy_s: float = WAKE_BUSY_S,
     seed: int = 2026,
+    worker_shares: list[float] | None = None,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -153,10 +156,13 @@ def simulate(
     request's database calls are round trips to the database server: its thread's work is
     cut at each, the database's share done and this long waited, then the interpreter
     asked for again; ``wake_busy_s``: while more is asked of the cores than they have,
-    each of those wake-ups waits this much longer for a core, on average (a whole slice,
-    now and then: ``WAKE_SLICE_SHARE``); ``seed``: which worker each
+    each of those wake-ups waits this much longer for a core, on average, for each core
+    asked beyond them (a whole slice of ``WAKE_SLICE_S``, now and then); ``seed``: which worker each
     connection reaches and which of a route's measured costs each request draws (the
-    students' start times are the load test's own).
+    students' start times are the load test's own); ``worker_shares``: each worker's share
+    of the students' connections (the kernel's accept race is not even: a run on two
+    workers served 33 % and 67 % of the requests), else each connection to a worker at
+    random.
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -179,14 +185,13 @@ def simulate(
     # what the probe's GYROLAB_BENCH_SERVER_TIMES measures in the server
     inside: dict[str, list[tuple[float, float]]] = defaultdict(list)
     finished = [0]
-    crowded = [False]  # whether more is asked of the cores than they have, now
+    overdrawn = [0.0]  # the cores asked for now beyond the cores there are, per core
     waking = random.Random(seed + 2)
 
     def busy_wake() -> float:
         """How much longer a thread woken now waits for a core (s)."""
-        if not crowded[0] or waking.random() >= WAKE_SLICE_SHARE:
-            return 0.0
-        return wake_busy_s / WAKE_SLICE_SHARE
+        mean = wake_busy_s * overdrawn[0]
+        return WAKE_SLICE_S if mean and waking.random() < mean / WAKE_SLICE_S else 0.0
 
     trace: list[tuple[float, float, float, str]] = []  # asked, admitted, answered, route
 
@@ -407,6 +412,24 @@ def simulate(
 
         phases(STREAM_START, started, websocket, position_half)
 
+    def accepted(kind: int) -> list[int] | None:
+        """With ``worker_shares``: which worker each student's connection of one kind (0:
+        HTTP, 1: WebSocket) reaches -- each worker as many as its share, in random order."""
+        if worker_shares is None:
+            return None
+        counts = [round(share * students) for share in worker_shares]
+        counts[0] += students - sum(counts)
+        order = [worker for worker, count in enumerate(counts) for _ in range(count)]
+        random.Random(seed + 3 + kind).shuffle(order)
+        return order
+
+    https, websockets = accepted(0), accepted(1)
+    arrived = iter(range(students))
+
+    def accepting(connections: list[int] | None, student: int) -> int:
+        """The worker the kernel hands a new connection to."""
+        return pick.randrange(workers) if connections is None else connections[student]
+
     teachers_worker = pick.randrange(workers)
 
     def watch() -> None:
@@ -416,8 +439,9 @@ def simulate(
     def look_again() -> None:
         at(now + TEACHER_PERIOD_S, watch)
 
-    def arrive() -> None:  # the kernel hands each new connection to a worker
-        run_student(student_script(), pick.randrange(workers), pick.randrange(workers))
+    def arrive() -> None:
+        student = next(arrived)
+        run_student(student_script(), accepting(https, student), accepting(websockets, student))
 
     for index in range(students):
         start = random.Random(index).uniform(0, ramp)  # the load test's ramp
@@ -440,7 +464,7 @@ def simulate(
         shared = [pool for pool in demand if not (clients_elsewhere and pool == "client")]
         asked = sum(demand[pool] for pool in shared)
         scale = min(1.0, cores / asked) if asked else 1.0
-        crowded[0] = asked > cores + 1e-9
+        overdrawn[0] = max(asked / cores - 1.0, 0.0)
         rate = {pool: demand[pool] * (scale if pool in shared else 1.0) / counts[pool]
                 for pool in counts}  # fmt: skip
         if holders:

@@ -476,3 +476,27 @@ def test_the_probe_counts_each_round_trip_to_postgresql(tmp_path, postgres):
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert int(done.stdout) == 5
+
+
+def test_each_workers_share_of_a_runs_requests_is_read_from_the_probe(tmp_path):
+    """The server-times lines name the worker that answered: its share of the requests is
+    its chance of a new connection in the simulation; older lines without it give none."""
+    path = tmp_path / "times.txt"
+    lines = ["GET /lab 2.0 0.1 100.5 41"] * 3 + ["GET /lab 2.0 0.1 100.6 42"]
+    path.write_text("\n".join(lines) + "\n")
+    assert class_cpu.worker_shares(path) == pytest.approx([0.75, 0.25])
+    path.write_text("GET /lab 2.0 0.1 100.5\n")
+    assert class_cpu.worker_shares(path) is None
+
+
+def test_connections_reach_the_workers_in_their_shares():
+    """A class whose connections all reach one of two workers waits as on one; spread
+    evenly it waits less."""
+
+    def burst_p95(shares):
+        result = queue_sim.simulate(
+            costs(), 80, 2, 2.0, one_writer=False, teacher=False, worker_shares=shares
+        )
+        return np.percentile(result["latencies"]["POST /lab/sessions/{id}/csv"], 95)
+
+    assert burst_p95([1.0, 0.0]) > 1.5 * burst_p95([0.5, 0.5])
