@@ -9,11 +9,14 @@
    the GIL's condition variable and scheduled on a core, and meanwhile nobody runs Python.
    A class's burst hands the interpreter on thousands of times a second
    (``queue_sim.HANDOFF_S``).
-2. A wake-up when every core is busy.  Two threads wake each other in turn (an event each
-   way) while one process per core spins: the woken thread waits for a core, most times a
-   few µs, now and then a whole time slice of the scheduler -- the mean is what a class's
-   burst pays at each hand-off and round trip when more is asked of the cores than they
-   have (``queue_sim.WAKE_BUSY_S``: the mean beyond the same wake-up with a core free).
+2. A wake-up when more is asked of the cores than they have.  Two threads wake each other
+   in turn (an event each way) while processes spin: with a core free the woken thread runs
+   at once; with every core asked for, it waits for one, most times a few µs, now and then
+   a whole time slice of the scheduler, the more often the more is asked.  Measured with
+   ``cores`` − 1 (a core free), then ``cores`` … ``cores`` + 4 spinning; the mean beyond the
+   free case per core asked beyond the cores (the waking thread counted) is what a class's
+   burst pays at each hand-off and round trip (``queue_sim.WAKE_BUSY_S``; the chance of a
+   slice, ``WAKE_SLICE_S``, follows from it).
 3. A round trip to PostgreSQL (``--postgresql``: a throw-away server on loopback): the wall
    time of ``SELECT 1`` less the CPU spent on it by this thread and by the server's
    backend -- the wake-ups and the loopback between them (``queue_sim.ROUND_TRIP_S``).
@@ -170,10 +173,19 @@ def main() -> int:
     args = parser.parse_args()
     print(describe("the interpreter handed to a waiting thread", interpreter_handoffs()))
     cores = os.cpu_count() or 1
-    free, busy = wake_ups(cores - 1), wake_ups(cores)
+    free = wake_ups(cores - 1)
     print(describe(f"a wake-up with a core free ({cores - 1} spinning)", free))
-    print(describe(f"a wake-up with every core busy ({cores} spinning)", busy))
-    print(f"  every core busy: {np.mean(busy - np.mean(free)) * 1e6:.0f} µs more a wake-up, mean")
+    beyond, extra = [], []
+    for spinning in (cores, cores + 1, cores + 2, cores + 4):
+        busy = wake_ups(spinning)
+        asked = (spinning + 1) / cores - 1  # cores asked beyond the cores, per core
+        beyond.append(asked)
+        extra.append(np.mean(busy) - np.mean(free))
+        print(describe(f"a wake-up with {spinning} spinning", busy))
+        print(f"  {asked:.1f} cores asked beyond each core: {extra[-1] * 1e6:.0f} µs more, mean;"
+              f" over 1 ms: {np.mean(busy > 1e-3):.1%}")  # fmt: skip
+    slope = np.dot(beyond, extra) / np.dot(beyond, beyond)
+    print(f"  ≈ {slope * 1e6:.0f} µs more a wake-up for each core asked beyond each core")
     if args.postgresql:
         print(describe("a PostgreSQL round trip beyond its CPU", postgresql_round_trips()))
     return 0
