@@ -75,7 +75,15 @@ sys.path.insert(0, str(ROOT / "bench"))
 import load_test  # noqa: E402  (bench/, the script's folder)
 from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
 from class_cpu import attributed_costs, in_class, server_times, worker_shares  # noqa: E402
-from queue_sim import STREAM, SWITCH_INTERVAL_S, WORK_PLACES, WRITE_SLOTS, simulate  # noqa: E402
+from queue_sim import (  # noqa: E402
+    HANDOFF_S,
+    STREAM,
+    SWITCH_INTERVAL_S,
+    WAKE_BUSY_S,
+    WORK_PLACES,
+    WRITE_SLOTS,
+    simulate,
+)
 
 from tests.e2e.conftest import running_server  # noqa: E402
 from tests.pgserver import PostgresServer  # noqa: E402
@@ -325,6 +333,20 @@ def main() -> int:
         "in place of one student's alone; several runs: each predicted from its own",
     )
     parser.add_argument(
+        "--handoff-us",
+        type=float,
+        default=HANDOFF_S * 1e6,
+        help="the interpreter's hand-off to a waiting thread, µs (bench_handoffs.py's first "
+        "line; it drifts with the host: 30-55 µs seen on one machine in a day)",
+    )
+    parser.add_argument(
+        "--wake-busy-us",
+        type=float,
+        default=WAKE_BUSY_S * 1e6,
+        help="a wake-up's extra wait for each core asked beyond each core, µs "
+        "(bench_handoffs.py's last line; 195-266 µs seen)",
+    )
+    parser.add_argument(
         "--seeds",
         type=int,
         default=5,
@@ -393,6 +415,8 @@ def main() -> int:
                     work_places=args.work_places,
                     seed=2026 + seed,
                     worker_shares=shares,
+                    handoff_s=args.handoff_us / 1e6,
+                    wake_busy_s=args.wake_busy_us / 1e6,
                 )
                 for seed in range(args.seeds)
             ]
@@ -433,7 +457,10 @@ def main() -> int:
                   f"{result['wall']:.1f} s; measured runs: {len(runs)}")  # fmt: skip
             compare(result, runs)
     if args.department:
-        department(costs, hash_s, args.department[0], args.department[1:], args.switch_interval)
+        waits = {"handoff_s": args.handoff_us / 1e6, "wake_busy_s": args.wake_busy_us / 1e6}
+        department(
+            costs, hash_s, args.department[0], args.department[1:], args.switch_interval, waits
+        )
     return 0
 
 
@@ -576,7 +603,9 @@ DEPARTMENT_ROUTES = {
 }
 
 
-def department(costs, hash_s: float, students: int, workers: list[int], switch_ms: float):
+def department(
+    costs, hash_s: float, students: int, workers: list[int], switch_ms: float, waits: dict
+):
     """p95 per route of ``students`` starting within a minute, for each number of workers
     (one core each, PostgreSQL's CPU counted in it; browsers elsewhere)."""
     print(f"\ndepartment: {students} students starting within a minute, PostgreSQL; p95 ms "
@@ -587,7 +616,7 @@ def department(costs, hash_s: float, students: int, workers: list[int], switch_m
         share = -(-students // count)
         result = simulate(
             costs, share, 1, 1.0, ramp=60.0, one_writer=False, clients_elsewhere=True,
-            hash_s=hash_s, switch_interval_s=switch_ms / 1000,
+            hash_s=hash_s, switch_interval_s=switch_ms / 1000, **waits,
         )  # fmt: skip
         p95 = {route: np.percentile(v, 95) * 1000 for route, v in result["latencies"].items()}
         row = " ".join(f"{p95.get(route, float('nan')):9.0f}" for route in DEPARTMENT_ROUTES)
