@@ -21,7 +21,10 @@
    time of ``SELECT 1`` less the CPU spent on it by this thread and by the server's
    backend -- the wake-ups and the loopback between them (``queue_sim.ROUND_TRIP_S``).
 
-Each is printed as p10 / p50 / p90 and mean over several hundred hand-offs.
+Each is printed as p10 / p50 / p90 and mean over several hundred hand-offs.  They drift
+with the host (the hand-off 30-55 µs, the busy wake-up's slope 195-266 µs on one machine
+in a day): measure them in the hour of the runs to be predicted and give them to
+``queue_model.py --handoff-us … --wake-busy-us …``.
 """
 
 from __future__ import annotations
