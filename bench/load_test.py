@@ -468,10 +468,10 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
 
                 before = cpu()
                 tally, wall = asyncio.run(run_class(server.url, course, assignment, args))
-                if CLIENT_TIMES:
-                    Path(CLIENT_TIMES).write_text("".join(tally.sent))
                 after = cpu()
                 tally.cpu = tuple(b - a for a, b in zip(before, after, strict=True))
+                if CLIENT_TIMES:  # after the class's CPU is read: not counted in it
+                    Path(CLIENT_TIMES).write_text("".join(tally.sent))
             lost, checked = lost_samples(tally, database_url)
             if tally.errors:  # keep the server's log for the post-mortem
                 kept = Path(tempfile.gettempdir()) / f"gyrolab-load-{backend}-server.log"

@@ -170,9 +170,8 @@ def simulate(
     many short database calls therefore waits about one turn of the others per call.
 
     Returns "latencies" (per route, s), "server" (per route, each HTTP request's wait for
-    a work place and time from asking for it to the answer, s), "trace" (each HTTP
-    request's asked / admitted / answered times and route), "wall", "cpu" asked of each
-    pool, and "lock held" (each SQLite write's time holding the lock)."""
+    a work place and time from asking for it to the answer, s), "wall", "cpu" asked of
+    each pool, and "lock held" (each SQLite write's time holding the lock)."""
     capacity = {"client": float("inf") if clients_elsewhere else 1.0}
     capacity |= {"server": float(workers), "db": cores, "hash": float(HASH_SLOTS * workers)}
     capacity["loop"] = float(workers)
@@ -192,8 +191,6 @@ def simulate(
         """How much longer a thread woken now waits for a core (s)."""
         mean = wake_busy_s * overdrawn[0]
         return WAKE_SLICE_S if mean and waking.random() < mean / WAKE_SLICE_S else 0.0
-
-    trace: list[tuple[float, float, float, str]] = []  # asked, admitted, answered, route
 
     def at(when: float, callback) -> None:
         heapq.heappush(timers, (when, next(order), callback))
@@ -328,7 +325,6 @@ def simulate(
                 places[worker].enter(admitted)
             elif pool == "dismiss":
                 inside[route].append((waited[0], now - asked[0]))
-                trace.append((asked[0], asked[0] + waited[0], now, route))
                 give_back()
                 run(i + 1)
             elif pool == "enter":
@@ -533,5 +529,4 @@ def simulate(
         "wall": now,
         "cpu": dict(spent),
         "lock held": lock_held,
-        "trace": trace,
     }
