@@ -24,7 +24,9 @@
 Each is printed as p10 / p50 / p90 and mean over several hundred hand-offs.  They drift
 with the host (the hand-off 30-55 µs, the busy wake-up's slope 195-266 µs on one machine
 in a day): measure them in the hour of the runs to be predicted and give them to
-``queue_model.py --handoff-us … --wake-busy-us …``.
+``queue_model.py --handoff-us … --wake-busy-us …``, or let ``load_test.py --handoffs``
+measure them just before and after its class (``queue_model.py`` reads them from its
+output).
 """
 
 from __future__ import annotations
@@ -90,6 +92,25 @@ def interpreter_handoffs(count: int = 400) -> np.ndarray:
 def _spin(stop) -> None:
     while not stop.is_set():
         pass
+
+
+def handoffs_beside(spinning: int, count: int = 400) -> np.ndarray:
+    """``interpreter_handoffs`` while ``spinning`` processes keep cores busy: with no core
+    free, the thread woken for the interpreter waits for one, and meanwhile the thread that
+    released it takes it back at the end of its call (CPython's GIL is not handed in
+    order), so the waiting thread's gap grows to milliseconds while the interpreter itself
+    does not idle."""
+    stop = multiprocessing.Event()
+    processes = [multiprocessing.Process(target=_spin, args=(stop,)) for _ in range(spinning)]
+    for process in processes:
+        process.start()
+    time.sleep(0.3)
+    try:
+        return interpreter_handoffs(count)
+    finally:
+        stop.set()
+        for process in processes:
+            process.join()
 
 
 def wake_ups(busy_processes: int, count: int = 3000) -> np.ndarray:
@@ -170,25 +191,40 @@ def describe(name: str, seconds: np.ndarray) -> str:
     )
 
 
+def hand_off_constants(wakes: int = 3000, report=None) -> tuple[float, float]:
+    """The queueing model's two waits as this machine pays them now, seconds: the
+    interpreter's hand-off to a waiting thread (mean) and a wake-up's extra wait for each
+    core asked beyond each core (least squares through 0 over ``cores`` … ``cores`` + 4
+    processes spinning, against a core free); ``wakes``: wake-ups timed at each load;
+    ``report``: called with each measurement's line."""
+    say = report or (lambda line: None)
+    handoffs = interpreter_handoffs()
+    say(describe("the interpreter handed to a waiting thread", handoffs))
+    cores = os.cpu_count() or 1
+    free = wake_ups(cores - 1, wakes)
+    say(describe(f"a wake-up with a core free ({cores - 1} spinning)", free))
+    beyond, extra = [], []
+    for spinning in (cores, cores + 1, cores + 2, cores + 4):
+        busy = wake_ups(spinning, wakes)
+        asked = (spinning + 1) / cores - 1  # cores asked beyond the cores, per core
+        beyond.append(asked)
+        extra.append(np.mean(busy) - np.mean(free))
+        say(describe(f"a wake-up with {spinning} spinning", busy))
+        say(f"  {asked:.1f} cores asked beyond each core: {extra[-1] * 1e6:.0f} µs more, mean;"
+            f" over 1 ms: {np.mean(busy > 1e-3):.1%}")  # fmt: skip
+    slope = float(np.dot(beyond, extra) / np.dot(beyond, beyond))
+    return float(np.mean(handoffs)), slope
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--postgresql", action="store_true", help="also a PostgreSQL round trip")
     args = parser.parse_args()
-    print(describe("the interpreter handed to a waiting thread", interpreter_handoffs()))
-    cores = os.cpu_count() or 1
-    free = wake_ups(cores - 1)
-    print(describe(f"a wake-up with a core free ({cores - 1} spinning)", free))
-    beyond, extra = [], []
-    for spinning in (cores, cores + 1, cores + 2, cores + 4):
-        busy = wake_ups(spinning)
-        asked = (spinning + 1) / cores - 1  # cores asked beyond the cores, per core
-        beyond.append(asked)
-        extra.append(np.mean(busy) - np.mean(free))
-        print(describe(f"a wake-up with {spinning} spinning", busy))
-        print(f"  {asked:.1f} cores asked beyond each core: {extra[-1] * 1e6:.0f} µs more, mean;"
-              f" over 1 ms: {np.mean(busy > 1e-3):.1%}")  # fmt: skip
-    slope = np.dot(beyond, extra) / np.dot(beyond, beyond)
+    _, slope = hand_off_constants(report=print)
     print(f"  ≈ {slope * 1e6:.0f} µs more a wake-up for each core asked beyond each core")
+    busy = (os.cpu_count() or 1) - 1
+    print(describe(f"the interpreter handed on with {busy} process(es) spinning (no core free)",
+                   handoffs_beside(busy)))  # fmt: skip
     if args.postgresql:
         print(describe("a PostgreSQL round trip beyond its CPU", postgresql_round_trips()))
     return 0
