@@ -42,7 +42,8 @@ from websockets.asyncio.client import connect
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from capacity import cpu_seconds, postgres_pids, server_pids  # noqa: E402  (bench/)
+from bench_handoffs import hand_off_constants  # noqa: E402  (bench/)
+from capacity import cpu_seconds, postgres_pids, server_pids  # noqa: E402
 
 from tests.e2e.conftest import running_server  # noqa: E402
 from tests.pgserver import PostgresServer  # noqa: E402
@@ -54,6 +55,7 @@ CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
 # (time.perf_counter, the same clock as the server probe's GYROLAB_BENCH_SERVER_TIMES), to
 # set the client's time of a request beside the server's
 CLIENT_TIMES = os.environ.get("GYROLAB_BENCH_CLIENT_TIMES")
+HANDOFFS_LABEL = "hand-offs just before / after the class (bench_handoffs.py)"
 PARTS = ("heading", "latitude")
 # One TLS context for every simulated browser.  httpx builds a new one per client unless
 # given one, loading the CA bundle: ≈ 28 ms of the load generator's CPU per client, and
@@ -110,6 +112,9 @@ class Tally:
     ws_extensions: set[str] = field(default_factory=set)  # what the server agreed to
     cpu: tuple[float, float, float] = (0.0, 0.0, 0.0)  # s: server, PostgreSQL, load generator
     sent: list[str] = field(default_factory=list)  # with CLIENT_TIMES: each request's times
+    # with --handoffs: (the interpreter's hand-off, a busy wake-up's extra per core asked
+    # beyond each core), s, measured just before and just after the class
+    handoffs: list[tuple[float, float]] = field(default_factory=list)
 
     async def request(
         self, client: httpx.AsyncClient, method: str, url: str, route: str, ok=(200,), **kw
@@ -411,6 +416,15 @@ def report(name: str, tally: Tally, wall: float, lost: int, checked: int, worker
         f" {tally.cpu[1]:.1f} s, load generator {tally.cpu[2]:.1f} s",
         "- WebSocket extensions the server agreed to: "
         + (", ".join(sorted(tally.ws_extensions)) or "none"),
+    ]
+    if tally.handoffs:
+        handoffs = " / ".join(f"{h * 1e6:.0f}" for h, _ in tally.handoffs)
+        wakes = " / ".join(f"{w * 1e6:.0f}" for _, w in tally.handoffs)
+        lines.append(
+            f"- {HANDOFFS_LABEL}: the interpreter's {handoffs} µs, a busy wake-up {wakes} µs"
+            " a core asked beyond each core"
+        )
+    lines += [
         "",
         "| route | count | p50 ms | p95 ms | p99 ms | max ms |",
         "|---|---:|---:|---:|---:|---:|",
@@ -454,6 +468,8 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
             env = {**os.environ, "GYROLAB_VAR_DIR": var, "GYROLAB_DATABASE_URL": database_url}
             course, assignment = seed(env, args.students)
             url = database_url if backend == "postgresql" else None
+            # before the server starts: its first seconds' own work is not in the measurement
+            waits = [hand_off_constants()] if args.handoffs and not args.logins_only else []
             with running_server(var_dir, *serve_args, database_url=url) as server:
                 if args.logins_only:
                     text, passed = asyncio.run(login_burst(server.url, args.students))
@@ -469,6 +485,7 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
                 before = cpu()
                 tally, wall = asyncio.run(run_class(server.url, course, assignment, args))
                 after = cpu()
+                tally.handoffs = waits + ([hand_off_constants()] if args.handoffs else [])
                 tally.cpu = tuple(b - a for a, b in zip(before, after, strict=True))
                 if CLIENT_TIMES:  # after the class's CPU is read: not counted in it
                     Path(CLIENT_TIMES).write_text("".join(tally.sent))
@@ -503,6 +520,12 @@ def main() -> int:
         "--logins-only",
         action="store_true",
         help="only the log-in burst: every student logs in at the same instant (goal ≤ 3 s)",
+    )
+    parser.add_argument(
+        "--handoffs",
+        action="store_true",
+        help="measure the interpreter's hand-off and a busy wake-up (bench_handoffs.py, "
+        "≈ 15 s each time) just before and just after the class, for queue_model.py",
     )
     args = parser.parse_args()
     backends = ("sqlite", "postgresql") if args.backend == "both" else (args.backend,)
