@@ -4,6 +4,7 @@
                                           [--measure 3] [--compare FILE ...]
                                           [--costs FILE] [--department STUDENTS WORKERS ...]
     .venv/bin/python bench/queue_model.py --costs FILE --class-cpu CPU ... --class-run RUN ...
+                                          [--server-times TIMES ...] [--seeds 20]
 
 1. Measure: the load test's own scenario (``load_test.student``) runs for ``--measure``
    students one after another -- nothing else runs -- against a real server, and every
@@ -41,9 +42,13 @@
 3. Compare: ``--compare`` reads the tables ``load_test.py`` printed and puts each route's
    measured p95 (the median of the runs, and their range) beside the prediction, and the
    CPU the runs used beside the CPU the costs ask for; with ``--class-cpu`` every
-   ``--class-run`` is predicted from the CPU per request measured in it, then the runs of
-   each class size are summed up: the median predicted and measured p95 per route and
-   each run's error.
+   ``--class-run`` is predicted from the CPU per request measured in it (and with the
+   hand-off and busy wake-up measured just before and after its class, where
+   ``load_test.py --handoffs`` measured them: they drift with the host), then the runs of
+   each class size are summed up: the median predicted and measured p95 per route, each
+   run's error, and whether each run's p95 lies inside the band its seeds gave (the 10th
+   to 90th percentile of the seeds' p95: how far one run's p95 moves by chance alone, so
+   how near any prediction of one run can be; ``--seeds 20`` for a band worth reading).
 
 ``bench/README.md`` has how far it is from measured, and what it still leaves out.  The
 simulation is in ``queue_sim.py``; a class's own CPU per request is read in
@@ -270,9 +275,16 @@ CPU_LINE = re.compile(
 )
 
 
+HANDOFFS_LINE = re.compile(
+    r"the interpreter's ([\d /]+) µs, a busy wake-up ([\d /-]+) µs a core asked beyond"
+)
+
+
 def measured_p95(path: Path) -> dict[str, dict[str, float]]:
     """Per backend heading ("SQLite", "PostgreSQL") → route → p95 ms, from load_test's output
-    (and, under the keys "cpu server", "cpu db", "cpu client", the CPU the run used, s)."""
+    (and, under the keys "cpu server", "cpu db", "cpu client", the CPU the run used, s; with
+    ``load_test.py --handoffs``, under "handoff us" and "wake busy us" the mean of what was
+    measured just before and after the class)."""
     tables: dict[str, dict[str, float]] = {}
     backend = None
     for line in path.read_text().splitlines():
@@ -284,6 +296,10 @@ def measured_p95(path: Path) -> dict[str, dict[str, float]]:
         if backend and used:
             for key, value in zip(("server", "db", "client"), used.groups(), strict=True):
                 tables[backend][f"cpu {key}"] = float(value)
+        waits = HANDOFFS_LINE.search(line)
+        if backend and waits:
+            for key, values in zip(("handoff us", "wake busy us"), waits.groups(), strict=True):
+                tables[backend][key] = float(np.mean([float(v) for v in values.split("/")]))
         cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
         if backend and len(cells) == 6 and cells[1].isdigit():
             tables[backend][cells[0]] = float(cells[3])
@@ -335,16 +351,17 @@ def main() -> int:
     parser.add_argument(
         "--handoff-us",
         type=float,
-        default=HANDOFF_S * 1e6,
         help="the interpreter's hand-off to a waiting thread, µs (bench_handoffs.py's first "
-        "line; it drifts with the host: 30-55 µs seen on one machine in a day)",
+        "line; it drifts with the host: 30-55 µs seen on one machine in a day); default: "
+        "what a --class-run measured beside its class (load_test.py --handoffs), else "
+        f"{HANDOFF_S * 1e6:.0f}",
     )
     parser.add_argument(
         "--wake-busy-us",
         type=float,
-        default=WAKE_BUSY_S * 1e6,
         help="a wake-up's extra wait for each core asked beyond each core, µs "
-        "(bench_handoffs.py's last line; 195-266 µs seen)",
+        "(bench_handoffs.py's last line; 159-266 µs seen); default: as --handoff-us, else "
+        f"{WAKE_BUSY_S * 1e6:.0f}",
     )
     parser.add_argument(
         "--seeds",
@@ -397,10 +414,20 @@ def main() -> int:
     workers = 1 if args.backend == "sqlite" else 2
     name = "SQLite" if args.backend == "sqlite" else "PostgreSQL"
 
-    def predict(costs: dict, students: int, shares: list[float] | None = None) -> dict:
+    def waits_of(table: dict | None = None) -> dict[str, float]:
+        """The hand-off and the busy wake-up: as given, else as measured beside the run,
+        else the constants of ``queue_sim``, s."""
+        table = table or {}
+        handoff = args.handoff_us or table.get("handoff us") or HANDOFF_S * 1e6
+        wake = args.wake_busy_us or table.get("wake busy us") or WAKE_BUSY_S * 1e6
+        return {"handoff_s": handoff / 1e6, "wake_busy_s": wake / 1e6}
+
+    def predict(
+        costs: dict, students: int, shares: list[float] | None = None, waits: dict | None = None
+    ) -> dict:
         """The class simulated once per seed (which worker each connection reaches, which
         measured costs each request draws), combined; ``shares``: each worker's chance of
-        a new connection."""
+        a new connection; ``waits``: ``waits_of``'s."""
         return combine(
             [
                 simulate(
@@ -415,8 +442,7 @@ def main() -> int:
                     work_places=args.work_places,
                     seed=2026 + seed,
                     worker_shares=shares,
-                    handoff_s=args.handoff_us / 1e6,
-                    wake_busy_s=args.wake_busy_us / 1e6,
+                    **(waits or waits_of()),
                 )
                 for seed in range(args.seeds)
             ]
@@ -434,10 +460,13 @@ def main() -> int:
             if shares:
                 print("each worker's share of the run's requests (a new connection's chance):"
                       f" {' / '.join(f'{share:.0%}' for share in shares)}")  # fmt: skip
-            result = predict(costs, students, shares)
             table = measured_p95(run)[name]
+            waits = waits_of(table)
+            result = predict(costs, students, shares, waits)
             print(f"\n{students} students, {name}, {workers} worker(s), the run in {run}:"
-                  f" predicted wall {result['wall']:.1f} s")  # fmt: skip
+                  f" predicted wall {result['wall']:.1f} s; hand-off"
+                  f" {waits['handoff_s'] * 1e6:.0f} µs, busy wake-up"
+                  f" {waits['wake_busy_s'] * 1e6:.0f} µs")  # fmt: skip
             compare(result, [table])
             if times:
                 inside_the_server(result, server_times(times))
@@ -457,18 +486,20 @@ def main() -> int:
                   f"{result['wall']:.1f} s; measured runs: {len(runs)}")  # fmt: skip
             compare(result, runs)
     if args.department:
-        waits = {"handoff_s": args.handoff_us / 1e6, "wake_busy_s": args.wake_busy_us / 1e6}
         department(
-            costs, hash_s, args.department[0], args.department[1:], args.switch_interval, waits
-        )
+            costs, hash_s, args.department[0], args.department[1:], args.switch_interval,
+            waits_of(),
+        )  # fmt: skip
     return 0
 
 
 def combine(results: list[dict]) -> dict:
     """Simulations of one class with different seeds as one prediction: per route the
-    median over the seeds of the p50 and p95 (ms) and the p95s' lowest and highest; the
-    CPU asked (the mean), and the waits inside the server and the write lock's holds of
-    all seeds together."""
+    median over the seeds of the p50 and p95 (ms), the p95s' lowest and highest, and their
+    band from the 10th to the 90th percentile over the seeds (how far one run's p95 moves
+    with nothing changed but chance: which worker each connection reached, which request
+    came when); the CPU asked (the mean), and the waits inside the server and the write
+    lock's holds of all seeds together."""
     routes = set.intersection(*(set(result["latencies"]) for result in results))
     p95 = {r: [np.percentile(x["latencies"][r], 95) * 1000 for x in results] for r in routes}
     p50 = {r: [np.percentile(x["latencies"][r], 50) * 1000 for x in results] for r in routes}
@@ -480,6 +511,10 @@ def combine(results: list[dict]) -> dict:
     return {
         "p95": {route: float(np.median(values)) for route, values in p95.items()},
         "p95 range": {route: (min(values), max(values)) for route, values in p95.items()},
+        "p95 band": {
+            route: tuple(float(v) for v in np.percentile(values, [10, 90]))
+            for route, values in p95.items()
+        },
         "p50": {route: float(np.median(values)) for route, values in p50.items()},
         "cpu": {key: float(np.mean([x["cpu"].get(key, 0.0) for x in results])) for key in keys},
         "lock held": [held for result in results for held in result["lock held"]],
@@ -489,20 +524,43 @@ def combine(results: list[dict]) -> dict:
     }
 
 
-def summary(students: int, name: str, pairs: list[tuple[dict, dict]]) -> None:
+def summary(students: int, name: str, pairs: list[tuple[dict, dict]]) -> dict:
     """Over the runs at one class size, each predicted from its own CPU: per route the
-    median predicted and measured p95 and the error between them, and each run's error."""
+    median predicted and measured p95 and the error between them; the half-width of the
+    seeds' band (``combine``) against the prediction, median over the runs (the p95's own
+    spread from chance alone: no prediction of one run can be surer than that); how many
+    runs measured a p95 inside their band; and each run's error.  Returns the counts over
+    the routes: "routes", "within 10 %" (the medians), "inside" (runs × routes in their
+    band), "runs × routes", "band" (the median half-width, %)."""
     print(f"\n{students} students, {name}: {len(pairs)} runs, each predicted from its own CPU"
-          " per request; p95 ms, median over the runs")  # fmt: skip
-    print(f"  {'route':42s} {'predicted':>9s} {'measured':>9s} {'error':>6s}  each run's error")
+          " per request; p95 ms, median over the runs; band: the seeds' 10-90 % band's"
+          " half-width (%); in band: runs whose p95 lies in theirs")  # fmt: skip
+    print(f"  {'route':42s} {'predicted':>9s} {'measured':>9s} {'error':>6s} {'band':>5s}"
+          f" {'in band':>7s}  each run's error")  # fmt: skip
     routes = sorted(set.intersection(*(set(r["p95"]) & set(t) for r, t in pairs)))
+    counts = {"routes": len(routes), "within 10 %": 0, "inside": 0,
+              "runs × routes": len(routes) * len(pairs)}  # fmt: skip
+    widths = []
     for route in routes:
         model = [r["p95"][route] for r, _ in pairs]
         seen = [t[route] for _, t in pairs]
+        bands = [(r.get("p95 band") or r["p95 range"])[route] for r, _ in pairs]
+        inside = sum(low <= s <= high for (low, high), s in zip(bands, seen, strict=True))
+        halves = [(high - low) / 2 / m * 100 for (low, high), m in zip(bands, model, strict=True)]
+        width = float(np.median(halves))
         each = " ".join(f"{(m - s) / s * 100:+.0f}" for m, s in zip(model, seen, strict=True))
         middle_model, middle_seen = float(np.median(model)), float(np.median(seen))
         error = (middle_model - middle_seen) / middle_seen * 100
-        print(f"  {route:42s} {middle_model:9.0f} {middle_seen:9.0f} {error:+5.0f}%  {each}")
+        counts["within 10 %"] += abs(error) <= 10
+        counts["inside"] += inside
+        widths.append(width)
+        print(f"  {route:42s} {middle_model:9.0f} {middle_seen:9.0f} {error:+5.0f}% {width:4.0f}%"
+              f" {inside:3d} / {len(pairs)}  {each}")  # fmt: skip
+    counts["band"] = float(np.median(widths)) if widths else 0.0
+    print(f"  the medians within 10 %: {counts['within 10 %']} of {counts['routes']} routes;"
+          f" a run's p95 inside its band: {counts['inside']} of {counts['runs × routes']};"
+          f" the band's half-width, median: ±{counts['band']:.0f} %")  # fmt: skip
+    return counts
 
 
 def class_costs(alone, own, cpu: Path, run: Path | None, each: bool) -> dict:

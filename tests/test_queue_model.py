@@ -439,6 +439,8 @@ def test_a_prediction_is_the_median_of_its_seeds():
     # the first seed's p95: 10 ms but for one 50 ms in twenty (interpolated: 12 ms)
     assert combined["p95"]["GET /lab"] == pytest.approx(20.0)
     assert combined["p95 range"]["GET /lab"] == pytest.approx((12.0, 30.0))
+    # the band from the 10th to the 90th percentile of 12, 20 and 30 ms
+    assert combined["p95 band"]["GET /lab"] == pytest.approx((13.6, 28.0))
     assert combined["cpu"]["server"] == pytest.approx(2.0)
     assert combined["lock held"] == [0.001, 0.002] and combined["wall"] == 11.0
 
@@ -500,3 +502,43 @@ def test_connections_reach_the_workers_in_their_shares():
         return np.percentile(result["latencies"]["POST /lab/sessions/{id}/csv"], 95)
 
     assert burst_p95([1.0, 0.0]) > 1.5 * burst_p95([0.5, 0.5])
+
+
+def test_the_summary_counts_the_runs_inside_the_band_of_their_seeds(capsys):
+    """Each run's measured p95 is held against the band its seeds gave (how far a p95
+    moves by chance alone), and the medians over the runs against each other."""
+    predicted = [
+        {"p95": {"GET /lab": 100.0, "POST /login": 50.0},
+         "p95 band": {"GET /lab": (80.0, 120.0), "POST /login": (45.0, 55.0)}},
+        {"p95": {"GET /lab": 110.0, "POST /login": 60.0},
+         "p95 band": {"GET /lab": (90.0, 130.0), "POST /login": (54.0, 66.0)}},
+    ]  # fmt: skip
+    measured = [{"GET /lab": 125.0, "POST /login": 52.0}, {"GET /lab": 95.0, "POST /login": 80.0}]
+    counts = queue_model.summary(60, "SQLite", list(zip(predicted, measured, strict=True)))
+    # GET /lab: medians 105 against 110 (−5 %): within 10 %; 125 is out of [80, 120], 95 in.
+    # POST /login: 55 against 66 (−17 %); 52 in [45, 55], 80 out of [54, 66]
+    assert counts["within 10 %"] == 1 and counts["routes"] == 2
+    assert counts["inside"] == 2 and counts["runs × routes"] == 4
+    # half-widths: GET /lab 20 % and 18.2 %, POST /login 10 % and 10 %: medians 19.1 and 10
+    assert counts["band"] == pytest.approx((19.09 + 10.0) / 2, abs=0.01)
+    assert "1 / 2" in capsys.readouterr().out
+
+
+def test_the_hand_offs_measured_beside_a_run_are_read_from_its_report(tmp_path):
+    """load_test.py --handoffs prints what it measured before and after the class; the
+    model reads their means from that report."""
+    import load_test
+
+    tally = load_test.Tally()
+    tally.latencies["GET /lab"] = [0.010, 0.020]
+    tally.handoffs = [(41e-6, 180e-6), (49e-6, 210e-6)]
+    report = load_test.report("PostgreSQL", tally, 10.0, 0, 16, 2)
+    path = tmp_path / "run.txt"
+    path.write_text("machine: x86_64; 1 students\n\n" + report + "\n")
+    table = queue_model.measured_p95(path)["PostgreSQL"]
+    assert table["handoff us"] == pytest.approx(45.0)
+    assert table["wake busy us"] == pytest.approx(195.0)
+    assert table["GET /lab"] == pytest.approx(20.0)
+    tally.handoffs = []
+    path.write_text(load_test.report("SQLite", tally, 10.0, 0, 16, 1))
+    assert "handoff us" not in queue_model.measured_p95(path)["SQLite"]
