@@ -415,12 +415,7 @@ def main() -> int:
     name = "SQLite" if args.backend == "sqlite" else "PostgreSQL"
 
     def waits_of(table: dict | None = None) -> dict[str, float]:
-        """The hand-off and the busy wake-up: as given, else as measured beside the run,
-        else the constants of ``queue_sim``, s."""
-        table = table or {}
-        handoff = args.handoff_us or table.get("handoff us") or HANDOFF_S * 1e6
-        wake = args.wake_busy_us or table.get("wake busy us") or WAKE_BUSY_S * 1e6
-        return {"handoff_s": handoff / 1e6, "wake_busy_s": wake / 1e6}
+        return run_waits(table or {}, args.handoff_us, args.wake_busy_us)
 
     def predict(
         costs: dict, students: int, shares: list[float] | None = None, waits: dict | None = None
@@ -491,6 +486,19 @@ def main() -> int:
             waits_of(),
         )  # fmt: skip
     return 0
+
+
+def run_waits(
+    table: dict[str, float], handoff_us: float | None, wake_busy_us: float | None
+) -> dict[str, float]:
+    """The hand-off and the busy wake-up to simulate a run with, s: as given (0 turns one
+    off), else as measured beside the run (``measured_p95``'s "handoff us", "wake busy
+    us"), else the constants of ``queue_sim``."""
+    if handoff_us is None:
+        handoff_us = table.get("handoff us", HANDOFF_S * 1e6)
+    if wake_busy_us is None:
+        wake_busy_us = table.get("wake busy us", WAKE_BUSY_S * 1e6)
+    return {"handoff_s": handoff_us / 1e6, "wake_busy_s": wake_busy_us / 1e6}
 
 
 def combine(results: list[dict]) -> dict:

@@ -539,6 +539,17 @@ def test_the_hand_offs_measured_beside_a_run_are_read_from_its_report(tmp_path):
     assert table["handoff us"] == pytest.approx(45.0)
     assert table["wake busy us"] == pytest.approx(195.0)
     assert table["GET /lab"] == pytest.approx(20.0)
+    # the run is simulated with them unless others are given; 0 turns one off
+    assert queue_model.run_waits(table, None, None) == pytest.approx(
+        {"handoff_s": 45e-6, "wake_busy_s": 195e-6}
+    )
+    assert queue_model.run_waits(table, 0.0, 100.0) == pytest.approx(
+        {"handoff_s": 0.0, "wake_busy_s": 100e-6}
+    )
     tally.handoffs = []
     path.write_text(load_test.report("SQLite", tally, 10.0, 0, 16, 1))
-    assert "handoff us" not in queue_model.measured_p95(path)["SQLite"]
+    table = queue_model.measured_p95(path)["SQLite"]
+    assert "handoff us" not in table
+    assert queue_model.run_waits(table, None, None) == pytest.approx(
+        {"handoff_s": queue_sim.HANDOFF_S, "wake_busy_s": queue_sim.WAKE_BUSY_S}
+    )
