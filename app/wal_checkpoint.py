@@ -28,6 +28,8 @@ import logging
 import os
 import sqlite3
 import threading
+import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import quote
@@ -36,6 +38,12 @@ BACKSTOP_PAGES = 16_384  # 64 MB of 4 KiB pages: where a connection checkpoints 
 CHECKPOINT_PAGES = 1_000  # SQLite's default threshold, now the thread's
 LOOK_EVERY_S = 0.25  # how often the thread looks at the logs
 FRAME_BYTES = 4096 + 24  # a page in the log: the page (SQLite's default size) and its header
+# A log whose file holds more pages than SQLite reports committed, and that neither grows nor
+# has more committed for this long, is left alone until it changes (a log some other program
+# restarted without emptying it).  Shorter waits mistook a commit whose frames were all in
+# the file, its index not yet updated, for such a log, and left it for the next write (a
+# full test run on a loaded machine).
+STALE_AFTER_S = 2.0
 
 
 @dataclass
@@ -79,14 +87,22 @@ def checkpoint(path: str | Path) -> Checkpoint | None:
 class Checkpointer:
     """The thread that checkpoints the databases it watches once ``threshold`` pages wait."""
 
-    def __init__(self, interval_s: float = LOOK_EVERY_S, threshold: int = CHECKPOINT_PAGES) -> None:
+    def __init__(
+        self,
+        interval_s: float = LOOK_EVERY_S,
+        threshold: int = CHECKPOINT_PAGES,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
         self.interval_s = interval_s
         self.threshold = threshold
+        self._clock = clock
         self._watched: dict[str, int] = {}  # path → engines using it
         # path → the log's (pages, mtime) when last done with: the size as well as the time,
         # as a file's time moves in the kernel's clock ticks (a few ms) and a commit's last
         # frame can land in the tick of the look before it
         self._checked: dict[str, tuple[int, int]] = {}
+        # path → the log's state and the checkpoint's report when first seen together, and when
+        self._unchanged: dict[str, tuple[tuple[int, int], Checkpoint, float]] = {}
         self._lock = threading.Lock()
         self._thread: threading.Thread | None = None
         self.last: dict[str, Checkpoint] = {}  # path → the last checkpoint's report
@@ -110,6 +126,7 @@ class Checkpointer:
             else:
                 self._watched.pop(path, None)
                 self._checked.pop(path, None)
+                self._unchanged.pop(path, None)
                 self.last.pop(path, None)
 
     def watching(self, path: str) -> bool:
@@ -119,7 +136,9 @@ class Checkpointer:
     def look(self) -> None:
         """Checkpoint every watched database whose log holds ``threshold`` pages or more
         and has changed since its last checkpoint here (one that readers kept from
-        finishing is tried again once more is written, as SQLite's own would be)."""
+        finishing is tried again once more is written, as SQLite's own would be); a log
+        with pages beyond what SQLite reports committed is looked at again until it has
+        stayed as it is for ``STALE_AFTER_S``."""
         with self._lock:
             paths = list(self._watched)
         for path in paths:
@@ -134,13 +153,25 @@ class Checkpointer:
                 if path not in self._watched:
                     continue
                 # done with this state of the log once the checkpoint saw all of it; a
-                # write still going (its pages in the file, its commit not yet) is looked
-                # at again, unless a second look sees nothing new (a log some other
-                # program restarted without emptying it)
-                if report is None or report.log_frames >= pages or report == self.last.get(path):
+                # write still going (its pages in the file, its commit or the index's
+                # update not yet) is looked at again, unless the log and the report stay as
+                # they are for STALE_AFTER_S (a log some other program restarted without
+                # emptying it)
+                if report is None or report.log_frames >= pages or self._stale(path, log, report):
                     self._checked[path] = log
+                    self._unchanged.pop(path, None)
                 if report is not None:
                     self.last[path] = report
+
+    def _stale(self, path: str, log: tuple[int, int], report: Checkpoint) -> bool:
+        """Whether ``path``'s log and its checkpoint's report have stayed as they are now for
+        ``STALE_AFTER_S`` (under the lock)."""
+        now = self._clock()
+        seen = self._unchanged.get(path)
+        if seen is None or seen[:2] != (log, report):
+            self._unchanged[path] = (log, report, now)
+            return False
+        return now - seen[2] >= STALE_AFTER_S
 
     def _run(self) -> None:
         stop = threading.Event()  # never set: a daemon thread ends with its process

@@ -192,3 +192,50 @@ def test_a_commit_in_the_same_clock_tick_as_the_last_look_is_still_checkpointed(
         looking.look()
     assert seen == [13, 13, 1960]  # the commit copied once; the fourth look has nothing new
     assert looking.last["db"] == Checkpoint(0, 1960, 1960)
+
+
+def fake_log(monkeypatch, logs: list[tuple[int, int]], committed: list[int]) -> list[int]:
+    """``log_pages`` and ``checkpoint`` played from lists; returns the frames each
+    checkpoint reported, as they come."""
+    import app.wal_checkpoint as wal
+
+    states, frames_left, seen = iter(logs), iter(committed), []
+    monkeypatch.setattr(wal, "log_pages", lambda path: next(states))
+
+    def fake_checkpoint(path):
+        frames = next(frames_left)
+        seen.append(frames)
+        return Checkpoint(0, frames, frames)
+
+    monkeypatch.setattr(wal, "checkpoint", fake_checkpoint)
+    return seen
+
+
+def test_a_commit_whose_index_lags_its_frames_is_still_checkpointed(monkeypatch):
+    """The write's last frame is in the file (the log's size and time final) but SQLite's
+    index not yet updated: checkpoints see the old 13 frames for a while.  The log is looked
+    at again until they come (a full run on a loaded machine once left them for the next
+    write: the second identical report had been taken for a stale log)."""
+    tick = 1_700_000_000_000_000_000
+    seen = fake_log(monkeypatch, [(1500, tick)] + [(1960, tick)] * 4, [13, 13, 13, 1960])
+    looking = Checkpointer(interval_s=3600, clock=lambda: 0.0)
+    looking._watched["db"] = 1  # watched, without starting the thread
+    for _ in range(5):
+        looking.look()
+    assert seen == [13, 13, 13, 1960]  # copied once it was committed; then nothing new
+    assert looking.last["db"] == Checkpoint(0, 1960, 1960)
+
+
+def test_a_log_that_stays_longer_than_its_commits_is_left_alone_after_a_while(monkeypatch):
+    """A log some other program restarted without emptying it: more pages in the file than
+    committed, for good.  It is tried again until it has stayed so for STALE_AFTER_S."""
+    from app.wal_checkpoint import STALE_AFTER_S
+
+    tick = 1_700_000_000_000_000_000
+    seen = fake_log(monkeypatch, [(1500, tick)] * 6, [13] * 6)
+    times = iter([0.0, STALE_AFTER_S / 2, STALE_AFTER_S + 0.1, STALE_AFTER_S + 1, 99.0, 999.0])
+    looking = Checkpointer(interval_s=3600, clock=lambda: next(times))
+    looking._watched["db"] = 1
+    for _ in range(6):
+        looking.look()
+    assert seen == [13, 13, 13]  # at 0, at half the wait, and past it: then left alone
