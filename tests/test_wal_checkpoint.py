@@ -172,20 +172,9 @@ def test_a_commit_in_the_same_clock_tick_as_the_last_look_is_still_checkpointed(
     sees nothing new and is done with that state); the write's commit then lands within
     the same tick of the file clock -- the log's time unchanged, only its size grown -- and
     must still be checkpointed (a full run with four test workers once waited forever)."""
-    import app.wal_checkpoint as wal
-
     tick = 1_700_000_000_000_000_000  # the log's modification time, one coarse tick
-    logs = iter([(1500, tick), (1900, tick), (1960, tick), (1960, tick)])
-    committed = iter([13, 13, 1960, 1960])
-    seen: list[int] = []
-    monkeypatch.setattr(wal, "log_pages", lambda path: next(logs))
-
-    def fake_checkpoint(path):
-        frames = next(committed)
-        seen.append(frames)
-        return Checkpoint(0, frames, frames)
-
-    monkeypatch.setattr(wal, "checkpoint", fake_checkpoint)
+    logs = [(1500, tick), (1900, tick), (1960, tick), (1960, tick)]
+    seen = fake_log(monkeypatch, logs, [13, 13, 1960, 1960])
     looking = Checkpointer(interval_s=3600)
     looking._watched["db"] = 1  # watched, without starting the thread
     for _ in range(4):
