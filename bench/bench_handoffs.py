@@ -33,12 +33,14 @@ from __future__ import annotations
 
 import argparse
 import bisect
+import contextlib
 import multiprocessing
 import os
 import sqlite3
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -94,34 +96,42 @@ def _spin(stop) -> None:
         pass
 
 
-def handoffs_beside(spinning: int, count: int = 400) -> np.ndarray:
-    """``interpreter_handoffs`` while ``spinning`` processes keep cores busy: with no core
-    free, the thread woken for the interpreter waits for one, and meanwhile the thread that
-    released it takes it back at the end of its call (CPython's GIL is not handed in
-    order), so the waiting thread's gap grows to milliseconds while the interpreter itself
-    does not idle."""
+@contextlib.contextmanager
+def spinning_processes(count: int) -> Iterator[None]:
+    """``count`` processes spinning on the cores while the block runs (given 0.3 s to
+    start)."""
     stop = multiprocessing.Event()
-    processes = [multiprocessing.Process(target=_spin, args=(stop,)) for _ in range(spinning)]
+    processes = [multiprocessing.Process(target=_spin, args=(stop,)) for _ in range(count)]
     for process in processes:
         process.start()
     time.sleep(0.3)
     try:
-        return interpreter_handoffs(count)
+        yield
     finally:
         stop.set()
         for process in processes:
             process.join()
 
 
+def handoffs_beside(spinning: int, count: int = 400) -> np.ndarray:
+    """``interpreter_handoffs`` while ``spinning`` processes keep cores busy: with no core
+    free, the thread woken for the interpreter waits for one, and meanwhile the thread that
+    released it takes it back at the end of its call (CPython's GIL is not handed in
+    order), so the waiting thread's gap grows to milliseconds while the interpreter itself
+    does not idle."""
+    with spinning_processes(spinning):
+        return interpreter_handoffs(count)
+
+
 def wake_ups(busy_processes: int, count: int = 3000) -> np.ndarray:
     """Seconds of each wake-up (half a round trip of two threads waking each other) while
     ``busy_processes`` processes spin; between round trips the waking thread runs Python
     for 0.5 ms, as a thread holding the interpreter does."""
-    stop = multiprocessing.Event()
-    spinning = [multiprocessing.Process(target=_spin, args=(stop,)) for _ in range(busy_processes)]
-    for process in spinning:
-        process.start()
-    time.sleep(0.3)
+    with spinning_processes(busy_processes):
+        return _wake_ups(count)
+
+
+def _wake_ups(count: int) -> np.ndarray:
     ping, pong = threading.Event(), threading.Event()
 
     def answering() -> None:
@@ -146,9 +156,6 @@ def wake_ups(busy_processes: int, count: int = 3000) -> np.ndarray:
                 pass
     finally:
         other.join()
-        stop.set()
-        for process in spinning:
-            process.join()
     return np.array(halves)
 
 
