@@ -44,6 +44,7 @@ sys.path.insert(0, str(ROOT))
 
 from bench_handoffs import hand_off_constants  # noqa: E402  (bench/)
 from capacity import cpu_seconds, postgres_pids, server_pids  # noqa: E402
+from run_queue import RunQueueWatch  # noqa: E402
 
 from tests.e2e.conftest import running_server  # noqa: E402
 from tests.pgserver import PostgresServer  # noqa: E402
@@ -56,6 +57,7 @@ CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
 # set the client's time of a request beside the server's
 CLIENT_TIMES = os.environ.get("GYROLAB_BENCH_CLIENT_TIMES")
 HANDOFFS_LABEL = "hand-offs just before / after the class (bench_handoffs.py)"
+RUN_QUEUE_LABEL = "waited for a core / ran during the class (run_queue.py)"
 PARTS = ("heading", "latitude")
 # One TLS context for every simulated browser.  httpx builds a new one per client unless
 # given one, loading the CA bundle: ≈ 28 ms of the load generator's CPU per client, and
@@ -115,6 +117,9 @@ class Tally:
     # with --handoffs: (the interpreter's hand-off, a busy wake-up's extra per core asked
     # beyond each core), s, measured just before and just after the class
     handoffs: list[tuple[float, float]] = field(default_factory=list)
+    # with --run-queue: per group of processes, its threads' (ran, waited for a core) s, and
+    # how many times they were put on a core
+    run_queue: dict[str, tuple[float, float, int]] = field(default_factory=dict)
 
     async def request(
         self, client: httpx.AsyncClient, method: str, url: str, route: str, ok=(200,), **kw
@@ -424,6 +429,12 @@ def report(name: str, tally: Tally, wall: float, lost: int, checked: int, worker
             f"- {HANDOFFS_LABEL}: the interpreter's {handoffs} µs, a busy wake-up {wakes} µs"
             " a core asked beyond each core"
         )
+    if tally.run_queue:
+        lines.append(f"- {RUN_QUEUE_LABEL}: " + ", ".join(
+            f"{group} {waited:.2f} / {ran:.2f} s ({waited / max(ran + waited, 1e-9):.0%},"
+            f" {slices} slices)"
+            for group, (ran, waited, slices) in tally.run_queue.items()
+        ))  # fmt: skip
     lines += [
         "",
         "| route | count | p50 ms | p95 ms | p99 ms | max ms |",
@@ -482,9 +493,18 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
                     database = cpu_seconds(postgres_pids()) if backend == "postgresql" else 0.0
                     return cpu_seconds(pids), database, time.process_time()
 
+                groups = {"server": lambda: pids, "load generator": lambda: [os.getpid()]}
+                if backend == "postgresql":
+                    groups["PostgreSQL"] = postgres_pids
+                watch = RunQueueWatch(groups if args.run_queue else {})
                 before = cpu()
-                tally, wall = asyncio.run(run_class(server.url, course, assignment, args))
+                with watch:
+                    tally, wall = asyncio.run(run_class(server.url, course, assignment, args))
                 after = cpu()
+                tally.run_queue = {
+                    group: (waits.ran_s, waits.waited_s, waits.slices)
+                    for group, waits in watch.waits().items()
+                }
                 tally.handoffs = waits + ([hand_off_constants()] if args.handoffs else [])
                 tally.cpu = tuple(b - a for a, b in zip(before, after, strict=True))
                 if CLIENT_TIMES:  # after the class's CPU is read: not counted in it
@@ -526,6 +546,12 @@ def main() -> int:
         action="store_true",
         help="measure the interpreter's hand-off and a busy wake-up (bench_handoffs.py, "
         "≈ 15 s each time) just before and just after the class, for queue_model.py",
+    )
+    parser.add_argument(
+        "--run-queue",
+        action="store_true",
+        help="poll the kernel's schedstat of the server, the database and the load "
+        "generator (run_queue.py): how long each waited for a core during the class",
     )
     args = parser.parse_args()
     backends = ("sqlite", "postgresql") if args.backend == "both" else (args.backend,)

@@ -1,0 +1,115 @@
+"""How long each group of processes waited for a core while a class ran: the kernel's
+``/proc/PID/task/TID/schedstat`` (per thread: ns on a core, ns runnable but waiting on a
+run queue, time slices), polled by a thread of the load generator so that threads born
+and ended during the class are counted (a thread first seen after the start is counted
+from zero; one that ends loses at most one poll's worth).
+
+What the queueing model assumes about the scheduler -- cores shared in proportion among
+whatever asks for them -- can then be held against what the scheduler did: the share of
+each group's wanted time it spent waiting (``waited / (ran + waited)``), and each group's
+autogroup (the kernel shares the cores between sessions' autogroups first when
+``kernel.sched_autogroup_enabled`` is 1)."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+POLL_S = 0.25
+
+
+def thread_stats(pid: int) -> dict[int, tuple[int, int, int]]:
+    """Per thread of ``pid``: (ns on a core, ns waiting on a run queue, times it was put
+    on a core) so far."""
+    stats: dict[int, tuple[int, int, int]] = {}
+    try:
+        tasks = list(Path(f"/proc/{pid}/task").iterdir())
+    except OSError:
+        return stats
+    for task in tasks:
+        try:
+            ran, waited, slices = (task / "schedstat").read_text().split()
+        except (OSError, ValueError):
+            continue  # ended meanwhile
+        stats[int(task.name)] = (int(ran), int(waited), int(slices))
+    return stats
+
+
+def autogroup(pid: int) -> str:
+    """The process's autogroup ("/autogroup-N"), or "" where the kernel has none."""
+    try:
+        return Path(f"/proc/{pid}/autogroup").read_text().split()[0]
+    except (OSError, IndexError):
+        return ""
+
+
+@dataclass
+class Waits:
+    """One group's time over the watch: on a core and waiting for one (s), and how many
+    times its threads were put on a core (each after a wait on the run queue: a wake-up,
+    or a turn after being preempted)."""
+
+    ran_s: float
+    waited_s: float
+    autogroups: tuple[str, ...]
+    slices: int = 0
+
+    @property
+    def waited_share(self) -> float:
+        """Of the time its threads wanted a core, the part spent waiting for one."""
+        wanted = self.ran_s + self.waited_s
+        return self.waited_s / wanted if wanted else 0.0
+
+
+class RunQueueWatch:
+    """``with RunQueueWatch({"server": lambda: pids, …}) as watch: …`` then
+    ``watch.waits()``: each group's :class:`Waits` between entering and leaving.  Each
+    group's processes are asked for at every poll (PostgreSQL starts a process per
+    connection)."""
+
+    def __init__(self, groups: dict[str, Callable[[], list[int]]], poll_s: float = POLL_S):
+        self.groups, self.poll_s = groups, poll_s
+        self._first: dict[str, dict[tuple[int, int], tuple[int, int, int]]] = {}
+        self._last: dict[str, dict[tuple[int, int], tuple[int, int, int]]] = {}
+        self._autogroups: dict[str, set[str]] = {name: set() for name in groups}
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._watch, name="run-queue-watch", daemon=True)
+
+    def _poll(self, first: bool) -> None:
+        for name, pids_of in self.groups.items():
+            seen = self._last.setdefault(name, {})
+            start = self._first.setdefault(name, {})
+            for pid in pids_of():
+                if group := autogroup(pid):
+                    self._autogroups[name].add(group)
+                for tid, stats in thread_stats(pid).items():
+                    key = (pid, tid)
+                    if key not in start:  # born during the watch: from zero
+                        start[key] = stats if first else (0, 0, 0)
+                    seen[key] = stats
+
+    def _watch(self) -> None:
+        while not self._stop.wait(self.poll_s):
+            self._poll(first=False)
+
+    def __enter__(self) -> RunQueueWatch:
+        self._poll(first=True)
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self._thread.join()
+        self._poll(first=False)
+
+    def waits(self) -> dict[str, Waits]:
+        result = {}
+        for name in self.groups:
+            start, last = self._first.get(name, {}), self._last.get(name, {})
+            ran, waited, slices = (sum(last[key][i] - start[key][i] for key in last)
+                                   for i in range(3))  # fmt: skip
+            groups = tuple(sorted(self._autogroups[name]))
+            result[name] = Waits(ran / 1e9, waited / 1e9, groups, slices)
+        return result
