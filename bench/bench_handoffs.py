@@ -17,7 +17,13 @@
    free case per core asked beyond the cores (the waking thread counted) is what a class's
    burst pays at each hand-off and round trip (``queue_sim.WAKE_BUSY_S``; the chance of a
    slice, ``WAKE_SLICE_S``, follows from it).
-3. A round trip to PostgreSQL (``--postgresql``: a throw-away server on loopback): the wall
+3. An SQLite call handing the interpreter on (``--calls FILE``).  A thread waiting for the
+   interpreter is woken at each release, but takes it only if it reaches a core before
+   the call is over; with a core free, calls under ≈ 40 µs are never handed on and calls
+   over ≈ 100 µs always; with none free, 5-35 % of any length.  Measured for calls of
+   several lengths and averaged over the app's own calls (the probe's
+   ``GYROLAB_BENCH_SQLITE_CALLS``): ``queue_sim.CALL_HANDOFF``.
+4. A round trip to PostgreSQL (``--postgresql``: a throw-away server on loopback): the wall
    time of ``SELECT 1`` less the CPU spent on it by this thread and by the server's
    backend -- the wake-ups and the loopback between them (``queue_sim.ROUND_TRIP_S``).
 
@@ -123,6 +129,74 @@ def handoffs_beside(spinning: int, count: int = 400) -> np.ndarray:
         return interpreter_handoffs(count)
 
 
+def call_handoffs(rows: int, count: int = 2000, python_s: float = 0.0003) -> tuple[float, float]:
+    """How often a thread waiting for the interpreter takes it during an SQLite call of
+    the other: thread A runs Python for ``python_s``, then a query over ``rows`` rows
+    (the GIL released while SQLite runs), ``count`` times; thread B runs Python whenever it
+    has the interpreter.  Returns (the chance that B ran during one of A's calls, the
+    calls' median CPU in s).  B is woken at each release, but if A's call is over before B
+    reaches a core, A takes the interpreter back and B sleeps again."""
+    clock = time.perf_counter
+    marks: list[float] = []
+    stop = threading.Event()
+
+    def waiting_thread() -> None:
+        mark = marks.append
+        while not stop.is_set():
+            mark(clock())
+
+    calls: list[tuple[float, float]] = []
+    spent: list[float] = []
+
+    def calling_thread() -> None:
+        connection = sqlite3.connect(":memory:")
+        connection.execute("CREATE TABLE t (x)")
+        connection.executemany("INSERT INTO t VALUES (?)", [(i,) for i in range(max(rows, 1))])
+        query = "SELECT sum(x) FROM t" if rows else "SELECT 1"
+        cursor = connection.cursor()
+        for _ in range(count):
+            busy_until = clock() + python_s
+            while clock() < busy_until:
+                pass
+            began, cpu = clock(), time.thread_time()
+            cursor.execute(query)
+            spent.append(time.thread_time() - cpu)
+            calls.append((began, clock()))
+        connection.close()
+
+    other = threading.Thread(target=waiting_thread)
+    other.start()
+    time.sleep(0.02)
+    calling = threading.Thread(target=calling_thread)
+    calling.start()
+    calling.join()
+    stop.set()
+    other.join()
+    taken = 0
+    for began, ended in calls:
+        after = bisect.bisect_right(marks, began)
+        taken += after < len(marks) and marks[after] < ended
+    return taken / len(calls), float(np.median(spent))
+
+
+CALL_ROWS = (0, 200, 400, 600, 800, 1000, 3000, 10_000)
+
+
+def call_handoff_curve(spinning: int) -> list[tuple[float, float]]:
+    """(a call's CPU s, the chance it hands the interpreter on) for calls of several
+    lengths, while ``spinning`` processes keep cores busy; sorted by length."""
+    with spinning_processes(spinning):
+        return sorted((length, chance) for chance, length in map(call_handoffs, CALL_ROWS))
+
+
+def call_handoff_chance(curve: list[tuple[float, float]], durations: np.ndarray) -> float:
+    """The chance that one of the app's calls (``durations``, s: the probe's
+    GYROLAB_BENCH_SQLITE_CALLS) hands the interpreter on: the curve at each call's length
+    (linear between its points, flat beyond its ends), averaged over the calls."""
+    lengths, chances = zip(*curve, strict=True)
+    return float(np.mean(np.interp(durations, lengths, chances)))
+
+
 def wake_ups(busy_processes: int, count: int = 3000) -> np.ndarray:
     """Seconds of each wake-up (half a round trip of two threads waking each other) while
     ``busy_processes`` processes spin; between round trips the waking thread runs Python
@@ -226,7 +300,28 @@ def hand_off_constants(wakes: int = 3000, report=None) -> tuple[float, float]:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--postgresql", action="store_true", help="also a PostgreSQL round trip")
+    parser.add_argument(
+        "--calls",
+        type=Path,
+        help="the app's SQLite calls (µs, one a line: the probe's GYROLAB_BENCH_SQLITE_CALLS):"
+        " the chance that one hands the interpreter on, with a core free and with none"
+        " (queue_sim.CALL_HANDOFF)",
+    )
     args = parser.parse_args()
+    if args.calls:
+        durations = np.loadtxt(args.calls) / 1e6
+        print(f"{len(durations)} SQLite calls of the app: p50 {np.median(durations) * 1e6:.1f}"
+              f" µs, p90 {np.percentile(durations, 90) * 1e6:.1f} µs")  # fmt: skip
+        chances = []
+        cores = os.cpu_count() or 1  # the calling and the waiting thread want two of them
+        for spinning, label in ((max(cores - 2, 0), "a core free"), (cores - 1, "no core free")):
+            curve = call_handoff_curve(spinning)
+            points = ", ".join(f"{length * 1e6:.0f} µs {chance:.0%}" for length, chance in curve)
+            chances.append(call_handoff_chance(curve, durations))
+            print(f"a call handing the interpreter on, {label}: {points}; the app's calls:"
+                  f" {chances[-1]:.1%}")  # fmt: skip
+        print(f"  queue_sim.CALL_HANDOFF ≈ ({chances[0]:.2f}, {chances[1]:.2f})")
+        return 0
     _, slope = hand_off_constants(report=print)
     print(f"  ≈ {slope * 1e6:.0f} µs more a wake-up for each core asked beyond each core")
     busy = (os.cpu_count() or 1) - 1

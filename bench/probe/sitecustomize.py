@@ -7,6 +7,11 @@ counts the places where a request's thread gives up the interpreter -- database 
 PostgreSQL's round trips: psycopg's statements and its BEGIN, COMMIT and ROLLBACK) and
 trips to the thread pool (anyio's ``to_thread.run_sync``).
 
+``GYROLAB_BENCH_SQLITE_CALLS`` (a load test): a file to which each SQLite call that runs
+the database with the GIL released (execute, executemany, fetch) appends the CPU its thread
+spent in it, µs: how long the interpreter is left to others at each call (a waiting thread
+is woken for it; ``bench_handoffs.py`` measures how long a call must last for it to run).
+
 ``GYROLAB_BENCH_LOCK_TRACE`` (a load test): a file to which each SQLite write transaction
 appends one line, ``wall_ms cpu_ms``: how long it held the write lock (``BEGIN
 IMMEDIATE`` to the end of its commit or rollback) and the CPU its thread spent meanwhile.
@@ -44,6 +49,7 @@ _TIMES = os.environ.get("GYROLAB_BENCH_SERVER_TIMES")
 _GC = os.environ.get("GYROLAB_BENCH_GC")
 _CPU = os.environ.get("GYROLAB_BENCH_REQUEST_CPU")
 _PROFILE = os.environ.get("GYROLAB_BENCH_PROFILE")
+_CALLS = os.environ.get("GYROLAB_BENCH_SQLITE_CALLS")
 
 if _GC:
     import gc as _gc
@@ -107,7 +113,7 @@ if _TIMES:
 
     _exceptions.ExceptionMiddleware.__call__ = _admitted
 
-if _COUNTS or _LOCKS:
+if _COUNTS or _LOCKS or _CALLS:
     import sqlite3
     import sqlite3.dbapi2
     import struct
@@ -130,28 +136,43 @@ if _COUNTS or _LOCKS:
 
     _trace = os.open(_LOCKS, os.O_WRONLY | os.O_APPEND | os.O_CREAT) if _LOCKS else None
 
+    if _CALLS:
+        _calls = os.open(_CALLS, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+
+        def _sqlite_call(call, *args, **kwargs):
+            began = time.thread_time_ns()
+            try:
+                return call(*args, **kwargs)
+            finally:
+                os.write(_calls, f"{(time.thread_time_ns() - began) / 1000:.1f}\n".encode())
+
+    else:
+
+        def _sqlite_call(call, *args, **kwargs):
+            return call(*args, **kwargs)
+
     class _CountingCursor(sqlite3.Cursor):
         def execute(self, sql, *args, **kwargs):
             _add(0)
             if _trace is not None and sql.startswith("BEGIN IMMEDIATE"):
                 self.connection.began = (time.perf_counter(), time.thread_time())
-            return super().execute(sql, *args, **kwargs)
+            return _sqlite_call(super().execute, sql, *args, **kwargs)
 
         def executemany(self, *args, **kwargs):
             _add(0)
-            return super().executemany(*args, **kwargs)
+            return _sqlite_call(super().executemany, *args, **kwargs)
 
         def fetchone(self):
             _add(0)
-            return super().fetchone()
+            return _sqlite_call(super().fetchone)
 
         def fetchmany(self, *args, **kwargs):
             _add(0)
-            return super().fetchmany(*args, **kwargs)
+            return _sqlite_call(super().fetchmany, *args, **kwargs)
 
         def fetchall(self):
             _add(0)
-            return super().fetchall()
+            return _sqlite_call(super().fetchall)
 
     class _CountingConnection(sqlite3.Connection):
         began = None
@@ -163,7 +184,7 @@ if _COUNTS or _LOCKS:
             _add(0)
             if _trace is not None and sql.startswith("BEGIN IMMEDIATE"):
                 self.began = (time.perf_counter(), time.thread_time())
-            return super().execute(sql, *args, **kwargs)
+            return _sqlite_call(super().execute, sql, *args, **kwargs)
 
         def _ended(self) -> None:
             if self.began is not None and _trace is not None:
