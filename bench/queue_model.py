@@ -81,6 +81,7 @@ import load_test  # noqa: E402  (bench/, the script's folder)
 from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
 from class_cpu import attributed_costs, in_class, server_times, worker_shares  # noqa: E402
 from queue_sim import (  # noqa: E402
+    CALL_HANDOFF,
     HANDOFF_S,
     STREAM,
     SWITCH_INTERVAL_S,
@@ -278,13 +279,19 @@ CPU_LINE = re.compile(
 HANDOFFS_LINE = re.compile(
     r"the interpreter's ([\d /]+) µs, a busy wake-up ([\d /-]+) µs a core asked beyond"
 )
+RUN_QUEUE_GROUP = re.compile(
+    r"(server|PostgreSQL|load generator) ([\d.]+) / ([\d.]+) s \(\d+%(?:, (\d+) slices)?\)"
+)
+RUN_QUEUE_KEYS = {"server": "server", "PostgreSQL": "db", "load generator": "client"}
 
 
 def measured_p95(path: Path) -> dict[str, dict[str, float]]:
     """Per backend heading ("SQLite", "PostgreSQL") → route → p95 ms, from load_test's output
     (and, under the keys "cpu server", "cpu db", "cpu client", the CPU the run used, s; with
     ``load_test.py --handoffs``, under "handoff us" and "wake busy us" the mean of what was
-    measured just before and after the class)."""
+    measured just before and after the class; with ``--run-queue``, under "waited server",
+    "ran server" and so for "db" and "client", each group's time waiting for a core and on
+    one during the class, s)."""
     tables: dict[str, dict[str, float]] = {}
     backend = None
     for line in path.read_text().splitlines():
@@ -296,6 +303,12 @@ def measured_p95(path: Path) -> dict[str, dict[str, float]]:
         if backend and used:
             for key, value in zip(("server", "db", "client"), used.groups(), strict=True):
                 tables[backend][f"cpu {key}"] = float(value)
+        if backend and load_test.RUN_QUEUE_LABEL in line:
+            for group, waited, ran, slices in RUN_QUEUE_GROUP.findall(line):
+                tables[backend][f"waited {RUN_QUEUE_KEYS[group]}"] = float(waited)
+                tables[backend][f"ran {RUN_QUEUE_KEYS[group]}"] = float(ran)
+                if slices:
+                    tables[backend][f"slices {RUN_QUEUE_KEYS[group]}"] = float(slices)
         waits = HANDOFFS_LINE.search(line)
         if backend and waits:
             for key, values in zip(("handoff us", "wake busy us"), waits.groups(), strict=True):
@@ -362,6 +375,18 @@ def main() -> int:
         help="a wake-up's extra wait for each core asked beyond each core, µs "
         "(bench_handoffs.py's last line; 159-266 µs seen); default: as --handoff-us, else "
         f"{WAKE_BUSY_S * 1e6:.0f}",
+    )
+    parser.add_argument(
+        "--every-call-hands",
+        action="store_true",
+        help="every SQLite call hands the interpreter to a waiting thread (the model before "
+        "2026-11-27), not only with the chance bench_handoffs.py --calls measured",
+    )
+    parser.add_argument(
+        "--woken-at-once",
+        action="store_true",
+        help="a thread woken to a free interpreter runs at once (the model before "
+        "2026-11-27), not after the hand-off's wait for a core",
     )
     parser.add_argument(
         "--seeds",
@@ -437,6 +462,8 @@ def main() -> int:
                     work_places=args.work_places,
                     seed=2026 + seed,
                     worker_shares=shares,
+                    call_handoff=None if args.every_call_hands else CALL_HANDOFF,
+                    wake_free=not args.woken_at_once,
                     **(waits or waits_of()),
                 )
                 for seed in range(args.seeds)
@@ -525,6 +552,17 @@ def combine(results: list[dict]) -> dict:
         },
         "p50": {route: float(np.median(values)) for route, values in p50.items()},
         "cpu": {key: float(np.mean([x["cpu"].get(key, 0.0) for x in results])) for key in keys},
+        "run queue": {
+            group: tuple(
+                float(np.mean([x["run queue"].get(group, (0.0, 0.0))[i] for x in results]))
+                for i in (0, 1)
+            )
+            for group in set().union(*(x.get("run queue", {}) for x in results))
+        },  # fmt: skip
+        "wake-ups": {
+            group: float(np.mean([x["wake-ups"].get(group, 0) for x in results]))
+            for group in set().union(*(x.get("wake-ups", {}) for x in results))
+        },
         "lock held": [held for result in results for held in result["lock held"]],
         "server": dict(server),
         "wall": float(np.median([result["wall"] for result in results])),
@@ -622,6 +660,7 @@ def compare(result: dict, runs: list[dict[str, float]]) -> None:
             print(f"  CPU of the {label}: {asked:.1f} s from the costs per request, "
                   f"{middle:.1f} s used in the measured runs"
                   f" (median, {middle / asked:.2f}×)")  # fmt: skip
+    run_queue(result, runs)
     if result["lock held"]:
         held = np.percentile(result["lock held"], [50, 95]) * 1000
         print(f"  SQLite's write lock held (wall) p50 {held[0]:.1f} ms, p95 {held[1]:.1f} ms")
@@ -638,6 +677,40 @@ def compare(result: dict, runs: list[dict[str, float]]) -> None:
             shown = f"{middle:.0f} ({min(seen):.0f}–{max(seen):.0f})"
             error = f"{(p95 - middle) / middle * 100:+.0f} %"
         print(f"  {route:42s} {p50:6.0f} {predicted:>18s} {shown:>28s} {error:>6s}")
+
+
+def run_queue(result: dict, runs: list[dict[str, float]]) -> None:
+    """Each group's wait for a core, predicted (the model's cores shared in proportion)
+    beside what the kernel counted in the runs (``load_test.py --run-queue``): waited s /
+    ran s and the waited share of the time wanted.  For SQLite the database is the
+    server's own threads."""
+    model = dict(result.get("run queue", {}))
+    if "db" in model and not any(run.get("ran db") for run in runs):  # SQLite: in-process
+        ran, waited = model.pop("db")
+        model["server"] = (model.get("server", (0.0, 0.0))[0] + ran,
+                           model.get("server", (0.0, 0.0))[1] + waited)  # fmt: skip
+    for key, label in (("server", "server"), ("db", "PostgreSQL"), ("client", "load gen.")):
+        ran, waited = model.get(key, (0.0, 0.0))
+        seen = [(run[f"ran {key}"], run[f"waited {key}"]) for run in runs
+                if f"waited {key}" in run]  # fmt: skip
+        if not seen or not ran + waited:
+            continue
+        seen_ran, seen_waited = (float(np.median(v)) for v in zip(*seen, strict=True))
+        woken = result.get("wake-ups", {}).get(key, 0.0)
+        slices = [run[f"slices {key}"] for run in runs if f"slices {key}" in run]
+        if slices:
+            print(f"  times on a core, {label}: predicted wake-ups {woken:,.0f}, measured"
+                  f" {float(np.median(slices)):,.0f} (schedstat's slices)")  # fmt: skip
+        print(
+            f"  waited for a core, {label}: predicted {waited:.2f} s ({share(ran, waited):.0%}"
+            f" of {ran + waited:.1f} s wanted), measured {seen_waited:.2f} s"
+            f" ({share(seen_ran, seen_waited):.0%} of {seen_ran + seen_waited:.1f} s)"
+        )
+
+
+def share(ran: float, waited: float) -> float:
+    """The part of the time wanted on a core spent waiting for one."""
+    return waited / (ran + waited) if ran + waited else 0.0
 
 
 def inside_the_server(result: dict, measured_inside: dict[str, np.ndarray]) -> None:

@@ -98,6 +98,15 @@ ROUND_TRIP_S = 17e-6
 # as a slice of WAKE_SLICE_S with the chance that gives that mean.
 WAKE_BUSY_S = 195e-6
 WAKE_SLICE_S = 2e-3
+# An SQLite call releases the GIL while the database runs; a thread waiting for the
+# interpreter is woken, but takes it only if it reaches a core before the call is over --
+# else the caller takes it back and the waiter sleeps again.  bench/bench_handoffs.py
+# --calls over the app's calls (the probe's GYROLAB_BENCH_SQLITE_CALLS, 20 students on
+# SQLite: 10,411 calls, median 8.8 µs of CPU, 90 % under 32 µs): with a core free, calls
+# under ≈ 15 µs are never handed on and calls over ≈ 60 µs almost always (8 % of the app's);
+# with none free, 7-23 % of calls of any length (10 %).  None: every call hands it on
+# (the model before 2026-11-27).
+CALL_HANDOFF = (0.08, 0.10)
 
 
 class Job:
@@ -105,13 +114,24 @@ class Job:
     the thread gives up the interpreter (and queues for it again); ``handing`` is what is
     left of the hand-off to it (s of wall time: the interpreter is its, not yet running)."""
 
-    __slots__ = ("pool", "left", "done", "segment", "segment_left", "worker", "handing")
+    __slots__ = (
+        "pool", "left", "done", "segment", "segment_left", "worker", "handing", "call_share"
+    )  # fmt: skip
 
-    def __init__(self, pool: str, work: float, done, segments: float = 1.0, worker: int = 0):
+    def __init__(
+        self,
+        pool: str,
+        work: float,
+        done,
+        segments: float = 1.0,
+        worker: int = 0,
+        call_share: float = 0.0,
+    ):
         self.pool, self.left, self.done = pool, max(work, 1e-6), done
         self.segment = self.segment_left = self.left / max(segments, 1.0)
         self.worker = worker
         self.handing = 0.0
+        self.call_share = call_share  # of its releases, the SQLite calls'
 
 
 def simulate(
@@ -132,6 +152,8 @@ def simulate(
     wake_busy_s: float = WAKE_BUSY_S,
     seed: int = 2026,
     worker_shares: list[float] | None = None,
+    call_handoff: tuple[float, float] | None = CALL_HANDOFF,
+    wake_free: bool = True,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -162,7 +184,10 @@ def simulate(
     students' start times are the load test's own); ``worker_shares``: each worker's share
     of the students' connections (the kernel's accept race is not even: a run on two
     workers served 33 % and 67 % of the requests), else each connection to a worker at
-    random.
+    random; ``call_handoff``: (with a core free, with none) the chance that an SQLite
+    call hands the interpreter to a thread waiting for it (None: every call does);
+    ``wake_free``: a thread woken from sleep waits the hand-off for a core even when it
+    finds the interpreter free (False: it runs at once, the model before 2026-11-27).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -171,7 +196,12 @@ def simulate(
 
     Returns "latencies" (per route, s), "server" (per route, each HTTP request's wait for
     a work place and time from asking for it to the answer, s), "wall", "cpu" asked of
-    each pool, and "lock held" (each SQLite write's time holding the lock)."""
+    each pool, "lock held" (each SQLite write's time holding the lock), and "run queue":
+    per group ("server", "db", "client"), the time its threads ran and the time they were
+    ready and waited for a core, s -- the hand-offs included: a woken thread waits on the run
+    queue until it runs (run_queue.py measures the same in a run) -- and "wake-ups": per
+    group, how many times one of its threads was woken to run (the interpreter handed to
+    it, a round trip's answer)."""
     capacity = {"client": float("inf") if clients_elsewhere else 1.0}
     capacity |= {"server": float(workers), "db": cores, "hash": float(HASH_SLOTS * workers)}
     capacity["loop"] = float(workers)
@@ -187,10 +217,22 @@ def simulate(
     overdrawn = [0.0]  # the cores asked for now beyond the cores there are, per core
     waking = random.Random(seed + 2)
 
-    def busy_wake() -> float:
-        """How much longer a thread woken now waits for a core (s)."""
+    # per pool, the time its threads were ready to run and waited for a core, s (what the
+    # kernel's schedstat counts as run-queue waits: run_queue.py), and the time they ran
+    queued: dict[str, float] = defaultdict(float)
+    ran: dict[str, float] = defaultdict(float)
+
+    wakeups: dict[str, int] = defaultdict(int)
+
+    def busy_wake(pool: str = "server", counted: bool = True) -> float:
+        """How much longer a thread of ``pool`` woken now waits for a core (s); counted
+        here as a wake-up and a wait on the run queue unless the caller counts it."""
         mean = wake_busy_s * overdrawn[0]
-        return WAKE_SLICE_S if mean and waking.random() < mean / WAKE_SLICE_S else 0.0
+        wait = WAKE_SLICE_S if mean and waking.random() < mean / WAKE_SLICE_S else 0.0
+        if counted:
+            queued[pool] += wait
+            wakeups[pool] += 1
+        return wait
 
     def at(when: float, callback) -> None:
         heapq.heappush(timers, (when, next(order), callback))
@@ -230,10 +272,18 @@ def simulate(
     interpreters: list[list[Job]] = [[] for _ in range(workers)]  # [0] holds it
     turn_ends = [0.0] * workers
     pick = random.Random(seed)  # which worker each new connection reaches
+    calls_drawn = random.Random(seed + 3)  # which releases hand the interpreter on
     draw = random.Random(seed + 1)  # which of a route's measured requests this one costs
 
-    def server_job(work: float, done, releases: float, worker: int) -> None:
-        job = Job("server", work, done, releases + 1, worker)
+    def server_job(
+        work: float,
+        done,
+        releases: float,
+        worker: int,
+        call_share: float = 0.0,
+        woken: bool = True,
+    ) -> None:
+        job = Job("server", work, done, releases + 1, worker, call_share)
         if not switch_interval_s:
             jobs.append(job)
             return
@@ -241,6 +291,16 @@ def simulate(
         queue.append(job)
         if len(queue) <= 2:  # it now holds the interpreter, or is the first to wait
             turn_ends[worker] = now + switch_interval_s
+        if len(queue) == 1 and woken:
+            wake_to_free(job)
+
+    def wake_to_free(job: Job) -> None:
+        """A thread woken from sleep (by the event loop, or the loop by a socket) finds the
+        interpreter free: it still waits on the run queue to reach a core, as a thread
+        handed the interpreter does (the interpreter is its meanwhile)."""
+        if wake_free:
+            job.handing = handoff_s + busy_wake(counted=False)
+            wakeups["server"] += 1
 
     loops: list[list[list]] = [[] for _ in range(workers)]  # [work left, done] in order
 
@@ -258,6 +318,8 @@ def simulate(
             queue.append(loop_thread)
             if len(queue) <= 2:
                 turn_ends[worker] = now + switch_interval_s
+            if len(queue) == 1:
+                wake_to_free(loop_thread)
 
     def phases(route: str, then, worker: int, cost: tuple | None = None) -> None:
         cost = cost or costs[route]
@@ -341,7 +403,7 @@ def simulate(
 
                 def take() -> None:
                     taken[0] = now
-                    server_job(work, release, share(work), worker)
+                    server_job(work, release, share(work), worker, call_share)
 
                 taken: list[float | None] = [None]
                 lock.enter(take)
@@ -353,15 +415,23 @@ def simulate(
 
                     at(now + TURN_PATIENCE_S, impatient)
             elif pool == "server":
-                server_job(work, lambda: run(i + 1), share(work), worker)
+                server_job(work, lambda: run(i + 1), share(work), worker, call_share)
             elif pool == "thread":  # between round trips: only thread-pool trips cut it
-                server_job(work, lambda: run(i + 1), trips * work / threads, worker)
+                # after a round trip its wake-up is in the round trip's time
+                after_trip = i > 0 and stages[i - 1][0] == "wait"
+                server_job(
+                    work, lambda: run(i + 1), trips * work / threads, worker, woken=not after_trip
+                )
             elif pool == "wait":  # the server and then this thread woken
-                at(now + work + busy_wake() + busy_wake(), lambda: run(i + 1))
+                at(now + work + busy_wake("db") + busy_wake(), lambda: run(i + 1))
             elif pool == "loop":
                 loop_task(work, lambda: run(i + 1), worker, 1 + trips / 2)
             else:
                 jobs.append(Job(pool, work, lambda: run(i + 1)))
+
+        # in-process SQLite: of the releases, the calls' (round trips to PostgreSQL are
+        # stages of their own, and always hand the interpreter on)
+        call_share = calls / releases if one_writer and releases else 0.0
 
         def share(work: float) -> float:
             """This stage's part of the request's releases (in proportion to its CPU)."""
@@ -445,6 +515,21 @@ def simulate(
     if teacher:
         at(0.0, watch)
 
+    def kept_through_call(job: Job, queue: list[Job]) -> bool:
+        """At the end of a segment: whether it was an SQLite call that ended before the
+        thread woken for the interpreter reached a core (the caller keeps it; the waiter
+        was woken for nothing)."""
+        if call_handoff is None or len(queue) < 2 or not job.call_share:
+            return False
+        if calls_drawn.random() >= job.call_share:
+            return False  # a trip to the thread pool: the thread waits, the turn passes
+        chance = call_handoff[1] if overdrawn[0] > 0 else call_handoff[0]
+        if calls_drawn.random() < chance:
+            return False
+        wakeups["server"] += 1  # the waiter woken, on the run queue, asleep again
+        queued["server"] += handoff_s
+        return True
+
     def running() -> list[Job]:
         return [queue[0] for queue in interpreters if queue]
 
@@ -475,10 +560,16 @@ def simulate(
                 next_done = min(next_done, max(turn_ends[job.worker] - now, 0.0))
         next_timer = timers[0][0] - now if timers else float("inf")
         step = min(next_done, next_timer)
+        for pool, asked_of in demand.items():
+            if pool in shared and step < float("inf"):
+                group = "server" if pool in ("loop", "hash") else pool
+                queued[group] += asked_of * (1.0 - scale) * step
+                ran[group] += asked_of * scale * step
         for job in jobs:
             job.left -= rate[job.pool] * step
         for job in holders:
-            if job.handing > 0.0:
+            if job.handing > 0.0:  # woken, on the run queue, not yet on a core
+                queued["server"] += min(job.handing, step)
                 job.handing = job.handing - step if job.handing > step + 1e-15 else 0.0
                 continue
             job.left -= rate["interpreter"] * step
@@ -508,6 +599,10 @@ def simulate(
             elif job.left <= 1e-9:
                 queue.pop(0)
                 done.append(job)
+            elif job.segment_left <= 1e-9 and kept_through_call(job, queue):
+                job.segment_left = job.segment  # the call ended before a waiter ran;
+                turn_ends[job.worker] = now + switch_interval_s  # it waits a new interval
+                continue
             elif job.segment_left <= 1e-9:  # a call, or the loop's next callback: queues again
                 job.segment_left = job.segment
                 queue.append(queue.pop(0))
@@ -517,7 +612,8 @@ def simulate(
                 continue
             turn_ends[job.worker] = now + switch_interval_s
             if queue and queue[0] is not job:  # handed to a thread that waited for it
-                queue[0].handing = handoff_s + busy_wake()
+                queue[0].handing = handoff_s + busy_wake(counted=False)
+                wakeups["server"] += 1
         for job in done:
             job.done()
         while timers and timers[0][0] <= now + 1e-12:
@@ -529,4 +625,6 @@ def simulate(
         "wall": now,
         "cpu": dict(spent),
         "lock held": lock_held,
+        "run queue": {pool: (ran[pool], queued[pool]) for pool in ran},
+        "wake-ups": dict(wakeups),
     }

@@ -3,6 +3,7 @@ simulation against cases whose answer is known without it, and the class's CPU r
 
 from __future__ import annotations
 
+import os
 import sys
 from collections import Counter
 from pathlib import Path
@@ -30,8 +31,10 @@ def costs(server=4 * MS, db=1 * MS, client=2 * MS, calls=10.0, trips=4.0, loop=1
 
 
 def test_a_student_alone_waits_for_nothing_but_the_work_of_each_request():
+    """Woken threads reaching a core at once (``wake_free=False``): each request's latency
+    is its work."""
     result = queue_sim.simulate(
-        costs(), students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
+        costs(), 1, 1, 2.0, ramp=0.0, hash_s=2 * MS, teacher=False, wake_free=False
     )
     expected = Counter(route for kind, route in queue_sim.student_script() if kind == "request")
     saved = result["latencies"].pop(queue_sim.SAVED)
@@ -59,7 +62,9 @@ def test_many_short_calls_wait_a_turn_of_the_busy_threads_at_each_call():
     """CPython's GIL: a thread that gives the interpreter up at each database call queues
     again behind threads that hold it for their whole interval.  Writes of 60 short calls
     among reads that never give it up: evenly shared (processor sharing), the writes wait
-    far less and the reads more -- the convoy the switch interval makes."""
+    far less and the reads more -- the convoy the switch interval makes.  (Every call
+    handing the interpreter on: ``call_handoff=None``; the app's short calls mostly do not,
+    the next test.)"""
     mixed = costs(server=8 * MS, calls=0.0, trips=0.0)
     for route in mixed:
         if route.startswith("POST"):
@@ -68,7 +73,7 @@ def test_many_short_calls_wait_a_turn_of_the_busy_threads_at_each_call():
     shared = queue_sim.simulate(
         mixed, 40, 1, 2.0, teacher=False, switch_interval_s=0.0, work_places=0
     )
-    turns = queue_sim.simulate(mixed, 40, 1, 2.0, teacher=False, work_places=0)
+    turns = queue_sim.simulate(mixed, 40, 1, 2.0, teacher=False, work_places=0, call_handoff=None)
 
     def p95(result: dict, route: str) -> float:
         return float(np.percentile(result["latencies"][route], 95))
@@ -76,6 +81,32 @@ def test_many_short_calls_wait_a_turn_of_the_busy_threads_at_each_call():
     write, read = "POST /lab/sessions/{id}/csv", "GET /lab/sessions/{id}/results.json"
     assert p95(turns, write) > 2 * p95(shared, write)
     assert p95(turns, read) < p95(shared, read)
+
+
+def test_a_call_that_ends_before_the_waiter_runs_keeps_the_interpreter():
+    """bench_handoffs.py: a thread woken at an SQLite call takes the interpreter only if it
+    reaches a core before the call is over.  The writes' 60 short calls: when none hands it
+    on, the writes wait no turns at their calls; with the measured chances a few; when
+    every call does, a turn at each.  A call kept still woke the waiter for nothing."""
+    mixed = costs(server=8 * MS, calls=0.0, trips=0.0)
+    for route in mixed:
+        if route.startswith("POST"):
+            mixed[route] = (3 * MS, 1 * MS, 2 * MS, 60.0, 4.0, 1 * MS)
+
+    def run(call_handoff):
+        return queue_sim.simulate(
+            mixed, 40, 1, 2.0, teacher=False, work_places=0, call_handoff=call_handoff
+        )
+
+    def p95(result: dict) -> float:
+        return float(np.percentile(result["latencies"]["POST /lab/sessions/{id}/csv"], 95))
+
+    never, measured, every = run((0.0, 0.0)), run(queue_sim.CALL_HANDOFF), run(None)
+    assert p95(never) < p95(measured) < p95(every)
+    assert p95(every) > 1.5 * p95(never)
+    # kept calls are wake-ups too: the waiter woken and asleep again
+    assert never["wake-ups"]["server"] > 0
+    assert never["run queue"]["server"][1] >= never["wake-ups"]["server"] * queue_sim.HANDOFF_S
 
 
 def test_a_request_waits_for_a_work_place():
@@ -304,7 +335,7 @@ def test_inside_the_server_a_lone_request_waits_for_no_place():
     GYROLAB_BENCH_SERVER_TIMES measures): from asking for a work place to the answer,
     and of it the wait for the place."""
     result = queue_sim.simulate(
-        costs(), students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
+        costs(), 1, 1, 2.0, ramp=0.0, hash_s=2 * MS, teacher=False, wake_free=False
     )
     for route, pairs in result["server"].items():
         waited, inside = np.array(pairs).T
@@ -331,7 +362,7 @@ def test_the_event_loops_part_inside_the_app_holds_the_work_place():
     a request holds its place meanwhile; the server's socket work comes before and after."""
     table = {route: (*values, 0.6 * MS) for route, values in costs().items()}
     result = queue_sim.simulate(
-        table, students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
+        table, 1, 1, 2.0, ramp=0.0, hash_s=2 * MS, teacher=False, wake_free=False
     )
     for route, pairs in result["server"].items():
         waited, inside = np.array(pairs).T
@@ -346,7 +377,7 @@ def test_each_streamed_position_starts_and_saves_in_the_write_lock():
     holds the one write lock, as the HTTP writes do and a log-in twice; the frames between
     take no lock (a class whose positions end together queues its saves and turns)."""
     result = queue_sim.simulate(
-        costs(), students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
+        costs(), 1, 1, 2.0, ramp=0.0, hash_s=2 * MS, teacher=False, wake_free=False
     )
     writes = sum(
         1 for kind, route in queue_sim.student_script() if kind == "request" and route in
@@ -379,9 +410,9 @@ def test_a_hand_off_idles_the_interpreter_only_when_a_thread_waited_for_it():
     interpreter, so hands nothing off: the same latencies with or without it; a crowded
     class hands off at every call and is slower by it."""
     alone = {
-        handoff: queue_sim.simulate(costs(), 1, 1, 2.0, ramp=0.0, teacher=False, handoff_s=handoff)[
-            "latencies"
-        ]
+        handoff: queue_sim.simulate(
+            costs(), 1, 1, 2.0, ramp=0.0, teacher=False, handoff_s=handoff, wake_free=False
+        )["latencies"]
         for handoff in (0.0, 1 * MS)
     }
     for route, latencies in alone[0.0].items():
@@ -400,10 +431,9 @@ def test_on_postgresql_each_database_call_is_a_round_trip():
     database server's share of the work, and ``round_trip_s`` of loopback and wake-ups.  A
     student alone: each request's latency is its CPU (client, server, database) and one
     round trip per call (10 calls here); on SQLite the calls run in the thread itself."""
-    postgres = queue_sim.simulate(
-        costs(), 1, 1, 2.0, ramp=0.0, teacher=False, one_writer=False, round_trip_s=0.1 * MS
-    )
-    sqlite = queue_sim.simulate(costs(), 1, 1, 2.0, ramp=0.0, teacher=False, round_trip_s=0.1 * MS)
+    alone = {"ramp": 0.0, "teacher": False, "round_trip_s": 0.1 * MS, "wake_free": False}
+    postgres = queue_sim.simulate(costs(), 1, 1, 2.0, one_writer=False, **alone)
+    sqlite = queue_sim.simulate(costs(), 1, 1, 2.0, **alone)
     for route in ("GET /lab/sessions/{id}", "POST /lab/sessions/{id}/csv"):
         assert postgres["latencies"][route] == pytest.approx([8 * MS] * 2, abs=1e-5)
         assert sqlite["latencies"][route] == pytest.approx([7 * MS] * 2, abs=1e-5)
@@ -553,3 +583,141 @@ def test_the_hand_offs_measured_beside_a_run_are_read_from_its_report(tmp_path):
     assert queue_model.run_waits(table, None, None) == pytest.approx(
         {"handoff_s": queue_sim.HANDOFF_S, "wake_busy_s": queue_sim.WAKE_BUSY_S}
     )
+
+
+def test_the_run_queue_watch_counts_a_thread_born_during_it_from_zero():
+    """run_queue.py: a thread that starts inside the watch is counted whole (its CPU from
+    zero), a thread that was there before only from the watch's start."""
+    import threading
+    import time
+
+    import run_queue
+
+    burnt, done = threading.Semaphore(0), threading.Event()
+
+    def burn() -> None:
+        end = time.thread_time() + 0.3
+        while time.thread_time() < end:
+            pass
+        burnt.release()
+        done.wait()  # alive at the watch's last poll
+
+    before = threading.Thread(target=burn)
+    before.start()
+    burnt.acquire()  # its CPU spent before the watch: not counted
+    with run_queue.RunQueueWatch({"me": lambda: [os.getpid()]}, poll_s=0.05) as watch:
+        born = threading.Thread(target=burn)
+        born.start()
+        burnt.acquire()
+    done.set()
+    before.join()
+    born.join()
+    waits = watch.waits()["me"]
+    assert 0.3 <= waits.ran_s < 0.5  # the born thread's 0.3 s from zero, not the other's
+    assert waits.waited_s >= 0.0 and 0.0 <= waits.waited_share < 1.0
+    assert waits.autogroups == (run_queue.autogroup(os.getpid()),) or not waits.autogroups
+
+
+def test_the_run_queue_of_a_run_is_read_from_its_report(tmp_path):
+    """load_test.py --run-queue prints each group's wait for a core; the model reads it."""
+    import load_test
+
+    tally = load_test.Tally()
+    tally.latencies["GET /lab"] = [0.010, 0.020]
+    tally.run_queue = {
+        "server": (14.25, 1.5, 120000),
+        "load generator": (9.0, 3.0, 800),
+        "PostgreSQL": (4.0, 0.5, 30000),
+    }
+    path = tmp_path / "run.txt"
+    path.write_text(load_test.report("PostgreSQL", tally, 10.0, 0, 16, 2) + "\n")
+    table = queue_model.measured_p95(path)["PostgreSQL"]
+    assert (table["ran server"], table["waited server"]) == (14.25, 1.5)
+    assert (table["ran client"], table["waited client"]) == (9.0, 3.0)
+    assert (table["ran db"], table["waited db"]) == (4.0, 0.5)
+    assert (table["slices server"], table["slices db"]) == (120000, 30000)
+
+
+def test_the_model_counts_a_wait_for_a_core_only_when_more_is_asked_than_there_are():
+    """One student alone on two cores never waits for one; a class on half a core waits
+    for it: its groups' waits are then the time they wanted beyond what the core gave."""
+    alone = queue_sim.simulate(
+        costs(), students=1, workers=1, cores=2.0, ramp=0.0, hash_s=2 * MS, teacher=False
+    )
+    # alone, a thread waits on the run queue only to be woken: the hand-off at each wake-up
+    waits = {group: waited for group, (_, waited) in alone["run queue"].items()}
+    assert waits.pop("server") == pytest.approx(
+        alone["wake-ups"]["server"] * queue_sim.HANDOFF_S, rel=1e-9
+    )
+    assert all(waited == 0.0 for waited in waits.values())
+    assert sum(ran for ran, _ in alone["run queue"].values()) == pytest.approx(
+        sum(alone["cpu"].values()), rel=0.02
+    )
+    crowded = queue_sim.simulate(costs(), students=20, workers=1, cores=0.5, teacher=False)
+    ran = sum(r for r, _ in crowded["run queue"].values())
+    waited = sum(w for _, w in crowded["run queue"].values())
+    assert ran == pytest.approx(sum(crowded["cpu"].values()), rel=0.02)
+    # whatever ran on the half core took at least twice as long to be given
+    assert waited >= ran
+    # each hand-off of the interpreter to a thread that waited for it is a wake-up, its
+    # thread on the run queue for at least the hand-off
+    woken = crowded["wake-ups"]["server"]
+    assert woken > 0
+    assert crowded["run queue"]["server"][1] >= woken * queue_sim.HANDOFF_S
+
+
+def test_a_thread_woken_to_a_free_interpreter_still_waits_to_reach_a_core():
+    """``wake_free``: a thread woken from sleep (a thread-pool thread by the event loop,
+    the loop by a socket) waits the hand-off to reach a core even when the interpreter is
+    free.  A student alone: each request is its work and a whole number of hand-offs (the
+    loop woken for the request and its answer, the thread for its work)."""
+    kwargs = {"ramp": 0.0, "hash_s": 2 * MS, "teacher": False, "handoff_s": 1 * MS}
+    woken = queue_sim.simulate(costs(), 1, 1, 2.0, **kwargs)
+    at_once = queue_sim.simulate(costs(), 1, 1, 2.0, wake_free=False, **kwargs)
+    for route in ("GET /lab", "POST /lab/sessions/{id}/csv"):
+        extra = np.array(woken["latencies"][route]) - np.array(at_once["latencies"][route])
+        hand_offs = extra / (1 * MS)
+        assert np.all(hand_offs >= 2.9), route  # the loop twice and the thread at least
+        assert hand_offs == pytest.approx(np.round(hand_offs), abs=1e-6), route
+    assert woken["cpu"] == pytest.approx(at_once["cpu"])  # waited, not spent
+
+
+CALLING_SCRIPT = """
+import sqlite3, sys
+connection = sqlite3.connect(":memory:")
+connection.execute("CREATE TABLE t (x)")
+cursor = connection.cursor()
+cursor.executemany("INSERT INTO t VALUES (?)", [(i,) for i in range(50_000)])
+cursor.execute("SELECT sum(x) FROM t")  # tens of ms: the whole table
+cursor.fetchone()
+"""
+
+
+def test_the_sqlite_calls_probe_writes_each_calls_cpu(tmp_path):
+    """``GYROLAB_BENCH_SQLITE_CALLS``: one line per call that runs the database (the
+    connection's execute, the cursor's execute, executemany and fetches), its CPU in µs."""
+    import subprocess
+
+    probe = Path(queue_model.__file__).parent / "probe"
+    calls = tmp_path / "calls.txt"
+    env = {**os.environ, "PYTHONPATH": str(probe), "GYROLAB_BENCH_SQLITE_CALLS": str(calls)}
+    subprocess.run([sys.executable, "-c", CALLING_SCRIPT], env=env, check=True, timeout=60)
+    spent = [float(line) for line in calls.read_text().split()]
+    assert len(spent) == 4  # CREATE, executemany, SELECT, fetchone
+    assert all(value >= 0 for value in spent)
+    assert spent[1] > 1000 and spent[2] > 100  # 50,000 inserts; a sum over them
+
+
+def test_a_call_hands_the_interpreter_on_with_the_chance_of_its_length():
+    """bench_handoffs.py: the chance for the app's calls is the measured curve at each
+    call's length (linear between its points, flat beyond), averaged; and the measurement
+    itself gives a chance and a call's CPU."""
+    import bench_handoffs
+
+    curve = [(10e-6, 0.0), (60e-6, 1.0)]
+    calls = np.array([5e-6, 10e-6, 35e-6, 60e-6, 200e-6])
+    # 0, 0, 0.5, 1, 1
+    assert bench_handoffs.call_handoff_chance(curve, calls) == pytest.approx(2.5 / 5)
+    chance, spent = bench_handoffs.call_handoffs(rows=200, count=50)
+    assert 0.0 <= chance <= 1.0
+    assert 0.0 < spent < 0.01
