@@ -58,6 +58,7 @@ CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
 CLIENT_TIMES = os.environ.get("GYROLAB_BENCH_CLIENT_TIMES")
 HANDOFFS_LABEL = "hand-offs just before / after the class (bench_handoffs.py)"
 RUN_QUEUE_LABEL = "waited for a core / ran during the class (run_queue.py)"
+LOOPS = "of it the event loops"  # the server's workers' main threads
 PARTS = ("heading", "latitude")
 # One TLS context for every simulated browser.  httpx builds a new one per client unless
 # given one, loading the CA bundle: ≈ 28 ms of the load generator's CPU per client, and
@@ -496,7 +497,9 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
                 groups = {"server": lambda: pids, "load generator": lambda: [os.getpid()]}
                 if backend == "postgresql":
                     groups["PostgreSQL"] = postgres_pids
-                watch = RunQueueWatch(groups if args.run_queue else {})
+                watch = RunQueueWatch(
+                    groups if args.run_queue else {}, main_threads={"server": LOOPS}
+                )
                 before = cpu()
                 with watch:
                     tally, wall = asyncio.run(run_class(server.url, course, assignment, args))

@@ -280,9 +280,13 @@ HANDOFFS_LINE = re.compile(
     r"the interpreter's ([\d /]+) µs, a busy wake-up ([\d /-]+) µs a core asked beyond"
 )
 RUN_QUEUE_GROUP = re.compile(
-    r"(server|PostgreSQL|load generator) ([\d.]+) / ([\d.]+) s \(\d+%(?:, (\d+) slices)?\)"
+    r"(server|PostgreSQL|load generator|of it the event loops) ([\d.]+) / ([\d.]+) s"
+    r" \(\d+%(?:, (\d+) slices)?\)"
 )
-RUN_QUEUE_KEYS = {"server": "server", "PostgreSQL": "db", "load generator": "client"}
+RUN_QUEUE_KEYS = {
+    "server": "server", "PostgreSQL": "db", "load generator": "client",
+    load_test.LOOPS: "loop",
+}  # fmt: skip
 
 
 def measured_p95(path: Path) -> dict[str, dict[str, float]]:
@@ -689,6 +693,11 @@ def run_queue(result: dict, runs: list[dict[str, float]]) -> None:
         ran, waited = model.pop("db")
         model["server"] = (model.get("server", (0.0, 0.0))[0] + ran,
                            model.get("server", (0.0, 0.0))[1] + waited)  # fmt: skip
+    loops = [run["slices loop"] for run in runs if "slices loop" in run]
+    if loops and "loop" in result.get("wake-ups", {}):
+        predicted = result["wake-ups"]["loop"]
+        print(f"  times on a core, the event loops: predicted wake-ups {predicted:,.0f},"
+              f" measured {float(np.median(loops)):,.0f}")  # fmt: skip
     for key, label in (("server", "server"), ("db", "PostgreSQL"), ("client", "load gen.")):
         ran, waited = model.get(key, (0.0, 0.0))
         seen = [(run[f"ran {key}"], run[f"waited {key}"]) for run in runs

@@ -201,7 +201,7 @@ def simulate(
     ready and waited for a core, s -- the hand-offs included: a woken thread waits on the run
     queue until it runs (run_queue.py measures the same in a run) -- and "wake-ups": per
     group, how many times one of its threads was woken to run (the interpreter handed to
-    it, a round trip's answer)."""
+    it, a round trip's answer; under "loop", of the server's those of the event loops)."""
     capacity = {"client": float("inf") if clients_elsewhere else 1.0}
     capacity |= {"server": float(workers), "db": cores, "hash": float(HASH_SLOTS * workers)}
     capacity["loop"] = float(workers)
@@ -301,6 +301,7 @@ def simulate(
         if wake_free:
             job.handing = handoff_s + busy_wake(counted=False)
             wakeups["server"] += 1
+            wakeups["loop"] += job.pool == "loop"
 
     loops: list[list[list]] = [[] for _ in range(workers)]  # [work left, done] in order
 
@@ -614,6 +615,7 @@ def simulate(
             if queue and queue[0] is not job:  # handed to a thread that waited for it
                 queue[0].handing = handoff_s + busy_wake(counted=False)
                 wakeups["server"] += 1
+                wakeups["loop"] += queue[0].pool == "loop"
         for job in done:
             job.done()
         while timers and timers[0][0] <= now + 1e-12:

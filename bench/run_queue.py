@@ -69,8 +69,16 @@ class RunQueueWatch:
     group's processes are asked for at every poll (PostgreSQL starts a process per
     connection)."""
 
-    def __init__(self, groups: dict[str, Callable[[], list[int]]], poll_s: float = POLL_S):
+    def __init__(
+        self,
+        groups: dict[str, Callable[[], list[int]]],
+        poll_s: float = POLL_S,
+        main_threads: dict[str, str] | None = None,
+    ):
+        """``main_threads``: for a group's name, the name under which its processes' main
+        threads are also counted on their own (a uvicorn worker's event loop)."""
         self.groups, self.poll_s = groups, poll_s
+        self.main_threads = main_threads or {}
         self._first: dict[str, dict[tuple[int, int], tuple[int, int, int]]] = {}
         self._last: dict[str, dict[tuple[int, int], tuple[int, int, int]]] = {}
         self._autogroups: dict[str, set[str]] = {name: set() for name in groups}
@@ -108,8 +116,14 @@ class RunQueueWatch:
         result = {}
         for name in self.groups:
             start, last = self._first.get(name, {}), self._last.get(name, {})
-            ran, waited, slices = (sum(last[key][i] - start[key][i] for key in last)
-                                   for i in range(3))  # fmt: skip
             groups = tuple(sorted(self._autogroups[name]))
-            result[name] = Waits(ran / 1e9, waited / 1e9, groups, slices)
+            result[name] = _summed(start, last, list(last), groups)
+            if name in self.main_threads:
+                mains = [(pid, tid) for pid, tid in last if pid == tid]
+                result[self.main_threads[name]] = _summed(start, last, mains, groups)
         return result
+
+
+def _summed(start: dict, last: dict, keys: list, groups: tuple[str, ...]) -> Waits:
+    ran, waited, slices = (sum(last[key][i] - start[key][i] for key in keys) for i in range(3))
+    return Waits(ran / 1e9, waited / 1e9, groups, slices)

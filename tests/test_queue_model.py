@@ -605,7 +605,8 @@ def test_the_run_queue_watch_counts_a_thread_born_during_it_from_zero():
     before = threading.Thread(target=burn)
     before.start()
     burnt.acquire()  # its CPU spent before the watch: not counted
-    with run_queue.RunQueueWatch({"me": lambda: [os.getpid()]}, poll_s=0.05) as watch:
+    watching = {"me": lambda: [os.getpid()]}
+    with run_queue.RunQueueWatch(watching, poll_s=0.05, main_threads={"me": "main"}) as watch:
         born = threading.Thread(target=burn)
         born.start()
         burnt.acquire()
@@ -616,6 +617,9 @@ def test_the_run_queue_watch_counts_a_thread_born_during_it_from_zero():
     assert 0.3 <= waits.ran_s < 0.5  # the born thread's 0.3 s from zero, not the other's
     assert waits.waited_s >= 0.0 and 0.0 <= waits.waited_share < 1.0
     assert waits.autogroups == (run_queue.autogroup(os.getpid()),) or not waits.autogroups
+    # the process's main thread on its own (a worker's event loop): it burnt nothing here
+    main = watch.waits()["main"]
+    assert main.ran_s < 0.3 and main.ran_s <= waits.ran_s and main.slices <= waits.slices
 
 
 def test_the_run_queue_of_a_run_is_read_from_its_report(tmp_path):
@@ -628,6 +632,7 @@ def test_the_run_queue_of_a_run_is_read_from_its_report(tmp_path):
         "server": (14.25, 1.5, 120000),
         "load generator": (9.0, 3.0, 800),
         "PostgreSQL": (4.0, 0.5, 30000),
+        load_test.LOOPS: (3.0, 0.25, 40000),
     }
     path = tmp_path / "run.txt"
     path.write_text(load_test.report("PostgreSQL", tally, 10.0, 0, 16, 2) + "\n")
@@ -636,6 +641,7 @@ def test_the_run_queue_of_a_run_is_read_from_its_report(tmp_path):
     assert (table["ran client"], table["waited client"]) == (9.0, 3.0)
     assert (table["ran db"], table["waited db"]) == (4.0, 0.5)
     assert (table["slices server"], table["slices db"]) == (120000, 30000)
+    assert (table["ran loop"], table["waited loop"], table["slices loop"]) == (3.0, 0.25, 40000)
 
 
 def test_the_model_counts_a_wait_for_a_core_only_when_more_is_asked_than_there_are():
