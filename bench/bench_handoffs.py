@@ -55,18 +55,32 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 
-def interpreter_handoffs(count: int = 400) -> np.ndarray:
-    """Seconds from a thread's release of the interpreter to a waiting thread's first
-    instruction, ``count`` times."""
-    clock = time.perf_counter
+def beside_a_waiting_thread(work) -> list[float]:
+    """Runs ``work()`` in a thread while another (B) reads the clock whenever it has the
+    interpreter; returns B's readings (``time.perf_counter``), in order."""
     marks: list[float] = []  # thread B's clock readings, as fast as it can take them
     stop = threading.Event()
 
     def waiting_thread() -> None:
-        mark = marks.append
+        mark, clock = marks.append, time.perf_counter
         while not stop.is_set():
             mark(clock())
 
+    other = threading.Thread(target=waiting_thread)
+    other.start()
+    time.sleep(0.02)
+    working = threading.Thread(target=work)
+    working.start()
+    working.join()
+    stop.set()
+    other.join()
+    return marks
+
+
+def interpreter_handoffs(count: int = 400) -> np.ndarray:
+    """Seconds from a thread's release of the interpreter to a waiting thread's first
+    instruction, ``count`` times."""
+    clock = time.perf_counter
     releases: list[float] = []
 
     def releasing_thread() -> None:
@@ -81,14 +95,7 @@ def interpreter_handoffs(count: int = 400) -> np.ndarray:
             connection.execute("SELECT sum(x) FROM t").fetchone()  # B takes it meanwhile
         connection.close()
 
-    other = threading.Thread(target=waiting_thread)
-    other.start()
-    time.sleep(0.05)
-    releasing = threading.Thread(target=releasing_thread)
-    releasing.start()
-    releasing.join()
-    stop.set()
-    other.join()
+    marks = beside_a_waiting_thread(releasing_thread)
     gaps = []
     for released in releases:
         after = bisect.bisect_right(marks, released)
@@ -137,14 +144,6 @@ def call_handoffs(rows: int, count: int = 2000, python_s: float = 0.0003) -> tup
     calls' median CPU in s).  B is woken at each release, but if A's call is over before B
     reaches a core, A takes the interpreter back and B sleeps again."""
     clock = time.perf_counter
-    marks: list[float] = []
-    stop = threading.Event()
-
-    def waiting_thread() -> None:
-        mark = marks.append
-        while not stop.is_set():
-            mark(clock())
-
     calls: list[tuple[float, float]] = []
     spent: list[float] = []
 
@@ -164,14 +163,7 @@ def call_handoffs(rows: int, count: int = 2000, python_s: float = 0.0003) -> tup
             calls.append((began, clock()))
         connection.close()
 
-    other = threading.Thread(target=waiting_thread)
-    other.start()
-    time.sleep(0.02)
-    calling = threading.Thread(target=calling_thread)
-    calling.start()
-    calling.join()
-    stop.set()
-    other.join()
+    marks = beside_a_waiting_thread(calling_thread)
     taken = 0
     for began, ended in calls:
         after = bisect.bisect_right(marks, began)
