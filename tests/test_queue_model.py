@@ -17,6 +17,8 @@ import class_cpu  # noqa: E402  (bench/)
 import queue_model  # noqa: E402
 import queue_sim  # noqa: E402
 
+from tests.probed_apps import run_probed  # noqa: E402
+
 MS = 1e-3
 
 
@@ -123,18 +125,7 @@ def test_a_request_waits_for_a_work_place():
         assert first == pytest.approx(expected, abs=1e-4), places
 
 
-PROBED_APP = """
-import asyncio, sys, time
-import httpx
-from fastapi import FastAPI
-
-app = FastAPI()
-
-def burn(seconds):
-    began = time.thread_time()
-    while time.thread_time() - began < seconds:
-        pass
-
+PROBED_ROUTES = """
 @app.get("/on-the-loop/{n}")
 async def on_the_loop(n: int):
     burn(0.03)
@@ -146,29 +137,21 @@ async def on_the_loop(n: int):
 def in_a_thread(n: int):
     burn(0.03)
     return {}
-
-async def main():
-    transport = httpx.ASGITransport(app=app)
-    async with httpx.AsyncClient(transport=transport, base_url="http://t") as client:
-        await client.get("/on-the-loop/0")  # first calls: the framework's own set-up
-        await client.get("/in-a-thread/0")
-        await asyncio.gather(client.get("/on-the-loop/1"), client.get("/in-a-thread/2"))
-
-asyncio.run(main())
 """
+PROBED_CALLS = [
+    'client.get("/on-the-loop/0")',  # first calls: the framework's own set-up
+    'client.get("/in-a-thread/0")',
+    'asyncio.gather(client.get("/on-the-loop/1"), client.get("/in-a-thread/2"))',
+]
 
 
 def test_the_probe_gives_each_request_the_cpu_of_its_own_task(tmp_path):
     """``GYROLAB_BENCH_REQUEST_CPU``: CPU its coroutine spent on the event loop and its
     functions in the thread pool, by the thread's CPU clock (work that burns a known amount
     of CPU; waiting counts nothing), requests running at once kept apart."""
-    import os
-    import subprocess
 
     out = tmp_path / "cpu.txt"
-    probe = Path(queue_model.__file__).parent / "probe"
-    env = {**os.environ, "PYTHONPATH": str(probe), "GYROLAB_BENCH_REQUEST_CPU": str(out)}
-    subprocess.run([sys.executable, "-c", PROBED_APP], env=env, check=True, timeout=60)
+    run_probed(PROBED_ROUTES, PROBED_CALLS, {"GYROLAB_BENCH_REQUEST_CPU": str(out)})
     rows = {}
     for line in out.read_text().splitlines():
         kind, method, path, loop_ms, threads_ms, frames = line.split()
@@ -186,13 +169,9 @@ def test_the_profile_probe_writes_each_routes_thread_pool_functions_by_cpu(tmp_p
     """``GYROLAB_BENCH_PROFILE``: one cProfile file per route (ids folded), of what its
     requests ran in the thread pool, timed by the thread's CPU clock; the loop's work is
     not in it."""
-    import os
     import pstats
-    import subprocess
 
-    probe = Path(queue_model.__file__).parent / "probe"
-    env = {**os.environ, "PYTHONPATH": str(probe), "GYROLAB_BENCH_PROFILE": str(tmp_path)}
-    subprocess.run([sys.executable, "-c", PROBED_APP], env=env, check=True, timeout=60)
+    run_probed(PROBED_ROUTES, PROBED_CALLS, {"GYROLAB_BENCH_PROFILE": str(tmp_path)})
     files = sorted(path.name.split("-", 1)[1] for path in tmp_path.glob("*.prof"))
     assert files == ["GET_in_a_thread_id.prof"]  # the loop's route sent nothing there
     stats = pstats.Stats(str(next(tmp_path.glob("*.prof"))))
@@ -338,7 +317,7 @@ def test_inside_the_server_a_lone_request_waits_for_no_place():
         costs(), 1, 1, 2.0, ramp=0.0, hash_s=2 * MS, teacher=False, wake_free=False
     )
     for route, pairs in result["server"].items():
-        waited, inside = np.array(pairs).T
+        waited, inside = np.array(pairs).T[:2]
         assert np.all(waited == 0), route
         # the threads' work (server less its event loop's part) and the database's
         assert inside == pytest.approx(np.full(len(inside), 4 * MS), abs=1e-5), route
@@ -365,7 +344,7 @@ def test_the_event_loops_part_inside_the_app_holds_the_work_place():
         table, 1, 1, 2.0, ramp=0.0, hash_s=2 * MS, teacher=False, wake_free=False
     )
     for route, pairs in result["server"].items():
-        waited, inside = np.array(pairs).T
+        waited, inside = np.array(pairs).T[:2]
         assert inside == pytest.approx(np.full(len(inside), 4.6 * MS), abs=1e-5), route
     result["latencies"].pop(queue_sim.SAVED)
     for route, latencies in result["latencies"].items():  # the same work in all

@@ -39,6 +39,20 @@ after every 100 profiled calls (a stopped server may not run its exit code), one
 ``cProfile`` file per route (``PID-ROUTE.prof``, for ``pstats``) of every
 function the route's requests sent to the thread pool, timed by the thread's CPU clock --
 where a class's thread-pool CPU goes (``GYROLAB_BENCH_REQUEST_CPU`` says how much).
+
+``GYROLAB_BENCH_REQUEST_WAITS`` (a load test): a file to which each HTTP request appends
+where its time inside the server went, ms: ``method path total admitted loop_cpu
+loop_wall dispatch thread_cpu thread_wall thread_queued back trips began_s pid`` -- from
+when the app is called to its end, of it the wait before the app proper began (the body,
+a work place); its coroutine's steps on the event loop (CPU, and wall: a step that loses
+the interpreter or its core takes longer); per function sent to the thread pool, from
+sending it to its start (a thread woken, the interpreter taken), its CPU and wall in the
+thread and of that wall the thread's wait for a core (the kernel's
+``/proc/thread-self/schedstat``: the rest of the wall is waiting for the interpreter or
+for the write lock), and from its end to the coroutine's next step (the loop woken, the
+interpreter taken, the loop's other callbacks first); the trips to the thread pool; when
+it was called (``time.perf_counter``) and which worker answered.  The probe's own reads
+of ``schedstat`` are in the thread's CPU.
 """
 
 import os
@@ -50,6 +64,7 @@ _GC = os.environ.get("GYROLAB_BENCH_GC")
 _CPU = os.environ.get("GYROLAB_BENCH_REQUEST_CPU")
 _PROFILE = os.environ.get("GYROLAB_BENCH_PROFILE")
 _CALLS = os.environ.get("GYROLAB_BENCH_SQLITE_CALLS")
+_WAITS = os.environ.get("GYROLAB_BENCH_REQUEST_WAITS")
 
 if _GC:
     import gc as _gc
@@ -241,10 +256,30 @@ if _COUNTS or _LOCKS or _CALLS:
         _base = _connection_base.BaseConnection
         _base._exec_command = _counting(_base._exec_command)
 
-if _CPU or _PROFILE:
+if _CPU or _PROFILE or _WAITS:
     import contextvars
+    import types
 
     import anyio.to_thread as _to_thread
+
+    @types.coroutine
+    def _each_step(awaitable, before, after):
+        """Drive ``awaitable`` step by step: ``after(before())`` around each step (what the
+        coroutine does between two of its awaits, on the event loop)."""
+        steps = awaitable.__await__()
+        value, error = None, None
+        while True:
+            mark = before()
+            try:
+                yielded = steps.throw(error) if error is not None else steps.send(value)
+            except StopIteration as stop:
+                after(mark)
+                return stop.value
+            after(mark)
+            try:
+                value, error = (yield yielded), None
+            except BaseException as raised:  # noqa: BLE001 (handed on to the coroutine)
+                value, error = None, raised
 
     def _wrap_thread_pool(wrap) -> None:
         """Send every function a request gives the thread pool through ``wrap(func)``: the
@@ -259,7 +294,6 @@ if _CPU or _PROFILE:
 
 if _CPU:
     import time as _cpu_time
-    import types
 
     from fastapi import applications as _cpu_applications
 
@@ -267,23 +301,13 @@ if _CPU:
     _SAMPLES = '"type":"samples"'  # how the stream's frames of samples begin
     _spent = contextvars.ContextVar("gyrolab_bench_spent", default=None)
 
-    @types.coroutine
     def _timed_steps(awaitable, spent):
-        """Drive ``awaitable`` step by step, adding each step's CPU (this thread's clock)."""
-        steps = awaitable.__await__()
-        value, error = None, None
-        while True:
-            began = _cpu_time.thread_time()
-            try:
-                yielded = steps.throw(error) if error is not None else steps.send(value)
-            except StopIteration as stop:
-                spent[0] += _cpu_time.thread_time() - began
-                return stop.value
+        """``awaitable`` with each step's CPU (this thread's clock) added to ``spent[0]``."""
+
+        def after(began: float) -> None:
             spent[0] += _cpu_time.thread_time() - began
-            try:
-                value, error = (yield yielded), None
-            except BaseException as raised:  # noqa: BLE001 (handed on to the coroutine)
-                value, error = None, raised
+
+        return _each_step(awaitable, _cpu_time.thread_time, after)
 
     _cpu_call = _cpu_applications.FastAPI.__call__
 
@@ -388,3 +412,96 @@ if _PROFILE:
     def _write_at_exit() -> None:
         with _profiles_lock:
             _write_profiles()
+
+
+if _WAITS:
+    import time as _w_time
+
+    from fastapi import applications as _w_applications
+    from starlette.middleware import exceptions as _w_exceptions
+
+    _w_file = os.open(_WAITS, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+    _w_state = contextvars.ContextVar("gyrolab_bench_waits", default=None)
+    # began, admitted, loop cpu, loop wall, dispatch, thread cpu, thread wall, thread queued,
+    # back, trips, a function's end (until the coroutine's next step)
+    _BEGAN, _ADMITTED, _LOOP_CPU, _LOOP_WALL, _DISPATCH = range(5)
+    _T_CPU, _T_WALL, _T_QUEUED, _BACK, _TRIPS, _ENDED = range(5, 11)
+
+    def _queued_s() -> float:
+        """This thread's time ready to run but waiting for a core so far (the kernel's)."""
+        handle = os.open("/proc/thread-self/schedstat", os.O_RDONLY)
+        try:
+            return int(os.read(handle, 96).split()[1]) / 1e9
+        finally:
+            os.close(handle)
+
+    def _waited_steps(awaitable, state):
+        """``awaitable`` with each step's CPU and wall on the loop added to ``state``, and
+        the time from a thread-pool function's end to the step after it."""
+
+        def before() -> tuple[float, float]:
+            wall = _w_time.perf_counter()
+            if state[_ENDED]:
+                state[_BACK] += wall - state[_ENDED]
+                state[_ENDED] = 0.0
+            return wall, _w_time.thread_time()
+
+        def after(began: tuple[float, float]) -> None:
+            state[_LOOP_CPU] += _w_time.thread_time() - began[1]
+            state[_LOOP_WALL] += _w_time.perf_counter() - began[0]
+
+        return _each_step(awaitable, before, after)
+
+    _w_call = _w_applications.FastAPI.__call__
+
+    async def _waits_call(self, scope, receive, send):
+        if scope["type"] != "http":
+            return await _w_call(self, scope, receive, send)
+        state = [_w_time.perf_counter(), 0.0, *([0.0] * 9)]
+        token = _w_state.set(state)
+        try:
+            return await _waited_steps(_w_call(self, scope, receive, send), state)
+        finally:
+            _w_state.reset(token)
+            total = _w_time.perf_counter() - state[_BEGAN]
+            admitted = state[_ADMITTED] - state[_BEGAN] if state[_ADMITTED] else total
+            parts = (total, admitted, *state[_LOOP_CPU:_TRIPS])
+            line = f"{scope['method']} {scope['path']} " + " ".join(
+                f"{part * 1000:.3f}" for part in parts
+            )
+            line += f" {int(state[_TRIPS])} {state[_BEGAN]:.6f} {os.getpid()}\n"
+            os.write(_w_file, line.encode())
+
+    _w_applications.FastAPI.__call__ = _waits_call
+    _w_inner = _w_exceptions.ExceptionMiddleware.__call__
+
+    async def _w_admitted(self, scope, receive, send):
+        state = _w_state.get()
+        if state is not None and not state[_ADMITTED]:
+            state[_ADMITTED] = _w_time.perf_counter()
+        return await _w_inner(self, scope, receive, send)
+
+    _w_exceptions.ExceptionMiddleware.__call__ = _w_admitted
+
+    def _waited(func):
+        state = _w_state.get()
+        if state is None:
+            return None
+        sent = _w_time.perf_counter()
+
+        def waited(*call_args):
+            began, cpu, queued = _w_time.perf_counter(), _w_time.thread_time(), _queued_s()
+            state[_DISPATCH] += began - sent
+            try:
+                return func(*call_args)
+            finally:
+                state[_T_QUEUED] += _queued_s() - queued
+                state[_T_CPU] += _w_time.thread_time() - cpu
+                ended = _w_time.perf_counter()
+                state[_T_WALL] += ended - began
+                state[_TRIPS] += 1
+                state[_ENDED] = ended
+
+        return waited
+
+    _wrap_thread_pool(_waited)
