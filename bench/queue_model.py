@@ -78,6 +78,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import load_test  # noqa: E402  (bench/, the script's folder)
+import request_waits  # noqa: E402
 from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
 from class_cpu import attributed_costs, in_class, server_times, worker_shares  # noqa: E402
 from queue_sim import (  # noqa: E402
@@ -417,6 +418,16 @@ def main() -> int:
         "share of the run's requests is its chance of a new connection in the simulation",
     )
     parser.add_argument(
+        "--request-waits",
+        type=Path,
+        nargs="*",
+        default=[],
+        help="what the probe's GYROLAB_BENCH_REQUEST_WAITS wrote in the --class-run runs (one "
+        "file per run, in order): where each request's time inside the server went (CPU, "
+        "waits off a core, on the run queue), and how crowded the work places were, "
+        "measured beside predicted",
+    )
+    parser.add_argument(
         "--class-run",
         type=Path,
         nargs="+",
@@ -496,6 +507,15 @@ def main() -> int:
             compare(result, [table])
             if times:
                 inside_the_server(result, server_times(times))
+            if len(args.request_waits) > index:
+                measured = request_waits.read(args.request_waits[index])
+                request_waits.compare(request_waits.modelled(result), measured)
+                if workers == 1:
+                    share, queue = request_waits.crowding(measured)
+                    print(f"  the work places: someone waited for one {result['places'][0]:.0%}"
+                          f" of the time they were asked for or held (model), {share:.0%}"
+                          f" (measured); then {result['places'][1]:.1f} / {queue:.1f} waited"
+                          " on average")  # fmt: skip
             predicted[students].append((result, table))
         for students, pairs in sorted(predicted.items()):
             summary(students, name, pairs)
@@ -538,7 +558,8 @@ def combine(results: list[dict]) -> dict:
     band from the 10th to the 90th percentile over the seeds (how far one run's p95 moves
     with nothing changed but chance: which worker each connection reached, which request
     came when); the CPU asked (the mean), and the waits inside the server and the write
-    lock's holds of all seeds together."""
+    lock's holds of all seeds together; "places": how crowded the work places were
+    (``request_waits.place_queue`` of each seed, the median; one worker's)."""
     routes = set.intersection(*(set(result["latencies"]) for result in results))
     p95 = {r: [np.percentile(x["latencies"][r], 95) * 1000 for x in results] for r in routes}
     p50 = {r: [np.percentile(x["latencies"][r], 50) * 1000 for x in results] for r in routes}
@@ -569,9 +590,16 @@ def combine(results: list[dict]) -> dict:
         },
         "lock held": [held for result in results for held in result["lock held"]],
         "server": dict(server),
+        "places": tuple(np.median([crowded_places(result) for result in results], axis=0)),
         "wall": float(np.median([result["wall"] for result in results])),
         "seeds": len(results),
     }
+
+
+def crowded_places(result: dict) -> tuple[float, float]:
+    """``request_waits.place_queue`` of one simulation's requests (all workers as one)."""
+    rows = [row for rows in result["server"].values() for row in rows if len(row) > 6]
+    return request_waits.place_queue((row[6], row[0], row[1] - row[0]) for row in rows)
 
 
 def summary(students: int, name: str, pairs: list[tuple[dict, dict]]) -> dict:

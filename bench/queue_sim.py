@@ -115,7 +115,8 @@ class Job:
     left of the hand-off to it (s of wall time: the interpreter is its, not yet running)."""
 
     __slots__ = (
-        "pool", "left", "done", "segment", "segment_left", "worker", "handing", "call_share"
+        "pool", "left", "done", "segment", "segment_left", "worker", "handing", "call_share",
+        "waits",
     )  # fmt: skip
 
     def __init__(
@@ -132,6 +133,10 @@ class Job:
         self.worker = worker
         self.handing = 0.0
         self.call_share = call_share  # of its releases, the SQLite calls'
+        # its request's waits (``simulate``'s "server" tuples): for the interpreter, being
+        # handed it (on the run queue), holding it for a core, for the write lock or the
+        # database server
+        self.waits: list[float] | None = None
 
 
 def simulate(
@@ -195,7 +200,9 @@ def simulate(
     many short database calls therefore waits about one turn of the others per call.
 
     Returns "latencies" (per route, s), "server" (per route, each HTTP request's wait for
-    a work place and time from asking for it to the answer, s), "wall", "cpu" asked of
+    a work place, time from asking for it to the answer, of that its threads' waits for the
+    interpreter, for a hand-off of it, for a core while holding it and for the write lock or
+    the database server, and when it asked for a place, s), "wall", "cpu" asked of
     each pool, "lock held" (each SQLite write's time holding the lock), and "run queue":
     per group ("server", "db", "client"), the time its threads ran and the time they were
     ready and waited for a core, s -- the hand-offs included: a woken thread waits on the run
@@ -282,8 +289,10 @@ def simulate(
         worker: int,
         call_share: float = 0.0,
         woken: bool = True,
+        waits: list[float] | None = None,
     ) -> None:
         job = Job("server", work, done, releases + 1, worker, call_share)
+        job.waits = waits
         if not switch_interval_s:
             jobs.append(job)
             return
@@ -365,6 +374,9 @@ def simulate(
         stages += [("dismiss", 0.0)] if http else []
         stages += [("loop", outside / 2), ("client", client / 2)]
         holding = [False]  # whether this request holds one of its worker's places
+        # its threads' waits: for the interpreter, a hand-off of it, a core, the write lock
+        # or the database server
+        waits = [0.0, 0.0, 0.0, 0.0]
         asked, waited = [0.0], [0.0]  # when it asked for a place, how long it waited
 
         def give_back() -> None:
@@ -387,7 +399,7 @@ def simulate(
 
                 places[worker].enter(admitted)
             elif pool == "dismiss":
-                inside[route].append((waited[0], now - asked[0]))
+                inside[route].append((waited[0], now - asked[0], *waits, asked[0]))
                 give_back()
                 run(i + 1)
             elif pool == "enter":
@@ -404,9 +416,11 @@ def simulate(
 
                 def take() -> None:
                     taken[0] = now
-                    server_job(work, release, share(work), worker, call_share)
+                    waits[3] += now - wanted
+                    server_job(work, release, share(work), worker, call_share, waits=waits)
 
                 taken: list[float | None] = [None]
+                wanted = now
                 lock.enter(take)
                 if taken[0] is None and holding[0]:  # waiting; past its patience it gives way
 
@@ -416,19 +430,36 @@ def simulate(
 
                     at(now + TURN_PATIENCE_S, impatient)
             elif pool == "server":
-                server_job(work, lambda: run(i + 1), share(work), worker, call_share)
+                server_job(work, lambda: run(i + 1), share(work), worker, call_share, waits=waits)
             elif pool == "thread":  # between round trips: only thread-pool trips cut it
                 # after a round trip its wake-up is in the round trip's time
                 after_trip = i > 0 and stages[i - 1][0] == "wait"
                 server_job(
-                    work, lambda: run(i + 1), trips * work / threads, worker, woken=not after_trip
+                    work,
+                    lambda: run(i + 1),
+                    trips * work / threads,
+                    worker,
+                    woken=not after_trip,
+                    waits=waits,
                 )
             elif pool == "wait":  # the server and then this thread woken
-                at(now + work + busy_wake("db") + busy_wake(), lambda: run(i + 1))
+                at(now + work + busy_wake("db") + busy_wake(), waited_on_database(i))
             elif pool == "loop":
                 loop_task(work, lambda: run(i + 1), worker, 1 + trips / 2)
+            elif pool == "db" and round_trips:  # PostgreSQL's CPU between round trips
+                jobs.append(Job(pool, work, waited_on_database(i)))
             else:
                 jobs.append(Job(pool, work, lambda: run(i + 1)))
+
+        def waited_on_database(i: int):
+            """``run(i + 1)`` once the database has answered, its time counted as waited."""
+            began = now
+
+            def answered() -> None:
+                waits[3] += now - began
+                run(i + 1)
+
+            return answered
 
         # in-process SQLite: of the releases, the calls' (round trips to PostgreSQL are
         # stages of their own, and always hand the interpreter on)
@@ -568,7 +599,16 @@ def simulate(
                 ran[group] += asked_of * scale * step
         for job in jobs:
             job.left -= rate[job.pool] * step
+        for queue in interpreters:
+            for waiter in queue[1:]:
+                if waiter.waits is not None:
+                    waiter.waits[0] += step
         for job in holders:
+            if job.waits is not None:
+                if job.handing > 0.0:
+                    job.waits[1] += min(job.handing, step)
+                else:
+                    job.waits[2] += step * (1.0 - rate["interpreter"])
             if job.handing > 0.0:  # woken, on the run queue, not yet on a core
                 queued["server"] += min(job.handing, step)
                 job.handing = job.handing - step if job.handing > step + 1e-15 else 0.0

@@ -1,0 +1,117 @@
+"""Where a request's time inside the server goes, measured beside the queueing model's.
+
+The probe's ``GYROLAB_BENCH_REQUEST_WAITS`` (``bench/probe/sitecustomize.py``) splits each
+HTTP request of a load test into its wait for a work place and, holding the place, its
+CPU, its threads' waits off a core (for the interpreter, for the write lock or
+PostgreSQL's answers, for the thread pool to take the function and the event loop to take
+the answer back) and its threads' waits on the run queue (the kernel's ``schedstat``).
+``queue_sim.simulate`` reports the same split for each simulated request ("server"), and
+:func:`compare` prints the two side by side; :func:`place_queue` says how crowded the work
+places were."""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+from class_cpu import route_of
+
+# the columns of ``read``'s arrays, ms (began: s, the probe's clock)
+PLACE, INSIDE, CPU, OFF_CORE, RUN_QUEUE, BEGAN = range(6)
+
+
+def read(path: Path) -> dict[str, np.ndarray]:
+    """Per route, one row per request: waited for a work place, inside (from the place to
+    the app's end), CPU (event loop and threads), waits off a core, waits on the run
+    queue (ms), and when it came (s)."""
+    rows: dict[str, list[list[float]]] = defaultdict(list)
+    for line in path.read_text().splitlines():
+        fields = line.split()
+        if len(fields) < 12:
+            continue  # a line cut short by a stopped server
+        method, route = fields[:2]
+        total, place, loop_cpu, loop_wall, dispatch, cpu, wall, queued, back = map(
+            float, fields[2:11]
+        )
+        began = float(fields[12]) if len(fields) > 12 else 0.0
+        off_core = dispatch + back + (loop_wall - loop_cpu) + max(wall - cpu - queued, 0.0)
+        rows[route_of(method, route)].append(
+            [place, total - place, loop_cpu + cpu, off_core, queued, began]
+        )
+    return {route: np.array(values) for route, values in rows.items()}
+
+
+def modelled(result: dict) -> dict[str, np.ndarray]:
+    """``queue_sim.simulate``'s (or ``combine``'s) "server" tuples in ``read``'s columns
+    (ms; CPU: what is left of the time inside, which also holds the model's waits for the
+    event loop and a write place)."""
+    table = {}
+    for route, rows in result["server"].items():
+        values = np.array(rows, dtype=float)
+        if values.shape[1] < 7:
+            continue
+        place, asked_to_answer = values[:, 0], values[:, 1]
+        inside = asked_to_answer - place
+        off_core = values[:, 2] + values[:, 5]  # the interpreter's queue, lock or database
+        run_queue = values[:, 3] + values[:, 4]  # being handed the interpreter, a core
+        cpu = np.maximum(inside - off_core - run_queue, 0.0)
+        table[route] = np.column_stack(
+            [place * 1000, inside * 1000, cpu * 1000, off_core * 1000, run_queue * 1000,
+             values[:, 6]]
+        )  # fmt: skip
+    return table
+
+
+def place_queue(requests: Iterable[tuple[float, float, float]]) -> tuple[float, float]:
+    """Of the time at least one request asked for or held a work place, the share in which
+    some waited for one, and how many waited then on average; ``requests``: (asked,
+    waited, inside) each, in the same unit (one worker's)."""
+    events: list[tuple[float, int, int]] = []
+    for asked, waited, inside in requests:
+        events += [(asked, 1, 0), (asked + waited, -1, 1), (asked + waited + inside, 0, -1)]
+    events.sort()
+    waiting = holding = 0
+    busy = crowded = waited_area = 0.0
+    last = events[0][0] if events else 0.0
+    for when, wait_change, hold_change in events:
+        span = when - last
+        if waiting or holding:
+            busy += span
+        if waiting:
+            crowded += span
+            waited_area += waiting * span
+        waiting += wait_change
+        holding += hold_change
+        last = when
+    if not busy:
+        return 0.0, 0.0
+    return crowded / busy, (waited_area / crowded if crowded else 0.0)
+
+
+def compare(model: dict[str, np.ndarray], measured: dict[str, np.ndarray]) -> None:
+    """Per route the time inside the server holding a place (mean, p95) and of it the
+    waits off a core and on the run queue (p95), model beside measurement."""
+    print("  inside the server holding a work place, ms: mean / p95 (model | measured);"
+          " p95 of the waits off a core (interpreter, write lock or database, thread hops)"
+          " hops) and on the run queue")  # fmt: skip
+    print(f"  {'route':42s} {'inside':>17s} {'off a core':>13s} {'run queue':>13s}")
+    for route in sorted(set(model) & set(measured)):
+        m, s = model[route], measured[route]
+        inside = " | ".join(
+            f"{t[:, INSIDE].mean():3.0f}/{np.percentile(t[:, INSIDE], 95):3.0f}" for t in (m, s)
+        )
+        cells = [
+            f"{np.percentile(m[:, k], 95):5.1f} | {np.percentile(s[:, k], 95):5.1f}"
+            for k in (OFF_CORE, RUN_QUEUE)
+        ]
+        print(f"  {route:42s} {inside:>17s} {cells[0]:>13s} {cells[1]:>13s}")
+
+
+def crowding(measured: dict[str, np.ndarray]) -> tuple[float, float]:
+    """``place_queue`` of the requests ``read`` (all workers as one)."""
+    rows = np.concatenate(list(measured.values()))
+    return place_queue(
+        zip(rows[:, BEGAN], rows[:, PLACE] / 1000, rows[:, INSIDE] / 1000, strict=True)
+    )

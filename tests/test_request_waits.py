@@ -1,0 +1,142 @@
+"""bench/: where a request's time inside the server goes -- the probe's measurement
+(``GYROLAB_BENCH_REQUEST_WAITS``), the queueing model's own split of it, and how crowded
+the work places were."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+
+import queue_model  # noqa: E402  (bench/)
+import queue_sim  # noqa: E402
+import request_waits  # noqa: E402
+
+from tests.probed_apps import run_probed  # noqa: E402
+
+MS = 1e-3
+
+PROBED_ROUTES = """
+def who():  # a dependency of its own: a trip to the thread pool before the route's
+    burn(0.005)
+    return 1
+
+@app.get("/in-a-thread/{n}")
+def in_a_thread(n: int, user: int = Depends(who)):
+    burn(0.03)
+    time.sleep(0.02)  # off a core: not CPU, not the run queue
+    return {}
+
+@app.get("/on-the-loop/{n}")
+async def on_the_loop(n: int):
+    burn(0.01)
+    return {}
+"""
+PROBED_CALLS = [
+    'client.get("/on-the-loop/0")',  # first calls: the framework's own set-up
+    'client.get("/in-a-thread/1")',
+    'client.get("/on-the-loop/2")',
+]
+
+
+def test_the_probe_splits_each_requests_time_into_cpu_and_waits(tmp_path):
+    """Each HTTP request one line: its CPU on the loop and in the thread pool (a known
+    burn), the thread's sleep among the waits off a core, both trips to the thread pool
+    counted; when it came and which process answered."""
+    out = tmp_path / "waits.txt"
+    run_probed(PROBED_ROUTES, PROBED_CALLS, {"GYROLAB_BENCH_REQUEST_WAITS": str(out)})
+    lines = out.read_text().splitlines()
+    assert len(lines) == 3 and all(len(line.split()) == 14 for line in lines)
+    fields = {line.split()[1]: line.split() for line in lines}
+    thread, loop = fields["/in-a-thread/1"], fields["/on-the-loop/2"]
+    total, _, loop_cpu, _, _, cpu, wall, queued, _ = map(float, thread[2:11])
+    assert int(thread[11]) == 2  # the dependency's trip and the route's
+    assert 34 <= cpu < 60 and loop_cpu < 15
+    assert wall - cpu - queued >= 19  # the sleep
+    assert total >= wall >= 50
+    assert int(loop[11]) == 0 and 9 <= float(loop[4]) < 30  # the burn on the loop
+    assert float(loop[12]) > float(thread[12]) and int(thread[13]) > 0
+    read = request_waits.read(out)
+    row = read["GET /in-a-thread/{id}"][0]
+    assert row[request_waits.CPU] == pytest.approx(loop_cpu + cpu)
+    assert row[request_waits.OFF_CORE] >= 19
+    assert row[request_waits.INSIDE] + row[request_waits.PLACE] == pytest.approx(total)
+
+
+def test_a_line_cut_short_is_left_out(tmp_path):
+    path = tmp_path / "waits.txt"
+    path.write_text("GET /lab/sessions/3 12 2 1 1.5 0.5 4 7 0.5 0.5 2 100.5 7\nGET /lab/sess\n")
+    read = request_waits.read(path)
+    (row,) = read["GET /lab/sessions/{id}"]
+    # place 2; inside 10; CPU 1 + 4; off a core 0.5 + 0.5 + 0.5 + (7 - 4 - 0.5); queued 0.5
+    assert row.tolist() == [2.0, 10.0, 5.0, 4.0, 0.5, 100.5]
+
+
+@pytest.mark.parametrize(
+    ("requests", "expected"),
+    [
+        ([(0.0, 0.0, 2.0)], (0.0, 0.0)),  # alone: never a wait
+        # the second waits from 1 to 2 s of the 3 s the place was asked for or held
+        ([(0.0, 0.0, 2.0), (1.0, 1.0, 1.0)], (1 / 3, 1.0)),
+        # two waiting from 1 to 2, one from 2 to 3: 2 of 4 s crowded, 1.5 waiting then
+        ([(0.0, 0.0, 2.0), (1.0, 1.0, 1.0), (1.0, 2.0, 1.0)], (0.5, 1.5)),
+        ([], (0.0, 0.0)),
+    ],
+)
+def test_how_crowded_the_work_places_were(requests, expected):
+    share, queue = request_waits.place_queue(requests)
+    assert (share, queue) == pytest.approx(expected)
+
+
+def costs() -> dict:
+    """Each route 5 ms of server CPU (1 ms of it on the loop), 10 SQLite calls, 2 trips."""
+    table = {route: (5 * MS, 0.0, 0.5 * MS, 10.0, 2.0, 1 * MS) for _, route in STEPS}
+    table[queue_sim.STREAM] = (1 * MS, 0.0, 0.2 * MS, 1.0, 0.0, 1 * MS)
+    table[queue_sim.STREAM_START] = table[queue_sim.STREAM_SAVE] = table[queue_sim.STREAM]
+    return table
+
+
+STEPS = [step for step in queue_sim.student_script() if step[0] == "request"]
+
+
+def test_the_model_splits_each_requests_time_inside_the_server():
+    """Alone, a request waits for nothing but its hand-offs; in a crowd its waits for the
+    interpreter, a core and the write lock are never negative and never more than its
+    time inside; ``modelled`` puts them in the probe's columns."""
+    alone = queue_sim.simulate(costs(), 1, 1, 2.0, ramp=0.0, teacher=False, wake_free=False)
+    for route, rows in alone["server"].items():
+        values = np.array(rows)
+        assert values.shape[1] == 7, route
+        assert np.all(values[:, 2] == 0) and np.all(values[:, 5] == 0), route  # no queue
+    crowd = queue_sim.simulate(costs(), students=40, workers=1, cores=2.0, teacher=False)
+    values = np.concatenate([np.array(rows) for rows in crowd["server"].values()])
+    waits = values[:, 2:6]
+    assert np.all(waits >= 0)
+    assert np.all(waits.sum(axis=1) <= values[:, 1] - values[:, 0] + 1e-9)
+    assert waits[:, 0].max() > 0 and waits[:, 3].max() > 0  # the interpreter, the lock
+    table = request_waits.modelled(crowd)
+    for route, rows in table.items():
+        assert np.all(rows[:, request_waits.CPU] >= 0), route
+        assert rows[:, request_waits.INSIDE] == pytest.approx(
+            rows[:, request_waits.CPU]
+            + rows[:, request_waits.OFF_CORE]
+            + rows[:, request_waits.RUN_QUEUE]
+        )
+
+
+def test_a_prediction_says_how_crowded_its_places_were():
+    """``combine`` keeps each seed's crowding (the median): more students, more crowded."""
+
+    def crowding(students: int) -> tuple[float, float]:
+        results = [
+            queue_sim.simulate(costs(), students, 1, 2.0, teacher=False, seed=seed)
+            for seed in (1, 2)
+        ]
+        return queue_model.combine(results)["places"]
+
+    few, many = crowding(5), crowding(60)
+    assert 0 <= few[0] < many[0] <= 1 and many[1] >= 1
