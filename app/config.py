@@ -56,6 +56,9 @@ class Settings(BaseSettings):
     # requests of one worker running at once, and state-changing ones (web/admission.py)
     request_concurrency: int = Field(default=2, ge=1, le=64)
     write_concurrency: int = Field(default=8, ge=1, le=32)
+    # how long a served worker's thread keeps the interpreter while another waits for it
+    # (sys.setswitchinterval; CPython's default is 5 ms): main.set_switch_interval
+    switch_interval_ms: float = Field(default=1.0, ge=0.1, le=100.0)
     timezone: str = "Asia/Shanghai"  # a course's default zone for due dates and times
 
     @field_validator("timezone")

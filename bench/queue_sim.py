@@ -77,7 +77,9 @@ TURN_PATIENCE_S = 0.05  # app.db: a write waiting longer for the lock gives its 
 HASH_SLOTS = 4
 
 
-SWITCH_INTERVAL_S = 0.005  # CPython's sys.getswitchinterval()
+# a served worker's sys.getswitchinterval(): GYROLAB_SWITCH_INTERVAL_MS, 1 ms since
+# 2026-11-27 (CPython's own 5 ms before: ``--switch-interval 5`` for the runs of then)
+SWITCH_INTERVAL_S = 0.001
 # The interpreter handed to a thread that was waiting for it: from the release to the
 # waiting thread's first instruction (woken by the GIL's condition variable, scheduled on a
 # core) nobody runs Python.  bench/bench_handoffs.py on the 2-core machine, 2026-11-27:
