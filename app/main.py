@@ -102,7 +102,7 @@ def set_switch_interval(settings: Settings) -> None:
     for the holder's whole interval.  At 5 ms a request's waits off a core reached 6-44 ms
     at p95 in a class's burst.  At 1 ms, alternated pairs of load tests (bench/README.md,
     issue 32, twentieth part): the burst's p95 about halved at 60 students on SQLite and on
-    PostgreSQL, 10-40 % lower at 120, the server's CPU a class unchanged or lower."""
+    PostgreSQL, 5-40 % lower at 120, the server's CPU a class unchanged or lower."""
     sys.setswitchinterval(settings.switch_interval_ms / 1000)
 
 
