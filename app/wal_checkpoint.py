@@ -135,10 +135,10 @@ class Checkpointer:
 
     def look(self) -> None:
         """Checkpoint every watched database whose log holds ``threshold`` pages or more
-        and has changed since its last checkpoint here (one that readers kept from
-        finishing is tried again once more is written, as SQLite's own would be); a log
-        with pages beyond what SQLite reports committed is looked at again until it has
-        stayed as it is for ``STALE_AFTER_S``."""
+        and has changed since its last checkpoint here; a log with pages beyond what SQLite
+        reports committed, or whose checkpoint a reader cut short, is looked at again until
+        it has stayed as it is for ``STALE_AFTER_S`` (then, as SQLite's own would, once more
+        is written)."""
         with self._lock:
             paths = list(self._watched)
         for path in paths:
@@ -152,12 +152,15 @@ class Checkpointer:
             with self._lock:
                 if path not in self._watched:
                     continue
-                # done with this state of the log once the checkpoint saw all of it; a
+                # done with this state of the log once the checkpoint copied all of it; a
                 # write still going (its pages in the file, its commit or the index's
-                # update not yet) is looked at again, unless the log and the report stay as
-                # they are for STALE_AFTER_S (a log some other program restarted without
-                # emptying it)
-                if report is None or report.log_frames >= pages or self._stale(path, log, report):
+                # update not yet), or a reader whose snapshot stopped the copy short (the
+                # writer's own, in the instant after its commit), is looked at again,
+                # unless the log and the report stay as they are for STALE_AFTER_S (a log
+                # some other program restarted without emptying it; a long reader)
+                whole = report is not None and report.checkpointed_frames >= report.log_frames
+                complete = whole and report.log_frames >= pages
+                if report is None or complete or self._stale(path, log, report):
                     self._checked[path] = log
                     self._unchanged.pop(path, None)
                 if report is not None:
