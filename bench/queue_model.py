@@ -511,11 +511,7 @@ def main() -> int:
                 measured = request_waits.read(args.request_waits[index])
                 request_waits.compare(request_waits.modelled(result), measured)
                 if workers == 1:
-                    share, queue = request_waits.crowding(measured)
-                    print(f"  the work places: someone waited for one {result['places'][0]:.0%}"
-                          f" of the time they were asked for or held (model), {share:.0%}"
-                          f" (measured); then {result['places'][1]:.1f} / {queue:.1f} waited"
-                          " on average")  # fmt: skip
+                    request_waits.compare_crowding(result["places"], measured)
             predicted[students].append((result, table))
         for students, pairs in sorted(predicted.items()):
             summary(students, name, pairs)
@@ -590,16 +586,12 @@ def combine(results: list[dict]) -> dict:
         },
         "lock held": [held for result in results for held in result["lock held"]],
         "server": dict(server),
-        "places": tuple(np.median([crowded_places(result) for result in results], axis=0)),
+        "places": tuple(
+            np.median([request_waits.simulated_crowding(result) for result in results], axis=0)
+        ),
         "wall": float(np.median([result["wall"] for result in results])),
         "seeds": len(results),
     }
-
-
-def crowded_places(result: dict) -> tuple[float, float]:
-    """``request_waits.place_queue`` of one simulation's requests (all workers as one)."""
-    rows = [row for rows in result["server"].values() for row in rows if len(row) > 6]
-    return request_waits.place_queue((row[6], row[0], row[1] - row[0]) for row in rows)
 
 
 def summary(students: int, name: str, pairs: list[tuple[dict, dict]]) -> dict:

@@ -115,3 +115,18 @@ def crowding(measured: dict[str, np.ndarray]) -> tuple[float, float]:
     return place_queue(
         zip(rows[:, BEGAN], rows[:, PLACE] / 1000, rows[:, INSIDE] / 1000, strict=True)
     )
+
+
+def simulated_crowding(result: dict) -> tuple[float, float]:
+    """``place_queue`` of one ``queue_sim.simulate``'s requests (all workers as one)."""
+    rows = [row for rows in result["server"].values() for row in rows if len(row) > 6]
+    return place_queue((row[6], row[0], row[1] - row[0]) for row in rows)
+
+
+def compare_crowding(model: tuple[float, float], measured: dict[str, np.ndarray]) -> None:
+    """How crowded the work places were, ``model`` (``simulated_crowding``, e.g. the median
+    over seeds) beside the requests ``read`` (one worker's)."""
+    share, queue = crowding(measured)
+    print(f"  the work places: someone waited for one {model[0]:.0%} of the time they were"
+          f" asked for or held (model), {share:.0%} (measured); then {model[1]:.1f} /"
+          f" {queue:.1f} waited on average")  # fmt: skip
