@@ -135,6 +135,41 @@ def test_csv_bodies(client, auth):
     assert unreadable.status_code == 400 and "cannot be read" in unreadable.json()["detail"]
 
 
+@pytest.mark.one_backend  # the body's parsing; storing is the same as for commas
+@pytest.mark.parametrize(
+    ("separator", "decimal"),
+    [("\t", "."), (";", ","), ("\t", ",")],
+    ids=["a spreadsheet's copy", "a European export", "tabs and decimal commas"],
+)
+def test_csv_bodies_separated_by_tabs_or_semicolons_read_as_the_lab_page_reads_them(
+    client, auth, separator, decimal
+):
+    """What a spreadsheet puts on the clipboard (tabs) and what one in Europe saves (``;``,
+    decimal commas) give the same readings, and so the same heading, as the comma CSV."""
+
+    def heading_from(body_of) -> float:
+        session_id = new_api_session(client, auth)
+        for k, values in handout("handout_horizontal.csv").items():
+            response = client.put(
+                f"{API}/sessions/{session_id}/heading/positions/{k}?unit=deg/h",
+                content=body_of(values).encode(),
+                headers={**auth, "Content-Type": "text/csv"},
+            )
+            assert response.status_code == 200, response.text
+            assert response.json()["n_samples"] == len(values)
+        results = client.get(f"{API}/sessions/{session_id}/results", headers=auth).json()
+        return results["heading"]["azimuth_deg"]
+
+    def commas(values):
+        return "time_s,value\n" + "\n".join(f"{i},{v!r}" for i, v in enumerate(values))
+
+    def separated(values):
+        rows = [f"{i}{separator}{v!r}".replace(".", decimal) for i, v in enumerate(values)]
+        return f"time_s{separator}value\r\n" + "\r\n".join(rows)
+
+    assert heading_from(separated) == heading_from(commas)
+
+
 @pytest.mark.one_backend  # input refused before any write
 @pytest.mark.parametrize(
     ("body", "status", "text"),

@@ -87,3 +87,34 @@ def test_binary_is_not_text():
     with pytest.raises(UserError) as error:
         decode_text(bytes(range(256)) * 4)
     assert error.value.key == "csv.encoding"
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "time_s,value\n0.0,10.74\n0.1,10.65\n",
+        "time_s\tvalue\n0.0\t10.74\n0.1\t10.65\n",
+        "time_s;value\r\n0,0;10,74\r\n0,1;10,65\r\n",
+        "# a device's log\n0\t10,74\n0,1\t10,65\n",
+    ],
+    ids=["commas", "tabs", "semicolons-decimal-commas", "headerless-tabs-decimal-commas"],
+)
+def test_one_positions_record_in_every_spelling_the_lab_page_reads(text):
+    """What a device or a script sends for one position (the API's ``text/csv``), and a
+    static record: a tab or ``;`` between the columns, then decimal commas, as the lab
+    page reads a table."""
+    from app.core.position_records import parse_position_csv, parse_static_record
+
+    values, times = parse_position_csv(text)
+    np.testing.assert_allclose(values, [10.74, 10.65])
+    np.testing.assert_allclose(times, [0.0, 0.1])
+    np.testing.assert_allclose(parse_static_record(text), [10.74, 10.65])
+
+
+def test_one_positions_record_with_commas_keeps_a_decimal_comma_two_cells():
+    """In a comma-separated record "10,74" is a time and a value, as before."""
+    from app.core.position_records import parse_position_csv
+
+    values, times = parse_position_csv("10,74\n11,75\n")
+    np.testing.assert_allclose(values, [74.0, 75.0])
+    np.testing.assert_allclose(times, [10.0, 11.0])

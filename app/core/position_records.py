@@ -9,7 +9,13 @@ import io
 import numpy as np
 
 from app.core.exceptions import UserError
-from app.core.readings import _is_number, _number, parse_readings_csv
+from app.core.readings import (
+    _is_number,
+    _number,
+    decimal_point,
+    parse_readings_csv,
+    spreadsheet_delimiter,
+)
 from app.core.text_files import decode_text
 
 
@@ -51,7 +57,9 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
 
     What a device or a script sends (``text/csv`` to the API) and the fallback for a static
     record.  An optional header on line 1 and ``#`` comment lines are skipped; lines may
-    end in ``\n``, ``\r\n`` or a bare ``\r``.
+    end in ``\n``, ``\r\n`` or a bare ``\r``.  The columns may be separated by a tab or a
+    ``;`` instead of a comma (a spreadsheet's copy, a European export), and then a decimal
+    comma is read as a point -- as the lab page reads a pasted or uploaded table.
 
     Parameters
     ----------
@@ -74,10 +82,14 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
     """
     if isinstance(data, bytes):
         data = decode_text(data)
+    data = data.lstrip("\ufeff")
+    delimiter = spreadsheet_delimiter(data)
     try:  # newline="": lines may end in \n, \r\n or a bare \r
-        rows = list(csv.reader(io.StringIO(data.lstrip("\ufeff"), newline="")))
+        rows = list(csv.reader(io.StringIO(data, newline=""), delimiter=delimiter))
     except csv.Error as error:
         raise UserError("csv.unreadable", detail=str(error)) from None
+    if delimiter != ",":
+        rows = [[decimal_point(cell) for cell in row] for row in rows]
     values: list[float] = []
     times: list[float] = []
     for number, row in enumerate(rows, start=1):

@@ -143,13 +143,13 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
         With the line and column of the first problem.
     """
     text = text.lstrip("\ufeff")
-    delimiter = _delimiter(text)
+    delimiter = spreadsheet_delimiter(text)
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
         rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))
     except csv.Error as error:
         raise UserError("csv.unreadable", detail=str(error)) from None
     rows = [
-        (number, row if delimiter == "," else [_point(cell) for cell in row])
+        (number, row if delimiter == "," else [decimal_point(cell) for cell in row])
         for number, row in enumerate(rows, start=1)
         if any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")
     ]
@@ -199,9 +199,10 @@ def _headerless_columns(rows) -> dict[int, int] | None:
     return {index: index - skip + 1 for index in range(skip, width)}
 
 
-def _delimiter(text: str) -> str:
-    """A tab or ``;`` when the first line that is not a comment uses it (what spreadsheets
-    in Europe write, with decimal commas), else ``,``."""
+def spreadsheet_delimiter(text: str) -> str:
+    """A tab or ``;`` when the first line that is not a comment uses it (what a spreadsheet
+    copies to the clipboard, and what spreadsheets in Europe write, with decimal commas),
+    else ``,``."""
     first = next(
         (line for line in text.splitlines() if line.strip() and not line.startswith("#")), ""
     )
@@ -211,7 +212,7 @@ def _delimiter(text: str) -> str:
     return ","
 
 
-def _point(cell: str) -> str:
+def decimal_point(cell: str) -> str:
     """A decimal comma as a decimal point ("10,74" → "10.74"), in files whose separator is
     not the comma."""
     match = DECIMAL_COMMA.fullmatch(cell.strip())
