@@ -26,6 +26,7 @@ from app.db import UnstorableText, database_busy, get_engine, storage_unavailabl
 from app.web.deps import LoginRequired, PasswordChangeRequired, reload_login
 from app.web.i18n import translate
 from app.web.render import redirect, render, request_language
+from app.web.validation_errors import localised_details
 
 log = logging.getLogger("gyrolab")
 STORAGE_LOG_INTERVAL_S = 600.0
@@ -77,13 +78,6 @@ def report_storage_fault(error: DBAPIError) -> None:
     if now - _storage_logged_at[0] >= STORAGE_LOG_INTERVAL_S:
         _storage_logged_at[0] = now
         log.error("the database cannot be written; answering 503 until it can: %s", error.orig)
-
-
-def validation_details(exc: RequestValidationError) -> list[dict]:
-    return [
-        {"loc": list(err.get("loc", ())), "msg": err.get("msg", ""), "type": err.get("type", "")}
-        for err in exc.errors()
-    ]
 
 
 def register_error_handlers(app: FastAPI) -> None:
@@ -142,12 +136,16 @@ def register_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(RequestValidationError)
     async def _invalid(request: Request, exc: RequestValidationError):
         if wants_json(request):
-            return JSONResponse({"detail": validation_details(exc)}, status_code=422)
+            details = localised_details(exc.errors(), request_language(request))
+            return JSONResponse({"detail": details}, status_code=422)
         return error_response(request, UserError("error.bad_request"))
 
 
 class ErrorOut(BaseModel):
-    detail: str | list = Field(description="what is wrong, in words (a list for 422)")
+    detail: str | list = Field(
+        description="what is wrong, in the reader's words (for 422 a list of the fields' "
+        "problems, each with its `loc`, `type` and `msg`)"
+    )
     key: str | None = Field(default=None, description="the message's key (not for 422)")
 
 
