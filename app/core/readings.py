@@ -200,9 +200,20 @@ def _headerless_columns(rows) -> dict[int, int] | None:
 
 
 def spreadsheet_delimiter(text: str) -> str:
-    """A tab or ``;`` when the first line that is not a comment uses it (what a spreadsheet
-    copies to the clipboard, and what spreadsheets in Europe write, with decimal commas),
-    else ``,``."""
+    """The separator of a readings file's columns.
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+
+    Returns
+    -------
+    str
+        A tab or ``;`` when the first line that is not a ``#`` comment holds one (what a
+        spreadsheet copies to the clipboard, and what spreadsheets in Europe write, with
+        decimal commas), else ``,``.
+    """
     first = next(
         (line for line in text.splitlines() if line.strip() and not line.startswith("#")), ""
     )
@@ -213,8 +224,18 @@ def spreadsheet_delimiter(text: str) -> str:
 
 
 def decimal_point(cell: str) -> str:
-    """A decimal comma as a decimal point ("10,74" → "10.74"), in files whose separator is
-    not the comma."""
+    """A cell's decimal comma as a decimal point, for files whose separator is not the comma.
+
+    Parameters
+    ----------
+    cell : str
+        One cell, e.g. ``"10,74"`` or ``"-1,5e-3"``.
+
+    Returns
+    -------
+    str
+        ``"10.74"``, ``"-1.5e-3"``; any other cell unchanged.
+    """
     match = DECIMAL_COMMA.fullmatch(cell.strip())
     return f"{match.group(1)}.{match.group(2)}" if match else cell
 
