@@ -352,6 +352,7 @@ def test_the_labs_allan_chart_draws_the_terms_the_curve_carries():
         ("% t [s]   rate\n0.0   1.5\n0.1   -2.25\n0.2   3e-1\n", [1.5, -2.25, 0.3]),
         ("time_s\tvalue\n0\t1.5\n0.1\t-2.25\n0.2\t0.3\n", [1.5, -2.25, 0.3]),
         ("time_s;value\n0;1,5\n0,1;-2,25\n0,2;0,3\n", [1.5, -2.25, 0.3]),
+        ("time_s\tvalue\n0\t1,5\n0,1\t-2,25\n0,2\t0,3\n", [1.5, -2.25, 0.3]),
     ],
 )
 def test_records_with_spaces_tabs_or_decimal_commas_are_read(text, values):

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.core.exceptions import UserError
+from app.core.readings import decimal_point
 
 BLOCK_LINES = 200_000
 MAX_SAMPLES = 20_000_000
@@ -211,10 +212,16 @@ def read_static_record(
 
 def _splitter(first: str) -> Callable[[str], list[str]]:
     """How the record's lines split into cells, decided by its first line: commas (quotes
-    allowed), tabs, semicolons with decimal commas (a European spreadsheet), or runs of
-    spaces (the plain text files of instruments and public data sets)."""
-    if "\t" in first:
-        return lambda text: [c.strip() for c in text.split("\t")]
+    allowed), tabs or semicolons with decimal commas (a spreadsheet's copy, a European
+    spreadsheet), or runs of spaces (the plain text files of instruments and public data
+    sets)."""
+    if "\t" in first:  # a spreadsheet's copy: decimal commas too, as the lab page reads it
+
+        def tabs(text: str) -> list[str]:
+            cells = [c.strip() for c in text.split("\t")]
+            return [decimal_point(c) for c in cells] if "," in text else cells
+
+        return tabs
     if ";" in first:
         return lambda text: [c.strip().replace(",", ".") for c in text.split(";")]
     if "," in first:
