@@ -2,7 +2,7 @@
 
 Reading: CSV text (``value`` per line, ``time_s,value``, ``time_s,value,temperature_c``, the
 bridge's long layout ``position,angle_deg,time_s,value[,temperature_c]``, with or without a
-header; commas, tabs, semicolons with decimal commas, or spaces between the columns;
+header; commas, tabs or semicolons (then decimal commas), or spaces between the columns;
 ``#`` and ``%`` comment lines), parsed in blocks of lines, so a 10⁷-sample record never
 exists as one string.
 
