@@ -118,3 +118,22 @@ def test_one_positions_record_with_commas_keeps_a_decimal_comma_two_cells():
     values, times = parse_position_csv("10,74\n11,75\n")
     np.testing.assert_allclose(values, [74.0, 75.0])
     np.testing.assert_allclose(times, [10.0, 11.0])
+
+
+@pytest.mark.parametrize(
+    ("typed", "value"),
+    [("１０．７４", 10.74), ("－０．５", -0.5), ("１０，７４", 10.74), ("\u3000１２\u3000", 12.0)],
+)
+def test_a_number_typed_with_a_chinese_input_methods_full_width_forms(typed, value):
+    from app.core.readings import parse_typed_number
+
+    assert parse_typed_number(typed) == value
+
+
+def test_a_table_pasted_from_a_chinese_document_in_full_width_forms():
+    """Full-width digits, points and commas (a table in a Chinese document) read as the
+    same table; the Chinese headers stay Chinese."""
+    text = "序号，位置１，位置２\n１，１０．７４，－０．５０\n２，１０．６５，－０．４０\n"
+    readings = parse_readings_csv(text)
+    for got, want in zip(readings.positions, expected(), strict=True):
+        np.testing.assert_allclose(got, want)

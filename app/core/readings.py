@@ -18,6 +18,7 @@ import csv
 import io
 import math
 import re
+import unicodedata
 from dataclasses import dataclass
 
 import numpy as np
@@ -67,8 +68,9 @@ def parse_decimal(text: str) -> float:
 def parse_typed_number(text: str) -> float:
     """One number typed in a form field, as people write it.
 
-    Surrounding spaces, one decimal comma ("12,5" → 12.5) and the minus sign "−"
-    (U+2212) are taken; the rest is :func:`parse_decimal`'s plain decimal.
+    Surrounding spaces, one decimal comma ("12,5" → 12.5), the minus sign "−" (U+2212)
+    and a Chinese input method's full-width forms ("－１２．５") are taken; the rest is
+    :func:`parse_decimal`'s plain decimal.
 
     Parameters
     ----------
@@ -85,10 +87,30 @@ def parse_typed_number(text: str) -> float:
     ValueError
         When it is not one number (as :func:`parse_decimal`).
     """
-    text = text.strip().replace("\u2212", "-")
+    text = plain_text(text).strip().replace("\u2212", "-")
     if "," in text and "." not in text and text.count(",") == 1:
         text = text.replace(",", ".")
     return parse_decimal(text)
+
+
+def plain_text(text: str) -> str:
+    """Full-width digits, points, commas, signs and spaces as their ASCII forms.
+
+    A Chinese input method in full-width mode types "１０．７４，－０．５"; Unicode's
+    compatibility normalisation (NFKC) maps each to its plain form, and leaves Chinese
+    characters as they are.
+
+    Parameters
+    ----------
+    text : str
+        Typed, pasted or read from a file.
+
+    Returns
+    -------
+    str
+        ``text`` under NFKC ("10.74,-0.5"); ASCII text as it is (no copy).
+    """
+    return text if text.isascii() else unicodedata.normalize("NFKC", text)
 
 
 @dataclass
@@ -142,7 +164,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     UserError
         With the line and column of the first problem.
     """
-    text = text.lstrip("\ufeff")
+    text = plain_text(text.lstrip("\ufeff"))
     delimiter = spreadsheet_delimiter(text)
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
         rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))

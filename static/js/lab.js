@@ -118,9 +118,11 @@
   });
 
   // --- typed grid -------------------------------------------------------------------------
-  // A number as typed or pasted: "10.74", "-1e-3", or with a decimal comma "10,74".
+  // A number as typed or pasted: "10.74", "-1e-3", or with a decimal comma "10,74"; typed
+  // with a Chinese input method's full-width forms ("－３．２５") or the minus sign "−" too.
+  const plain = (text) => text.normalize("NFKC").replace(/\u2212/g, "-");
   function parseCell(text) {
-    let value = text.trim();
+    let value = plain(text).trim();
     if (value === "") return { empty: true };
     if (/^[-+]?\d*,\d+([eE][-+]?\d+)?$/.test(value)) value = value.replace(",", ".");
     if (!/^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/.test(value)) return { error: "js.not_a_number" };
@@ -134,7 +136,7 @@
   // dropped and reported, never read as readings.
   const ROW_NUMBER_NAMES = new Set(["sample", "n", "#", "no", "no.", "index", "序号", "编号", "次数", "row", "i"]);
   function parseBlock(text) {
-    const lines = text.replace(/\r\n?/g, "\n").split("\n").filter((line) => line.trim() !== "");
+    const lines = plain(text).replace(/\r\n?/g, "\n").split("\n").filter((line) => line.trim() !== "");
     const rows = splitLines(lines);
     const notes = [];
     let header = null;
@@ -217,6 +219,13 @@
     }
 
     body.addEventListener("input", validate);
+    // a number typed in full-width forms shows as it will be saved once the cell is left
+    body.addEventListener("change", (event) => {
+      const input = event.target.closest("input");
+      if (input && /[^\x00-\x7f]/.test(input.value) && !parseCell(input.value).error) {
+        input.value = plain(input.value).trim();
+      }
+    });
     // Enter and the arrow keys move like a spreadsheet: Enter (and ↓) down a column, ↑ up,
     // ← → across when the caret is at the edge of the cell.  A new row appears at the end.
     body.addEventListener("keydown", (event) => {
@@ -247,7 +256,7 @@
     body.addEventListener("paste", (event) => {
       const target = event.target.closest("input");
       const text = (event.clipboardData || window.clipboardData).getData("text");
-      if (!target || !/[\t\n;]|,.*,|\s\S/.test(text.trim())) return;
+      if (!target || !/[\t\n;]|,.*,|\s\S/.test(plain(text).trim())) return;
       event.preventDefault();
       const { rows, notes } = parseBlock(text);
       const startRow = target.closest("tr").sectionRowIndex;

@@ -17,11 +17,15 @@ WORDS = {
         "loaded": "Your saved readings are in the grid",
         "unchanged": "Nothing changed",
         "download": "Download plot as a PNG",
+        "typo": "-3,25",  # a decimal comma, as typed on a German keyboard
+        "left": "-3,25",  # the cell as it shows once left (ASCII stays as typed)
     },
     "zh-CN": {
         "loaded": "表格中已载入已保存的读数",
         "unchanged": "没有改动",
         "download": "下载图表（PNG）",  # the chart toolbar speaks the page's language too
+        "typo": "－３．２５",  # a Chinese input method's full-width forms
+        "left": "-3.25",  # shown as it will be saved once the cell is left
     },
 }
 
@@ -58,7 +62,9 @@ def test_saved_readings_come_back_and_one_typo_is_corrected(live_server, new_pag
     )
     typo = grid.nth(3).locator("input").nth(1)
     assert typo.is_visible()
-    typo.fill("-3,25")  # a decimal comma, as typed on a Chinese or German keyboard
+    typo.fill(WORDS[language]["typo"])
+    typo.press("Tab")
+    expect(typo).to_have_value(WORDS[language]["left"])
     with page.expect_navigation():
         page.locator("#part-heading .save-manual").click()
     expect(grid.nth(3).locator("input").nth(1)).to_have_value("-3.25")
