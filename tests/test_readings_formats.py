@@ -122,7 +122,13 @@ def test_one_positions_record_with_commas_keeps_a_decimal_comma_two_cells():
 
 @pytest.mark.parametrize(
     ("typed", "value"),
-    [("１０．７４", 10.74), ("－０．５", -0.5), ("１０，７４", 10.74), ("\u3000１２\u3000", 12.0)],
+    [
+        ("１０．７４", 10.74),
+        ("－０．５", -0.5),
+        ("１０，７４", 10.74),
+        ("\u3000１２\u3000", 12.0),
+        ("10。74", 10.74),  # the "." key in Chinese punctuation
+    ],
 )
 def test_a_number_typed_with_a_chinese_input_methods_full_width_forms(typed, value):
     from app.core.readings import parse_typed_number
@@ -133,7 +139,7 @@ def test_a_number_typed_with_a_chinese_input_methods_full_width_forms(typed, val
 def test_a_table_pasted_from_a_chinese_document_in_full_width_forms():
     """Full-width digits, points and commas (a table in a Chinese document) read as the
     same table; the Chinese headers stay Chinese."""
-    text = "序号，位置１，位置２\n１，１０．７４，－０．５０\n２，１０．６５，－０．４０\n"
+    text = "序号，位置１，位置２\n１，１０。７４，－０．５０\n２，１０．６５，－０。４０\n"
     readings = parse_readings_csv(text)
     for got, want in zip(readings.positions, expected(), strict=True):
         np.testing.assert_allclose(got, want)

@@ -93,12 +93,16 @@ def parse_typed_number(text: str) -> float:
     return parse_decimal(text)
 
 
+IDEOGRAPHIC_POINT = re.compile(r"(\d)\u3002(?=\d)")
+
+
 def plain_text(text: str) -> str:
     """Full-width digits, points, commas, signs and spaces as their ASCII forms.
 
     A Chinese input method in full-width mode types "１０．７４，－０．５"; Unicode's
     compatibility normalisation (NFKC) maps each to its plain form, and leaves Chinese
-    characters as they are.
+    characters as they are.  In Chinese punctuation the "." key types "。": between two
+    digits it is read as the decimal point ("10。74").
 
     Parameters
     ----------
@@ -108,9 +112,12 @@ def plain_text(text: str) -> str:
     Returns
     -------
     str
-        ``text`` under NFKC ("10.74,-0.5"); ASCII text as it is (no copy).
+        ``text`` under NFKC, "。" between digits a point ("10.74,-0.5"); ASCII text as it
+        is (no copy).
     """
-    return text if text.isascii() else unicodedata.normalize("NFKC", text)
+    if text.isascii():
+        return text
+    return IDEOGRAPHIC_POINT.sub(r"\1.", unicodedata.normalize("NFKC", text))
 
 
 @dataclass

@@ -119,8 +119,10 @@
 
   // --- typed grid -------------------------------------------------------------------------
   // A number as typed or pasted: "10.74", "-1e-3", or with a decimal comma "10,74"; typed
-  // with a Chinese input method's full-width forms ("－３．２５") or the minus sign "−" too.
-  const plain = (text) => text.normalize("NFKC").replace(/\u2212/g, "-");
+  // with a Chinese input method's full-width forms ("－３．２５"), its full stop between
+  // digits ("10。74", the "." key in Chinese punctuation) or the minus sign "−" too.
+  const plain = (text) =>
+    text.normalize("NFKC").replace(/\u2212/g, "-").replace(/(\d)\u3002(?=\d)/g, "$1.");
   function parseCell(text) {
     let value = plain(text).trim();
     if (value === "") return { empty: true };

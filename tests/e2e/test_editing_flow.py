@@ -24,7 +24,7 @@ WORDS = {
         "loaded": "表格中已载入已保存的读数",
         "unchanged": "没有改动",
         "download": "下载图表（PNG）",  # the chart toolbar speaks the page's language too
-        "typo": "－３．２５",  # a Chinese input method's full-width forms
+        "typo": "－３。２５",  # a Chinese input method's full-width forms and its "。"
         "left": "-3.25",  # shown as it will be saved once the cell is left
     },
 }
