@@ -59,7 +59,7 @@ def stored(world) -> dict | None:
 def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
     teacher = browser(world, "teacher1")
     text, gyro = static_record()
-    reply = upload(teacher, world, text)
+    reply = upload(teacher, world, text, rate="１０")  # typed with a Chinese input method
     assert reply.status_code == 303
     page = teacher.get(reply.headers["location"]).text
     assert "Characterisation stored" in page

@@ -78,6 +78,8 @@ def test_points_are_checked_against_the_maximum(world):
     assert latest(session_id).points == 87.5 and latest(session_id).letter == "B+"
     assert status_of(session_id) == "submitted"  # saved, not released
     assert "87.5 / 100 (B+)" in teacher.get(page).text
+    review(teacher, session_id, points="８８．５", action="save")  # a Chinese input method's
+    assert latest(session_id).points == 88.5
 
 
 def test_a_rubric_sums_its_criteria(world):
@@ -88,7 +90,7 @@ def test_a_rubric_sums_its_criteria(world):
         "latitude_deg": "39.93",
         "methods": ["manual", "csv", "simulator"],
         "max_points": "50",
-        "rubric": "Heading within tolerance | 30\n纬度与地速 ｜ 20",
+        "rubric": "Heading within tolerance | 30\n纬度与地速 ｜ ２０",
     }
     post_form(teacher, f"{base}/settings", form, page=base)
     with read_session() as db:
@@ -112,7 +114,7 @@ def test_a_rubric_sums_its_criteria(world):
     assert 'value="20" aria-label="纬度与地速">' in answer.text  # the other criterion kept
     review(teacher, session_id, **{"rubric-0": "25"}, action="release")  # one criterion open
     assert status_of(session_id) == "submitted" and latest(session_id).points is None
-    review(teacher, session_id, **{"rubric-0": "25", "rubric-1": "17.5"}, action="release")
+    review(teacher, session_id, **{"rubric-0": "25", "rubric-1": "１７。５"}, action="release")
     assert status_of(session_id) == "graded"
     assert latest(session_id).points == 42.5
     assert json.loads(latest(session_id).rubric_points) == {"0": 25.0, "1": 17.5}

@@ -22,7 +22,7 @@ from pydantic import (
 
 from app.core.exceptions import FieldProblems, UserError
 from app.core.presets import PRESETS
-from app.core.readings import parse_decimal, parse_typed_number
+from app.core.readings import parse_typed_number
 from app.models import Assignment, InputMethod, LatePolicy, RevealTruth
 from app.web.local_time import local_input_to_utc, utc_to_local_input
 
@@ -138,7 +138,7 @@ def parse_rubric(text: str) -> list[dict]:
         points = math.nan
         if match:
             try:
-                points = parse_decimal(match["points"].strip())
+                points = parse_typed_number(match["points"])
             except ValueError:
                 points = math.nan
         if not match or not math.isfinite(points) or not 0 < points <= 100_000:

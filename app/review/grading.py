@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from sqlmodel import Session, col, select
 
 from app.core.exceptions import UserError
-from app.core.readings import parse_decimal
+from app.core.readings import parse_typed_number
 from app.lab.attempts import latest_attempt, rubric_of
 from app.models import (
     Assignment,
@@ -46,10 +46,8 @@ def _points(text: str, low: float, high: float, field: str) -> float | None:
     text = text.strip()
     if not text:
         return None
-    if text.count(",") == 1 and "." not in text:
-        text = text.replace(",", ".")  # a decimal comma: "87,5"
-    try:
-        value = parse_decimal(text)
+    try:  # as people type it: "87,5", "−1", a Chinese input method's "８７．５"
+        value = parse_typed_number(text)
     except ValueError:
         value = math.nan
     if not math.isfinite(value) or not low <= value <= high:
