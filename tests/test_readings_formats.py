@@ -143,3 +143,17 @@ def test_a_table_pasted_from_a_chinese_document_in_full_width_forms():
     readings = parse_readings_csv(text)
     for got, want in zip(readings.positions, expected(), strict=True):
         np.testing.assert_allclose(got, want)
+
+
+@pytest.mark.parametrize(
+    "header",
+    [
+        "位置1 (°/h),位置2 (°/h)",
+        "Position 1 [deg/h],Position 2 [deg/h]",
+        "位置1（°/h）,位置2（°/h）",
+    ],
+)
+def test_a_unit_noted_in_brackets_after_a_column_name_is_not_part_of_it(header):
+    readings = parse_readings_csv(f"{header}\n10.74,-0.50\n10.65,-0.40\n")
+    for got, want in zip(readings.positions, expected(), strict=True):
+        np.testing.assert_allclose(got, want)

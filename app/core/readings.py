@@ -269,9 +269,13 @@ def decimal_point(cell: str) -> str:
     return f"{match.group(1)}.{match.group(2)}" if match else cell
 
 
+UNIT_SUFFIX = re.compile(r"\s*[(\[][^()\[\]]*[)\]]$")  # "(°/h)", "[deg/h]", after NFKC
+
+
 def _column_name(cell: str) -> str:
-    """A header cell as the layouts name it: "位置1", "Position 1" → "position_1"."""
-    name = cell.strip().lower()
+    """A header cell as the layouts name it: "位置1", "Position 1", "位置1 (°/h)" →
+    "position_1" (a unit in brackets is the student's note; the unit is the form's)."""
+    name = UNIT_SUFFIX.sub("", cell.strip().lower())
     chinese = CHINESE_POSITION.match(name)
     if chinese:
         return f"position_{chinese.group(1)}"
