@@ -45,6 +45,17 @@ def test_username_is_case_insensitive(client, teacher):
     assert login(client, "  TEACHER1 ").status_code == 303
 
 
+def test_a_student_number_typed_in_full_width_forms_is_the_same_username(client):
+    """A Chinese input method in full-width mode types "２０２３０１０１０１": the account
+    made from it is "2023010101", and either spelling logs in."""
+    make_user("２０２３０１０１０１")
+    with read_session() as db:
+        assert db.exec(select(User.username)).all() == ["2023010101"]
+    assert login(client, "2023010101").status_code == 303
+    client.cookies.clear()
+    assert login(client, "２０２３０１０１０１").status_code == 303
+
+
 def test_session_cookie_flags(client, teacher):
     response = login(client, "teacher1")
     header = response.headers["set-cookie"].lower()

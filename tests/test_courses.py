@@ -74,6 +74,17 @@ def test_import_gb18030_file_from_excel(teacher_client):
     assert names == {"张三", "李四"}
 
 
+def test_student_numbers_in_full_width_forms_are_imported_as_ascii(teacher_client):
+    """A registrar's list typed with a Chinese input method in full-width mode."""
+    course_id = create_course(teacher_client)
+    roster = "学号,姓名\n２０２４００１,张三\n２０２４００２,李四\n"
+    response = import_file(teacher_client, course_id, roster.encode("gb18030"))
+    assert response.status_code == 200
+    with read_session() as db:
+        usernames = set(db.exec(select(User.username).where(User.role == "student")).all())
+    assert usernames == {"2024001", "2024002"}
+
+
 def test_invalid_roster_creates_nothing_and_reports_each_row(teacher_client):
     course_id = create_course(teacher_client)
     before = user_count()

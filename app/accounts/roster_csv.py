@@ -14,7 +14,7 @@ import re
 from dataclasses import dataclass, field
 
 from app.core.exceptions import UserError
-from app.core.text_files import decode_text
+from app.core.text_files import decode_text, plain_text
 
 MAX_ROSTER_BYTES = 1_000_000
 MAX_ROSTER_ROWS = 2000
@@ -27,7 +27,7 @@ def person_problems(username: str, display_name: str, email: str = "") -> dict[s
     """Every problem with one person typed into a form, at once: field name → UserError
     (in the form's order; empty when all is well).  The values arrive stripped."""
     problems: dict[str, UserError] = {}
-    if not USERNAME_RE.match(username):
+    if not USERNAME_RE.match(plain_text(username)):  # as normalise_username stores it
         problems["username"] = UserError("roster.bad_username", value=username)
     if not display_name:
         problems["display_name"] = UserError("roster.name_required")
@@ -130,7 +130,9 @@ def parse_roster(data: bytes) -> RosterParse:
             index = mapping.get(column)
             return cells[index].strip() if index is not None and index < len(cells) else ""
 
-        username, name, email = cell("username"), cell("display_name"), cell("email")
+        # a student number typed in full-width forms ("２０２３…") is the same number
+        username = plain_text(cell("username"))
+        name, email = cell("display_name"), cell("email")
         if not USERNAME_RE.match(username):
             problems.append(RosterProblem(number, "roster.bad_username", {"value": username}))
             continue

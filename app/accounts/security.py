@@ -16,6 +16,7 @@ from sqlalchemy import and_, delete, or_, update
 from sqlmodel import Session, select
 
 from app.config import Settings
+from app.core.text_files import plain_text
 from app.db import give_way, lock_keys
 from app.models import ApiToken, AuthSession, LoginFailure, User, utcnow
 from app.web.signing import signed, token_digest, unsigned
@@ -53,7 +54,9 @@ def verify_password(password: str, password_hash: str) -> bool:
 
 
 def normalise_username(username: str) -> str:
-    return username.strip().lower()
+    """A username as stored and looked up: full-width forms as ASCII (a student number
+    typed with a Chinese input method), no surrounding spaces, lower case."""
+    return plain_text(username).strip().lower()
 
 
 @lru_cache
@@ -166,7 +169,7 @@ def _hash_slots(count: int) -> threading.BoundedSemaphore:
 
 
 def _account_key(username: str) -> str:
-    return username.strip().lower()[:128]
+    return normalise_username(username)[:128]
 
 
 def _pair_key(account: str, address: str) -> str:

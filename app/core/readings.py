@@ -18,12 +18,12 @@ import csv
 import io
 import math
 import re
-import unicodedata
 from dataclasses import dataclass
 
 import numpy as np
 
 from app.core.exceptions import UserError
+from app.core.text_files import plain_text
 
 WIDE_COLUMN = re.compile(r"^position_(\d+)$")
 # A plain decimal number: what a spreadsheet or a gyro writes.  Python's float() also takes
@@ -91,33 +91,6 @@ def parse_typed_number(text: str) -> float:
     if "," in text and "." not in text and text.count(",") == 1:
         text = text.replace(",", ".")
     return parse_decimal(text)
-
-
-IDEOGRAPHIC_POINT = re.compile(r"(\d)\u3002(?=\d)")
-
-
-def plain_text(text: str) -> str:
-    """Full-width digits, points, commas, signs and spaces as their ASCII forms.
-
-    A Chinese input method in full-width mode types "１０．７４，－０．５"; Unicode's
-    compatibility normalisation (NFKC) maps each to its plain form, and leaves Chinese
-    characters as they are.  In Chinese punctuation the "." key types "。": between two
-    digits it is read as the decimal point ("10。74").
-
-    Parameters
-    ----------
-    text : str
-        Typed, pasted or read from a file.
-
-    Returns
-    -------
-    str
-        ``text`` under NFKC, "。" between digits a point ("10.74,-0.5"); ASCII text as it
-        is (no copy).
-    """
-    if text.isascii():
-        return text
-    return IDEOGRAPHIC_POINT.sub(r"\1.", unicodedata.normalize("NFKC", text))
 
 
 @dataclass

@@ -1,7 +1,11 @@
-"""Text files as students and teachers save them: UTF-8 (with or without a byte-order
-mark), UTF-16 from some spreadsheets, or GB18030 from a Chinese-locale Excel."""
+"""Text as students and teachers save and type it: files in UTF-8 (with or without a
+byte-order mark), UTF-16 from some spreadsheets, or GB18030 from a Chinese-locale Excel;
+a Chinese input method's full-width forms."""
 
 from __future__ import annotations
+
+import re
+import unicodedata
 
 from app.core.exceptions import UserError
 
@@ -44,3 +48,30 @@ def decode_text(data: bytes) -> str:
         if not any(ord(ch) < 32 and ch not in "\t\r\n" for ch in text):
             return text
     raise UserError("csv.encoding")
+
+
+IDEOGRAPHIC_POINT = re.compile(r"(\d)\u3002(?=\d)")
+
+
+def plain_text(text: str) -> str:
+    """Full-width digits, points, commas, signs and spaces as their ASCII forms.
+
+    A Chinese input method in full-width mode types "１０．７４，－０．５"; Unicode's
+    compatibility normalisation (NFKC) maps each to its plain form, and leaves Chinese
+    characters as they are.  In Chinese punctuation the "." key types "。": between two
+    digits it is read as the decimal point ("10。74").
+
+    Parameters
+    ----------
+    text : str
+        Typed, pasted or read from a file.
+
+    Returns
+    -------
+    str
+        ``text`` under NFKC, "。" between digits a point ("10.74,-0.5"); ASCII text as it
+        is (no copy).
+    """
+    if text.isascii():
+        return text
+    return IDEOGRAPHIC_POINT.sub(r"\1.", unicodedata.normalize("NFKC", text))
