@@ -101,6 +101,22 @@ def test_invalid_roster_creates_nothing_and_reports_each_row(teacher_client):
     assert user_count() == before
 
 
+def test_student_numbers_a_spreadsheet_saved_as_numbers_are_refused_with_the_reason(
+    teacher_client,
+):
+    """A numeric column saved as "2024001.0" or shortened to "2.024001E+06" is not the
+    student number: nothing is created, and the teacher is told to save it as text."""
+    course_id = create_course(teacher_client)
+    before = user_count()
+    roster = "学号,姓名\n2024001.0,张三\n2.024002E+06,李四\n2024003,王五\n"
+    response = import_file(teacher_client, course_id, roster.encode())
+    assert response.status_code == 400
+    for value, line in (("2024001.0", 2), ("2.024002E+06", 3)):
+        assert f"Line {line}" in response.text
+        assert f"“{value}” is a student number as a spreadsheet saved" in response.text
+    assert user_count() == before
+
+
 def test_roster_rejects_teacher_usernames(teacher_client):
     course_id = create_course(teacher_client)
     before = user_count()

@@ -19,6 +19,8 @@ from app.core.text_files import decode_text, plain_text
 MAX_ROSTER_BYTES = 1_000_000
 MAX_ROSTER_ROWS = 2000
 USERNAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}$")
+# a student number as a spreadsheet saved a numeric column: "2023010102.0", "2.0230101E+09"
+SPREADSHEET_NUMBER = re.compile(r"\d+\.0+|\d(?:\.\d+)?[eE][+]?\d+")
 EMAIL_RE = re.compile(r"^[^@\s]+@[^@\s]+\.[^@\s]+$")
 MAX_NAME = 128
 
@@ -133,6 +135,11 @@ def parse_roster(data: bytes) -> RosterParse:
         # a student number typed in full-width forms ("２０２３…") is the same number
         username = plain_text(cell("username"))
         name, email = cell("display_name"), cell("email")
+        if SPREADSHEET_NUMBER.fullmatch(username):
+            problems.append(
+                RosterProblem(number, "roster.number_from_spreadsheet", {"value": username})
+            )
+            continue
         if not USERNAME_RE.match(username):
             problems.append(RosterProblem(number, "roster.bad_username", {"value": username}))
             continue
