@@ -142,6 +142,11 @@ def test_join_by_code_and_link(app):
     make_user("student9")
     other = signed_in(app, "student9")
     assert post_form(other, "/join", {"code": code}).status_code == 400
+    # the new code with a dash in it, in a Chinese input method's full-width forms
+    new = join_code(course_b)
+    typed = "".join(chr(ord(c) + 0xFEE0) for c in f"{new[:4]}-{new[4:]}".lower())
+    assert post_form(other, "/join", {"code": typed}).status_code == 303
+    assert enrolled("student9", course_b)
 
 
 def test_teachers_do_not_join_courses(app):

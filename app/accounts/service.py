@@ -14,6 +14,7 @@ from app.accounts.security import (
     revoke_credentials,
 )
 from app.core.exceptions import UserError
+from app.core.text_files import plain_text
 from app.models import Course, Enrollment, Role, User, new_join_code
 
 
@@ -144,7 +145,7 @@ def join_course(db: Session, student: User, code: str) -> Course:
     """The student's own consent: enroll with a course's join code (case and spaces ignored)."""
     if student.role != Role.student:
         raise UserError("join.students_only")
-    wanted = "".join(code.split()).upper()[:16]
+    wanted = typed_join_code(code)
     course = db.exec(select(Course).where(Course.join_code == wanted)).first() if wanted else None
     if course is None or course.archived:
         raise UserError("join.bad_code")
@@ -152,8 +153,14 @@ def join_course(db: Session, student: User, code: str) -> Course:
     return course
 
 
+def typed_join_code(code: str) -> str:
+    """A join code as a student types it, as stored: without spaces or dashes, upper case,
+    full-width letters and digits (a Chinese input method's) as plain ones."""
+    return "".join(plain_text(code).replace("-", " ").split()).upper()[:16]
+
+
 def course_by_code(db: Session, code: str) -> Course | None:
-    wanted = "".join(code.split()).upper()[:16]
+    wanted = typed_join_code(code)
     if not wanted:
         return None
     course = db.exec(select(Course).where(Course.join_code == wanted)).first()
