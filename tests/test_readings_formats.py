@@ -157,3 +157,29 @@ def test_a_unit_noted_in_brackets_after_a_column_name_is_not_part_of_it(header):
     readings = parse_readings_csv(f"{header}\n10.74,-0.50\n10.65,-0.40\n")
     for got, want in zip(readings.positions, expected(), strict=True):
         np.testing.assert_allclose(got, want)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "陀螺寻北实验数据\n位置1,位置2\n10.74,-0.50\n10.65,-0.40\n",
+        "实验数据\r\n2026-11-27 第3组\r\n位置1\t位置2\r\n10,74\t-0,50\r\n10,65\t-0,40\r\n",
+    ],
+    ids=["a title", "two title lines, tabs"],
+)
+def test_a_spreadsheets_title_above_the_table_is_passed_over(text):
+    readings = parse_readings_csv(text)
+    for got, want in zip(readings.positions, expected(), strict=True):
+        np.testing.assert_allclose(got, want)
+
+
+def test_past_a_title_the_lines_keep_their_numbers_and_more_titles_are_not_a_table():
+    with pytest.raises(UserError) as caught:
+        parse_readings_csv("标题\n位置1,位置2\n10.74,-0.50\n10.65,x\n")
+    assert caught.value.key == "csv.not_a_number" and caught.value.params["line"] == 4
+    with pytest.raises(UserError) as caught:
+        parse_readings_csv("a\nb\nc\n位置1,位置2\n10.74,-0.50\n")
+    assert caught.value.key == "csv.unknown_layout" and caught.value.params["line"] == 1
+    # one column, no separator anywhere: a name above it is its header, nothing is skipped
+    readings = parse_readings_csv("位置1\n10.74\n10.65\n")
+    np.testing.assert_allclose(readings.positions[0], [10.74, 10.65])

@@ -144,7 +144,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     UserError
         With the line and column of the first problem.
     """
-    text = plain_text(text.lstrip("\ufeff"))
+    text = _title_lines_blanked(plain_text(text.lstrip("\ufeff")))
     delimiter = spreadsheet_delimiter(text)
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
         rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))
@@ -359,6 +359,36 @@ def readings_to_long_csv(
             extra = f",{temps[index]:.3f}" if temps is not None else ""
             buffer.write(f"{number},{angle:.6g},{time:.3f},{value:{value_format}}{extra}\n")
     return buffer.getvalue()
+
+
+TITLE_LINES = 2  # at most this many title lines above a table are passed over
+
+
+def _title_lines_blanked(text: str) -> str:
+    """A spreadsheet's title above the table ("陀螺寻北实验数据", a merged cell saved as a
+    line of its own) blanked, its line kept so that later lines keep their numbers: up to
+    ``TITLE_LINES`` lines of one cell that is not a number, before a header: the first line
+    with a tab, semicolon or comma, one of its cells not a number.  A file of one column
+    (its lines without a separator, or numbers with a decimal comma) is left as it is."""
+    head = text.split("\n", TITLE_LINES + 2)  # the lines looked at, then the rest
+    titles = []
+    for index, line in enumerate(head[: TITLE_LINES + 2]):
+        cell = line.strip()
+        if not cell or cell.startswith("#"):
+            continue
+        separator = next((mark for mark in "\t;," if mark in cell), None)
+        if separator is not None:
+            if all(_is_number(c.strip()) for c in cell.split(separator) if c.strip()):
+                return text  # numbers ("10,74" under a one-column header): no header here
+            break
+        if _is_number(cell) or len(titles) == TITLE_LINES or index == len(head) - 1:
+            return text  # data of one column, too many lines, or no table after them
+        titles.append(index)
+    else:
+        return text
+    for index in titles:
+        head[index] = ""
+    return "\n".join(head)
 
 
 def _is_number(text: str) -> bool:
