@@ -69,13 +69,12 @@ def test_window_covariance_matches_the_simulator(name):
     assert contrast @ empirical @ contrast == pytest.approx(contrast @ model @ contrast, rel=0.10)
 
 
-@pytest.mark.parametrize(
-    ("name", "dwell"),
-    [("teaching-fog", 300.0), ("tactical-fog", 60.0), ("navigation-fog", 120.0)],
-)
+@pytest.mark.parametrize(("name", "dwell"), [("teaching-fog", 300.0), ("tactical-fog", 60.0)])
 def test_the_noise_model_sigma_covers_68_percent(name, dwell):
-    """Seeded Monte Carlo of the simulator (600 runs; bench/bench_coverage.py runs 1000 for
-    every preset and dwell): the white-noise σ under-covers, the noise model's does not."""
+    """Seeded Monte Carlo of the simulator (600 runs): the white-noise σ under-covers, the
+    noise model's does not -- for the handout's gyro and the lab's live preset here;
+    bench/bench_coverage.py runs 1000 for every preset and dwell (the navigation FOG's
+    ≈ 10 s here went to keep the suite under five minutes)."""
     from bench.bench_coverage import coverage
 
     result = coverage(name, dwell, runs=600, cold=False)
