@@ -180,6 +180,8 @@ def test_admin_page_lists_creates_and_resets(app):
     page = admin.get("/admin/accounts?q=student")
     listed = re.findall(r"<td><code>([^<]+)</code>", page.text)
     assert page.status_code == 200 and listed == ["student1"]
+    page = admin.get("/admin/accounts?q=ｓｔｕｄｅｎｔ１")  # typed in full-width forms
+    assert re.findall(r"<td><code>([^<]+)</code>", page.text) == ["student1"]
     created = post_form(
         admin,
         "/admin/accounts",

@@ -10,7 +10,7 @@ from sqlmodel import select
 
 from app.accounts.deps import AdminUser, CsrfProtected
 from app.accounts.roster_csv import person_problems
-from app.accounts.security import generate_password
+from app.accounts.security import generate_password, normalise_username
 from app.accounts.service import NewCredential, create_user, may_reset_password
 from app.accounts.service import reset_password as give_new_password
 from app.core.exceptions import UserError
@@ -28,11 +28,10 @@ def accounts_context(db, query: str, **extra) -> dict:
     courses hold them."""
     statement = select(User).order_by(User.role, User.username).limit(PAGE_SIZE)
     if query:
-        pattern = f"%{query.lower()}%"
+        login = f"%{normalise_username(query)}%"  # a student number typed in full width too
+        name = f"%{query.strip().lower()}%"
         statement = statement.where(
-            or_(
-                func.lower(User.username).like(pattern), func.lower(User.display_name).like(pattern)
-            )
+            or_(func.lower(User.username).like(login), func.lower(User.display_name).like(name))
         )
     users = db.exec(statement).all()
     names = {u.id: u.username for u in db.exec(select(User).where(User.role == Role.teacher))}
