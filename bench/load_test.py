@@ -57,6 +57,7 @@ CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
 # set the client's time of a request beside the server's
 CLIENT_TIMES = os.environ.get("GYROLAB_BENCH_CLIENT_TIMES")
 HANDOFFS_LABEL = "hand-offs just before / after the class (bench_handoffs.py)"
+MACHINE_LABEL = "the whole machine during the class (/proc/stat, /proc/pressure/cpu)"
 RUN_QUEUE_LABEL = "waited for a core / ran during the class (run_queue.py)"
 LOOPS = "of it the event loops"  # the server's workers' main threads
 PARTS = ("heading", "latitude")
@@ -121,6 +122,8 @@ class Tally:
     # with --run-queue: per group of processes, its threads' (ran, waited for a core) s, and
     # how many times they were put on a core
     run_queue: dict[str, tuple[float, float, int]] = field(default_factory=dict)
+    # with --run-queue: the whole machine over the class (run_queue.machine_times)
+    machine: tuple[float, ...] = ()
 
     async def request(
         self, client: httpx.AsyncClient, method: str, url: str, route: str, ok=(200,), **kw
@@ -436,6 +439,14 @@ def report(name: str, tally: Tally, wall: float, lost: int, checked: int, worker
             f" {slices} slices)"
             for group, (ran, waited, slices) in tally.run_queue.items()
         ))  # fmt: skip
+    if tally.machine:
+        busy, steal, idle, pressure = tally.machine
+        mine = sum(ran for group, (ran, _, _) in tally.run_queue.items() if group != LOOPS)
+        lines.append(
+            f"- {MACHINE_LABEL}: busy {busy:.2f} s (the groups above {mine:.2f} s, anything"
+            f" else {busy - mine:.2f} s), steal {steal:.2f} s, idle {idle:.2f} s; a task"
+            f" waited for a core during {pressure:.2f} s"
+        )
     lines += [
         "",
         "| route | count | p50 ms | p95 ms | p99 ms | max ms |",
@@ -508,6 +519,8 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
                     group: (waits.ran_s, waits.waited_s, waits.slices)
                     for group, waits in watch.waits().items()
                 }
+                if args.run_queue:
+                    tally.machine = watch.machine()
                 tally.handoffs = waits + ([hand_off_constants()] if args.handoffs else [])
                 tally.cpu = tuple(b - a for a, b in zip(before, after, strict=True))
                 if CLIENT_TIMES:  # after the class's CPU is read: not counted in it

@@ -12,6 +12,7 @@ autogroup (the kernel shares the cores between sessions' autogroups first when
 
 from __future__ import annotations
 
+import os
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -35,6 +36,23 @@ def thread_stats(pid: int) -> dict[int, tuple[int, int, int]]:
             continue  # ended meanwhile
         stats[int(task.name)] = (int(ran), int(waited), int(slices))
     return stats
+
+
+def machine_times() -> tuple[float, ...]:
+    """The whole machine so far, in core-seconds: (busy, of which steal, idle and waiting
+    for I/O, and the kernel's CPU pressure: seconds in which at least one task waited for
+    a core).  Busy is ``/proc/stat``'s user + nice + system + irq + softirq; steal is the
+    time the hypervisor ran something else on a virtual core that wanted it."""
+    ticks = int(os.sysconf("SC_CLK_TCK"))
+    fields = [int(f) for f in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:9]]
+    user, nice, system, idle, iowait, irq, softirq, steal = fields
+    try:
+        some = Path("/proc/pressure/cpu").read_text().split("\n", 1)[0]
+        pressure = int(some.rsplit("total=", 1)[1]) / 1e6
+    except (OSError, IndexError, ValueError):
+        pressure = float("nan")
+    busy = (user + nice + system + irq + softirq) / ticks
+    return busy, steal / ticks, (idle + iowait) / ticks, pressure
 
 
 def autogroup(pid: int) -> str:
@@ -82,6 +100,7 @@ class RunQueueWatch:
         self._first: dict[str, dict[tuple[int, int], tuple[int, int, int]]] = {}
         self._last: dict[str, dict[tuple[int, int], tuple[int, int, int]]] = {}
         self._autogroups: dict[str, set[str]] = {name: set() for name in groups}
+        self._machine: list[tuple[float, ...]] = []
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._watch, name="run-queue-watch", daemon=True)
 
@@ -104,6 +123,7 @@ class RunQueueWatch:
 
     def __enter__(self) -> RunQueueWatch:
         self._poll(first=True)
+        self._machine = [machine_times()]
         self._thread.start()
         return self
 
@@ -111,6 +131,13 @@ class RunQueueWatch:
         self._stop.set()
         self._thread.join()
         self._poll(first=False)
+        self._machine.append(machine_times())
+
+    def machine(self) -> tuple[float, ...]:
+        """The whole machine over the watch: (busy, steal, idle, CPU pressure) in
+        core-seconds (:func:`machine_times`)."""
+        first, last = self._machine
+        return tuple(b - a for a, b in zip(first, last, strict=True))
 
     def waits(self) -> dict[str, Waits]:
         result = {}
