@@ -196,6 +196,7 @@ def measure(url: str, course: int, assignment: int, students: int) -> list[tuple
         "class board JSON": (f"{dashboard}/board.json", {}),
         "submissions API": (f"/api/v1/assignments/{assignment}/submissions", {"headers": api}),
         "class CSV": (f"{dashboard}/export.csv", {}),
+        "class workbook (xlsx)": (f"{dashboard}/export.xlsx", {}),
     }
     recorders = [logged_in(url, f"t{i:04d}") for i in range(students - RECORDING, students)]
     out = []

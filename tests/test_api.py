@@ -12,6 +12,7 @@ from app.core.sinusoid import heading_angles
 from app.core.solve import solve_heading
 from app.db import read_session, write_session
 from app.models import ApiToken, Assignment, Role, SampleChunk, Take, utcnow
+from app.web.exports import XLSX_MEDIA_TYPE
 from tests.factories import (
     API,
     HEADING_KEYS,
@@ -362,7 +363,7 @@ def test_must_change_password_users_get_no_token(client):
 def test_openapi_documents_every_route(client):
     schema = client.get("/openapi.json").json()
     paths = schema["paths"]
-    assert len(paths) == 19
+    assert len(paths) == 20
     for path, operations in paths.items():
         for method, operation in operations.items():
             assert operation.get("summary"), (method, path)
@@ -373,6 +374,8 @@ def test_openapi_documents_every_route(client):
         "text/csv",
         "application/octet-stream",
     }
+    table = paths[f"{API}/assignments/{{assignment_id}}/export.xlsx"]["get"]["responses"]["200"]
+    assert set(table["content"]) == {XLSX_MEDIA_TYPE}
     docs = client.get("/docs")
     assert docs.status_code == 200 and "/vendor/swagger-ui/swagger-ui-bundle.js" in docs.text
     assert "cdn" not in docs.text.lower()

@@ -9,9 +9,24 @@ import io
 import json
 import zipfile
 
+import openpyxl
+import pytest
+
+from app.accounts.service import enroll
 from app.db import write_session
-from app.models import Assignment
-from tests.factories import API, browser, do_lab, review, start, submit, token_for
+from app.models import Assignment, Course, User
+from app.web.exports import XLSX_CELL_LIMIT, XLSX_MEDIA_TYPE, xlsx_table, xlsx_text
+from tests.factories import (
+    API,
+    browser,
+    csrf_from,
+    do_lab,
+    make_user,
+    review,
+    start,
+    submit,
+    token_for,
+)
 from tests.test_partners import allow_groups, code_of, join
 
 RUBRIC = [{"name": "Method", "points": 40}, {"name": "Results", "points": 60}]
@@ -82,3 +97,83 @@ def test_the_class_table_names_partners_and_holds_the_review(world):
     assert "heading" in json.loads(archive.read("class-accuracy.json"))
     plan = json.loads(archive.read("accuracy-plan.json"))
     assert plan["source"] == "preset" and len(plan["points"]) == 22
+
+
+def workbook_rows(content: bytes) -> tuple[str, list[tuple]]:
+    """The sheet's title and its cells (openpyxl: an independent reader), refusing formulas."""
+    sheet = openpyxl.load_workbook(io.BytesIO(content)).worksheets[0]
+    for row in sheet.iter_rows():
+        for cell in row:
+            assert cell.data_type != "f", f"{cell.coordinate} is a formula: {cell.value!r}"
+    return sheet.title, [tuple(row) for row in sheet.iter_rows(values_only=True)]
+
+
+def test_the_class_table_as_a_workbook_keeps_student_numbers_as_text(world):
+    """Excel opens the CSV's "202301010101" as 2.02301E+11 and "007" as 7; the workbook
+    holds them as text, and the results, points and rubric scores as numbers."""
+    graded_pair(world)
+    long_number = make_user("202301010101", name='=HYPERLINK("http://x","y")')
+    leading_zeros = make_user("007", name="@SUM(1+1)")
+    with write_session() as db:
+        course = db.get(Course, world["course"])
+        enroll(db, course, db.get(User, long_number.id))
+        enroll(db, course, db.get(User, leading_zeros.id))
+    teacher = browser(world, "teacher1")
+    base = f"/courses/{world['course']}/assignments/{world['assignment']}"
+    response = teacher.get(f"{base}/export.xlsx")
+    assert response.status_code == 200
+    assert response.headers["content-type"] == XLSX_MEDIA_TYPE
+    assert ".xlsx" in response.headers["content-disposition"]
+    title, cells = workbook_rows(response.content)
+    csv_rows = list(
+        csv.reader(io.StringIO(teacher.get(f"{base}/export.csv").text.lstrip("\ufeff")))
+    )
+    assert title == "Class table" and list(cells[0]) == csv_rows[0]  # the CSV's columns
+    header = list(cells[0])
+    rows = {row[0]: dict(zip(header, row, strict=True)) for row in cells[1:]}
+    assert set(rows) == {"s1", "s2", "s3", "202301010101", "007"}
+    assert rows["202301010101"]["Name"] == '=HYPERLINK("http://x","y")'  # text, as typed
+    assert rows["007"]["Name"] == "@SUM(1+1)"
+    s1 = rows["s1"]
+    assert s1["Feedback"] == "=HYPERLINK(good teamwork)"  # no apostrophe needed: it is text
+    assert s1["Rubric 1: Method (of 40)"] == 35 and s1["Rubric 2: Results (of 60)"] == 50.5
+    assert s1["Points"] == 85.5 and s1["Lab partners"] == "s2"
+    by_name = {row[0]: dict(zip(csv_rows[0], row, strict=True)) for row in csv_rows[1:]}
+    for column in (
+        "Azimuth of position 1 (°)",
+        "Attempts",
+    ):  # the same numbers as the CSV, as numbers
+        assert column in header, header
+        assert isinstance(s1[column], float | int)
+        assert s1[column] == pytest.approx(float(by_name["s1"][column]))
+    assert (
+        rows["s3"]["Azimuth of position 1 (°)"] is None
+    )  # nothing measured: an empty cell, not "" or 0
+
+    teacher.post("/lang", data={"lang": "zh", "csrf_token": csrf_from(teacher, base)})
+    title, cells = workbook_rows(teacher.get(f"{base}/export.xlsx").content)
+    zh_csv = next(csv.reader(io.StringIO(teacher.get(f"{base}/export.csv").text.lstrip("\ufeff"))))
+    assert title == "全班成绩表" and list(cells[0]) == zh_csv
+
+    api = teacher.get(
+        f"{API}/assignments/{world['assignment']}/export.xlsx",
+        headers=token_for(teacher, "teacher1"),
+    )
+    assert api.status_code == 200 and api.headers["content-type"] == XLSX_MEDIA_TYPE
+    title, cells = workbook_rows(api.content)
+    machine = {row[0]: dict(zip(cells[0], row, strict=True)) for row in cells[1:]}
+    assert title == "class" and cells[0][:2] == ("username", "display_name")
+    assert machine["s1"]["rubric_1:Method"] == 35 and machine["202301010101"]["status"]
+
+
+def test_workbook_text_is_what_excel_can_hold():
+    """Control characters become spaces (a tab and a line break stay), a lone surrogate the
+    replacement character, and a cell longer than Excel's 32,767 characters is cut visibly."""
+    assert xlsx_text("a\x00b\x1fc\td\ne\x7f") == "a b c\td\ne "
+    assert xlsx_text("x\ud800y") == "x\ufffdy"
+    cut = xlsx_text("z" * 40_000)
+    assert len(cut) == XLSX_CELL_LIMIT and cut.endswith("…")
+    content = xlsx_table([["name", "n"], ["\x01=1+1", "1e400"], ["z" * 40_000, ""]], [1], "s")
+    _title, cells = workbook_rows(content)
+    assert cells[1] == (" =1+1", "1e400")  # Excel has no ∞: the text as it was
+    assert len(cells[2][0]) == XLSX_CELL_LIMIT and cells[2][1] is None

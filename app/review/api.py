@@ -17,11 +17,12 @@ from app.review import archives
 from app.review.accuracy import class_accuracy
 from app.review.board import board_data
 from app.review.deps import teachers_assignment
-from app.review.exports import class_table_response
+from app.review.exports import class_table_response, class_table_xlsx_response
 from app.review.schemas import ArchiveOut, ClassAccuracyOut, CourseOut, SubmissionRow
 from app.review.service import class_rows
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS
+from app.web.exports import XLSX_MEDIA_TYPE
 
 router = APIRouter(prefix="/api/v1", tags=["api: teachers"], responses=API_ERRORS)
 
@@ -115,6 +116,18 @@ def export_submissions(assignment_id: ObjectId, caller: TeacherCaller, db: Sessi
     """Teachers: the class table as CSV (UTF-8 with BOM)."""
     assignment = teachers_assignment(db, caller.user, assignment_id)
     return class_table_response(db, assignment)
+
+
+@router.get(
+    "/assignments/{assignment_id}/export.xlsx",
+    response_class=Response,
+    responses={200: {"content": {XLSX_MEDIA_TYPE: {}}, "description": "the class table"}},
+)
+def export_submissions_xlsx(assignment_id: ObjectId, caller: TeacherCaller, db: SessionDep):
+    """Teachers: the class table as an Excel workbook (the CSV's columns; student numbers
+    as text, results and points as numbers)."""
+    assignment = teachers_assignment(db, caller.user, assignment_id)
+    return class_table_xlsx_response(db, assignment)
 
 
 def _archive_out(archive: ReadingArchive) -> ArchiveOut:

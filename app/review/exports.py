@@ -1,4 +1,5 @@
-"""The class's downloads for a teacher: the class table (CSV) and every submitted attempt
+"""The class's downloads for a teacher: the class table (CSV, or an Excel workbook whose
+student numbers stay text and whose results are numbers) and every submitted attempt
 (zip).  One function each, shared by the dashboard and the REST API.
 
 The dashboard's downloads speak the teacher's language (column names, statuses, yes/no,
@@ -16,7 +17,7 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from datetime import UTC
 
-from fastapi.responses import StreamingResponse
+from fastapi.responses import Response, StreamingResponse
 from sqlmodel import Session
 
 from app.core.jsonsafe import json_safe
@@ -28,7 +29,14 @@ from app.review.accuracy import class_accuracy
 from app.review.board import board_data
 from app.review.evidence import finding_text
 from app.review.service import StudentRow, class_rows
-from app.web.exports import ZIP_BLOCK, attachment, csv_table, safe_name
+from app.web.exports import (
+    XLSX_MEDIA_TYPE,
+    ZIP_BLOCK,
+    attachment,
+    csv_table,
+    safe_name,
+    xlsx_table,
+)
 from app.web.local_time import zone
 from app.web.work_slots import held_while_streaming
 
@@ -57,6 +65,21 @@ COLUMNS = (
     "flags",
     "identical_data_with",
     "data_evidence",
+)
+# the columns a workbook holds as numbers (the rubric's criteria after them too)
+NUMERIC_COLUMNS = frozenset(
+    {
+        "attempts",
+        "azimuth_deg",
+        "azimuth_sigma_deg",
+        "heading_error_deg",
+        "latitude_deg",
+        "latitude_error_percent",
+        "earth_rate_deg_h",
+        "earth_rate_error_percent",
+        "points",
+        "max_points",
+    }
 )
 
 
@@ -176,6 +199,29 @@ def class_table_response(
         csv_table(rows),
         media_type="text/csv; charset=utf-8",
         headers={"Content-Disposition": attachment(names, "csv")},
+    )
+
+
+def class_table_xlsx_response(
+    db: Session,
+    assignment: Assignment,
+    course: Course | None = None,
+    _: Callable[..., str] | None = None,
+) -> Response:
+    """The class table as an Excel workbook: the same rows as the CSV
+    (:func:`class_table_response`), text kept as text -- a student number such as
+    202301010101 is not turned into 2.02301E+11, nothing is ever a formula -- and the
+    results, points and rubric scores as numbers."""
+    rubric = rubric_of(assignment)
+    rows = export_rows(class_rows(db, assignment), _, course.timezone if course else None, rubric)
+    numeric = [i for i, name in enumerate(COLUMNS) if name in NUMERIC_COLUMNS]
+    numeric += range(len(COLUMNS), len(COLUMNS) + len(rubric))
+    sheet = _("export.sheet_name") if _ else "class"
+    names = [course.name, assignment.title] if course else [f"assignment-{assignment.id}"]
+    return Response(
+        xlsx_table(rows, numeric, sheet),
+        media_type=XLSX_MEDIA_TYPE,
+        headers={"Content-Disposition": attachment(names, "xlsx")},
     )
 
 

@@ -21,7 +21,11 @@ from app.review.accuracy import accuracy_rows, class_accuracy
 from app.review.dashboard_cells import class_cells
 from app.review.deps import TeacherAssignment
 from app.review.evidence import badge_text, finding_text, once_per_finding
-from app.review.exports import class_table_response, class_zip_response
+from app.review.exports import (
+    class_table_response,
+    class_table_xlsx_response,
+    class_zip_response,
+)
 from app.review.lms_outbox import passback_state
 from app.review.service import class_rows, status_counts
 from app.web.deps import FormDep, SessionDep
@@ -191,6 +195,13 @@ def upload_characterisation(
 def export_assignment_csv(request: Request, target: TeacherAssignment, db: SessionDep):
     _ = translator(request_language(request))
     return class_table_response(db, target.assignment, target.course, _)
+
+
+@router.get("/courses/{course_id}/assignments/{assignment_id}/export.xlsx")
+def export_assignment_xlsx(request: Request, target: TeacherAssignment, db: SessionDep):
+    """The class table as an Excel workbook, in the teacher's language."""
+    _ = translator(request_language(request))
+    return class_table_xlsx_response(db, target.assignment, target.course, _)
 
 
 @router.get("/courses/{course_id}/assignments/{assignment_id}/export.zip")
