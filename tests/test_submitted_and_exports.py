@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import csv
 import io
 import json
@@ -9,13 +10,14 @@ import re
 import zipfile
 from urllib.parse import unquote
 
+import openpyxl
 import pytest
 from sqlmodel import select
 
 from app.db import read_session, write_session
 from app.lab.store import load_samples
 from app.models import Attempt, LabSession, Take, User
-from app.web.exports import comment_line, csv_line, neutralise
+from app.web.exports import XLSX_MEDIA_TYPE, comment_line, csv_line, neutralise
 from tests.factories import (
     API,
     HEADING,
@@ -161,6 +163,27 @@ def test_roster_password_download_is_neutralised(client, teacher_client):
     href = re.search(r'href="data:text/csv;charset=utf-8,([^"]+)"', response.text).group(1)
     rows = list(csv.reader(io.StringIO(unquote(href.replace("&amp;", "&")).lstrip("\ufeff"))))
     assert rows[1][:2] == ["2024001", "'=1+2"]
+
+
+def test_roster_passwords_as_a_workbook_keep_student_numbers(client, teacher_client):
+    """Excel opens the CSV's "202301010101" as 2.02301E+11 and "007" as 7: a slip printed
+    from it would not log in.  The workbook keeps them as typed, and a name is never run."""
+    course_id = create_course(teacher_client)
+    response = import_file(teacher_client, course_id, b"202301010101,=1+2\n007,Bond\n")
+    page = response.text
+    href = re.search(r'id="download-credentials-xlsx" href="data:([^;"]+);base64,([^"]+)"', page)
+    assert href.group(1) == XLSX_MEDIA_TYPE
+    assert 'download="Navigation-lab_initial-passwords.xlsx"' in page
+    sheet = openpyxl.load_workbook(io.BytesIO(base64.b64decode(href.group(2)))).worksheets[0]
+    cells = list(sheet.iter_rows())
+    assert [c.value for c in cells[0]] == ["username", "display_name", "initial_password"]
+    typed = {row[0].value: row for row in cells[1:]}
+    assert set(typed) == {"202301010101", "007"}
+    assert typed["202301010101"][1].value == "=1+2" and typed["202301010101"][1].data_type == "s"
+    csv_href = re.search(r'href="data:text/csv;charset=utf-8,([^"]+)"', page).group(1)
+    rows = list(csv.reader(io.StringIO(unquote(csv_href.replace("&amp;", "&")).lstrip("\ufeff"))))
+    passwords = {row[0]: row[2] for row in rows[1:]}
+    assert {name: row[2].value for name, row in typed.items()} == passwords
 
 
 def test_streamed_json_export_is_valid_and_complete(world):  # noqa: F811

@@ -16,7 +16,7 @@ from app.accounts.service import reset_password as give_new_password
 from app.core.exceptions import UserError
 from app.models import Course, Enrollment, Role, User
 from app.web.deps import ObjectId, SessionDep
-from app.web.exports import credentials_data_url
+from app.web.exports import credential_downloads
 from app.web.render import render
 
 router = APIRouter(prefix="/admin", tags=["pages: admin"], include_in_schema=False)
@@ -112,7 +112,6 @@ def credentials_page(request: Request, credential: NewCredential, *, reset: bool
     context = {
         "credentials": [credential],
         "reset": reset,
-        "csv_href": credentials_data_url([credential]),
-        "csv_name": f"{credential.username}-initial-password.csv",
+        **credential_downloads([credential], [credential.username]),
     }
     return render(request, "admin/credentials.html", context)

@@ -25,7 +25,7 @@ from app.courses.deps import TeacherCourse
 from app.courses.listing import teacher_dashboard
 from app.models import Assignment, Course, Enrollment, LtiContext, LtiPlatform, User
 from app.web.deps import ObjectId, SessionDep
-from app.web.exports import credentials_data_url
+from app.web.exports import credential_downloads
 from app.web.local_time import valid_zone_name, zone_choices
 from app.web.render import flash, redirect, render
 
@@ -208,7 +208,7 @@ def add_student_by_hand(
             "course": course,
             "credentials": [credential],
             "enrolled": [],
-            "csv_href": credentials_data_url([credential]),
+            **credential_downloads([credential], [course.name, credential.username]),
         },
     )
 
@@ -241,7 +241,7 @@ def import_students(
             "credentials": outcome.created,
             "enrolled": outcome.enrolled,
             "needs_code": outcome.needs_code,
-            "csv_href": credentials_data_url(outcome.created),
+            **credential_downloads(outcome.created, [course.name]),
         },
     )
 
@@ -270,7 +270,7 @@ def reset_student_password(
             "credentials": [credential],
             "enrolled": [],
             "reset": True,
-            "csv_href": credentials_data_url([credential]),
+            **credential_downloads([credential], [course.name, credential.username]),
         },
     )
 

@@ -9,6 +9,7 @@ such as 202301010101 or 007 opens as typed.  The lab's own files are
 
 from __future__ import annotations
 
+import base64
 import csv
 import io
 import math
@@ -65,25 +66,57 @@ def csv_table(rows: Iterable[list]) -> Iterator[str]:
         yield csv_line(row)
 
 
+CREDENTIAL_COLUMNS = ["username", "display_name", "initial_password"]
+
+
 def credentials_data_url(credentials) -> str:
     """A ``data:`` URL holding one-time passwords as CSV, so they are downloaded without
     being stored anywhere (``credentials``: items with username, display_name, password)."""
-    rows = [["username", "display_name", "initial_password"]]
+    rows = [CREDENTIAL_COLUMNS]
     rows += [[item.username, item.display_name, item.password] for item in credentials]
     return "data:text/csv;charset=utf-8," + quote("".join(csv_table(rows)))
 
 
+def credentials_xlsx_data_url(credentials) -> str:
+    """The same one-time passwords as an Excel workbook in a ``data:`` URL: a student
+    number such as 202301010101 or 007 stays the username as typed (Excel opens the CSV's
+    as 2.02301E+11 or 7, and a slip printed from it would not log in)."""
+    rows = [CREDENTIAL_COLUMNS]
+    rows += [[item.username, item.display_name, item.password] for item in credentials]
+    workbook = xlsx_table(rows, (), "passwords")
+    return f"data:{XLSX_MEDIA_TYPE};base64," + base64.b64encode(workbook).decode("ascii")
+
+
+def credential_downloads(credentials, parts: list[str]) -> dict[str, str]:
+    """The one-time passwords page's two downloads, CSV and Excel, named after ``parts``
+    (the course, or the account): a template context's ``csv_href`` / ``csv_name`` and
+    ``xlsx_href`` / ``xlsx_name``."""
+    stem = file_stem([*parts, "initial-passwords"])
+    return {
+        "csv_href": credentials_data_url(credentials),
+        "csv_name": f"{stem}.csv",
+        "xlsx_href": credentials_xlsx_data_url(credentials),
+        "xlsx_name": f"{stem}.xlsx",
+    }
+
+
 FILENAME_UNSAFE = re.compile(r'[\x00-\x1f\x7f/\\:*?"<>|;,%]+')
+
+
+def file_stem(parts: list[str]) -> str:
+    """A file name's stem from its parts (course, assignment, student…), joined by "_":
+    characters unsafe on some system become "-", the UTF-8 kept, at most 120 characters."""
+    cleaned = [
+        re.sub(r"\s+", "-", FILENAME_UNSAFE.sub("-", part).strip()).strip("-.") for part in parts
+    ]
+    return "_".join(part for part in cleaned if part)[:120] or "gyrolab"
 
 
 def attachment(parts: list[str], extension: str) -> str:
     """A Content-Disposition naming the download after its contents (course, assignment,
     student…): an ASCII ``filename`` for old clients and the UTF-8 ``filename*`` (RFC 6266
     / 5987) that browsers use, so "惯导实验_寻北_s1.csv" survives."""
-    cleaned = [
-        re.sub(r"\s+", "-", FILENAME_UNSAFE.sub("-", part).strip()).strip("-.") for part in parts
-    ]
-    stem = "_".join(part for part in cleaned if part)[:120] or "gyrolab"
+    stem = file_stem(parts)
     ascii_stem = "".join(
         ch if ch.isascii() and (ch.isalnum() or ch in "_.-") else "_" for ch in stem
     )

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 
+import openpyxl
 import pytest
 from playwright.sync_api import expect
 
@@ -44,6 +45,15 @@ def test_teacher_imports_roster_and_student_changes_password(live_server, new_pa
     rows = {row["username"]: row for row in csv.DictReader(saved.open(encoding="utf-8-sig"))}
     assert rows["2024001"]["display_name"] == "张三"
     password = rows["2024001"]["initial_password"]
+    assert download_info.value.suggested_filename == "惯性导航实验-1-班_initial-passwords.csv"
+    with teacher.expect_download() as download_info:  # the same, for Excel: numbers as text
+        teacher.click("#download-credentials-xlsx")
+    assert download_info.value.suggested_filename.endswith("_initial-passwords.xlsx")
+    download_info.value.save_as(tmp_path / "passwords.xlsx")
+    sheet = openpyxl.load_workbook(tmp_path / "passwords.xlsx").worksheets[0]
+    cells = list(sheet.iter_rows(values_only=True))
+    assert cells[0] == ("username", "display_name", "initial_password")
+    assert ("2024001", "张三", password) in cells
 
     student = new_page(locale="zh-CN")
     log_in(student, url, "2024001", password)
