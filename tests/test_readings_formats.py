@@ -183,3 +183,43 @@ def test_past_a_title_the_lines_keep_their_numbers_and_more_titles_are_not_a_tab
     # one column, no separator anywhere: a name above it is its header, nothing is skipped
     readings = parse_readings_csv("位置1\n10.74\n10.65\n")
     np.testing.assert_allclose(readings.positions[0], [10.74, 10.65])
+
+
+@pytest.mark.parametrize(
+    ("text", "values"),
+    [
+        ("11,5\n11,7\n10,9\n-0,5\n", [11.5, 11.7, 10.9, -0.5]),  # the first column falls
+        ("value\n1,5\n2,5\n3,25\n", [1.5, 2.5, 3.25]),  # one name above two cells a line
+        ("0,0123\n0,0131\n-0,0045\n0,0007\n", [0.0123, 0.0131, -0.0045, 0.0007]),
+    ],
+    ids=["falling", "one-name-header", "a-static-record"],
+)
+def test_one_column_with_decimal_commas_is_not_read_as_times_and_values(text, values):
+    """A European logger's one column ("0,0123" per line) was read as time 0 and value 123:
+    where the cells cannot be times and values, they are one number with a decimal comma."""
+    from app.core.position_records import parse_position_csv, parse_static_record
+
+    read, times = parse_position_csv(text)
+    np.testing.assert_allclose(read, values)
+    assert times is None
+    np.testing.assert_allclose(parse_static_record(text), values)
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["0,10\n1,11\n2,9\n", "time_s,value\n0,10\n0,11\n", "0,10.5\n0,11.5\n", "1,-5\n0,5\n"],
+    ids=["rising-times", "two-names", "a-point-in-the-value", "a-signed-value"],
+)
+def test_times_and_values_stay_times_and_values(text):
+    from app.core.position_records import parse_position_csv
+
+    _values, times = parse_position_csv(text)
+    assert times is not None
+
+
+def test_a_huge_whole_number_in_a_record_is_a_clear_refusal():
+    from app.core.position_records import parse_position_csv
+
+    with pytest.raises(UserError) as caught:
+        parse_position_csv("9" * 5000 + ",5\n1,5\n")
+    assert caught.value.key == "csv.out_of_range"

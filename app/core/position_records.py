@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 
 import numpy as np
 
@@ -59,7 +60,9 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
     record.  An optional header on line 1 and ``#`` comment lines are skipped; lines may
     end in ``\n``, ``\r\n`` or a bare ``\r``.  The columns may be separated by a tab or a
     ``;`` instead of a comma (a spreadsheet's copy, a European export), and then a decimal
-    comma is read as a point -- as the lab page reads a pasted or uploaded table.
+    comma is read as a point -- as the lab page reads a pasted or uploaded table.  A
+    comma-separated record of one column with decimal commas ("11,5" per line) is read as
+    such where it cannot be times and values (:func:`_decimal_comma_column`).
 
     Parameters
     ----------
@@ -92,12 +95,14 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
         rows = [[decimal_point(cell) for cell in row] for row in rows]
     values: list[float] = []
     times: list[float] = []
+    header: list[str] | None = None
     for number, row in enumerate(rows, start=1):
         cells = [c.strip() for c in row if c.strip()]
         if not cells or cells[0].startswith("#"):
             continue
         if number == 1 and not all(_is_number(cell) for cell in cells):
-            continue  # a header such as "time_s,value"
+            header = cells  # such as "time_s,value"
+            continue
         if len(cells) > 2:
             raise UserError(
                 "csv.one_or_two_columns",
@@ -112,6 +117,40 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
             times.append(numbers[0])
     if times and len(times) != len(values):
         raise UserError("csv.times_on_every_line")
+    if times and delimiter == "," and (one_column := _decimal_comma_column(rows, header, times)):
+        return np.array(one_column), None
     if not values:
         raise UserError("csv.empty")
     return np.array(values), (np.array(times) if times else None)
+
+
+WHOLE_NUMBER = re.compile(r"[+-]?\d+")
+DIGITS = re.compile(r"\d+")
+
+
+def _decimal_comma_column(
+    rows: list[list[str]], header: list[str] | None, times: list[float]
+) -> list[float] | None:
+    """The values of a comma-separated record that is one column of numbers with decimal
+    commas ("11,5" per line, as a European logger or spreadsheet writes them), or None
+    where it is ``time_s,value`` pairs as read.
+
+    It is one column when every line is two whole numbers, the second plain digits (a
+    fraction), and a one-name header stands above them ("value") or, with no header, the
+    first column does not increase as times must.  "10,74" / "11,75" stays a time and a
+    value; so does anything under a "time_s,value" header.
+    """
+    if header is not None and len(header) != 1:
+        return None
+    if header is None and bool(np.all(np.diff(times) > 0)):
+        return None
+    values: list[float] = []
+    for number, row in enumerate(rows, start=1):
+        cells = [c.strip() for c in row if c.strip()]
+        if not cells or cells[0].startswith("#") or (number == 1 and header is not None):
+            continue
+        whole, fraction = cells  # two cells: read as a time and a value already
+        if not WHOLE_NUMBER.fullmatch(whole) or not DIGITS.fullmatch(fraction):
+            return None
+        values.append(_number(f"{whole}.{fraction}", number, "value"))
+    return values
