@@ -3,6 +3,8 @@ decimal commas, Chinese or spaced headers, a row-number column."""
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
 import pytest
 
@@ -223,3 +225,43 @@ def test_a_huge_whole_number_in_a_record_is_a_clear_refusal():
     with pytest.raises(UserError) as caught:
         parse_position_csv("9" * 5000 + ",5\n1,5\n")
     assert caught.value.key == "csv.out_of_range"
+
+
+@pytest.mark.parametrize(
+    ("text", "values"),
+    [
+        ("0,0123\n0,0131\n-0,0045\n0,0007\n", [0.0123, 0.0131, -0.0045, 0.0007]),
+        ("# logger 7\nrate\n1,5\n2,5\n3,25\n", [1.5, 2.5, 3.25]),
+    ],
+    ids=["no-header", "one-name-header"],
+)
+def test_a_static_record_of_one_column_with_decimal_commas(text, values):
+    """The bench-gyro record and ``gyrolab allan`` read a European logger's one column as
+    numbers, not as times 0, 0, -0, 0 and values 123, 131, 45, 7."""
+    from app.core.static_record import read_static_record
+
+    record = read_static_record(io.StringIO(text))
+    np.testing.assert_allclose(record.values, values)
+    assert record.times_s is None
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["0,10\n1,11\n2,9\n", "time_s,value\n0,10\n0,11\n", "0,10.5\n0,11.5\n"],
+    ids=["rising-times", "two-names", "a-point-in-the-value"],
+)
+def test_a_static_records_times_and_values_stay_so(text):
+    from app.core.static_record import read_static_record
+
+    assert read_static_record(io.StringIO(text)).times_s is not None
+
+
+def test_a_decimal_comma_record_characterises_as_the_same_record_with_points():
+    """The whole bench-gyro analysis, on an independent white-noise record written both
+    ways: the same summary."""
+    from app.courses.characterisation import characterise
+
+    rates = np.random.default_rng(3).normal(0.01, 0.05, 100 * 610)
+    points = "".join(f"{x:.4f}\n" for x in rates)
+    commas = "rate_deg_h\n" + points.replace(".", ",")
+    assert characterise(commas.encode(), 100.0) == characterise(points.encode(), 100.0)

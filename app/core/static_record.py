@@ -3,6 +3,7 @@
 Reading: CSV text (``value`` per line, ``time_s,value``, ``time_s,value,temperature_c``, the
 bridge's long layout ``position,angle_deg,time_s,value[,temperature_c]``, with or without a
 header; commas, tabs or semicolons (then decimal commas), or spaces between the columns;
+one column with decimal commas ("0,0123" per line) where it cannot be times and values;
 ``#`` and ``%`` comment lines), parsed in blocks of lines, so a 10⁷-sample record never
 exists as one string.
 
@@ -14,6 +15,8 @@ from __future__ import annotations
 import codecs
 import csv
 import io
+import itertools
+import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
@@ -23,6 +26,8 @@ from app.core.exceptions import UserError
 from app.core.readings import decimal_point
 
 BLOCK_LINES = 200_000
+LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
+DECIMAL_COMMA_LINE = re.compile(r"[+-]?\d+,\d+")
 MAX_SAMPLES = 20_000_000
 VALUE_NAMES = ("value", "rate", "rate_deg_h", "omega", "reading")
 TIME_NAMES = ("time_s", "time", "t", "t_s", "timestamp", "timestamp_s")
@@ -166,8 +171,10 @@ def read_static_record(
             progress("read", {"samples": count})
 
     width = None
-    split = None
-    for raw in lines:
+    lines = iter(lines)
+    first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
+    split = _joined_decimal_comma if _one_column_with_decimal_commas(first) else None
+    for raw in itertools.chain(first, lines):
         line_number += 1
         text = raw.strip().lstrip("\ufeff")
         if not text or text.startswith(("#", "%")):
@@ -233,6 +240,34 @@ def _splitter(first: str) -> Callable[[str], list[str]]:
 
         return commas
     return lambda text: text.split()
+
+
+def _one_column_with_decimal_commas(first_lines: list[str]) -> bool:
+    """Whether a comma-separated record is one column of numbers with decimal commas
+    ("0,0123" per line, as a European logger or spreadsheet writes them), not
+    ``time_s,value`` pairs: its first lines (comments aside) are each a whole number, a
+    comma and digits, under a one-name header ("rate") or, with no header, with first
+    numbers that do not increase as times must.  "10,74" / "11,75" stays a time and a
+    value; so does anything under a two-name header."""
+    texts = [line.strip().lstrip("\ufeff") for line in first_lines]
+    texts = [text for text in texts if text and not text.startswith(("#", "%"))]
+    if not texts or "\t" in texts[0] or ";" in texts[0]:
+        return False
+    header = not DECIMAL_COMMA_LINE.fullmatch(texts[0]) and _is_header(texts[0].split(","))
+    if header and "," in texts[0]:
+        return False
+    rows = texts[1:] if header else texts
+    if not rows or not all(DECIMAL_COMMA_LINE.fullmatch(text) for text in rows):
+        return False
+    if header:
+        return True
+    firsts = [float(text.split(",")[0]) for text in rows]
+    return any(later <= earlier for earlier, later in itertools.pairwise(firsts))
+
+
+def _joined_decimal_comma(text: str) -> list[str]:
+    """One cell: the line's decimal comma read as a point ("0,0123" → "0.0123")."""
+    return [text.replace(",", ".")]
 
 
 def _first_bad_line(block, layout) -> int:
