@@ -1,7 +1,8 @@
-"""Parse a class roster CSV: username (or student number), display name, optional email.
+"""Parse a class roster: username (or student number), display name, optional email.
 
-Accepts UTF-8 (with or without BOM) and GB18030 (what Excel in a Chinese locale writes),
-comma, semicolon or tab separated, with or without a header row.  Returns every row's
+Accepts a CSV in UTF-8 (with or without BOM) or GB18030 (what Excel in a Chinese locale
+writes), comma, semicolon or tab separated, or an Excel workbook (.xlsx, its first sheet:
+:mod:`app.accounts.roster_workbook`), with or without a header row.  Returns every row's
 problems at once so a teacher can fix the file in one go; callers create nothing when any
 row has a problem.
 """
@@ -13,6 +14,7 @@ import io
 import re
 from dataclasses import dataclass, field
 
+from app.accounts.roster_workbook import is_workbook, workbook_rows
 from app.core.exceptions import UserError
 from app.core.text_files import decode_text, plain_text
 
@@ -98,19 +100,25 @@ def parse_roster(data: bytes) -> RosterParse:
         return RosterParse(
             [], [RosterProblem(0, "roster.too_large", {"limit_kb": MAX_ROSTER_BYTES // 1000})]
         )
-    try:
-        text = decode_text(data)
-    except UserError:
-        return RosterParse([], [RosterProblem(0, "roster.encoding")])
-    try:
-        dialect = csv.Sniffer().sniff(text[:4096], delimiters=",;\t")
-    except csv.Error:
-        dialect = csv.excel
-    lines = [
-        (number, cells)
-        for number, cells in enumerate(csv.reader(io.StringIO(text), dialect), start=1)
-        if any(cell.strip() for cell in cells)
-    ]
+    if is_workbook(data):
+        try:  # the header row and one more than the most students: "too many" then
+            lines = workbook_rows(data, MAX_ROSTER_ROWS + 1)
+        except UserError as error:
+            return RosterParse([], [RosterProblem(0, error.key, error.params)])
+    else:
+        try:
+            text = decode_text(data)
+        except UserError:
+            return RosterParse([], [RosterProblem(0, "roster.encoding")])
+        try:
+            dialect = csv.Sniffer().sniff(text[:4096], delimiters=",;\t")
+        except csv.Error:
+            dialect = csv.excel
+        lines = [
+            (number, cells)
+            for number, cells in enumerate(csv.reader(io.StringIO(text), dialect), start=1)
+            if any(cell.strip() for cell in cells)
+        ]
     if not lines:
         return RosterParse([], [RosterProblem(0, "roster.empty_file")])
     mapping = _header_map(lines[0][1])

@@ -1,0 +1,165 @@
+"""A roster uploaded as the Excel workbook a student system hands out: student numbers held
+as numbers come in whole, and a hostile or broken file is a clear refusal."""
+
+from __future__ import annotations
+
+import io
+import zipfile
+from datetime import date
+
+import pytest
+import xlsxwriter
+from sqlmodel import select
+
+from app.accounts.roster_csv import parse_roster
+from app.accounts.roster_workbook import MAX_UNPACKED_BYTES, OLE_MAGIC, cell_text
+from app.db import read_session
+from app.models import User
+from tests.factories import create_course, credentials_from, import_file
+
+XLSX = "application/vnd.openxmlformats-officedocument.spreadsheetml.sheet"
+
+
+def workbook(rows: list[list], first_sheet: str = "名单", more_sheets: int = 0) -> bytes:
+    """An .xlsx as a spreadsheet writes one (XlsxWriter: numbers as numbers, text as text)."""
+    buffer = io.BytesIO()
+    book = xlsxwriter.Workbook(buffer, {"in_memory": True})
+    sheet = book.add_worksheet(first_sheet)
+    for r, row in enumerate(rows):
+        for c, value in enumerate(row):
+            if value is None:
+                continue
+            if isinstance(value, int | float):
+                sheet.write_number(r, c, value)
+            else:
+                sheet.write_string(r, c, value)
+    for k in range(more_sheets):
+        book.add_worksheet(f"other{k}").write_string(0, 0, "not the roster")
+    book.close()
+    return buffer.getvalue()
+
+
+def test_numbers_held_as_numbers_are_the_student_numbers():
+    data = workbook(
+        [
+            ["学号", "姓名", "邮箱"],
+            [2023010101, "张三", "zhang@example.edu"],
+            [None, None, None],  # an empty row: passed over, the numbering kept
+            ["007", "Bond", None],
+            [202301010102.0, "李四", None],
+        ],
+        more_sheets=1,
+    )
+    parsed = parse_roster(data)
+    assert parsed.problems == []
+    assert [(r.line, r.username, r.display_name, r.email) for r in parsed.rows] == [
+        (2, "2023010101", "张三", "zhang@example.edu"),
+        (4, "007", "Bond", None),
+        (5, "202301010102", "李四", None),
+    ]
+
+
+def test_a_problem_names_the_sheets_row():
+    data = workbook([[2023010101, "张三", "not-mail"], [None], [2023010102, None, None]])
+    parsed = parse_roster(data)  # no header: the columns in the usual order
+    assert [(p.line, p.key) for p in parsed.problems] == [
+        (1, "roster.bad_email"),
+        (3, "roster.no_name"),
+    ]
+
+
+@pytest.mark.parametrize(
+    ("value", "text"),
+    [
+        (None, ""),
+        (2023010101.0, "2023010101"),
+        (7, "7"),
+        (12.5, "12.5"),
+        (1e300, "1e+300"),
+        (True, "TRUE"),
+        (date(2026, 9, 1), "2026-09-01"),
+        (" 张三 ", " 张三 "),
+    ],
+)
+def test_cells_as_the_roster_reads_them(value, text):
+    assert cell_text(value) == text
+
+
+def broken_zip() -> bytes:
+    return b"PK\x03\x04" + b"\x00" * 200
+
+
+def zip_of(members: dict[str, bytes]) -> bytes:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+        for name, content in members.items():
+            archive.writestr(name, content)
+    return buffer.getvalue()
+
+
+def with_sheet(xml: bytes) -> bytes:
+    """A real workbook whose first sheet's XML is replaced by ``xml``."""
+    original = zipfile.ZipFile(io.BytesIO(workbook([["2024001", "张三"]])))
+    members = {name: original.read(name) for name in original.namelist()}
+    members["xl/worksheets/sheet1.xml"] = xml
+    return zip_of(members)
+
+
+LAUGHS = b"""<?xml version="1.0"?>
+<!DOCTYPE lolz [<!ENTITY lol "lol"><!ENTITY lol2 "&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;">
+<!ENTITY lol3 "&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;">]>
+<worksheet xmlns="http://schemas.openxmlformats.org/spreadsheetml/2006/main"><sheetData>
+<row r="1"><c r="A1" t="inlineStr"><is><t>&lol3;</t></is></c></row></sheetData></worksheet>"""
+
+EXTERNAL = b"""<?xml version="1.0"?>
+<!DOCTYPE x [<!ENTITY secret SYSTEM "file:///etc/passwd">]>
+<worksheet xmlns="http://schemas.openxmlformats.org/spreadsheetml/2006/main"><sheetData>
+<row r="1"><c r="A1" t="inlineStr"><is><t>&secret;</t></is></c></row></sheetData></worksheet>"""
+
+
+@pytest.mark.parametrize(
+    ("data", "key"),
+    [
+        (OLE_MAGIC + b"\x00" * 500, "roster.old_excel"),
+        (broken_zip(), "roster.bad_workbook"),
+        (zip_of({"roster.csv": b"2024001,Zhang\n"}), "roster.bad_workbook"),  # a zipped CSV
+        (with_sheet(LAUGHS), "roster.bad_workbook"),  # entity expansion: never expanded
+        (with_sheet(EXTERNAL), "roster.bad_workbook"),  # an external entity: never read
+        (with_sheet(b"<worksheet"), "roster.bad_workbook"),  # cut short
+        (zip_of({"xl/big.bin": b"\x00" * (MAX_UNPACKED_BYTES + 1)}), "roster.workbook_too_large"),
+    ],
+    ids=["xls", "broken-zip", "zipped-csv", "entity-expansion", "external-entity", "cut-short",
+         "zip-bomb"],
+)  # fmt: skip
+def test_a_workbook_that_cannot_be_read_is_a_clear_refusal(data, key):
+    parsed = parse_roster(data)
+    assert parsed.rows == [] and [(p.line, p.key) for p in parsed.problems] == [(0, key)]
+
+
+def test_the_course_page_imports_a_workbook(teacher_client):
+    course_id = create_course(teacher_client)
+    data = workbook([["学号", "姓名"], [2023010101, "张三"], ["007", "Bond"]])
+    response = import_file(teacher_client, course_id, data, name="名单.xlsx")
+    assert response.status_code == 200, response.text[:300]
+    assert set(credentials_from(response.text)) == {"2023010101", "007"}
+    with read_session() as db:
+        usernames = set(db.exec(select(User.username).where(User.role == "student")).all())
+    assert usernames == {"2023010101", "007"}
+
+
+def test_the_course_page_names_an_old_excel_file_and_creates_nothing(teacher_client):
+    course_id = create_course(teacher_client)
+    teacher_client.cookies.set("gyrolab_lang", "zh-CN")
+    response = import_file(teacher_client, course_id, OLE_MAGIC + b"\x00" * 500, name="a.xls")
+    assert response.status_code == 400
+    assert "Excel 97-2003 工作簿（.xls）" in response.text
+    with read_session() as db:
+        assert db.exec(select(User).where(User.role == "student")).first() is None
+
+
+def test_uploaded_workbooks_are_parsed_through_defusedxml():
+    """openpyxl uses defusedxml when it is installed: without it the entity tests above
+    would expand (a small expansion passes as a roster row)."""
+    from openpyxl.xml import DEFUSEDXML
+
+    assert DEFUSEDXML
