@@ -163,3 +163,37 @@ def test_uploaded_workbooks_are_parsed_through_defusedxml():
     from openpyxl.xml import DEFUSEDXML
 
     assert DEFUSEDXML
+
+
+def test_a_student_systems_export_with_a_title_above_the_header():
+    """A registrar's workbook: a merged title and a term line above "序号 学号 姓 名 性别"."""
+    data = workbook(
+        [
+            ["2026 秋季学期 惯性导航实验 学生名单"],
+            [None, None, "导出日期 2026-09-01"],
+            ["序号", "学　号", "姓 名", "性别"],
+            [1, 2023010101, "张三", "男"],
+            [2, 2023010102, "李四", "女"],
+        ]
+    )
+    parsed = parse_roster(data)
+    assert parsed.problems == []
+    assert [(r.line, r.username, r.display_name) for r in parsed.rows] == [
+        (4, "2023010101", "张三"),
+        (5, "2023010102", "李四"),
+    ]
+
+
+def test_title_lines_in_a_csv_and_a_header_without_names_names_its_line():
+    csv_text = "惯性导航实验名单\n学生学号,学生姓名\n2024001,张三\n"
+    assert [r.username for r in parse_roster(csv_text.encode()).rows] == ["2024001"]
+    no_names = parse_roster("名单\n学号,邮箱\n2024001,a@b.cn\n".encode())
+    assert [(p.line, p.key) for p in no_names.problems] == [(2, "roster.no_name_column")]
+
+
+def test_a_roster_without_a_header_keeps_every_row():
+    """A student named "login" on the second row is not a header: the first row has two
+    cells, so the file has none."""
+    parsed = parse_roster(b"2024001,Zhang\nlogin,Name\n2024003,Wang\n")
+    assert [r.username for r in parsed.rows] == ["2024001", "login", "2024003"]
+    assert parsed.problems == []

@@ -2,7 +2,8 @@
 
 Accepts a CSV in UTF-8 (with or without BOM) or GB18030 (what Excel in a Chinese locale
 writes), comma, semicolon or tab separated, or an Excel workbook (.xlsx, its first sheet:
-:mod:`app.accounts.roster_workbook`), with or without a header row.  Returns every row's
+:mod:`app.accounts.roster_workbook`), with or without a header row (and up to three title
+lines above it, as a student system's export has).  Returns every row's
 problems at once so a teacher can fix the file in one go; callers create nothing when any
 row has a problem.
 """
@@ -25,6 +26,7 @@ USERNAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}$")
 SPREADSHEET_NUMBER = re.compile(r"\d+\.0+|\d(?:\.\d+)?[eE][+]?\d+")
 EMAIL_RE = re.compile(r"^[^@\s]+@[^@\s]+\.[^@\s]+$")
 MAX_NAME = 128
+TITLE_LINES = 3  # lines of one cell above the header row (a title, a term, a date)
 
 
 def person_problems(username: str, display_name: str, email: str = "") -> dict[str, UserError]:
@@ -52,10 +54,19 @@ HEADER_NAMES = {
         "student_id",
         "student id",
         "学号",
+        "学生学号",
         "用户名",
         "账号",
     },
-    "display_name": {"display_name", "display name", "name", "full name", "姓名", "名字"},
+    "display_name": {
+        "display_name",
+        "display name",
+        "name",
+        "full name",
+        "姓名",
+        "学生姓名",
+        "名字",
+    },
     "email": {"email", "e-mail", "mail", "邮箱", "电子邮件", "电子邮箱"},
 }
 
@@ -86,13 +97,27 @@ class RosterParse:
 
 
 def _header_map(cells: list[str]) -> dict[str, int] | None:
+    """The columns a header row names (by :data:`HEADER_NAMES`, full-width forms and the
+    spaces of "姓 名" aside), or None when it names no username column."""
     mapping: dict[str, int] = {}
     for index, cell in enumerate(cells):
-        name = cell.strip().lower()
+        name = " ".join(plain_text(cell).lower().split())
         for column, aliases in HEADER_NAMES.items():
-            if name in aliases and column not in mapping:
+            if (name in aliases or name.replace(" ", "") in aliases) and column not in mapping:
                 mapping[column] = index
     return mapping if "username" in mapping else None
+
+
+def _header_index(lines: list[tuple[int, list[str]]]) -> int | None:
+    """Which of the first lines is the header: the first that names a username column,
+    with at most ``TITLE_LINES`` lines of one cell each above it (a student system's
+    export: "2026 秋 惯性导航 名单", a date); None for a roster without one."""
+    for index, (_number, cells) in enumerate(lines[: TITLE_LINES + 1]):
+        if _header_map(cells) is not None:
+            return index
+        if sum(bool(cell.strip()) for cell in cells) != 1:  # a row of a headerless roster
+            return None
+    return None
 
 
 def parse_roster(data: bytes) -> RosterParse:
@@ -121,13 +146,15 @@ def parse_roster(data: bytes) -> RosterParse:
         ]
     if not lines:
         return RosterParse([], [RosterProblem(0, "roster.empty_file")])
-    mapping = _header_map(lines[0][1])
-    if mapping is None:
+    header_at = _header_index(lines)
+    if header_at is None:
         mapping = {"username": 0, "display_name": 1, "email": 2}
     else:
-        lines = lines[1:]
+        header_line, header = lines[header_at]
+        mapping = _header_map(header) or {}
+        lines = lines[header_at + 1 :]
         if "display_name" not in mapping:
-            return RosterParse([], [RosterProblem(1, "roster.no_name_column")])
+            return RosterParse([], [RosterProblem(header_line, "roster.no_name_column")])
     if len(lines) > MAX_ROSTER_ROWS:
         return RosterParse([], [RosterProblem(0, "roster.too_many", {"limit": MAX_ROSTER_ROWS})])
 
