@@ -279,6 +279,7 @@ JS_MESSAGES = (
     "js.mean",
     "js.angle",
     "js.too_large",
+    "js.workbook_not_csv",
     "chart.time_s",
     "chart.rate_deg_h",
     "js.pasted",

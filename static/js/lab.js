@@ -378,6 +378,13 @@
     }
   }
 
+  // An Excel workbook chosen by mistake: .xlsx is a zip ("PK\x03\x04"), .xls an OLE file.
+  function isWorkbook(buffer) {
+    const head = new Uint8Array(buffer, 0, Math.min(4, buffer.byteLength));
+    const starts = (magic) => magic.every((byte, i) => head[i] === byte);
+    return starts([0x50, 0x4b, 0x03, 0x04]) || starts([0xd0, 0xcf, 0x11, 0xe0]);
+  }
+
   function setupCsv(panel) {
     const input = panel.querySelector(".csv-file");
     const preview = panel.querySelector(".csv-preview");
@@ -393,7 +400,12 @@
         preview.innerHTML = `<p class="error-text">${t("js.too_large")}</p>`;
         return;
       }
-      text = decodeFile(await file.arrayBuffer());
+      const buffer = await file.arrayBuffer();
+      if (isWorkbook(buffer)) {
+        preview.innerHTML = `<p class="error-text">${t("js.workbook_not_csv")}</p>`;
+        return;
+      }
+      text = decodeFile(buffer);
       try {
         const result = await postJson("/csv/preview", { part: panel.dataset.part, unit: panel.querySelector(".unit").value, text });
         const rows = result.positions.map((p) =>

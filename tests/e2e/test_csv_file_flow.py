@@ -1,0 +1,64 @@
+"""The lab page's CSV file, in a real browser: a spreadsheet's table chosen as a file is
+previewed and saved; an Excel workbook chosen by mistake is named as such, with the fix, in
+the page's language -- never garbled bytes sent to the server."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+import xlsxwriter
+from playwright.sync_api import expect
+
+from tests.e2e.conftest import STUDENT_PASSWORD, log_in
+from tests.e2e.test_lab_flow import start_practice, table
+
+pytestmark = pytest.mark.e2e
+
+WORKBOOK_WORDS = {"en": "This is an Excel workbook, not a CSV file", "zh-CN": "这是 Excel 工作簿"}
+
+
+def workbook_of(rows: list[list[str]]) -> bytes:
+    buffer = io.BytesIO()
+    book = xlsxwriter.Workbook(buffer, {"in_memory": True})
+    sheet = book.add_worksheet()
+    for r, row in enumerate(rows):
+        for c, value in enumerate(row):
+            sheet.write(r, c, value)
+    book.close()
+    return buffer.getvalue()
+
+
+@pytest.mark.parametrize(("language", "width"), [("en", 1366), ("zh-CN", 390)])
+def test_a_csv_file_is_previewed_and_saved_and_a_workbook_is_named(
+    live_server, new_page, tmp_path, language, width
+):
+    page = new_page()
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    page.context.add_cookies([{"name": "gyrolab_lang", "value": language, "url": live_server.url}])
+    page.set_viewport_size({"width": width, "height": 844})
+    start_practice(page, live_server.url)
+    section = page.locator("#part-heading")
+    section.locator(".method-tab[data-method=csv]").click()
+    panel = section.locator('.method-panel[data-method="csv"]')
+    # the file chooser and the unit fit a phone's width (the panel once pushed the page
+    # sideways: a file input's own width in a grid column that could not shrink)
+    assert page.evaluate("document.documentElement.scrollWidth") <= width
+    rows = table("handout_horizontal.csv")
+    header = [f"position_{k}" for k in range(1, 5)]
+
+    book = tmp_path / "readings.xlsx"
+    book.write_bytes(workbook_of([header, *rows]))
+    panel.locator(".csv-file").set_input_files(str(book))
+    expect(panel.locator(".csv-preview .error-text")).to_contain_text(WORKBOOK_WORDS[language])
+    expect(panel.locator(".accept-csv")).to_be_disabled()
+
+    readings = tmp_path / "readings.csv"  # the same sheet saved as CSV by a Chinese Excel
+    readings.write_bytes("\n".join(",".join(row) for row in [header, *rows]).encode("gb18030"))
+    panel.locator(".csv-file").set_input_files(str(readings))
+    preview = panel.locator(".csv-preview tbody tr")
+    expect(preview).to_have_count(4)
+    expect(preview.nth(0).locator("td").nth(2)).to_have_text(str(len(rows)))
+    with page.expect_navigation():
+        panel.locator(".accept-csv").click()
+    expect(page.locator("#take-history tbody tr")).to_have_count(4)
