@@ -533,3 +533,24 @@ def test_the_symmetric_order_adds_positions_five_to_eight(student_client):
     reply = post_form(student_client, f"{page}/order", {"symmetric": "sideways"}, page=page)
     assert reply.status_code == 303
     assert "Choose the recording order" in student_client.get(page).text
+
+
+def test_readings_saved_in_the_wrong_unit_are_named(student_client):
+    """The handout's readings typed in °/s but saved as °/h: the heading is the same (a
+    ratio), Earth's rate 3600× small.  Each part's results say which unit they look like,
+    and name no expected value."""
+    words = "about 3600: were they recorded in °/s and saved as °/h?"
+    session_id = new_session(student_client)
+    for part, name in (("heading", "handout_horizontal.csv"), ("latitude", "handout_vertical.csv")):
+        columns = {k: [v / 3600 for v in vals] for k, vals in handout(name).items()}
+        assert save_manual(student_client, session_id, part, columns, "deg/h").status_code == 200
+    results = student_client.get(f"/lab/sessions/{session_id}/results.json").json()
+    assert results["heading"]["theta_deg"] == pytest.approx(-10.753, abs=5e-4)  # a ratio
+    page = student_client.get(f"/lab/sessions/{session_id}").text
+    assert page.count(words) == 2  # once in each part
+
+    right = new_session(student_client)  # the same readings saved as °/s: no such words
+    for part, name in (("heading", "handout_horizontal.csv"), ("latitude", "handout_vertical.csv")):
+        columns = {k: [v / 3600 for v in vals] for k, vals in handout(name).items()}
+        assert save_manual(student_client, right, part, columns, "deg/s").status_code == 200
+    assert "were they recorded in" not in student_client.get(f"/lab/sessions/{right}").text

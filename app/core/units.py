@@ -107,3 +107,46 @@ def from_deg_per_hour(values, unit: str = DEG_PER_HOUR) -> np.ndarray:
         The rates in ``unit``.
     """
     return np.asarray(values, dtype=float) / TO_DEG_PER_HOUR[canonical_unit(unit)]
+
+
+UNIT_SLIP_TOLERANCE = 1.5  # a ratio within 1.5× of a unit's factor names that unit
+
+
+def unit_slip(measured_deg_h: float, expected_deg_h: float, chosen: str) -> str | None:
+    """The unit readings were likely recorded in, when they were saved as ``chosen``.
+
+    Readings recorded in unit u but saved as unit c come out scaled by
+    k = F(c) / F(u), F the factor to °/h (1 °/s = 3600 °/h, 1 rad/s = 206 264.8 °/h): °/s
+    saved as °/h are 3600× small, rad/s saved as °/s 57.3× small, °/s saved as rad/s 57.3×
+    large.  The amplitude a four-position fit measures is a multiple of Earth's rate known
+    beforehand (Ω·cos φ in the horizontal plane, Ω in the meridian plane), so a measured /
+    expected ratio within ``UNIT_SLIP_TOLERANCE`` of one such k names u; noise and a wrong
+    latitude move it by far less than the smallest k (57.3).
+
+    Parameters
+    ----------
+    measured_deg_h : float
+        The amplitude (or Earth rate) measured, °/h as saved.
+    expected_deg_h : float
+        What Earth's rotation gives there, °/h.
+    chosen : str
+        The unit the readings were saved as.
+
+    Returns
+    -------
+    str or None
+        The likely unit, or None when the ratio matches none (or cannot be formed).
+    """
+    if not (measured_deg_h > 0 and expected_deg_h > 0):  # NaN fails too
+        return None
+    ratio = measured_deg_h / expected_deg_h
+    if not math.isfinite(ratio):
+        return None
+    chosen = canonical_unit(chosen)
+    for unit, factor in TO_DEG_PER_HOUR.items():
+        if unit == chosen:
+            continue
+        k = TO_DEG_PER_HOUR[chosen] / factor
+        if abs(math.log(ratio / k)) < math.log(UNIT_SLIP_TOLERANCE):
+            return unit
+    return None

@@ -20,6 +20,7 @@ from app.core.explain import explain_heading, explain_latitude
 from app.core.noise_model import GyroNoise, Window
 from app.core.record_checks import count_spikes, record_gaps, warm_up_change
 from app.core.solve import solve_heading, solve_latitude
+from app.core.units import TO_DEG_PER_HOUR, unit_slip
 from app.courses.characterisation import StationNoise, station_noise
 from app.lab.recent_samples import RECENT
 from app.lab.samples import unpack_all
@@ -253,6 +254,8 @@ def solve_part(
     except UserError as error:
         outcome.error = error
     outcome.flags = quality_flags(session, data)
+    if (slip := unit_slip_flag(session, part, ordered, outcome.result)) is not None:
+        outcome.flags.insert(0, slip)  # the first thing to put right
     check = outcome.result.drift_check if outcome.result is not None else None
     if check is not None and check.flagged:
         until = None
@@ -334,6 +337,39 @@ def flags_of_checks(session: LabSession, checks: dict[int, PositionChecks]) -> l
             if typical > 0 and std > 3 * typical:
                 flags.append(flag("flag.noisy", position=position, ratio=round(std / typical, 1)))
     return flags
+
+
+UNIT_SYMBOLS = {"deg/h": "°/h", "deg/s": "°/s", "rad/s": "rad/s"}
+
+
+def unit_slip_flag(session: LabSession, part: str, ordered: list[PositionData], result):
+    """A flag when the part's readings look recorded in another unit than the one they
+    were saved as (°/s saved as °/h: Ω 3600× small), by :func:`app.core.units.unit_slip`
+    on the fit's amplitude (heading: against Ω·cos φ) or Earth rate (latitude: Ω).  Only
+    the unit is named, never the expected value (a secret truth stays secret)."""
+    units = {p.take.unit for p in ordered}
+    if result is None or len(units) != 1:
+        return None
+    chosen = units.pop()
+    if part == "heading":
+        horizontal = math.cos(math.radians(session.latitude_deg))
+        if horizontal < 0.1:  # within 6° of a pole the horizontal amplitude is no guide
+            return None
+        measured, expected = result.amplitude_deg_h, session.earth_rate_deg_h * horizontal
+    else:
+        measured, expected = result.earth_rate_deg_h, session.earth_rate_deg_h
+    likely = unit_slip(measured, expected, chosen)
+    if likely is None:
+        return None
+    factor = TO_DEG_PER_HOUR[chosen] / TO_DEG_PER_HOUR[likely]
+    return {
+        "key": "flag.unit_slip",
+        "params": {
+            "factor": f"{max(factor, 1 / factor):.0f}",
+            "likely": UNIT_SYMBOLS[likely],
+            "chosen": UNIT_SYMBOLS.get(chosen, chosen),
+        },
+    }
 
 
 def warm_up_flag(session: LabSession, check, simulated_until_s: float | None) -> dict:
