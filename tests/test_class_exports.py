@@ -89,6 +89,10 @@ def test_the_class_table_names_partners_and_holds_the_review(world):
     assert {"s1/attempt-1.csv", "s2/attempt-1.csv", "s2/attempt-1.json"} <= names
     zipped = {row["Username"]: row for row in rows_of(archive.read("class.csv").decode())}
     assert zipped["s2"]["Lab partners"] == "s1"
+    title, cells = workbook_rows(archive.read("class.xlsx"))  # the same table for Excel
+    booked = {row[0]: dict(zip(cells[0], row, strict=True)) for row in cells[1:]}
+    assert title == "Class table" and list(cells[0]) == list(zipped["s1"])
+    assert booked["s2"]["Lab partners"] == "s1" and booked["s1"]["Points"] == 85.5
     # the class as a whole: the board (one point per session, named), the accuracy against
     # the planner, and the plan itself
     board = json.loads(archive.read("class-board.json"))

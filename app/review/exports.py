@@ -214,15 +214,20 @@ def class_table_xlsx_response(
     results, points and rubric scores as numbers."""
     rubric = rubric_of(assignment)
     rows = export_rows(class_rows(db, assignment), _, course.timezone if course else None, rubric)
-    numeric = [i for i, name in enumerate(COLUMNS) if name in NUMERIC_COLUMNS]
-    numeric += range(len(COLUMNS), len(COLUMNS) + len(rubric))
-    sheet = _("export.sheet_name") if _ else "class"
     names = [course.name, assignment.title] if course else [f"assignment-{assignment.id}"]
     return Response(
-        xlsx_table(rows, numeric, sheet),
+        class_workbook(rows, len(rubric), _),
         media_type=XLSX_MEDIA_TYPE,
         headers={"Content-Disposition": attachment(names, "xlsx")},
     )
+
+
+def class_workbook(rows: list[list], rubric_items: int, _: Callable[..., str] | None) -> bytes:
+    """:func:`export_rows`' table as a workbook: results, points and rubric scores as
+    numbers, everything else as text, the sheet named in the reader's language."""
+    numeric = [i for i, name in enumerate(COLUMNS) if name in NUMERIC_COLUMNS]
+    numeric += range(len(COLUMNS), len(COLUMNS) + rubric_items)
+    return xlsx_table(rows, numeric, _("export.sheet_name") if _ else "class")
 
 
 def class_zip_response(
@@ -241,9 +246,10 @@ def class_zip_response(
         "class-accuracy.json": json_safe(class_accuracy(assignment, rows)),
         "accuracy-plan.json": json_safe(assignment_plan(assignment).to_json()),
     }
-    blocks = assignment_zip(
-        export_rows(rows, _, course.timezone, rubric_of(assignment)), work, summaries
-    )
+    rubric = rubric_of(assignment)
+    table = export_rows(rows, _, course.timezone, rubric)
+    summaries["class.xlsx"] = class_workbook(table, len(rubric), _)
+    blocks = assignment_zip(table, work, summaries)
     return StreamingResponse(
         held_while_streaming("exports", requester_id, blocks),
         media_type="application/zip",
@@ -279,14 +285,18 @@ def assignment_zip(
     class_table: list[list], work: list[SubmittedWork], summaries: dict | None = None
 ) -> Iterator[bytes]:
     """``class.csv``, the class-wide ``summaries`` (name → JSON-able: the board, the
-    accuracy against the planner, the plan) and, per student, every submitted attempt's
-    own data (CSV and JSON): built in a temporary file (spilled to disk past 8 MB), then
-    sent block by block."""
+    accuracy against the planner, the plan; or bytes as they are: the class table as a
+    workbook) and, per student, every submitted attempt's own data (CSV and JSON): built in
+    a temporary file (spilled to disk past 8 MB), then sent block by block."""
     with tempfile.SpooledTemporaryFile(max_size=8 * 1024 * 1024) as spool:
         with zipfile.ZipFile(spool, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as archive:
             _write_text(archive, "class.csv", csv_table(class_table))
             for name, content in (summaries or {}).items():
-                _write_text(archive, name, [json.dumps(content, ensure_ascii=False, indent=1)])
+                if isinstance(content, bytes):
+                    archive.writestr(name, content)
+                else:
+                    text = json.dumps(content, ensure_ascii=False, indent=1)
+                    _write_text(archive, name, [text])
             for item in work:
                 stem = safe_name(item.username)
                 summary = attempts_summary(item.attempts)
