@@ -546,7 +546,8 @@ def request(client, method, path, headers=None):
 def credentials_from(page: str) -> dict[str, str]:
     href = re.search(r'href="data:text/csv;charset=utf-8,([^"]+)"', page).group(1)
     text = unquote(href.replace("&amp;", "&")).lstrip("\ufeff")
-    return {row["username"]: row["initial_password"] for row in csv.DictReader(io.StringIO(text))}
+    rows = list(csv.reader(io.StringIO(text)))  # columns named in the page's language
+    return {username: password for username, _name, password in rows[1:]}
 
 
 # --- forms as a browser reads them (issue 34) --------------------------

@@ -4,8 +4,10 @@ as numbers come in whole, and a hostile or broken file is a clear refusal."""
 from __future__ import annotations
 
 import io
+import re
 import zipfile
 from datetime import date
+from urllib.parse import unquote
 
 import pytest
 import xlsxwriter
@@ -197,3 +199,19 @@ def test_a_roster_without_a_header_keeps_every_row():
     parsed = parse_roster(b"2024001,Zhang\nlogin,Name\n2024003,Wang\n")
     assert [r.username for r in parsed.rows] == ["2024001", "login", "2024003"]
     assert parsed.problems == []
+
+
+def test_the_passwords_download_speaks_the_page_language_and_imports_back(teacher_client):
+    """The one-time passwords' columns are named as the page's table names them (用户名/学号,
+    姓名, 初始密码); the same file imported into another course enrols the same students."""
+    teacher_client.cookies.set("gyrolab_lang", "zh-CN")
+    first = create_course(teacher_client, name="惯导 1 班")
+    page = import_file(teacher_client, first, "学号,姓名\n2024001,张三\n".encode()).text
+    href = re.search(r'id="download-credentials" href="data:text/csv;charset=utf-8,([^"]+)"', page)
+    text = unquote(href.group(1).replace("&amp;", "&"))
+    assert text.lstrip("\ufeff").splitlines()[0] == "用户名/学号,姓名,初始密码"
+    second = create_course(teacher_client, name="惯导 2 班")
+    again = import_file(teacher_client, second, text.encode("utf-8"))
+    assert again.status_code == 200 and "2024001" in again.text
+    with read_session() as db:
+        assert db.exec(select(User).where(User.username == "2024001")).one().display_name == "张三"

@@ -176,7 +176,7 @@ def test_roster_passwords_as_a_workbook_keep_student_numbers(client, teacher_cli
     assert 'download="Navigation-lab_initial-passwords.xlsx"' in page
     sheet = openpyxl.load_workbook(io.BytesIO(base64.b64decode(href.group(2)))).worksheets[0]
     cells = list(sheet.iter_rows())
-    assert [c.value for c in cells[0]] == ["username", "display_name", "initial_password"]
+    assert [c.value for c in cells[0]] == ["Username / student number", "Name", "Initial password"]
     typed = {row[0].value: row for row in cells[1:]}
     assert set(typed) == {"202301010101", "007"}
     assert typed["202301010101"][1].value == "=1+2" and typed["202301010101"][1].data_type == "s"

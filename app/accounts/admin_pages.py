@@ -17,7 +17,8 @@ from app.core.exceptions import UserError
 from app.models import Course, Enrollment, Role, User
 from app.web.deps import ObjectId, SessionDep
 from app.web.exports import credential_downloads
-from app.web.render import render
+from app.web.i18n import translator
+from app.web.render import render, request_language
 
 router = APIRouter(prefix="/admin", tags=["pages: admin"], include_in_schema=False)
 PAGE_SIZE = 200
@@ -112,6 +113,8 @@ def credentials_page(request: Request, credential: NewCredential, *, reset: bool
     context = {
         "credentials": [credential],
         "reset": reset,
-        **credential_downloads([credential], [credential.username]),
+        **credential_downloads(
+            [credential], [credential.username], translator(request_language(request))
+        ),
     }
     return render(request, "admin/credentials.html", context)

@@ -56,6 +56,8 @@ HEADER_NAMES = {
         "学号",
         "学生学号",
         "用户名",
+        "用户名/学号",  # the one-time passwords' download names its columns as the page does
+        "username / student number",
         "账号",
     },
     "display_name": {

@@ -26,8 +26,9 @@ from app.courses.listing import teacher_dashboard
 from app.models import Assignment, Course, Enrollment, LtiContext, LtiPlatform, User
 from app.web.deps import ObjectId, SessionDep
 from app.web.exports import credential_downloads
+from app.web.i18n import translator
 from app.web.local_time import valid_zone_name, zone_choices
-from app.web.render import flash, redirect, render
+from app.web.render import flash, redirect, render, request_language
 
 router = APIRouter(prefix="/courses", tags=["pages: courses"], include_in_schema=False)
 
@@ -208,7 +209,11 @@ def add_student_by_hand(
             "course": course,
             "credentials": [credential],
             "enrolled": [],
-            **credential_downloads([credential], [course.name, credential.username]),
+            **credential_downloads(
+                [credential],
+                [course.name, credential.username],
+                translator(request_language(request)),
+            ),
         },
     )
 
@@ -241,7 +246,9 @@ def import_students(
             "credentials": outcome.created,
             "enrolled": outcome.enrolled,
             "needs_code": outcome.needs_code,
-            **credential_downloads(outcome.created, [course.name]),
+            **credential_downloads(
+                outcome.created, [course.name], translator(request_language(request))
+            ),
         },
     )
 
@@ -270,7 +277,11 @@ def reset_student_password(
             "credentials": [credential],
             "enrolled": [],
             "reset": True,
-            **credential_downloads([credential], [course.name, credential.username]),
+            **credential_downloads(
+                [credential],
+                [course.name, credential.username],
+                translator(request_language(request)),
+            ),
         },
     )
 

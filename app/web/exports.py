@@ -15,7 +15,7 @@ import io
 import math
 import re
 import unicodedata
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from urllib.parse import quote
 
 import xlsxwriter
@@ -69,33 +69,39 @@ def csv_table(rows: Iterable[list]) -> Iterator[str]:
 CREDENTIAL_COLUMNS = ["username", "display_name", "initial_password"]
 
 
-def credentials_data_url(credentials) -> str:
-    """A ``data:`` URL holding one-time passwords as CSV, so they are downloaded without
-    being stored anywhere (``credentials``: items with username, display_name, password)."""
-    rows = [CREDENTIAL_COLUMNS]
+def _credential_rows(credentials, header: list[str] | None) -> list[list[str]]:
+    rows = [header or CREDENTIAL_COLUMNS]
     rows += [[item.username, item.display_name, item.password] for item in credentials]
+    return rows
+
+
+def credentials_data_url(credentials, header: list[str] | None = None) -> str:
+    """A ``data:`` URL holding one-time passwords as CSV, so they are downloaded without
+    being stored anywhere (``credentials``: items with username, display_name, password;
+    ``header``: the column names, by default ``CREDENTIAL_COLUMNS``)."""
+    rows = _credential_rows(credentials, header)
     return "data:text/csv;charset=utf-8," + quote("".join(csv_table(rows)))
 
 
-def credentials_xlsx_data_url(credentials) -> str:
+def credentials_xlsx_data_url(credentials, header: list[str] | None = None) -> str:
     """The same one-time passwords as an Excel workbook in a ``data:`` URL: a student
     number such as 202301010101 or 007 stays the username as typed (Excel opens the CSV's
     as 2.02301E+11 or 7, and a slip printed from it would not log in)."""
-    rows = [CREDENTIAL_COLUMNS]
-    rows += [[item.username, item.display_name, item.password] for item in credentials]
-    workbook = xlsx_table(rows, (), "passwords")
+    workbook = xlsx_table(_credential_rows(credentials, header), (), "passwords")
     return f"data:{XLSX_MEDIA_TYPE};base64," + base64.b64encode(workbook).decode("ascii")
 
 
-def credential_downloads(credentials, parts: list[str]) -> dict[str, str]:
+def credential_downloads(credentials, parts: list[str], _: Callable[..., str]) -> dict[str, str]:
     """The one-time passwords page's two downloads, CSV and Excel, named after ``parts``
-    (the course, or the account): a template context's ``csv_href`` / ``csv_name`` and
-    ``xlsx_href`` / ``xlsx_name``."""
+    (the course, or the account), their columns named as the page's table names them (a
+    roster import reads those names back): a template context's ``csv_href`` /
+    ``csv_name`` and ``xlsx_href`` / ``xlsx_name``."""
+    header = [_("roster.username"), _("roster.display_name"), _("credentials.password")]
     stem = file_stem([*parts, "initial-passwords"])
     return {
-        "csv_href": credentials_data_url(credentials),
+        "csv_href": credentials_data_url(credentials, header),
         "csv_name": f"{stem}.csv",
-        "xlsx_href": credentials_xlsx_data_url(credentials),
+        "xlsx_href": credentials_xlsx_data_url(credentials, header),
         "xlsx_name": f"{stem}.xlsx",
     }
 

@@ -42,9 +42,11 @@ def test_teacher_imports_roster_and_student_changes_password(live_server, new_pa
         teacher.click("#download-credentials")
     saved = tmp_path / "passwords.csv"
     download_info.value.save_as(saved)
-    rows = {row["username"]: row for row in csv.DictReader(saved.open(encoding="utf-8-sig"))}
-    assert rows["2024001"]["display_name"] == "张三"
-    password = rows["2024001"]["initial_password"]
+    rows = list(csv.reader(saved.open(encoding="utf-8-sig")))
+    assert rows[0] == ["Username / student number", "Name", "Initial password"]  # the page's
+    passwords = {username: (name, password) for username, name, password in rows[1:]}
+    assert passwords["2024001"][0] == "张三"
+    password = passwords["2024001"][1]
     assert download_info.value.suggested_filename == "惯性导航实验-1-班_initial-passwords.csv"
     with teacher.expect_download() as download_info:  # the same, for Excel: numbers as text
         teacher.click("#download-credentials-xlsx")
@@ -52,7 +54,7 @@ def test_teacher_imports_roster_and_student_changes_password(live_server, new_pa
     download_info.value.save_as(tmp_path / "passwords.xlsx")
     sheet = openpyxl.load_workbook(tmp_path / "passwords.xlsx").worksheets[0]
     cells = list(sheet.iter_rows(values_only=True))
-    assert cells[0] == ("username", "display_name", "initial_password")
+    assert cells[0] == ("Username / student number", "Name", "Initial password")
     assert ("2024001", "张三", password) in cells
 
     student = new_page(locale="zh-CN")
