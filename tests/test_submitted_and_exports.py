@@ -291,3 +291,16 @@ def test_session_settings_must_be_finite(api_session, body):
         f"{API}/sessions", content=body, headers={**auth, "Content-Type": "application/json"}
     )
     assert 400 <= response.status_code < 500, response.text
+
+
+@pytest.mark.parametrize(
+    "hidden", ["\u202e", "\u202d", "\u2066", "\u200b", "\u200f", "\ufeff", "\u061c", "\u2060"]
+)
+def test_a_download_name_has_no_invisible_reordering_or_hiding_character(hidden):
+    """A title with a right-to-left override would make "report<U+202E>fdp.csv" show as
+    "reportvsc.pdf"; such characters become "-" like any unsafe one."""
+    from app.web.exports import attachment
+
+    disposition = attachment([f"report{hidden}fdp"], "csv")
+    assert 'filename="report-fdp.csv"' in disposition
+    assert "filename*=UTF-8''report-fdp.csv" in disposition

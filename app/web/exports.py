@@ -106,7 +106,12 @@ def credential_downloads(credentials, parts: list[str], _: Callable[..., str]) -
     }
 
 
-FILENAME_UNSAFE = re.compile(r'[\x00-\x1f\x7f/\\:*?"<>|;,%]+')
+# path and shell characters, control characters, and the invisible ones that reorder or
+# hide what a name shows (a right-to-left override makes "report\u202efdp.csv" read as
+# "reportvsc.pdf"): zero-width marks, bidirectional controls, the byte-order mark
+FILENAME_UNSAFE = re.compile(
+    r'[\x00-\x1f\x7f/\\:*?"<>|;,%\u061c\u200b-\u200f\u202a-\u202e\u2060-\u2069\ufeff]+'
+)
 
 
 def file_stem(parts: list[str]) -> str:
