@@ -4,9 +4,11 @@ truth before the assignment's rule reveals it."""
 
 from __future__ import annotations
 
+import io
 import json
 import time
 
+import openpyxl
 import pytest
 from jwcrypto.jwk import JWK
 from sqlmodel import select
@@ -56,6 +58,23 @@ def built_class_zip(teacher, world) -> int:  # noqa: F811
 
 @pytest.mark.slow  # every GET route, its PDFs and the class zip rendered
 @pytest.mark.one_backend  # what a page shows does not depend on the database: SQLite only
+def readable(name: str, data: bytes) -> str:
+    """A download's text as a reader sees it: a PDF's text, every cell of a workbook (its
+    XML is compressed inside the zip), anything else decoded."""
+    if name.endswith(".pdf"):
+        return pdf_text(data)
+    if name.endswith(".xlsx"):
+        book = openpyxl.load_workbook(io.BytesIO(data), read_only=True)
+        return "\n".join(
+            str(value)
+            for sheet in book.worksheets
+            for row in sheet.iter_rows(values_only=True)
+            for value in row
+            if value is not None
+        )
+    return data.decode()
+
+
 def test_no_response_carries_a_secret(world):  # noqa: F811
     with write_session() as db:
         assignment = db.get(Assignment, world["assignment"])
@@ -107,19 +126,15 @@ def test_no_response_carries_a_secret(world):  # noqa: F811
         ):
             response = client.get(path, headers=headers if path.startswith("/api/") else {})
             body = response.content.decode("utf-8", errors="replace")
-            if path.endswith(".pdf") and response.status_code == 200:
-                body = pdf_text(response.content)  # the text, not the compressed streams
+            if path.endswith((".pdf", ".xlsx")) and response.status_code == 200:
+                body = readable(path, response.content)  # the text, not compressed streams
             if path.endswith((".zip", "/download")):
-                import io
                 import zipfile
 
                 if response.status_code == 200:
                     archive = zipfile.ZipFile(io.BytesIO(response.content))
                     members = [(n, archive.read(n)) for n in archive.namelist()]
-                    body = "".join(
-                        pdf_text(data) if n.endswith(".pdf") else data.decode()
-                        for n, data in members
-                    )
+                    body = "".join(readable(n, data) for n, data in members)
             for secret in secrets["hashes"]:
                 assert secret not in body, (route, "hash")
             assert "$argon2" not in body, route
