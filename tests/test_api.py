@@ -102,6 +102,28 @@ def test_whole_handout_via_the_api_equals_gyrolab_solve(client, auth):
     assert [s["id"] for s in listed] == [session_id] and listed[0]["status"] == "submitted"
 
 
+def test_results_carry_each_parts_data_quality_flags(client, auth):
+    """A device that sends °/s as °/h learns it from the results, as the lab page says it;
+    the handout's heading carries none (its vertical part a closure beyond 3σ)."""
+    session_id = new_api_session(client, auth)
+    upload_handout(client, auth, session_id)
+    clean = client.get(f"{API}/sessions/{session_id}/results", headers=auth).json()
+    assert "heading" not in clean["flags"]
+    assert [flag["key"] for flag in clean["flags"]["latitude"]] == ["flag.closure"]
+    for k, values in handout("handout_horizontal.csv").items():
+        response = client.put(
+            f"{API}/sessions/{session_id}/heading/positions/{k}",
+            json={"samples": [v / 3600 for v in values], "unit": "deg/h"},
+            headers=auth,
+        )
+        assert response.status_code == 200, response.text
+    results = client.get(f"{API}/sessions/{session_id}/results", headers=auth).json()
+    slip = results["flags"]["heading"][0]
+    assert slip["key"] == "flag.unit_slip"
+    assert slip["params"] == {"factor": "3600", "likely": "°/s", "chosen": "°/h"}
+    assert "were they recorded in °/s and saved as °/h?" in slip["message"]
+
+
 def test_results_are_null_without_enough_data(client, auth):
     session_id = new_api_session(client, auth)
     results = client.get(f"{API}/sessions/{session_id}/results", headers=auth).json()
@@ -420,3 +442,20 @@ def test_symmetric_order_over_the_api(client, auth):
     assert heading["n_positions"] == 8
     assert heading["drift_deg_h_per_h"] == pytest.approx(drift, rel=1e-6)
     assert heading["theta_deg"] == pytest.approx(-10.743, abs=1e-3)  # the printed averages
+
+
+def test_a_flags_parameter_may_be_empty():
+    """The warm-up flag of a gyro already warm names no minutes (None): still a valid body."""
+    from app.core.drift_check import warm_up_message
+    from app.lab.schemas import ResultsOut
+
+    class Warm:
+        wait_minutes = None
+        shift = None
+
+    key, params = warm_up_message(Warm())
+    assert params == {"minutes": None}
+    body = {"heading": None, "latitude": None, "flags": {"heading": [
+        {"key": key, "params": params, "message": "the gyro was still warming up"}
+    ]}}  # fmt: skip
+    assert ResultsOut.model_validate(body).flags["heading"][0].params == {"minutes": None}

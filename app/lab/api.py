@@ -295,20 +295,27 @@ def get_plan(session: ReadableSession, db: SessionDep):
 
 @router.get("/sessions/{session_id}/results", response_model=ResultsOut)
 async def get_results(entry: Annotated[CachedResults, Depends(session_results_entry)]):
-    """Exactly the keys of ``gyrolab solve --json`` per part (null without enough data)."""
+    """Exactly the keys of ``gyrolab solve --json`` per part (null without enough data),
+    with why a part has none (``problems``) and each part's data-quality flags (``flags``),
+    in English."""
     return Response(results_body(entry), media_type="application/json")
 
 
 def results_body(entry: CachedResults) -> bytes:
     """The response body of a cached result, validated and serialised once."""
     if entry.payload is None:
-        payload: dict[str, Any] = {"problems": {}}
+        payload: dict[str, Any] = {"problems": {}, "flags": {}}
         for part, outcome in entry.parts.items():
             payload[part] = json_safe(outcome.to_json())
             if outcome.result is None and outcome.error is not None:
                 # in English: one cached body serves every reader
                 error = outcome.error
                 payload["problems"][part] = translate(error.key, "en", **error.params)
+            if outcome.flags:
+                payload["flags"][part] = [
+                    {**flag, "message": translate(flag["key"], "en", **flag["params"])}
+                    for flag in outcome.flags
+                ]
         entry.payload = ResultsOut.model_validate(payload).model_dump_json().encode()
     return entry.payload
 

@@ -223,10 +223,22 @@ class LatitudeOut(BaseModel):
     warm_up: WarmUpOut | None
 
 
+class FlagOut(BaseModel):
+    key: str = Field(description="the flag's message key, e.g. flag.unit_slip")
+    params: dict[str, str | int | float | None] = Field(description="the message's values")
+    message: str = Field(description="the message, in English")
+
+
 class ResultsOut(BaseModel):
     heading: HeadingOut | None
     latitude: LatitudeOut | None
     problems: dict[str, str] = Field(default_factory=dict, description="why a part has no result")
+    flags: dict[str, list[FlagOut]] = Field(
+        default_factory=dict,
+        description="each part's data-quality flags, as the lab page shows them: too few "
+        "readings, spikes, gaps, a noisy position, a drifting bias (warm-up), a closure "
+        "residual beyond 3σ, readings saved in another unit than recorded",
+    )
 
 
 class AttemptOut(BaseModel):
