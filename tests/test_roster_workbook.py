@@ -155,6 +155,7 @@ def test_the_course_page_names_an_old_excel_file_and_creates_nothing(teacher_cli
     response = import_file(teacher_client, course_id, OLE_MAGIC + b"\x00" * 500, name="a.xls")
     assert response.status_code == 400
     assert "Excel 97-2003 工作簿（.xls）" in response.text
+    assert "名单未导入：" in response.text and "请修改以下各行" not in response.text  # no rows
     with read_session() as db:
         assert db.exec(select(User).where(User.role == "student")).first() is None
 
