@@ -14,7 +14,12 @@ import xlsxwriter
 from sqlmodel import select
 
 from app.accounts.roster_csv import parse_roster
-from app.accounts.roster_workbook import MAX_UNPACKED_BYTES, OLE_MAGIC, cell_text
+from app.accounts.roster_workbook import (
+    MAX_SHEET_ELEMENTS,
+    MAX_UNPACKED_BYTES,
+    OLE_MAGIC,
+    cell_text,
+)
 from app.db import read_session
 from app.models import User
 from tests.factories import create_course, credentials_from, import_file
@@ -119,6 +124,12 @@ EXTERNAL = b"""<?xml version="1.0"?>
 <row r="1"><c r="A1" t="inlineStr"><is><t>&secret;</t></is></c></row></sheetData></worksheet>"""
 
 
+EMPTY_ROWS = (  # 1.6 million empty rows in 10 MB of XML: a 20 kB upload
+    b'<?xml version="1.0"?><worksheet xmlns="http://schemas.openxmlformats.org/spreadsheetml/'
+    b'2006/main"><sheetData>' + b"<row/>" * (MAX_SHEET_ELEMENTS * 8) + b"</sheetData></worksheet>"
+)
+
+
 @pytest.mark.parametrize(
     ("data", "key"),
     [
@@ -129,9 +140,10 @@ EXTERNAL = b"""<?xml version="1.0"?>
         (with_sheet(EXTERNAL), "roster.bad_workbook"),  # an external entity: never read
         (with_sheet(b"<worksheet"), "roster.bad_workbook"),  # cut short
         (zip_of({"xl/big.bin": b"\x00" * (MAX_UNPACKED_BYTES + 1)}), "roster.workbook_too_large"),
+        (with_sheet(EMPTY_ROWS), "roster.workbook_rows"),  # 20 kB: seconds of parsing
     ],
     ids=["xls", "broken-zip", "zipped-csv", "entity-expansion", "external-entity", "cut-short",
-         "zip-bomb"],
+         "zip-bomb", "empty-rows"],
 )  # fmt: skip
 def test_a_workbook_that_cannot_be_read_is_a_clear_refusal(data, key):
     parsed = parse_roster(data)
