@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 from app.accounts.roster_workbook import is_workbook, workbook_rows
 from app.core.exceptions import UserError
-from app.core.text_files import decode_text, plain_text
+from app.core.text_files import decode_text, plain_text, shown_name
 
 MAX_ROSTER_BYTES = 1_000_000
 MAX_ROSTER_ROWS = 2000
@@ -35,7 +35,7 @@ def person_problems(username: str, display_name: str, email: str = "") -> dict[s
     problems: dict[str, UserError] = {}
     if not USERNAME_RE.match(plain_text(username)):  # as normalise_username stores it
         problems["username"] = UserError("roster.bad_username", value=username)
-    if not display_name:
+    if not shown_name(display_name):
         problems["display_name"] = UserError("roster.name_required")
     elif len(display_name) > MAX_NAME:
         problems["display_name"] = UserError("roster.name_too_long", value=username)
@@ -171,7 +171,7 @@ def parse_roster(data: bytes) -> RosterParse:
 
         # a student number typed in full-width forms ("２０２３…") is the same number
         username = plain_text(cell("username"))
-        name, email = cell("display_name"), cell("email")
+        name, email = shown_name(cell("display_name")), cell("email")
         if SPREADSHEET_NUMBER.fullmatch(username):
             problems.append(
                 RosterProblem(number, "roster.number_from_spreadsheet", {"value": username})

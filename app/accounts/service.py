@@ -14,7 +14,7 @@ from app.accounts.security import (
     revoke_credentials,
 )
 from app.core.exceptions import UserError
-from app.core.text_files import plain_text
+from app.core.text_files import plain_text, shown_name
 from app.models import Course, Enrollment, Role, User, new_join_code
 
 
@@ -44,7 +44,7 @@ def create_user(
         raise UserError("account.exists", username=username)
     user = User(
         username=normalise_username(username),
-        display_name=display_name.strip(),
+        display_name=shown_name(display_name),
         email=email,
         role=role.value,
         password_hash=hash_password(password),

@@ -27,6 +27,7 @@ from sqlmodel import Session, select
 
 from app.accounts.security import hash_password, normalise_username
 from app.config import Settings
+from app.core.text_files import shown_name
 from app.models import ExternalIdentity, Role, User, utcnow
 
 USERNAME_CHARS = re.compile(r"[^a-z0-9._-]+")
@@ -94,7 +95,7 @@ def account_for(db: Session, claims: dict, new_role: Role) -> User:
             ExternalIdentity.issuer == issuer, ExternalIdentity.subject == subject
         )
     ).first()
-    name = str(claims.get("name") or claims.get("preferred_username") or "").strip()[:128]
+    name = shown_name(str(claims.get("name") or claims.get("preferred_username") or ""))[:128]
     email = claims.get("email") if isinstance(claims.get("email"), str) else None
     email = email if email and len(email) <= 254 else None
     if identity is not None:

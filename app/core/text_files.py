@@ -75,3 +75,26 @@ def plain_text(text: str) -> str:
     if text.isascii():
         return text
     return IDEOGRAPHIC_POINT.sub(r"\1.", unicodedata.normalize("NFKC", text))
+
+
+# explicit embeddings, overrides and isolates (LRE RLE PDF LRO RLO, LRI RLI FSI PDI): in a
+# name they reorder what follows -- "\u202e" before "student1" shows the username beside it
+# as "1tneduts"
+BIDI_CONTROLS = re.compile("[\u202a-\u202e\u2066-\u2069]")
+
+
+def shown_name(text: str) -> str:
+    """A person's name as pages show it: surrounding spaces and bidirectional controls
+    removed (letters of any script, and the joiners some scripts need, kept).
+
+    Parameters
+    ----------
+    text : str
+        A name typed in a roster or a form, or sent by a sign-in provider.
+
+    Returns
+    -------
+    str
+        The name without explicit bidirectional embeddings, overrides and isolates.
+    """
+    return BIDI_CONTROLS.sub("", text).strip()
