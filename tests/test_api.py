@@ -12,7 +12,7 @@ from app.core.sinusoid import heading_angles
 from app.core.solve import solve_heading
 from app.db import read_session, write_session
 from app.models import ApiToken, Assignment, Role, SampleChunk, Take, utcnow
-from app.web.exports import XLSX_MEDIA_TYPE
+from app.web.workbooks import XLSX_MEDIA_TYPE
 from tests.factories import (
     API,
     HEADING_KEYS,

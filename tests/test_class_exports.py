@@ -15,7 +15,7 @@ import pytest
 from app.accounts.service import enroll
 from app.db import write_session
 from app.models import Assignment, Course, User
-from app.web.exports import XLSX_CELL_LIMIT, XLSX_MEDIA_TYPE, xlsx_table, xlsx_text
+from app.web.workbooks import XLSX_CELL_LIMIT, XLSX_MEDIA_TYPE, xlsx_table, xlsx_text
 from tests.factories import (
     API,
     browser,

@@ -17,7 +17,8 @@ from sqlmodel import select
 from app.db import read_session, write_session
 from app.lab.store import load_samples
 from app.models import Attempt, LabSession, Take, User
-from app.web.exports import XLSX_MEDIA_TYPE, comment_line, csv_line, neutralise
+from app.web.exports import comment_line, csv_line, neutralise
+from app.web.workbooks import XLSX_MEDIA_TYPE
 from tests.factories import (
     API,
     HEADING,

@@ -22,7 +22,7 @@ from app.review.schemas import ArchiveOut, ClassAccuracyOut, CourseOut, Submissi
 from app.review.service import class_rows
 from app.web.deps import ObjectId, SessionDep
 from app.web.errors import API_ERRORS
-from app.web.exports import XLSX_MEDIA_TYPE
+from app.web.workbooks import XLSX_MEDIA_TYPE
 
 router = APIRouter(prefix="/api/v1", tags=["api: teachers"], responses=API_ERRORS)
 

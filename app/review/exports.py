@@ -29,16 +29,10 @@ from app.review.accuracy import class_accuracy
 from app.review.board import board_data
 from app.review.evidence import finding_text
 from app.review.service import StudentRow, class_rows
-from app.web.exports import (
-    XLSX_MEDIA_TYPE,
-    ZIP_BLOCK,
-    attachment,
-    csv_table,
-    safe_name,
-    xlsx_table,
-)
+from app.web.exports import ZIP_BLOCK, attachment, csv_table, safe_name
 from app.web.local_time import zone
 from app.web.work_slots import held_while_streaming
+from app.web.workbooks import XLSX_MEDIA_TYPE, xlsx_table
 
 COLUMNS = (
     "username",
