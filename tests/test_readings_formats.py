@@ -265,3 +265,38 @@ def test_a_decimal_comma_record_characterises_as_the_same_record_with_points():
     points = "".join(f"{x:.4f}\n" for x in rates)
     commas = "rate_deg_h\n" + points.replace(".", ",")
     assert characterise(commas.encode(), 100.0) == characterise(points.encode(), 100.0)
+
+
+@pytest.mark.parametrize(
+    "units",
+    ["°/h,°/h,°/h,°/h", "(°/h),(°/h),(°/h),(°/h)", "deg/h,deg/h,deg/h,deg/h", "度/小时,度/小时,,"],
+)
+def test_a_row_of_units_under_the_header_is_passed_over(units):
+    """An instrument's export names the units under the names; like a unit after a name it
+    is a note (the unit is the one chosen with the file), and the next lines keep their
+    numbers."""
+    text = f"position_1,position_2,position_3,position_4\n{units}\n10.74,-0.5,1.0,2\nx,1,1,1\n"
+    with pytest.raises(UserError) as caught:
+        parse_readings_csv(text)
+    assert caught.value.params["line"] == 4  # the bad cell keeps its line
+    good = parse_readings_csv(text.replace("x,1,1,1\n", "10.65,-0.4,1.1,2\n"))
+    np.testing.assert_allclose(good.positions[0], [10.74, 10.65])
+
+
+@pytest.mark.parametrize("units", ["s,°C", "s,value", "10.7,°/h"])
+def test_a_row_that_is_not_only_units_is_still_read_and_refused(units):
+    with pytest.raises(UserError) as caught:
+        parse_readings_csv(f"position_1,position_2,position_3,position_4\n{units},1,1\n")
+    assert caught.value.key == "csv.not_a_number" and caught.value.params["line"] == 2
+
+
+def test_a_units_row_in_one_positions_record_and_a_static_record():
+    from app.core.position_records import parse_position_csv
+    from app.core.static_record import read_static_record
+
+    values, times = parse_position_csv("time,rate\ns,deg/h\n0,10.7\n0.1,10.8\n")
+    np.testing.assert_allclose(values, [10.7, 10.8])
+    np.testing.assert_allclose(times, [0.0, 0.1])
+    record = read_static_record(io.StringIO("time,rate,temp\ns,°/h,℃\n0,10.7,25\n0.1,10.8,25\n"))
+    np.testing.assert_allclose(record.values, [10.7, 10.8])
+    np.testing.assert_allclose(record.temperatures_c, [25.0, 25.0])

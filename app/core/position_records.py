@@ -14,6 +14,7 @@ from app.core.readings import (
     _is_number,
     _number,
     decimal_point,
+    is_units_row,
     parse_readings_csv,
     spreadsheet_delimiter,
 )
@@ -58,7 +59,8 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
 
     What a device or a script sends (``text/csv`` to the API) and the fallback for a static
     record.  An optional header on line 1 and ``#`` comment lines are skipped; lines may
-    end in ``\n``, ``\r\n`` or a bare ``\r``.  The columns may be separated by a tab or a
+    end in ``\n``, ``\r\n`` or a bare ``\r``; a row of units under the header is passed
+    over.  The columns may be separated by a tab or a
     ``;`` instead of a comma (a spreadsheet's copy, a European export), and then a decimal
     comma is read as a point -- as the lab page reads a pasted or uploaded table.  A
     comma-separated record of one column with decimal commas ("11,5" per line) is read as
@@ -103,6 +105,8 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
         if number == 1 and not all(_is_number(cell) for cell in cells):
             header = cells  # such as "time_s,value"
             continue
+        if number == 2 and header is not None and is_units_row(cells):
+            continue  # "s, °/h" under the names
         if len(cells) > 2:
             raise UserError(
                 "csv.one_or_two_columns",
@@ -148,6 +152,8 @@ def _decimal_comma_column(
     for number, row in enumerate(rows, start=1):
         cells = [c.strip() for c in row if c.strip()]
         if not cells or cells[0].startswith("#") or (number == 1 and header is not None):
+            continue
+        if number == 2 and header is not None and is_units_row(cells):
             continue
         whole, fraction = cells  # two cells: read as a time and a value already
         if not WHOLE_NUMBER.fullmatch(whole) or not DIGITS.fullmatch(fraction):

@@ -10,6 +10,9 @@ Either may be separated by semicolons or tabs instead of commas, with decimal co
   position columns; a first column counting 1, 2, 3… is taken as row numbers.
 * long — header ``position,angle_deg,value`` with optional ``time_s``; one reading per row,
   the angle of each position used as given.
+
+Under either header a row naming only units ("s, °/h, °/h") is passed over, as a unit
+after a column name is: the readings' unit is the one chosen with the file.
 """
 
 from __future__ import annotations
@@ -159,6 +162,8 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
         raise UserError("csv.empty")
     header_line, header = rows[0]
     names = [_column_name(cell) for cell in header]
+    if len(rows) > 1 and is_units_row(rows[1][1]):
+        del rows[1]  # "s, °/h, °/h…" under the names: a note, as a unit after a name is
     if {"position", "value"} <= set(names):
         body = rows[1:]
         if part is not None and "part" in names:
@@ -389,6 +394,37 @@ def _title_lines_blanked(text: str) -> str:
     for index in titles:
         head[index] = ""
     return "\n".join(head)
+
+
+UNIT_NAME = re.compile(
+    r"(?:°|deg|rad|mrad|dph|dps|s|ms|h|hr|min|hz|°c|℃|c|k|v|mv|lsb|度|秒|小时|摄氏度)"
+    r"(?:\s*/\s*(?:s|h|hr|min|秒|小时))?"
+)
+
+
+def is_units_row(cells: list[str]) -> bool:
+    """Whether a row under a header only names units ("s, °/h, °/h", "(deg/h)", "度/小时"),
+    as an instrument's or a spreadsheet's export writes them: every cell empty or a unit,
+    and at least one a rate ("/", dph or dps).  Like a unit after a column name, it is a
+    note: the unit of the readings is the one the student or the script chose.
+
+    Parameters
+    ----------
+    cells : list of str
+        The row's cells.
+
+    Returns
+    -------
+    bool
+        True for a row of units only.
+    """
+    names = [re.sub(r"[\s()\[\]]", "", plain_text(cell)).lower() for cell in cells]
+    names = [name for name in names if name]
+    return (
+        bool(names)
+        and all(UNIT_NAME.fullmatch(name) for name in names)
+        and any("/" in name or name in ("dph", "dps") for name in names)
+    )
 
 
 def _is_number(text: str) -> bool:

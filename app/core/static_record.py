@@ -4,6 +4,7 @@ Reading: CSV text (``value`` per line, ``time_s,value``, ``time_s,value,temperat
 bridge's long layout ``position,angle_deg,time_s,value[,temperature_c]``, with or without a
 header; commas, tabs or semicolons (then decimal commas), or spaces between the columns;
 one column with decimal commas ("0,0123" per line) where it cannot be times and values;
+a row of units under the header passed over;
 ``#`` and ``%`` comment lines), parsed in blocks of lines, so a 10⁷-sample record never
 exists as one string.
 
@@ -23,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.core.exceptions import UserError
-from app.core.readings import decimal_point
+from app.core.readings import decimal_point, is_units_row
 
 BLOCK_LINES = 200_000
 LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
@@ -171,6 +172,7 @@ def read_static_record(
             progress("read", {"samples": count})
 
     width = None
+    units_next = False  # the line after a header may name the units
     lines = iter(lines)
     first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
     split = _joined_decimal_comma if _one_column_with_decimal_commas(first) else None
@@ -182,10 +184,15 @@ def read_static_record(
         if split is None:
             split = _splitter(text)
         cells = split(text)
+        if units_next:
+            units_next = False
+            if is_units_row(cells):
+                continue  # "s, °/h, °C" under the names
         if layout is None:
             if _is_header(cells):
                 layout = _columns(cells, column)
                 width = len(cells)
+                units_next = True
                 continue
             width = len(cells)
             layout = {1: (0, None, None, None), 2: (1, 0, None, None)}.get(width, (1, 0, 2, None))

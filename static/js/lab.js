@@ -137,6 +137,14 @@
   // header row (position_1, 位置1, sample, 序号 …) and a row-number column, which are
   // dropped and reported, never read as readings.
   const ROW_NUMBER_NAMES = new Set(["sample", "n", "#", "no", "no.", "index", "序号", "编号", "次数", "row", "i"]);
+  // A row under the names that only names units, as app.core.readings.is_units_row reads it.
+  const UNIT_NAME = /^(?:°|deg|rad|mrad|dph|dps|s|ms|h|hr|min|hz|°c|℃|c|k|v|mv|lsb|度|秒|小时|摄氏度)(?:\/(?:s|h|hr|min|秒|小时))?$/;
+  function isUnitsRow(cells) {
+    const names = cells.map((cell) => plain(cell).replace(/[\s()[\]]/g, "").toLowerCase()).filter(Boolean);
+    return names.length > 0 && names.every((name) => UNIT_NAME.test(name)) &&
+      names.some((name) => name.includes("/") || name === "dph" || name === "dps");
+  }
+
   function parseBlock(text) {
     const lines = plain(text).replace(/\r\n?/g, "\n").split("\n").filter((line) => line.trim() !== "");
     const rows = splitLines(lines);
@@ -147,6 +155,7 @@
       header = body[0];
       body = body.slice(1);
       notes.push("js.header_skipped");
+      if (body.length && isUnitsRow(body[0])) body = body.slice(1);  // "s, °/h…": a note
     }
     const firstColumn = body.map((row) => row[0]);
     const headerSaysRow = header && ROW_NUMBER_NAMES.has((header[0] || "").toLowerCase());

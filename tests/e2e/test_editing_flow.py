@@ -96,3 +96,19 @@ def test_rows_added_by_a_long_paste_mark_the_chosen_column(live_server, new_page
     page.locator("#part-heading .step[data-position='3']").click()
     expect(row.locator("td").nth(2)).to_have_class("column-selected")
     expect(row.locator("td").nth(0)).not_to_have_class("column-selected")
+
+
+def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_page):
+    """An instrument's export pasted with its names and a units row: both are passed over,
+    as the server reads such a file (app.core.readings.is_units_row)."""
+    page = new_page()
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    start_practice(page, live_server.url)
+    block = "位置1\t位置2\t位置3\t位置4\n(°/h)\t(°/h)\t(°/h)\t(°/h)\n" + "\n".join(
+        ["10.74\t-0.50\t-11.20\t0.10"] * 10
+    )
+    paste(page, "#part-heading .readings-grid tbody input", block)
+    first = page.locator("#part-heading .readings-grid tbody tr").first.locator("input")
+    expect(first.nth(0)).to_have_value("10.74")
+    expect(page.locator("#part-heading .readings-grid input.invalid")).to_have_count(0)
+    expect(page.locator("#part-heading .grid-status")).to_contain_text("Pasted 10 rows")
