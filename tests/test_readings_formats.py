@@ -133,7 +133,7 @@ def test_one_positions_record_with_commas_keeps_a_decimal_comma_two_cells():
     ],
 )
 def test_a_number_typed_with_a_chinese_input_methods_full_width_forms(typed, value):
-    from app.core.readings import parse_typed_number
+    from app.core.typed_numbers import parse_typed_number
 
     assert parse_typed_number(typed) == value
 

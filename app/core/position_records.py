@@ -5,20 +5,19 @@ from __future__ import annotations
 
 import csv
 import io
-import re
 
 import numpy as np
 
 from app.core.exceptions import UserError
-from app.core.readings import (
-    _is_number,
-    _number,
+from app.core.readings import _number, parse_readings_csv
+from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
-    parse_readings_csv,
+    one_column_of_decimal_commas,
     spreadsheet_delimiter,
 )
 from app.core.text_files import decode_text
+from app.core.typed_numbers import is_number
 
 
 def parse_static_record(text: str) -> np.ndarray:
@@ -102,7 +101,7 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
         cells = [c.strip() for c in row if c.strip()]
         if not cells or cells[0].startswith("#"):
             continue
-        if number == 1 and not all(_is_number(cell) for cell in cells):
+        if number == 1 and not all(is_number(cell) for cell in cells):
             header = cells  # such as "time_s,value"
             continue
         if number == 2 and header is not None and is_units_row(cells):
@@ -128,35 +127,22 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
     return np.array(values), (np.array(times) if times else None)
 
 
-WHOLE_NUMBER = re.compile(r"[+-]?\d+")
-DIGITS = re.compile(r"\d+")
-
-
 def _decimal_comma_column(
     rows: list[list[str]], header: list[str] | None, times: list[float]
 ) -> list[float] | None:
     """The values of a comma-separated record that is one column of numbers with decimal
-    commas ("11,5" per line, as a European logger or spreadsheet writes them), or None
-    where it is ``time_s,value`` pairs as read.
-
-    It is one column when every line is two whole numbers, the second plain digits (a
-    fraction), and a one-name header stands above them ("value") or, with no header, the
-    first column does not increase as times must.  "10,74" / "11,75" stays a time and a
-    value; so does anything under a "time_s,value" header.
-    """
-    if header is not None and len(header) != 1:
-        return None
+    commas (:func:`app.core.readings.one_column_of_decimal_commas`), or None where it is
+    ``time_s,value`` pairs as read."""
     if header is None and bool(np.all(np.diff(times) > 0)):
-        return None
-    values: list[float] = []
+        return None  # rising times, as most records have: decided without a scan
+    lines: list[tuple[int, str]] = []
     for number, row in enumerate(rows, start=1):
         cells = [c.strip() for c in row if c.strip()]
         if not cells or cells[0].startswith("#") or (number == 1 and header is not None):
             continue
         if number == 2 and header is not None and is_units_row(cells):
             continue
-        whole, fraction = cells  # two cells: read as a time and a value already
-        if not WHOLE_NUMBER.fullmatch(whole) or not DIGITS.fullmatch(fraction):
-            return None
-        values.append(_number(f"{whole}.{fraction}", number, "value"))
-    return values
+        lines.append((number, ",".join(cells)))
+    if not one_column_of_decimal_commas(header, [line for _number, line in lines]):
+        return None
+    return [_number(line.replace(",", "."), number, "value") for number, line in lines]

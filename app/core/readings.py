@@ -19,81 +19,22 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from app.core.exceptions import UserError
+from app.core.spreadsheet_text import (
+    decimal_point,
+    is_units_row,
+    spreadsheet_delimiter,
+    title_lines_blanked,
+)
 from app.core.text_files import plain_text
+from app.core.typed_numbers import NumberOutOfRange, is_number, parse_decimal
 
 WIDE_COLUMN = re.compile(r"^position_(\d+)$")
-# A plain decimal number: what a spreadsheet or a gyro writes.  Python's float() also takes
-# "1_000", "nan", "infinity" and " 1 " -- none of them a reading.
-DECIMAL = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
-
-
-class NumberOutOfRange(ValueError):
-    """A well-formed number too large for a float (e.g. 1e400)."""
-
-
-def parse_decimal(text: str) -> float:
-    """``text`` as a float when it is a plain decimal number.
-
-    Python's ``float`` also takes "1_000", "nan", "infinity" and " 1 " -- none of them a
-    reading.
-
-    Parameters
-    ----------
-    text : str
-        A cell of a file or a form.
-
-    Returns
-    -------
-    float
-        The number.
-
-    Raises
-    ------
-    ValueError
-        When it is not a plain decimal number (:class:`NumberOutOfRange` when it is one
-        but overflows).
-    """
-    if not DECIMAL.fullmatch(text):
-        raise ValueError(f"not a number: {text[:40]!r}")
-    value = float(text)
-    if not math.isfinite(value):
-        raise NumberOutOfRange(f"out of range: {text[:40]!r}")
-    return value
-
-
-def parse_typed_number(text: str) -> float:
-    """One number typed in a form field, as people write it.
-
-    Surrounding spaces, one decimal comma ("12,5" → 12.5), the minus sign "−" (U+2212)
-    and a Chinese input method's full-width forms ("－１２．５") are taken; the rest is
-    :func:`parse_decimal`'s plain decimal.
-
-    Parameters
-    ----------
-    text : str
-        What was typed in the field.
-
-    Returns
-    -------
-    float
-        The number.
-
-    Raises
-    ------
-    ValueError
-        When it is not one number (as :func:`parse_decimal`).
-    """
-    text = plain_text(text).strip().replace("\u2212", "-")
-    if "," in text and "." not in text and text.count(",") == 1:
-        text = text.replace(",", ".")
-    return parse_decimal(text)
 
 
 @dataclass
@@ -147,7 +88,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     UserError
         With the line and column of the first problem.
     """
-    text = _title_lines_blanked(plain_text(text.lstrip("\ufeff")))
+    text = title_lines_blanked(plain_text(text.lstrip("\ufeff")))
     delimiter = spreadsheet_delimiter(text)
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
         rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))
@@ -186,7 +127,6 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     )
 
 
-DECIMAL_COMMA = re.compile(r"([+-]?\d*),(\d+(?:[eE][+-]?\d+)?)")
 CHINESE_POSITION = re.compile(r"^位置\s*_?\s*(\d+)$")
 
 
@@ -195,7 +135,7 @@ def _headerless_columns(rows) -> dict[int, int] | None:
     three positions (two columns may be ``time_s,value``); a first column counting 1, 2, 3…
     (or 0, 1, 2…) is a row number, not position 1."""
     width = len(rows[0][1])
-    if any(len(row) != width or not all(_is_number(c) for c in row) for _, row in rows):
+    if any(len(row) != width or not all(is_number(c) for c in row) for _, row in rows):
         return None
     first = [row[0].strip() for _, row in rows]
     start = first[0]
@@ -204,47 +144,6 @@ def _headerless_columns(rows) -> dict[int, int] | None:
     if width - skip < 3:
         return None
     return {index: index - skip + 1 for index in range(skip, width)}
-
-
-def spreadsheet_delimiter(text: str) -> str:
-    """The separator of a readings file's columns.
-
-    Parameters
-    ----------
-    text : str
-        The file's text.
-
-    Returns
-    -------
-    str
-        A tab or ``;`` when the first line that is not a ``#`` comment holds one (what a
-        spreadsheet copies to the clipboard, and what spreadsheets in Europe write, with
-        decimal commas), else ``,``.
-    """
-    first = next(
-        (line for line in text.splitlines() if line.strip() and not line.startswith("#")), ""
-    )
-    for candidate in ("\t", ";"):
-        if candidate in first:
-            return candidate
-    return ","
-
-
-def decimal_point(cell: str) -> str:
-    """A cell's decimal comma as a decimal point, for files whose separator is not the comma.
-
-    Parameters
-    ----------
-    cell : str
-        One cell, e.g. ``"10,74"`` or ``"-1,5e-3"``.
-
-    Returns
-    -------
-    str
-        ``"10.74"``, ``"-1.5e-3"``; any other cell unchanged.
-    """
-    match = DECIMAL_COMMA.fullmatch(cell.strip())
-    return f"{match.group(1)}.{match.group(2)}" if match else cell
 
 
 UNIT_SUFFIX = re.compile(r"\s*[(\[][^()\[\]]*[)\]]$")  # "(°/h)", "[deg/h]", after NFKC
@@ -364,74 +263,3 @@ def readings_to_long_csv(
             extra = f",{temps[index]:.3f}" if temps is not None else ""
             buffer.write(f"{number},{angle:.6g},{time:.3f},{value:{value_format}}{extra}\n")
     return buffer.getvalue()
-
-
-TITLE_LINES = 2  # at most this many title lines above a table are passed over
-
-
-def _title_lines_blanked(text: str) -> str:
-    """A spreadsheet's title above the table ("陀螺寻北实验数据", a merged cell saved as a
-    line of its own) blanked, its line kept so that later lines keep their numbers: up to
-    ``TITLE_LINES`` lines of one cell that is not a number, before a header: the first line
-    with a tab, semicolon or comma, one of its cells not a number.  A file of one column
-    (its lines without a separator, or numbers with a decimal comma) is left as it is."""
-    head = text.split("\n", TITLE_LINES + 2)  # the lines looked at, then the rest
-    titles = []
-    for index, line in enumerate(head[: TITLE_LINES + 2]):
-        cell = line.strip()
-        if not cell or cell.startswith("#"):
-            continue
-        separator = next((mark for mark in "\t;," if mark in cell), None)
-        if separator is not None:
-            if all(_is_number(c.strip()) for c in cell.split(separator) if c.strip()):
-                return text  # numbers ("10,74" under a one-column header): no header here
-            break
-        if _is_number(cell) or len(titles) == TITLE_LINES or index == len(head) - 1:
-            return text  # data of one column, too many lines, or no table after them
-        titles.append(index)
-    else:
-        return text
-    for index in titles:
-        head[index] = ""
-    return "\n".join(head)
-
-
-UNIT_NAME = re.compile(
-    r"(?:°|deg|rad|mrad|dph|dps|s|ms|h|hr|min|hz|°c|℃|c|k|v|mv|lsb|度|秒|小时|摄氏度)"
-    r"(?:\s*/\s*(?:s|h|hr|min|秒|小时))?"
-)
-
-
-def is_units_row(cells: list[str]) -> bool:
-    """Whether a row under a header only names units ("s, °/h, °/h", "(deg/h)", "度/小时"),
-    as an instrument's or a spreadsheet's export writes them: every cell empty or a unit,
-    and at least one a rate ("/", dph or dps).  Like a unit after a column name, it is a
-    note: the unit of the readings is the one the student or the script chose.
-
-    Parameters
-    ----------
-    cells : list of str
-        The row's cells.
-
-    Returns
-    -------
-    bool
-        True for a row of units only.
-    """
-    names = [re.sub(r"[\s()\[\]]", "", plain_text(cell)).lower() for cell in cells]
-    names = [name for name in names if name]
-    return (
-        bool(names)
-        and all(UNIT_NAME.fullmatch(name) for name in names)
-        and any("/" in name or name in ("dph", "dps") for name in names)
-    )
-
-
-def _is_number(text: str) -> bool:
-    try:
-        parse_decimal(text)
-    except NumberOutOfRange:
-        return True  # a number, just too large: reported when it is read
-    except ValueError:
-        return False
-    return True

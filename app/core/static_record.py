@@ -17,18 +17,21 @@ import codecs
 import csv
 import io
 import itertools
-import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 import numpy as np
 
 from app.core.exceptions import UserError
-from app.core.readings import decimal_point, is_units_row
+from app.core.spreadsheet_text import (
+    WHOLE_COMMA_DIGITS,
+    decimal_point,
+    is_units_row,
+    one_column_of_decimal_commas,
+)
 
 BLOCK_LINES = 200_000
 LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
-DECIMAL_COMMA_LINE = re.compile(r"[+-]?\d+,\d+")
 MAX_SAMPLES = 20_000_000
 VALUE_NAMES = ("value", "rate", "rate_deg_h", "omega", "reading")
 TIME_NAMES = ("time_s", "time", "t", "t_s", "timestamp", "timestamp_s")
@@ -250,26 +253,15 @@ def _splitter(first: str) -> Callable[[str], list[str]]:
 
 
 def _one_column_with_decimal_commas(first_lines: list[str]) -> bool:
-    """Whether a comma-separated record is one column of numbers with decimal commas
-    ("0,0123" per line, as a European logger or spreadsheet writes them), not
-    ``time_s,value`` pairs: its first lines (comments aside) are each a whole number, a
-    comma and digits, under a one-name header ("rate") or, with no header, with first
-    numbers that do not increase as times must.  "10,74" / "11,75" stays a time and a
-    value; so does anything under a two-name header."""
+    """Whether a comma-separated record is one column of numbers with decimal commas, by
+    its first lines (:func:`app.core.readings.one_column_of_decimal_commas`)."""
     texts = [line.strip().lstrip("\ufeff") for line in first_lines]
     texts = [text for text in texts if text and not text.startswith(("#", "%"))]
     if not texts or "\t" in texts[0] or ";" in texts[0]:
         return False
-    header = not DECIMAL_COMMA_LINE.fullmatch(texts[0]) and _is_header(texts[0].split(","))
-    if header and "," in texts[0]:
-        return False
-    rows = texts[1:] if header else texts
-    if not rows or not all(DECIMAL_COMMA_LINE.fullmatch(text) for text in rows):
-        return False
-    if header:
-        return True
-    firsts = [float(text.split(",")[0]) for text in rows]
-    return any(later <= earlier for earlier, later in itertools.pairwise(firsts))
+    named = not WHOLE_COMMA_DIGITS.fullmatch(texts[0]) and _is_header(texts[0].split(","))
+    header = texts[0].split(",") if named else None
+    return one_column_of_decimal_commas(header, texts[1:] if named else texts)
 
 
 def _joined_decimal_comma(text: str) -> list[str]:

@@ -22,7 +22,7 @@ from pydantic import (
 
 from app.core.exceptions import FieldProblems, UserError
 from app.core.presets import PRESETS
-from app.core.readings import parse_typed_number
+from app.core.typed_numbers import parse_typed_number
 from app.models import Assignment, InputMethod, LatePolicy, RevealTruth
 from app.web.local_time import local_input_to_utc, utc_to_local_input
 

@@ -11,7 +11,7 @@ from sqlmodel import Session, select
 from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import FieldProblems, UserError
 from app.core.presets import PRESETS
-from app.core.readings import parse_typed_number
+from app.core.typed_numbers import parse_typed_number
 from app.core.units import EARTH_RATE_DEG_H
 from app.lab import partners
 from app.lab import sessions as labsessions

@@ -15,7 +15,7 @@ from pydantic import ValidationError
 from app.core.exceptions import UserError
 from app.core.jsonsafe import loads_finite
 from app.core.position_records import parse_position_csv
-from app.core.readings import parse_decimal
+from app.core.typed_numbers import parse_decimal
 from app.core.units import canonical_unit
 from app.lab.binary_upload import is_npy, parse_npy, parse_raw
 from app.lab.schemas import PositionUpload

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from sqlmodel import Session, col, select
 
 from app.core.exceptions import UserError
-from app.core.readings import parse_typed_number
+from app.core.typed_numbers import parse_typed_number
 from app.lab.attempts import latest_attempt, rubric_of
 from app.models import (
     Assignment,

@@ -11,7 +11,7 @@ from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.allan_summary import dwell_lines, note_lines, term_rows
 from app.core.exceptions import FieldProblems, UserError
 from app.core.presets import PRESETS
-from app.core.readings import parse_typed_number
+from app.core.typed_numbers import parse_typed_number
 from app.courses import characterisation
 from app.courses.assignment_form import form_context, form_values, parse_assignment_form
 from app.lab.chart_texts import class_text

@@ -1,0 +1,165 @@
+"""How spreadsheets and instruments write a table of readings as text: the column separator
+(a tab when copied, a semicolon in Europe), decimal commas, a title line or two above the
+table, a row of units under its names, and one column of decimal commas that a comma
+separator would split in two.  The layouts themselves are :mod:`app.core.readings`.
+"""
+
+from __future__ import annotations
+
+import re
+
+from app.core.text_files import plain_text
+from app.core.typed_numbers import is_number
+
+
+def spreadsheet_delimiter(text: str) -> str:
+    """The separator of a readings file's columns.
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+
+    Returns
+    -------
+    str
+        A tab or ``;`` when the first line that is not a ``#`` comment holds one (what a
+        spreadsheet copies to the clipboard, and what spreadsheets in Europe write, with
+        decimal commas), else ``,``.
+    """
+    first = next(
+        (line for line in text.splitlines() if line.strip() and not line.startswith("#")), ""
+    )
+    for candidate in ("\t", ";"):
+        if candidate in first:
+            return candidate
+    return ","
+
+
+DECIMAL_COMMA = re.compile(r"([+-]?\d*),(\d+(?:[eE][+-]?\d+)?)")
+
+
+def decimal_point(cell: str) -> str:
+    """A cell's decimal comma as a decimal point, for files whose separator is not the comma.
+
+    Parameters
+    ----------
+    cell : str
+        One cell, e.g. ``"10,74"`` or ``"-1,5e-3"``.
+
+    Returns
+    -------
+    str
+        ``"10.74"``, ``"-1.5e-3"``; any other cell unchanged.
+    """
+    match = DECIMAL_COMMA.fullmatch(cell.strip())
+    return f"{match.group(1)}.{match.group(2)}" if match else cell
+
+
+TITLE_LINES = 2  # at most this many title lines above a table are passed over
+
+
+def title_lines_blanked(text: str) -> str:
+    """A spreadsheet's title above the table blanked, its line kept.
+
+    A title ("陀螺寻北实验数据", a merged cell saved as a line of its own) is a line of one
+    cell that is not a number; up to ``TITLE_LINES`` of them before a header (the first
+    line with a tab, semicolon or comma, one of its cells not a number) are blanked, so
+    that later lines keep their numbers.  A file of one column (its lines without a
+    separator, or numbers with a decimal comma) is left as it is.
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+
+    Returns
+    -------
+    str
+        The text with its title lines empty.
+    """
+    head = text.split("\n", TITLE_LINES + 2)  # the lines looked at, then the rest
+    titles = []
+    for index, line in enumerate(head[: TITLE_LINES + 2]):
+        cell = line.strip()
+        if not cell or cell.startswith("#"):
+            continue
+        separator = next((mark for mark in "\t;," if mark in cell), None)
+        if separator is not None:
+            if all(is_number(c.strip()) for c in cell.split(separator) if c.strip()):
+                return text  # numbers ("10,74" under a one-column header): no header here
+            break
+        if is_number(cell) or len(titles) == TITLE_LINES or index == len(head) - 1:
+            return text  # data of one column, too many lines, or no table after them
+        titles.append(index)
+    else:
+        return text
+    for index in titles:
+        head[index] = ""
+    return "\n".join(head)
+
+
+WHOLE_COMMA_DIGITS = re.compile(r"[+-]?\d+,\d+")  # "11,5", "-0,0045"
+
+
+def one_column_of_decimal_commas(header: list[str] | None, lines: list[str]) -> bool:
+    """Whether a comma-separated record is one column of numbers with decimal commas
+    ("11,5" per line, as a European logger or spreadsheet writes them) rather than
+    ``time_s,value`` pairs.
+
+    It is one column when every line is a whole number, a comma and digits (a fraction),
+    and a one-name header stands above ("value") or, with no header, the first numbers do
+    not increase as times must.  "10,74" / "11,75" stays a time and a value; so does
+    anything under a two-name header ("time_s,value").
+
+    Parameters
+    ----------
+    header : list of str or None
+        The header's names, if the record has one.
+    lines : list of str
+        The data lines, comments and a units row left out.
+
+    Returns
+    -------
+    bool
+        True when each line is one number with a decimal comma.
+    """
+    if header is not None and len(header) != 1:
+        return False
+    if not lines or not all(WHOLE_COMMA_DIGITS.fullmatch(line) for line in lines):
+        return False
+    if header is not None:
+        return True
+    firsts = [float(line.split(",", 1)[0]) for line in lines]  # float: any length of digits
+    return any(later <= earlier for earlier, later in zip(firsts, firsts[1:], strict=False))
+
+
+UNIT_NAME = re.compile(
+    r"(?:°|deg|rad|mrad|dph|dps|s|ms|h|hr|min|hz|°c|℃|c|k|v|mv|lsb|度|秒|小时|摄氏度)"
+    r"(?:\s*/\s*(?:s|h|hr|min|秒|小时))?"
+)
+
+
+def is_units_row(cells: list[str]) -> bool:
+    """Whether a row under a header only names units ("s, °/h, °/h", "(deg/h)", "度/小时"),
+    as an instrument's or a spreadsheet's export writes them: every cell empty or a unit,
+    and at least one a rate ("/", dph or dps).  Like a unit after a column name, it is a
+    note: the unit of the readings is the one the student or the script chose.
+
+    Parameters
+    ----------
+    cells : list of str
+        The row's cells.
+
+    Returns
+    -------
+    bool
+        True for a row of units only.
+    """
+    names = [re.sub(r"[\s()\[\]]", "", plain_text(cell)).lower() for cell in cells]
+    names = [name for name in names if name]
+    return (
+        bool(names)
+        and all(UNIT_NAME.fullmatch(name) for name in names)
+        and any("/" in name or name in ("dph", "dps") for name in names)
+    )
