@@ -56,8 +56,6 @@ def built_class_zip(teacher, world) -> int:  # noqa: F811
     return int(progress.rsplit("/", 1)[1])
 
 
-@pytest.mark.slow  # every GET route, its PDFs and the class zip rendered
-@pytest.mark.one_backend  # what a page shows does not depend on the database: SQLite only
 def readable(name: str, data: bytes) -> str:
     """A download's text as a reader sees it: a PDF's text, every cell of a workbook (its
     XML is compressed inside the zip), anything else decoded."""
@@ -75,6 +73,8 @@ def readable(name: str, data: bytes) -> str:
     return data.decode()
 
 
+@pytest.mark.slow  # every GET route, its PDFs and the class zip rendered
+@pytest.mark.one_backend  # what a page shows does not depend on the database: SQLite only
 def test_no_response_carries_a_secret(world):  # noqa: F811
     with write_session() as db:
         assignment = db.get(Assignment, world["assignment"])
