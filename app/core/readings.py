@@ -1,8 +1,11 @@
 """Readings files: the two CSV layouts shared by ``gyrolab solve``, uploads and exports.
 
 * wide — like the handout's tables: a header ``position_1,...,position_N`` (or "位置1",
-  "Position 1") and one reading per row; other columns (``sample``, 序号, ``time``...) are
-  ignored and blank cells allowed.
+  "Position 1", "P1", the handout's own "位置 | 1 | 2 | 3 | 4", the turntable's angles
+  "0° | 90° | …": :mod:`app.core.table_headers`) and one reading per row; other columns
+  (``sample``, 序号, ``time``...) are ignored and blank cells allowed; a row of means or
+  other summary ("平均值", "mean") is passed over and reported (``Readings.skipped``).
+  Turned on its side -- one row per position, its name first -- it is read the same way.
 
 Either may be separated by semicolons or tabs instead of commas, with decimal commas
 ("10,74"), as spreadsheets in many European locales write them.
@@ -20,7 +23,7 @@ from __future__ import annotations
 import csv
 import io
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -31,6 +34,7 @@ from app.core.spreadsheet_text import (
     spreadsheet_delimiter,
     title_lines_blanked,
 )
+from app.core.table_headers import column_name, numbered_columns, summary_label
 from app.core.text_files import plain_text
 from app.core.typed_numbers import NumberOutOfRange, is_number, parse_decimal
 
@@ -44,6 +48,7 @@ class Readings:
     times_s: list[np.ndarray] | None = None
     layout: str = "wide"
     temperatures_c: list[np.ndarray] | None = None  # long layout's optional temperature_c
+    skipped: list[tuple[int, str]] = field(default_factory=list)  # summary rows: line, label
 
 
 def _number(text: str, line: int, column: str) -> float:
@@ -102,7 +107,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     if not rows:
         raise UserError("csv.empty")
     header_line, header = rows[0]
-    names = [_column_name(cell) for cell in header]
+    names = [column_name(cell) for cell in header]
     if len(rows) > 1 and is_units_row(rows[1][1]):
         del rows[1]  # "s, °/h, °/h…" under the names: a note, as a unit after a name is
     if {"position", "value"} <= set(names):
@@ -111,11 +116,19 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
             column = names.index("part")
             body = [(n, r) for n, r in body if column < len(r) and r[column].strip() == part]
         return _parse_long(names, body)
+    if len(rows) > 1 and all(
+        WIDE_COLUMN.match(column_name(row[0])) and all(is_number(c) for c in row[1:] if c.strip())
+        for _, row in rows
+    ):  # one row per position, its name first: the table turned on its side
+        return _parse_rows_of_positions(rows)
     wide = {
         index: int(m.group(1)) for index, name in enumerate(names) if (m := WIDE_COLUMN.match(name))
     }
     if wide:
         return _parse_wide(wide, rows[1:])
+    numbered = numbered_columns(header, more_rows=len(rows) > 1)
+    if numbered is not None:  # "位置 | 1 | 2 | 3 | 4" as the handout's tables, "0° | 90° …"
+        return _parse_wide(numbered, rows[1:])
     headerless = _headerless_columns(rows)
     if headerless is not None:
         return _parse_wide(headerless, rows)
@@ -127,9 +140,6 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     )
 
 
-CHINESE_POSITION = re.compile(r"^位置\s*_?\s*(\d+)$")
-
-
 def _headerless_columns(rows) -> dict[int, int] | None:
     """Position columns of a wide table without a header: every row numbers only, at least
     three positions (two columns may be ``time_s,value``); a first column counting 1, 2, 3…
@@ -139,25 +149,15 @@ def _headerless_columns(rows) -> dict[int, int] | None:
         return None
     first = [row[0].strip() for _, row in rows]
     start = first[0]
-    counting = start in ("0", "1") and first == [str(int(start) + k) for k in range(len(rows))]
+    counting = (
+        len(rows) > 1
+        and start in ("0", "1")
+        and first == [str(int(start) + k) for k in range(len(rows))]
+    )
     skip = 1 if counting and width > 1 else 0
     if width - skip < 3:
         return None
     return {index: index - skip + 1 for index in range(skip, width)}
-
-
-UNIT_SUFFIX = re.compile(r"\s*[(\[][^()\[\]]*[)\]]$")  # "(°/h)", "[deg/h]", after NFKC
-
-
-def _column_name(cell: str) -> str:
-    """A header cell as the layouts name it: "位置1", "Position 1", "位置1 (°/h)" →
-    "position_1" (a unit in brackets is the student's note; the unit is the form's)."""
-    name = UNIT_SUFFIX.sub("", cell.strip().lower())
-    chinese = CHINESE_POSITION.match(name)
-    if chinese:
-        return f"position_{chinese.group(1)}"
-    spaced = re.fullmatch(r"position\s+(\d+)", name)
-    return f"position_{spaced.group(1)}" if spaced else name
 
 
 def _parse_wide(columns: dict[int, int], rows) -> Readings:
@@ -168,7 +168,12 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
         )
     order = sorted(columns, key=columns.get)
     values: list[list[float]] = [[] for _ in order]
+    skipped = []
     for line, row in rows:
+        label = summary_label([cell for index, cell in enumerate(row) if index not in columns])
+        if label is not None:  # "平均值 | 10.71 | 2.79 …": the handout's row of means
+            skipped.append((line, label))
+            continue
         for slot, index in enumerate(order):
             cell = row[index].strip() if index < len(row) else ""
             if cell:
@@ -176,7 +181,26 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
     for slot, column in enumerate(values, start=1):
         if not column:
             raise UserError("readings.empty_position", position=slot)
-    return Readings([np.array(v) for v in values], None, None, "wide")
+    return Readings([np.array(v) for v in values], None, None, "wide", skipped=skipped)
+
+
+def _parse_rows_of_positions(rows) -> Readings:
+    """A wide table turned on its side: one row per position, its name first ("位置1,
+    10.74, 10.65, …"), as a student types it line by line."""
+    columns = {}
+    for line, row in rows:
+        number = int(WIDE_COLUMN.match(column_name(row[0])).group(1))
+        if number in columns:
+            raise UserError("csv.position_twice", line=line, position=number)
+        columns[number] = [
+            _number(c.strip(), line, f"position_{number}") for c in row[1:] if c.strip()
+        ]
+    if sorted(columns) != list(range(1, len(columns) + 1)):
+        raise UserError("csv.position_columns")
+    for number in sorted(columns):
+        if not columns[number]:
+            raise UserError("readings.empty_position", position=number)
+    return Readings([np.array(columns[k]) for k in sorted(columns)], None, None, "wide")
 
 
 def _parse_long(names: list[str], rows) -> Readings:

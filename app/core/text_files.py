@@ -59,7 +59,8 @@ def plain_text(text: str) -> str:
     A Chinese input method in full-width mode types "１０．７４，－０．５"; Unicode's
     compatibility normalisation (NFKC) maps each to its plain form, and leaves Chinese
     characters as they are.  In Chinese punctuation the "." key types "。": between two
-    digits it is read as the decimal point ("10。74").
+    digits it is read as the decimal point ("10。74").  The minus sign "−" (U+2212, what a
+    document or a typeset handout writes) is the hyphen-minus a number is read with.
 
     Parameters
     ----------
@@ -69,12 +70,13 @@ def plain_text(text: str) -> str:
     Returns
     -------
     str
-        ``text`` under NFKC, "。" between digits a point ("10.74,-0.5"); ASCII text as it
-        is (no copy).
+        ``text`` under NFKC, "−" as "-", "。" between digits a point ("10.74,-0.5");
+        ASCII text as it is (no copy).
     """
     if text.isascii():
         return text
-    return IDEOGRAPHIC_POINT.sub(r"\1.", unicodedata.normalize("NFKC", text))
+    normal = unicodedata.normalize("NFKC", text).replace("\u2212", "-")
+    return IDEOGRAPHIC_POINT.sub(r"\1.", normal)
 
 
 # explicit embeddings, overrides and isolates (LRE RLE PDF LRO RLO, LRI RLI FSI PDI): in a

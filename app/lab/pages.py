@@ -285,6 +285,8 @@ JS_MESSAGES = (
     "js.pasted",
     "js.header_skipped",
     "js.row_numbers_skipped",
+    "js.leading_columns_skipped",
+    "js.summary_rows_skipped",
     "js.cells_dropped",
     "js.trim_shown",
     "js.done_trim",

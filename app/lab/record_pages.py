@@ -29,7 +29,8 @@ from app.lab.trim import trim_position
 from app.models import InputMethod, LabSession, Part
 from app.web.deps import ObjectId, ReadOnlySession, RowWriteSession, SessionDep
 from app.web.exports import attachment
-from app.web.render import flash, redirect
+from app.web.i18n import translate
+from app.web.render import flash, redirect, request_language
 from app.web.work_slots import held_while_streaming
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
@@ -87,6 +88,7 @@ def preview_csv(
     user: CurrentUser,
     db: SessionDep,
     body: Annotated[CsvUpload, Body()],
+    request: Request,
 ):
     session = recordable_session(db, user, session_id, InputMethod.csv)
     readings = parse_csv_upload(body)
@@ -108,7 +110,12 @@ def preview_csv(
                 "first": [float(v) for v in converted[:5]],
             }
         )
-    return {"layout": readings.layout, "positions": rows}
+    language = request_language(request)
+    notes = [
+        translate("csv.summary_skipped", language, line=line, label=label)
+        for line, label in readings.skipped
+    ]
+    return {"layout": readings.layout, "positions": rows, "notes": notes}
 
 
 @router.post("/sessions/{session_id}/csv", dependencies=[CsrfProtected, RowWriteSession])

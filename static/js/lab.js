@@ -145,25 +145,74 @@
       names.some((name) => name.includes("/") || name === "dph" || name === "dps");
   }
 
+  // How a header names a position, as app.core.table_headers reads it: "位置1", "P1", "第1位置",
+  // the handout's "位置 | 1 | 2 | 3 | 4", or the turntable's angle ("90°").
+  const NUMBER = "(\\d+|[一二三四五六七八九十])";
+  const POSITION_NAMES = [
+    new RegExp(`^(?:position|pos\\.?|p|位置)\\s*[_#.\\-]?\\s*${NUMBER}\\s*号?$`),
+    new RegExp(`^第\\s*${NUMBER}\\s*个?\\s*位置$`),
+    new RegExp(`^${NUMBER}\\s*号\\s*位置$`),
+  ];
+  const ANGLE_NAME = /^[+-]?\d+(?:\.\d+)?\s*(?:°|º|˚|度|deg|degrees?)$/;
+  const headerName = (cell) => plain(cell).trim().toLowerCase().replace(/\s*[(\[][^()\[\]]*[)\]]$/, "");
+  function namesPosition(cell) {
+    const name = headerName(cell);
+    return /^\d+$/.test(name) || ANGLE_NAME.test(name) || POSITION_NAMES.some((pattern) => pattern.test(name));
+  }
+  // A first row of numbers that numbers the positions: 1, 2, 3, 4 or the angles 0, 90, 180, 270.
+  function numbersThePositions(cells) {
+    const values = cells.filter((cell) => cell !== "").map(Number);
+    if (values.length < 3 || values.some((value) => !Number.isFinite(value))) return false;
+    if (values.every((value, i) => value === i + 1)) return true;
+    const step = 360 / values.length;
+    return values[0] === 0 && values.every((value, i) => Math.abs(value - i * step) < 1e-9);
+  }
+  // A row of means or another summary ("平均值", "mean"): the handout ends its tables with one.
+  const SUMMARY_LABELS = new Set(["平均值", "平均", "均值", "平均数", "均方差", "标准差", "标准偏差", "方差", "中位数",
+    "最大值", "最小值", "总和", "合计", "求和", "和", "极差", "误差", "mean", "average", "avg", "ave", "median", "std",
+    "stdev", "std dev", "stddev", "sd", "σ", "sigma", "variance", "var", "sum", "total", "max", "min", "maximum",
+    "minimum", "range"]);
+  const isSummary = (row) => row.some((cell) => SUMMARY_LABELS.has(headerName(cell).replace(/[:：]$/, "").trim()));
+
   function parseBlock(text) {
     const lines = plain(text).replace(/\r\n?/g, "\n").split("\n").filter((line) => line.trim() !== "");
     const rows = splitLines(lines);
     const notes = [];
     let header = null;
     let body = rows;
-    if (body.length && rows[0].some((cell) => cell !== "" && parseCell(cell).error)) {
+    if (body.length && (rows[0].some((cell) => cell !== "" && parseCell(cell).error) ||
+        (body.length > 1 && numbersThePositions(rows[0])))) {
       header = body[0];
       body = body.slice(1);
       notes.push("js.header_skipped");
       if (body.length && isUnitsRow(body[0])) body = body.slice(1);  // "s, °/h…": a note
     }
-    const firstColumn = body.map((row) => row[0]);
-    const headerSaysRow = header && ROW_NUMBER_NAMES.has((header[0] || "").toLowerCase());
-    const counts = body.length > 1 && body[0].length > 1 && /^[01]$/.test(firstColumn[0]) &&
-      firstColumn.every((cell, i) => cell === String(i + Number(firstColumn[0])));
-    if (headerSaysRow || counts) {
-      body = body.map((row) => row.slice(1));
-      notes.push("js.row_numbers_skipped");
+    const summaries = body.filter(isSummary).length;
+    if (summaries) {
+      body = body.filter((row) => !isSummary(row));
+      notes.push("js.summary_rows_skipped");
+    }
+    // Columns before the first position's: a row number, a time, the handout's label column.
+    let skip = 0;
+    let note = "js.leading_columns_skipped";
+    if (header && header.some(namesPosition)) {
+      skip = header.findIndex(namesPosition);
+      if (skip === 1 && ROW_NUMBER_NAMES.has((header[0] || "").toLowerCase())) note = "js.row_numbers_skipped";
+    } else if (header && ROW_NUMBER_NAMES.has((header[0] || "").toLowerCase())) {
+      skip = 1;
+      note = "js.row_numbers_skipped";
+    } else {
+      const firstColumn = body.map((row) => row[0]);
+      const counts = body.length > 1 && body[0].length > 1 && /^[01]$/.test(firstColumn[0]) &&
+        firstColumn.every((cell, i) => cell === String(i + Number(firstColumn[0])));
+      const labels = body.length > 0 && body[0].length > 1 && firstColumn.some((cell) => cell !== "") &&
+        firstColumn.every((cell) => cell === "" || parseCell(cell).error);  // "采样值" beside the rows
+      if (counts || labels) skip = 1;
+      if (counts) note = "js.row_numbers_skipped";
+    }
+    if (skip > 0) {
+      body = body.map((row) => row.slice(skip));
+      notes.push(note);
     }
     return { rows: body, notes };
   }
@@ -430,6 +479,12 @@
         const rows = result.positions.map((p) =>
           `<tr><td>${p.position}</td><td class="num">${p.angle_deg}°</td><td class="num">${p.n}</td><td class="num">${p.mean_deg_h.toFixed(3)}</td><td>${p.first.map((v) => v.toFixed(3)).join(", ")}…</td></tr>`).join("");
         preview.innerHTML = `<p>${t("js.preview_title")}</p><table class="table compact"><thead><tr><th>#</th><th class="num">${t("js.angle")}</th><th class="num">n</th><th class="num">${t("js.mean")}</th><th>${t("js.samples")}</th></tr></thead><tbody>${rows}</tbody></table>`;
+        (result.notes || []).forEach((note) => {  // a row of means passed over: said, not read
+          const line = document.createElement("p");
+          line.className = "muted";
+          line.textContent = note;
+          preview.appendChild(line);
+        });
         accept.disabled = false;
       } catch (error) {
         const message = document.createElement("p");

@@ -112,3 +112,20 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     expect(first.nth(0)).to_have_value("10.74")
     expect(page.locator("#part-heading .readings-grid input.invalid")).to_have_count(0)
     expect(page.locator("#part-heading .grid-status")).to_contain_text("Pasted 10 rows")
+    # The handout's table as printed -- "位置 | 1 | 2 | 3 | 4", a label column with "采样值"
+    # and a last row of means -- pasted into the other part: the labels and the means are
+    # passed over and said (app.core.table_headers reads a file the same way).
+    printed = "位置\t1\t2\t3\t4\n" + "\n".join(
+        [("采样值" if row == 4 else "") + "\t11.10\t9.77\t-11.76\t-9.99" for row in range(10)]
+        + ["平均值\t11.13\t9.83\t-11.81\t-9.93"]
+    )
+    paste(page, "#part-latitude .readings-grid tbody input", printed)
+    rows = page.locator("#part-latitude .readings-grid tbody tr")
+    expect(rows.nth(4).locator("input").nth(0)).to_have_value("11.10")
+    expect(rows.nth(9).locator("input").nth(3)).to_have_value("-9.99")
+    expect(rows).to_have_count(10)  # ten rows of readings, none of means
+    expect(page.locator("#part-latitude .readings-grid input.invalid")).to_have_count(0)
+    status = page.locator("#part-latitude .grid-status")
+    expect(status).to_contain_text("Pasted 10 rows")
+    expect(status).to_contain_text("a row of means or another summary skipped")
+    expect(status).to_contain_text("the columns before position 1 skipped")

@@ -1,0 +1,139 @@
+"""How a table of readings names its positions, and which of its rows are not readings.
+
+Students copy the handout's table: a header "位置 | 1 | 2 | 3 | 4" (a label, then the
+positions' numbers), one row of samples after another, a label "采样值" beside them and a
+last row "平均值" of the means.  Others name the columns "P1", "Pos 1", "第1位置", or by the
+turntable's angle ("0°, 90°, 180°, 270°").  This module maps such a header to position
+columns and tells a summary row (a mean, a standard deviation) from a row of readings.
+The layouts themselves are :mod:`app.core.readings`.
+"""
+
+from __future__ import annotations
+
+import re
+
+from app.core.text_files import plain_text
+from app.core.typed_numbers import is_number
+
+CHINESE_NUMBERS = {c: n for n, c in enumerate("一二三四五六七八九十", start=1)}
+NUMBER = r"(\d+|[一二三四五六七八九十])"
+POSITION_NAMES = [
+    re.compile(rf"^(?:position|pos\.?|p|位置)\s*[_#.\-]?\s*{NUMBER}\s*号?$"),  # P1, 位置 1
+    re.compile(rf"^第\s*{NUMBER}\s*个?\s*位置$"),  # 第1位置, 第一个位置
+    re.compile(rf"^{NUMBER}\s*号\s*位置$"),  # 1号位置
+]
+UNIT_SUFFIX = re.compile(r"\s*[(\[（【][^()\[\]（）【】]*[)\]）】]$")  # "(°/h)", "（度/时）"
+ANGLE = re.compile(r"^([+-]?\d+(?:\.\d+)?)\s*(?:°|º|˚|度|deg|degrees?)$")
+SUMMARY_LABELS = {
+    "平均值", "平均", "均值", "平均数", "均方差", "标准差", "标准偏差", "方差", "中位数", "最大值",
+    "最小值", "总和", "合计", "求和", "和", "极差", "误差",
+    "mean", "average", "avg", "ave", "median", "std", "stdev", "std dev", "stddev", "sd",
+    "σ", "sigma", "variance", "var", "sum", "total", "max", "min", "maximum", "minimum",
+    "range",
+}  # fmt: skip
+
+
+def _number_of(text: str) -> int:
+    return CHINESE_NUMBERS[text] if text in CHINESE_NUMBERS else int(text)
+
+
+def column_name(cell: str) -> str:
+    """A header cell as the layouts name it: "位置1", "Position 1", "P1", "pos. 2",
+    "第3位置", "4号位置", "位置一" and "位置1 (°/h)" → "position_1" … (a unit in brackets
+    is the student's note; the unit is the form's); other names lower-cased.
+
+    Parameters
+    ----------
+    cell : str
+        One cell of the header row.
+
+    Returns
+    -------
+    str
+        ``position_N`` for a position's name, else the cell stripped and lower-cased.
+    """
+    name = UNIT_SUFFIX.sub("", plain_text(cell).strip().lower())
+    for pattern in POSITION_NAMES:
+        match = pattern.match(name)
+        if match:
+            return f"position_{_number_of(match.group(1))}"
+    return name
+
+
+def _angle(cell: str) -> float | None:
+    match = ANGLE.match(UNIT_SUFFIX.sub("", plain_text(cell).strip().lower()))
+    return float(match.group(1)) if match else None
+
+
+def _evenly_round(angles: list[float], from_zero: bool) -> bool:
+    """Angles one turn's N-th apart, in turning order (either way round)."""
+    count = len(angles)
+    if count < 3 or (from_zero and angles[0] != 0.0):
+        return False
+    step = 360.0 / count
+    turns = [(later - earlier) % 360.0 for earlier, later in zip(angles, angles[1:], strict=False)]
+    return any(all(abs(t - way) < 1e-9 for t in turns) for way in (step, 360.0 - step))
+
+
+def numbered_columns(cells: list[str], more_rows: bool) -> dict[int, int] | None:
+    """Position columns of a header that numbers the positions instead of naming them.
+
+    * the handout's "位置 | 1 | 2 | 3 | 4": cells 1, 2, …, N (N ≥ 2) in order, the others
+      text (a label, "序号", "time");
+    * the turntable's angles, "0° | 90° | 180° | 270°" (or "0度", "0 deg"): N ≥ 3 of
+      them, a turn's N-th apart in order, either way round, from any start;
+    * a header of numbers alone ("1, 2, 3, 4" or "0, 90, 180, 270") only when N ≥ 3,
+      the angles start at 0, and rows follow (otherwise it is a row of readings).
+
+    Parameters
+    ----------
+    cells : list of str
+        The header row's cells.
+    more_rows : bool
+        Whether rows follow it.
+
+    Returns
+    -------
+    dict or None
+        Column index → position number, or None when the row is no such header.
+    """
+    stripped = [UNIT_SUFFIX.sub("", plain_text(c).strip()) for c in cells]
+    used = [(index, cell) for index, cell in enumerate(stripped) if cell]
+    numbers = [(index, cell) for index, cell in used if is_number(cell)]
+    angles = [(index, _angle(cell)) for index, cell in used if _angle(cell) is not None]
+    labelled = len(used) > len(numbers) + len(angles)  # a text cell: "位置", "序号", "time"
+    if not labelled and not more_rows:
+        return None  # one row of numbers and nothing under it: readings, not a header
+    if angles:
+        if numbers or not _evenly_round([angle for _, angle in angles], from_zero=False):
+            return None
+        return {index: k for k, (index, _) in enumerate(angles, start=1)}
+    written = [cell for _, cell in numbers]
+    counting = written == [str(k) for k in range(1, len(written) + 1)]
+    if (counting and len(written) >= (2 if labelled else 3)) or _evenly_round(
+        [float(cell) for cell in written], from_zero=True
+    ):
+        return {index: k for k, (index, _) in enumerate(numbers, start=1)}
+    return None
+
+
+def summary_label(cells: list[str]) -> str | None:
+    """The label of a row that summarises the readings instead of holding one: "平均值",
+    "mean", "标准差", "σ" … in any of the row's cells (the handout ends its tables with
+    a row of means).
+
+    Parameters
+    ----------
+    cells : list of str
+        The cells of the row that are not position columns.
+
+    Returns
+    -------
+    str or None
+        The label as written, or None for a row of readings.
+    """
+    for cell in cells:
+        name = UNIT_SUFFIX.sub("", plain_text(cell).strip()).rstrip(":：").strip()
+        if name.lower() in SUMMARY_LABELS:
+            return name
+    return None
