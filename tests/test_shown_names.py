@@ -45,3 +45,40 @@ def test_a_sign_in_providers_name_loses_them(app):
     with read_session() as db:
         names = db.exec(select(User.display_name).where(User.role == "student")).all()
     assert names == ["Mallory"]
+
+
+def test_titles_lose_them_too(teacher_client):
+    """A course's, an assignment's, a session's and an LMS course's title are shown beside
+    other text on every page and export: they lose the controls as names do."""
+    from app.courses.assignment_form import AssignmentForm
+    from app.lti.provisioning import context_of
+    from app.models import Course
+    from tests.factories import post_form
+
+    made = post_form(teacher_client, "/courses", {"name": f"{RLO}Physics 2"}, page="/")
+    assert made.status_code == 303, made.text
+    course_id = int(made.headers["location"].rsplit("/", 1)[1])
+    renamed = post_form(
+        teacher_client,
+        f"/courses/{course_id}/rename",
+        {"name": f"Optics{RLO}"},
+        page=f"/courses/{course_id}",
+    )
+    assert renamed.status_code == 303, renamed.text
+    refused = post_form(teacher_client, "/courses", {"name": RLO}, page="/")
+    assert refused.status_code == 400  # nothing but a control: no name at all
+    form = AssignmentForm.model_validate({"title": f"\u2066Lab 1{RLO}", "latitude_deg": 40})
+    assert form.title == "Lab 1"
+    body = {"https://purl.imsglobal.org/spec/lti/claim/context": {"id": "c1", "title": f"{RLO}Geo"}}
+    assert context_of(None, body) == ("c1", "Geo")
+    with read_session() as db:
+        assert [c.name for c in db.exec(select(Course)).all()] == ["Optics"]
+
+
+def test_a_session_title_loses_them(student_client):
+    from app.models import LabSession
+    from tests.factories import new_session
+
+    session_id = new_session(student_client, title=f"{RLO}Bench 3")
+    with read_session() as db:
+        assert db.get(LabSession, session_id).title == "Bench 3"

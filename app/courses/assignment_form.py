@@ -22,6 +22,7 @@ from pydantic import (
 
 from app.core.exceptions import FieldProblems, UserError
 from app.core.presets import PRESETS
+from app.core.text_files import shown_name
 from app.core.typed_numbers import parse_typed_number
 from app.models import Assignment, InputMethod, LatePolicy, RevealTruth
 from app.web.local_time import local_input_to_utc, utc_to_local_input
@@ -107,6 +108,13 @@ class AssignmentForm(BaseModel):
         if cls.model_fields[info.field_name].annotation in NUMBER_TYPES:
             return _typed_number(value)
         return value
+
+    @field_validator("title")
+    @classmethod
+    def _shown_title(cls, value: str) -> str:
+        """A title as pages show it: no bidirectional controls, which would reorder the
+        text beside it on every page and export that shows it."""
+        return shown_name(value)
 
     def assignment(self, course_id: int = 0, zone_name: str | None = None) -> Assignment:
         """The unsaved assignment (the form's rules are checked by ``rule_problems``)."""

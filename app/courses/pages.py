@@ -20,6 +20,7 @@ from app.accounts.service import (
 )
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
+from app.core.text_files import shown_name
 from app.courses.assignment_form import form_context, form_values
 from app.courses.deps import TeacherCourse
 from app.courses.listing import teacher_dashboard
@@ -74,11 +75,11 @@ def course_list(teacher: TeacherUser):
 
 @router.post("", dependencies=[CsrfProtected])
 def create_course(request: Request, teacher: TeacherUser, db: SessionDep, name: NameField = ""):
-    if not name.strip():  # the dashboard again, the name as typed and its message beside it
+    if not shown_name(name):  # the dashboard again, the name as typed and its message beside it
         context = teacher_dashboard(db, teacher)
         context.update(course_name=name, course_problems=_name_problem())
         return render(request, "dashboard/teacher.html", context, 400)
-    course = Course(name=name.strip(), teacher_id=teacher.id)
+    course = Course(name=shown_name(name), teacher_id=teacher.id)
     db.add(course)
     db.commit()
     response = redirect(f"/courses/{course.id}")
@@ -124,12 +125,12 @@ def rename_course(
     db: SessionDep,
     name: NameField = "",
 ):
-    if not name.strip():
+    if not shown_name(name):
         context = course_context(db, course, settings_typed={"name": name})
         context["settings_problems"] = _name_problem()
         return render(request, "courses/detail.html", context, 400)
     response = redirect(f"/courses/{course.id}")
-    course.name = name.strip()
+    course.name = shown_name(name)
     db.add(course)
     db.commit()
     flash(response, request, "course.renamed", "success", name=course.name)

@@ -11,6 +11,7 @@ from sqlmodel import Session, select
 
 from app.core.exceptions import FieldProblems, UserError
 from app.core.presets import PRESETS
+from app.core.text_files import shown_name
 from app.db import lock_rows
 from app.lab.partners import ensure_partner_code, member_map
 from app.lab.sim import new_truth
@@ -111,7 +112,7 @@ def start_session(
     seed, azimuth = new_truth()
     session = LabSession(
         owner_id=user.id,
-        title=settings.title.strip()[:200],
+        title=shown_name(settings.title)[:200],
         latitude_deg=0.0,
         heading_rotation=settings.rotation,
         heading_start_deg=settings.heading_start_deg,

@@ -26,6 +26,7 @@ from sqlmodel import Session, select
 
 from app.accounts.sso import account_for
 from app.core.exceptions import UserError
+from app.core.text_files import shown_name
 from app.lab import sessions as labsessions
 from app.models import (
     Assignment,
@@ -125,7 +126,7 @@ def context_of(platform: LtiPlatform, body: dict) -> tuple[str, str]:
     course), ``deployment:<id>`` and the platform's name."""
     context = body.get(CLAIM + "context")
     if isinstance(context, dict) and context.get("id"):
-        title = str(context.get("title") or context.get("label") or "").strip()[:200]
+        title = shown_name(str(context.get("title") or context.get("label") or ""))[:200]
         return str(context["id"])[:255], title
     deployment = body.get(CLAIM + "deployment_id")
     return f"deployment:{deployment}"[:255], f"{platform.name} · GyroLab"[:200]
