@@ -4,7 +4,10 @@ Reading: CSV text (``value`` per line, ``time_s,value``, ``time_s,value,temperat
 bridge's long layout ``position,angle_deg,time_s,value[,temperature_c]``, with or without a
 header; commas, tabs or semicolons (then decimal commas), or spaces between the columns;
 one column with decimal commas ("0,0123" per line) where it cannot be times and values;
-a row of units under the header passed over;
+a row of units under the header passed over; a time column in seconds, in milliseconds
+(``time_ms``) or as a logger's clock -- "2026-11-28 10:00:00.123", ISO 8601, a time of day
+carried past midnight -- read as seconds from the first reading; a spreadsheet's empty
+last column dropped;
 ``#`` and ``%`` comment lines), parsed in blocks of lines, so a 10⁷-sample record never
 exists as one string.
 
@@ -17,6 +20,7 @@ import codecs
 import csv
 import io
 import itertools
+import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
@@ -34,7 +38,16 @@ BLOCK_LINES = 200_000
 LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
 MAX_SAMPLES = 20_000_000
 VALUE_NAMES = ("value", "rate", "rate_deg_h", "omega", "reading")
-TIME_NAMES = ("time_s", "time", "t", "t_s", "timestamp", "timestamp_s")
+TIME_NAMES = ("time_s", "time", "t", "t_s", "timestamp", "timestamp_s", "datetime", "date_time")
+TIME_NAMES += ("time_ms", "t_ms", "timestamp_ms", "time_us", "t_us", "时间")
+TIME_UNITS = {"time_ms": 1e-3, "t_ms": 1e-3, "timestamp_ms": 1e-3, "time_us": 1e-6, "t_us": 1e-6}
+# a logger's clock: "2026-11-28 10:00:00.123", "2026/11/28T10:00:00Z", "10:00:00.123"
+DATE_TIME = re.compile(
+    r"(\d{4})[-/.](\d{1,2})[-/.](\d{1,2})(?:[T ](\d{1,2}):(\d{2})(?::(\d{2})([.,]\d+)?)?)?"
+    r"(?:Z|[+-]\d{2}:?\d{2})?"
+)
+TIME_OF_DAY = re.compile(r"(\d{1,2}):(\d{2}):(\d{2})([.,]\d+)?")
+DAY_S = 86_400.0
 TEMPERATURE_NAMES = ("temperature_c", "temperature", "temp_c", "temp")
 
 Progress = Callable[[str, dict], None]
@@ -95,11 +108,66 @@ def _columns(
 
 
 def _is_header(cells: list[str]) -> bool:
-    try:
-        [float(c) for c in cells if c.strip()]
-    except ValueError:
-        return True
+    for cell in cells:
+        if cell.strip():
+            try:
+                float(cell)
+            except ValueError:
+                if not (DATE_TIME.fullmatch(cell.strip()) or TIME_OF_DAY.fullmatch(cell.strip())):
+                    return True
     return False
+
+
+def _clock_seconds(cells, origin: list[int]) -> np.ndarray:
+    """Seconds of a logger's clock stamps: a date and time ("2026-11-28 10:00:00.123",
+    ISO 8601 with "T", a "Z" or an offset -- one zone for the whole record) from the
+    midnight of ``origin``'s day (the record's first date, set by the first call), or a
+    time of day ("10:00:00.123") from its midnight.
+
+    Raises
+    ------
+    ValueError
+        A cell that is neither.
+    """
+    seconds = np.empty(len(cells))
+    days_of: dict[str, int] = {}  # a date repeats on every line of its day
+    for index, cell in enumerate(cells):
+        text = str(cell).strip()
+        stamp = DATE_TIME.fullmatch(text)
+        if stamp is not None:
+            year, month, day, hour, minute, second, fraction = stamp.groups()
+            date = f"{year}-{int(month):02d}-{int(day):02d}"
+            days = days_of.get(date)
+            if days is None:
+                days = days_of[date] = int(np.datetime64(date, "D").astype(np.int64))
+                if not origin:
+                    origin.append(days)
+            days -= origin[0]
+        elif (stamp := TIME_OF_DAY.fullmatch(text)) is not None:
+            hour, minute, second, fraction = stamp.groups()
+            days = 0
+        else:
+            raise ValueError(f"not a time: {text[:40]!r}")
+        if int(hour or 0) > 23 or int(minute or 0) > 59 or int(second or 0) > 60:
+            raise ValueError(f"not a time: {text[:40]!r}")
+        seconds[index] = (
+            days * DAY_S
+            + int(hour or 0) * 3600.0
+            + int(minute or 0) * 60.0
+            + int(second or 0)
+            + (float("0." + fraction[1:]) if fraction else 0.0)
+        )
+    return seconds
+
+
+def _times(cells, name: str | None, origin: list[int]) -> tuple[np.ndarray, bool]:
+    """A block's times in seconds: numbers (scaled when the column's name says ms or µs),
+    or a logger's clock stamps (:func:`_clock_seconds`); and whether they are clock
+    stamps."""
+    try:
+        return np.asarray(cells, dtype=float) * TIME_UNITS.get(name or "", 1.0), False
+    except ValueError:
+        return _clock_seconds(cells, origin), True
 
 
 def read_static_record(
@@ -130,6 +198,9 @@ def read_static_record(
     """
     values, times, temps = [], [], []
     layout: tuple[int, int | None, int | None, int | None] | None = None
+    time_name: str | None = None  # the time column's name, for its unit
+    clock = False  # the times are a logger's clock stamps
+    origin_day: list[int] = []  # their first date (days from 1970), once seen
     position_seen: str | None = None
     block: list[list[str]] = []
     first_line = 0
@@ -137,7 +208,7 @@ def read_static_record(
     count = 0
 
     def flush() -> None:
-        nonlocal block, first_line, count, position_seen
+        nonlocal block, first_line, count, position_seen, clock
         if not block:
             return
         value_col, time_col, temp_col, position_col = layout
@@ -155,7 +226,9 @@ def read_static_record(
                 position_seen = next(iter(positions))
             values.append(np.asarray(rows[:, value_col], dtype=float))
             if time_col is not None:
-                times.append(np.asarray(rows[:, time_col], dtype=float))
+                seconds, stamped = _times(rows[:, time_col], time_name, origin_day)
+                times.append(seconds)
+                clock = clock or stamped
             if temp_col is not None:
                 temps.append(np.asarray(rows[:, temp_col], dtype=float))
         except (ValueError, IndexError):
@@ -194,6 +267,8 @@ def read_static_record(
         if layout is None:
             if _is_header(cells):
                 layout = _columns(cells, column)
+                if layout[1] is not None:
+                    time_name = cells[layout[1]].strip().lower()
                 width = len(cells)
                 units_next = True
                 continue
@@ -219,7 +294,7 @@ def read_static_record(
     data = np.concatenate(values)
     record = StaticRecord(
         data,
-        np.concatenate(times) if times else None,
+        _clock_times(np.concatenate(times)) if clock else np.concatenate(times) if times else None,
         np.concatenate(temps) if temps else None,
     )
     if not np.all(np.isfinite(record.values)):
@@ -240,15 +315,23 @@ def _splitter(first: str) -> Callable[[str], list[str]]:
 
         return tabs
     if ";" in first:
-        return lambda text: [c.strip().replace(",", ".") for c in text.split(";")]
+        return lambda text: [c.strip().replace(",", ".") for c in text.rstrip(";").split(";")]
     if "," in first:
 
-        def commas(text: str) -> list[str]:
+        def commas(text: str) -> list[str]:  # a spreadsheet's empty last column dropped
             if '"' in text:
-                return [c.strip() for c in next(csv.reader([text]))]
-            return [c.strip() for c in text.split(",")]
+                return [c.strip() for c in next(csv.reader([text.rstrip(",")]))]
+            return [c.strip() for c in text.rstrip(",").split(",")]
 
         return commas
+    words = first.split()
+    if len(words) > 2 and DATE_TIME.fullmatch(words[0]) and TIME_OF_DAY.fullmatch(words[1]):
+
+        def stamped(text: str) -> list[str]:  # "2026-11-28 10:00:00.123  10.74"
+            cells = text.split()
+            return [f"{cells[0]} {cells[1]}", *cells[2:]] if len(cells) > 1 else cells
+
+        return stamped
     return lambda text: text.split()
 
 
@@ -269,11 +352,25 @@ def _joined_decimal_comma(text: str) -> list[str]:
     return [text.replace(",", ".")]
 
 
+def _clock_times(times: np.ndarray) -> np.ndarray:
+    """Clock stamps as seconds from the record's first, times of day carried past midnight
+    (23:59:59 then 00:00:00 goes on a second, not back a day)."""
+    if times.max() < DAY_S:  # times of day (or a record within its first day)
+        wraps = np.diff(times) < -DAY_S / 2
+        if wraps.any():
+            times = times + DAY_S * np.concatenate([[0], np.cumsum(wraps)])
+    return times - times[0]
+
+
 def _first_bad_line(block, layout) -> int:
     for index, row in enumerate(block):
         try:
-            for col in layout[:3]:
-                if col is not None:
+            for position, col in enumerate(layout[:3]):
+                if col is None:
+                    continue
+                if position == 1:
+                    _times([row[col]], None, [0])
+                else:
                     float(row[col])
         except (ValueError, IndexError):
             return index

@@ -1,0 +1,99 @@
+"""Static records as loggers write them: a clock for the time ("2026-11-28 23:59:59.900",
+ISO 8601, a time of day that runs past midnight), a time in milliseconds, a spreadsheet's
+empty last column -- read to the same times and the same analysis as a record with
+``time_s``."""
+
+from __future__ import annotations
+
+import datetime as dt
+
+import numpy as np
+import pytest
+
+from app.core.allan import analyse_record
+from app.core.exceptions import UserError
+from app.core.static_record import StaticRecord, read_static_record, text_lines
+from tests.noise_sources import static_record
+
+RATES = [10.0346, 10.0822, 9.9512, 10.0078]
+
+
+def read(text: str) -> StaticRecord:
+    return read_static_record(text_lines(text.encode()))
+
+
+def stamped(format_line, start: dt.datetime, step_s: float = 0.1) -> list[str]:
+    return [
+        format_line(start + dt.timedelta(seconds=k * step_s), rate) for k, rate in enumerate(RATES)
+    ]
+
+
+LATE = dt.datetime(2026, 11, 28, 23, 59, 59, 800_000)  # the record runs past midnight
+
+
+@pytest.mark.parametrize(
+    "lines",
+    [
+        ["time,value", *stamped(lambda t, r: f"{t:%Y-%m-%d %H:%M:%S.%f},{r}", LATE)],
+        ["timestamp,rate", *stamped(lambda t, r: f"{t:%Y-%m-%dT%H:%M:%S.%f}Z,{r}", LATE)],
+        ["datetime;rate", *stamped(lambda t, r: f"{t:%Y/%m/%d %H:%M:%S,%f};{r}", LATE)],
+        stamped(lambda t, r: f"{t:%Y-%m-%d %H:%M:%S.%f}  {r}", LATE),  # spaces, no header
+        stamped(lambda t, r: f"{t:%Y-%m-%d %H:%M:%S.%f},{r}", LATE),  # no header
+        ["Date Time Rate", *stamped(lambda t, r: f"{t:%Y-%m-%d %H:%M:%S.%f} {r}", LATE)],
+        ["time,value", *stamped(lambda t, r: f"{t:%H:%M:%S.%f},{r}", LATE)],  # time of day
+        ["时间,value", *stamped(lambda t, r: f"{t:%H:%M:%S.%f},{r}", LATE)],
+        ["time_ms,value", *(f"{k * 100},{r}" for k, r in enumerate(RATES))],
+    ],
+    ids=[
+        "date-time",
+        "iso-z",
+        "slashes-semicolons-decimal-comma",
+        "spaces",
+        "no-header",
+        "date-and-time-columns",
+        "time-of-day",
+        "chinese-name",
+        "milliseconds",
+    ],
+)
+def test_a_loggers_clock_is_read_as_seconds_from_the_first_reading(lines):
+    record = read("\n".join(lines) + "\n")
+    assert record.values.tolist() == RATES
+    np.testing.assert_allclose(record.times_s, [0.0, 0.1, 0.2, 0.3], atol=1e-9)
+
+
+def test_a_spreadsheets_empty_last_column_is_no_column():
+    assert read("".join(f"{r},\n" for r in RATES)).values.tolist() == RATES
+    assert read("".join(f"{r};\n" for r in RATES)).values.tolist() == RATES
+    with pytest.raises(UserError) as missing:
+        read("0,1.5\n0.1,\n0.2,1.7\n")  # an empty value inside is still a bad line
+    assert missing.value.key == "allan.bad_line" and missing.value.params["line"] == 2
+
+
+@pytest.mark.parametrize("bad", ["2026-13-28 10:00:00.2", "yesterday", "10:61:00"])
+def test_a_stamp_that_is_no_time_is_named_by_its_line(bad):
+    with pytest.raises(UserError) as error:
+        read(f"time,value\n2026-11-28 10:00:00.1,1.0\n{bad},2.0\n")
+    assert error.value.key == "allan.bad_line" and error.value.params["line"] == 3
+
+
+def test_a_stamped_record_gives_the_analysis_of_the_same_record_in_seconds():
+    """An hour at 10 Hz from the independent generator, 2 s of it lost, written once with
+    time_s and once with a logger's clock across midnight: the same gaps found, the same
+    rate, the same Allan terms."""
+    rates = static_record(1.0, 10.0, arw=0.012, seed=7)
+    keep = np.ones(rates.size, bool)
+    keep[9000:9020] = False
+    seconds = (np.arange(rates.size) / 10.0)[keep]
+    kept = rates[keep]
+    start = dt.datetime(2026, 11, 28, 23, 30)
+    clock = "\n".join(
+        f"{start + dt.timedelta(seconds=float(t)):%Y-%m-%d %H:%M:%S.%f},{r:.17g}"
+        for t, r in zip(seconds, kept, strict=True)
+    )
+    plain = "\n".join(f"{t:.17g},{r:.17g}" for t, r in zip(seconds, kept, strict=True))
+    by_clock = analyse_record(read("time,value\n" + clock), None)
+    by_seconds = analyse_record(read("time_s,value\n" + plain), None)
+    assert by_clock.notes == by_seconds.notes
+    assert by_clock.samples == by_seconds.samples and by_clock.rate_hz == pytest.approx(10.0)
+    assert by_clock.arw_deg_rt_h == pytest.approx(by_seconds.arw_deg_rt_h, rel=1e-9)
