@@ -178,3 +178,23 @@ def test_one_bench_record_is_analysed_at_a_time(world):
         pool("analysis").give_back(99_999)
     upload(teacher, world, text)
     assert stored(world) is not None
+
+
+@pytest.mark.one_backend  # the record's reading does not depend on the database
+def test_a_loggers_record_with_its_clock_and_no_rate(world):
+    """A logger's record -- its clock for the time, spaces between the columns, running
+    past midnight -- characterised without a rate given: the rate comes from the clock."""
+    import datetime as dt
+
+    teacher = browser(world, "teacher1")
+    text, gyro = static_record(hours=0.5)
+    start = dt.datetime(2026, 11, 28, 23, 50)
+    lines = [
+        f"{start + dt.timedelta(seconds=k / 10):%Y-%m-%d %H:%M:%S.%f}  {value}"
+        for k, value in enumerate(text.splitlines()[1:])
+    ]
+    reply = upload(teacher, world, "\n".join(lines) + "\n", rate="")
+    assert reply.status_code == 303
+    summary = stored(world)
+    assert summary is not None and summary["rate_hz"] == pytest.approx(10.0)
+    assert summary["arw_deg_rt_h"] == pytest.approx(gyro.arw_deg_rt_h, rel=0.1)
