@@ -97,3 +97,20 @@ def test_a_stamped_record_gives_the_analysis_of_the_same_record_in_seconds():
     assert by_clock.notes == by_seconds.notes
     assert by_clock.samples == by_seconds.samples and by_clock.rate_hz == pytest.approx(10.0)
     assert by_clock.arw_deg_rt_h == pytest.approx(by_seconds.arw_deg_rt_h, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "0.0 10.0346\n0.1  10.0822\n",
+        "time_s value\n0.0 10.0346\n0.1 10.0822\n",
+        "# gyro\n0.0\t10.0346\n0.1\t10.0822\n",
+    ],
+)
+def test_one_positions_record_with_spaces_between_its_columns(text):
+    """What a script sends the API for one position: "0.1  10.74" per line was one cell,
+    taken for a header, then refused on line 2."""
+    from app.core.position_records import parse_position_csv
+
+    values, times = parse_position_csv(text)
+    assert values.tolist() == RATES[:2] and times.tolist() == [0.0, 0.1]

@@ -57,7 +57,8 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
     r"""One position's readings: one value per line, or ``time_s,value`` per line.
 
     What a device or a script sends (``text/csv`` to the API) and the fallback for a static
-    record.  An optional header on line 1 and ``#`` comment lines are skipped; lines may
+    record.  Spaces may split the columns ("0.1  10.74", what a script writes).  An optional
+    header on line 1 and ``#`` comment lines are skipped; lines may
     end in ``\n``, ``\r\n`` or a bare ``\r``; a row of units under the header is passed
     over.  The columns may be separated by a tab or a
     ``;`` instead of a comma (a spreadsheet's copy, a European export), and then a decimal
@@ -88,10 +89,13 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
         data = decode_text(data)
     data = data.lstrip("\ufeff")
     delimiter = spreadsheet_delimiter(data)
-    try:  # newline="": lines may end in \n, \r\n or a bare \r
-        rows = list(csv.reader(io.StringIO(data, newline=""), delimiter=delimiter))
-    except csv.Error as error:
-        raise UserError("csv.unreadable", detail=str(error)) from None
+    if delimiter == "," and _spaced_columns(data):  # "0.1  10.74": a script's or logger's
+        rows = [line.split() for line in data.splitlines()]
+    else:
+        try:  # newline="": lines may end in \n, \r\n or a bare \r
+            rows = list(csv.reader(io.StringIO(data, newline=""), delimiter=delimiter))
+        except csv.Error as error:
+            raise UserError("csv.unreadable", detail=str(error)) from None
     if delimiter != ",":
         rows = [[decimal_point(cell) for cell in row] for row in rows]
     values: list[float] = []
@@ -125,6 +129,18 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
     if not values:
         raise UserError("csv.empty")
     return np.array(values), (np.array(times) if times else None)
+
+
+def _spaced_columns(text: str) -> bool:
+    """Whether a record's columns are split by spaces: its first data line (after any
+    header or comment) has no comma and two numbers with spaces between them."""
+    for line in text.splitlines()[:3]:
+        cells = line.split()
+        if not cells or cells[0].startswith("#") or "," in line:
+            continue
+        if all(is_number(cell) for cell in cells):
+            return len(cells) > 1
+    return False
 
 
 def _decimal_comma_column(
