@@ -36,15 +36,22 @@ FRAME_ARGS = [*CHROMIUM_ARGS, "--disable-site-isolation-trials"]
 LAUNCH_MS = 20_000  # a launch is several round trips, the platform's key set fetched once
 
 
+@pytest.fixture(scope="module")
+def framed_tool(tmp_path_factory):
+    """GyroLab served on 127.0.0.1 for this module's tests (each registers an LMS of its own:
+    another issuer, its own courses and people, so that no test sees another's)."""
+    with running_server(tmp_path_factory.mktemp("framed-tool"), "--no-demo") as server:
+        yield server
+
+
 @pytest.fixture
-def framed_lms(tmp_path):
-    """GyroLab served on 127.0.0.1, an LMS on localhost registered with it."""
-    with running_server(tmp_path, "--no-demo") as server:
-        port = free_port()
-        platform = PlatformState(url=f"http://localhost:{port}", tool_url=server.url)
-        register_with_cli(server, platform)
-        with serving(create_platform_app(platform), port):
-            yield server, platform
+def framed_lms(framed_tool):
+    """An LMS on localhost, on a port of its own, registered with GyroLab."""
+    port = free_port()
+    platform = PlatformState(url=f"http://localhost:{port}", tool_url=framed_tool.url)
+    register_with_cli(framed_tool, platform)
+    with serving(create_platform_app(platform), port):
+        yield framed_tool, platform
 
 
 @pytest.fixture
