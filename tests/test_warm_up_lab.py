@@ -62,6 +62,7 @@ def record_heading(student_client, session_id: int, dwell: float) -> None:
                 pass
 
 
+@pytest.mark.one_backend  # the words and the σ of a run; streamed saves on both: test_stream
 def test_a_cold_run_is_flagged_in_words_and_its_sigma_holds_the_warm_up(
     student_client, monkeypatch
 ):
