@@ -400,4 +400,10 @@ def with_samples(db: Session, session: LabSession, parts: dict[str, PartResult])
 
 
 def results_json(results: dict[str, PartResult]) -> dict:
-    return {part: outcome.to_json() for part, outcome in results.items()}
+    """Each part's result as JSON with its data-quality flags (``flags``: key and params),
+    None for a part without one -- what an attempt freezes and an export holds."""
+    out = {}
+    for part, outcome in results.items():
+        result = outcome.to_json()
+        out[part] = None if result is None else {**result, "flags": list(outcome.flags)}
+    return out

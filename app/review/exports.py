@@ -156,7 +156,9 @@ def export_rows(
                 word("export.yes", "yes") if row.released else word("export.no", "no"),
                 row.latest.feedback if row.latest else "",
                 "; ".join(f"{part_name(k)}: {v}" for k, v in sorted(comments.items())),
-                ";".join(sorted({f["key"].split(".")[-1] for f in row.flags})),
+                ";".join(
+                    sorted({word(f"review.flag_{name}", name) for name in flag_names(row.flags)})
+                ),
                 ";".join(row.duplicate_of),
                 " | ".join(finding_text(f, _) for f in row.evidence)
                 if _
@@ -165,6 +167,11 @@ def export_rows(
             ]
         )
     return out
+
+
+def flag_names(flags: list[dict]) -> set[str]:
+    """The flags' short names ("spikes", "unit_slip"): their keys' last part."""
+    return {flag["key"].split(".")[-1] for flag in flags}
 
 
 def _score(value: float | None) -> str:

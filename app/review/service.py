@@ -60,6 +60,34 @@ def data_flags(session: LabSession, takes: list, summaries: dict[int, TakeSummar
     return flags
 
 
+# flags of a part's result, not of one position's readings: the submitted attempt keeps
+# them (the per-position flags come from the current readings, ``data_flags``)
+PART_FLAG_KEYS = frozenset(
+    {
+        "flag.unit_slip",
+        "flag.closure",
+        "flag.warming_up",
+        "flag.warming_up_waited",
+        "flag.warming_up_model",
+        "flag.warming_up_model_waited",
+    }
+)
+
+
+def part_flags(results: dict) -> list[dict]:
+    """The part-level flags of a submitted attempt's results (a wrong unit, a closure
+    residual, a gyro still warming up), each once; none from attempts made before
+    results kept their flags."""
+    seen, flags = set(), []
+    for part in PARTS:
+        for flag in (results.get(part) or {}).get("flags", []):
+            mark = (flag["key"], json.dumps(flag.get("params", {}), sort_keys=True))
+            if flag["key"] in PART_FLAG_KEYS and mark not in seen:
+                seen.add(mark)
+                flags.append(flag)
+    return flags
+
+
 @dataclass
 class StudentRow:
     student: User
@@ -280,6 +308,7 @@ def class_rows(db: Session, assignment: Assignment) -> list[StudentRow]:
             session.id, ([], (None, None), [], SessionEvidence())
         )
         results = latest_results(history)
+        flags = [*flags, *part_flags(results)]
         truth = session_truth(db, session, assignment, takes)
         check = auto_check(results, truth, assignment) if history else None
         row = StudentRow(
