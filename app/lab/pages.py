@@ -35,6 +35,7 @@ from app.lab.chart_texts import (
 )
 from app.lab.charts import allan_figure, compass_figure, fit_figure, readings_figure
 from app.lab.deps import OwnedSession
+from app.lab.grid import GRID_LIMIT
 from app.lab.partner_pages import partner_view
 from app.lab.planner import plan_view, session_plan
 from app.lab.result_cache import CACHE, cached_results
@@ -123,6 +124,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         "sessionId": session.id,
         "csrf": csrf_token_for(request),
         "minReadings": session.min_readings,
+        "gridLimit": GRID_LIMIT,  # a longer paste is held and saved as pasted, not shown
         "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
         "plane": session.sim_plane_dial_deg,
         "messages": client_messages(JS_MESSAGES, _.language),
@@ -287,6 +289,8 @@ JS_MESSAGES = (
     "js.row_numbers_skipped",
     "js.leading_columns_skipped",
     "js.summary_rows_skipped",
+    "js.long_paste_held",
+    "js.long_paste_bad",
     "js.cells_dropped",
     "js.trim_shown",
     "js.done_trim",

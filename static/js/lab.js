@@ -322,6 +322,30 @@
         target.select();
       }
     });
+    // A paste longer than the grid shows (a logger's export): its readings are held and
+    // saved as pasted; building hundreds of thousands of cells froze the page for seconds.
+    let held = null;
+    function holdLongPaste(rows, startColumn, notes) {
+      const values = {};
+      for (let r = 0; r < rows.length; r += 1) {
+        for (let c = 0; c < rows[r].length; c += 1) {
+          const column = startColumn + c + 1;
+          const parsed = parseCell(rows[r][c]);
+          if (parsed.empty || column > columns) continue;
+          if (parsed.error) {
+            held = null;
+            status.textContent = t("js.long_paste_bad", { rows: rows.length, row: r + 1, position: column, problem: t(parsed.error, { value: rows[r][c] }) });
+            status.classList.add("error-text");
+            return;
+          }
+          (values[column] = values[column] || []).push(parsed.value);
+        }
+      }
+      held = values;
+      const counts = Object.entries(values).map(([position, list]) => `${t("js.position", { n: position })}: n = ${list.length}`);
+      status.textContent = [t("js.long_paste_held", { rows: rows.length, counts: counts.join(", ") }), ...notes.map((key) => t(key))].join(" ");
+      status.classList.remove("error-text");
+    }
     body.addEventListener("paste", (event) => {
       const target = event.target.closest("input");
       const text = (event.clipboardData || window.clipboardData).getData("text");
@@ -330,6 +354,11 @@
       const { rows, notes } = parseBlock(text);
       const startRow = target.closest("tr").sectionRowIndex;
       const startColumn = Number(target.dataset.column) - 1;
+      if (startRow + rows.length > config.gridLimit) {
+        holdLongPaste(rows, startColumn, notes);
+        return;
+      }
+      held = null;
       const needed = startRow + rows.length - body.rows.length;
       if (needed > 0) addRows(needed);
       let dropped = 0;
@@ -348,6 +377,7 @@
     });
     panel.querySelector(".add-rows").addEventListener("click", () => addRows(5));
     panel.querySelector(".clear-grid").addEventListener("click", () => {
+      held = null;
       body.querySelectorAll("input").forEach((input) => { input.value = ""; });
       validate();
     });
@@ -409,6 +439,19 @@
     }
 
     panel.querySelector(".save-manual").addEventListener("click", async () => {
+      if (held) {
+        status.textContent = t("js.saving");
+        try {
+          await postJson("/manual", { part: panel.dataset.part, unit: unitSelect.value, columns: held });
+          held = null;
+          status.textContent = t("js.saved");
+          reloadSoon();
+        } catch (error) {
+          status.textContent = error.message;
+          status.classList.add("error-text");
+        }
+        return;
+      }
       if (!validate()) return;
       const data = changedColumns();
       if (!Object.keys(data).length) {

@@ -129,3 +129,26 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     expect(status).to_contain_text("Pasted 10 rows")
     expect(status).to_contain_text("a row of means or another summary skipped")
     expect(status).to_contain_text("the columns before position 1 skipped")
+
+
+def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, new_page):
+    """A logger's export of 5,000 rows pasted into the grid: not built as 20,000 cells (a
+    60,000-row paste froze the page for 14 s), but held, said, and saved as pasted."""
+    page = new_page()
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    start_practice(page, live_server.url)
+    rows = [f"{10.7 + 0.001 * (k % 7):.3f}\t{-0.5 - 0.001 * (k % 5):.3f}" for k in range(5000)]
+    paste(page, "#part-heading .readings-grid tbody input", "\n".join(rows))
+    status = page.locator("#part-heading .grid-status")
+    expect(status).to_contain_text("Pasted 5000 rows: too many to show as cells")
+    expect(status).to_contain_text("Position 1: n = 5000, Position 2: n = 5000")
+    expect(page.locator("#part-heading .readings-grid tbody tr")).to_have_count(10)
+    with page.expect_navigation():
+        page.locator("#part-heading .save-manual").click()
+    cards = page.locator("#part-heading .step")
+    expect(cards.nth(0)).to_contain_text("5000")
+    expect(cards.nth(1)).to_contain_text("5000")
+    # a bad cell anywhere in such a paste keeps nothing, and says where
+    rows[4321] = "10.7\tabc"
+    paste(page, "#part-heading .readings-grid tbody input", "\n".join(rows))
+    expect(status).to_contain_text("nothing kept: row 4322, position 2")
