@@ -20,12 +20,18 @@ import codecs
 import csv
 import io
 import itertools
-import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 import numpy as np
 
+from app.core.clock_stamps import (
+    DATE_TIME,
+    TIME_OF_DAY,
+    clock_seconds,
+    is_clock_stamp,
+    seconds_from_first,
+)
 from app.core.exceptions import UserError
 from app.core.spreadsheet_text import (
     WHOLE_COMMA_DIGITS,
@@ -41,13 +47,6 @@ VALUE_NAMES = ("value", "rate", "rate_deg_h", "omega", "reading")
 TIME_NAMES = ("time_s", "time", "t", "t_s", "timestamp", "timestamp_s", "datetime", "date_time")
 TIME_NAMES += ("time_ms", "t_ms", "timestamp_ms", "time_us", "t_us", "时间")
 TIME_UNITS = {"time_ms": 1e-3, "t_ms": 1e-3, "timestamp_ms": 1e-3, "time_us": 1e-6, "t_us": 1e-6}
-# a logger's clock: "2026-11-28 10:00:00.123", "2026/11/28T10:00:00Z", "10:00:00.123"
-DATE_TIME = re.compile(
-    r"(\d{4})[-/.](\d{1,2})[-/.](\d{1,2})(?:[T ](\d{1,2}):(\d{2})(?::(\d{2})([.,]\d+)?)?)?"
-    r"(?:Z|[+-]\d{2}:?\d{2})?"
-)
-TIME_OF_DAY = re.compile(r"(\d{1,2}):(\d{2}):(\d{2})([.,]\d+)?")
-DAY_S = 86_400.0
 TEMPERATURE_NAMES = ("temperature_c", "temperature", "temp_c", "temp")
 
 Progress = Callable[[str, dict], None]
@@ -113,61 +112,19 @@ def _is_header(cells: list[str]) -> bool:
             try:
                 float(cell)
             except ValueError:
-                if not (DATE_TIME.fullmatch(cell.strip()) or TIME_OF_DAY.fullmatch(cell.strip())):
+                if not is_clock_stamp(cell):
                     return True
     return False
 
 
-def _clock_seconds(cells, origin: list[int]) -> np.ndarray:
-    """Seconds of a logger's clock stamps: a date and time ("2026-11-28 10:00:00.123",
-    ISO 8601 with "T", a "Z" or an offset -- one zone for the whole record) from the
-    midnight of ``origin``'s day (the record's first date, set by the first call), or a
-    time of day ("10:00:00.123") from its midnight.
-
-    Raises
-    ------
-    ValueError
-        A cell that is neither.
-    """
-    seconds = np.empty(len(cells))
-    days_of: dict[str, int] = {}  # a date repeats on every line of its day
-    for index, cell in enumerate(cells):
-        text = str(cell).strip()
-        stamp = DATE_TIME.fullmatch(text)
-        if stamp is not None:
-            year, month, day, hour, minute, second, fraction = stamp.groups()
-            date = f"{year}-{int(month):02d}-{int(day):02d}"
-            days = days_of.get(date)
-            if days is None:
-                days = days_of[date] = int(np.datetime64(date, "D").astype(np.int64))
-                if not origin:
-                    origin.append(days)
-            days -= origin[0]
-        elif (stamp := TIME_OF_DAY.fullmatch(text)) is not None:
-            hour, minute, second, fraction = stamp.groups()
-            days = 0
-        else:
-            raise ValueError(f"not a time: {text[:40]!r}")
-        if int(hour or 0) > 23 or int(minute or 0) > 59 or int(second or 0) > 60:
-            raise ValueError(f"not a time: {text[:40]!r}")
-        seconds[index] = (
-            days * DAY_S
-            + int(hour or 0) * 3600.0
-            + int(minute or 0) * 60.0
-            + int(second or 0)
-            + (float("0." + fraction[1:]) if fraction else 0.0)
-        )
-    return seconds
-
-
 def _times(cells, name: str | None, origin: list[int]) -> tuple[np.ndarray, bool]:
     """A block's times in seconds: numbers (scaled when the column's name says ms or µs),
-    or a logger's clock stamps (:func:`_clock_seconds`); and whether they are clock
-    stamps."""
+    or a logger's clock stamps (:func:`app.core.clock_stamps.clock_seconds`); and whether
+    they are clock stamps."""
     try:
         return np.asarray(cells, dtype=float) * TIME_UNITS.get(name or "", 1.0), False
     except ValueError:
-        return _clock_seconds(cells, origin), True
+        return clock_seconds(cells, origin), True
 
 
 def read_static_record(
@@ -292,9 +249,10 @@ def read_static_record(
     if not values:
         raise UserError("allan.empty")
     data = np.concatenate(values)
+    all_times = np.concatenate(times) if times else None
     record = StaticRecord(
         data,
-        _clock_times(np.concatenate(times)) if clock else np.concatenate(times) if times else None,
+        seconds_from_first(all_times) if clock else all_times,
         np.concatenate(temps) if temps else None,
     )
     if not np.all(np.isfinite(record.values)):
@@ -350,16 +308,6 @@ def _one_column_with_decimal_commas(first_lines: list[str]) -> bool:
 def _joined_decimal_comma(text: str) -> list[str]:
     """One cell: the line's decimal comma read as a point ("0,0123" → "0.0123")."""
     return [text.replace(",", ".")]
-
-
-def _clock_times(times: np.ndarray) -> np.ndarray:
-    """Clock stamps as seconds from the record's first, times of day carried past midnight
-    (23:59:59 then 00:00:00 goes on a second, not back a day)."""
-    if times.max() < DAY_S:  # times of day (or a record within its first day)
-        wraps = np.diff(times) < -DAY_S / 2
-        if wraps.any():
-            times = times + DAY_S * np.concatenate([[0], np.cumsum(wraps)])
-    return times - times[0]
 
 
 def _first_bad_line(block, layout) -> int:
