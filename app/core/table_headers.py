@@ -24,13 +24,48 @@ POSITION_NAMES = [
 ]
 UNIT_SUFFIX = re.compile(r"\s*[(\[（【][^()\[\]（）【】]*[)\]）】]$")  # "(°/h)", "（度/时）"
 ANGLE = re.compile(r"^([+-]?\d+(?:\.\d+)?)\s*(?:°|º|˚|度|deg|degrees?)$")
-SUMMARY_LABELS = {
-    "平均值", "平均", "均值", "平均数", "均方差", "标准差", "标准偏差", "方差", "中位数", "最大值",
-    "最小值", "总和", "合计", "求和", "和", "极差", "误差",
-    "mean", "average", "avg", "ave", "median", "std", "stdev", "std dev", "stddev", "sd",
-    "σ", "sigma", "variance", "var", "sum", "total", "max", "min", "maximum", "minimum",
-    "range",
-}  # fmt: skip
+SUMMARY_LABELS = frozenset(
+    {
+        "平均值",
+        "平均",
+        "均值",
+        "平均数",
+        "均方差",
+        "标准差",
+        "标准偏差",
+        "方差",
+        "中位数",
+        "最大值",
+        "最小值",
+        "总和",
+        "合计",
+        "求和",
+        "和",
+        "极差",
+        "误差",
+        "mean",
+        "average",
+        "avg",
+        "ave",
+        "median",
+        "std",
+        "stdev",
+        "std dev",
+        "stddev",
+        "sd",
+        "σ",
+        "sigma",
+        "variance",
+        "var",
+        "sum",
+        "total",
+        "max",
+        "min",
+        "maximum",
+        "minimum",
+        "range",
+    }
+)  # fmt: skip  (the lab page sends them to the grid's script too)
 
 
 def _number_of(text: str) -> int:

@@ -14,6 +14,7 @@ from sqlmodel import Session
 from app.accounts.deps import CurrentUser
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
+from app.core.table_headers import SUMMARY_LABELS
 from app.core.units import UNITS
 from app.courses import deadlines
 from app.lab.attempts import (
@@ -63,6 +64,8 @@ from app.web.render import (
     request_language,
     templates,
 )
+
+SHOWN_SUMMARY_LABELS = sorted(SUMMARY_LABELS)  # for the grid's script, once
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 
@@ -125,6 +128,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         "csrf": csrf_token_for(request),
         "minReadings": session.min_readings,
         "gridLimit": GRID_LIMIT,  # a longer paste is held and saved as pasted, not shown
+        "summaryLabels": SHOWN_SUMMARY_LABELS,  # a pasted row of means is no reading
         "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
         "plane": session.sim_plane_dial_deg,
         "messages": client_messages(JS_MESSAGES, _.language),

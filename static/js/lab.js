@@ -167,11 +167,9 @@
     const step = 360 / values.length;
     return values[0] === 0 && values.every((value, i) => Math.abs(value - i * step) < 1e-9);
   }
-  // A row of means or another summary ("平均值", "mean"): the handout ends its tables with one.
-  const SUMMARY_LABELS = new Set(["平均值", "平均", "均值", "平均数", "均方差", "标准差", "标准偏差", "方差", "中位数",
-    "最大值", "最小值", "总和", "合计", "求和", "和", "极差", "误差", "mean", "average", "avg", "ave", "median", "std",
-    "stdev", "std dev", "stddev", "sd", "σ", "sigma", "variance", "var", "sum", "total", "max", "min", "maximum",
-    "minimum", "range"]);
+  // A row of means or another summary ("平均值", "mean"): the handout ends its tables with one;
+  // its labels are the server's, sent with the page.
+  const SUMMARY_LABELS = new Set(config.summaryLabels);  // app.core.table_headers.SUMMARY_LABELS
   const isSummary = (row) => row.some((cell) => SUMMARY_LABELS.has(headerName(cell).replace(/[:：]$/, "").trim()));
 
   function parseBlock(text) {
