@@ -85,7 +85,12 @@ def add_allan_command(commands, guarded) -> None:
     allan.add_argument(
         "--rate", type=float, help="sample rate in Hz (default: from the record's times)"
     )
-    allan.add_argument("--unit", choices=UNITS, default="deg/h")
+    allan.add_argument(
+        "--unit",
+        choices=UNITS,
+        default=None,
+        help="the rates' unit (default: as the record's header names it, else deg/h)",
+    )
     allan.add_argument(
         "--column",
         metavar="NAME|N",

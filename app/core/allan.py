@@ -309,11 +309,38 @@ def _with_dwell(result: AllanResult, advice: DwellAdvice) -> AllanResult:
     return replace(result, dwell=advice)
 
 
+PLAUSIBLE_FLOOR_DEG_H = (1e-4, 1e3)  # the Allan floor of any gyro at rest, °/h
+
+
+def unit_doubt(adev_min_deg_h: float) -> dict | None:
+    """A note when the Allan floor (the curve's minimum) is no gyro's at rest in °/h.
+
+    Gyros' floors run from ≈ 1e-3 °/h (navigation and strategic FOGs, RLGs) to ≈ 10² °/h
+    (consumer MEMS); outside [1e-4, 1e3] °/h the readings were most likely in another
+    unit than the one they were read in -- a FOG's 0.05 °/h floor read from rad/s as °/h
+    is 2.4e-7 -- or the gyro was not at rest.
+
+    Parameters
+    ----------
+    adev_min_deg_h : float
+        The Allan deviation's minimum (°/h), as read.
+
+    Returns
+    -------
+    dict or None
+        The note ``allan.note_unit_doubt`` (key and parameters), or None.
+    """
+    low, high = PLAUSIBLE_FLOOR_DEG_H
+    if low <= adev_min_deg_h <= high or not math.isfinite(adev_min_deg_h):
+        return None
+    return {"key": "allan.note_unit_doubt", "params": {"floor": f"{adev_min_deg_h:.3g}"}}
+
+
 def analyse_record(
     record: StaticRecord,
     rate_hz: float | None,
     *,
-    unit: str = "deg/h",
+    unit: str | None = None,
     max_tau_s: float | None = None,
     progress: Progress | None = None,
 ) -> AllanResult:
@@ -326,8 +353,9 @@ def analyse_record(
         The record as read.
     rate_hz : float or None
         Sample rate (Hz); None: from the record's times.
-    unit : str
-        The readings' unit (:data:`app.core.units.UNITS`).
+    unit : str, optional
+        The readings' unit (:data:`app.core.units.UNITS`); None: the unit the record's
+        header names, else °/h.
     max_tau_s : float, optional
         The longest τ asked for (s).
     progress : callable, optional
@@ -336,20 +364,39 @@ def analyse_record(
     Returns
     -------
     AllanResult
-        With ``notes`` saying what was done to the record.
+        With ``notes`` saying how the record was read and what was done to it.
+
+    Raises
+    ------
+    UserError
+        ``allan.unit_conflict`` when ``unit`` is not the unit the header names.
 
     References
     ----------
     IEEE Std 952-1997, annex C; lab-reference §6.
     """
-    from app.core.units import to_deg_per_hour
+    from app.core.units import DEG_PER_HOUR, UNIT_SYMBOLS, canonical_unit, to_deg_per_hour
 
-    values = to_deg_per_hour(record.values, unit)
+    notes = list(record.notes)
+    chosen = canonical_unit(unit) if unit else None
+    if chosen and record.unit and chosen != record.unit:
+        raise UserError(
+            "allan.unit_conflict", header=UNIT_SYMBOLS[record.unit], chosen=UNIT_SYMBOLS[chosen]
+        )
+    if record.unit and record.unit != DEG_PER_HOUR and not chosen:  # not the default
+        notes.append(
+            {"key": "allan.note_unit_from_header", "params": {"unit": UNIT_SYMBOLS[record.unit]}}
+        )
+    values = to_deg_per_hour(record.values, chosen or record.unit or DEG_PER_HOUR)
     prepared = prepare_record(
         StaticRecord(values, record.times_s, record.temperatures_c), rate_hz, max_tau_s=max_tau_s
     )
     if progress:
         progress("analyse", {"samples": int(prepared.values.size)})
-    return allan_deviation(
-        prepared.values, prepared.rate_hz, notes=prepared.notes, max_tau_s=max_tau_s
+    result = allan_deviation(
+        prepared.values, prepared.rate_hz, notes=notes + prepared.notes, max_tau_s=max_tau_s
     )
+    doubt = unit_doubt(result.adev_min_deg_h)
+    if doubt:
+        result.notes.append(doubt)
+    return result

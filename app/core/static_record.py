@@ -7,9 +7,10 @@ one column with decimal commas ("0,0123" per line) where it cannot be times and 
 a row of units under the header passed over; a time column in seconds, in milliseconds
 (``time_ms``) or as a logger's clock -- "2026-11-28 10:00:00.123", ISO 8601, a time of day
 carried past midnight -- read as seconds from the first reading; a spreadsheet's empty
-last column dropped;
-``#`` and ``%`` comment lines), parsed in blocks of lines, so a 10⁷-sample record never
-exists as one string.
+last column dropped; ``#``, ``%`` and ``//`` comment lines, the last one before the
+readings read as the header where it names their columns -- EuRoC, Kalibr and ROS write
+it so; what the names say of units: :mod:`app.core.record_columns`), parsed in blocks of
+lines, so a 10⁷-sample record never exists as one string.
 
 Preparing the record for the analysis: :mod:`app.core.record_preparation`.
 """
@@ -21,18 +22,19 @@ import csv
 import io
 import itertools
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.core.clock_stamps import (
-    DATE_TIME,
-    TIME_OF_DAY,
-    clock_seconds,
-    is_clock_stamp,
-    seconds_from_first,
-)
+from app.core.clock_stamps import DATE_TIME, TIME_OF_DAY, is_clock_stamp, seconds_from_first
 from app.core.exceptions import UserError
+from app.core.record_columns import (
+    Layout,
+    TimeColumn,
+    bare_layout,
+    comment_text,
+    header_layout,
+)
 from app.core.spreadsheet_text import (
     WHOLE_COMMA_DIGITS,
     decimal_point,
@@ -43,11 +45,6 @@ from app.core.spreadsheet_text import (
 BLOCK_LINES = 200_000
 LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
 MAX_SAMPLES = 20_000_000
-VALUE_NAMES = ("value", "rate", "rate_deg_h", "omega", "reading")
-TIME_NAMES = ("time_s", "time", "t", "t_s", "timestamp", "timestamp_s", "datetime", "date_time")
-TIME_NAMES += ("time_ms", "t_ms", "timestamp_ms", "time_us", "t_us", "时间")
-TIME_UNITS = {"time_ms": 1e-3, "t_ms": 1e-3, "timestamp_ms": 1e-3, "time_us": 1e-6, "t_us": 1e-6}
-TEMPERATURE_NAMES = ("temperature_c", "temperature", "temp_c", "temp")
 
 Progress = Callable[[str, dict], None]
 
@@ -55,55 +52,14 @@ Progress = Callable[[str, dict], None]
 @dataclass
 class StaticRecord:
     """A static record: rates, and where the source had them, times (s) and case
-    temperatures (°C)."""
+    temperatures (°C); the rates' unit where the header names it, and notes on how the
+    record was read (``{"key", "params"}``, words in the catalogues)."""
 
     values: np.ndarray
     times_s: np.ndarray | None = None
     temperatures_c: np.ndarray | None = None
-
-
-def _chosen(column: str, names: list[str]) -> int:
-    """The column asked for: its name in the header, or its number counted from 1."""
-    wanted = column.strip().lower()
-    if wanted in names:
-        return names.index(wanted)
-    if wanted.isdigit() and 1 <= int(wanted) <= len(names):
-        return int(wanted) - 1
-    raise UserError(
-        "allan.no_such_column",
-        column=column,
-        columns=", ".join(names),
-    )
-
-
-def _columns(
-    header: list[str], column: str | None = None
-) -> tuple[int, int | None, int | None, int | None]:
-    names = [h.strip().lower() for h in header]
-
-    def find(options):
-        return next((names.index(o) for o in options if o in names), None)
-
-    if column is not None:  # one axis of a multi-axis record, say
-        return _chosen(column, names), find(TIME_NAMES), find(TEMPERATURE_NAMES), None
-
-    wide = [n for n in names if n.startswith("position_")]
-    if len(wide) > 1:  # the wide layout: one column per position
-        raise UserError(
-            "allan.one_position",
-            count=len(wide),
-        )
-    value = find((*VALUE_NAMES, *wide))
-    if value is None:
-        if len(names) in (1, 2, 3):  # unknown names: the columns as without a header
-            return {1: (0, None, None, None), 2: (1, 0, None, None)}.get(
-                len(names), (1, 0, 2, None)
-            )
-        raise UserError(
-            "allan.no_value_column",
-            columns=", ".join(names),
-        )
-    return value, find(TIME_NAMES), find(TEMPERATURE_NAMES), find(("position",))
+    unit: str | None = None
+    notes: list[dict] = field(default_factory=list)
 
 
 def _is_header(cells: list[str]) -> bool:
@@ -117,14 +73,26 @@ def _is_header(cells: list[str]) -> bool:
     return False
 
 
-def _times(cells, name: str | None, origin: list[int]) -> tuple[np.ndarray, bool]:
-    """A block's times in seconds: numbers (scaled when the column's name says ms or µs),
-    or a logger's clock stamps (:func:`app.core.clock_stamps.clock_seconds`); and whether
-    they are clock stamps."""
+def _holds_a_number(cells: list[str]) -> bool:
+    return any(_is_number(cell) for cell in cells)
+
+
+def _is_number(cell: str) -> bool:
     try:
-        return np.asarray(cells, dtype=float) * TIME_UNITS.get(name or "", 1.0), False
+        float(cell)
     except ValueError:
-        return clock_seconds(cells, origin), True
+        return False
+    return True
+
+
+def _header_in_comment(comment: str | None, split, width: int) -> list[str] | None:
+    """A header written as the comment line just above the readings ("#timestamp [ns],
+    w_x [rad s^-1], …", "%time,field.angular_velocity.x, …"): its cells, when it has the
+    readings' number of columns and is names, not numbers."""
+    if comment is None or width < 2:
+        return None
+    cells = split(comment)
+    return cells if len(cells) == width and _is_header(cells) else None
 
 
 def read_static_record(
@@ -154,10 +122,9 @@ def read_static_record(
         ``MAX_SAMPLES`` readings.
     """
     values, times, temps = [], [], []
-    layout: tuple[int, int | None, int | None, int | None] | None = None
-    time_name: str | None = None  # the time column's name, for its unit
-    clock = False  # the times are a logger's clock stamps
-    origin_day: list[int] = []  # their first date (days from 1970), once seen
+    layout: Layout | None = None
+    clock: TimeColumn | None = None  # the time column's reader, once the layout is known
+    notes: list[dict] = []
     position_seen: str | None = None
     block: list[list[str]] = []
     first_line = 0
@@ -165,14 +132,13 @@ def read_static_record(
     count = 0
 
     def flush() -> None:
-        nonlocal block, first_line, count, position_seen, clock
+        nonlocal block, first_line, count, position_seen
         if not block:
             return
-        value_col, time_col, temp_col, position_col = layout
         try:
             rows = np.array(block, dtype=object)
-            if position_col is not None:
-                positions = set(rows[:, position_col].tolist())
+            if layout.position is not None:
+                positions = set(rows[:, layout.position].tolist())
                 if position_seen is not None:
                     positions.add(position_seen)
                 if len(positions) > 1:
@@ -181,13 +147,11 @@ def read_static_record(
                         count=len(positions),
                     )
                 position_seen = next(iter(positions))
-            values.append(np.asarray(rows[:, value_col], dtype=float))
-            if time_col is not None:
-                seconds, stamped = _times(rows[:, time_col], time_name, origin_day)
-                times.append(seconds)
-                clock = clock or stamped
-            if temp_col is not None:
-                temps.append(np.asarray(rows[:, temp_col], dtype=float))
+            values.append(np.asarray(rows[:, layout.value], dtype=float))
+            if layout.time is not None:
+                times.append(clock.seconds(rows[:, layout.time]))
+            if layout.temperature is not None:
+                temps.append(np.asarray(rows[:, layout.temperature], dtype=float))
         except (ValueError, IndexError):
             bad = _first_bad_line(block, layout)
             raise UserError(
@@ -206,13 +170,19 @@ def read_static_record(
 
     width = None
     units_next = False  # the line after a header may name the units
+    comment: str | None = None  # the last comment line before the readings
+    comment_line = 0
     lines = iter(lines)
     first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
     split = _joined_decimal_comma if _one_column_with_decimal_commas(first) else None
     for raw in itertools.chain(first, lines):
         line_number += 1
         text = raw.strip().lstrip("\ufeff")
-        if not text or text.startswith(("#", "%")):
+        if not text:
+            continue
+        if (remark := comment_text(text)) is not None:
+            if layout is None:
+                comment, comment_line = remark, line_number
             continue
         if split is None:
             split = _splitter(text)
@@ -222,18 +192,19 @@ def read_static_record(
             if is_units_row(cells):
                 continue  # "s, °/h, °C" under the names
         if layout is None:
-            if _is_header(cells):
-                layout = _columns(cells, column)
-                if layout[1] is not None:
-                    time_name = cells[layout[1]].strip().lower()
-                width = len(cells)
-                units_next = True
-                continue
             width = len(cells)
-            layout = {1: (0, None, None, None), 2: (1, 0, None, None)}.get(width, (1, 0, 2, None))
-            if column is not None:
-                numbers = [str(k) for k in range(1, width + 1)]
-                layout = (_chosen(column, numbers), None, None, None)
+            named = _header_in_comment(comment, split, width)
+            if named is not None and _holds_a_number(cells):  # a ROS frame's name, say
+                layout = header_layout(named, column)
+                notes.append({"key": "allan.note_comment_header", "params": {"line": comment_line}})
+            elif _is_header(cells):
+                layout = header_layout(cells, column)
+                units_next = True
+            else:
+                layout = bare_layout(width, column)
+            clock = TimeColumn(layout.time_scale)
+            if units_next:
+                continue
         if len(cells) != width:
             raise UserError(
                 "allan.bad_line",
@@ -250,10 +221,19 @@ def read_static_record(
         raise UserError("allan.empty")
     data = np.concatenate(values)
     all_times = np.concatenate(times) if times else None
+    if clock is not None and clock.inferred:
+        notes.append(
+            {
+                "key": "allan.note_time_unit",
+                "params": {"unit": clock.inferred, "column": layout.time + 1},
+            }
+        )
     record = StaticRecord(
         data,
-        seconds_from_first(all_times) if clock else all_times,
+        seconds_from_first(all_times) if clock is not None and clock.clock else all_times,
         np.concatenate(temps) if temps else None,
+        layout.rate_unit,
+        notes,
     )
     if not np.all(np.isfinite(record.values)):
         raise UserError("readings.not_finite")
@@ -297,7 +277,7 @@ def _one_column_with_decimal_commas(first_lines: list[str]) -> bool:
     """Whether a comma-separated record is one column of numbers with decimal commas, by
     its first lines (:func:`app.core.readings.one_column_of_decimal_commas`)."""
     texts = [line.strip().lstrip("\ufeff") for line in first_lines]
-    texts = [text for text in texts if text and not text.startswith(("#", "%"))]
+    texts = [text for text in texts if text and comment_text(text) is None]
     if not texts or "\t" in texts[0] or ";" in texts[0]:
         return False
     named = not WHOLE_COMMA_DIGITS.fullmatch(texts[0]) and _is_header(texts[0].split(","))
@@ -310,16 +290,14 @@ def _joined_decimal_comma(text: str) -> list[str]:
     return [text.replace(",", ".")]
 
 
-def _first_bad_line(block, layout) -> int:
+def _first_bad_line(block, layout: Layout) -> int:
     for index, row in enumerate(block):
         try:
-            for position, col in enumerate(layout[:3]):
-                if col is None:
-                    continue
-                if position == 1:
-                    _times([row[col]], None, [0])
-                else:
-                    float(row[col])
+            float(row[layout.value])
+            if layout.temperature is not None:
+                float(row[layout.temperature])
+            if layout.time is not None and not TimeColumn.readable(row[layout.time]):
+                return index
         except (ValueError, IndexError):
             return index
     return 0

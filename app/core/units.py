@@ -20,6 +20,7 @@ TO_DEG_PER_HOUR: dict[str, float] = {
     RAD_PER_SECOND: math.degrees(1.0) * 3600.0,
 }
 UNITS = tuple(TO_DEG_PER_HOUR)
+UNIT_SYMBOLS = {DEG_PER_HOUR: "°/h", DEG_PER_SECOND: "°/s", RAD_PER_SECOND: "rad/s"}  # as shown
 ALIASES = {
     "°/h": DEG_PER_HOUR,
     "deg/hr": DEG_PER_HOUR,

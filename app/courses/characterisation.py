@@ -24,7 +24,7 @@ from app.core.exceptions import UserError
 from app.core.flicker import DEFAULT_BAND_S
 from app.core.noise_model import GyroNoise
 from app.core.static_record import read_static_record, text_lines
-from app.core.units import canonical_unit
+from app.core.units import DEG_PER_HOUR, UNIT_SYMBOLS, canonical_unit
 from app.models import Assignment, utcnow
 
 MAX_RATE_HZ = 10_000.0
@@ -49,13 +49,14 @@ def _check_length(seconds: float) -> None:
 
 
 def characterise(
-    source, rate_hz: float | None, unit: str = "deg/h", column: str | None = None
+    source, rate_hz: float | None, unit: str | None = None, column: str | None = None
 ) -> dict:
     """Fit the record's Allan deviation; the stored summary (JSON-ready).
 
     ``source`` is the record's bytes or a binary file (an upload spooled to disk), read in
-    blocks of lines; ``rate_hz`` None takes the rate from the record's times; ``column``
-    names the rates' column (one axis of a multi-axis record)."""
+    blocks of lines; ``rate_hz`` None takes the rate from the record's times; ``unit``
+    None takes it from the record's header (else °/h); ``column`` names the rates' column
+    (one axis of a multi-axis record)."""
     if rate_hz is not None and (
         not (isinstance(rate_hz, int | float) and math.isfinite(rate_hz))
         or not (0 < rate_hz <= MAX_RATE_HZ)
@@ -68,7 +69,13 @@ def characterise(
         _check_length(record.values.size / rate_hz)
     elif record.times_s is not None and record.times_s.size > 1:
         _check_length(float(record.times_s[-1] - record.times_s[0]))
-    result = analyse_record(record, rate_hz, unit=canonical_unit(unit))
+    result = analyse_record(record, rate_hz, unit=canonical_unit(unit) if unit else None)
+    if not unit and any(note["key"] == "allan.note_unit_doubt" for note in result.notes):
+        raise UserError(  # a unit read by default that no gyro's floor fits: ask, not store
+            "characterisation.unit_doubt",
+            floor=f"{result.adev_min_deg_h:.3g}",
+            unit=UNIT_SYMBOLS[record.unit or DEG_PER_HOUR],
+        )
     _check_length(result.samples / result.rate_hz)  # what is left after trimming
     if result.rate_hz > MAX_RATE_HZ:
         raise UserError(

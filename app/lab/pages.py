@@ -15,7 +15,7 @@ from app.accounts.deps import CurrentUser
 from app.core.exceptions import UserError
 from app.core.presets import PRESETS
 from app.core.table_headers import SUMMARY_LABELS
-from app.core.units import UNITS
+from app.core.units import UNIT_SYMBOLS, UNITS
 from app.courses import deadlines
 from app.lab.attempts import (
     amendments_of,
@@ -263,7 +263,7 @@ def session_view(
     }
 
 
-UNIT_NAMES = {"deg/h": "°/h", "deg/s": "°/s", "rad/s": "rad/s"}
+UNIT_NAMES = UNIT_SYMBOLS
 JS_MESSAGES = (
     "js.not_a_number",
     "js.not_finite",

@@ -20,7 +20,7 @@ from app.core.explain import explain_heading, explain_latitude
 from app.core.noise_model import GyroNoise, Window
 from app.core.record_checks import count_spikes, record_gaps, warm_up_change
 from app.core.solve import solve_heading, solve_latitude
-from app.core.units import TO_DEG_PER_HOUR, unit_slip
+from app.core.units import TO_DEG_PER_HOUR, UNIT_SYMBOLS, unit_slip
 from app.courses.characterisation import StationNoise, station_noise
 from app.lab.recent_samples import RECENT
 from app.lab.samples import unpack_all
@@ -337,9 +337,6 @@ def flags_of_checks(session: LabSession, checks: dict[int, PositionChecks]) -> l
             if typical > 0 and std > 3 * typical:
                 flags.append(flag("flag.noisy", position=position, ratio=round(std / typical, 1)))
     return flags
-
-
-UNIT_SYMBOLS = {"deg/h": "°/h", "deg/s": "°/s", "rad/s": "rad/s"}
 
 
 def unit_slip_flag(session: LabSession, part: str, ordered: list[PositionData], result):

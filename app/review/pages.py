@@ -152,7 +152,7 @@ def upload_characterisation(
     db: SessionDep,
     record: Annotated[UploadFile | None, File()] = None,
     rate_hz: Annotated[str, Form(max_length=40)] = "",
-    unit: Annotated[str, Form(max_length=16)] = "deg/h",
+    unit: Annotated[str, Form(max_length=16)] = "",
     column: Annotated[str, Form(max_length=100)] = "",
     remove: Annotated[str, Form(max_length=8)] = "",
 ):
@@ -177,7 +177,7 @@ def upload_characterisation(
         try:
             with pool("analysis").slot(course.teacher_id):
                 summary = characterisation.characterise(
-                    _record_source(record), rate, unit, column.strip() or None
+                    _record_source(record), rate, unit.strip() or None, column.strip() or None
                 )
         except (OSError, EOFError):  # a truncated or corrupt gzip stream
             raise UserError("characterisation.bad_gzip") from None

@@ -1,0 +1,372 @@
+"""What a static record's header says: which column holds the rates, the times, the case
+temperature and the position, and in which units.
+
+Loggers name their columns in many ways: "value" or "rate_deg_h" (GyroLab and its serial
+bridge), "Time (s)" and "Rate (°/h)" (a spreadsheet), "#timestamp [ns]" and
+"w_RS_S_z [rad s^-1]" (the EuRoC and Kalibr IMU files, the header behind a comment mark),
+"%time" and "field.angular_velocity.z" (ROS's ``rostopic echo -p``), "SampleTimeFine" and
+"Gyr_Z" (Xsens MT Manager, ``//`` comments).  A unit in brackets or parentheses, or as
+the name's suffix ("time_ms", "rate_deg_h"), is read.  A time column that names no unit
+and whose numbers are too large for seconds is read as milliseconds, microseconds or
+nanoseconds since 1970 (:func:`epoch_scale`).  The records themselves:
+:mod:`app.core.static_record`.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from app.core.clock_stamps import clock_seconds
+from app.core.exceptions import UserError
+from app.core.units import DEG_PER_HOUR, DEG_PER_SECOND, RAD_PER_SECOND
+
+COMMENT_MARKS = ("#", "%", "//")
+VALUE_NAMES = ("value", "rate", "omega", "reading", "角速度", "角速率")
+TIME_NAMES = ("time", "t", "timestamp", "datetime", "date_time", "sampletimefine", "时间")
+TEMPERATURE_NAMES = ("temperature", "temperature_c", "temp", "temp_c", "温度")
+TIME_SCALES = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6, "ns": 1e-9}
+NAMED_TIME_SCALES = {"sampletimefine": 1e-4}  # Xsens: ticks of 100 µs
+RATE_UNITS = {
+    "deg/h": DEG_PER_HOUR,
+    "°/h": DEG_PER_HOUR,
+    "deg/hr": DEG_PER_HOUR,
+    "degh^-1": DEG_PER_HOUR,
+    "dph": DEG_PER_HOUR,
+    "deg_h": DEG_PER_HOUR,
+    "deg/s": DEG_PER_SECOND,
+    "°/s": DEG_PER_SECOND,
+    "deg/sec": DEG_PER_SECOND,
+    "degs^-1": DEG_PER_SECOND,
+    "degs-1": DEG_PER_SECOND,
+    "dps": DEG_PER_SECOND,
+    "deg_s": DEG_PER_SECOND,
+    "rad/s": RAD_PER_SECOND,
+    "rad/sec": RAD_PER_SECOND,
+    "rads^-1": RAD_PER_SECOND,
+    "rads-1": RAD_PER_SECOND,
+    "rad_s": RAD_PER_SECOND,
+}
+# ROS's sensor_msgs/Imu angular velocity, in rad/s by the message's definition (REP 103)
+ROS_ANGULAR_VELOCITY = re.compile(r"(?:.*\.)?angular_velocity\.[xyz]")
+_UNIT_IN_BRACKETS = re.compile(r"(.*?)\s*[(\[]([^()\[\]]*)[)\]]")
+_TIME_SUFFIX = re.compile(r"(.+?)_(s|ms|us|ns)")
+_RATE_SUFFIX = re.compile(r"(.+?)_(deg_h|deg_s|dps|dph|rad_s)")
+# the smallest numbers that cannot be seconds (since 1970 or since a record's start: over
+# 3,000 years), and the unit since 1970 they are in, by size (true from 1973 to 5138)
+EPOCH_SCALES = ((1e17, 1e-9, "ns"), (1e14, 1e-6, "µs"), (1e11, 1e-3, "ms"))
+
+
+@dataclass(frozen=True)
+class ColumnName:
+    """One header cell: as written (lower case), its name without a unit, and the unit."""
+
+    full: str
+    base: str
+    unit: str | None
+
+
+def comment_text(text: str) -> str | None:
+    """The text of a comment line after its mark (``#``, ``%``, ``//``), or None.
+
+    Parameters
+    ----------
+    text : str
+        A line, stripped.
+
+    Returns
+    -------
+    str or None
+        "timestamp [ns],w_x [rad s^-1]" for "#timestamp [ns],w_x [rad s^-1]".
+    """
+    for mark in COMMENT_MARKS:
+        if text.startswith(mark):
+            return text[len(mark) :].strip()
+    return None
+
+
+def column_name(cell: str) -> ColumnName:
+    """A header cell split into its name and its unit.
+
+    Parameters
+    ----------
+    cell : str
+        "Time (s)", "w_RS_S_z [rad s^-1]", "time_ms", "rate_deg_h", "value" ….
+
+    Returns
+    -------
+    ColumnName
+        ("time (s)", "time", "s"), ("w_rs_s_z [rad s^-1]", "w_rs_s_z", "rad s^-1"),
+        ("time_ms", "time", "ms"), ("rate_deg_h", "rate", "deg_h"), ("value", "value", None).
+    """
+    full = cell.strip().lower()
+    bracketed = _UNIT_IN_BRACKETS.fullmatch(full)
+    if bracketed and bracketed.group(1):
+        return ColumnName(full, bracketed.group(1).strip(), bracketed.group(2).strip())
+    for suffix in (_RATE_SUFFIX, _TIME_SUFFIX):
+        named = suffix.fullmatch(full)
+        if named:
+            return ColumnName(full, named.group(1), named.group(2))
+    return ColumnName(full, full, None)
+
+
+def rate_unit(unit: str | None) -> str | None:
+    """The canonical rate unit a column's unit text names ("rad s^-1" → "rad/s"), or None.
+
+    Parameters
+    ----------
+    unit : str or None
+        The unit as written in the header.
+
+    Returns
+    -------
+    str or None
+        "deg/h", "deg/s" or "rad/s"; None when the text names none of them.
+    """
+    if unit is None:
+        return None
+    return RATE_UNITS.get(unit.replace(" ", "").replace("·", ""))
+
+
+def epoch_scale(first_time: float) -> tuple[float, str] | None:
+    """The unit of a time column that names none, from the size of its first number.
+
+    No record's times in seconds reach 1e11 (3,000 years, since 1970 or since its start);
+    such numbers are a clock since 1970 in ms (1e11 … 1e14), µs (… 1e17) or ns (beyond),
+    true for dates from 1973 to 5138.
+
+    Parameters
+    ----------
+    first_time : float
+        The column's first number.
+
+    Returns
+    -------
+    (float, str) or None
+        Seconds per unit and the unit's name; None for numbers that can be seconds.
+    """
+    for smallest, scale, name in EPOCH_SCALES:
+        if abs(first_time) >= smallest:
+            return scale, name
+    return None
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where a record's columns are (0-based) and what their header says of units."""
+
+    value: int
+    time: int | None = None
+    temperature: int | None = None
+    position: int | None = None
+    time_scale: float | None = None  # seconds per unit; None: seconds or by size
+    rate_unit: str | None = None  # the rates' unit as the header names it
+    value_name: str | None = None  # the rates' column as the header names it
+
+
+def chosen_column(column: str, names: list[ColumnName]) -> int:
+    """The column asked for: its header cell, its name without the unit, or its number
+    counted from 1.
+
+    Parameters
+    ----------
+    column : str
+        As the user gave it ("w_RS_S_z", "gyr_z", "4").
+    names : list of ColumnName
+        The header's columns.
+
+    Returns
+    -------
+    int
+        The column's index from 0.
+
+    Raises
+    ------
+    UserError
+        ``allan.no_such_column``, listing the columns.
+    """
+    wanted = column.strip().lower()
+    for field in ("full", "base"):
+        found = [k for k, name in enumerate(names) if getattr(name, field) == wanted]
+        if found:
+            return found[0]
+    if wanted.isdigit() and 1 <= int(wanted) <= len(names):
+        return int(wanted) - 1
+    raise UserError(
+        "allan.no_such_column",
+        column=column,
+        columns=", ".join(name.full for name in names) or "1",
+    )
+
+
+def _find(names: list[ColumnName], options: tuple[str, ...]) -> int | None:
+    return next(
+        (k for option in options for k, name in enumerate(names) if name.base == option), None
+    )
+
+
+def header_layout(header: list[str], column: str | None = None) -> Layout:
+    """The layout a header names.
+
+    Parameters
+    ----------
+    header : list of str
+        The header's cells.
+    column : str, optional
+        The rates' column, when the record has several (one axis of an IMU's record).
+
+    Returns
+    -------
+    Layout
+        By name: the rates ``value`` (or ``rate``, ``omega`` …, or the one ``position_k``),
+        the times, the case temperature and the position; a header of one to three
+        unknown names is read as the columns without a header.
+
+    Raises
+    ------
+    UserError
+        ``allan.one_position`` for the wide layout of several positions;
+        ``allan.no_value_column`` when no column is the rates and none was chosen.
+    """
+    names = [column_name(cell) for cell in header]
+    time = _find(names, TIME_NAMES)
+    temperature = _find(names, TEMPERATURE_NAMES)
+    if column is not None:
+        value = chosen_column(column, names)
+        position = None
+    else:
+        wide = [k for k, name in enumerate(names) if name.full.startswith("position_")]
+        if len(wide) > 1:  # the wide layout: one column per position
+            raise UserError("allan.one_position", count=len(wide))
+        value = _find(names, VALUE_NAMES)
+        if value is None and wide:
+            value = wide[0]
+        if value is None:
+            if len(names) <= 3:  # unknown names: the columns as without a header
+                return bare_layout(len(names))
+            raise UserError(
+                "allan.no_value_column",
+                columns=", ".join(name.full for name in names),
+            )
+        position = _find(names, ("position",))
+    if time is not None:
+        name = names[time]
+        scale = NAMED_TIME_SCALES.get(name.base, TIME_SCALES.get(name.unit or ""))
+    else:
+        scale = None
+    return Layout(
+        value,
+        time,
+        temperature if temperature != value else None,
+        position,
+        scale,
+        rate_unit(names[value].unit)
+        or (RAD_PER_SECOND if ROS_ANGULAR_VELOCITY.fullmatch(names[value].base) else None),
+        header[value].strip(),
+    )
+
+
+def bare_layout(width: int, column: str | None = None) -> Layout:
+    """The layout of a record without a header, by its number of columns: the rates;
+    time and rate; time, rate and case temperature (the bridge's static record).
+
+    Parameters
+    ----------
+    width : int
+        The record's number of columns.
+    column : str, optional
+        The rates' column, a number from 1.
+
+    Returns
+    -------
+    Layout
+        Where the rates, times and temperatures are.
+
+    Raises
+    ------
+    UserError
+        ``allan.choose_column`` for four or more columns with none chosen: which is the
+        rate cannot be told.
+    """
+    if column is not None:
+        numbers = [ColumnName(str(k), str(k), None) for k in range(1, width + 1)]
+        return Layout(chosen_column(column, numbers))
+    if width == 1:
+        return Layout(0)
+    if width == 2:
+        return Layout(1, 0)
+    if width == 3:
+        return Layout(1, 0, 2)
+    raise UserError("allan.choose_column", count=width)
+
+
+class TimeColumn:
+    """A record's time column read block by block, in seconds.
+
+    Numbers in seconds stay as they are; in another unit -- named by the header, or, where
+    it names none, told by their size (:func:`epoch_scale`) -- they are counted from the
+    first reading, whole numbers exactly (a clock in ns since 1970 is beyond float64's
+    53 bits); a logger's clock stamps (:func:`app.core.clock_stamps.clock_seconds`) are
+    read from the midnight of the first date (``clock``: the reader counts them from the
+    first reading).
+    """
+
+    def __init__(self, scale: float | None) -> None:
+        self.scale = scale
+        self.clock = False
+        self.inferred: str | None = None  # the unit told by the numbers' size
+        self._origin: int | float | None = None
+        self._origin_day: list[int] = []
+
+    def _unit_of(self, first: float) -> float:
+        if self.scale is None:
+            told = epoch_scale(first)
+            self.scale, self.inferred = told if told else (1.0, None)
+        return self.scale
+
+    def seconds(self, cells) -> np.ndarray:
+        """The block's times in seconds.
+
+        Raises
+        ------
+        ValueError
+            A cell that is neither a number nor a clock stamp.
+        """
+        try:
+            whole = np.asarray(cells, dtype=np.int64)
+        except (ValueError, OverflowError):
+            whole = None
+        if whole is not None and whole.size:
+            scale = self._unit_of(float(whole[0]))
+            if scale == 1.0:
+                return whole.astype(float)
+            if self._origin is None:
+                self._origin = int(whole[0])
+            return (whole - np.int64(self._origin)).astype(float) * scale
+        try:
+            numbers = np.asarray(cells, dtype=float)
+        except ValueError:
+            self.clock = True
+            return clock_seconds(cells, self._origin_day)
+        if not numbers.size:
+            return numbers
+        scale = self._unit_of(float(numbers[0]))
+        if scale == 1.0:
+            return numbers
+        if self._origin is None:
+            self._origin = float(numbers[0])
+        return (numbers - self._origin) * scale
+
+    @staticmethod
+    def readable(cell: str) -> bool:
+        """Whether one cell is a time (a number or a clock stamp)."""
+        try:
+            float(cell)
+        except ValueError:
+            try:
+                clock_seconds([cell], [0])
+            except ValueError:
+                return False
+        return True

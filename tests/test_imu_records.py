@@ -1,0 +1,283 @@
+"""Static records as IMUs and their tools write them -- EuRoC and Kalibr's CSV (the header
+behind '#', times in ns, rates in rad/s named in the header), ROS's ``rostopic echo -p``
+(the header behind '%', a frame's name among the numbers), Xsens MT Manager ('//'
+comments, tabs, SampleTimeFine in 100 µs ticks, no unit), a spreadsheet's "Time (s)" and
+"Rate (deg/s)" -- read and analysed from an independent generator's white noise, whose
+angle random walk is known in closed form: N = σ·√Δt."""
+
+from __future__ import annotations
+
+import functools
+import gzip
+import math
+
+import numpy as np
+import pytest
+
+from app.core.allan import analyse_record, unit_doubt
+from app.core.exceptions import UserError
+from app.core.record_columns import (
+    TimeColumn,
+    column_name,
+    epoch_scale,
+    header_layout,
+    rate_unit,
+)
+from app.core.static_record import read_static_record, text_lines
+
+RATE_HZ = 100.0
+SECONDS = 650.0
+SIGMA_DEG_S = 0.004  # white noise per sample, °/s
+# N (°/√h) = σ (°/h) · √(Δt in h) = σ (°/s) · 3600 · √(Δt / 3600 s) = σ (°/s) · 60 · √Δt
+ARW_DEG_RT_H = SIGMA_DEG_S * 60.0 * math.sqrt(1.0 / RATE_HZ)
+EPOCH_NS = 1_403_636_579_758_555_392  # EuRoC's MH_01 starts here
+
+
+@functools.cache
+def white_rates(seed: int = 7, axes: int = 3) -> np.ndarray:
+    """Independent of the app's simulator: numpy's own white noise about a small bias, °/s."""
+    rng = np.random.default_rng(seed)
+    count = int(SECONDS * RATE_HZ)
+    return rng.normal(0.0, SIGMA_DEG_S, (count, axes)) + np.array([2e-3, -1e-3, 4e-3])[:axes]
+
+
+def read(text: str, column: str | None = None):
+    return read_static_record(text_lines(text.encode()), column=column)
+
+
+@functools.cache
+def euroc_text() -> str:
+    rates = np.radians(white_rates()).tolist()
+    step_ns = int(1e9 / RATE_HZ)
+    lines = [
+        "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+        "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"
+    ]
+    lines += [
+        f"{EPOCH_NS + k * step_ns},{x},{y},{z},0.01,-0.02,9.81" for k, (x, y, z) in enumerate(rates)
+    ]
+    return "\n".join(lines) + "\n"
+
+
+@functools.cache
+def ros_text() -> str:
+    rates = np.radians(white_rates()).tolist()
+    step_ns = int(1e9 / RATE_HZ)
+    lines = [
+        "%time,field.header.seq,field.header.stamp,field.header.frame_id,"
+        "field.angular_velocity.x,field.angular_velocity.y,field.angular_velocity.z"
+    ]
+    lines += [
+        f"{EPOCH_NS + k * step_ns},{k},{EPOCH_NS + k * step_ns},imu_link,{x},{y},{z}"
+        for k, (x, y, z) in enumerate(rates)
+    ]
+    return "\n".join(lines) + "\n"
+
+
+@functools.cache
+def xsens_text() -> str:
+    rates = np.radians(white_rates()).tolist()
+    lines = [
+        "// Start Time: Unknown",
+        "// Update Rate: 100.0Hz",
+        "// Filter Profile: General",
+        "PacketCounter\tSampleTimeFine\tGyr_X\tGyr_Y\tGyr_Z",
+    ]
+    lines += [
+        f"{k}\t{4_000_000 + k * 100}\t{x:.8f}\t{y:.8f}\t{z:.8f}"
+        for k, (x, y, z) in enumerate(rates)
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def keys(result) -> list[str]:
+    return [note["key"] for note in result.notes]
+
+
+def test_a_euroc_record_header_behind_a_hash_ns_times_rad_per_s():
+    record = read(euroc_text(), column="w_RS_S_z")
+    assert record.unit == "rad/s"
+    # times from a clock in ns, counted from the first reading, exact
+    assert record.times_s[:3].tolist() == [0.0, 0.01, 0.02]
+    result = analyse_record(record, None)
+    assert result.rate_hz == pytest.approx(RATE_HZ, rel=1e-12)
+    assert result.arw_deg_rt_h == pytest.approx(ARW_DEG_RT_H, rel=0.05)
+    assert keys(result)[:2] == ["allan.note_comment_header", "allan.note_unit_from_header"]
+    assert "allan.note_unit_doubt" not in keys(result)
+
+
+def test_a_euroc_axis_chosen_by_its_full_header_cell_or_its_number():
+    by_name = read(euroc_text(), column="w_RS_S_y [rad s^-1]")
+    by_number = read(euroc_text(), column="3")
+    assert np.array_equal(by_name.values, by_number.values)
+
+
+def test_a_ros_topic_dump_with_a_frame_name_among_the_numbers():
+    record = read(ros_text(), column="field.angular_velocity.z")
+    assert record.unit == "rad/s"  # sensor_msgs/Imu: rad/s by definition
+    result = analyse_record(record, None)
+    assert result.rate_hz == pytest.approx(RATE_HZ, rel=1e-12)
+    assert result.arw_deg_rt_h == pytest.approx(ARW_DEG_RT_H, rel=0.05)
+    notes = {note["key"]: note["params"] for note in result.notes}
+    assert notes["allan.note_time_unit"] == {"unit": "ns", "column": 1}
+    assert "allan.note_comment_header" in notes
+
+
+def test_without_a_column_the_imus_columns_are_listed_by_name():
+    with pytest.raises(UserError) as error:
+        read(ros_text())
+    assert error.value.key == "allan.no_value_column"
+    assert "field.angular_velocity.z" in error.value.params["columns"]
+    assert "imu_link" not in error.value.params["columns"]
+
+
+def test_an_xsens_export_no_unit_named_is_doubted_then_read_as_chosen():
+    record = read(xsens_text(), column="Gyr_Z")
+    assert record.unit is None
+    assert record.times_s[1] == pytest.approx(0.01, abs=1e-12)  # SampleTimeFine: 100 µs
+    as_deg_h = analyse_record(record, None)
+    assert "allan.note_unit_doubt" in keys(as_deg_h)  # rad/s read as °/h: a floor of 1e-7
+    as_rad_s = analyse_record(record, None, unit="rad/s")
+    assert as_rad_s.arw_deg_rt_h == pytest.approx(ARW_DEG_RT_H, rel=0.05)
+    assert "allan.note_unit_doubt" not in keys(as_rad_s)
+
+
+def test_a_spreadsheets_units_in_parentheses():
+    rates = white_rates(axes=1)[:, 0]
+    text = "Time (s),Rate (deg/s)\n" + "".join(
+        f"{k / RATE_HZ:.2f},{r:.7f}\n" for k, r in enumerate(rates)
+    )
+    record = read(text)
+    assert record.unit == "deg/s"
+    result = analyse_record(record, None)
+    assert result.arw_deg_rt_h == pytest.approx(ARW_DEG_RT_H, rel=0.05)
+
+
+def test_a_unit_chosen_against_the_header_is_refused():
+    record = read(euroc_text(), column="w_RS_S_x")
+    with pytest.raises(UserError) as error:
+        analyse_record(record, None, unit="deg/h")
+    assert error.value.key == "allan.unit_conflict"
+    assert error.value.params == {"header": "rad/s", "chosen": "°/h"}
+    same = analyse_record(record, None, unit="rad/s")  # the header's own unit: no conflict
+    assert same.arw_deg_rt_h == pytest.approx(ARW_DEG_RT_H, rel=0.05)
+
+
+def test_many_columns_and_no_header_ask_which_is_the_rate():
+    text = "".join(f"{k},0.1,0.2,{k % 7}\n" for k in range(20))
+    with pytest.raises(UserError) as error:
+        read(text)
+    assert error.value.key == "allan.choose_column" and error.value.params == {"count": 4}
+    assert read(text, column="4").values[:3].tolist() == [0.0, 1.0, 2.0]
+    # the bridge's static record keeps its bare layout: time, rate, case temperature
+    bare = read("0.0,1.5,20.1\n0.1,1.6,20.2\n")
+    assert bare.values.tolist() == [1.5, 1.6] and bare.temperatures_c.tolist() == [20.1, 20.2]
+
+
+def test_a_comment_above_bare_numbers_is_no_header_when_its_width_differs():
+    record = read("# bench 3, 2026-11-28, FOG at rest, 10 Hz\n1.5\n1.6\n")
+    assert record.values.tolist() == [1.5, 1.6] and record.notes == []
+
+
+@pytest.mark.parametrize(
+    ("cell", "base", "unit"),
+    [
+        ("Time (s)", "time", "s"),
+        ("w_RS_S_z [rad s^-1]", "w_rs_s_z", "rad s^-1"),
+        ("time_ms", "time", "ms"),
+        ("rate_deg_h", "rate", "deg_h"),
+        ("rate_deg_s", "rate", "deg_s"),
+        ("value", "value", None),
+        ("position_2", "position_2", None),
+        ("角速度 (°/h)", "角速度", "°/h"),
+    ],
+)
+def test_a_column_name_and_its_unit(cell, base, unit):
+    name = column_name(cell)
+    assert (name.base, name.unit) == (base, unit)
+
+
+@pytest.mark.parametrize(
+    ("text", "unit"),
+    [
+        ("rad s^-1", "rad/s"),
+        ("rad/s", "rad/s"),
+        ("°/s", "deg/s"),
+        ("dps", "deg/s"),
+        ("deg_h", "deg/h"),
+        ("°/h", "deg/h"),
+        ("m s^-2", None),
+        (None, None),
+    ],
+)
+def test_rate_units_as_headers_write_them(text, unit):
+    assert rate_unit(text) == unit
+
+
+@pytest.mark.parametrize(
+    ("first", "told"),
+    [
+        (0.0, None),
+        (1.7e9, None),  # seconds since 1970
+        (1.7e12, (1e-3, "ms")),
+        (1.7e15, (1e-6, "µs")),
+        (1.7e18, (1e-9, "ns")),
+    ],
+)
+def test_a_times_unit_told_by_its_size(first, told):
+    assert epoch_scale(first) == told
+
+
+def test_ns_clock_times_are_exact_across_blocks():
+    clock = TimeColumn(None)
+    first = clock.seconds(np.array([str(EPOCH_NS), str(EPOCH_NS + 5_000_000)], dtype=object))
+    later = clock.seconds(np.array([str(EPOCH_NS + 10_000_000_001)], dtype=object))
+    assert first.tolist() == [0.0, 0.005] and later.tolist() == [10.000000001]
+    assert clock.inferred == "ns"
+
+
+def test_the_header_names_the_time_and_temperature_by_their_bases():
+    layout = header_layout(["Time [ms]", "Rate (deg/h)", "Temperature (°C)"])
+    assert (layout.value, layout.time, layout.temperature) == (1, 0, 2)
+    assert layout.time_scale == 1e-3 and layout.rate_unit == "deg/h"
+
+
+@pytest.mark.parametrize(
+    ("floor", "doubted"), [(2e-7, True), (1e-3, False), (50.0, False), (4e4, True)]
+)
+def test_an_allan_floor_no_gyro_has_doubts_the_unit(floor, doubted):
+    assert (unit_doubt(floor) is not None) is doubted
+
+
+@pytest.mark.one_backend  # the record's reading does not depend on the database
+def test_the_teacher_uploads_a_euroc_record_and_a_doubtful_unit_is_asked(app, teacher):
+    """Through the assignment page: the EuRoC record gzip-compressed, the unit left to
+    the file; the Xsens export, whose header names no unit, refused until it is chosen."""
+    from app.db import write_session
+    from app.models import Assignment, Role
+    from tests.factories import browser, make_course, make_user
+    from tests.test_characterisation import stored, upload
+
+    student = make_user("s1", Role.student, name="学生1")
+    course_id = make_course(teacher, "Bench lab", (student,))
+    with write_session() as db:
+        assignment = Assignment(course_id=course_id, title="Bench", latitude_deg=39.93)
+        db.add(assignment)
+        db.flush()
+        world = {"course": course_id, "assignment": assignment.id, "app": app}
+    client = browser(world, "teacher1")
+    reply = upload(client, world, xsens_text(), rate="", column="Gyr_Z")
+    page = client.get(reply.headers["location"]).text
+    assert "likely in another unit" in page and stored(world) is None
+    reply = upload(client, world, xsens_text(), rate="", column="Gyr_Z", unit="rad/s")
+    assert stored(world)["arw_deg_rt_h"] == pytest.approx(ARW_DEG_RT_H, rel=0.05)
+    packed = gzip.compress(euroc_text().encode())
+    reply = upload(client, world, packed, rate="", column="w_RS_S_z")
+    summary = stored(world)
+    assert summary["rate_hz"] == pytest.approx(RATE_HZ)
+    assert summary["arw_deg_rt_h"] == pytest.approx(ARW_DEG_RT_H, rel=0.05)
+    page = client.get(reply.headers["location"]).text
+    assert "as the record&#39;s header says" in page or "as the record's header says" in page
+    reply = upload(client, world, packed, rate="", column="w_RS_S_z", unit="deg/s")
+    page = client.get(reply.headers["location"]).text
+    assert "header gives the rates in rad/s, but °/s was chosen" in page
