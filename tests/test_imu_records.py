@@ -281,3 +281,72 @@ def test_the_teacher_uploads_a_euroc_record_and_a_doubtful_unit_is_asked(app, te
     reply = upload(client, world, packed, rate="", column="w_RS_S_z", unit="deg/s")
     page = client.get(reply.headers["location"]).text
     assert "header gives the rates in rad/s, but °/s was chosen" in page
+
+
+def angles_text(header: str, angles_per_unit: float, integrated: bool, times: bool) -> str:
+    """Angles per output from the same white rates: each output's increment ω·Δt, or
+    their running sum, in the header's unit (``angles_per_unit`` of it per degree)."""
+    rates = white_rates(axes=1)[:, 0] + 15.0 / 3600.0  # °/s, with Earth's rate in it
+    degrees = rates / RATE_HZ
+    if integrated:
+        degrees = np.cumsum(degrees)
+    values = (degrees * angles_per_unit).tolist()
+    rows = (f"{k / RATE_HZ:.2f},{v!r}" if times else repr(v) for k, v in enumerate(values))
+    return header + "\n" + "\n".join(rows) + "\n"
+
+
+@pytest.mark.parametrize(
+    ("header", "per_degree", "integrated", "times", "told"),
+    [
+        ("time_s,dtheta_z [rad]", math.pi / 180.0, False, True, False),
+        ("time_s,Delta angle (deg)", 1.0, False, True, False),
+        ("time_s,angle (deg)", 1.0, True, True, True),  # the readings tell the kind
+        ("integrated_angle [arcsec]", 3600.0, True, False, False),
+        ("gyro_z [µrad]", math.pi / 180.0 * 1e6, False, False, True),
+    ],
+)
+def test_angles_per_output_become_rates(header, per_degree, integrated, times, told):
+    record = read(angles_text(header, per_degree, integrated, times))
+    result = analyse_record(record, None if times else RATE_HZ)
+    assert result.arw_deg_rt_h == pytest.approx(ARW_DEG_RT_H, rel=0.05)
+    assert result.samples == int(SECONDS * RATE_HZ) - integrated
+    kind = "integrated" if integrated else "increment"
+    assert f"allan.note_angle_{kind}" in keys(result)
+    assert ("allan.note_angle_told" in keys(result)) is told
+    assert "allan.note_unit_doubt" not in keys(result)
+
+
+def test_a_rate_unit_chosen_for_angles_is_refused():
+    record = read(angles_text("time_s,dtheta_z [rad]", math.pi / 180.0, False, True))
+    with pytest.raises(UserError) as error:
+        analyse_record(record, None, unit="rad/s")
+    assert error.value.key == "allan.angle_not_rate" and error.value.params == {"unit": "rad"}
+
+
+def test_the_kind_of_angle_told_from_the_readings():
+    from app.core.angle_outputs import angle_kind
+
+    increments = np.random.default_rng(3).normal(1e-4, 1e-5, 1000)
+    assert angle_kind(increments) == "increment"
+    assert angle_kind(np.cumsum(increments)) == "integrated"
+    # a random walk alone (no ramp): still told, ρ ≈ √(6/n)
+    assert angle_kind(np.cumsum(increments - 1e-4)) == "integrated"
+
+
+@pytest.mark.parametrize(
+    ("cell", "kind"),
+    [
+        ("dtheta_z [rad]", "increment"),
+        ("Delta angle (deg)", "increment"),
+        ("gyro_d_ang_x [rad]", "increment"),
+        ("integrated_angle [arcsec]", "integrated"),
+        ("角增量 (°)", "increment"),
+        ("angle (deg)", None),
+        ("gyro_z [rad/s]", "rate"),
+    ],
+)
+def test_what_an_angle_columns_name_says(cell, kind):
+    from app.core.record_columns import angle_output
+
+    angle = angle_output(column_name(cell))
+    assert (angle.kind if angle else "rate") == kind

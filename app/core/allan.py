@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from app.core.allan_fit import BASES, TERM_ALPHA, TERM_ORDER, TermEstimate, TermFit, fit_terms
+from app.core.angle_outputs import rates_from_angles
 from app.core.exceptions import UserError
 from app.core.flicker import DEFAULT_BAND_S
 from app.core.noise_model import DwellAdvice, GyroNoise, curve_dwell, recommended_dwell
@@ -379,6 +380,11 @@ def analyse_record(
 
     notes = list(record.notes)
     chosen = canonical_unit(unit) if unit else None
+    if record.angle is not None:  # angles per output: rates from them, in °/h
+        if chosen:
+            raise UserError("allan.angle_not_rate", unit=record.angle.unit)
+        record, angle_notes = rates_from_angles(record, record.angle, rate_hz)
+        notes += angle_notes
     if chosen and record.unit and chosen != record.unit:
         raise UserError(
             "allan.unit_conflict", header=UNIT_SYMBOLS[record.unit], chosen=UNIT_SYMBOLS[chosen]

@@ -14,6 +14,7 @@ nanoseconds since 1970 (:func:`epoch_scale`).  The records themselves:
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 
@@ -51,6 +52,23 @@ RATE_UNITS = {
 }
 # ROS's sensor_msgs/Imu angular velocity, in rad/s by the message's definition (REP 103)
 ROS_ANGULAR_VELOCITY = re.compile(r"(?:.*\.)?angular_velocity\.[xyz]")
+# an angle per output instead of a rate (KVH's delta angle, Honeywell's and Northrop's Δθ,
+# a DSP-3000's integrated angle): the unit of the angle, in degrees
+ANGLE_UNITS = {
+    "rad": 180.0 / math.pi,
+    "mrad": 0.180 / math.pi,
+    "urad": 1.8e-4 / math.pi,
+    "µrad": 1.8e-4 / math.pi,
+    "μrad": 1.8e-4 / math.pi,
+    "deg": 1.0,
+    "°": 1.0,
+    "arcsec": 1.0 / 3600.0,
+    "″": 1.0 / 3600.0,
+}
+INCREMENT_NAME = re.compile(
+    r"(?:^|[^a-z])(?:delta|d_?theta|d_?ang(?:le)?|incr(?:ement(?:al)?)?)|[δΔ]|增量", re.IGNORECASE
+)
+INTEGRATED_NAME = re.compile(r"(integrated|cumulative|累积|积分)", re.IGNORECASE)
 _UNIT_IN_BRACKETS = re.compile(r"(.*?)\s*[(\[]([^()\[\]]*)[)\]]")
 _TIME_SUFFIX = re.compile(r"(.+?)_(s|ms|us|ns)")
 _RATE_SUFFIX = re.compile(r"(.+?)_(deg_h|deg_s|dps|dph|rad_s)")
@@ -154,6 +172,43 @@ def epoch_scale(first_time: float) -> tuple[float, str] | None:
 
 
 @dataclass(frozen=True)
+class AngleOutput:
+    """Readings that are angles, not rates: each output's increment Δθ, its integrated
+    angle θ, or either (``kind`` None: told from the readings,
+    :func:`app.core.angle_outputs.angle_kind`); ``deg_per_unit`` converts them to degrees."""
+
+    kind: str | None  # "increment", "integrated" or None
+    deg_per_unit: float
+    unit: str  # as the header writes it
+
+
+def angle_output(name: ColumnName) -> AngleOutput | None:
+    """Whether a column's unit is an angle ("dtheta_z [rad]", "Delta angle (deg)"), and
+    what kind its name says.
+
+    Parameters
+    ----------
+    name : ColumnName
+        The rates' column.
+
+    Returns
+    -------
+    AngleOutput or None
+        None for a rate or no unit.
+    """
+    unit = (name.unit or "").replace(" ", "")
+    if unit not in ANGLE_UNITS:
+        return None
+    if INTEGRATED_NAME.search(name.base):
+        kind = "integrated"
+    elif INCREMENT_NAME.search(name.base):
+        kind = "increment"
+    else:
+        kind = None
+    return AngleOutput(kind, ANGLE_UNITS[unit], unit)
+
+
+@dataclass(frozen=True)
 class Layout:
     """Where a record's columns are (0-based) and what their header says of units."""
 
@@ -164,6 +219,7 @@ class Layout:
     time_scale: float | None = None  # seconds per unit; None: seconds or by size
     rate_unit: str | None = None  # the rates' unit as the header names it
     value_name: str | None = None  # the rates' column as the header names it
+    angle: AngleOutput | None = None  # the readings are angles per output, not rates
 
 
 def chosen_column(column: str, names: list[ColumnName]) -> int:
@@ -244,12 +300,14 @@ def header_layout(header: list[str], column: str | None = None) -> Layout:
         if value is None and wide:
             value = wide[0]
         if value is None:
-            if len(names) <= 3:  # unknown names: the columns as without a header
-                return bare_layout(len(names))
-            raise UserError(
-                "allan.no_value_column",
-                columns=", ".join(name.full for name in names),
-            )
+            if len(names) <= 3:  # unknown names: the columns as without a header, their
+                bare = bare_layout(len(names))  # units as the names say
+                value, time, temperature = bare.value, bare.time, bare.temperature
+            else:
+                raise UserError(
+                    "allan.no_value_column",
+                    columns=", ".join(name.full for name in names),
+                )
         position = _find(names, ("position",))
     if time is not None:
         name = names[time]
@@ -265,6 +323,7 @@ def header_layout(header: list[str], column: str | None = None) -> Layout:
         rate_unit(names[value].unit)
         or (RAD_PER_SECOND if ROS_ANGULAR_VELOCITY.fullmatch(names[value].base) else None),
         header[value].strip(),
+        angle_output(names[value]),
     )
 
 

@@ -29,6 +29,7 @@ import numpy as np
 from app.core.clock_stamps import DATE_TIME, TIME_OF_DAY, is_clock_stamp, seconds_from_first
 from app.core.exceptions import UserError
 from app.core.record_columns import (
+    AngleOutput,
     Layout,
     TimeColumn,
     bare_layout,
@@ -60,6 +61,7 @@ class StaticRecord:
     temperatures_c: np.ndarray | None = None
     unit: str | None = None
     notes: list[dict] = field(default_factory=list)
+    angle: AngleOutput | None = None  # the readings are angles per output, not rates
 
 
 def _is_header(cells: list[str]) -> bool:
@@ -83,6 +85,24 @@ def _is_number(cell: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def _fitted_header(cells: list[str], text: str, width: int) -> list[str] | None:
+    """The header's cells for ``width`` columns of readings: as split, or -- where spaces
+    split the columns and the names have spaces -- a unit in brackets joined to its name
+    ("Time (s)  Rate (deg/h)"), or the whole line as the one column's name; None when
+    they cannot match."""
+    if len(cells) == width:
+        return cells
+    joined: list[str] = []
+    for word in text.split():
+        if joined and word[:1] in "([":
+            joined[-1] += " " + word
+        else:
+            joined.append(word)
+    if len(joined) == width:
+        return joined
+    return [text] if width == 1 else None
 
 
 def _header_in_comment(comment: str | None, split, width: int) -> list[str] | None:
@@ -169,6 +189,8 @@ def read_static_record(
             progress("read", {"samples": count})
 
     width = None
+    header: list[str] | None = None  # the header's cells, once seen
+    header_text = ""
     units_next = False  # the line after a header may name the units
     comment: str | None = None  # the last comment line before the readings
     comment_line = 0
@@ -192,19 +214,22 @@ def read_static_record(
             if is_units_row(cells):
                 continue  # "s, °/h, °C" under the names
         if layout is None:
+            named = _header_in_comment(comment, split, len(cells))
+            if header is None and named is None and _is_header(cells):
+                header, header_text, units_next = cells, text, True  # read with the data's width
+                continue
             width = len(cells)
-            named = _header_in_comment(comment, split, width)
-            if named is not None and _holds_a_number(cells):  # a ROS frame's name, say
+            if header is not None:
+                header = _fitted_header(header, header_text, width)
+                if header is None:
+                    raise UserError("allan.bad_line", line=line_number)
+                layout = header_layout(header, column)
+            elif named is not None and _holds_a_number(cells):  # a ROS frame's name, say
                 layout = header_layout(named, column)
                 notes.append({"key": "allan.note_comment_header", "params": {"line": comment_line}})
-            elif _is_header(cells):
-                layout = header_layout(cells, column)
-                units_next = True
             else:
                 layout = bare_layout(width, column)
             clock = TimeColumn(layout.time_scale)
-            if units_next:
-                continue
         if len(cells) != width:
             raise UserError(
                 "allan.bad_line",
@@ -234,6 +259,7 @@ def read_static_record(
         np.concatenate(temps) if temps else None,
         layout.rate_unit,
         notes,
+        layout.angle,
     )
     if not np.all(np.isfinite(record.values)):
         raise UserError("readings.not_finite")
