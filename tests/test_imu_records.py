@@ -350,3 +350,12 @@ def test_what_an_angle_columns_name_says(cell, kind):
 
     angle = angle_output(column_name(cell))
     assert (angle.kind if angle else "rate") == kind
+
+
+def test_names_with_units_over_columns_split_by_spaces():
+    text = "Time (s)  Rate (deg/s)\n0.00  0.0042\n0.01  0.0040\n0.02  0.0041\n"
+    record = read(text)
+    assert record.unit == "deg/s" and record.times_s.tolist() == [0.0, 0.01, 0.02]
+    with pytest.raises(UserError) as error:  # names that cannot match the columns
+        read("a b c d e\n0.00  0.0042\n")
+    assert error.value.key == "allan.bad_line" and error.value.params == {"line": 2}
