@@ -6,6 +6,7 @@ empty last column -- read to the same times and the same analysis as a record wi
 from __future__ import annotations
 
 import datetime as dt
+import math
 
 import numpy as np
 import pytest
@@ -114,3 +115,28 @@ def test_one_positions_record_with_spaces_between_its_columns(text):
 
     values, times = parse_position_csv(text)
     assert values.tolist() == RATES[:2] and times.tolist() == [0.0, 0.1]
+
+
+def test_a_clock_that_ticks_by_the_second_under_readings_at_ten_hertz():
+    """A serial logger stamping each line to the whole second, 10 readings a second (the
+    record starts and ends mid-second, and loses three seconds once): the rate is counted
+    from the readings between ticks, the longest stretch without a missed tick analysed."""
+    rng = np.random.default_rng(5)
+    start = dt.datetime(2026, 11, 28, 9, 59, 59)
+    stamps = [start + dt.timedelta(seconds=k // 10) for k in range(4, 10 * 900)]
+    stamps = [
+        t
+        for t in stamps
+        if not (start + dt.timedelta(seconds=100) <= t < start + dt.timedelta(seconds=103))
+    ]
+    rates = rng.normal(0.0, 0.3, len(stamps)).tolist()
+    text = "time,value\n" + "".join(
+        f"{t:%H:%M:%S},{r!r}\n" for t, r in zip(stamps, rates, strict=True)
+    )
+    result = analyse_record(read(text), None)
+    assert result.rate_hz == pytest.approx(10.0, rel=1e-9)
+    notes = {note["key"]: note["params"] for note in result.notes}
+    assert notes["allan.note_coarse_clock"]["tick"] == "1"
+    assert notes["allan.note_gaps"] == {"gaps": 1, "missing": 30, "kept": 7970, "seconds": 797}
+    # white noise of 0.3 °/h per reading at 10 Hz: N = 0.3 · √(0.1 s / 3600 s/h) °/√h
+    assert result.arw_deg_rt_h == pytest.approx(0.3 * math.sqrt(0.1 / 3600.0), rel=0.06)

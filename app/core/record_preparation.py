@@ -44,6 +44,35 @@ def _note(key: str, **params) -> dict:
     return {"key": key, "params": params}
 
 
+def _coarse_clock(times: np.ndarray) -> tuple[slice, float, float, int, int] | None:
+    """A clock coarser than the readings (a logger stamping whole seconds at 10 Hz): the
+    longest stretch without a missing tick, the rate counted in it, the tick, the gaps
+    (missed ticks) and the readings they held at that rate -- or None where the times are
+    not such a clock.
+
+    The rate is the readings from the stretch's first whole tick to its last tick's
+    start over the ticks between: the first and last ticks are seen only in part.
+    """
+    steps = np.diff(times)
+    if not steps.size or np.any(steps < 0) or not np.any(steps == 0):
+        return None
+    ticks = steps[steps > 0]
+    if ticks.size < 2:
+        return None
+    tick = float(np.median(ticks))
+    breaks = np.flatnonzero(steps >= 1.5 * tick)
+    edges = np.concatenate([[0], breaks + 1, [times.size]])
+    longest = int(np.argmax(np.diff(edges)))
+    start, stop = int(edges[longest]), int(edges[longest + 1])
+    changes = start + 1 + np.flatnonzero(steps[start : stop - 1] > 0)  # each tick's first
+    if changes.size < 2:
+        return None
+    first, last = int(changes[0]), int(changes[-1])
+    rate = (last - first) / float(times[last] - times[first])
+    missed_s = float(np.sum(np.rint(steps[breaks] / tick) - 1)) * tick
+    return slice(start, stop), rate, tick, int(breaks.size), round(missed_s * rate)
+
+
 def _longest_stretch(times: np.ndarray) -> tuple[slice, int, int, float]:
     steps = np.diff(times)
     interval = float(np.median(steps)) if steps.size else 0.0
@@ -141,7 +170,24 @@ def prepare_record(
     values = np.asarray(record.values, dtype=float)
     temperatures = record.temperatures_c
     notes: list[dict] = []
+    coarse = None
     if record.times_s is not None and record.times_s.size > 2:
+        coarse = _coarse_clock(np.asarray(record.times_s, float))
+    if coarse is not None:
+        stretch, counted, tick, gaps, missing = coarse
+        rate_hz = rate_hz or counted
+        kept = stretch.stop - stretch.start
+        notes.append(
+            _note("allan.note_coarse_clock", tick=f"{tick:g}", rate=f"{counted:.4g}", kept=kept)
+        )
+        if gaps:
+            seconds = round(kept / rate_hz)
+            notes.append(
+                _note("allan.note_gaps", gaps=gaps, missing=missing, kept=kept, seconds=seconds)
+            )
+        values = values[stretch]
+        temperatures = None if temperatures is None else temperatures[stretch]
+    elif record.times_s is not None and record.times_s.size > 2:
         stretch, gaps, missing, interval = _longest_stretch(np.asarray(record.times_s, float))
         if rate_hz is None:
             rate_hz = 1.0 / interval
