@@ -359,3 +359,12 @@ def test_names_with_units_over_columns_split_by_spaces():
     with pytest.raises(UserError) as error:  # names that cannot match the columns
         read("a b c d e\n0.00  0.0042\n")
     assert error.value.key == "allan.bad_line" and error.value.params == {"line": 2}
+
+
+def test_the_one_column_with_a_rates_unit_is_the_rate():
+    layout = header_layout(["time_ns", "gyro_z [rad/s]", "temp"])
+    assert (layout.value, layout.time, layout.temperature) == (1, 0, 2)
+    assert layout.rate_unit == "rad/s" and layout.time_scale == 1e-9
+    with pytest.raises(UserError) as error:  # two such columns: which one is not told
+        header_layout(["t", "gx [rad/s]", "gy [rad/s]", "gz [rad/s]"])
+    assert error.value.key == "allan.no_value_column"

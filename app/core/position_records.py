@@ -9,13 +9,14 @@ import io
 import numpy as np
 
 from app.core.exceptions import UserError
-from app.core.readings import _number, parse_readings_csv
+from app.core.readings import Readings, _number, parse_readings_csv
 from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
     one_column_of_decimal_commas,
     spreadsheet_delimiter,
 )
+from app.core.static_record import read_static_record
 from app.core.text_files import decode_text
 from app.core.typed_numbers import is_number
 
@@ -162,3 +163,39 @@ def _decimal_comma_column(
     if not one_column_of_decimal_commas(header, [line for _number, line in lines]):
         return None
     return [_number(line.replace(",", "."), number, "value") for number, line in lines]
+
+
+def parse_one_position_record(text: str) -> tuple[Readings, str | None]:
+    """One position's record as a gyro's own logger writes it, for a position the student
+    chooses: one reading per line, ``time,value`` (seconds, a logger's clock, ns since
+    1970), with or without a header, units in the header, a header behind ``#``
+    (:func:`app.core.static_record.read_static_record`, which reads it in blocks).
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+
+    Returns
+    -------
+    (Readings, str or None)
+        The one position's readings (``layout`` "record"), times and case temperatures
+        where given; the rates' unit where the header names one.
+
+    Raises
+    ------
+    UserError
+        A line that is not a reading (its number), a record of angles rather than rates
+        (``csv.record_of_angles``), a first column that is not rising times
+        (``csv.not_a_record``), no readings.
+    """
+    record = read_static_record(io.StringIO(text.lstrip("\ufeff")), guess=False)
+    if record.times_s is not None and not bool(np.all(np.diff(record.times_s) > 0)):
+        # two columns that are not times and readings (two positions, say): no record
+        raise UserError("csv.not_a_record")
+    if record.angle is not None:
+        raise UserError("csv.record_of_angles", unit=record.angle.unit)
+    times = None if record.times_s is None else [record.times_s]
+    temperatures = None if record.temperatures_c is None else [record.temperatures_c]
+    readings = Readings([record.values], None, times, "record", temperatures)
+    return readings, record.unit

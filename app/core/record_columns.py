@@ -263,7 +263,16 @@ def _find(names: list[ColumnName], options: tuple[str, ...]) -> int | None:
     )
 
 
-def header_layout(header: list[str], column: str | None = None) -> Layout:
+def _only_rate_column(names: list[ColumnName], others: tuple[int | None, ...]) -> int | None:
+    found = [
+        k
+        for k, name in enumerate(names)
+        if k not in others and (rate_unit(name.unit) or angle_output(name))
+    ]
+    return found[0] if len(found) == 1 else None
+
+
+def header_layout(header: list[str], column: str | None = None, *, guess: bool = True) -> Layout:
     """The layout a header names.
 
     Parameters
@@ -272,6 +281,9 @@ def header_layout(header: list[str], column: str | None = None) -> Layout:
         The header's cells.
     column : str, optional
         The rates' column, when the record has several (one axis of an IMU's record).
+    guess : bool
+        Read a header of one to three unknown names as the columns without a header
+        (False: refuse it, ``allan.no_value_column``).
 
     Returns
     -------
@@ -299,8 +311,10 @@ def header_layout(header: list[str], column: str | None = None) -> Layout:
         value = _find(names, VALUE_NAMES)
         if value is None and wide:
             value = wide[0]
+        if value is None:  # the one column whose header names a rate's or an angle's unit
+            value = _only_rate_column(names, (time, temperature))
         if value is None:
-            if len(names) <= 3:  # unknown names: the columns as without a header, their
+            if guess and len(names) <= 3:  # unknown names: as without a header, their
                 bare = bare_layout(len(names))  # units as the names say
                 value, time, temperature = bare.value, bare.time, bare.temperature
             else:

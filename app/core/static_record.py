@@ -116,7 +116,11 @@ def _header_in_comment(comment: str | None, split, width: int) -> list[str] | No
 
 
 def read_static_record(
-    lines: Iterable[str], *, progress: Progress | None = None, column: str | None = None
+    lines: Iterable[str],
+    *,
+    progress: Progress | None = None,
+    column: str | None = None,
+    guess: bool = True,
 ) -> StaticRecord:
     """Parse a static record from an iterable of text lines, block by block.
 
@@ -129,6 +133,9 @@ def read_static_record(
     column : str, optional
         The column of the rates: a header name or a number from 1 (e.g. one axis of an
         IMU's record); by default ``value`` (or the layouts above).
+    guess : bool
+        Read a header of one to three unknown names as the columns without a header
+        (False: such a header is refused).
 
     Returns
     -------
@@ -223,9 +230,9 @@ def read_static_record(
                 header = _fitted_header(header, header_text, width)
                 if header is None:
                     raise UserError("allan.bad_line", line=line_number)
-                layout = header_layout(header, column)
+                layout = header_layout(header, column, guess=guess)
             elif named is not None and _holds_a_number(cells):  # a ROS frame's name, say
-                layout = header_layout(named, column)
+                layout = header_layout(named, column, guess=guess)
                 notes.append({"key": "allan.note_comment_header", "params": {"line": comment_line}})
             else:
                 layout = bare_layout(width, column)

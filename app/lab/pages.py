@@ -293,6 +293,7 @@ JS_MESSAGES = (
     "js.row_numbers_skipped",
     "js.leading_columns_skipped",
     "js.summary_rows_skipped",
+    "js.record_position",
     "js.long_paste_held",
     "js.long_paste_bad",
     "js.cells_dropped",

@@ -14,8 +14,9 @@ from fastapi.responses import Response, StreamingResponse
 from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
+from app.core.position_records import parse_one_position_record
 from app.core.readings import Readings, parse_readings_csv
-from app.core.units import canonical_unit, to_deg_per_hour
+from app.core.units import UNIT_SYMBOLS, canonical_unit, to_deg_per_hour
 from app.lab.deps import OwnedSession, OwnSessionId
 from app.lab.exports import Selection, readings_csv, session_json
 from app.lab.grid import grid_readings
@@ -23,7 +24,7 @@ from app.lab.result_cache import results_of
 from app.lab.schemas import CsvUpload, ManualReadings, Plane, Trim, Turn
 from app.lab.service import own_session, record_positions, recordable_session
 from app.lab.sim import nominal_angle, position_count, wait_for_gyro, warm_up_state
-from app.lab.store import POSITIONS, check_position, set_symmetric_order
+from app.lab.store import POSITIONS, check_position, current_takes, set_symmetric_order
 from app.lab.submissions import submit
 from app.lab.trim import trim_position
 from app.models import InputMethod, LabSession, Part
@@ -38,6 +39,8 @@ router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 # it is the caller's (lab.deps: why).
 
 MAX_CSV_CHARS = 5_000_000
+# what is said of a file read as one position's record (else it is no record at all)
+RECORD_PROBLEMS = ("allan.bad_line", "readings.not_finite", "csv.record_of_angles")
 
 
 @router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected, RowWriteSession])
@@ -66,10 +69,35 @@ def parse_csv_upload(body: CsvUpload) -> Readings:
             "lab.file_too_large",
             limit_mb=MAX_CSV_CHARS // 1_000_000,
         )
-    readings = parse_readings_csv(body.text, part=body.part)
+    unit = canonical_unit(body.unit)
+    try:
+        readings = parse_readings_csv(body.text, part=body.part)
+    except UserError as error:
+        if error.key != "csv.unknown_layout":
+            raise
+        try:  # one position's record, as a gyro's logger writes it
+            readings, header_unit = parse_one_position_record(body.text)
+        except UserError as record_error:
+            if record_error.key in RECORD_PROBLEMS:  # a record, with a problem in it
+                raise
+            raise error from None  # neither: the table's message, which names the layouts
+        if header_unit is not None and header_unit != unit:
+            raise UserError(
+                "csv.unit_conflict", header=UNIT_SYMBOLS[header_unit], chosen=UNIT_SYMBOLS[unit]
+            ) from None
     check_position_count(len(readings.positions), POSITIONS)
-    canonical_unit(body.unit)
     return readings
+
+
+def record_position(session: LabSession, body: CsvUpload, db) -> int:
+    """The position a one-position record is for: the student's choice, else (in the
+    preview) the part's first position not yet recorded."""
+    if body.position is not None:
+        check_position(session, body.part, body.position)
+        return body.position
+    done = {take.position for take in current_takes(db, session.id) if take.part == body.part}
+    free = [k for k in range(1, position_count(session) + 1) if k not in done]
+    return free[0] if free else 1
 
 
 def check_position_count(count: int, limit: int) -> None:
@@ -93,8 +121,10 @@ def preview_csv(
     session = recordable_session(db, user, session_id, InputMethod.csv)
     readings = parse_csv_upload(body)
     check_position_count(len(readings.positions), position_count(session))
+    single = readings.layout == "record"
+    first = record_position(session, body, db) if single else 1
     rows = []
-    for index, values in enumerate(readings.positions, start=1):
+    for index, values in enumerate(readings.positions, start=first):
         converted = to_deg_per_hour(values, body.unit)
         angle = (
             readings.angles_deg[index - 1]
@@ -115,7 +145,14 @@ def preview_csv(
         translate("csv.summary_skipped", language, line=line, label=label)
         for line, label in readings.skipped
     ]
-    return {"layout": readings.layout, "positions": rows, "notes": notes}
+    if single:
+        notes.insert(0, translate("csv.one_position_record", language, position=first))
+    return {
+        "layout": readings.layout,
+        "positions": rows,
+        "notes": notes,
+        "position_count": position_count(session),
+    }
 
 
 @router.post("/sessions/{session_id}/csv", dependencies=[CsrfProtected, RowWriteSession])
@@ -134,8 +171,12 @@ def save_csv(
         raise problem
     check_position_count(len(readings.positions), position_count(session))
 
+    if readings.layout == "record" and body.position is None:
+        raise UserError("csv.record_position")
+    first = body.position if readings.layout == "record" else 1
+
     def numbered(items):
-        return dict(enumerate(items, start=1)) if items is not None else None
+        return dict(enumerate(items, start=first)) if items is not None else None
 
     saved = record_positions(
         db,
@@ -146,6 +187,7 @@ def save_csv(
         source=InputMethod.csv,
         angles=numbered(readings.angles_deg),
         times=numbered(readings.times_s),
+        temperatures=numbered(readings.temperatures_c),
     )
     db.commit()
     return {"saved": saved}

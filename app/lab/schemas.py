@@ -282,6 +282,8 @@ class CsvUpload(BaseModel):
     part: Part
     unit: str = "deg/h"
     text: str
+    # a file of one position's record (a gyro logger's): the position it was recorded at
+    position: int | None = Field(default=None, ge=1, le=POSITIONS, strict=True)
 
 
 class Turn(BaseModel):

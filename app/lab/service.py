@@ -132,11 +132,21 @@ def record_positions(
     source: str,
     angles: dict[int, float] | None = None,
     times: dict[int, np.ndarray] | None = None,
+    temperatures: dict[int, np.ndarray] | None = None,
 ) -> list[int]:
     """Store several positions at once (a grid or a file); returns the positions saved."""
-    angles, times = angles or {}, times or {}
+    angles, times, temperatures = angles or {}, times or {}, temperatures or {}
     takes = [
-        _new_take(session, part, position, values, unit, angles.get(position), times.get(position))
+        _new_take(
+            session,
+            part,
+            position,
+            values,
+            unit,
+            angles.get(position),
+            times.get(position),
+            temperatures.get(position),
+        )
         for position, values in sorted(columns.items())
     ]
     store_takes(db, session, part=part, takes=takes, source=source, unit=canonical_unit(unit))

@@ -499,10 +499,40 @@
     const preview = panel.querySelector(".csv-preview");
     const accept = panel.querySelector(".accept-csv");
     let text = null;
+    let recordPosition = null;  // a one-position record: the position it is saved as
 
-    async function showPreview() {
+    function body() {
+      const data = { part: panel.dataset.part, unit: panel.querySelector(".unit").value, text };
+      if (recordPosition !== null) data.position = recordPosition;
+      return data;
+    }
+
+    // A one-position record (a gyro logger's file): which position it is, chosen here.
+    function positionChoice(result) {
+      const label = document.createElement("label");
+      label.className = "inline-label";
+      label.textContent = t("js.record_position") + " ";
+      const select = document.createElement("select");
+      select.className = "record-position";
+      for (let k = 1; k <= result.position_count; k++) {
+        const option = document.createElement("option");
+        option.value = String(k);
+        option.textContent = String(k);
+        select.appendChild(option);
+      }
+      select.value = String(recordPosition);
+      select.addEventListener("change", () => {
+        recordPosition = Number(select.value);
+        showPreview(true);
+      });
+      label.appendChild(select);
+      return label;
+    }
+
+    async function showPreview(keepFile) {
       accept.disabled = true;
       preview.textContent = "";
+      if (keepFile !== true) recordPosition = null;
       const file = input.files[0];
       if (!file) return;
       if (file.size > MAX_FILE_BYTES) {
@@ -516,10 +546,12 @@
       }
       text = decodeFile(buffer);
       try {
-        const result = await postJson("/csv/preview", { part: panel.dataset.part, unit: panel.querySelector(".unit").value, text });
+        const result = await postJson("/csv/preview", body());
+        if (result.layout === "record") recordPosition = result.positions[0].position;
         const rows = result.positions.map((p) =>
           `<tr><td>${p.position}</td><td class="num">${p.angle_deg}°</td><td class="num">${p.n}</td><td class="num">${p.mean_deg_h.toFixed(3)}</td><td>${p.first.map((v) => v.toFixed(3)).join(", ")}…</td></tr>`).join("");
         preview.innerHTML = `<p>${t("js.preview_title")}</p><table class="table compact"><thead><tr><th>#</th><th class="num">${t("js.angle")}</th><th class="num">n</th><th class="num">${t("js.mean")}</th><th>${t("js.samples")}</th></tr></thead><tbody>${rows}</tbody></table>`;
+        if (result.layout === "record") preview.prepend(positionChoice(result));
         (result.notes || []).forEach((note) => {  // a row of means passed over: said, not read
           const line = document.createElement("p");
           line.className = "muted";
@@ -535,11 +567,11 @@
       }
     }
     input.addEventListener("change", showPreview);
-    panel.querySelector(".unit").addEventListener("change", showPreview);
+    panel.querySelector(".unit").addEventListener("change", () => showPreview(true));
     accept.addEventListener("click", async () => {
       accept.disabled = true;
       try {
-        await postJson("/csv", { part: panel.dataset.part, unit: panel.querySelector(".unit").value, text });
+        await postJson("/csv", body());
         preview.textContent = t("js.saved");
         reloadSoon();
       } catch (error) {

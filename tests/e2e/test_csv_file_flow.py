@@ -62,3 +62,51 @@ def test_a_csv_file_is_previewed_and_saved_and_a_workbook_is_named(
     with page.expect_navigation():
         panel.locator(".accept-csv").click()
     expect(page.locator("#take-history tbody tr")).to_have_count(4)
+
+
+def test_one_positions_logger_files_are_saved_where_the_student_says(
+    live_server, new_page, tmp_path
+):
+    """A real gyro's logger writes one file per position (its clock, the rate): the first
+    is offered for the first empty position, the next for the position chosen in the
+    preview -- its angle follows the choice -- and each is saved there."""
+    page = new_page()
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    page.context.add_cookies([{"name": "gyrolab_lang", "value": "zh-CN", "url": live_server.url}])
+    page.set_viewport_size({"width": 390, "height": 844})
+    start_practice(page, live_server.url)
+    section = page.locator("#part-heading")
+    section.locator(".method-tab[data-method=csv]").click()
+    panel = section.locator('.method-panel[data-method="csv"]')
+    columns = list(zip(*table("handout_horizontal.csv"), strict=True))
+
+    def logger_file(position: int):
+        path = tmp_path / f"pos{position}.csv"
+        lines = ["时间,角速率 (°/h)"] + [
+            f"2026-11-28 14:00:{k:02d}.0,{value}" for k, value in enumerate(columns[position - 1])
+        ]
+        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        return str(path)
+
+    panel.locator(".csv-file").set_input_files(logger_file(1))
+    choice = panel.locator(".csv-preview select.record-position")
+    expect(choice).to_have_value("1")
+    expect(panel.locator(".csv-preview tbody tr td").first).to_have_text("1")
+    with page.expect_navigation():
+        panel.locator(".accept-csv").click()
+    expect(page.locator("#take-history tbody tr")).to_have_count(1)
+
+    section = page.locator("#part-heading")
+    section.locator(".method-tab[data-method=csv]").click()
+    panel = section.locator('.method-panel[data-method="csv"]')
+    panel.locator(".csv-file").set_input_files(logger_file(3))
+    choice = panel.locator(".csv-preview select.record-position")
+    expect(choice).to_have_value("2")  # the first position still empty
+    angle_before = panel.locator(".csv-preview tbody tr td").nth(1).inner_text()
+    choice.select_option("3")
+    expect(panel.locator(".csv-preview tbody tr td").first).to_have_text("3")
+    assert panel.locator(".csv-preview tbody tr td").nth(1).inner_text() != angle_before
+    assert page.evaluate("document.documentElement.scrollWidth") <= 390
+    with page.expect_navigation():
+        panel.locator(".accept-csv").click()
+    expect(page.locator("#take-history tbody tr")).to_have_count(2)
