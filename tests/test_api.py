@@ -158,6 +158,29 @@ def test_csv_bodies(client, auth):
     assert unreadable.status_code == 400 and "cannot be read" in unreadable.json()["detail"]
 
 
+@pytest.mark.one_backend  # the body's parsing; storing is the same as for any CSV
+def test_a_loggers_record_as_one_positions_csv(client, auth):
+    """A script sends the gyro logger's own file: its clock in ns behind a '#' header with
+    the unit -- read as the lab page reads it; a unit asked against the header refused."""
+    from app.lab.samples import unpack
+
+    session_id = new_api_session(client, auth)
+    url = f"{API}/sessions/{session_id}/heading/positions/1"
+    values = handout("handout_horizontal.csv")[1]
+    text = "#timestamp [ns],rate [deg/h]\n" + "".join(
+        f"{1_764_324_000_000_000_000 + k * 500_000_000},{v}\n" for k, v in enumerate(values)
+    )
+    csv = {**auth, "Content-Type": "text/csv"}
+    refused = client.put(url + "?unit=deg/s", content=text, headers=csv)
+    assert refused.status_code == 400 and "°/h, but °/s is chosen" in refused.json()["detail"]
+    response = client.put(url + "?unit=deg/h", content=text, headers=csv)
+    assert response.status_code == 200 and response.json()["n_samples"] == len(values)
+    with read_session() as db:
+        chunk = db.exec(select(SampleChunk)).first()
+    assert unpack(chunk.times)[:3].tolist() == [0.0, 0.5, 1.0]
+    assert unpack(chunk.values).tolist() == pytest.approx(values)
+
+
 @pytest.mark.one_backend  # the body's parsing; storing is the same as for commas
 @pytest.mark.parametrize(
     ("separator", "decimal"),

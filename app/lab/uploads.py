@@ -14,9 +14,11 @@ from pydantic import ValidationError
 
 from app.core.exceptions import UserError
 from app.core.jsonsafe import loads_finite
-from app.core.position_records import parse_position_csv
+from app.core.position_records import parse_one_position_record, parse_position_csv
+from app.core.record_columns import epoch_scale
+from app.core.text_files import decode_text
 from app.core.typed_numbers import parse_decimal
-from app.core.units import canonical_unit
+from app.core.units import UNIT_SYMBOLS, canonical_unit
 from app.lab.binary_upload import is_npy, parse_npy, parse_raw
 from app.lab.schemas import PositionUpload
 
@@ -77,8 +79,8 @@ def read_upload(request: Request, body: bytes) -> tuple[UploadMeta, *Arrays]:
     binary: raw little-endian float64/float32 or ``.npy`` (see binary_upload)."""
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if content_type == "text/csv":
-        values, times = parse_position_csv(body)
-        return query_meta(request), values, times, None
+        meta = query_meta(request)
+        return meta, *csv_position(body, meta.unit)
     if content_type in BINARY_TYPES:
         query = request.query_params
         if is_npy(body, content_type):
@@ -97,6 +99,36 @@ def read_upload(request: Request, body: bytes) -> tuple[UploadMeta, *Arrays]:
     values, times, temperatures = upload_arrays(upload)
     meta = UploadMeta(upload.unit, upload.angle_deg, upload.offset)
     return meta, values, times, temperatures
+
+
+def csv_position(body: bytes, unit: str) -> Arrays:
+    """One position's ``text/csv``: a reading (or ``time_s,value``) per line, else one
+    position's record as a gyro's logger writes it -- its clock or ns, a header with
+    units, a header behind ``#`` (:func:`app.core.position_records.parse_one_position_record`,
+    as the lab page reads such a file); the first reader's message where neither reads it.
+    """
+    try:
+        values, times = parse_position_csv(body)
+        if times is None or epoch_scale(float(times[0])) is None:
+            return values, times, None
+        # times too large for seconds (a clock in ns since 1970): the record's reader
+        raise UserError("csv.not_a_record")
+    except UserError as error:
+        if error.key == "csv.encoding":
+            raise
+        try:
+            readings, header_unit = parse_one_position_record(decode_text(body))
+        except UserError as record_error:
+            if record_error.key == "csv.record_of_angles":
+                raise
+            raise error from None
+    if header_unit is not None and header_unit != unit:
+        raise UserError(
+            "csv.unit_conflict", header=UNIT_SYMBOLS[header_unit], chosen=UNIT_SYMBOLS[unit]
+        )
+    times = readings.times_s[0] if readings.times_s else None
+    temperatures = readings.temperatures_c[0] if readings.temperatures_c else None
+    return readings.positions[0], times, temperatures
 
 
 def query_meta(request: Request) -> UploadMeta:
