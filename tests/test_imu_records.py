@@ -14,16 +14,16 @@ import math
 import numpy as np
 import pytest
 
-from app.core.allan import analyse_record, unit_doubt
+from app.core.allan import analyse_record
+from app.core.clock_stamps import TimeColumn, epoch_scale
 from app.core.exceptions import UserError
 from app.core.record_columns import (
-    TimeColumn,
     column_name,
-    epoch_scale,
     header_layout,
     rate_unit,
 )
 from app.core.static_record import read_static_record, text_lines
+from app.core.units import unit_doubt
 
 RATE_HZ = 100.0
 SECONDS = 650.0

@@ -310,33 +310,6 @@ def _with_dwell(result: AllanResult, advice: DwellAdvice) -> AllanResult:
     return replace(result, dwell=advice)
 
 
-PLAUSIBLE_FLOOR_DEG_H = (1e-4, 1e3)  # the Allan floor of any gyro at rest, °/h
-
-
-def unit_doubt(adev_min_deg_h: float) -> dict | None:
-    """A note when the Allan floor (the curve's minimum) is no gyro's at rest in °/h.
-
-    Gyros' floors run from ≈ 1e-3 °/h (navigation and strategic FOGs, RLGs) to ≈ 10² °/h
-    (consumer MEMS); outside [1e-4, 1e3] °/h the readings were most likely in another
-    unit than the one they were read in -- a FOG's 0.05 °/h floor read from rad/s as °/h
-    is 2.4e-7 -- or the gyro was not at rest.
-
-    Parameters
-    ----------
-    adev_min_deg_h : float
-        The Allan deviation's minimum (°/h), as read.
-
-    Returns
-    -------
-    dict or None
-        The note ``allan.note_unit_doubt`` (key and parameters), or None.
-    """
-    low, high = PLAUSIBLE_FLOOR_DEG_H
-    if low <= adev_min_deg_h <= high or not math.isfinite(adev_min_deg_h):
-        return None
-    return {"key": "allan.note_unit_doubt", "params": {"floor": f"{adev_min_deg_h:.3g}"}}
-
-
 def analyse_record(
     record: StaticRecord,
     rate_hz: float | None,
@@ -376,7 +349,13 @@ def analyse_record(
     ----------
     IEEE Std 952-1997, annex C; lab-reference §6.
     """
-    from app.core.units import DEG_PER_HOUR, UNIT_SYMBOLS, canonical_unit, to_deg_per_hour
+    from app.core.units import (
+        DEG_PER_HOUR,
+        UNIT_SYMBOLS,
+        canonical_unit,
+        to_deg_per_hour,
+        unit_doubt,
+    )
 
     notes = list(record.notes)
     chosen = canonical_unit(unit) if unit else None

@@ -19,6 +19,7 @@ from app.core.spreadsheet_text import (
 from app.core.static_record import read_static_record
 from app.core.text_files import decode_text
 from app.core.typed_numbers import is_number
+from app.core.units import UNIT_SYMBOLS
 
 
 def parse_static_record(text: str) -> np.ndarray:
@@ -165,7 +166,16 @@ def _decimal_comma_column(
     return [_number(line.replace(",", "."), number, "value") for number, line in lines]
 
 
-def parse_one_position_record(text: str) -> tuple[Readings, str | None]:
+# what is said of a file read as one position's record (any other problem: it is none)
+RECORD_PROBLEMS = (
+    "allan.bad_line",
+    "readings.not_finite",
+    "csv.record_of_angles",
+    "csv.unit_conflict",
+)
+
+
+def parse_one_position_record(text: str, unit: str) -> Readings:
     """One position's record as a gyro's own logger writes it, for a position the student
     chooses: one reading per line, ``time,value`` (seconds, a logger's clock, ns since
     1970), with or without a header, units in the header, a header behind ``#``
@@ -175,18 +185,21 @@ def parse_one_position_record(text: str) -> tuple[Readings, str | None]:
     ----------
     text : str
         The file's text.
+    unit : str
+        The unit chosen for the readings (canonical); a header naming another is refused.
 
     Returns
     -------
-    (Readings, str or None)
+    Readings
         The one position's readings (``layout`` "record"), times and case temperatures
-        where given; the rates' unit where the header names one.
+        where given.
 
     Raises
     ------
     UserError
         A line that is not a reading (its number), a record of angles rather than rates
-        (``csv.record_of_angles``), a first column that is not rising times
+        (``csv.record_of_angles``), a header's unit that is not ``unit``
+        (``csv.unit_conflict``), a first column that is not rising times
         (``csv.not_a_record``), no readings.
     """
     record = read_static_record(io.StringIO(text.lstrip("\ufeff")), guess=False)
@@ -197,5 +210,8 @@ def parse_one_position_record(text: str) -> tuple[Readings, str | None]:
         raise UserError("csv.record_of_angles", unit=record.angle.unit)
     times = None if record.times_s is None else [record.times_s]
     temperatures = None if record.temperatures_c is None else [record.temperatures_c]
-    readings = Readings([record.values], None, times, "record", temperatures)
-    return readings, record.unit
+    if record.unit is not None and record.unit != unit:
+        raise UserError(
+            "csv.unit_conflict", header=UNIT_SYMBOLS[record.unit], chosen=UNIT_SYMBOLS[unit]
+        )
+    return Readings([record.values], None, times, "record", temperatures)

@@ -18,9 +18,6 @@ import math
 import re
 from dataclasses import dataclass
 
-import numpy as np
-
-from app.core.clock_stamps import clock_seconds
 from app.core.exceptions import UserError
 from app.core.units import DEG_PER_HOUR, DEG_PER_SECOND, RAD_PER_SECOND
 
@@ -72,9 +69,6 @@ INTEGRATED_NAME = re.compile(r"(integrated|cumulative|累积|积分)", re.IGNORE
 _UNIT_IN_BRACKETS = re.compile(r"(.*?)\s*[(\[]([^()\[\]]*)[)\]]")
 _TIME_SUFFIX = re.compile(r"(.+?)_(s|ms|us|ns)")
 _RATE_SUFFIX = re.compile(r"(.+?)_(deg_h|deg_s|dps|dph|rad_s)")
-# the smallest numbers that cannot be seconds (since 1970 or since a record's start: over
-# 3,000 years), and the unit since 1970 they are in, by size (true from 1973 to 5138)
-EPOCH_SCALES = ((1e17, 1e-9, "ns"), (1e14, 1e-6, "µs"), (1e11, 1e-3, "ms"))
 
 
 @dataclass(frozen=True)
@@ -146,29 +140,6 @@ def rate_unit(unit: str | None) -> str | None:
     if unit is None:
         return None
     return RATE_UNITS.get(unit.replace(" ", "").replace("·", ""))
-
-
-def epoch_scale(first_time: float) -> tuple[float, str] | None:
-    """The unit of a time column that names none, from the size of its first number.
-
-    No record's times in seconds reach 1e11 (3,000 years, since 1970 or since its start);
-    such numbers are a clock since 1970 in ms (1e11 … 1e14), µs (… 1e17) or ns (beyond),
-    true for dates from 1973 to 5138.
-
-    Parameters
-    ----------
-    first_time : float
-        The column's first number.
-
-    Returns
-    -------
-    (float, str) or None
-        Seconds per unit and the unit's name; None for numbers that can be seconds.
-    """
-    for smallest, scale, name in EPOCH_SCALES:
-        if abs(first_time) >= smallest:
-            return scale, name
-    return None
 
 
 @dataclass(frozen=True)
@@ -373,73 +344,3 @@ def bare_layout(width: int, column: str | None = None) -> Layout:
     if width == 3:
         return Layout(1, 0, 2)
     raise UserError("allan.choose_column", count=width)
-
-
-class TimeColumn:
-    """A record's time column read block by block, in seconds.
-
-    Numbers in seconds stay as they are; in another unit -- named by the header, or, where
-    it names none, told by their size (:func:`epoch_scale`) -- they are counted from the
-    first reading, whole numbers exactly (a clock in ns since 1970 is beyond float64's
-    53 bits); a logger's clock stamps (:func:`app.core.clock_stamps.clock_seconds`) are
-    read from the midnight of the first date (``clock``: the reader counts them from the
-    first reading).
-    """
-
-    def __init__(self, scale: float | None) -> None:
-        self.scale = scale
-        self.clock = False
-        self.inferred: str | None = None  # the unit told by the numbers' size
-        self._origin: int | float | None = None
-        self._origin_day: list[int] = []
-
-    def _unit_of(self, first: float) -> float:
-        if self.scale is None:
-            told = epoch_scale(first)
-            self.scale, self.inferred = told if told else (1.0, None)
-        return self.scale
-
-    def seconds(self, cells) -> np.ndarray:
-        """The block's times in seconds.
-
-        Raises
-        ------
-        ValueError
-            A cell that is neither a number nor a clock stamp.
-        """
-        try:
-            whole = np.asarray(cells, dtype=np.int64)
-        except (ValueError, OverflowError):
-            whole = None
-        if whole is not None and whole.size:
-            scale = self._unit_of(float(whole[0]))
-            if scale == 1.0:
-                return whole.astype(float)
-            if self._origin is None:
-                self._origin = int(whole[0])
-            return (whole - np.int64(self._origin)).astype(float) * scale
-        try:
-            numbers = np.asarray(cells, dtype=float)
-        except ValueError:
-            self.clock = True
-            return clock_seconds(cells, self._origin_day)
-        if not numbers.size:
-            return numbers
-        scale = self._unit_of(float(numbers[0]))
-        if scale == 1.0:
-            return numbers
-        if self._origin is None:
-            self._origin = float(numbers[0])
-        return (numbers - self._origin) * scale
-
-    @staticmethod
-    def readable(cell: str) -> bool:
-        """Whether one cell is a time (a number or a clock stamp)."""
-        try:
-            float(cell)
-        except ValueError:
-            try:
-                clock_seconds([cell], [0])
-            except ValueError:
-                return False
-        return True

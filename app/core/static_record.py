@@ -26,12 +26,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.core.clock_stamps import DATE_TIME, TIME_OF_DAY, is_clock_stamp, seconds_from_first
+from app.core.clock_stamps import (
+    DATE_TIME,
+    TIME_OF_DAY,
+    TimeColumn,
+    is_clock_stamp,
+    seconds_from_first,
+)
 from app.core.exceptions import UserError
 from app.core.record_columns import (
     AngleOutput,
     Layout,
-    TimeColumn,
     bare_layout,
     comment_text,
     header_layout,

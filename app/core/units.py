@@ -151,3 +151,30 @@ def unit_slip(measured_deg_h: float, expected_deg_h: float, chosen: str) -> str 
         if abs(math.log(ratio / k)) < math.log(UNIT_SLIP_TOLERANCE):
             return unit
     return None
+
+
+PLAUSIBLE_FLOOR_DEG_H = (1e-4, 1e3)  # the Allan floor of any gyro at rest, °/h
+
+
+def unit_doubt(adev_min_deg_h: float) -> dict | None:
+    """A note when the Allan floor (the curve's minimum) is no gyro's at rest in °/h.
+
+    Gyros' floors run from ≈ 1e-3 °/h (navigation and strategic FOGs, RLGs) to ≈ 10² °/h
+    (consumer MEMS); outside [1e-4, 1e3] °/h the readings were most likely in another
+    unit than the one they were read in -- a FOG's 0.05 °/h floor read from rad/s as °/h
+    is 2.4e-7 -- or the gyro was not at rest.
+
+    Parameters
+    ----------
+    adev_min_deg_h : float
+        The Allan deviation's minimum (°/h), as read.
+
+    Returns
+    -------
+    dict or None
+        The note ``allan.note_unit_doubt`` (key and parameters), or None.
+    """
+    low, high = PLAUSIBLE_FLOOR_DEG_H
+    if low <= adev_min_deg_h <= high or not math.isfinite(adev_min_deg_h):
+        return None
+    return {"key": "allan.note_unit_doubt", "params": {"floor": f"{adev_min_deg_h:.3g}"}}

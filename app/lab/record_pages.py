@@ -14,9 +14,9 @@ from fastapi.responses import Response, StreamingResponse
 from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
-from app.core.position_records import parse_one_position_record
+from app.core.position_records import RECORD_PROBLEMS, parse_one_position_record
 from app.core.readings import Readings, parse_readings_csv
-from app.core.units import UNIT_SYMBOLS, canonical_unit, to_deg_per_hour
+from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.deps import OwnedSession, OwnSessionId
 from app.lab.exports import Selection, readings_csv, session_json
 from app.lab.grid import grid_readings
@@ -39,8 +39,6 @@ router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 # it is the caller's (lab.deps: why).
 
 MAX_CSV_CHARS = 5_000_000
-# what is said of a file read as one position's record (else it is no record at all)
-RECORD_PROBLEMS = ("allan.bad_line", "readings.not_finite", "csv.record_of_angles")
 
 
 @router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected, RowWriteSession])
@@ -76,15 +74,11 @@ def parse_csv_upload(body: CsvUpload) -> Readings:
         if error.key != "csv.unknown_layout":
             raise
         try:  # one position's record, as a gyro's logger writes it
-            readings, header_unit = parse_one_position_record(body.text)
+            readings = parse_one_position_record(body.text, unit)
         except UserError as record_error:
             if record_error.key in RECORD_PROBLEMS:  # a record, with a problem in it
                 raise
             raise error from None  # neither: the table's message, which names the layouts
-        if header_unit is not None and header_unit != unit:
-            raise UserError(
-                "csv.unit_conflict", header=UNIT_SYMBOLS[header_unit], chosen=UNIT_SYMBOLS[unit]
-            ) from None
     check_position_count(len(readings.positions), POSITIONS)
     return readings
 

@@ -12,13 +12,17 @@ from fastapi import Depends, Request
 from fastapi.exceptions import RequestValidationError
 from pydantic import ValidationError
 
+from app.core.clock_stamps import epoch_scale
 from app.core.exceptions import UserError
 from app.core.jsonsafe import loads_finite
-from app.core.position_records import parse_one_position_record, parse_position_csv
-from app.core.record_columns import epoch_scale
+from app.core.position_records import (
+    RECORD_PROBLEMS,
+    parse_one_position_record,
+    parse_position_csv,
+)
 from app.core.text_files import decode_text
 from app.core.typed_numbers import parse_decimal
-from app.core.units import UNIT_SYMBOLS, canonical_unit
+from app.core.units import canonical_unit
 from app.lab.binary_upload import is_npy, parse_npy, parse_raw
 from app.lab.schemas import PositionUpload
 
@@ -105,7 +109,8 @@ def csv_position(body: bytes, unit: str) -> Arrays:
     """One position's ``text/csv``: a reading (or ``time_s,value``) per line, else one
     position's record as a gyro's logger writes it -- its clock or ns, a header with
     units, a header behind ``#`` (:func:`app.core.position_records.parse_one_position_record`,
-    as the lab page reads such a file); the first reader's message where neither reads it.
+    as the lab page reads such a file).  A record's own problem (a bad line, a unit
+    against the header's) is said as such; where neither reads it, the first reader's.
     """
     try:
         values, times = parse_position_csv(body)
@@ -117,15 +122,11 @@ def csv_position(body: bytes, unit: str) -> Arrays:
         if error.key == "csv.encoding":
             raise
         try:
-            readings, header_unit = parse_one_position_record(decode_text(body))
+            readings = parse_one_position_record(decode_text(body), unit)
         except UserError as record_error:
-            if record_error.key == "csv.record_of_angles":
+            if record_error.key in RECORD_PROBLEMS:  # a record, with a problem in it
                 raise
             raise error from None
-    if header_unit is not None and header_unit != unit:
-        raise UserError(
-            "csv.unit_conflict", header=UNIT_SYMBOLS[header_unit], chosen=UNIT_SYMBOLS[unit]
-        )
     times = readings.times_s[0] if readings.times_s else None
     temperatures = readings.temperatures_c[0] if readings.temperatures_c else None
     return readings.positions[0], times, temperatures
