@@ -33,10 +33,17 @@ ROOT = Path(__file__).resolve().parents[1]
 PASSWORD = "bench-password-1"
 
 
-def free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
+def free_ports(count: int) -> list[int]:
+    """``count`` distinct free loopback ports (each held until all are chosen: two choices
+    one after the other can return the same port)."""
+    sockets = [socket.socket() for _ in range(count)]
+    try:
+        for sock in sockets:
+            sock.bind(("127.0.0.1", 0))
+        return [sock.getsockname()[1] for sock in sockets]
+    finally:
+        for sock in sockets:
+            sock.close()
 
 
 def wait_for(url: str, process: subprocess.Popen) -> None:
@@ -147,7 +154,7 @@ def main() -> None:
                 check=True,
                 capture_output=True,
             )
-        port, bare_port = free_port(), free_port()
+        port, bare_port = free_ports(2)
         app = subprocess.Popen(
             [
                 sys.executable,

@@ -17,6 +17,7 @@ import functools
 import html
 import json
 import re
+import socket
 import threading
 import time
 import urllib.request
@@ -462,18 +463,31 @@ class _PromptServer(uvicorn.Server):
             await asyncio.sleep(0.005)
 
 
+def bound_socket() -> socket.socket:
+    """A loopback socket bound to a port of the kernel's choosing, held until served.
+
+    Two ``free_port()`` calls in a row once returned the same port, and the second server
+    failed with ``[Errno 98] Address already in use``; a port held from the moment it is
+    chosen cannot be taken by anyone else."""
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    return sock
+
+
+def url_of(sock: socket.socket) -> str:
+    return f"http://127.0.0.1:{sock.getsockname()[1]}"
+
+
 @contextmanager
-def serving(*apps_and_ports) -> Iterator[None]:
-    """ASGI apps served by uvicorn, each in a thread on 127.0.0.1:port, stopped together:
-    ``serving(app, port)`` or ``serving(app_a, port_a, app_b, port_b)``."""
-    pairs = list(zip(apps_and_ports[::2], apps_and_ports[1::2], strict=True))
+def serving(*apps_and_sockets) -> Iterator[None]:
+    """ASGI apps served by uvicorn, each in a thread on its bound socket, stopped together:
+    ``serving(app, sock)`` or ``serving(app_a, sock_a, app_b, sock_b)``."""
+    pairs = list(zip(apps_and_sockets[::2], apps_and_sockets[1::2], strict=True))
     running: list[tuple[uvicorn.Server, threading.Thread]] = []
     try:
-        for app, port in pairs:
-            server = _PromptServer(
-                uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning")
-            )
-            thread = threading.Thread(target=server.run, daemon=True)
+        for app, sock in pairs:
+            server = _PromptServer(uvicorn.Config(app, log_level="warning"))
+            thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
             thread.start()
             running.append((server, thread))
         deadline = time.monotonic() + 20
@@ -488,6 +502,8 @@ def serving(*apps_and_ports) -> Iterator[None]:
             server.should_exit = True
         for _server, thread in running:
             thread.join(10)
+        for _app, sock in pairs:
+            sock.close()
 
 
 class Browser:

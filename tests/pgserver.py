@@ -91,7 +91,6 @@ class PostgresServer:
                 shutil.chown(data, user="postgres")
             except LookupError as error:
                 raise PostgresUnavailable("running as root and no 'postgres' user") from error
-        self.port = _free_port()
         self._run(
             "initdb",
             "-D",
@@ -103,12 +102,28 @@ class PostgresServer:
             "--locale=C.UTF-8",
             "--no-sync",
         )
+        # a port found free can be taken by another test worker before this cluster binds
+        # it: the cluster is then started again on another port, up to three times
+        for attempt in range(3):
+            self.port = _free_port()
+            try:
+                self._pg_ctl_start(data, durable)
+                break
+            except PostgresUnavailable:
+                log = (self.root / "server.log").read_text(errors="replace")
+                if attempt == 2 or "already in use" not in log:
+                    raise
+        self.admin_url = f"postgresql+psycopg://{USER}@127.0.0.1:{self.port}/postgres"
+        return self
+
+    def _pg_ctl_start(self, data: Path, durable: bool) -> None:
         options = (
             f"-c listen_addresses=127.0.0.1 -p {self.port} -c unix_socket_directories={self.root}"
             " -c max_connections=300 -c shared_buffers=128MB"
         )
         if not durable:
             options += " -c fsync=off -c synchronous_commit=off -c full_page_writes=off"
+        assert self.root is not None
         self._run(
             "pg_ctl",
             "-D",
@@ -122,8 +137,6 @@ class PostgresServer:
             "60",
             "start",
         )
-        self.admin_url = f"postgresql+psycopg://{USER}@127.0.0.1:{self.port}/postgres"
-        return self
 
     def stop(self) -> None:
         if self.root is None:

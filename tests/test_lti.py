@@ -19,14 +19,15 @@ from app.db import read_session, write_session
 from app.lti import grades, keys
 from app.lti.platforms import PlatformFields, add_platform
 from app.models import Enrollment, ExternalIdentity, LtiGradePost, LtiPlatform, Role, User
-from tests.e2e.conftest import free_port
 from tests.factories import CSRF_RE, HEADING, VERTICAL, make_user, post_form, without_tokens
 from tests.lti_platform import (
     CLIENT_ID,
     Browser,
     PlatformState,
+    bound_socket,
     create_platform_app,
     serving,
+    url_of,
 )
 
 pytestmark = pytest.mark.slow  # a real LMS and GyroLab served on loopback
@@ -46,9 +47,9 @@ class Lti:
 
 @pytest.fixture
 def lti(app) -> Iterator[Lti]:
-    tool_port, platform_port = free_port(), free_port()
-    tool = f"http://127.0.0.1:{tool_port}"
-    state = PlatformState(url=f"http://127.0.0.1:{platform_port}", tool_url=tool)
+    tool_socket, platform_socket = bound_socket(), bound_socket()
+    tool = url_of(tool_socket)
+    state = PlatformState(url=url_of(platform_socket), tool_url=tool)
     fields = state.platform_fields()
     with write_session() as db:
         add_platform(
@@ -58,7 +59,7 @@ def lti(app) -> Iterator[Lti]:
                 deployment_ids=[fields["deployment_ids"]],
             ),
         )
-    with serving(app, tool_port, create_platform_app(state), platform_port):
+    with serving(app, tool_socket, create_platform_app(state), platform_socket):
         yield Lti(tool, state)
 
 

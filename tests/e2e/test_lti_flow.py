@@ -8,12 +8,14 @@ from __future__ import annotations
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import axe_problems, free_port, running_server
+from tests.e2e.conftest import axe_problems, running_server
 from tests.lti_platform import (
     PlatformState,
+    bound_socket,
     create_platform_app,
     register_with_cli,
     serving,
+    url_of,
 )
 
 pytestmark = pytest.mark.e2e
@@ -21,10 +23,10 @@ pytestmark = pytest.mark.e2e
 
 def test_a_teacher_adds_gyrolab_and_a_student_lands_in_the_lab(tmp_path, new_page):
     with running_server(tmp_path, "--no-demo") as server:
-        port = free_port()
-        platform = PlatformState(url=f"http://127.0.0.1:{port}", tool_url=server.url)
+        platform_socket = bound_socket()
+        platform = PlatformState(url=url_of(platform_socket), tool_url=server.url)
         register_with_cli(server, platform)
-        with serving(create_platform_app(platform), port):
+        with serving(create_platform_app(platform), platform_socket):
             teacher = new_page(locale="zh-CN")
             teacher.goto(f"{platform.url}/start?user=teacher-1&kind=deep")
             expect(teacher.locator("h1")).to_have_text("添加 GyroLab 活动")

@@ -17,9 +17,10 @@ import json
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import CHROMIUM, CHROMIUM_ARGS, free_port, running_server
+from tests.e2e.conftest import CHROMIUM, CHROMIUM_ARGS, running_server
 from tests.lti_platform import (
     PlatformState,
+    bound_socket,
     create_platform_app,
     register_with_cli,
     serving,
@@ -47,10 +48,12 @@ def framed_tool(tmp_path_factory):
 @pytest.fixture
 def framed_lms(framed_tool):
     """An LMS on localhost, on a port of its own, registered with GyroLab."""
-    port = free_port()
-    platform = PlatformState(url=f"http://localhost:{port}", tool_url=framed_tool.url)
+    platform_socket = bound_socket()
+    platform = PlatformState(
+        url=f"http://localhost:{platform_socket.getsockname()[1]}", tool_url=framed_tool.url
+    )
     register_with_cli(framed_tool, platform)
-    with serving(create_platform_app(platform), port):
+    with serving(create_platform_app(platform), platform_socket):
         yield framed_tool, platform
 
 
