@@ -17,7 +17,7 @@ import json
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import CHROMIUM, CHROMIUM_ARGS, running_server
+from tests.e2e.conftest import CHROMIUM, CHROMIUM_ARGS
 from tests.lti_platform import (
     PlatformState,
     bound_socket,
@@ -37,12 +37,12 @@ FRAME_ARGS = [*CHROMIUM_ARGS, "--disable-site-isolation-trials"]
 LAUNCH_MS = 20_000  # a launch is several round trips, the platform's key set fetched once
 
 
-@pytest.fixture(scope="module")
-def framed_tool(tmp_path_factory):
-    """GyroLab served on 127.0.0.1 for this module's tests (each registers an LMS of its own:
-    another issuer, its own courses and people, so that no test sees another's)."""
-    with running_server(tmp_path_factory.mktemp("framed-tool"), "--no-demo") as server:
-        yield server
+@pytest.fixture
+def framed_tool(live_server):
+    """GyroLab served on 127.0.0.1: the run's shared installation (each test registers an
+    LMS of its own: another issuer, its own courses and people, so that no test sees
+    another's)."""
+    return live_server
 
 
 @pytest.fixture
