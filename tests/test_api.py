@@ -181,6 +181,35 @@ def test_a_loggers_record_as_one_positions_csv(client, auth):
     assert unpack(chunk.values).tolist() == pytest.approx(values)
 
 
+@pytest.mark.one_backend  # the body's parsing; storing is the same as for any CSV
+def test_one_axis_of_an_imus_record_is_the_column_the_script_names(client, auth):
+    """An IMU's file of three gyro axes: refused without ``?column=`` (no axis guessed),
+    read from the column named (its header cell or its number); a column it does not
+    have, or an empty one, is a 400 that lists or says what to send."""
+    from tests.test_position_record_files import imu_file
+
+    session_id = new_api_session(client, auth)
+    url = f"{API}/sessions/{session_id}/heading/positions/1?unit=rad/s"
+    values = handout("handout_horizontal.csv")[1]
+    csv = {**auth, "Content-Type": "text/csv"}
+    text = imu_file(values)
+    refused = client.put(url, content=text, headers=csv)
+    assert refused.status_code == 400 and refused.json()["key"] == "csv.choose_column"
+    assert "w_RS_S_z [rad s^-1]" in refused.json()["detail"]
+    unknown = client.put(url + "&column=w_RS_S_q", content=text, headers=csv)
+    assert unknown.status_code == 400 and unknown.json()["key"] == "allan.no_such_column"
+    empty = client.put(url + "&column=", content=text, headers=csv)
+    assert empty.status_code == 400 and empty.json()["key"] == "api.bad_column"
+    from app.lab.samples import unpack
+
+    for column in ("w_RS_S_z", "4"):
+        response = client.put(url + f"&column={column}", content=text, headers=csv)
+        assert response.status_code == 200 and response.json()["n_samples"] == len(values)
+        with read_session() as db:
+            chunk = db.exec(select(SampleChunk).order_by(SampleChunk.id.desc())).first()
+        assert unpack(chunk.values).tolist() == pytest.approx(values)  # °/h, the z axis
+
+
 @pytest.mark.one_backend  # the body's parsing; storing is the same as for commas
 @pytest.mark.parametrize(
     ("separator", "decimal"),

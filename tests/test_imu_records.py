@@ -368,3 +368,37 @@ def test_the_one_column_with_a_rates_unit_is_the_rate():
     with pytest.raises(UserError) as error:  # two such columns: which one is not told
         header_layout(["t", "gx [rad/s]", "gy [rad/s]", "gz [rad/s]"])
     assert error.value.key == "allan.no_value_column"
+
+
+@pytest.mark.parametrize(
+    ("header", "offered"),
+    [
+        (  # EuRoC / Kalibr: the gyro's three axes, not the accelerometer's
+            "timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+            "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]",
+            ["w_RS_S_x [rad s^-1]", "w_RS_S_y [rad s^-1]", "w_RS_S_z [rad s^-1]"],
+        ),
+        (  # ROS: not the header's sequence number, stamp or frame, nor the orientation
+            "time,field.header.seq,field.header.stamp,field.header.frame_id,"
+            "field.orientation.x,field.angular_velocity.x,field.angular_velocity.z,"
+            "field.linear_acceleration.z",
+            ["field.angular_velocity.x", "field.angular_velocity.z"],
+        ),
+        (  # Xsens MT Manager
+            "PacketCounter,SampleTimeFine,Acc_X,Gyr_X,Gyr_Y,Gyr_Z,Mag_X",
+            ["Gyr_X", "Gyr_Y", "Gyr_Z"],
+        ),
+        ("time,gx,gy,gz,temp_gyro", ["gx", "gy", "gz"]),
+        ("Time (s),X,Y,Z,Temperature", ["X", "Y", "Z"]),  # times beside them: a record
+        ("hello,world", []),  # names of no record: nothing offered
+    ],
+)
+def test_the_columns_offered_as_the_gyros_axis(header, offered):
+    from app.core.record_columns import ColumnChoiceNeeded, rate_column_choices
+
+    assert rate_column_choices(header.split(",")) == offered
+    with pytest.raises(ColumnChoiceNeeded) as raised:
+        header_layout(header.split(","), guess=False)
+    assert raised.value.choices == offered and raised.value.key == "allan.no_value_column"
+    for column in offered:  # each offered is a column the reader takes
+        assert header_layout(header.split(","), column).value_name == column

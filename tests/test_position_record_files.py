@@ -96,3 +96,59 @@ def test_a_header_in_the_chosen_unit_is_read(lab):
     )
     preview = lab("/csv/preview", text, unit="deg/s", position=1).json()
     assert preview["positions"][0]["mean_deg_h"] == pytest.approx(np.mean(HEADING[1]))
+
+
+def imu_file(axis_z: list[float]) -> str:
+    """An IMU's record as EuRoC and Kalibr write it: ns since 1970 behind '#', three gyro
+    axes in rad/s and three accelerometer axes; the gyro's sensitive axis is z (the
+    x and y axes hold other numbers, so that reading the wrong axis shows)."""
+    deg_h = np.pi / 180.0 / 3600.0
+    lines = [
+        "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+        "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"
+    ]
+    for k, value in enumerate(axis_z):
+        stamp = 1_403_636_579_758_555_392 + k * 500_000_000
+        lines.append(f"{stamp},{1e-3 + k * 1e-6!r},{-2e-3!r},{value * deg_h!r},0.01,-0.02,9.81")
+    return "\n".join(lines) + "\n"
+
+
+def test_an_imus_record_is_read_from_the_column_the_student_chooses(lab):
+    values = HEADING[4]
+    text = imu_file(values)
+    preview = lab("/csv/preview", text, unit="rad/s")
+    assert preview.status_code == 200, preview.text
+    body = preview.json()
+    offered = [c["value"] for c in body["columns"]]
+    # the gyro's three axes, not the time or the accelerometer's
+    assert offered == ["w_RS_S_x [rad s^-1]", "w_RS_S_y [rad s^-1]", "w_RS_S_z [rad s^-1]"]
+    assert body["column"] == offered[0] and "3 columns that may be the gyro's rate" in str(
+        body["notes"]
+    )
+    assert body["positions"][0]["mean_deg_h"] != pytest.approx(np.mean(values), rel=0.01)
+    chosen = lab("/csv/preview", text, unit="rad/s", column=offered[2]).json()
+    assert chosen["column"] == offered[2]
+    assert chosen["positions"][0]["mean_deg_h"] == pytest.approx(np.mean(values))
+    # saved only with a column said: the API and a script never guess an axis
+    refused = lab("/csv", text, unit="rad/s", position=4)
+    assert refused.status_code == 400
+    assert "say which column is the gyro's axis" in refused.json()["detail"]
+    unknown = lab("/csv", text, unit="rad/s", position=4, column="w_RS_S_q")
+    assert unknown.status_code == 400 and "w_rs_s_z" in unknown.json()["detail"]
+    with read_session() as db:
+        assert db.exec(select(Take)).all() == []
+    saved = lab("/csv", text, unit="rad/s", position=4, column="w_RS_S_z")  # its name is enough
+    assert saved.status_code == 200 and saved.json()["saved"] == [4]
+    with read_session() as db:
+        chunk = db.exec(select(SampleChunk)).first()
+    assert unpack(chunk.times)[:3].tolist() == [0.0, 0.5, 1.0]
+    assert unpack(chunk.values) == pytest.approx(values)  # stored in °/h
+
+
+def test_a_table_of_bare_columns_stays_a_table_of_positions(lab):
+    """Four columns of numbers without a header are the handout's table of positions, as
+    before; nothing is offered as an axis."""
+    text = "".join(f"{a},{b},{c},{d}\n" for a, b, c, d in zip(*HEADING.values(), strict=True))
+    body = lab("/csv/preview", text).json()
+    assert body["layout"] != "record" and len(body["positions"]) == 4
+    assert body["columns"] == [] and body["column"] is None

@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import csv
 import io
+from dataclasses import dataclass
 
 import numpy as np
 
 from app.core.exceptions import UserError
 from app.core.readings import Readings, _number, parse_readings_csv
+from app.core.record_columns import ColumnChoiceNeeded
 from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
@@ -172,14 +174,30 @@ RECORD_PROBLEMS = (
     "readings.not_finite",
     "csv.record_of_angles",
     "csv.unit_conflict",
+    "csv.choose_column",
+    "allan.no_such_column",
 )
 
 
-def parse_one_position_record(text: str, unit: str) -> Readings:
+@dataclass(frozen=True)
+class OnePositionRecord:
+    """One position's record as read: its readings, and where the file has several
+    columns that may hold the rates (the axes of an IMU), those columns (likeliest
+    first) and the one read."""
+
+    readings: Readings
+    columns: tuple[str, ...] = ()
+    column: str | None = None
+
+
+def parse_one_position_record(
+    text: str, unit: str, column: str | None = None, *, suggest: bool = False
+) -> OnePositionRecord:
     """One position's record as a gyro's own logger writes it, for a position the student
     chooses: one reading per line, ``time,value`` (seconds, a logger's clock, ns since
     1970), with or without a header, units in the header, a header behind ``#``
-    (:func:`app.core.static_record.read_static_record`, which reads it in blocks).
+    (:func:`app.core.static_record.read_static_record`, which reads it in blocks); an
+    IMU's record of several axes, one of its columns.
 
     Parameters
     ----------
@@ -187,12 +205,18 @@ def parse_one_position_record(text: str, unit: str) -> Readings:
         The file's text.
     unit : str
         The unit chosen for the readings (canonical); a header naming another is refused.
+    column : str, optional
+        The rates' column where the file has several: a header cell, its name without the
+        unit, or a number from 1.
+    suggest : bool
+        Where the file has several such columns and none is chosen, read the likeliest
+        (a preview) rather than refuse (``csv.choose_column``).
 
     Returns
     -------
-    Readings
+    OnePositionRecord
         The one position's readings (``layout`` "record"), times and case temperatures
-        where given.
+        where given; the columns offered and the one read, where there was a choice.
 
     Raises
     ------
@@ -200,9 +224,28 @@ def parse_one_position_record(text: str, unit: str) -> Readings:
         A line that is not a reading (its number), a record of angles rather than rates
         (``csv.record_of_angles``), a header's unit that is not ``unit``
         (``csv.unit_conflict``), a first column that is not rising times
-        (``csv.not_a_record``), no readings.
+        (``csv.not_a_record``), several columns of rates and none chosen
+        (``csv.choose_column``), a chosen column the file does not have, no readings.
     """
-    record = read_static_record(io.StringIO(text.lstrip("\ufeff")), guess=False)
+    text = text.lstrip("\ufeff")
+    columns: tuple[str, ...] = ()
+    try:
+        record = read_static_record(io.StringIO(text), column=column, guess=False)
+    except ColumnChoiceNeeded as choice:
+        columns = tuple(choice.choices)
+        if not columns:
+            raise UserError(choice.key, **choice.params) from None
+        if not suggest:
+            raise UserError("csv.choose_column", columns=", ".join(columns)) from None
+        column = columns[0]
+        record = read_static_record(io.StringIO(text), column=column, guess=False)
+    if column is not None and not columns:  # chosen: the choice offered again
+        try:
+            read_static_record(io.StringIO(_head(text)), guess=False)
+        except ColumnChoiceNeeded as choice:
+            columns = tuple(choice.choices)
+        except UserError:
+            pass
     if record.times_s is not None and not bool(np.all(np.diff(record.times_s) > 0)):
         # two columns that are not times and readings (two positions, say): no record
         raise UserError("csv.not_a_record")
@@ -214,4 +257,10 @@ def parse_one_position_record(text: str, unit: str) -> Readings:
         raise UserError(
             "csv.unit_conflict", header=UNIT_SYMBOLS[record.unit], chosen=UNIT_SYMBOLS[unit]
         )
-    return Readings([record.values], None, times, "record", temperatures)
+    readings = Readings([record.values], None, times, "record", temperatures)
+    return OnePositionRecord(readings, columns, column if columns else None)
+
+
+def _head(text: str, lines: int = 50) -> str:
+    """The file's first lines: enough for its header and the width of its readings."""
+    return "\n".join(text.splitlines()[:lines])

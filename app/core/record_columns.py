@@ -66,9 +66,31 @@ INCREMENT_NAME = re.compile(
     r"(?:^|[^a-z])(?:delta|d_?theta|d_?ang(?:le)?|incr(?:ement(?:al)?)?)|[δΔ]|增量", re.IGNORECASE
 )
 INTEGRATED_NAME = re.compile(r"(integrated|cumulative|累积|积分)", re.IGNORECASE)
+# columns an IMU's record holds beside its rates: counters, stamps, frame names,
+# accelerations, magnetic fields, orientations (EuRoC's a_RS_S_x, ROS's
+# field.linear_acceleration.x and field.header.seq, Xsens's PacketCounter and Acc_X)
+NOT_RATE_NAME = re.compile(
+    r"seq|count|packet|stamp|frame|status|index|acc(?!um)|(?:^|[^a-z])a_|mag|(?:^|[^a-z])m_"
+    r"|quat|orient|covariance|pressure|baro|gps|temp|温度",
+    re.IGNORECASE,
+)
+NOT_RATE_UNITS = {"m/s^2", "ms^-2", "m/s2", "m/s²", "g", "mg", "gauss", "ut", "µt", "μt", "nt"}
+RATE_NAME = re.compile(
+    r"gyr|omega|angular|rate|(?:^|[^a-z])w_|^w[xyz]$|^g[xyz]$|角速", re.IGNORECASE
+)
 _UNIT_IN_BRACKETS = re.compile(r"(.*?)\s*[(\[]([^()\[\]]*)[)\]]")
 _TIME_SUFFIX = re.compile(r"(.+?)_(s|ms|us|ns)")
 _RATE_SUFFIX = re.compile(r"(.+?)_(deg_h|deg_s|dps|dph|rad_s)")
+
+
+class ColumnChoiceNeeded(UserError):
+    """A record with several columns that may hold the rates and none chosen (one axis of
+    an IMU's record, say).  ``choices``: the columns to offer -- header cells as written,
+    or numbers from 1 where there is no header -- the likeliest first."""
+
+    def __init__(self, key: str, choices: list[str], **params: object) -> None:
+        super().__init__(key, **params)
+        self.choices = choices
 
 
 @dataclass(frozen=True)
@@ -289,8 +311,9 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
                 bare = bare_layout(len(names))  # units as the names say
                 value, time, temperature = bare.value, bare.time, bare.temperature
             else:
-                raise UserError(
+                raise ColumnChoiceNeeded(
                     "allan.no_value_column",
+                    rate_column_choices(header),
                     columns=", ".join(name.full for name in names),
                 )
         position = _find(names, ("position",))
@@ -343,4 +366,51 @@ def bare_layout(width: int, column: str | None = None) -> Layout:
         return Layout(1, 0)
     if width == 3:
         return Layout(1, 0, 2)
-    raise UserError("allan.choose_column", count=width)
+    # no header: any column may be the rates; the first is most often the times
+    choices = [str(k) for k in range(2, width + 1)] + ["1"]
+    raise ColumnChoiceNeeded("allan.choose_column", choices, count=width)
+
+
+def rate_column_choices(header: list[str]) -> list[str]:
+    """The columns of a header that may hold the rates, the likeliest first: not the times,
+    the case temperature or the position; not a counter, a stamp, an acceleration or a
+    magnetic field (:data:`NOT_RATE_NAME`, :data:`NOT_RATE_UNITS`) unless nothing else is
+    left; first those whose unit is a rate's or an angle's or whose name says rate
+    ("w_RS_S_z", "Gyr_Z", "field.angular_velocity.z", "gz").
+
+    Parameters
+    ----------
+    header : list of str
+        The header's cells.
+
+    Returns
+    -------
+    list of str
+        The cells as written (stripped), each a valid ``column`` for :func:`header_layout`;
+        none where no column's name says rate and there is no time column beside two or
+        more others (names of no record).
+    """
+    names = [column_name(cell) for cell in header]
+    time = _find(names, TIME_NAMES)
+    taken = {time, _find(names, TEMPERATURE_NAMES), _find(names, ("position",))}
+    free = [k for k in range(len(names)) if k not in taken]
+    plausible = [k for k in free if not _not_a_rate(names[k])] or free
+    likely = [k for k in plausible if _looks_like_a_rate(names[k])]
+    if not likely and (time is None or len(plausible) < 2):
+        return []  # names of no record ("hello, world"): nothing to offer
+    order = likely + [k for k in plausible if k not in likely]
+    return [header[k].strip() for k in order]
+
+
+def _not_a_rate(name: ColumnName) -> bool:
+    unit = (name.unit or "").replace(" ", "")
+    return bool(NOT_RATE_NAME.search(name.base)) or unit in NOT_RATE_UNITS
+
+
+def _looks_like_a_rate(name: ColumnName) -> bool:
+    return bool(
+        rate_unit(name.unit)
+        or angle_output(name)
+        or ROS_ANGULAR_VELOCITY.fullmatch(name.base)
+        or RATE_NAME.search(name.base)
+    )

@@ -278,6 +278,36 @@ def read_static_record(
     return record
 
 
+def names_its_columns_in_a_comment(text: str) -> bool:
+    """Whether a file's header is the comment line just above its readings, as EuRoC,
+    Kalibr and ROS write it ("#timestamp [ns],w_RS_S_x [rad s^-1],…"): a record, whose
+    columns are named -- not a table of positions whose comments are passed over.
+
+    Parameters
+    ----------
+    text : str
+        The file's text (its first lines are enough).
+
+    Returns
+    -------
+    bool
+        True where the last comment line before the first reading names as many columns
+        as that reading has.
+    """
+    comment = None
+    for line in itertools.islice(io.StringIO(text), LOOK_AHEAD_LINES):
+        stripped = line.strip().lstrip("\ufeff")
+        if not stripped:
+            continue
+        if (remark := comment_text(stripped)) is not None:
+            comment = remark
+            continue
+        split = _splitter(stripped)
+        cells = split(stripped)
+        return _holds_a_number(cells) and _header_in_comment(comment, split, len(cells)) is not None
+    return False
+
+
 def _splitter(first: str) -> Callable[[str], list[str]]:
     """How the record's lines split into cells, decided by its first line: commas (quotes
     allowed), tabs or semicolons with decimal commas (a spreadsheet's copy, a European

@@ -120,8 +120,9 @@ UPLOAD_BODY = {
                 "schema": {
                     "type": "string",
                     "description": "one value per line, or time_s,value per line; an "
-                    "optional header; ?unit= and ?angle_deg= (and for appends ?offset=) "
-                    "in the URL",
+                    "optional header; a gyro logger's own file; ?unit= and ?angle_deg= "
+                    "(and for appends ?offset=) in the URL; ?column= for one axis of an "
+                    "IMU's file (a header name or a number from 1)",
                 },
                 "example": "time_s,value\n0,10.74\n1,10.65\n2,10.84\n",
             },

@@ -294,6 +294,7 @@ JS_MESSAGES = (
     "js.leading_columns_skipped",
     "js.summary_rows_skipped",
     "js.record_position",
+    "js.record_column",
     "js.long_paste_held",
     "js.long_paste_bad",
     "js.cells_dropped",

@@ -14,8 +14,13 @@ from fastapi.responses import Response, StreamingResponse
 from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.exceptions import UserError
 from app.core.jsonsafe import json_safe
-from app.core.position_records import RECORD_PROBLEMS, parse_one_position_record
-from app.core.readings import Readings, parse_readings_csv
+from app.core.position_records import (
+    RECORD_PROBLEMS,
+    OnePositionRecord,
+    parse_one_position_record,
+)
+from app.core.readings import parse_readings_csv
+from app.core.static_record import names_its_columns_in_a_comment
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.deps import OwnedSession, OwnSessionId
 from app.lab.exports import Selection, readings_csv, session_json
@@ -59,28 +64,36 @@ def save_manual(
     return {"saved": saved}
 
 
-def parse_csv_upload(body: CsvUpload) -> Readings:
+def parse_csv_upload(body: CsvUpload, *, suggest: bool = False) -> OnePositionRecord:
     """The file's readings, before any session is looked up (so that no write transaction
-    waits on parsing)."""
+    waits on parsing); for one position's record of several axes, the columns offered and
+    the one read (``suggest``: the likeliest where none is chosen, for the preview)."""
     if len(body.text) > MAX_CSV_CHARS:
         raise UserError(
             "lab.file_too_large",
             limit_mb=MAX_CSV_CHARS // 1_000_000,
         )
     unit = canonical_unit(body.unit)
+    if body.column is not None or names_its_columns_in_a_comment(body.text):
+        # a column chosen, or a header behind '#' (an IMU's record): a record's file only
+        return checked(parse_one_position_record(body.text, unit, body.column, suggest=suggest))
     try:
-        readings = parse_readings_csv(body.text, part=body.part)
+        parsed = OnePositionRecord(parse_readings_csv(body.text, part=body.part))
     except UserError as error:
         if error.key != "csv.unknown_layout":
             raise
         try:  # one position's record, as a gyro's logger writes it
-            readings = parse_one_position_record(body.text, unit)
+            parsed = parse_one_position_record(body.text, unit, body.column, suggest=suggest)
         except UserError as record_error:
             if record_error.key in RECORD_PROBLEMS:  # a record, with a problem in it
                 raise
             raise error from None  # neither: the table's message, which names the layouts
-    check_position_count(len(readings.positions), POSITIONS)
-    return readings
+    return checked(parsed)
+
+
+def checked(parsed: OnePositionRecord) -> OnePositionRecord:
+    check_position_count(len(parsed.readings.positions), POSITIONS)
+    return parsed
 
 
 def record_position(session: LabSession, body: CsvUpload, db) -> int:
@@ -113,7 +126,8 @@ def preview_csv(
     request: Request,
 ):
     session = recordable_session(db, user, session_id, InputMethod.csv)
-    readings = parse_csv_upload(body)
+    parsed = parse_csv_upload(body, suggest=True)
+    readings = parsed.readings
     check_position_count(len(readings.positions), position_count(session))
     single = readings.layout == "record"
     first = record_position(session, body, db) if single else 1
@@ -141,12 +155,28 @@ def preview_csv(
     ]
     if single:
         notes.insert(0, translate("csv.one_position_record", language, position=first))
+    if parsed.columns:
+        notes.insert(
+            1,
+            translate(
+                "csv.record_columns", language, count=len(parsed.columns), column=parsed.column
+            ),
+        )
     return {
         "layout": readings.layout,
         "positions": rows,
         "notes": notes,
         "position_count": position_count(session),
+        "columns": [
+            {"value": column, "label": column_label(column, language)} for column in parsed.columns
+        ],
+        "column": parsed.column,
     }
+
+
+def column_label(column: str, language: str) -> str:
+    """A column as offered: its header cell, or "Column 3" where the file has no header."""
+    return translate("csv.column_number", language, number=column) if column.isdigit() else column
 
 
 @router.post("/sessions/{session_id}/csv", dependencies=[CsrfProtected, RowWriteSession])
@@ -157,7 +187,7 @@ def save_csv(
     body: Annotated[CsvUpload, Body()],
 ):
     try:  # parsed before the first query takes the write lock; reported after the checks
-        readings, problem = parse_csv_upload(body), None
+        readings, problem = parse_csv_upload(body).readings, None
     except UserError as error:
         readings, problem = None, error
     session = recordable_session(db, user, session_id, InputMethod.csv)

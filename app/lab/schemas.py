@@ -284,6 +284,9 @@ class CsvUpload(BaseModel):
     text: str
     # a file of one position's record (a gyro logger's): the position it was recorded at
     position: int | None = Field(default=None, ge=1, le=POSITIONS, strict=True)
+    # an IMU's record of several axes: the column of the gyro's axis (a header cell, or a
+    # number from 1)
+    column: str | None = Field(default=None, min_length=1, max_length=200)
 
 
 class Turn(BaseModel):

@@ -84,7 +84,10 @@ def read_upload(request: Request, body: bytes) -> tuple[UploadMeta, *Arrays]:
     content_type = request.headers.get("content-type", "").split(";")[0].strip().lower()
     if content_type == "text/csv":
         meta = query_meta(request)
-        return meta, *csv_position(body, meta.unit)
+        column = request.query_params.get("column")
+        if column is not None and not 0 < len(column.strip()) <= 200:
+            raise UserError("api.bad_column")
+        return meta, *csv_position(body, meta.unit, column)
     if content_type in BINARY_TYPES:
         query = request.query_params
         if is_npy(body, content_type):
@@ -105,14 +108,18 @@ def read_upload(request: Request, body: bytes) -> tuple[UploadMeta, *Arrays]:
     return meta, values, times, temperatures
 
 
-def csv_position(body: bytes, unit: str) -> Arrays:
+def csv_position(body: bytes, unit: str, column: str | None = None) -> Arrays:
     """One position's ``text/csv``: a reading (or ``time_s,value``) per line, else one
     position's record as a gyro's logger writes it -- its clock or ns, a header with
-    units, a header behind ``#`` (:func:`app.core.position_records.parse_one_position_record`,
-    as the lab page reads such a file).  A record's own problem (a bad line, a unit
-    against the header's) is said as such; where neither reads it, the first reader's.
+    units, a header behind ``#``, one axis of an IMU's record (``column``;
+    :func:`app.core.position_records.parse_one_position_record`, as the lab page reads
+    such a file).  A record's own problem (a bad line, a unit against the header's,
+    several axes and none chosen) is said as such; where neither reads it, the first
+    reader's.
     """
     try:
+        if column is not None:  # a column chosen: the record's reader, which knows columns
+            raise UserError("csv.not_a_record")
         values, times = parse_position_csv(body)
         if times is None or epoch_scale(float(times[0])) is None:
             return values, times, None
@@ -122,7 +129,7 @@ def csv_position(body: bytes, unit: str) -> Arrays:
         if error.key == "csv.encoding":
             raise
         try:
-            readings = parse_one_position_record(decode_text(body), unit)
+            readings = parse_one_position_record(decode_text(body), unit, column).readings
         except UserError as record_error:
             if record_error.key in RECORD_PROBLEMS:  # a record, with a problem in it
                 raise

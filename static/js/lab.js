@@ -500,11 +500,36 @@
     const accept = panel.querySelector(".accept-csv");
     let text = null;
     let recordPosition = null;  // a one-position record: the position it is saved as
+    let recordColumn = null;  // an IMU's record of several axes: the gyro's column
+    let columnChoices = [];  // the columns the file offers ({value, label})
 
     function body() {
       const data = { part: panel.dataset.part, unit: panel.querySelector(".unit").value, text };
       if (recordPosition !== null) data.position = recordPosition;
+      if (recordColumn !== null) data.column = recordColumn;
       return data;
+    }
+
+    // An IMU's record of several axes: which column is the gyro's, chosen here.
+    function columnChoice() {
+      const label = document.createElement("label");
+      label.className = "inline-label";
+      label.textContent = t("js.record_column") + " ";
+      const select = document.createElement("select");
+      select.className = "record-column";
+      columnChoices.forEach((choice) => {
+        const option = document.createElement("option");
+        option.value = choice.value;
+        option.textContent = choice.label;
+        select.appendChild(option);
+      });
+      select.value = recordColumn;
+      select.addEventListener("change", () => {
+        recordColumn = select.value;
+        showPreview(true);
+      });
+      label.appendChild(select);
+      return label;
     }
 
     // A one-position record (a gyro logger's file): which position it is, chosen here.
@@ -532,7 +557,11 @@
     async function showPreview(keepFile) {
       accept.disabled = true;
       preview.textContent = "";
-      if (keepFile !== true) recordPosition = null;
+      if (keepFile !== true) {
+        recordPosition = null;
+        recordColumn = null;
+        columnChoices = [];
+      }
       const file = input.files[0];
       if (!file) return;
       if (file.size > MAX_FILE_BYTES) {
@@ -548,10 +577,13 @@
       try {
         const result = await postJson("/csv/preview", body());
         if (result.layout === "record") recordPosition = result.positions[0].position;
+        columnChoices = result.columns || [];
+        recordColumn = result.column ?? null;
         const rows = result.positions.map((p) =>
           `<tr><td>${p.position}</td><td class="num">${p.angle_deg}°</td><td class="num">${p.n}</td><td class="num">${p.mean_deg_h.toFixed(3)}</td><td>${p.first.map((v) => v.toFixed(3)).join(", ")}…</td></tr>`).join("");
         preview.innerHTML = `<p>${t("js.preview_title")}</p><table class="table compact"><thead><tr><th>#</th><th class="num">${t("js.angle")}</th><th class="num">n</th><th class="num">${t("js.mean")}</th><th>${t("js.samples")}</th></tr></thead><tbody>${rows}</tbody></table>`;
         if (result.layout === "record") preview.prepend(positionChoice(result));
+        if (columnChoices.length) preview.prepend(columnChoice());
         (result.notes || []).forEach((note) => {  // a row of means passed over: said, not read
           const line = document.createElement("p");
           line.className = "muted";
@@ -564,6 +596,8 @@
         message.className = "error-text";
         message.textContent = error.message;
         preview.replaceChildren(message);
+        // a column chosen that cannot be read (a counter, say): another can still be chosen
+        if (columnChoices.length && recordColumn !== null) preview.prepend(columnChoice());
       }
     }
     input.addEventListener("change", showPreview);

@@ -6,12 +6,14 @@ from __future__ import annotations
 
 import io
 
+import numpy as np
 import pytest
 import xlsxwriter
 from playwright.sync_api import expect
 
 from tests.e2e.conftest import STUDENT_PASSWORD, log_in
 from tests.e2e.test_lab_flow import start_practice, table
+from tests.test_position_record_files import imu_file
 
 pytestmark = pytest.mark.e2e
 
@@ -110,3 +112,23 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
     with page.expect_navigation():
         panel.locator(".accept-csv").click()
     expect(page.locator("#take-history tbody tr")).to_have_count(2)
+
+    # an IMU's record of three axes (EuRoC's layout, rad/s): the gyro's axis is chosen
+    section = page.locator("#part-heading")
+    section.locator(".method-tab[data-method=csv]").click()
+    panel = section.locator('.method-panel[data-method="csv"]')
+    panel.locator(".unit").select_option("rad/s")
+    imu = tmp_path / "imu.csv"
+    z_axis = [float(v) for v in columns[1]]
+    imu.write_text(imu_file(z_axis), encoding="utf-8")
+    panel.locator(".csv-file").set_input_files(str(imu))
+    axis = panel.locator(".csv-preview select.record-column")
+    expect(axis).to_have_value("w_RS_S_x [rad s^-1]")  # the first axis, said in a note
+    expect(panel.locator(".csv-preview")).to_contain_text("3 列可能是陀螺的角速率")
+    axis.select_option("w_RS_S_z [rad s^-1]")
+    expect(panel.locator(".csv-preview tbody tr td").nth(3)).to_have_text(f"{np.mean(z_axis):.3f}")
+    expect(panel.locator(".csv-preview select.record-position")).to_have_value("2")
+    assert page.evaluate("document.documentElement.scrollWidth") <= 390
+    with page.expect_navigation():
+        panel.locator(".accept-csv").click()
+    expect(page.locator("#take-history tbody tr")).to_have_count(3)
