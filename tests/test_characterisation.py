@@ -160,6 +160,15 @@ def test_one_axis_of_an_imu_record_compressed_with_its_times(world):
     assert summary["arw_deg_rt_h"] == pytest.approx(gyro.arw_deg_rt_h, rel=0.1)
     reply = upload(teacher, world, packed, rate="", column="gq")
     assert "has no column" in teacher.get(reply.headers["location"]).text
+    # without a column: the gyro's axes are named, and what was typed comes back
+    reply = upload(teacher, world, packed, rate="10", unit="deg/h")
+    page = teacher.get(reply.headers["location"]).text
+    assert "the columns that may hold the rates: gx, gy, gz" in page
+    assert 'name="rate_hz" inputmode="decimal" placeholder="10" value="10"' in page
+    assert '<option value="deg/h" selected>' in page
+    reply = upload(teacher, world, packed, rate="", column='gq"><b>x')
+    page = teacher.get(reply.headers["location"]).text
+    assert 'value="gq&#34;&gt;&lt;b&gt;x"' in page and "<b>x" not in page  # escaped
 
 
 def test_one_bench_record_is_analysed_at_a_time(world):

@@ -311,10 +311,11 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
                 bare = bare_layout(len(names))  # units as the names say
                 value, time, temperature = bare.value, bare.time, bare.temperature
             else:
+                choices = rate_column_choices(header)
                 raise ColumnChoiceNeeded(
                     "allan.no_value_column",
-                    rate_column_choices(header),
-                    columns=", ".join(name.full for name in names),
+                    choices,
+                    columns=", ".join(choices or [cell.strip() for cell in header]),
                 )
         position = _find(names, ("position",))
     if time is not None:

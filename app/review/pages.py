@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from typing import Annotated
+from urllib.parse import urlencode
 
 from fastapi import APIRouter, File, Form, Request, UploadFile
 
@@ -81,6 +82,9 @@ def dashboard_context(request: Request, target, db, status: str = "", **extra) -
         "form": form_values(assignment, course.timezone),
         "characterisation": stored,
         "characterisation_words": words,
+        "characterisation_typed": {  # after a refused upload: what was typed
+            name: request.query_params.get(name, "")[:100] for name in ("rate_hz", "unit", "column")
+        },
         "presets": sorted(PRESETS),
         "plotly_url": request.app.state.plotly_url,
         "passback": passback_state(db, assignment.id),
@@ -182,6 +186,13 @@ def upload_characterisation(
         except (OSError, EOFError):  # a truncated or corrupt gzip stream
             raise UserError("characterisation.bad_gzip") from None
     except UserError as error:
+        # what was typed comes back in the form (a file cannot: the browser asks again)
+        typed = {"rate_hz": rate_hz.strip(), "unit": unit.strip(), "column": column.strip()}
+        query = urlencode({name: value for name, value in typed.items() if value})
+        response = redirect(
+            f"/courses/{course.id}/assignments/{assignment.id}"
+            f"{'?' + query if query else ''}#characterisation"
+        )
         flash(response, request, error.key, "error", **error.params)
         return response
     characterisation.store(assignment, summary)
