@@ -295,6 +295,7 @@ JS_MESSAGES = (
     "js.summary_rows_skipped",
     "js.record_position",
     "js.record_column",
+    "js.position_problem",
     "js.long_paste_held",
     "js.long_paste_bad",
     "js.cells_dropped",

@@ -28,7 +28,15 @@
     let payload = {};
     try { payload = await response.json(); } catch (error) { payload = {}; }
     if (!response.ok) {
-      const detail = typeof payload.detail === "string" ? payload.detail : t("js.failed");
+      let detail = typeof payload.detail === "string" ? payload.detail : t("js.failed");
+      if (Array.isArray(payload.detail) && payload.detail.length) {  // a 422: its first field
+        const first = payload.detail[0];
+        const loc = Array.isArray(first.loc) ? first.loc : [];
+        const at = loc.indexOf("columns");  // a position's readings: say which position
+        detail = at >= 0 && at + 1 < loc.length
+          ? t("js.position_problem", { position: loc[at + 1], problem: first.msg })
+          : String(first.msg || detail);
+      }
       throw new Error(detail);
     }
     return payload;

@@ -152,3 +152,8 @@ def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, n
     rows[4321] = "10.7\tabc"
     paste(page, "#part-heading .readings-grid tbody input", "\n".join(rows))
     expect(status).to_contain_text("nothing kept: row 4322, position 2")
+    # more readings than a position holds: the server's refusal names the position
+    paste(page, "#part-heading .readings-grid tbody input", "\n".join(["10.7"] * 100_001))
+    expect(status).to_contain_text("Pasted 100001 rows")
+    page.locator("#part-heading .save-manual").click()
+    expect(status).to_contain_text("Position 1: Too many items: at most 100000.")
