@@ -50,6 +50,15 @@ def upload(client, world, text: str | bytes, rate: str = "10", **extra):
     )
 
 
+def shown(client, reply) -> str:
+    """The page the teacher sees after an upload: the dashboard it redirects to once
+    stored, or (refused) the dashboard again with the refusal beside its field."""
+    if reply.status_code == 303:
+        return client.get(reply.headers["location"]).text
+    assert reply.status_code in (400, 503), reply.status_code
+    return reply.text
+
+
 def stored(world) -> dict | None:
     with read_session() as db:
         value = db.get(Assignment, world["assignment"]).gyro_characterisation
@@ -61,7 +70,7 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
     text, gyro = static_record()
     reply = upload(teacher, world, text, rate="１０")  # typed with a Chinese input method
     assert reply.status_code == 303
-    page = teacher.get(reply.headers["location"]).text
+    page = shown(teacher, reply)
     assert "Characterisation stored" in page
     summary = stored(world)
     assert summary["arw_deg_rt_h"] == pytest.approx(gyro.arw_deg_rt_h, rel=0.05)
@@ -125,8 +134,8 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
 def test_bad_records_are_explained_and_nothing_is_stored(world, content, rate, message):
     teacher = browser(world, "teacher1")
     reply = upload(teacher, world, content, rate)
-    assert reply.status_code == 303
-    assert message in teacher.get(reply.headers["location"]).text
+    assert reply.status_code == 400
+    assert message in reply.text  # beside its field, the section's form as typed
     assert stored(world) is None
 
 
@@ -159,15 +168,18 @@ def test_one_axis_of_an_imu_record_compressed_with_its_times(world):
     assert summary is not None and summary["rate_hz"] == pytest.approx(10.0)
     assert summary["arw_deg_rt_h"] == pytest.approx(gyro.arw_deg_rt_h, rel=0.1)
     reply = upload(teacher, world, packed, rate="", column="gq")
-    assert "has no column" in teacher.get(reply.headers["location"]).text
+    assert "has no column" in shown(teacher, reply)
     # without a column: the gyro's axes are named, and what was typed comes back
     reply = upload(teacher, world, packed, rate="10", unit="deg/h")
-    page = teacher.get(reply.headers["location"]).text
+    page = shown(teacher, reply)
     assert "the columns that may hold the rates: gx, gy, gz" in page
+    beside = page.split('id="field-characterisation-column"')[1].split("</label>")[0]
+    assert 'class="field-error" id="error-characterisation-column"' in beside  # beside it
+    assert "gx, gy, gz" in beside
     assert 'name="rate_hz" inputmode="decimal" placeholder="10" value="10"' in page
     assert '<option value="deg/h" selected>' in page
     reply = upload(teacher, world, packed, rate="", column='gq"><b>x')
-    page = teacher.get(reply.headers["location"]).text
+    page = shown(teacher, reply)
     assert 'value="gq&#34;&gt;&lt;b&gt;x"' in page and "<b>x" not in page  # escaped
 
 
@@ -181,7 +193,7 @@ def test_one_bench_record_is_analysed_at_a_time(world):
     pool("analysis").take(99_999)  # another teacher's analysis under way
     try:
         reply = upload(teacher, world, text)
-        assert "analysing another record" in teacher.get(reply.headers["location"]).text
+        assert "analysing another record" in shown(teacher, reply)
         assert stored(world) is None
     finally:
         pool("analysis").give_back(99_999)

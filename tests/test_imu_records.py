@@ -256,7 +256,7 @@ def test_the_teacher_uploads_a_euroc_record_and_a_doubtful_unit_is_asked(app, te
     from app.db import write_session
     from app.models import Assignment, Role
     from tests.factories import browser, make_course, make_user
-    from tests.test_characterisation import stored, upload
+    from tests.test_characterisation import shown, stored, upload
 
     student = make_user("s1", Role.student, name="学生1")
     course_id = make_course(teacher, "Bench lab", (student,))
@@ -267,7 +267,7 @@ def test_the_teacher_uploads_a_euroc_record_and_a_doubtful_unit_is_asked(app, te
         world = {"course": course_id, "assignment": assignment.id, "app": app}
     client = browser(world, "teacher1")
     reply = upload(client, world, xsens_text(), rate="", column="Gyr_Z")
-    page = client.get(reply.headers["location"]).text
+    page = shown(client, reply)
     assert "likely in another unit" in page and stored(world) is None
     reply = upload(client, world, xsens_text(), rate="", column="Gyr_Z", unit="rad/s")
     assert stored(world)["arw_deg_rt_h"] == pytest.approx(ARW_DEG_RT_H, rel=0.05)
@@ -276,10 +276,10 @@ def test_the_teacher_uploads_a_euroc_record_and_a_doubtful_unit_is_asked(app, te
     summary = stored(world)
     assert summary["rate_hz"] == pytest.approx(RATE_HZ)
     assert summary["arw_deg_rt_h"] == pytest.approx(ARW_DEG_RT_H, rel=0.05)
-    page = client.get(reply.headers["location"]).text
+    page = shown(client, reply)
     assert "as the record&#39;s header says" in page or "as the record's header says" in page
     reply = upload(client, world, packed, rate="", column="w_RS_S_z", unit="deg/s")
-    page = client.get(reply.headers["location"]).text
+    page = shown(client, reply)
     assert "header gives the rates in rad/s, but °/s was chosen" in page
 
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 from typing import Annotated
-from urllib.parse import urlencode
 
 from fastapi import APIRouter, File, Form, Request, UploadFile
 
@@ -82,9 +81,8 @@ def dashboard_context(request: Request, target, db, status: str = "", **extra) -
         "form": form_values(assignment, course.timezone),
         "characterisation": stored,
         "characterisation_words": words,
-        "characterisation_typed": {  # after a refused upload: what was typed
-            name: request.query_params.get(name, "")[:100] for name in ("rate_hz", "unit", "column")
-        },
+        "characterisation_typed": {"rate_hz": "", "unit": "", "column": ""},
+        "characterisation_problems": {},
         "presets": sorted(PRESETS),
         "plotly_url": request.app.state.plotly_url,
         "passback": passback_state(db, assignment.id),
@@ -146,6 +144,20 @@ def _record_source(record: UploadFile):
     return handle
 
 
+# a refused characterisation upload: the field its problem is about (else the file)
+CHARACTERISATION_FIELDS = {
+    "characterisation.bad_rate": "characterisation-rate",
+    "allan.bad_rate": "characterisation-rate",
+    "allan.no_rate": "characterisation-rate",
+    "characterisation.unit_doubt": "characterisation-unit",
+    "allan.unit_conflict": "characterisation-unit",
+    "allan.angle_not_rate": "characterisation-unit",
+    "allan.no_value_column": "characterisation-column",
+    "allan.no_such_column": "characterisation-column",
+    "allan.choose_column": "characterisation-column",
+}
+
+
 @router.post(
     "/courses/{course_id}/assignments/{assignment_id}/characterisation",
     dependencies=[CsrfProtected],
@@ -185,16 +197,17 @@ def upload_characterisation(
                 )
         except (OSError, EOFError):  # a truncated or corrupt gzip stream
             raise UserError("characterisation.bad_gzip") from None
-    except UserError as error:
-        # what was typed comes back in the form (a file cannot: the browser asks again)
+    except UserError as error:  # the section again: what was typed, the refusal beside its field
         typed = {"rate_hz": rate_hz.strip(), "unit": unit.strip(), "column": column.strip()}
-        query = urlencode({name: value for name, value in typed.items() if value})
-        response = redirect(
-            f"/courses/{course.id}/assignments/{assignment.id}"
-            f"{'?' + query if query else ''}#characterisation"
+        problems = {CHARACTERISATION_FIELDS.get(error.key, "characterisation-record"): error}
+        context = dashboard_context(
+            request,
+            target,
+            db,
+            characterisation_typed=typed,
+            characterisation_problems=problems,
         )
-        flash(response, request, error.key, "error", **error.params)
-        return response
+        return render(request, "review/dashboard.html", context, error.status)
     characterisation.store(assignment, summary)
     db.add(assignment)
     db.commit()
