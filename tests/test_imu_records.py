@@ -16,12 +16,9 @@ import pytest
 
 from app.core.allan import analyse_record
 from app.core.clock_stamps import TimeColumn, epoch_scale
+from app.core.column_names import column_name, rate_unit
 from app.core.exceptions import UserError
-from app.core.record_columns import (
-    column_name,
-    header_layout,
-    rate_unit,
-)
+from app.core.record_columns import header_layout
 from app.core.static_record import read_static_record, text_lines
 from app.core.units import unit_doubt
 
@@ -346,7 +343,7 @@ def test_the_kind_of_angle_told_from_the_readings():
     ],
 )
 def test_what_an_angle_columns_name_says(cell, kind):
-    from app.core.record_columns import angle_output
+    from app.core.column_names import angle_output
 
     angle = angle_output(column_name(cell))
     assert (angle.kind if angle else "rate") == kind

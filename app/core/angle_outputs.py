@@ -9,7 +9,7 @@ the integrated angle θ (a DSP-3000's "integrated angle") instead of a rate.
 
 The header names the unit (an angle: rad, mrad, µrad, deg, arcsec) and, where the name
 says so ("delta", "dtheta", "increment"; "integrated"), the kind; otherwise the readings
-tell it (:func:`angle_kind`).  The reading of headers: :mod:`app.core.record_columns`.
+tell it (:func:`angle_kind`).  The units a header names: :mod:`app.core.column_names`.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from dataclasses import replace
 
 import numpy as np
 
+from app.core.column_names import AngleOutput
 from app.core.exceptions import UserError
-from app.core.record_columns import AngleOutput
 from app.core.static_record import StaticRecord
 from app.core.units import SECONDS_PER_HOUR
 

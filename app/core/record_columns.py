@@ -9,63 +9,30 @@ bridge), "Time (s)" and "Rate (°/h)" (a spreadsheet), "#timestamp [ns]" and
 the name's suffix ("time_ms", "rate_deg_h"), is read.  A time column that names no unit
 and whose numbers are too large for seconds is read as milliseconds, microseconds or
 nanoseconds since 1970 (:func:`epoch_scale`).  The records themselves:
-:mod:`app.core.static_record`.
+:mod:`app.core.static_record`; one cell's name and unit: :mod:`app.core.column_names`.
 """
 
 from __future__ import annotations
 
-import math
 import re
 from dataclasses import dataclass
 
+from app.core.column_names import (
+    ROS_ANGULAR_VELOCITY,
+    AngleOutput,
+    ColumnName,
+    angle_output,
+    column_name,
+    rate_unit,
+)
 from app.core.exceptions import UserError
-from app.core.units import DEG_PER_HOUR, DEG_PER_SECOND, RAD_PER_SECOND
+from app.core.units import RAD_PER_SECOND
 
-COMMENT_MARKS = ("#", "%", "//")
 VALUE_NAMES = ("value", "rate", "omega", "reading", "角速度", "角速率")
 TIME_NAMES = ("time", "t", "timestamp", "datetime", "date_time", "sampletimefine", "时间")
 TEMPERATURE_NAMES = ("temperature", "temperature_c", "temp", "temp_c", "温度")
 TIME_SCALES = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6, "ns": 1e-9}
 NAMED_TIME_SCALES = {"sampletimefine": 1e-4}  # Xsens: ticks of 100 µs
-RATE_UNITS = {
-    "deg/h": DEG_PER_HOUR,
-    "°/h": DEG_PER_HOUR,
-    "deg/hr": DEG_PER_HOUR,
-    "degh^-1": DEG_PER_HOUR,
-    "dph": DEG_PER_HOUR,
-    "deg_h": DEG_PER_HOUR,
-    "deg/s": DEG_PER_SECOND,
-    "°/s": DEG_PER_SECOND,
-    "deg/sec": DEG_PER_SECOND,
-    "degs^-1": DEG_PER_SECOND,
-    "degs-1": DEG_PER_SECOND,
-    "dps": DEG_PER_SECOND,
-    "deg_s": DEG_PER_SECOND,
-    "rad/s": RAD_PER_SECOND,
-    "rad/sec": RAD_PER_SECOND,
-    "rads^-1": RAD_PER_SECOND,
-    "rads-1": RAD_PER_SECOND,
-    "rad_s": RAD_PER_SECOND,
-}
-# ROS's sensor_msgs/Imu angular velocity, in rad/s by the message's definition (REP 103)
-ROS_ANGULAR_VELOCITY = re.compile(r"(?:.*\.)?angular_velocity\.[xyz]")
-# an angle per output instead of a rate (KVH's delta angle, Honeywell's and Northrop's Δθ,
-# a DSP-3000's integrated angle): the unit of the angle, in degrees
-ANGLE_UNITS = {
-    "rad": 180.0 / math.pi,
-    "mrad": 0.180 / math.pi,
-    "urad": 1.8e-4 / math.pi,
-    "µrad": 1.8e-4 / math.pi,
-    "μrad": 1.8e-4 / math.pi,
-    "deg": 1.0,
-    "°": 1.0,
-    "arcsec": 1.0 / 3600.0,
-    "″": 1.0 / 3600.0,
-}
-INCREMENT_NAME = re.compile(
-    r"(?:^|[^a-z])(?:delta|d_?theta|d_?ang(?:le)?|incr(?:ement(?:al)?)?)|[δΔ]|增量", re.IGNORECASE
-)
-INTEGRATED_NAME = re.compile(r"(integrated|cumulative|累积|积分)", re.IGNORECASE)
 # columns an IMU's record holds beside its rates: counters, stamps, frame names,
 # accelerations, magnetic fields, orientations (EuRoC's a_RS_S_x, ROS's
 # field.linear_acceleration.x and field.header.seq, Xsens's PacketCounter and Acc_X)
@@ -78,9 +45,6 @@ NOT_RATE_UNITS = {"m/s^2", "ms^-2", "m/s2", "m/s²", "g", "mg", "gauss", "ut", "
 RATE_NAME = re.compile(
     r"gyr|omega|angular|rate|(?:^|[^a-z])w_|^w[xyz]$|^g[xyz]$|角速", re.IGNORECASE
 )
-_UNIT_IN_BRACKETS = re.compile(r"(.*?)\s*[(\[]([^()\[\]]*)[)\]]")
-_TIME_SUFFIX = re.compile(r"(.+?)_(s|ms|us|ns)")
-_RATE_SUFFIX = re.compile(r"(.+?)_(deg_h|deg_s|dps|dph|rad_s)")
 
 
 class ColumnChoiceNeeded(UserError):
@@ -91,114 +55,6 @@ class ColumnChoiceNeeded(UserError):
     def __init__(self, key: str, choices: list[str], **params: object) -> None:
         super().__init__(key, **params)
         self.choices = choices
-
-
-@dataclass(frozen=True)
-class ColumnName:
-    """One header cell: as written (lower case), its name without a unit, and the unit."""
-
-    full: str
-    base: str
-    unit: str | None
-
-
-def comment_text(text: str) -> str | None:
-    """The text of a comment line after its mark (``#``, ``%``, ``//``), or None.
-
-    Parameters
-    ----------
-    text : str
-        A line, stripped.
-
-    Returns
-    -------
-    str or None
-        "timestamp [ns],w_x [rad s^-1]" for "#timestamp [ns],w_x [rad s^-1]".
-    """
-    for mark in COMMENT_MARKS:
-        if text.startswith(mark):
-            return text[len(mark) :].strip()
-    return None
-
-
-def column_name(cell: str) -> ColumnName:
-    """A header cell split into its name and its unit.
-
-    Parameters
-    ----------
-    cell : str
-        "Time (s)", "w_RS_S_z [rad s^-1]", "time_ms", "rate_deg_h", "value" ….
-
-    Returns
-    -------
-    ColumnName
-        ("time (s)", "time", "s"), ("w_rs_s_z [rad s^-1]", "w_rs_s_z", "rad s^-1"),
-        ("time_ms", "time", "ms"), ("rate_deg_h", "rate", "deg_h"), ("value", "value", None).
-    """
-    full = cell.strip().lower()
-    bracketed = _UNIT_IN_BRACKETS.fullmatch(full)
-    if bracketed and bracketed.group(1):
-        return ColumnName(full, bracketed.group(1).strip(), bracketed.group(2).strip())
-    for suffix in (_RATE_SUFFIX, _TIME_SUFFIX):
-        named = suffix.fullmatch(full)
-        if named:
-            return ColumnName(full, named.group(1), named.group(2))
-    return ColumnName(full, full, None)
-
-
-def rate_unit(unit: str | None) -> str | None:
-    """The canonical rate unit a column's unit text names ("rad s^-1" → "rad/s"), or None.
-
-    Parameters
-    ----------
-    unit : str or None
-        The unit as written in the header.
-
-    Returns
-    -------
-    str or None
-        "deg/h", "deg/s" or "rad/s"; None when the text names none of them.
-    """
-    if unit is None:
-        return None
-    return RATE_UNITS.get(unit.replace(" ", "").replace("·", ""))
-
-
-@dataclass(frozen=True)
-class AngleOutput:
-    """Readings that are angles, not rates: each output's increment Δθ, its integrated
-    angle θ, or either (``kind`` None: told from the readings,
-    :func:`app.core.angle_outputs.angle_kind`); ``deg_per_unit`` converts them to degrees."""
-
-    kind: str | None  # "increment", "integrated" or None
-    deg_per_unit: float
-    unit: str  # as the header writes it
-
-
-def angle_output(name: ColumnName) -> AngleOutput | None:
-    """Whether a column's unit is an angle ("dtheta_z [rad]", "Delta angle (deg)"), and
-    what kind its name says.
-
-    Parameters
-    ----------
-    name : ColumnName
-        The rates' column.
-
-    Returns
-    -------
-    AngleOutput or None
-        None for a rate or no unit.
-    """
-    unit = (name.unit or "").replace(" ", "")
-    if unit not in ANGLE_UNITS:
-        return None
-    if INTEGRATED_NAME.search(name.base):
-        kind = "integrated"
-    elif INCREMENT_NAME.search(name.base):
-        kind = "increment"
-    else:
-        kind = None
-    return AngleOutput(kind, ANGLE_UNITS[unit], unit)
 
 
 @dataclass(frozen=True)

@@ -9,8 +9,9 @@ a row of units under the header passed over; a time column in seconds, in millis
 carried past midnight -- read as seconds from the first reading; a spreadsheet's empty
 last column dropped; ``#``, ``%`` and ``//`` comment lines, the last one before the
 readings read as the header where it names their columns -- EuRoC, Kalibr and ROS write
-it so; what the names say of units: :mod:`app.core.record_columns`), parsed in blocks of
-lines, so a 10⁷-sample record never exists as one string.
+it so; which column is which: :mod:`app.core.record_columns`; what a name says of units:
+:mod:`app.core.column_names`), parsed in blocks of lines, so a 10⁷-sample record never
+exists as one string.
 
 Preparing the record for the analysis: :mod:`app.core.record_preparation`.
 """
@@ -33,14 +34,9 @@ from app.core.clock_stamps import (
     is_clock_stamp,
     seconds_from_first,
 )
+from app.core.column_names import AngleOutput, comment_text
 from app.core.exceptions import UserError
-from app.core.record_columns import (
-    AngleOutput,
-    Layout,
-    bare_layout,
-    comment_text,
-    header_layout,
-)
+from app.core.record_columns import Layout, bare_layout, header_layout
 from app.core.spreadsheet_text import (
     WHOLE_COMMA_DIGITS,
     decimal_point,
