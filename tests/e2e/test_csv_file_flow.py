@@ -31,6 +31,13 @@ def workbook_of(rows: list[list[str]]) -> bytes:
     return buffer.getvalue()
 
 
+def csv_panel(page):
+    """The heading part's CSV method, opened (after a save the page reloads: again)."""
+    section = page.locator("#part-heading")
+    section.locator(".method-tab[data-method=csv]").click()
+    return section.locator('.method-panel[data-method="csv"]')
+
+
 @pytest.mark.parametrize(("language", "width"), [("en", 1366), ("zh-CN", 390)])
 def test_a_csv_file_is_previewed_and_saved_and_a_workbook_is_named(
     live_server, new_page, tmp_path, language, width
@@ -40,9 +47,7 @@ def test_a_csv_file_is_previewed_and_saved_and_a_workbook_is_named(
     page.context.add_cookies([{"name": "gyrolab_lang", "value": language, "url": live_server.url}])
     page.set_viewport_size({"width": width, "height": 844})
     start_practice(page, live_server.url)
-    section = page.locator("#part-heading")
-    section.locator(".method-tab[data-method=csv]").click()
-    panel = section.locator('.method-panel[data-method="csv"]')
+    panel = csv_panel(page)
     # the file chooser and the unit fit a phone's width (the panel once pushed the page
     # sideways: a file input's own width in a grid column that could not shrink)
     assert page.evaluate("document.documentElement.scrollWidth") <= width
@@ -77,9 +82,7 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
     page.context.add_cookies([{"name": "gyrolab_lang", "value": "zh-CN", "url": live_server.url}])
     page.set_viewport_size({"width": 390, "height": 844})
     start_practice(page, live_server.url)
-    section = page.locator("#part-heading")
-    section.locator(".method-tab[data-method=csv]").click()
-    panel = section.locator('.method-panel[data-method="csv"]')
+    panel = csv_panel(page)
     columns = list(zip(*table("handout_horizontal.csv"), strict=True))
 
     def logger_file(position: int):
@@ -98,9 +101,7 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
         panel.locator(".accept-csv").click()
     expect(page.locator("#take-history tbody tr")).to_have_count(1)
 
-    section = page.locator("#part-heading")
-    section.locator(".method-tab[data-method=csv]").click()
-    panel = section.locator('.method-panel[data-method="csv"]')
+    panel = csv_panel(page)
     panel.locator(".csv-file").set_input_files(logger_file(3))
     choice = panel.locator(".csv-preview select.record-position")
     expect(choice).to_have_value("2")  # the first position still empty
@@ -114,9 +115,7 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
     expect(page.locator("#take-history tbody tr")).to_have_count(2)
 
     # an IMU's record of three axes (EuRoC's layout, rad/s): the gyro's axis is chosen
-    section = page.locator("#part-heading")
-    section.locator(".method-tab[data-method=csv]").click()
-    panel = section.locator('.method-panel[data-method="csv"]')
+    panel = csv_panel(page)
     panel.locator(".unit").select_option("rad/s")
     imu = tmp_path / "imu.csv"
     z_axis = [float(v) for v in columns[1]]
