@@ -102,6 +102,20 @@ def test_long_layout_uses_the_given_angles(capsys):
     assert code == 0 and json.loads(out)["azimuth_deg"] == pytest.approx(10.753, abs=1e-3)
 
 
+def test_a_long_file_without_a_position_is_solved_at_its_positions_angles(capsys):
+    """Positions 1, 2 and 4 named "P1, P2, P4" are at 0°, -90° and -270° (counter-
+    clockwise), not at three positions' angles; the same heading as with all four."""
+    means = {1: 10.706, 2: 2.793, 3: -8.951, 4: -0.94}  # the handout's means, heading 10.75°
+
+    def solved(kept) -> float:
+        rows = ["位置,读数"] + [f"P{k},{means[k]}" for k in kept for _ in range(3)]
+        code, out, _ = run(capsys, "solve", "heading", "-", "--json", stdin="\n".join(rows))
+        assert code == 0
+        return json.loads(out)["azimuth_deg"]
+
+    assert solved([2, 4, 1]) == pytest.approx(solved([1, 2, 3, 4]), abs=0.5)
+
+
 @pytest.mark.parametrize("azimuth", [20.0, 110.0, 200.0, 290.0])
 @pytest.mark.parametrize("rotation", ["ccw", "cw"])
 def test_simulate_then_solve_every_quadrant(capsys, azimuth, rotation):

@@ -152,3 +152,24 @@ def test_a_table_of_bare_columns_stays_a_table_of_positions(lab):
     body = lab("/csv/preview", text).json()
     assert body["layout"] != "record" and len(body["positions"]) == 4
     assert body["columns"] == [] and body["column"] is None
+
+
+def test_a_long_file_saves_each_position_as_the_number_it_gives(lab):
+    """ "position, rate" with position 3 alone is position 3 -- not position 1 -- and a
+    file by the dial's angles fills the positions at those angles."""
+    text = "position,rate\n" + "".join(f"3,{v}\n" for v in HEADING[3])
+    [row] = lab("/csv/preview", text).json()["positions"]
+    assert row["position"] == 3 and row["n"] == len(HEADING[3])
+    assert lab("/csv", text).json()["saved"] == [3]
+    # the handout's session turns counter-clockwise: position 2 is at -90° (270°)
+    by_angle = "转台角度,读数\n" + "".join(
+        f"{angle},{v}\n" for angle, k in ((0, 1), (270, 2)) for v in HEADING[k]
+    )
+    rows = lab("/csv/preview", by_angle).json()["positions"]
+    assert [(r["position"], r["angle_deg"]) for r in rows] == [(1, 0.0), (2, 270.0)]
+    assert lab("/csv", by_angle).json()["saved"] == [1, 2]
+    with read_session() as db:
+        takes = db.exec(select(Take).where(Take.superseded_at == None)).all()  # noqa: E711
+    assert sorted((t.position, t.n_samples) for t in takes) == [
+        (k, len(HEADING[k])) for k in (1, 2, 3)
+    ]

@@ -300,3 +300,83 @@ def test_a_units_row_in_one_positions_record_and_a_static_record():
     record = read_static_record(io.StringIO("time,rate,temp\ns,°/h,℃\n0,10.7,25\n0.1,10.8,25\n"))
     np.testing.assert_allclose(record.values, [10.7, 10.8])
     np.testing.assert_allclose(record.temperatures_c, [25.0, 25.0])
+
+
+@pytest.mark.parametrize(
+    ("header", "separator"),
+    [
+        ("position,rate", ","),
+        ("Position,Reading (°/h)", ","),
+        ("位置,角速度", ","),
+        ("pos;rate_deg_h", ";"),
+        ("序号\t位置\t读数 (°/h)\t时间 (s)", "\t"),
+        ("Position No,Gyro Output", ","),
+    ],
+)
+def test_one_reading_per_row_beside_its_position_in_a_students_spelling(header, separator):
+    """The long table as spreadsheets name it: each position's readings, nothing merged
+    into one record."""
+    rows = [(1, 10.74), (1, 10.65), (2, -0.5), (2, -0.4), (3, -10.7), (4, 0.3), (4, 0.4)]
+    width = header.count(separator) + 1
+    lines = []
+    for count, (position, value) in enumerate(rows, start=1):
+        cells = {2: [position, value], 3: [position, value], 4: [count, position, value, count]}
+        text = separator.join(str(c) for c in cells[width])
+        lines.append(text.replace(".", ",") if separator == ";" else text)
+    readings = parse_readings_csv(header + "\n" + "\n".join(lines) + "\n")
+    assert readings.layout == "long" and readings.numbers == [1, 2, 3, 4]
+    for got, want in zip(readings.positions, [[10.74, 10.65], [-0.5, -0.4], [-10.7], [0.3, 0.4]]):
+        np.testing.assert_allclose(got, want)
+    if "时间" in header:
+        assert [t.tolist() for t in readings.times_s] == [[1, 2], [3, 4], [5], [6, 7]]
+
+
+@pytest.mark.parametrize(
+    ("labels", "numbers"),
+    [
+        (["3", "3"], [3]),
+        (["P2", "P1", "P1"], [1, 2]),
+        (["位置4", "第2位置", "位置4"], [2, 4]),
+        (["0", "1", "2", "3"], [1, 2, 3, 4]),
+        (["north", "east"], None),
+    ],
+    ids=["one-position", "names-sorted", "chinese", "from-zero", "labels"],
+)
+def test_a_long_files_positions_keep_the_numbers_it_gives(labels, numbers):
+    text = "position,value\n" + "".join(f"{label},{k}.5\n" for k, label in enumerate(labels))
+    readings = parse_readings_csv(text)
+    assert readings.numbers == numbers and len(readings.positions) == len(set(labels))
+    if labels[0] == "P2":  # sorted with their readings
+        assert [p.tolist() for p in readings.positions] == [[1.5, 2.5], [0.5]]
+
+
+def test_positions_given_by_the_turntables_angle():
+    pairs = [(0, 1), (0, 2), (90, 3), (180, 4), (270, 5)]
+    text = "angle,rate\n" + "".join(f"{a},{v}\n" for a, v in pairs)
+    readings = parse_readings_csv(text)
+    assert readings.angles_deg == [0.0, 90.0, 180.0, 270.0] and readings.numbers is None
+    assert [p.tolist() for p in readings.positions] == [[1, 2], [3], [4], [5]]
+    # a "position" column holding the dial's angles (0, 90, 180, 270) is read as the angles
+    readings = parse_readings_csv(text.replace("angle", "Position (deg)"))
+    assert readings.angles_deg == [0.0, 90.0, 180.0, 270.0] and readings.numbers is None
+
+
+@pytest.mark.parametrize(
+    ("text", "key"),
+    [
+        ("angle,rate\n0,1\n90,2\n0,3\n", "csv.angle_returns"),
+        ("position,rate\n1,1\nP1,2\n", "csv.position_twice_named"),
+        ("position,rate\n1,1\n99999999999999999999,2\n", "csv.position_number"),
+        ("position,rate\n1,1\n,2\n", "csv.no_position"),
+        ("position,rate\n1,1\n2,abc\n", "csv.not_a_number"),
+    ],
+)
+def test_a_long_file_that_cannot_be_read_says_why(text, key):
+    with pytest.raises(UserError) as caught:
+        parse_readings_csv(text)
+    assert caught.value.key == key
+
+
+def test_a_time_in_another_unit_is_not_taken_for_seconds():
+    readings = parse_readings_csv("position,time (ms),rate\n1,0,1\n1,500,2\n2,1000,3\n")
+    assert readings.layout == "long" and readings.times_s is None

@@ -60,16 +60,14 @@ def _finite(name: str, value: float | None) -> None:
 def solve_readings(part: str, readings: Readings, args: argparse.Namespace):
     """Solve ``readings`` as the ``solve`` command does (shared with tests and the API)."""
     positions = [to_deg_per_hour(values, args.unit) for values in readings.positions]
-    count = len(positions)
-    if part == "heading":
-        if readings.angles_deg is not None:
-            angles = np.asarray(readings.angles_deg)
-        else:
-            angles = heading_angles(count, args.rotation, args.start_angle, args.step)
-    elif readings.angles_deg is not None:
+    numbers = np.asarray(readings.numbers or range(1, len(positions) + 1))  # "P3": the 3rd
+    if readings.angles_deg is not None:
         angles = np.asarray(readings.angles_deg)
+    elif part == "heading":
+        angles = heading_angles(numbers.max(), args.rotation, args.start_angle, args.step)
+        angles = angles[numbers - 1]
     else:
-        angles = elevation_angles(count, args.start_angle, args.step)
+        angles = elevation_angles(numbers.max(), args.start_angle, args.step)[numbers - 1]
     known = _known_noise(readings, positions, getattr(args, "gyro_preset", None))
     known["times_s"] = readings.times_s  # drift fitted (5+ positions) or checked (warm-up)
     known["temperatures_c"] = readings.temperatures_c or None

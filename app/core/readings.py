@@ -11,8 +11,12 @@ Either may be separated by semicolons or tabs instead of commas, with decimal co
 ("10,74"), as spreadsheets in many European locales write them.
   A table of numbers only (no header) is read the same way when it has three or more
   position columns; a first column counting 1, 2, 3… is taken as row numbers.
-* long — header ``position,angle_deg,value`` with optional ``time_s``; one reading per row,
-  the angle of each position used as given.
+* long — one reading per row beside its position: header ``position,angle_deg,value`` with
+  optional ``time_s`` and ``temperature_c`` (GyroLab's export), or as students name it --
+  "position, rate", "angle, reading (°/h)", "位置, 角速度" (:mod:`app.core.long_headers`).
+  The position is keyed by its number ("3", "P3", "位置3"; kept, so a file of position 3
+  alone is position 3), a label, or the turntable's angle; the angle of each position is
+  used as given.
 
 Under either header a row naming only units ("s, °/h, °/h") is passed over, as a unit
 after a column name is: the readings' unit is the one chosen with the file.
@@ -28,17 +32,19 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from app.core.exceptions import UserError
+from app.core.long_headers import long_columns
 from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
     spreadsheet_delimiter,
     title_lines_blanked,
 )
-from app.core.table_headers import column_name, numbered_columns, summary_label
+from app.core.table_headers import column_name, evenly_round, numbered_columns, summary_label
 from app.core.text_files import plain_text
 from app.core.typed_numbers import NumberOutOfRange, is_number, parse_decimal
 
 WIDE_COLUMN = re.compile(r"^position_(\d+)$")
+MAX_POSITION_NUMBER = 360  # one position per degree of the turntable at most
 
 
 @dataclass
@@ -49,6 +55,7 @@ class Readings:
     layout: str = "wide"
     temperatures_c: list[np.ndarray] | None = None  # long layout's optional temperature_c
     skipped: list[tuple[int, str]] = field(default_factory=list)  # summary rows: line, label
+    numbers: list[int] | None = None  # long layout: the positions' numbers as the file gives
 
 
 def _number(text: str, line: int, column: str) -> float:
@@ -110,12 +117,13 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     names = [column_name(cell) for cell in header]
     if len(rows) > 1 and is_units_row(rows[1][1]):
         del rows[1]  # "s, °/h, °/h…" under the names: a note, as a unit after a name is
-    if {"position", "value"} <= set(names):
+    long = long_columns(header)
+    if long is not None:
         body = rows[1:]
-        if part is not None and "part" in names:
-            column = names.index("part")
+        if part is not None and "part" in long:
+            column = long["part"]
             body = [(n, r) for n, r in body if column < len(r) and r[column].strip() == part]
-        return _parse_long(names, body)
+        return _parse_long(long, body)
     if len(rows) > 1 and all(
         WIDE_COLUMN.match(column_name(row[0])) and all(is_number(c) for c in row[1:] if c.strip())
         for _, row in rows
@@ -203,12 +211,10 @@ def _parse_rows_of_positions(rows) -> Readings:
     return Readings([np.array(columns[k]) for k in sorted(columns)], None, None, "wide")
 
 
-def _parse_long(names: list[str], rows) -> Readings:
-    index = {
-        name: names.index(name)
-        for name in ("position", "angle_deg", "value", "time_s", "temperature_c")
-        if name in names
-    }
+def _parse_long(index: dict[str, int], rows) -> Readings:
+    """One reading per row, keyed by its position (a number, "P2", "位置2", a label) or by
+    the turntable's angle.  Positions keep the numbers the file gives them."""
+    keyed = "position" if "position" in index else "angle_deg"
     labels: list[str] = []
     grouped: dict[str, dict] = {}
     for line, row in rows:
@@ -217,13 +223,17 @@ def _parse_long(names: list[str], rows) -> Readings:
             position = index.get(name)
             return row[position].strip() if position is not None and position < len(row) else ""
 
-        label = cell("position")
+        label = cell(keyed)
         if not label:
             raise UserError("csv.no_position", line=line)
+        if keyed == "angle_deg":
+            label = _angle_label(_number(label, line, "angle_deg"))
         entry = grouped.get(label)
         if entry is None:
             entry = grouped[label] = {"values": [], "times": [], "temps": [], "angle": None}
             labels.append(label)
+        elif keyed == "angle_deg" and labels[-1] != label:
+            raise UserError("csv.angle_returns", line=line, angle=label)
         entry["values"].append(_number(cell("value"), line, "value"))
         if "time_s" in index:
             entry["times"].append(_number(cell("time_s"), line, "time_s"))
@@ -241,17 +251,53 @@ def _parse_long(names: list[str], rows) -> Readings:
                 )
     if not labels:
         raise UserError("csv.empty")
-    if all(label.lstrip("-").isdigit() for label in labels):
-        labels.sort(key=int)
-    angles = None
-    if "angle_deg" in index:
-        angles = [grouped[label]["angle"] for label in labels]
+    numbers = _position_numbers(labels) if keyed == "position" else None
+    if numbers is not None and "angle_deg" not in index and _angles_named_positions(numbers):
+        for label, angle in zip(labels, numbers, strict=True):  # "position" 0, 90, 180, 270
+            grouped[label]["angle"] = float(angle)
+        index = {**index, "angle_deg": index["position"]}
+        numbers = None
+    if numbers is not None:
+        order = sorted(range(len(labels)), key=numbers.__getitem__)
+        labels, numbers = [labels[k] for k in order], [numbers[k] for k in order]
+    angles = [grouped[label]["angle"] for label in labels] if "angle_deg" in index else None
     times = [np.array(grouped[label]["times"]) for label in labels] if "time_s" in index else None
     positions = [np.array(grouped[label]["values"]) for label in labels]
     temperatures = None
     if "temperature_c" in index:
         temperatures = [np.array(grouped[label]["temps"]) for label in labels]
-    return Readings(positions, angles, times, "long", temperatures)
+    return Readings(positions, angles, times, "long", temperatures, numbers=numbers)
+
+
+def _angle_label(angle: float) -> str:
+    return f"{angle:g}"
+
+
+def _position_numbers(labels: list[str]) -> list[int] | None:
+    """The positions' numbers as the labels give them ("3", "P3", "位置3", "第3位置"),
+    counted from 1 where the labels count from 0; None where a label is no number."""
+    numbers = []
+    for label in labels:
+        name = column_name(label)
+        match = WIDE_COLUMN.match(name)
+        if match:
+            numbers.append(int(match.group(1)))
+        elif label.isdigit():
+            numbers.append(int(label))
+        else:
+            return None
+    if max(numbers) > MAX_POSITION_NUMBER:
+        raise UserError("csv.position_number", position=max(numbers), limit=MAX_POSITION_NUMBER)
+    if len(set(numbers)) != len(numbers):
+        raise UserError("csv.position_twice_named", positions=", ".join(labels))
+    if 0 in numbers and sorted(numbers) == list(range(len(numbers))):
+        return [number + 1 for number in numbers]  # counted from 0
+    return numbers
+
+
+def _angles_named_positions(numbers: list[int]) -> bool:
+    """Labels that are the turntable's angles, not positions' numbers: 0, 90, 180, 270."""
+    return max(numbers) > 8 and evenly_round([float(n) for n in numbers], from_zero=False)
 
 
 def readings_to_long_csv(

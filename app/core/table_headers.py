@@ -100,7 +100,7 @@ def _angle(cell: str) -> float | None:
     return float(match.group(1)) if match else None
 
 
-def _evenly_round(angles: list[float], from_zero: bool) -> bool:
+def evenly_round(angles: list[float], from_zero: bool) -> bool:
     """Angles one turn's N-th apart, in turning order (either way round)."""
     count = len(angles)
     if count < 3 or (from_zero and angles[0] != 0.0):
@@ -140,12 +140,12 @@ def numbered_columns(cells: list[str], more_rows: bool) -> dict[int, int] | None
     if not labelled and not more_rows:
         return None  # one row of numbers and nothing under it: readings, not a header
     if angles:
-        if numbers or not _evenly_round([angle for _, angle in angles], from_zero=False):
+        if numbers or not evenly_round([angle for _, angle in angles], from_zero=False):
             return None
         return {index: k for k, (index, _) in enumerate(angles, start=1)}
     written = [cell for _, cell in numbers]
     counting = written == [str(k) for k in range(1, len(written) + 1)]
-    if (counting and len(written) >= (2 if labelled else 3)) or _evenly_round(
+    if (counting and len(written) >= (2 if labelled else 3)) or evenly_round(
         [float(cell) for cell in written], from_zero=True
     ):
         return {index: k for k, (index, _) in enumerate(numbers, start=1)}

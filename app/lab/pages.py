@@ -13,6 +13,7 @@ from sqlmodel import Session
 
 from app.accounts.deps import CurrentUser
 from app.core.exceptions import UserError
+from app.core.long_headers import ROLE_NAMES
 from app.core.presets import PRESETS
 from app.core.table_headers import SUMMARY_LABELS
 from app.core.units import UNIT_SYMBOLS, UNITS
@@ -66,6 +67,7 @@ from app.web.render import (
 )
 
 SHOWN_SUMMARY_LABELS = sorted(SUMMARY_LABELS)  # for the grid's script, once
+LONG_ROLES = {role: list(ROLE_NAMES[role]) for role in ("position", "angle_deg", "value")}
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 
@@ -129,6 +131,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         "minReadings": session.min_readings,
         "gridLimit": GRID_LIMIT,  # a longer paste is held and saved as pasted, not shown
         "summaryLabels": SHOWN_SUMMARY_LABELS,  # a pasted row of means is no reading
+        "longRoles": LONG_ROLES,  # a pasted table of one reading per row beside its position
         "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
         "plane": session.sim_plane_dial_deg,
         "messages": client_messages(JS_MESSAGES, _.language),
@@ -291,6 +294,7 @@ JS_MESSAGES = (
     "js.pasted",
     "js.header_skipped",
     "js.row_numbers_skipped",
+    "js.long_block",
     "js.leading_columns_skipped",
     "js.summary_rows_skipped",
     "js.record_position",

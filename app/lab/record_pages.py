@@ -19,7 +19,7 @@ from app.core.position_records import (
     OnePositionRecord,
     parse_one_position_record,
 )
-from app.core.readings import parse_readings_csv
+from app.core.readings import Readings, parse_readings_csv
 from app.core.static_record import names_its_columns_in_a_comment
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.lab.deps import OwnedSession, OwnSessionId
@@ -131,11 +131,12 @@ def preview_csv(
     check_position_count(len(readings.positions), position_count(session))
     single = readings.layout == "record"
     first = record_position(session, body, db) if single else 1
+    numbers = file_positions(session, body.part, readings, first)
     rows = []
-    for index, values in enumerate(readings.positions, start=first):
+    for slot, (index, values) in enumerate(zip(numbers, readings.positions, strict=True)):
         converted = to_deg_per_hour(values, body.unit)
         angle = (
-            readings.angles_deg[index - 1]
+            readings.angles_deg[slot]
             if readings.angles_deg is not None
             else nominal_angle(session, body.part, index)
         )
@@ -174,6 +175,26 @@ def preview_csv(
     }
 
 
+def file_positions(session: LabSession, part: str, readings: Readings, first: int) -> list[int]:
+    """The positions a file's readings are saved as: the record's chosen position; the
+    numbers a long file gives ("P3"); the positions at the angles it gives, where each
+    is one of the session's dial angles; else 1, 2, … in the file's order."""
+    count = len(readings.positions)
+    if readings.layout == "record":
+        return [first]
+    if readings.numbers is not None:
+        return list(readings.numbers)
+    if readings.angles_deg is not None:
+        dial = [(k, nominal_angle(session, part, k)) for k in range(1, position_count(session) + 1)]
+        found = [
+            next((k for k, at in dial if abs((angle - at + 180.0) % 360.0 - 180.0) < 1e-6), None)
+            for angle in readings.angles_deg
+        ]  # a revisit (1-2-3-4-4-3-2-1): its first position, so the file's order is kept
+        if None not in found and len(set(found)) == count:
+            return found
+    return list(range(1, count + 1))
+
+
 def column_label(column: str, language: str) -> str:
     """A column as offered: its header cell, or "Column 3" where the file has no header."""
     return translate("csv.column_number", language, number=column) if column.isdigit() else column
@@ -197,10 +218,10 @@ def save_csv(
 
     if readings.layout == "record" and body.position is None:
         raise UserError("csv.record_position")
-    first = body.position if readings.layout == "record" else 1
+    numbers = file_positions(session, body.part, readings, body.position or 1)
 
     def numbered(items):
-        return dict(enumerate(items, start=first)) if items is not None else None
+        return dict(zip(numbers, items, strict=True)) if items is not None else None
 
     saved = record_positions(
         db,

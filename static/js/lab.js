@@ -180,7 +180,59 @@
   const SUMMARY_LABELS = new Set(config.summaryLabels);  // app.core.table_headers.SUMMARY_LABELS
   const isSummary = (row) => row.some((cell) => SUMMARY_LABELS.has(headerName(cell).replace(/[:：]$/, "").trim()));
 
-  function parseBlock(text) {
+  // A long table: one reading per row beside its position ("位置 | 读数", "position, rate",
+  // "angle, reading (°/h)"), as app.core.long_headers names its columns (sent with the page).
+  const LONG_ROLES = Object.entries(config.longRoles).flatMap(([role, names]) => names.map((name) => [name, role]));
+  const ROLE_OF = new Map(LONG_ROLES);
+  function longRole(cell) {
+    let name = plain(cell).trim().toLowerCase().replace(/\s*[(\[（【][^()\[\]（）【】]*[)\]）】]$/, "");
+    name = name.replace(/[\s_]+/g, " ").trim();
+    const suffixed = name.match(/^(.+?) (?:deg h|deg s|dph|dps|rad s|deg|s|c)$/);
+    if (suffixed && ROLE_OF.has(suffixed[1])) name = suffixed[1];
+    return ROLE_OF.get(name);
+  }
+  function longColumns(header) {
+    const found = {};
+    header.forEach((cell, index) => {
+      const role = longRole(cell);
+      if (role) (found[role] = found[role] || []).push(index);
+    });
+    const one = (role) => (found[role] && found[role].length === 1 ? found[role][0] : undefined);
+    const key = one("position") ?? one("angle_deg");
+    return one("value") !== undefined && key !== undefined ? { key, value: one("value") } : null;
+  }
+  // Each position's readings put in its column: "3", "P3", "位置3" is position 3; labels
+  // counting from 0, angles or words: the positions in the order the rows give them.
+  function longBlock(body, long, columns) {
+    const labels = [];
+    const readings = new Map();
+    body.forEach((row) => {
+      const label = (row[long.key] || "").trim();
+      if (!readings.has(label)) { labels.push(label); readings.set(label, []); }
+      readings.get(label).push(row[long.value] ?? "");
+    });
+    const numberOf = (label) => {
+      const name = headerName(label);
+      if (/^\d+$/.test(name)) return Number(name);
+      const named = POSITION_NAMES.map((pattern) => name.match(pattern)).find(Boolean);
+      return named && /^\d+$/.test(named[1]) ? Number(named[1]) : NaN;
+    };
+    let numbers = labels.map(numberOf);
+    const fromZero = numbers.includes(0) && numbers.every((n) => n < numbers.length) && new Set(numbers).size === numbers.length;
+    if (fromZero) numbers = numbers.map((n) => n + 1);
+    if (!numbers.every((n) => n >= 1 && n <= columns) || new Set(numbers).size !== numbers.length) {
+      numbers = labels.map((_, i) => i + 1);
+    }
+    const length = Math.max(...labels.map((label) => readings.get(label).length));
+    const width = Math.max(...numbers);
+    const rows = Array.from({ length }, () => new Array(width).fill(undefined));
+    labels.forEach((label, i) => {
+      readings.get(label).forEach((value, r) => { rows[r][numbers[i] - 1] = value; });
+    });
+    return rows;
+  }
+
+  function parseBlock(text, columns) {
     const lines = plain(text).replace(/\r\n?/g, "\n").split("\n").filter((line) => line.trim() !== "");
     const rows = splitLines(lines);
     const notes = [];
@@ -192,6 +244,11 @@
       body = body.slice(1);
       notes.push("js.header_skipped");
       if (body.length && isUnitsRow(body[0])) body = body.slice(1);  // "s, °/h…": a note
+    }
+    const long = header && longColumns(header);
+    if (long) {  // each position's readings to its own column, from the grid's first
+      notes.push("js.long_block");
+      return { rows: longBlock(body.filter((row) => !isSummary(row)), long, columns), notes, whole: true };
     }
     const summaries = body.filter(isSummary).length;
     if (summaries) {
@@ -336,7 +393,7 @@
       for (let r = 0; r < rows.length; r += 1) {
         for (let c = 0; c < rows[r].length; c += 1) {
           const column = startColumn + c + 1;
-          const parsed = parseCell(rows[r][c]);
+          const parsed = parseCell(rows[r][c] ?? "");
           if (parsed.empty || column > columns) continue;
           if (parsed.error) {
             held = null;
@@ -357,9 +414,9 @@
       const text = (event.clipboardData || window.clipboardData).getData("text");
       if (!target || !/[\t\n;]|,.*,|\s\S/.test(plain(text).trim())) return;
       event.preventDefault();
-      const { rows, notes } = parseBlock(text);
-      const startRow = target.closest("tr").sectionRowIndex;
-      const startColumn = Number(target.dataset.column) - 1;
+      const { rows, notes, whole } = parseBlock(text, columns);
+      const startRow = whole ? 0 : target.closest("tr").sectionRowIndex;
+      const startColumn = whole ? 0 : Number(target.dataset.column) - 1;
       if (startRow + rows.length > config.gridLimit) {
         holdLongPaste(rows, startColumn, notes);
         return;
@@ -370,6 +427,7 @@
       let dropped = 0;
       rows.forEach((cells, r) => {
         cells.forEach((value, c) => {
+          if (value === undefined) return;  // a long table's position not in the paste
           const input = cellAt(startRow + r, startColumn + c);
           if (input) input.value = value;
           else if (value !== "") dropped += 1;

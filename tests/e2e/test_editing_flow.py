@@ -129,6 +129,19 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     expect(status).to_contain_text("Pasted 10 rows")
     expect(status).to_contain_text("a row of means or another summary skipped")
     expect(status).to_contain_text("the columns before position 1 skipped")
+    # A long table -- one reading per row beside its position -- pasted into any cell: each
+    # position's readings go to its own column, not the positions' numbers to column 1; the
+    # columns of positions not in the paste are left as they were.
+    third = rows.nth(2).locator("input").nth(1)
+    cell = "#part-latitude .readings-grid tbody tr:nth-child(3) input[data-column='2']"
+    paste(page, cell, "位置\t读数 (°/h)\n3\t-11.50\n3\t-11.40\nP2\t9.60\n")
+    first = rows.nth(0).locator("input")
+    expect(first.nth(2)).to_have_value("-11.50")
+    expect(rows.nth(1).locator("input").nth(2)).to_have_value("-11.40")
+    expect(first.nth(1)).to_have_value("9.60")
+    expect(first.nth(0)).to_have_value("11.10")  # position 1 untouched
+    expect(third).to_have_value("9.77")
+    expect(status).to_contain_text("each position's readings put in its own column")
 
 
 def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, new_page):
