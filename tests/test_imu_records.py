@@ -386,6 +386,10 @@ def test_the_one_column_with_a_rates_unit_is_the_rate():
             ["Gyr_X", "Gyr_Y", "Gyr_Z"],
         ),
         ("time,gx,gy,gz,temp_gyro", ["gx", "gy", "gz"]),
+        (  # a STIM300's datagram as logged: not its counter, status, latency or CRC
+            "counter,gyro_x,gyro_y,gyro_z,status,latency,crc",
+            ["gyro_x", "gyro_y", "gyro_z"],
+        ),
         ("Time (s),X,Y,Z,Temperature", ["X", "Y", "Z"]),  # times beside them: a record
         ("hello,world", []),  # names of no record: nothing offered
     ],

@@ -35,10 +35,11 @@ TIME_SCALES = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs":
 NAMED_TIME_SCALES = {"sampletimefine": 1e-4}  # Xsens: ticks of 100 µs
 # columns an IMU's record holds beside its rates: counters, stamps, frame names,
 # accelerations, magnetic fields, orientations (EuRoC's a_RS_S_x, ROS's
-# field.linear_acceleration.x and field.header.seq, Xsens's PacketCounter and Acc_X)
+# field.linear_acceleration.x and field.header.seq, Xsens's PacketCounter and Acc_X, a
+# STIM's status word, latency and CRC)
 NOT_RATE_NAME = re.compile(
     r"seq|count|packet|stamp|frame|status|index|acc(?!um)|(?:^|[^a-z])a_|mag|(?:^|[^a-z])m_"
-    r"|quat|orient|covariance|pressure|baro|gps|temp|温度",
+    r"|quat|orient|covariance|pressure|baro|gps|temp|温度|latency|crc|checksum|valid|flag",
     re.IGNORECASE,
 )
 NOT_RATE_UNITS = {"m/s^2", "ms^-2", "m/s2", "m/s²", "g", "mg", "gauss", "ut", "µt", "μt", "nt"}
