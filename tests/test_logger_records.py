@@ -44,6 +44,21 @@ LATE = dt.datetime(2026, 11, 28, 23, 59, 59, 800_000)  # the record runs past mi
         ["time,value", *stamped(lambda t, r: f"{t:%H:%M:%S.%f},{r}", LATE)],  # time of day
         ["时间,value", *stamped(lambda t, r: f"{t:%H:%M:%S.%f},{r}", LATE)],
         ["time_ms,value", *(f"{k * 100},{r}" for k, r in enumerate(RATES))],
+        ["时间,角速度", *stamped(lambda t, r: f"{t:%Y年%m月%d日 %H:%M:%S.%f},{r}", LATE)],
+        ["时间,角速度", *stamped(lambda t, r: f"{t:%Y年%m月%d日%H时%M分%S.%f秒},{r}", LATE)],
+        ["Zeit;Wert", *stamped(lambda t, r: f"{t:%d.%m.%Y %H:%M:%S,%f};{r}", LATE)],
+        ["time,value", *stamped(lambda t, r: f"{t:%m/%d/%Y %I:%M:%S.%f %p},{r}", LATE)],
+        ["time,value", *stamped(lambda t, r: f"{t:%d/%m/%Y %H:%M:%S.%f},{r}", LATE)],
+        [
+            "时间,value",
+            *stamped(
+                lambda t, r: (
+                    f"{t:%Y/%m/%d} {'下午' if t.hour >= 12 else '上午'} "
+                    f"{t.hour % 12 or 12}:{t:%M:%S.%f},{r}"
+                ),
+                LATE,
+            ),
+        ],
     ],
     ids=[
         "date-time",
@@ -55,6 +70,12 @@ LATE = dt.datetime(2026, 11, 28, 23, 59, 59, 800_000)  # the record runs past mi
         "time-of-day",
         "chinese-name",
         "milliseconds",
+        "chinese-date",
+        "chinese-hours-minutes-seconds",
+        "german-day-first",
+        "us-twelve-hour",
+        "day-first-slashes",
+        "chinese-twelve-hour",
     ],
 )
 def test_a_loggers_clock_is_read_as_seconds_from_the_first_reading(lines):
@@ -140,3 +161,18 @@ def test_a_clock_that_ticks_by_the_second_under_readings_at_ten_hertz():
     assert notes["allan.note_gaps"] == {"gaps": 1, "missing": 30, "kept": 7970, "seconds": 797}
     # white noise of 0.3 °/h per reading at 10 Hz: N = 0.3 · √(0.1 s / 3600 s/h) °/√h
     assert result.arw_deg_rt_h == pytest.approx(0.3 * math.sqrt(0.1 / 3600.0), rel=0.06)
+
+
+def test_one_positions_record_stamped_to_the_second_at_two_hertz():
+    """Two readings share each whole-second stamp: the record is read, its times spread
+    over each second (each moved by less than its tick), not refused as "not rising"."""
+    from app.core.position_records import parse_one_position_record
+
+    start = dt.datetime(2026, 11, 28, 14, 0, 0)
+    lines = [
+        f"{start + dt.timedelta(seconds=k // 2):%Y年%m月%d日 %H:%M:%S},{10 + k}" for k in range(8)
+    ]
+    parsed = parse_one_position_record("时间,角速度\n" + "\n".join(lines), "deg/h")
+    [times] = parsed.readings.times_s
+    assert parsed.readings.positions[0].tolist() == [10 + k for k in range(8)]
+    np.testing.assert_allclose(times, [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5])

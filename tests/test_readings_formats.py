@@ -325,7 +325,8 @@ def test_one_reading_per_row_beside_its_position_in_a_students_spelling(header, 
         lines.append(text.replace(".", ",") if separator == ";" else text)
     readings = parse_readings_csv(header + "\n" + "\n".join(lines) + "\n")
     assert readings.layout == "long" and readings.numbers == [1, 2, 3, 4]
-    for got, want in zip(readings.positions, [[10.74, 10.65], [-0.5, -0.4], [-10.7], [0.3, 0.4]]):
+    wanted = [[10.74, 10.65], [-0.5, -0.4], [-10.7], [0.3, 0.4]]
+    for got, want in zip(readings.positions, wanted, strict=True):
         np.testing.assert_allclose(got, want)
     if "时间" in header:
         assert [t.tolist() for t in readings.times_s] == [[1, 2], [3, 4], [5], [6, 7]]
@@ -359,6 +360,9 @@ def test_positions_given_by_the_turntables_angle():
     # a "position" column holding the dial's angles (0, 90, 180, 270) is read as the angles
     readings = parse_readings_csv(text.replace("angle", "Position (deg)"))
     assert readings.angles_deg == [0.0, 90.0, 180.0, 270.0] and readings.numbers is None
+    # part B: the elevation in the meridian plane
+    readings = parse_readings_csv("仰角,读数\n0,1.5\n90,2.5\n90,3.5\n")
+    assert readings.angles_deg == [0.0, 90.0] and [p.size for p in readings.positions] == [1, 2]
 
 
 @pytest.mark.parametrize(

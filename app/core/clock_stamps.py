@@ -1,7 +1,8 @@
 """A record's time column read as seconds: numbers in seconds or in a named unit, a clock
 since 1970 in ms, µs or ns told by its size (:func:`epoch_scale`), or a logger's clock --
 "2026-11-28 10:00:00.123", ISO 8601 with "T", a "Z" or an offset (one zone for the whole
-record), or a time of day ("10:00:00.123") -- block by block (:class:`TimeColumn`).  The
+record), or a time of day ("10:00:00.123"), in other locales' forms too ("2026年11月28日 10:00:00",
+"28.11.2026 10:00:00,5", "11/28/2026 10:00:00 AM") -- block by block (:class:`TimeColumn`).  The
 records themselves are :mod:`app.core.static_record`.
 """
 
@@ -17,6 +18,52 @@ DATE_TIME = re.compile(
 )
 TIME_OF_DAY = re.compile(r"(\d{1,2}):(\d{2}):(\d{2})([.,]\d+)?")
 DAY_S = 86_400.0
+# other locales' clocks, rewritten to the forms above: a Chinese date and time
+# ("2026年11月28日 14时05分30秒"), a day or month first ("28.11.2026", "11/28/2026"), a
+# 12-hour clock ("2:05:30 PM", "下午 2:05:30")
+_CHINESE_DATE = re.compile(r"(\d{4})年(\d{1,2})月(\d{1,2})日?\s*")
+_CHINESE_TIME = re.compile(r"(\d{1,2})[时時点](\d{1,2})分(?:(\d{1,2})(?:[.,](\d+))?秒)?")
+_YEAR_LAST = re.compile(r"(\d{1,2})([./])(\d{1,2})[./](\d{4})(?=$|[T ])")
+_HALF_DAY = re.compile(r"\s*\b(am|pm|a\.m\.|p\.m\.)$|^(上午|下午)\s*|(?<=\s)(上午|下午)\s*", re.I)
+
+
+def _in_plain_form(text: str) -> str:
+    """A clock stamp of another locale in the forms :data:`DATE_TIME` and
+    :data:`TIME_OF_DAY` read: "2026年11月28日 14时05分30秒" → "2026-11-28 14:05:30",
+    "28.11.2026 14:05:30,5" → "2026-11-28 14:05:30,5", "11/28/2026 2:05:30 PM" →
+    "2026-11-28 14:05:30" (a slash: the month first unless the first number is over 12),
+    "下午 2:05:30" → "14:05:30"."""
+    text = _CHINESE_DATE.sub(
+        lambda m: f"{m.group(1)}-{m.group(2)}-{m.group(3)}" + (" " if m.end() < len(text) else ""),
+        text,
+    )
+    text = _CHINESE_TIME.sub(
+        lambda m: (
+            f"{m.group(1)}:{m.group(2)}:{m.group(3) or '00'}"
+            + (f".{m.group(4)}" if m.group(4) else "")
+        ),
+        text,
+    )
+
+    def year_first(m: re.Match) -> str:
+        first, separator, second, year = m.groups()
+        day_first = separator == "." or int(first) > 12
+        month, day = (second, first) if day_first else (first, second)
+        return f"{year}-{month}-{day}"
+
+    text = _YEAR_LAST.sub(year_first, text)
+    half = _HALF_DAY.search(text)
+    if half is None:
+        return " ".join(text.split())
+    marker = next(group for group in half.groups() if group).lower()
+    text = (text[: half.start()] + " " + text[half.end() :]).strip()
+    clock = re.search(r"(\d{1,2})(?=:\d{2})", text.split(" ")[-1])
+    if clock is None:
+        return text
+    hour = int(clock.group(1)) % 12 + (12 if marker in ("pm", "p.m.", "下午") else 0)
+    head, _, last = " ".join(text.split()).rpartition(" ")
+    last = f"{hour:02d}" + last[clock.end() :]
+    return f"{head} {last}" if head else last
 
 
 def is_clock_stamp(text: str) -> bool:
@@ -33,6 +80,9 @@ def is_clock_stamp(text: str) -> bool:
         True for "2026-11-28 10:00:00.123", "2026/11/28T10:00:00Z", "10:00:00.123" ….
     """
     text = text.strip()
+    if DATE_TIME.fullmatch(text) or TIME_OF_DAY.fullmatch(text):
+        return True
+    text = _in_plain_form(text)
     return bool(DATE_TIME.fullmatch(text) or TIME_OF_DAY.fullmatch(text))
 
 
@@ -63,6 +113,9 @@ def clock_seconds(cells, origin: list[int]) -> np.ndarray:
     for index, cell in enumerate(cells):
         text = str(cell).strip()
         stamp = DATE_TIME.fullmatch(text)
+        if stamp is None and TIME_OF_DAY.fullmatch(text) is None:
+            text = _in_plain_form(text)
+            stamp = DATE_TIME.fullmatch(text)
         if stamp is not None:
             year, month, day, hour, minute, second, fraction = stamp.groups()
             date = f"{year}-{int(month):02d}-{int(day):02d}"
@@ -206,3 +259,30 @@ class TimeColumn:
             except ValueError:
                 return False
         return True
+
+
+def spread_within_ticks(times: np.ndarray) -> np.ndarray:
+    """Times of a clock coarser than the readings (whole seconds at 10 Hz: ten readings
+    share each stamp) spread evenly over each tick, so that they rise.
+
+    A run of ``n`` readings stamped ``t`` before the next stamp ``t'`` is read at
+    ``t + k (t' - t) / n``, k = 0 … n-1; the last run at the spacing of the run before
+    (one reading per tick where there is none).  Each time moves by less than one tick.
+
+    Parameters
+    ----------
+    times : numpy.ndarray
+        Times that never fall, some repeated.
+
+    Returns
+    -------
+    numpy.ndarray
+        Rising times.
+    """
+    stamps, starts, counts = np.unique(times, return_index=True, return_counts=True)
+    ticks = np.diff(stamps)
+    last_tick = ticks[-1] if ticks.size else 1.0
+    steps = np.append(ticks, last_tick * counts[-1] / (counts[-2] if counts.size > 1 else 1))
+    steps = steps / counts
+    within = np.arange(times.size) - np.repeat(starts, counts)
+    return times + within * np.repeat(steps, counts)

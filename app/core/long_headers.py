@@ -3,7 +3,8 @@
 
 GyroLab's own export and the serial bridge write ``position,angle_deg,time_s,value``.
 Students and their spreadsheets write the same table as "position, rate", "Position,
-Reading (°/h)", "angle, rate_deg_h", "位置, 角速度", "转台角度, 读数".  This module maps
+Reading (°/h)", "angle, rate_deg_h", "位置, 角速度", "转台角度, 读数" -- and for part B
+"elevation, rate", "仰角, 读数".  This module maps
 such a header to the roles the long layout reads: which column keys the position (its
 number or label, or the turntable's angle), which holds the readings, and the optional
 times, case temperatures and part.  The layout itself is :mod:`app.core.readings`.
@@ -22,7 +23,8 @@ ROLE_NAMES = {
     ),
     "angle_deg": (
         "angle", "table angle", "turntable angle", "dial angle", "position angle",
-        "角度", "转台角度", "转角", "位置角", "位置角度", "转台位置角",
+        "elevation", "tilt", "角度", "转台角度", "转角", "位置角", "位置角度", "转台位置角",
+        "仰角", "俯仰角", "倾角",
     ),
     "value": (
         "value", "rate", "reading", "output", "gyro", "gyro output", "gyro rate",

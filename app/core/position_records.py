@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from app.core.clock_stamps import spread_within_ticks
 from app.core.exceptions import UserError
 from app.core.readings import Readings, _number, parse_readings_csv
 from app.core.record_columns import ColumnChoiceNeeded
@@ -247,8 +248,11 @@ def parse_one_position_record(
         except UserError:
             pass
     if record.times_s is not None and not bool(np.all(np.diff(record.times_s) > 0)):
-        # two columns that are not times and readings (two positions, say): no record
-        raise UserError("csv.not_a_record")
+        if not bool(np.all(np.diff(record.times_s) >= 0)) or np.unique(record.times_s).size < 2:
+            # two columns that are not times and readings (two positions, say): no record
+            raise UserError("csv.not_a_record")
+        # a clock coarser than the readings (whole seconds at 10 Hz): spread over each tick
+        record.times_s = spread_within_ticks(record.times_s)
     if record.angle is not None:
         raise UserError("csv.record_of_angles", unit=record.angle.unit)
     times = None if record.times_s is None else [record.times_s]
