@@ -101,7 +101,20 @@ def _angle(cell: str) -> float | None:
 
 
 def evenly_round(angles: list[float], from_zero: bool) -> bool:
-    """Angles one turn's N-th apart, in turning order (either way round)."""
+    """Whether angles are one turn's N-th apart, in turning order (either way round).
+
+    Parameters
+    ----------
+    angles : list of float
+        The angles in the order written (°).
+    from_zero : bool
+        Whether the first must be 0°.
+
+    Returns
+    -------
+    bool
+        True for N ≥ 3 angles each 360°/N on from the one before, or each 360°/N back.
+    """
     count = len(angles)
     if count < 3 or (from_zero and angles[0] != 0.0):
         return False
