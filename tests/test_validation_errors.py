@@ -38,6 +38,21 @@ from tests.factories import API, new_api_session, token_for
             "Too long: at most 200 characters.",
             "太长：最多 200 个字符。",
         ),
+        (
+            {"type": "too_long", "ctx": {"max_length": 8}, "loc": ("body", "columns")},
+            "Too many items: at most 8.",
+            "项目太多：最多 8 个。",
+        ),
+        (  # one position's readings: the grid's column, the API's samples
+            {"type": "too_long", "ctx": {"max_length": 100000}, "loc": ("body", "columns", "3")},
+            "Too many readings: at most 100000 per position.",
+            "读数太多：每个位置最多 100000 个。",
+        ),
+        (
+            {"type": "too_long", "ctx": {"max_length": 100000}, "loc": ("body", "samples")},
+            "Too many readings: at most 100000 per position.",
+            "读数太多：每个位置最多 100000 个。",
+        ),
         ({"type": "missing"}, "Required.", "必填。"),
         ({"type": "int_parsing"}, "Must be a whole number.", "必须是整数。"),
         ({"type": "finite_number"}, "Must be a finite number.", "必须是有限的数值。"),

@@ -50,6 +50,9 @@ MESSAGES: dict[str, tuple[str, str | None]] = {
     "datetime_from_date_parsing": ("validation.datetime", None),
 }
 GENERAL = "validation.invalid"
+# where one position's readings are: the API's "samples", a column of the typed grid
+# ("columns", 3): "too many items" there is too many readings for one position
+READINGS_PLACES = (("samples",), ("columns", None))
 OPTION_SEPARATORS = re.compile(r", | or ")
 
 
@@ -69,6 +72,16 @@ def _options(expected: str, language: str) -> str:
     return "、".join(part for part in OPTION_SEPARATORS.split(expected) if part)
 
 
+def _holds_readings(loc) -> bool:
+    """Whether a problem's place is one position's readings (:data:`READINGS_PLACES`)."""
+    place = [str(part) for part in loc][1:]  # after "body"
+    return any(
+        len(place) == len(pattern)
+        and all(p is None or p == q for p, q in zip(pattern, place, strict=True))
+        for pattern in READINGS_PLACES
+    )
+
+
 def field_message(error: Mapping[str, Any], language: str) -> str:
     """One pydantic error's ``msg`` in ``language``."""
     key, bound = MESSAGES.get(str(error.get("type", "")), (GENERAL, None))
@@ -76,6 +89,8 @@ def field_message(error: Mapping[str, Any], language: str) -> str:
     if bound is not None:
         if bound not in context:
             return translate(GENERAL, language)
+        if key == "validation.too_many" and _holds_readings(error.get("loc", ())):
+            key = "validation.too_many_readings"
         return translate(key, language, limit=_limit(context[bound]))
     if key == "validation.one_of":
         expected = context.get("expected")

@@ -169,4 +169,4 @@ def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, n
     paste(page, "#part-heading .readings-grid tbody input", "\n".join(["10.7"] * 100_001))
     expect(status).to_contain_text("Pasted 100001 rows")
     page.locator("#part-heading .save-manual").click()
-    expect(status).to_contain_text("Position 1: Too many items: at most 100000.")
+    expect(status).to_contain_text("Position 1: Too many readings: at most 100000 per position.")
