@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import re
 
+from app.core.column_names import column_name
 from app.core.text_files import plain_text
 
 ROLE_NAMES = {
@@ -41,8 +42,7 @@ ROLE_UNITS = {
     "time_s": {None, "s", "sec", "秒"},
     "temperature_c": {None, "c", "°c", "℃"},
 }
-_BRACKETED_UNIT = re.compile(r"^(.*?)\s*[(\[（【]([^()\[\]（）【】]*)[)\]）】]$")
-_SUFFIXED_UNIT = re.compile(r"^(.+?) (deg h|deg s|dph|dps|rad s|deg|s|c)$")
+_SUFFIXED_UNIT = re.compile(r"^(.+?) (deg|c)$")  # the rates' and times' own: column_name
 _ROLE_OF = {name: role for role, names in ROLE_NAMES.items() for name in names}
 
 
@@ -60,14 +60,10 @@ def name_and_unit(cell: str) -> tuple[str, str | None]:
     tuple of (str, str or None)
         The name in lower case, underscores and runs of spaces as one space; its unit.
     """
-    text = plain_text(cell).strip().lower()
-    unit = None
-    bracketed = _BRACKETED_UNIT.match(text)
-    if bracketed:
-        text, unit = bracketed.group(1), bracketed.group(2).strip()
-    name = re.sub(r"[\s_]+", " ", text).strip()
+    named = column_name(plain_text(cell))  # "Rate (°/h)", "rate_deg_h", "time_s"
+    name, unit = re.sub(r"[\s_]+", " ", named.base).strip(), named.unit
     suffixed = _SUFFIXED_UNIT.match(name)
-    if suffixed and unit is None and suffixed.group(1) in _ROLE_OF:
+    if suffixed and unit is None and suffixed.group(1) in _ROLE_OF:  # "angle_deg"
         name, unit = suffixed.group(1), suffixed.group(2)
     return name, unit
 

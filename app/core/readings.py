@@ -252,15 +252,16 @@ def _parse_long(index: dict[str, int], rows) -> Readings:
     if not labels:
         raise UserError("csv.empty")
     numbers = _position_numbers(labels) if keyed == "position" else None
-    if numbers is not None and "angle_deg" not in index and _angles_named_positions(numbers):
+    has_angles = "angle_deg" in index
+    if numbers is not None and not has_angles and _angles_named_positions(numbers):
         for label, angle in zip(labels, numbers, strict=True):  # "position" 0, 90, 180, 270
             grouped[label]["angle"] = float(angle)
-        index = {**index, "angle_deg": index["position"]}
+        has_angles = True
         numbers = None
     if numbers is not None:
         order = sorted(range(len(labels)), key=numbers.__getitem__)
         labels, numbers = [labels[k] for k in order], [numbers[k] for k in order]
-    angles = [grouped[label]["angle"] for label in labels] if "angle_deg" in index else None
+    angles = [grouped[label]["angle"] for label in labels] if has_angles else None
     times = [np.array(grouped[label]["times"]) for label in labels] if "time_s" in index else None
     positions = [np.array(grouped[label]["values"]) for label in labels]
     temperatures = None
