@@ -163,6 +163,74 @@ def test_a_clock_that_ticks_by_the_second_under_readings_at_ten_hertz():
     assert result.arw_deg_rt_h == pytest.approx(0.3 * math.sqrt(0.1 / 3600.0), rel=0.06)
 
 
+def test_a_fine_clocks_first_stamp_written_twice_is_not_a_coarse_clock():
+    """A FOG logger's file as its tool writes it: a '#date' line, no header, "t, rate, 0"
+    at 0.0104 s, and the first stamp (0.00000) written twice.  The one tie was read as a
+    clock ticking more slowly than the readings; it is a stamp written twice, said as such,
+    the rate taken from the steps."""
+    rng = np.random.default_rng(11)
+    rates = rng.normal(0.0, 0.05, 20_000)
+    times = [0.0, *(0.0104 * k for k in range(rates.size - 1))]
+    text = "#2021-03-02 16:56:54\n" + "".join(
+        f"{t:.5f}, {r:.5f}, 0.00000\n" for t, r in zip(times, rates, strict=True)
+    )
+    result = analyse_record(read(text), None)
+    assert result.rate_hz == pytest.approx(1 / 0.0104, rel=1e-6)
+    notes = {note["key"]: note["params"] for note in result.notes}
+    assert "allan.note_coarse_clock" not in notes
+    assert notes["allan.note_tied_stamps"] == {"n": 1}
+    # white noise of 0.05 °/h per reading: N = 0.05 · √(0.0104 s / 3600 s/h) °/√h
+    assert result.arw_deg_rt_h == pytest.approx(0.05 * math.sqrt(0.0104 / 3600.0), rel=0.05)
+
+
+def sparrow_lines(count: int, first_column) -> str:
+    """A PIG logger's file: a '#date' line, no header, "t, rate, loop error, °C" with the
+    rate quantised to 0.00049 °/s and the clock stepping 10.0 or 10.1 ms."""
+    rng = np.random.default_rng(3)
+    rates = np.round(rng.normal(0.0002, 0.00045, count) / 0.00049) * 0.00049
+    loop = rng.integers(-6, 139, count)
+    return "#2022-01-27 20:10:44\n" + "".join(
+        f"{first_column(k)}, {rate:.5f}, {error}, 35.5\n"
+        for k, (rate, error) in enumerate(zip(rates, loop, strict=True))
+    )
+
+
+def test_a_bare_record_of_four_columns_keeps_its_times_when_the_rates_are_chosen():
+    """Four columns, none named, the rates chosen as column 2: the first column, which
+    rises, is the times (it was dropped, and the analysis asked for the rate)."""
+    steps = np.where(np.arange(30_000) % 3 == 0, 0.0100, 0.0101)
+    times = 0.6139 + np.concatenate([[0.0], np.cumsum(steps[:-1])])
+    record = read_static_record(
+        text_lines(sparrow_lines(times.size, lambda k: f"{times[k]:.5f}").encode()), column="2"
+    )
+    assert record.times_s is not None
+    assert record.times_s[:3] == pytest.approx([0.6139, 0.6239, 0.6340])
+    assert [note["key"] for note in record.notes] == ["allan.note_first_column_times"]
+    result = analyse_record(record, None)
+    assert result.rate_hz == pytest.approx(1 / 0.0101, rel=1e-9)  # the median step
+
+
+def test_a_first_column_that_rises_then_wraps_is_no_time_column():
+    """A counter 0…255 that wraps is not times: the rate must be given, as before."""
+    record = read_static_record(
+        text_lines(sparrow_lines(1_200, lambda k: str(k % 256)).encode()), column="2"
+    )
+    assert record.times_s is None and record.notes == []
+    with pytest.raises(UserError) as refused:
+        analyse_record(record, None)
+    assert refused.value.key == "allan.no_rate"
+
+
+def test_a_clock_that_runs_back_is_still_refused():
+    """Tied stamps are let through, a clock that runs back is not."""
+    back = "time,value\n0.0,1\n0.1,2\n0.2,3\n0.15,4\n" + "".join(
+        f"{0.3 + 0.1 * k:.1f},{k}\n" for k in range(40)
+    )
+    with pytest.raises(UserError) as refused:
+        analyse_record(read(back), None)
+    assert refused.value.key == "allan.bad_times"
+
+
 def test_one_positions_record_stamped_to_the_second_at_two_hertz():
     """Two readings share each whole-second stamp: the record is read, its times spread
     over each second (each moved by less than its tick), not refused as "not rising"."""

@@ -31,6 +31,9 @@ SPIKE_LIMIT = 10.0
 WARM_UP_LIMIT = 6.0
 WARM_UP_BLOCKS = 64
 MAX_TRIM_SHARE = 0.5
+# a clock coarser than the readings ties at least one step in six (1.2 readings a tick);
+# fewer ties are a fine clock's stamps written twice (a logger's first line, say)
+COARSE_CLOCK_TIES = 0.05
 
 
 @dataclass
@@ -54,7 +57,7 @@ def _coarse_clock(times: np.ndarray) -> tuple[slice, float, float, int, int] | N
     start over the ticks between: the first and last ticks are seen only in part.
     """
     steps = np.diff(times)
-    if not steps.size or np.any(steps < 0) or not np.any(steps == 0):
+    if not steps.size or np.any(steps < 0) or np.mean(steps == 0) < COARSE_CLOCK_TIES:
         return None
     ticks = steps[steps > 0]
     if ticks.size < 2:
@@ -74,12 +77,15 @@ def _coarse_clock(times: np.ndarray) -> tuple[slice, float, float, int, int] | N
 
 
 def _longest_stretch(times: np.ndarray) -> tuple[slice, int, int, float]:
+    """The longest stretch without a gap, how many gaps, the readings they missed, and
+    the median step.  A few tied stamps (fewer than ``COARSE_CLOCK_TIES`` of the steps)
+    are a fine clock's stamp written twice: the readings stay in order, one step each."""
     steps = np.diff(times)
     interval = float(np.median(steps)) if steps.size else 0.0
     if not (interval > 0 and math.isfinite(interval)):
         raise UserError("allan.bad_times")
     breaks = np.flatnonzero(steps >= 1.5 * interval)
-    if np.any(steps <= 0):
+    if np.any(steps < 0) or np.mean(steps == 0) >= COARSE_CLOCK_TIES:
         raise UserError("allan.bad_times")
     edges = np.concatenate([[0], breaks + 1, [times.size]])
     lengths = np.diff(edges)
@@ -188,9 +194,13 @@ def prepare_record(
         values = values[stretch]
         temperatures = None if temperatures is None else temperatures[stretch]
     elif record.times_s is not None and record.times_s.size > 2:
-        stretch, gaps, missing, interval = _longest_stretch(np.asarray(record.times_s, float))
+        times = np.asarray(record.times_s, float)
+        stretch, gaps, missing, interval = _longest_stretch(times)
         if rate_hz is None:
             rate_hz = 1.0 / interval
+        tied = int(np.count_nonzero(np.diff(times) == 0))
+        if tied:
+            notes.append(_note("allan.note_tied_stamps", n=tied))
         if gaps:
             kept = stretch.stop - stretch.start
             notes.append(

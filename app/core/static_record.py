@@ -23,7 +23,7 @@ import csv
 import io
 import itertools
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -74,6 +74,27 @@ def _is_header(cells: list[str]) -> bool:
                 if not is_clock_stamp(cell):
                     return True
     return False
+
+
+def _rises(lines: list[str], split: Callable[[str], list[str]] | None) -> bool:
+    """Whether the first column of the readings among ``lines`` (the look-ahead) rises
+    as times do: numbers or clock stamps, never falling, the last after the first, in at
+    least three lines."""
+    cells: list[str] = []
+    for raw in lines:
+        text = raw.strip().lstrip("\ufeff")
+        if not text or comment_text(text) is not None:
+            continue
+        cells.append((split or _splitter(text))(text)[0])
+    if len(cells) < 3:
+        return False
+    if all(is_clock_stamp(cell) for cell in cells):
+        return True  # the clock's reader checks their order
+    try:
+        numbers = np.array([float(cell) for cell in cells])
+    except ValueError:
+        return False
+    return bool(np.all(np.diff(numbers) >= 0) and numbers[-1] > numbers[0])
 
 
 def _holds_a_number(cells: list[str]) -> bool:
@@ -150,6 +171,7 @@ def read_static_record(
         ``MAX_SAMPLES`` readings.
     """
     values, times, temps = [], [], []
+    time_guessed = False  # a bare record's first column taken as its times
     layout: Layout | None = None
     clock: TimeColumn | None = None  # the time column's reader, once the layout is known
     notes: list[dict] = []
@@ -237,6 +259,9 @@ def read_static_record(
                 notes.append({"key": "allan.note_comment_header", "params": {"line": comment_line}})
             else:
                 layout = bare_layout(width, column)
+                if layout.time is None and layout.value != 0 and _rises(first, split):
+                    layout = replace(layout, time=0)  # a logger's times, then its columns
+                    time_guessed = True
             clock = TimeColumn(layout.time_scale)
         if len(cells) != width:
             raise UserError(
@@ -254,6 +279,11 @@ def read_static_record(
         raise UserError("allan.empty")
     data = np.concatenate(values)
     all_times = np.concatenate(times) if times else None
+    if time_guessed:
+        if np.all(np.diff(all_times) >= 0):
+            notes.append({"key": "allan.note_first_column_times", "params": {}})
+        else:  # it rose only at first: a counter that wraps, say -- no times
+            all_times = None
     if clock is not None and clock.inferred:
         notes.append(
             {
