@@ -221,6 +221,19 @@ def test_a_first_column_that_rises_then_wraps_is_no_time_column():
     assert refused.value.key == "allan.no_rate"
 
 
+def test_a_rate_beside_a_status_flag_is_the_rate_without_times():
+    """A KVH DSP-3000 writes "rate  1" per line (CRLF), the 1 its valid flag: the rate
+    column was read as times and the flag as rates, refused as "times do not increase"."""
+    rng = np.random.default_rng(2)
+    rates = rng.normal(0.0012, 0.0004, 6_000)
+    text = "".join(f"{rate: .7f}    1\r\n" for rate in rates)
+    record = read(text)
+    assert record.times_s is None
+    assert record.values.tolist() == [float(f"{rate:.7f}") for rate in rates]
+    result = analyse_record(record, 100.0)
+    assert result.arw_deg_rt_h == pytest.approx(0.0004 * math.sqrt(0.01 / 3600.0), rel=0.06)
+
+
 def test_a_clock_that_runs_back_is_still_refused():
     """Tied stamps are let through, a clock that runs back is not."""
     back = "time,value\n0.0,1\n0.1,2\n0.2,3\n0.15,4\n" + "".join(

@@ -76,16 +76,22 @@ def _is_header(cells: list[str]) -> bool:
     return False
 
 
-def _rises(lines: list[str], split: Callable[[str], list[str]] | None) -> bool:
-    """Whether the first column of the readings among ``lines`` (the look-ahead) rises
-    as times do: numbers or clock stamps, never falling, the last after the first, in at
-    least three lines."""
-    cells: list[str] = []
+def _look_ahead_rows(
+    lines: list[str], split: Callable[[str], list[str]], width: int
+) -> list[list[str]]:
+    """The cells of the readings among ``lines`` (the look-ahead) that have ``width``."""
+    rows = []
     for raw in lines:
         text = raw.strip().lstrip("\ufeff")
-        if not text or comment_text(text) is not None:
-            continue
-        cells.append((split or _splitter(text))(text)[0])
+        if text and comment_text(text) is None and len(cells := split(text)) == width:
+            rows.append(cells)
+    return rows
+
+
+def _rises(rows: list[list[str]]) -> bool:
+    """Whether the first column of ``rows`` rises as times do: numbers or clock stamps,
+    never falling, the last after the first, in at least three rows."""
+    cells = [row[0] for row in rows]
     if len(cells) < 3:
         return False
     if all(is_clock_stamp(cell) for cell in cells):
@@ -95,6 +101,26 @@ def _rises(lines: list[str], split: Callable[[str], list[str]] | None) -> bool:
     except ValueError:
         return False
     return bool(np.all(np.diff(numbers) >= 0) and numbers[-1] > numbers[0])
+
+
+def _falls(rows: list[list[str]]) -> bool:
+    """Whether the first column of ``rows`` is numbers that are no times: in at least
+    three rows, falling somewhere or never rising."""
+    try:
+        numbers = np.array([float(row[0]) for row in rows])
+    except ValueError:
+        return False
+    return numbers.size >= 3 and not (np.all(np.diff(numbers) >= 0) and numbers[-1] > numbers[0])
+
+
+def _without_times(rows: list[list[str]], layout: Layout) -> Layout:
+    """A record of two or three columns without a header whose first column does not
+    rise: where one column alone varies, it is the rates and there are no times (a KVH
+    DSP-3000 writes "rate  1", the 1 a status flag); else the layout as it was, whose
+    times are then refused."""
+    width = len(rows[0])
+    varying = [k for k in range(width) if len({row[k] for row in rows}) > 1]
+    return Layout(varying[0]) if len(varying) == 1 else layout
 
 
 def _holds_a_number(cells: list[str]) -> bool:
@@ -258,10 +284,13 @@ def read_static_record(
                 layout = header_layout(named, column, guess=guess)
                 notes.append({"key": "allan.note_comment_header", "params": {"line": comment_line}})
             else:
+                rows = _look_ahead_rows(first, split, width)
                 layout = bare_layout(width, column)
-                if layout.time is None and layout.value != 0 and _rises(first, split):
+                if layout.time is None and layout.value != 0 and _rises(rows):
                     layout = replace(layout, time=0)  # a logger's times, then its columns
                     time_guessed = True
+                elif layout.time == 0 and column is None and _falls(rows):
+                    layout = _without_times(rows, layout)  # "rate  status" per line, say
             clock = TimeColumn(layout.time_scale)
         if len(cells) != width:
             raise UserError(
