@@ -6,8 +6,10 @@ header; commas, tabs or semicolons (then decimal commas), or spaces between the 
 one column with decimal commas ("0,0123" per line) where it cannot be times and values;
 a row of units under the header passed over; a time column in seconds, in milliseconds
 (``time_ms``) or as a logger's clock -- "2026-11-28 10:00:00.123", ISO 8601, a time of day
-carried past midnight -- read as seconds from the first reading; a spreadsheet's empty
-last column dropped; ``#``, ``%`` and ``//`` comment lines, the last one before the
+carried past midnight -- read as seconds from the first reading; without a header, a
+rising first column read as the times where the rates' column is chosen, and a rate beside
+a status flag read without times; a spreadsheet's empty last column dropped; ``#``,
+``%`` and ``//`` comment lines, the last one before the
 readings read as the header where it names their columns -- EuRoC, Kalibr and ROS write
 it so; which column is which: :mod:`app.core.record_columns`; what a name says of units:
 :mod:`app.core.column_names`), parsed in blocks of lines, so a 10⁷-sample record never
