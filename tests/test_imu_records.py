@@ -313,6 +313,35 @@ def test_angles_per_output_become_rates(header, per_degree, integrated, times, t
     assert "allan.note_unit_doubt" not in keys(result)
 
 
+def test_increments_from_a_clock_that_jitters_by_a_tick_keep_their_mean_rate():
+    """Increments of a steady 15 °/h over a clock stepping 10.0 or 10.1 ms: × the mean
+    rate (1 / 10.067 ms) they give 15 °/h; × the median step's rate (1 / 10.1 ms) 0.33 %
+    less, the error a real logger's jitter put into every rate."""
+    from app.core.angle_outputs import rates_from_angles
+    from app.core.record_checks import sample_rate_hz
+
+    steps = np.where(np.arange(3_000) % 3 == 0, 0.0100, 0.0101)
+    times = np.concatenate([[0.0], np.cumsum(steps)])
+    increments = 15.0 / 3600.0 * steps  # degrees turned over each output's own interval
+    text = "time_s,dtheta_z [deg]\n" + "".join(
+        f"{t:.4f},{float(d)!r}\n" for t, d in zip(times[1:], increments, strict=True)
+    )
+    record = read(text)
+    assert sample_rate_hz(record.times_s) == pytest.approx(2_999 / (times[-1] - times[1]))
+    rates, _ = rates_from_angles(record, record.angle, None)
+    assert float(np.mean(rates.values)) == pytest.approx(15.0, rel=1e-4)
+
+
+def test_the_sample_rate_leaves_out_gaps_and_tied_stamps():
+    """f = kept steps / their sum: a gap of five steps and a stamp written twice change
+    neither the count nor the sum."""
+    from app.core.record_checks import sample_rate_hz
+
+    times = np.concatenate([[0.0, 0.0], 0.01 * np.arange(1, 50), 0.01 * np.arange(55, 90)])
+    assert sample_rate_hz(times) == pytest.approx(100.0, rel=1e-12)
+    assert math.isnan(sample_rate_hz(np.zeros(5)))
+
+
 def test_a_rate_unit_chosen_for_angles_is_refused():
     record = read(angles_text("time_s,dtheta_z [rad]", math.pi / 180.0, False, True))
     with pytest.raises(UserError) as error:

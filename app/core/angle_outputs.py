@@ -20,6 +20,7 @@ import numpy as np
 
 from app.core.column_names import AngleOutput
 from app.core.exceptions import UserError
+from app.core.record_checks import sample_rate_hz
 from app.core.static_record import StaticRecord
 from app.core.units import SECONDS_PER_HOUR
 
@@ -58,10 +59,10 @@ def _output_rate(record: StaticRecord, rate_hz: float | None) -> float:
         return rate_hz
     if record.times_s is None or record.times_s.size < 2:
         raise UserError("allan.no_rate")
-    step = float(np.median(np.diff(record.times_s)))
-    if not step > 0:
+    rate = sample_rate_hz(record.times_s)  # the mean: increments × a median's rate are off
+    if not rate > 0:
         raise UserError("allan.bad_times")
-    return 1.0 / step
+    return rate
 
 
 def rates_from_angles(

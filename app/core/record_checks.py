@@ -39,6 +39,33 @@ def record_gaps(times_s: np.ndarray) -> tuple[int, int]:
     return int(skipped.size), int(skipped.sum())
 
 
+def sample_rate_hz(times_s: np.ndarray) -> float:
+    """The mean sample rate of a timed record, over its steps that are neither gaps nor
+    tied stamps.
+
+    With T = median(Δtᵢ), the steps kept are 0 < Δtᵢ < 1.5·T (as :func:`record_gaps`
+    counts gaps), and f = (number kept) / Σ(kept Δtᵢ).  A logger's clock that steps 10.0 or
+    10.1 ms has the mean rate of its readings, 1 / 10.07 ms, where 1 / median(Δt) would be
+    0.3 % off -- as much error in a rate taken from angle increments × f.
+
+    Parameters
+    ----------
+    times_s : numpy.ndarray
+        Each reading's time in seconds, in recording order.
+
+    Returns
+    -------
+    float
+        The rate in Hz; NaN where the times have no rising step.
+    """
+    steps = np.diff(np.asarray(times_s, dtype=float))
+    interval = _median(steps[steps > 0]) if np.any(steps > 0) else math.nan
+    if not (math.isfinite(interval) and interval > 0):
+        return math.nan
+    kept = steps[(steps > 0) & (steps < 1.5 * interval)]
+    return kept.size / float(np.sum(kept))
+
+
 WARM_UP_LIMIT_C = 1.0
 
 

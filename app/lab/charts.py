@@ -13,6 +13,7 @@ import numpy as np
 
 from app.core.allan import allan_deviation
 from app.core.exceptions import UserError
+from app.core.record_checks import sample_rate_hz
 
 MAX_POINTS = 2000
 # Okabe & Ito's palette, told apart with every common colour-vision deficiency (its yellow
@@ -191,7 +192,7 @@ def allan_figure(part_result, _: Callable[..., str], minimum_samples: int = 1000
     times = longest.times
     if times is None or times.size < 2:
         return None
-    rate = 1.0 / float(np.median(np.diff(times)))
+    rate = sample_rate_hz(times)
     if not math.isfinite(rate) or rate <= 0:
         return None
     try:
