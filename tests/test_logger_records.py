@@ -236,6 +236,36 @@ def test_a_rate_beside_a_status_flag_is_the_rate_without_times():
     assert result.arw_deg_rt_h == pytest.approx(0.0004 * math.sqrt(0.01 / 3600.0), rel=0.06)
 
 
+def test_a_spreadsheets_date_numbers_are_read_as_days():
+    """A time column saved from Excel as numbers: days since 1899-12-30 ("46354.58339…"
+    is 2026-11-28 14:00:05).  Read as seconds they gave a rate of 864,000 Hz; as days,
+    10 Hz, said."""
+    start = (dt.datetime(2026, 11, 28, 14, 0, 5) - dt.datetime(1899, 12, 30)).total_seconds()
+    rng = np.random.default_rng(4)
+    rates = rng.normal(10.0, 0.5, 3_000)
+    text = "time,rate\n" + "".join(
+        f"{(start + 0.1 * k) / 86_400:.10f},{rate:.5f}\n" for k, rate in enumerate(rates)
+    )
+    record = read(text)
+    assert record.times_s[:3] == pytest.approx([0.0, 0.1, 0.2], abs=1e-5)  # 10 digits: 8.6 µs
+    assert [note["key"] for note in record.notes] == ["allan.note_spreadsheet_days"]
+    assert analyse_record(record, None).rate_hz == pytest.approx(10.0, rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    "first_times",
+    [
+        "45000.0\n45000.1\n",  # seconds of the day at 10 Hz (12:30:00.0 on)
+        "45000.000\n45000.001\n",  # … at 1 kHz
+        "86400.5\n86400.50001\n",  # past the spreadsheets' range: seconds
+    ],
+)
+def test_seconds_that_look_like_date_numbers_stay_seconds(first_times):
+    """Seconds of the day step by a millisecond or more: not days."""
+    record = read("time,rate\n" + "".join(f"{t},{k}\n" for k, t in enumerate(first_times.split())))
+    assert record.times_s[0] == float(first_times.split()[0]) and record.notes == []
+
+
 def test_a_clock_that_runs_back_is_still_refused():
     """Tied stamps are let through, a clock that runs back is not."""
     back = "time,value\n0.0,1\n0.1,2\n0.2,3\n0.15,4\n" + "".join(

@@ -191,11 +191,41 @@ def epoch_scale(first_time: float) -> tuple[float, str] | None:
     return None
 
 
+SPREADSHEET_DAYS = (20_000.0, 80_000.0)  # a spreadsheet's date numbers from 1954 to 2119
+SPREADSHEET_DAY_STEP = 5e-5  # days: 4.3 s -- as seconds, a step of 50 µs (20 kHz)
+
+
+def spreadsheet_days(first: float, step: float) -> bool:
+    """Whether a time column that names no unit holds a spreadsheet's date numbers.
+
+    Excel and LibreOffice keep a date and time as days since 1899-12-30 ("46354.5834"
+    is 2026-11-28 14:00:05); a column formatted as a number is saved so.  Such numbers lie
+    in ``SPREADSHEET_DAYS`` and step by a fraction of a day: at 1 Hz 1.16e-5, at 1 kHz
+    1.16e-8.  The same numbers read as seconds would step by at most 50 µs, a gyro logged
+    at 20 kHz or more -- none that the lab records.
+
+    Parameters
+    ----------
+    first : float
+        The column's first number.
+    step : float
+        Its second number less its first.
+
+    Returns
+    -------
+    bool
+        True where the column is read as days.
+    """
+    low, high = SPREADSHEET_DAYS
+    return low <= first <= high and 0.0 < step < SPREADSHEET_DAY_STEP
+
+
 class TimeColumn:
     """A record's time column read block by block, in seconds.
 
     Numbers in seconds stay as they are; in another unit -- named by the header, or, where
-    it names none, told by their size (:func:`epoch_scale`) -- they are counted from the
+    it names none, told by their size (:func:`epoch_scale`, :func:`spreadsheet_days`) -- they
+    are counted from the
     first reading, whole numbers exactly (a clock in ns since 1970 is beyond float64's
     53 bits); a logger's clock stamps (:func:`app.core.clock_stamps.clock_seconds`) are
     read from the midnight of the first date (``clock``: the reader counts them from the
@@ -209,9 +239,11 @@ class TimeColumn:
         self._origin: int | float | None = None
         self._origin_day: list[int] = []
 
-    def _unit_of(self, first: float) -> float:
+    def _unit_of(self, first: float, step: float = 0.0) -> float:
         if self.scale is None:
             told = epoch_scale(first)
+            if told is None and spreadsheet_days(first, step):
+                told = (86_400.0, "days")
             self.scale, self.inferred = told if told else (1.0, None)
         return self.scale
 
@@ -241,7 +273,8 @@ class TimeColumn:
             return clock_seconds(cells, self._origin_day)
         if not numbers.size:
             return numbers
-        scale = self._unit_of(float(numbers[0]))
+        step = float(numbers[1] - numbers[0]) if numbers.size > 1 else 0.0
+        scale = self._unit_of(float(numbers[0]), step)
         if scale == 1.0:
             return numbers
         if self._origin is None:

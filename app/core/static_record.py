@@ -318,7 +318,9 @@ def read_static_record(
     if clock is not None and clock.inferred:
         notes.append(
             {
-                "key": "allan.note_time_unit",
+                "key": "allan.note_spreadsheet_days"
+                if clock.inferred == "days"
+                else "allan.note_time_unit",
                 "params": {"unit": clock.inferred, "column": layout.time + 1},
             }
         )
