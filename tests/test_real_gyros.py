@@ -361,3 +361,15 @@ def test_records_with_spaces_tabs_or_decimal_commas_are_read(text, values):
     record = read_static_record(io.StringIO(text))
     assert record.values == pytest.approx(values)
     assert record.times_s == pytest.approx([0.0, 0.1, 0.2])
+
+
+def test_one_reading_far_from_a_still_record_is_analysed_not_crashed():
+    """Zeros and one reading of 10⁶ °/h: quantisation (α = 2) dominates at the longest τ,
+    where Greenhall's ν has no formula in allantools (it raised NotImplementedError, a
+    500 on the teacher's page); ν is taken as 1 there."""
+    from app.core.static_record import StaticRecord
+
+    values = np.zeros(5_000)
+    values[-1] = 1e6
+    result = analyse_record(StaticRecord(values), 10.0)
+    assert np.all(result.edf >= 1.0) and np.all(np.isfinite(result.adev_deg_h))

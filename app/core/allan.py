@@ -29,6 +29,7 @@ from app.core.flicker import DEFAULT_BAND_S
 from app.core.noise_model import DwellAdvice, GyroNoise, curve_dwell, recommended_dwell
 from app.core.record_preparation import prepare_record
 from app.core.static_record import Progress, StaticRecord
+from app.core.units import MAX_RATE_DEG_H
 
 MIN_SAMPLES = 16
 UNITS = {
@@ -128,6 +129,15 @@ class AllanResult:
         }
 
 
+def _check_range(rates_deg_h: np.ndarray) -> None:
+    """Refuse non-finite rates, and rates beyond ``MAX_RATE_DEG_H`` (no gyro's; the
+    variances' squares would overflow)."""
+    if not (np.all(np.abs(rates_deg_h) <= MAX_RATE_DEG_H)):
+        if not np.all(np.isfinite(rates_deg_h)):
+            raise UserError("readings.not_finite")
+        raise UserError("readings.out_of_range")
+
+
 def degrees_of_freedom(
     taus_s: np.ndarray, rate_hz: float, count: int, alphas: np.ndarray
 ) -> np.ndarray:
@@ -159,11 +169,13 @@ def degrees_of_freedom(
     edf = []
     for tau, alpha in zip(taus_s, alphas, strict=True):
         m = max(1, int(round(tau * rate_hz)))
-        edf.append(
-            allantools.edf_greenhall(
+        try:
+            nu = allantools.edf_greenhall(
                 alpha=int(alpha), d=2, m=m, N=count + 1, overlapping=True, modified=False
             )
-        )
+        except NotImplementedError:  # α = 2 at τ of two differences or fewer: ν ≈ 1
+            nu = 1.0
+        edf.append(nu)
     return np.maximum(np.asarray(edf, dtype=float), 1.0)
 
 
@@ -262,8 +274,7 @@ def allan_deviation(
             "allan.too_short",
             minimum=MIN_SAMPLES,
         )
-    if not np.all(np.isfinite(data)):
-        raise UserError("readings.not_finite")
+    _check_range(data)
     if not (rate_hz > 0 and math.isfinite(rate_hz)):
         raise UserError("allan.bad_rate")
     taus, adev = allan_curve(data, rate_hz)
@@ -373,6 +384,7 @@ def analyse_record(
             {"key": "allan.note_unit_from_header", "params": {"unit": UNIT_SYMBOLS[record.unit]}}
         )
     values = to_deg_per_hour(record.values, chosen or record.unit or DEG_PER_HOUR)
+    _check_range(values)
     prepared = prepare_record(
         StaticRecord(values, record.times_s, record.temperatures_c), rate_hz, max_tau_s=max_tau_s
     )

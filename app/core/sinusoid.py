@@ -24,10 +24,10 @@ import numpy as np
 
 from app.core.exceptions import UserError
 from app.core.uncertainty import PositionNoise, closure_residual, position_noise
+from app.core.units import MAX_RATE_DEG_H
 
 SIGNIFICANCE = 3.0  # an amplitude below 3σ is not a measurement of anything
 ROTATIONS = ("ccw", "cw")
-MAX_RATE_DEG_H = 1e12  # far beyond any gyro; past it sums and squares would overflow
 
 
 MAX_ANGLE_DEG = 3600.0  # ten turns of a dial: anything beyond is a typing mistake

@@ -31,6 +31,7 @@ ALIASES = {
 }
 
 SECONDS_PER_HOUR = 3600.0
+MAX_RATE_DEG_H = 1e12  # far beyond any gyro; past it sums and squares would overflow
 EARTH_RATE_DEG_H = 15.041  # sidereal: 360° / 23.9345 h
 HANDOUT_EARTH_RATE_DEG_H = 15.04
 
