@@ -15,8 +15,11 @@ nanoseconds since 1970 (:func:`epoch_scale`).  The records themselves:
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
+import numpy as np
+
+from app.core.clock_stamps import is_clock_stamp
 from app.core.column_names import (
     ROS_ANGULAR_VELOCITY,
     AngleOutput,
@@ -227,6 +230,78 @@ def bare_layout(width: int, column: str | None = None) -> Layout:
     # no header: any column may be the rates; the first is most often the times
     choices = [str(k) for k in range(2, width + 1)] + ["1"]
     raise ColumnChoiceNeeded("allan.choose_column", choices, count=width)
+
+
+def bare_record_layout(
+    rows: list[list[str]], width: int, column: str | None = None
+) -> tuple[Layout, bool]:
+    """The layout of a record without a header from its first readings' cells: as
+    :func:`bare_layout` says, and -- where the rates' column is chosen -- a first column that
+    rises as the times (a FOG logger's ``t, rate, loop, °C``); where none is chosen, a first
+    column that does not rise beside one constant column is no times (a KVH DSP-3000's
+    ``rate  1``, the 1 its valid flag).
+
+    Parameters
+    ----------
+    rows : list of list of str
+        The first readings' cells (the look-ahead).
+    width : int
+        The record's number of columns.
+    column : str, optional
+        The rates' column, a number from 1.
+
+    Returns
+    -------
+    (Layout, bool)
+        The layout, and whether its time column was taken from how it rises (to be said,
+        and dropped if it falls later).
+
+    Raises
+    ------
+    UserError
+        As :func:`bare_layout`.
+    """
+    layout = bare_layout(width, column)
+    if layout.time is None and layout.value != 0 and _rises(rows):
+        return replace(layout, time=0), True
+    if layout.time == 0 and column is None and _falls(rows):
+        return _without_times(rows, layout), False
+    return layout, False
+
+
+def _rises(rows: list[list[str]]) -> bool:
+    """Whether the first column of ``rows`` rises as times do: numbers or clock stamps,
+    never falling, the last after the first, in at least three rows."""
+    cells = [row[0] for row in rows]
+    if len(cells) < 3:
+        return False
+    if all(is_clock_stamp(cell) for cell in cells):
+        return True  # the clock's reader checks their order
+    try:
+        numbers = np.array([float(cell) for cell in cells])
+    except ValueError:
+        return False
+    return bool(np.all(np.diff(numbers) >= 0) and numbers[-1] > numbers[0])
+
+
+def _falls(rows: list[list[str]]) -> bool:
+    """Whether the first column of ``rows`` is numbers that are no times: in at least
+    three rows, falling somewhere or never rising."""
+    try:
+        numbers = np.array([float(row[0]) for row in rows])
+    except ValueError:
+        return False
+    return numbers.size >= 3 and not (np.all(np.diff(numbers) >= 0) and numbers[-1] > numbers[0])
+
+
+def _without_times(rows: list[list[str]], layout: Layout) -> Layout:
+    """A record of two or three columns without a header whose first column does not
+    rise: where one column alone varies, it is the rates and there are no times (a KVH
+    DSP-3000 writes "rate  1", the 1 a status flag); else the layout as it was, whose
+    times are then refused."""
+    width = len(rows[0])
+    varying = [k for k in range(width) if len({row[k] for row in rows}) > 1]
+    return Layout(varying[0]) if len(varying) == 1 else layout
 
 
 def rate_column_choices(header: list[str]) -> list[str]:

@@ -25,7 +25,7 @@ import csv
 import io
 import itertools
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -38,7 +38,7 @@ from app.core.clock_stamps import (
 )
 from app.core.column_names import AngleOutput, comment_text
 from app.core.exceptions import UserError
-from app.core.record_columns import Layout, bare_layout, header_layout
+from app.core.record_columns import Layout, bare_record_layout, header_layout
 from app.core.spreadsheet_text import (
     WHOLE_COMMA_DIGITS,
     decimal_point,
@@ -88,41 +88,6 @@ def _look_ahead_rows(
         if text and comment_text(text) is None and len(cells := split(text)) == width:
             rows.append(cells)
     return rows
-
-
-def _rises(rows: list[list[str]]) -> bool:
-    """Whether the first column of ``rows`` rises as times do: numbers or clock stamps,
-    never falling, the last after the first, in at least three rows."""
-    cells = [row[0] for row in rows]
-    if len(cells) < 3:
-        return False
-    if all(is_clock_stamp(cell) for cell in cells):
-        return True  # the clock's reader checks their order
-    try:
-        numbers = np.array([float(cell) for cell in cells])
-    except ValueError:
-        return False
-    return bool(np.all(np.diff(numbers) >= 0) and numbers[-1] > numbers[0])
-
-
-def _falls(rows: list[list[str]]) -> bool:
-    """Whether the first column of ``rows`` is numbers that are no times: in at least
-    three rows, falling somewhere or never rising."""
-    try:
-        numbers = np.array([float(row[0]) for row in rows])
-    except ValueError:
-        return False
-    return numbers.size >= 3 and not (np.all(np.diff(numbers) >= 0) and numbers[-1] > numbers[0])
-
-
-def _without_times(rows: list[list[str]], layout: Layout) -> Layout:
-    """A record of two or three columns without a header whose first column does not
-    rise: where one column alone varies, it is the rates and there are no times (a KVH
-    DSP-3000 writes "rate  1", the 1 a status flag); else the layout as it was, whose
-    times are then refused."""
-    width = len(rows[0])
-    varying = [k for k in range(width) if len({row[k] for row in rows}) > 1]
-    return Layout(varying[0]) if len(varying) == 1 else layout
 
 
 def _holds_a_number(cells: list[str]) -> bool:
@@ -287,12 +252,7 @@ def read_static_record(
                 notes.append({"key": "allan.note_comment_header", "params": {"line": comment_line}})
             else:
                 rows = _look_ahead_rows(first, split, width)
-                layout = bare_layout(width, column)
-                if layout.time is None and layout.value != 0 and _rises(rows):
-                    layout = replace(layout, time=0)  # a logger's times, then its columns
-                    time_guessed = True
-                elif layout.time == 0 and column is None and _falls(rows):
-                    layout = _without_times(rows, layout)  # "rate  status" per line, say
+                layout, time_guessed = bare_record_layout(rows, width, column)
             clock = TimeColumn(layout.time_scale)
         if len(cells) != width:
             raise UserError(
