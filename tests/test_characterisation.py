@@ -225,3 +225,25 @@ def test_a_loggers_record_with_its_clock_and_no_rate(world):
     summary = stored(world)
     assert summary is not None and summary["rate_hz"] == pytest.approx(10.0)
     assert summary["arw_deg_rt_h"] == pytest.approx(gyro.arw_deg_rt_h, rel=0.1)
+
+
+@pytest.mark.one_backend  # refused before any write
+def test_a_record_that_needs_its_column_chosen_offers_the_columns(world):
+    """A FOG logger's bare four columns: refused with the columns to choose from, which
+    the column field then offers (a datalist); chosen, the first column is the times."""
+    teacher = browser(world, "teacher1")
+    rng = np.random.default_rng(8)
+    text = "#2022-01-27 20:10:44\n" + "".join(
+        f"{0.01 * k:.2f}, {rate:.5f}, {k % 97}, 35.5\n"
+        for k, rate in enumerate(rng.normal(0.0, 0.05, 72_000))
+    )
+    reply = upload(teacher, world, text, rate="")
+    assert reply.status_code == 400 and stored(world) is None
+    page = reply.text
+    assert 'list="characterisation-columns"' in page
+    offered = page.split('<datalist id="characterisation-columns">')[1].split("</datalist>")[0]
+    assert offered == "".join(f'<option value="{k}"></option>' for k in ("2", "3", "4", "1"))
+    reply = upload(teacher, world, text, rate="", column="2", unit="deg/s")
+    assert reply.status_code == 303
+    assert stored(world)["rate_hz"] == pytest.approx(100.0)
+    assert "its first column, which rises through the record" in shown(teacher, reply)

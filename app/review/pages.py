@@ -83,6 +83,7 @@ def dashboard_context(request: Request, target, db, status: str = "", **extra) -
         "characterisation_words": words,
         "characterisation_typed": {"rate_hz": "", "unit": "", "column": ""},
         "characterisation_problems": {},
+        "characterisation_choices": [],
         "presets": sorted(PRESETS),
         "plotly_url": request.app.state.plotly_url,
         "passback": passback_state(db, assignment.id),
@@ -206,6 +207,7 @@ def upload_characterisation(
             db,
             characterisation_typed=typed,
             characterisation_problems=problems,
+            characterisation_choices=getattr(error, "choices", []),  # the columns to choose
         )
         return render(request, "review/dashboard.html", context, error.status)
     characterisation.store(assignment, summary)
