@@ -1,0 +1,90 @@
+"""SQLModel tables, by domain: each module's tables, and every name here for
+``from app.models import …``.  Every change needs an Alembic migration (tests check it)."""
+
+from app.models.accounts import (
+    ApiToken,
+    AuthSession,
+    ExternalIdentity,
+    LoginFailure,
+    Role,
+    User,
+)
+from app.models.clock import utcnow
+from app.models.courses import (
+    JOIN_CODE_ALPHABET,
+    Assignment,
+    Course,
+    Enrollment,
+    Extension,
+    LatePolicy,
+    RevealTruth,
+    new_join_code,
+)
+from app.models.lab import (
+    DISCUSSION_MAX,
+    SEED_TYPE,
+    InputMethod,
+    LabSession,
+    Part,
+    ReadingArchive,
+    SampleChunk,
+    SessionMember,
+    SessionStatus,
+    Take,
+)
+from app.models.lti import (
+    LtiContext,
+    LtiGradePost,
+    LtiKey,
+    LtiLaunchValue,
+    LtiPlatform,
+    LtiResourceLink,
+)
+from app.models.review import (
+    Attempt,
+    BoardSnapshot,
+    CopyKey,
+    EvidenceNote,
+    GradeAmendment,
+    ReportJob,
+)
+
+__all__ = [
+    "DISCUSSION_MAX",
+    "JOIN_CODE_ALPHABET",
+    "SEED_TYPE",
+    "ApiToken",
+    "Assignment",
+    "Attempt",
+    "AuthSession",
+    "BoardSnapshot",
+    "CopyKey",
+    "Course",
+    "Enrollment",
+    "EvidenceNote",
+    "Extension",
+    "ExternalIdentity",
+    "GradeAmendment",
+    "InputMethod",
+    "LabSession",
+    "LatePolicy",
+    "LoginFailure",
+    "LtiContext",
+    "LtiGradePost",
+    "LtiKey",
+    "LtiLaunchValue",
+    "LtiPlatform",
+    "LtiResourceLink",
+    "Part",
+    "ReadingArchive",
+    "ReportJob",
+    "RevealTruth",
+    "Role",
+    "SampleChunk",
+    "SessionMember",
+    "SessionStatus",
+    "Take",
+    "User",
+    "new_join_code",
+    "utcnow",
+]
