@@ -266,6 +266,34 @@ def test_seconds_that_look_like_date_numbers_stay_seconds(first_times):
     assert record.times_s[0] == float(first_times.split()[0]) and record.notes == []
 
 
+@pytest.mark.parametrize(
+    "header",
+    [
+        "采样点,输出值",  # a teaching gyro's program: sample number, output
+        "点数,陀螺输出",
+        "序号,读数",
+        "Sample #,gyro output",
+        "采样点,数据",  # the value's name unknown: the counter is still no time
+        "index,data",
+    ],
+)
+def test_a_column_that_numbers_the_readings_is_not_their_times(header):
+    """A 10 Hz record numbered 1, 2, 3…: the numbers were read as seconds (1 Hz, N off by
+    √10) where the header's names were not known; they are no times, so the rate is asked."""
+    text = header + "\n" + "".join(f"{k + 1},{10.0 + 0.01 * (k % 7)}\n" for k in range(100))
+    record = read(text)
+    assert record.times_s is None
+    assert record.values[:2].tolist() == [10.0, 10.01]
+    with pytest.raises(UserError) as refused:
+        analyse_record(record, None)
+    assert refused.value.key == "allan.no_rate"
+
+
+def test_unknown_names_beside_rising_times_keep_their_times():
+    record = read("time,data\n0.1,10.5\n0.2,10.6\n0.3,10.4\n")
+    assert record.times_s.tolist() == [0.1, 0.2, 0.3] and record.values[0] == 10.5
+
+
 def test_a_clock_that_runs_back_is_still_refused():
     """Tied stamps are let through, a clock that runs back is not."""
     back = "time,value\n0.0,1\n0.1,2\n0.2,3\n0.15,4\n" + "".join(

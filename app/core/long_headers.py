@@ -46,6 +46,23 @@ _SUFFIXED_UNIT = re.compile(r"^(.+?) (deg|c)$")  # the rates' and times' own: co
 _ROLE_OF = {name: role for role, names in ROLE_NAMES.items() for name in names}
 
 
+def is_value_name(base: str) -> bool:
+    """Whether a column's name (its base, without the unit) names a gyro's reading as
+    students and loggers write it: "gyro output", "gyro_output", 陀螺输出, 读数.
+
+    Parameters
+    ----------
+    base : str
+        The name as :func:`app.core.column_names.column_name` gives its base.
+
+    Returns
+    -------
+    bool
+        True for a name in ``ROLE_NAMES["value"]``.
+    """
+    return _ROLE_OF.get(base.replace("_", " ").strip()) == "value"
+
+
 def name_and_unit(cell: str) -> tuple[str, str | None]:
     """A header cell's name and unit: "Rate (°/h)" → ("rate", "°/h"), "angle_deg" →
     ("angle", "deg"), "time_s" → ("time", "s"), "位置" → ("位置", None).

@@ -29,6 +29,7 @@ from app.core.column_names import (
     rate_unit,
 )
 from app.core.exceptions import UserError
+from app.core.long_headers import is_value_name
 from app.core.units import RAD_PER_SECOND
 
 VALUE_NAMES = ("value", "rate", "omega", "reading", "角速度", "角速率")
@@ -43,6 +44,12 @@ NAMED_TIME_SCALES = {"sampletimefine": 1e-4}  # Xsens: ticks of 100 µs
 NOT_RATE_NAME = re.compile(
     r"seq|count|packet|stamp|frame|status|index|acc(?!um)|(?:^|[^a-z])a_|mag|(?:^|[^a-z])m_"
     r"|quat|orient|covariance|pressure|baro|gps|temp|温度|latency|crc|checksum|valid|flag",
+    re.IGNORECASE,
+)
+# a column that numbers the readings (not their times): "index", "Sample #", 序号, 采样点
+COUNTER_NAME = re.compile(
+    r"index|idx|no\.?|n|num|number|#|sample(?:s| no\.?| number| #)?|count(?:er)?|seq"
+    r"|序号|点数|采样点|点号|编号|样点|计数|数据点|采样序号",
     re.IGNORECASE,
 )
 NOT_RATE_UNITS = {"m/s^2", "ms^-2", "m/s2", "m/s²", "g", "mg", "gauss", "ut", "µt", "μt", "nt"}
@@ -166,10 +173,14 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
             value = wide[0]
         if value is None:  # the one column whose header names a rate's or an angle's unit
             value = _only_rate_column(names, (time, temperature))
+        if value is None:  # a gyro's output as students and loggers name it: 陀螺输出, output
+            value = next((k for k, name in enumerate(names) if is_value_name(name.base)), None)
         if value is None:
             if guess and len(names) <= 3:  # unknown names: as without a header, their
                 bare = bare_layout(len(names))  # units as the names say
                 value, time, temperature = bare.value, bare.time, bare.temperature
+                if time is not None and COUNTER_NAME.fullmatch(names[time].base):
+                    time = None  # 采样点, "Sample #": a reading's number, not its time
             else:
                 choices = rate_column_choices(header)
                 raise ColumnChoiceNeeded(
