@@ -247,3 +247,15 @@ def test_a_record_that_needs_its_column_chosen_offers_the_columns(world):
     assert reply.status_code == 303
     assert stored(world)["rate_hz"] == pytest.approx(100.0)
     assert "its first column, which rises through the record" in shown(teacher, reply)
+
+
+@pytest.mark.one_backend  # the record's reading does not depend on the database
+def test_a_record_saved_as_unicode_text_is_read(world):
+    """A spreadsheet's "Unicode text" (UTF-16 with its byte-order mark, tab-separated):
+    refused as "not text" before."""
+    teacher = browser(world, "teacher1")
+    rates = np.random.default_rng(6).normal(10.0, 0.5, 7_200)
+    text = "time\trate\r\n" + "".join(f"{0.1 * k:.1f}\t{r:.4f}\r\n" for k, r in enumerate(rates))
+    reply = upload(teacher, world, text.encode("utf-16"), rate="")
+    assert reply.status_code == 303, reply.text[-500:]
+    assert stored(world)["rate_hz"] == pytest.approx(10.0)

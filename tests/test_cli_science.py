@@ -293,3 +293,32 @@ def test_a_cold_gyro_shows_its_warm_up_in_the_temperature_column(capsys):
     assert errors["0"] > 3 * errors["3600"]
     code, text, _ = run(capsys, "solve", "heading", "-", "--language", "zh-CN", stdin=csv_text)
     assert "温度稳定" in text
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be", "gb18030"])
+def test_solve_and_allan_read_the_encodings_spreadsheets_save(capsys, tmp_path, encoding):
+    """Excel's "Unicode text" (UTF-16 with its byte-order mark, tabs) and a Chinese-locale
+    Excel's CSV (GB18030): solve said "not UTF-8 text", allan "not text"."""
+    import numpy as np
+
+    table = (DATA / "handout_horizontal.csv").read_text(encoding="utf-8-sig")
+    bom = "\ufeff" if encoding == "utf-16-be" else ""  # utf-16 writes its own mark
+    path = tmp_path / "table.txt"
+    path.write_bytes((bom + table.replace(",", "\t")).encode(encoding))
+    code, out, _ = run(capsys, "solve", "heading", str(path), "--json")
+    _, plain, _ = run(capsys, "solve", "heading", str(DATA / "handout_horizontal.csv"), "--json")
+    assert code == 0 and json.loads(out)["azimuth_deg"] == json.loads(plain)["azimuth_deg"]
+    rates = np.random.default_rng(5).normal(10.0, 0.5, 7_000)
+    record = "时间,角速度\r\n" + "".join(f"{0.1 * k:.1f},{r:.4f}\r\n" for k, r in enumerate(rates))
+    path = tmp_path / "record.csv"
+    path.write_bytes((bom + record).encode(encoding))
+    code, out, err = run(capsys, "allan", str(path), "--json")
+    assert code == 0, err
+    assert json.loads(out)["rate_hz"] == pytest.approx(10.0)
+
+
+def test_allan_refuses_bytes_that_are_no_text(capsys, tmp_path):
+    path = tmp_path / "record.bin"
+    path.write_bytes(bytes(range(256)) * 8)
+    code, _, err = run(capsys, "allan", str(path))
+    assert code != 0 and "not text" in err

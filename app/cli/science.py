@@ -25,6 +25,7 @@ from app.core.record_checks import WARM_UP_LIMIT_C
 from app.core.simulate import GyroStream, Setup, simulate_run, simulate_static
 from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.solve import solve_heading, solve_latitude
+from app.core.text_files import decode_text
 from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
 
 WARM_GYRO_S = 3600.0  # simulate's default: a lab gyro is usually left on
@@ -39,17 +40,22 @@ def to_json_text(payload: dict) -> str:
 
 
 def _read_text(path: str) -> str:
+    """The file's text in UTF-8, UTF-16 (by its byte-order mark) or GB18030, as a page's
+    upload reads it."""
     try:
         if path == "-":
-            return sys.stdin.read()
-        with open(path, encoding="utf-8-sig") as handle:
-            return handle.read()
+            binary = getattr(sys.stdin, "buffer", None)
+            if binary is None:  # a text stream already decoded
+                return sys.stdin.read()
+            data = binary.read()
+        else:
+            with open(path, "rb") as handle:
+                data = handle.read()
     except FileNotFoundError:
         raise CommandError(f"no such file: {path}") from None
-    except UnicodeDecodeError:
-        raise CommandError(f"{path} is not UTF-8 text") from None
     except OSError as error:
         raise CommandError(f"cannot read {path}: {error.strerror}") from None
+    return decode_text(data)
 
 
 def _finite(name: str, value: float | None) -> None:

@@ -24,6 +24,7 @@ import codecs
 import csv
 import io
 import itertools
+import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
@@ -391,8 +392,10 @@ def _first_bad_line(block, layout: Layout) -> int:
 
 
 def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
-    """Lines of UTF-8 bytes or a binary file (a BOM, CRLF or CR line ends allowed), decoded
-    incrementally.
+    """Lines of a text file's bytes, decoded incrementally: UTF-8 (with or without a BOM),
+    UTF-16 by its byte-order mark (a spreadsheet's "Unicode text"), or GB18030 where the
+    first block is not UTF-8 (a Chinese-locale Excel's CSV) -- as
+    :func:`app.core.text_files.decode_text` reads a whole file; CRLF or CR line ends.
 
     Parameters
     ----------
@@ -405,22 +408,42 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
     -------
     iterator of str
         The lines, without their line ends.
+
+    Raises
+    ------
+    UserError
+        ``csv.encoding`` for bytes that are text in none of these encodings.
     """
-    decoder = codecs.getincrementaldecoder("utf-8")()
     buffer = io.BytesIO(data) if isinstance(data, bytes | bytearray) else data
-    pending = ""
-    while True:
-        piece = buffer.read(chunk)
-        if not piece:
-            break
+    first = buffer.read(chunk)
+    decoder = codecs.getincrementaldecoder(_encoding_of(first))()
+    pending, piece = "", first
+    while piece:
         try:
-            pending += decoder.decode(piece)
+            text = decoder.decode(piece)
         except UnicodeDecodeError:
-            raise UserError(
-                "csv.encoding",
-            ) from None
+            raise UserError("csv.encoding") from None
+        if _CONTROL.search(text):  # no text file holds these: bytes of another kind
+            raise UserError("csv.encoding")
+        pending += text
         parts = pending.replace("\r\n", "\n").replace("\r", "\n").split("\n")
         pending = parts.pop()
         yield from parts
+        piece = buffer.read(chunk)
     if pending:
         yield pending
+
+
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
+
+
+def _encoding_of(first: bytes) -> str:
+    """The encoding of a file from its first block: UTF-16 by its byte-order mark, UTF-8
+    where the block decodes as UTF-8 (but for a character cut at its end), else GB18030."""
+    if first.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return "utf-16"
+    try:
+        codecs.getincrementaldecoder("utf-8")().decode(first, final=False)
+    except UnicodeDecodeError:
+        return "gb18030"
+    return "utf-8-sig"
