@@ -174,7 +174,9 @@ def test_a_fine_clocks_first_stamp_written_twice_is_not_a_coarse_clock():
     text = "#2021-03-02 16:56:54\n" + "".join(
         f"{t:.5f}, {r:.5f}, 0.00000\n" for t, r in zip(times, rates, strict=True)
     )
-    result = analyse_record(read(text), None)
+    record = read(text)
+    assert record.temperatures_c is None  # the third column's zeros: no sensor's reading
+    result = analyse_record(record, None)
     assert result.rate_hz == pytest.approx(1 / 0.0104, rel=1e-6)
     notes = {note["key"]: note["params"] for note in result.notes}
     assert "allan.note_coarse_clock" not in notes

@@ -250,7 +250,7 @@ def bare_record_layout(
     :func:`bare_layout` says, and -- where the rates' column is chosen -- a first column that
     rises as the times (a FOG logger's ``t, rate, loop, °C``); where none is chosen, a first
     column that does not rise beside one constant column is no times (a KVH DSP-3000's
-    ``rate  1``, the 1 its valid flag).
+    ``rate  1``, the 1 its valid flag); a third column of zeros is no case temperature.
 
     Parameters
     ----------
@@ -273,6 +273,8 @@ def bare_record_layout(
         As :func:`bare_layout`.
     """
     layout = bare_layout(width, column)
+    if layout.temperature is not None and _all_zero(rows, layout.temperature):
+        layout = replace(layout, temperature=None)  # "t, rate, 0.00000": no sensor's reading
     if layout.time is None and layout.value != 0 and _rises(rows):
         return replace(layout, time=0), True
     if layout.time == 0 and column is None and _falls(rows):
@@ -293,6 +295,15 @@ def _rises(rows: list[list[str]]) -> bool:
     except ValueError:
         return False
     return bool(np.all(np.diff(numbers) >= 0) and numbers[-1] > numbers[0])
+
+
+def _all_zero(rows: list[list[str]], column: int) -> bool:
+    """Whether ``column`` holds 0 in every row (a logger's placeholder where it has no
+    temperature sensor), in at least three rows."""
+    try:
+        return len(rows) >= 3 and all(float(row[column]) == 0.0 for row in rows)
+    except ValueError:
+        return False
 
 
 def _falls(rows: list[list[str]]) -> bool:
