@@ -252,6 +252,13 @@ def test_a_spreadsheets_date_numbers_are_read_as_days():
     assert record.times_s[:3] == pytest.approx([0.0, 0.1, 0.2], abs=1e-5)  # 10 digits: 8.6 µs
     assert [note["key"] for note in record.notes] == ["allan.note_spreadsheet_days"]
     assert analyse_record(record, None).rate_hz == pytest.approx(10.0, rel=1e-6)
+    # stamped to the whole second at 10 Hz: ten readings tie before the first rise
+    whole = "time,rate\n" + "".join(
+        f"{(start + k // 10) / 86_400:.10f},{rate:.5f}\n" for k, rate in enumerate(rates)
+    )
+    result = analyse_record(read(whole), None)
+    assert result.rate_hz == pytest.approx(10.0, rel=1e-6)
+    assert "allan.note_coarse_clock" in {note["key"] for note in result.notes}
 
 
 @pytest.mark.parametrize(

@@ -209,7 +209,7 @@ def spreadsheet_days(first: float, step: float) -> bool:
     first : float
         The column's first number.
     step : float
-        Its second number less its first.
+        Its first rise (the first step that is not a tie).
 
     Returns
     -------
@@ -273,8 +273,9 @@ class TimeColumn:
             return clock_seconds(cells, self._origin_day)
         if not numbers.size:
             return numbers
-        step = float(numbers[1] - numbers[0]) if numbers.size > 1 else 0.0
-        scale = self._unit_of(float(numbers[0]), step)
+        steps = np.diff(numbers[:1000])
+        rising = steps[steps > 0]  # a coarse clock ties its first steps
+        scale = self._unit_of(float(numbers[0]), float(rising[0]) if rising.size else 0.0)
         if scale == 1.0:
             return numbers
         if self._origin is None:
