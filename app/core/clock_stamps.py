@@ -239,11 +239,15 @@ class TimeColumn:
         self._origin: int | float | None = None
         self._origin_day: list[int] = []
 
-    def _unit_of(self, first: float, step: float = 0.0) -> float:
+    def _unit_of(self, first: float, numbers: np.ndarray | None = None) -> float:
+        """The column's unit, decided once, by its first block's numbers."""
         if self.scale is None:
             told = epoch_scale(first)
-            if told is None and spreadsheet_days(first, step):
-                told = (86_400.0, "days")
+            if told is None and numbers is not None:
+                steps = np.diff(numbers[:1000])
+                rising = steps[steps > 0]  # a coarse clock ties its first steps
+                if spreadsheet_days(first, float(rising[0]) if rising.size else 0.0):
+                    told = (86_400.0, "days")
             self.scale, self.inferred = told if told else (1.0, None)
         return self.scale
 
@@ -273,9 +277,7 @@ class TimeColumn:
             return clock_seconds(cells, self._origin_day)
         if not numbers.size:
             return numbers
-        steps = np.diff(numbers[:1000])
-        rising = steps[steps > 0]  # a coarse clock ties its first steps
-        scale = self._unit_of(float(numbers[0]), float(rising[0]) if rising.size else 0.0)
+        scale = self._unit_of(float(numbers[0]), numbers)
         if scale == 1.0:
             return numbers
         if self._origin is None:

@@ -282,19 +282,28 @@ def bare_record_layout(
     return layout, False
 
 
-def _rises(rows: list[list[str]]) -> bool:
-    """Whether the first column of ``rows`` rises as times do: numbers or clock stamps,
-    never falling, the last after the first, in at least three rows."""
-    cells = [row[0] for row in rows]
-    if len(cells) < 3:
-        return False
-    if all(is_clock_stamp(cell) for cell in cells):
-        return True  # the clock's reader checks their order
+def _first_numbers(rows: list[list[str]]) -> np.ndarray | None:
+    """The first column of ``rows`` as numbers, or None where a cell is not one."""
     try:
-        numbers = np.array([float(cell) for cell in cells])
+        return np.array([float(row[0]) for row in rows])
     except ValueError:
-        return False
+        return None
+
+
+def _rising(numbers: np.ndarray) -> bool:
+    """Never falling, the last after the first: as times are."""
     return bool(np.all(np.diff(numbers) >= 0) and numbers[-1] > numbers[0])
+
+
+def _rises(rows: list[list[str]]) -> bool:
+    """Whether the first column of ``rows`` rises as times do: numbers or clock stamps, in
+    at least three rows."""
+    if len(rows) < 3:
+        return False
+    if all(is_clock_stamp(row[0]) for row in rows):
+        return True  # the clock's reader checks their order
+    numbers = _first_numbers(rows)
+    return numbers is not None and _rising(numbers)
 
 
 def _all_zero(rows: list[list[str]], column: int) -> bool:
@@ -309,11 +318,8 @@ def _all_zero(rows: list[list[str]], column: int) -> bool:
 def _falls(rows: list[list[str]]) -> bool:
     """Whether the first column of ``rows`` is numbers that are no times: in at least
     three rows, falling somewhere or never rising."""
-    try:
-        numbers = np.array([float(row[0]) for row in rows])
-    except ValueError:
-        return False
-    return numbers.size >= 3 and not (np.all(np.diff(numbers) >= 0) and numbers[-1] > numbers[0])
+    numbers = _first_numbers(rows)
+    return numbers is not None and numbers.size >= 3 and not _rising(numbers)
 
 
 def _without_times(rows: list[list[str]], layout: Layout) -> Layout:

@@ -77,22 +77,25 @@ def _coarse_clock(times: np.ndarray) -> tuple[slice, float, float, int, int] | N
     return slice(start, stop), rate, tick, int(breaks.size), round(missed_s * rate)
 
 
-def _longest_stretch(times: np.ndarray) -> tuple[slice, int, int, float]:
-    """The longest stretch without a gap, how many gaps, the readings they missed, and
-    the median step.  A few tied stamps (fewer than ``COARSE_CLOCK_TIES`` of the steps)
-    are a fine clock's stamp written twice: the readings stay in order, one step each."""
+def _longest_stretch(times: np.ndarray) -> tuple[slice, int, int, float, int]:
+    """The longest stretch without a gap, how many gaps, the readings they missed, the
+    median step, and how many stamps tie with the one before.  A few tied stamps (fewer
+    than ``COARSE_CLOCK_TIES`` of the steps) are a fine clock's stamp written twice: the
+    readings stay in order, one step each."""
     steps = np.diff(times)
     interval = float(np.median(steps)) if steps.size else 0.0
     if not (interval > 0 and math.isfinite(interval)):
         raise UserError("allan.bad_times")
     breaks = np.flatnonzero(steps >= 1.5 * interval)
-    if np.any(steps < 0) or np.mean(steps == 0) >= COARSE_CLOCK_TIES:
+    tied = int(np.count_nonzero(steps == 0))
+    if np.any(steps < 0) or tied >= COARSE_CLOCK_TIES * steps.size:
         raise UserError("allan.bad_times")
     edges = np.concatenate([[0], breaks + 1, [times.size]])
     lengths = np.diff(edges)
     longest = int(np.argmax(lengths))
     missing = int(np.sum(np.rint(steps[breaks] / interval) - 1))
-    return slice(int(edges[longest]), int(edges[longest + 1])), int(breaks.size), missing, interval
+    stretch = slice(int(edges[longest]), int(edges[longest + 1]))
+    return stretch, int(breaks.size), missing, interval, tied
 
 
 def _despike(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -198,12 +201,11 @@ def prepare_record(
         temperatures = None if temperatures is None else temperatures[stretch]
     elif record.times_s is not None and record.times_s.size > 2:
         times = np.asarray(record.times_s, float)
-        stretch, gaps, missing, interval = _longest_stretch(times)
+        stretch, gaps, missing, interval, tied = _longest_stretch(times)
         if rate_hz is None:  # the mean step of the stretch: a clock may jitter by a tick
             rate_hz = sample_rate_hz(times[stretch])
             if not math.isfinite(rate_hz):
                 rate_hz = 1.0 / interval
-        tied = int(np.count_nonzero(np.diff(times) == 0))
         if tied:
             notes.append(_note("allan.note_tied_stamps", n=tied))
         if gaps:
