@@ -19,7 +19,8 @@ from app.core.clock_stamps import TimeColumn, epoch_scale
 from app.core.column_names import column_name, rate_unit
 from app.core.exceptions import UserError
 from app.core.record_columns import header_layout
-from app.core.static_record import read_static_record, text_lines
+from app.core.static_record import read_static_record
+from app.core.text_files import text_lines
 from app.core.units import unit_doubt
 
 RATE_HZ = 100.0

@@ -13,7 +13,8 @@ import pytest
 
 from app.core.allan import analyse_record
 from app.core.exceptions import UserError
-from app.core.static_record import StaticRecord, read_static_record, text_lines
+from app.core.static_record import StaticRecord, read_static_record
+from app.core.text_files import text_lines
 from tests.noise_sources import static_record
 
 RATES = [10.0346, 10.0822, 9.9512, 10.0078]

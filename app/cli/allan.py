@@ -9,7 +9,8 @@ import sys
 from app.cli.science import CommandError, _finite, to_json_text
 from app.core.allan import analyse_record
 from app.core.allan_summary import dwell_lines, note_lines, summary_lines, term_rows
-from app.core.static_record import read_static_record, text_lines
+from app.core.static_record import read_static_record
+from app.core.text_files import text_lines
 from app.core.units import UNITS
 
 

@@ -20,11 +20,9 @@ Preparing the record for the analysis: :mod:`app.core.record_preparation`.
 
 from __future__ import annotations
 
-import codecs
 import csv
 import io
 import itertools
-import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
@@ -389,61 +387,3 @@ def _first_bad_line(block, layout: Layout) -> int:
         except (ValueError, IndexError):
             return index
     return 0
-
-
-def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
-    """Lines of a text file's bytes, decoded incrementally: UTF-8 (with or without a BOM),
-    UTF-16 by its byte-order mark (a spreadsheet's "Unicode text"), or GB18030 where the
-    first block is not UTF-8 (a Chinese-locale Excel's CSV) -- as
-    :func:`app.core.text_files.decode_text` reads a whole file; CRLF or CR line ends.
-
-    Parameters
-    ----------
-    data : bytes or binary file
-        The text's bytes, or a file opened in binary mode.
-    chunk : int
-        Bytes read at a time.
-
-    Returns
-    -------
-    iterator of str
-        The lines, without their line ends.
-
-    Raises
-    ------
-    UserError
-        ``csv.encoding`` for bytes that are text in none of these encodings.
-    """
-    buffer = io.BytesIO(data) if isinstance(data, bytes | bytearray) else data
-    first = buffer.read(chunk)
-    decoder = codecs.getincrementaldecoder(_encoding_of(first))()
-    pending, piece = "", first
-    while piece:
-        try:
-            text = decoder.decode(piece)
-        except UnicodeDecodeError:
-            raise UserError("csv.encoding") from None
-        if _CONTROL.search(text):  # no text file holds these: bytes of another kind
-            raise UserError("csv.encoding")
-        pending += text
-        parts = pending.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-        pending = parts.pop()
-        yield from parts
-        piece = buffer.read(chunk)
-    if pending:
-        yield pending
-
-
-_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
-
-
-def _encoding_of(first: bytes) -> str:
-    """The encoding of a file from its first block: UTF-16 by its byte-order mark, UTF-8
-    where the block decodes as UTF-8 (but for a character cut at its end), else GB18030."""
-    if first.startswith((b"\xff\xfe", b"\xfe\xff")):
-        return "utf-16"
-    try:
-        codecs.getincrementaldecoder("utf-8")().decode(first, final=False)
-    except UnicodeDecodeError:
-        return "gb18030"
-    return "utf-8-sig"

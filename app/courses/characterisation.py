@@ -23,7 +23,8 @@ from app.core.allan import analyse_record
 from app.core.exceptions import UserError
 from app.core.flicker import DEFAULT_BAND_S
 from app.core.noise_model import GyroNoise
-from app.core.static_record import read_static_record, text_lines
+from app.core.static_record import read_static_record
+from app.core.text_files import text_lines
 from app.core.units import DEG_PER_HOUR, UNIT_SYMBOLS, canonical_unit
 from app.models import Assignment, utcnow
 
