@@ -17,8 +17,9 @@
    the interpreter.  What a student's stream costs besides its requests (frames, the saves
    at each position's end) is divided by the frames it received.  The CPU of one password
    check is measured in process.  With ``--class-cpu`` each request instead costs what
-   one of the class's own requests of its route cost, drawn at random (the probe's
-   ``GYROLAB_BENCH_REQUEST_CPU`` lines of a load test, ``class_cpu.py``), its unseen part
+   one of the class's own requests of its route cost, one near its own place in the
+   class's order (the probe's ``GYROLAB_BENCH_REQUEST_CPU`` lines of a load test, in the
+   order answered, ``class_cpu.py``; ``--costs-at-random``: any of them), its unseen part
    scaled so that the class's CPU adds up to what that run used.
 2. Predict: a discrete-event simulation replays the scenario for N students -- the same
    start times as the load test; each student's connection reaches one worker and keeps
@@ -332,6 +333,12 @@ def main() -> int:
     parser.add_argument("--compare", type=Path, nargs="*", default=[])
     parser.add_argument("--cores", type=float, default=float(os.cpu_count() or 1))
     parser.add_argument(
+        "--costs-at-random",
+        action="store_true",
+        help="with --class-cpu: each request costs one of its route's in the class drawn at "
+        "random, not one near its place in the class's order (the model before 2026-12-03)",
+    )
+    parser.add_argument(
         "--department",
         type=int,
         nargs="+",
@@ -479,6 +486,7 @@ def main() -> int:
                     worker_shares=shares,
                     call_handoff=None if args.every_call_hands else CALL_HANDOFF,
                     wake_free=not args.woken_at_once,
+                    costs_in_order=not args.costs_at_random,
                     **(waits or waits_of()),
                 )
                 for seed in range(args.seeds)

@@ -8,7 +8,7 @@ from __future__ import annotations
 import heapq
 import random
 import sys
-from collections import defaultdict
+from collections import Counter, defaultdict
 from pathlib import Path
 
 import numpy as np
@@ -161,6 +161,7 @@ def simulate(
     worker_shares: list[float] | None = None,
     call_handoff: tuple[float, float] | None = CALL_HANDOFF,
     wake_free: bool = True,
+    costs_in_order: bool = True,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -194,7 +195,13 @@ def simulate(
     random; ``call_handoff``: (with a core free, with none) the chance that an SQLite
     call hands the interpreter to a thread waiting for it (None: every call does);
     ``wake_free``: a thread woken from sleep waits the hand-off for a core even when it
-    finds the interpreter free (False: it runs at once, the model before 2026-11-27).
+    finds the interpreter free (False: it runs at once, the model before 2026-11-27);
+    ``costs_in_order``: a student's route's measured requests (a list, in the order the
+    class answered them) are drawn in that order -- the route's k-th request here costs
+    one of the measured within 5 % of the k-th (scaled to this class's size) -- not at
+    random (False; the teacher's always at random): a route's CPU changes over a class
+    (the lab page is empty at the start, 2.3× dearer with results and charts in the
+    burst; bench/README.md, twenty-third part).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -283,6 +290,8 @@ def simulate(
     pick = random.Random(seed)  # which worker each new connection reaches
     calls_drawn = random.Random(seed + 3)  # which releases hand the interpreter on
     draw = random.Random(seed + 1)  # which of a route's measured requests this one costs
+    asked_of_route: dict[str, int] = defaultdict(int)  # requests of each route so far
+    per_student = Counter(route for kind, route in student_script() if kind == "request")
 
     def server_job(
         work: float,
@@ -335,7 +344,14 @@ def simulate(
 
     def phases(route: str, then, worker: int, cost: tuple | None = None) -> None:
         cost = cost or costs[route]
-        if isinstance(cost, list):  # the class's own requests: one drawn at random
+        if isinstance(cost, list) and costs_in_order and route in per_student:
+            # the k-th of the class's, give or take 5 % (a class of another size: the
+            # same place in its order)
+            k = asked_of_route[route] * len(cost) / (per_student[route] * students)
+            asked_of_route[route] += 1
+            spread = max(1, len(cost) // 20)
+            cost = cost[min(max(int(k) + draw.randint(-spread, spread), 0), len(cost) - 1)]
+        elif isinstance(cost, list):  # the class's own requests: one drawn at random
             cost = cost[draw.randrange(len(cost))]
         server, db, client, calls, trips, loop, *inside_place = cost
         releases = calls + trips  # a thread gives the interpreter up at each, and

@@ -293,6 +293,25 @@ def test_a_route_of_varied_requests_has_the_tail_of_its_slowest():
     assert np.percentile(varied, 95) > 40 * MS > 7 * np.percentile(latencies["mean"], 95)
 
 
+def test_a_routes_measured_requests_are_drawn_in_the_order_the_class_made_them():
+    """The lab page is cheap at a class's start and dear in its burst: the model's first
+    pages cost the first measured, its last the last -- not a random mix of both."""
+    students, page = 4, "GET /lab/sessions/{id}"
+    table = costs(client=0.0)
+    cheap, dear = table[page], (60 * MS, *table[page][1:5], 1 * MS)
+    table[page] = [cheap] * students + [dear] * students  # in the order the class made them
+    kwargs = dict(students=students, workers=1, cores=2.0, ramp=0.0, teacher=False)
+    in_order = queue_sim.simulate(table, **kwargs, wake_free=False)[("latencies")][page]
+    assert len(in_order) == 2 * students
+    assert max(in_order[:3]) < 20 * MS  # the first pages: the cheap ones
+    assert min(in_order[-3:]) > 60 * MS  # the last: the dear ones
+    at_random = [
+        queue_sim.simulate(table, **kwargs, wake_free=False, costs_in_order=False, seed=seed)
+        for seed in range(4)
+    ]
+    assert any(max(result["latencies"][page][:3]) > 60 * MS for result in at_random)
+
+
 def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
     """The unseen part of each request is scaled so that the class's requests and frames
     ask the server for the CPU the run used, and the load generator likewise."""
