@@ -29,7 +29,8 @@
    requests: 8 per worker), the threads' work (on SQLite inside the one write lock for the
    writes; on PostgreSQL cut at each round trip to the database server, whose share of
    the work and a round trip's wait come between; a log-in's password hash outside the
-   interpreter, at most 4 at once), the event loop's second half, the client's again;
+   interpreter, at most 4 at once, its work place given to another request from then on),
+   the event loop's second half, the client's again;
    each stream position 15 frames 0.2 s apart. Each worker's interpreter runs one thread
    at a time, handed on round robin when a thread gives it up (at each counted call or
    trip; the event loop at each wake-up) or after 5 ms with others waiting (CPython's

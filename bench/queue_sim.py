@@ -57,7 +57,8 @@ def student_script():
 # writes twice (its attempt is charged, then uncharged with the session row added), each
 # time for LOGIN_LOCKED_S; its password hash comes between, outside the lock and outside
 # the interpreter (argon2-cffi releases the GIL), in one of ``login_hash_slots`` (4) per
-# worker.  PostgreSQL: row locks, none.
+# worker, its work place given to another request from then on (``db.give_way``).
+# PostgreSQL: row locks, none.
 WRITES = {
     "POST /lab/sessions",
     "POST /lab/sessions/{id}/csv",
@@ -364,10 +365,10 @@ def simulate(
         if route == LOGIN:
             if one_writer:
                 locked = min(LOGIN_LOCKED_S, threads / 3)
-                work = [("server", threads - 2 * locked), ("lock", locked), ("hash", hash_s),
-                        ("lock", locked)]  # fmt: skip
+                work = [("server", threads - 2 * locked), ("lock", locked), ("give way", 0.0),
+                        ("hash", hash_s), ("lock", locked)]  # fmt: skip
             else:
-                work = [("server", threads), ("hash", hash_s)]
+                work = [("server", threads), ("give way", 0.0), ("hash", hash_s)]
         elif one_writer and route in WRITES:
             work = [("lock", threads)]
         else:
@@ -418,6 +419,9 @@ def simulate(
                 places[worker].enter(admitted)
             elif pool == "dismiss":
                 inside[route].append((waited[0], now - asked[0], *waits, asked[0]))
+                give_back()
+                run(i + 1)
+            elif pool == "give way":  # a log-in's hash: its work place to another request
                 give_back()
                 run(i + 1)
             elif pool == "enter":

@@ -312,6 +312,20 @@ def test_a_routes_measured_requests_are_drawn_in_the_order_the_class_made_them()
     assert any(max(result["latencies"][page][:3]) > 60 * MS for result in at_random)
 
 
+def test_a_log_in_gives_its_work_place_to_another_request_while_it_hashes():
+    """As the app does (``db.give_way`` before argon2id): two log-ins at once on one work
+    place hash side by side; the second does not wait for the first's hash."""
+    hash_s = 200 * MS
+    table = costs(server=1 * MS, db=0.0, client=0.0, calls=1.0, trips=1.0, loop=0.1 * MS)
+    table[queue_sim.LOGIN] = (hash_s + 2 * MS, 0.0, 0.0, 2.0, 1.0, 0.1 * MS)
+    result = queue_sim.simulate(
+        table, 2, 1, 2.0, ramp=0.0, hash_s=hash_s, teacher=False, work_places=1
+    )
+    log_ins = result["latencies"][queue_sim.LOGIN]
+    assert len(log_ins) == 2
+    assert max(log_ins) < 1.5 * hash_s  # held through the hash, the second took ≥ 2 hashes
+
+
 def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
     """The unseen part of each request is scaled so that the class's requests and frames
     ask the server for the CPU the run used, and the load generator likewise."""
