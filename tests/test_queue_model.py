@@ -301,7 +301,7 @@ def test_a_routes_measured_requests_are_drawn_in_the_order_the_class_made_them()
     cheap, dear = table[page], (60 * MS, *table[page][1:5], 1 * MS)
     table[page] = [cheap] * students + [dear] * students  # in the order the class made them
     kwargs = dict(students=students, workers=1, cores=2.0, ramp=0.0, teacher=False)
-    in_order = queue_sim.simulate(table, **kwargs, wake_free=False)[("latencies")][page]
+    in_order = queue_sim.simulate(table, **kwargs, wake_free=False)["latencies"][page]
     assert len(in_order) == 2 * students
     assert max(in_order[:3]) < 20 * MS  # the first pages: the cheap ones
     assert min(in_order[-3:]) > 60 * MS  # the last: the dear ones
