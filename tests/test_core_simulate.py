@@ -84,6 +84,25 @@ def test_any_chunking_gives_identical_samples(name):
     assert np.array_equal(whole, np.concatenate(pieces))
 
 
+@pytest.mark.parametrize("name", sorted(PRESETS))
+def test_a_copy_reads_on_as_the_stream_would_and_apart_from_it(name):
+    """A copy (kept gyro histories, app.lab.gyro_history) is the same state, not a shared
+    one: it and the original each read what an untouched stream reads next, whichever
+    reads first -- every noise source, the random walk and the quantiser's angle."""
+    preset = replace(PRESETS[name], drift_deg_h_per_h=0.3, rrw_deg_h_rt_h=0.05)
+    rates = np.linspace(-10, 10, 700)
+    reference = GyroStream(preset, 4)
+    reference.read(rates[:300], 0.5)
+    expected = reference.read(rates[300:], 0.5)
+    stream = GyroStream(preset, 4)
+    stream.read(rates[:300], 0.5)
+    twin = stream.copy()
+    assert twin.samples_read == 300 and twin.preset is stream.preset
+    assert np.array_equal(twin.read(rates[300:], 0.5), expected)  # the copy first
+    assert np.array_equal(stream.read(rates[300:], 0.5), expected)  # the original unmoved
+    assert np.array_equal(stream.copy().read(rates[:50]), twin.copy().read(rates[:50]))
+
+
 def test_white_noise_level_matches_arw():
     preset = PRESETS["tactical-fog"].ideal()
     preset = replace(preset, arw_deg_rt_h=0.012)

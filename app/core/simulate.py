@@ -166,6 +166,16 @@ def turn_on_bias_deg_h(preset: GyroPreset, seed: int) -> float:
     return _turn_on_draw(run_seq, preset.turn_on_bias_sigma_deg_h)
 
 
+_COPY_SEED = np.random.SeedSequence(0)  # any: a copy's state is overwritten at once
+
+
+def _generator_copy(rng: np.random.Generator) -> np.random.Generator:
+    """A new generator at ``rng``'s state (its own bit generator, same kind)."""
+    bits = type(rng.bit_generator)(_COPY_SEED)
+    bits.state = rng.bit_generator.state
+    return np.random.Generator(bits)
+
+
 class GyroStream:
     """Sensor errors for consecutive samples; ``read(true_rates)`` consumes the next block."""
 
@@ -190,6 +200,28 @@ class GyroStream:
         self._rrw_state = 0.0
         self._angle = 0.0  # accumulated angle (deg) for quantisation
         self.samples_read = 0
+
+    def copy(self) -> GyroStream:
+        """An independent copy of the stream's state: it reads on exactly as this stream
+        would, and reading either leaves the other as it was.
+
+        Each random generator is rebuilt from its bit generator's state (≈ 20 µs each,
+        ≈ 0.4 ms for the 21 of a tactical FOG) rather than through ``copy.deepcopy``,
+        which pickles every generator (≈ 1.3–1.8 ms a stream); the preset, immutable,
+        is shared.
+
+        Returns
+        -------
+        GyroStream
+            A stream at the same sample, with the same recursion states.
+        """
+        twin = object.__new__(GyroStream)
+        twin.__dict__.update(self.__dict__)
+        twin._arw, twin._rrw = _generator_copy(self._arw), _generator_copy(self._rrw)
+        twin._correlated = [
+            [phi, sigma, state, _generator_copy(rng)] for phi, sigma, state, rng in self._correlated
+        ]
+        return twin
 
     def _warmup_decay(self, count: int) -> np.ndarray:
         """e^(−t/τ_w) at the next ``count`` samples, t from switch-on."""
