@@ -153,6 +153,13 @@ def test_csv_bodies(client, auth):
         url, content="\r".join(["1.5"] * 10), headers={**auth, "Content-Type": "text/csv"}
     )
     assert mac.status_code == 200 and mac.json()["n_samples"] == 10
+    # a DOS program's file: CRLF lines and Ctrl-Z (0x1A) after the last, its end-of-file mark
+    dos = client.put(
+        url,
+        content="\r\n".join(["1.5"] * 10) + "\r\n\x1a",
+        headers={**auth, "Content-Type": "text/csv"},
+    )
+    assert dos.status_code == 200 and dos.json()["n_samples"] == 10
     huge = '"' + "9" * 200_000 + '"\n'
     unreadable = client.put(url, content=huge, headers={**auth, "Content-Type": "text/csv"})
     assert unreadable.status_code == 400 and "cannot be read" in unreadable.json()["detail"]

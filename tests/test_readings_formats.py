@@ -91,6 +91,44 @@ def test_binary_is_not_text():
     assert error.value.key == "csv.encoding"
 
 
+@pytest.mark.parametrize("marks", ["\x1a", "\x1a" * 100], ids=["dos", "cp/m-padding"])
+def test_a_dos_programs_end_of_file_mark_is_not_part_of_the_file(marks):
+    """An old logger's or terminal's file ends in Ctrl-Z (0x1A), several where the last
+    record was padded: read as the same file without them, by every reader -- the table,
+    one position's record, the API's CSV body, a record read in blocks (the marks, and a
+    CRLF, across a block's end) -- and a Ctrl-Z inside a file is still not text."""
+    from app.core.position_records import parse_one_position_record, parse_position_csv
+    from app.core.static_record import read_static_record
+    from app.core.text_files import decode_text, text_lines
+
+    table = "位置1,位置2\r\n10.74,-0.50\r\n10.65,-0.40\r\n"
+    for data in (table + marks, table.rstrip() + marks):
+        readings = parse_readings_csv(data)
+        for got, want in zip(readings.positions, expected(), strict=True):
+            np.testing.assert_allclose(got, want)
+        assert decode_text(data.encode("gb18030")) == data.rstrip("\x1a")
+        assert decode_text(data.encode("utf-16")) == data.rstrip("\x1a")
+    record = "time_s,value\r\n0.0,10.74\r\n0.1,10.65\r\n0.2,10.70\r\n" + marks
+    one = parse_one_position_record(record, "deg/h").readings
+    np.testing.assert_allclose(one.positions[0], [10.74, 10.65, 10.70])
+    values, times = parse_position_csv(record.encode())
+    np.testing.assert_allclose(values, [10.74, 10.65, 10.70])
+    np.testing.assert_allclose(times, [0.0, 0.1, 0.2])
+    for chunk in (7, 50, 1 << 20):  # marks and CRLFs cut at a block's end, or whole in one
+        lines = list(text_lines(record.encode(), chunk=chunk))
+        assert lines == ["time_s,value", "0.0,10.74", "0.1,10.65", "0.2,10.70"]
+        static = read_static_record(text_lines(record.encode(), chunk=chunk))
+        np.testing.assert_allclose(static.values, [10.74, 10.65, 10.70])
+    for inside in ("0.0,10.74\x1a\r\n0.1,10.65\r\n", "0.0,10.74\r\n" + marks + "0.1,10.65\r\n"):
+        with pytest.raises(UserError) as error:
+            decode_text(inside.encode())
+        assert error.value.key == "csv.encoding"
+        for chunk in (5, 1 << 20):
+            with pytest.raises(UserError) as error:
+                list(text_lines(inside.encode(), chunk=chunk))
+            assert error.value.key == "csv.encoding"
+
+
 @pytest.mark.parametrize(
     "text",
     [

@@ -20,7 +20,7 @@ from app.core.spreadsheet_text import (
     spreadsheet_delimiter,
 )
 from app.core.static_record import read_static_record
-from app.core.text_files import decode_text
+from app.core.text_files import decode_text, file_text
 from app.core.typed_numbers import is_number
 from app.core.units import UNIT_SYMBOLS
 
@@ -92,7 +92,7 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
     """
     if isinstance(data, bytes):
         data = decode_text(data)
-    data = data.lstrip("\ufeff")
+    data = file_text(data)
     delimiter = spreadsheet_delimiter(data)
     if delimiter == "," and _spaced_columns(data):  # "0.1  10.74": a script's or logger's
         rows = [line.split() for line in data.splitlines()]
@@ -228,7 +228,7 @@ def parse_one_position_record(
         (``csv.not_a_record``), several columns of rates and none chosen
         (``csv.choose_column``), a chosen column the file does not have, no readings.
     """
-    text = text.lstrip("\ufeff")
+    text = file_text(text)
     columns: tuple[str, ...] = ()
     try:
         record = read_static_record(io.StringIO(text), column=column, guess=False)

@@ -40,7 +40,7 @@ from app.core.spreadsheet_text import (
     title_lines_blanked,
 )
 from app.core.table_headers import column_name, evenly_round, numbered_columns, summary_label
-from app.core.text_files import plain_text
+from app.core.text_files import file_text, plain_text
 from app.core.typed_numbers import NumberOutOfRange, is_number, parse_decimal
 
 WIDE_COLUMN = re.compile(r"^position_(\d+)$")
@@ -100,7 +100,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     UserError
         With the line and column of the first problem.
     """
-    text = title_lines_blanked(plain_text(text.lstrip("\ufeff")))
+    text = title_lines_blanked(plain_text(file_text(text)))
     delimiter = spreadsheet_delimiter(text)
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
         rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))

@@ -1,6 +1,7 @@
 """Text as students and teachers save and type it: files in UTF-8 (with or without a
 byte-order mark), UTF-16 from some spreadsheets, or GB18030 from a Chinese-locale Excel --
-whole (:func:`decode_text`) or line by line in bounded memory (:func:`text_lines`); a
+whole (:func:`decode_text`) or line by line in bounded memory (:func:`text_lines`), without
+the end-of-file marks DOS-era programs leave after the last line (:func:`file_text`); a
 Chinese input method's full-width forms."""
 
 from __future__ import annotations
@@ -14,6 +15,26 @@ from collections.abc import Iterable
 from app.core.exceptions import UserError
 
 ENCODINGS = ("utf-8-sig", "gb18030")
+# Ctrl-Z (SUB, 0x1A): DOS's end-of-file mark, which DOS-era loggers and terminal captures
+# still write after the last line (CP/M padded a file's last 128-byte record with them)
+END_OF_FILE_MARK = "\x1a"
+
+
+def file_text(text: str) -> str:
+    """A file's text without a byte-order mark before it and end-of-file marks after it.
+
+    Parameters
+    ----------
+    text : str
+        A file's whole text (decoded here, or by the browser from the same bytes).
+
+    Returns
+    -------
+    str
+        ``text`` without a leading U+FEFF and trailing Ctrl-Z characters (0x1A); one in
+        the middle of the text is left to the reader to refuse.
+    """
+    return text.lstrip("\ufeff").rstrip(END_OF_FILE_MARK)
 
 
 def decode_text(data: bytes) -> str:
@@ -22,7 +43,8 @@ def decode_text(data: bytes) -> str:
     UTF-16 is recognised by its byte-order mark; otherwise UTF-8 is tried first (strict),
     then GB18030, which the simplified-Chinese Excel writes ("另存为 CSV").  GB18030 decodes
     almost any byte string, so a control character other than tab and line ends in the
-    result marks the file as binary.
+    result marks the file as binary; Ctrl-Z marks after the last line are DOS's end of
+    file, not part of the text.
 
     Parameters
     ----------
@@ -32,7 +54,7 @@ def decode_text(data: bytes) -> str:
     Returns
     -------
     str
-        The text, without a byte-order mark.
+        The text, without a byte-order mark or end-of-file marks.
 
     Raises
     ------
@@ -41,12 +63,12 @@ def decode_text(data: bytes) -> str:
     """
     if data.startswith((b"\xff\xfe", b"\xfe\xff")):
         try:
-            return data.decode("utf-16")
+            return data.decode("utf-16").rstrip(END_OF_FILE_MARK)
         except UnicodeDecodeError:
             pass
     for encoding in ENCODINGS:
         try:
-            text = data.decode(encoding)
+            text = data.decode(encoding).rstrip(END_OF_FILE_MARK)
         except UnicodeDecodeError:
             continue
         if not any(ord(ch) < 32 and ch not in "\t\r\n" for ch in text):
@@ -110,7 +132,8 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
     """Lines of a text file's bytes, decoded incrementally: UTF-8 (with or without a BOM),
     UTF-16 by its byte-order mark (a spreadsheet's "Unicode text"), or GB18030 where the
     first block is not UTF-8 (a Chinese-locale Excel's CSV) -- as
-    :func:`decode_text` reads a whole file; CRLF or CR line ends.
+    :func:`decode_text` reads a whole file; CRLF or CR line ends; Ctrl-Z marks after the
+    last line dropped.
 
     Parameters
     ----------
@@ -133,20 +156,30 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
     first = buffer.read(chunk)
     decoder = codecs.getincrementaldecoder(_encoding_of(first))()
     pending, piece = "", first
+    held = ""  # end-of-file marks at the end of what was read: dropped if nothing follows
     while piece:
         try:
-            text = decoder.decode(piece)
+            text = held + decoder.decode(piece)
         except UnicodeDecodeError:
             raise UserError("csv.encoding") from None
-        if _CONTROL.search(text):  # no text file holds these: bytes of another kind
+        body = text.rstrip(END_OF_FILE_MARK)
+        held = text[len(body) :]
+        if _CONTROL.search(body):  # no text file holds these: bytes of another kind
             raise UserError("csv.encoding")
-        pending += text
-        parts = pending.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-        pending = parts.pop()
+        pending += body
+        # a CR last may be half of a CRLF cut at the block's end: kept for the next block
+        cut = len(pending) - pending.endswith("\r")
+        parts = _line_ends(pending[:cut]).split("\n")
+        pending = parts.pop() + pending[cut:]
         yield from parts
         piece = buffer.read(chunk)
     if pending:
-        yield pending
+        yield from _line_ends(pending).removesuffix("\n").split("\n")
+
+
+def _line_ends(text: str) -> str:
+    """CRLF and a bare CR (an old Mac's line end) as LF."""
+    return text.replace("\r\n", "\n").replace("\r", "\n")
 
 
 _CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
