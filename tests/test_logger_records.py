@@ -327,3 +327,43 @@ def test_one_positions_record_stamped_to_the_second_at_two_hertz():
     [times] = parsed.readings.times_s
     assert parsed.readings.positions[0].tolist() == [10 + k for k in range(8)]
     np.testing.assert_allclose(times, [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5])
+
+
+@pytest.mark.parametrize(
+    ("last", "said"),
+    [
+        ("0.4,", "0.4,"),  # the line cut where the logger stopped writing
+        ("0.", "0."),
+        ("End of log", "End of log"),  # a closing remark
+        ("----------", "----------"),
+        (
+            "Logger stopped by the user at the end of the run",
+            "Logger stopped by the user at the end o…",
+        ),
+    ],
+)
+@pytest.mark.parametrize("header", ["time_s,value\n", ""])
+def test_a_last_line_cut_off_or_a_closing_remark_is_left_out_and_said(header, last, said):
+    """A logger stopped (or unplugged) mid-line leaves its last line cut; some write a
+    closing remark.  The readings before are read, the line left out with a note that
+    quotes it -- a record of hours is not refused for its last line.  A last line that is a
+    whole reading with a bad number (in a record of one column, any line), or a bad line
+    before the last, is still refused.  (A line cut inside its last number, "0.4,1" of
+    "0.4,10.0", reads as a number: it cannot be told.)"""
+    readings = "".join(f"{k / 10:.1f},{rate}\n" for k, rate in enumerate(RATES))
+    record = read(header + readings + last + "\n\n")
+    np.testing.assert_allclose(record.values, RATES)
+    np.testing.assert_allclose(record.times_s, [0.0, 0.1, 0.2, 0.3])
+    line = len(RATES) + 1 + bool(header)
+    left_out = [n for n in record.notes if n["key"] == "allan.note_last_line_left_out"]
+    assert left_out == [
+        {"key": "allan.note_last_line_left_out", "params": {"line": line, "text": said}}
+    ]
+    for refused, bad in ((readings + "0.4,abc\n", 5), (readings[:9] + "\n" + readings[9:], 2)):
+        with pytest.raises(UserError) as error:
+            read(header + refused)
+        assert error.value.key == "allan.bad_line"
+        assert error.value.params["line"] == bad + bool(header)
+    with pytest.raises(UserError) as error:
+        read("".join(f"{rate}\n" for rate in RATES) + "oops\n")
+    assert (error.value.key, error.value.params["line"]) == ("allan.bad_line", 5)

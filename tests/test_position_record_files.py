@@ -65,6 +65,25 @@ def test_a_loggers_file_for_one_position_previewed_then_saved_where_chosen(lab):
     assert lab("/csv/preview", logger_file(values)).json()["positions"][0]["position"] == 1
 
 
+def test_a_loggers_file_cut_off_mid_line_is_saved_without_its_last_line_and_says_so(lab):
+    """The logger was unplugged while it wrote: its last line is half a reading.  The
+    preview reads the rest and says which line was left out; the save stores the same."""
+    values = HEADING[2]
+    cut = "2026-11-28 14:00:05.000,10.74"[:22]  # the clock's cell, cut before its end
+    text = logger_file(values) + cut
+    preview = lab("/csv/preview", text, position=2).json()
+    assert preview["positions"][0]["n"] == len(values)
+    assert any(
+        f"Line {len(values) + 2} ('{cut}'), the file's last, is not a reading" in note
+        for note in preview["notes"]
+    ), preview["notes"]
+    saved = lab("/csv", text, position=2)
+    assert saved.status_code == 200 and saved.json()["saved"] == [2]
+    with read_session() as db:
+        [take] = db.exec(select(Take)).all()
+    assert take.n_samples == len(values)
+
+
 def test_one_reading_per_line_is_one_positions_record(lab):
     text = "".join(f"{v}\n" for v in HEADING[3])
     saved = lab("/csv", text, position=3)

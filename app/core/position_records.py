@@ -19,7 +19,7 @@ from app.core.spreadsheet_text import (
     one_column_of_decimal_commas,
     spreadsheet_delimiter,
 )
-from app.core.static_record import read_static_record
+from app.core.static_record import LEFT_OUT, read_static_record
 from app.core.text_files import decode_text, file_text
 from app.core.typed_numbers import is_number
 from app.core.units import UNIT_SYMBOLS
@@ -189,6 +189,7 @@ class OnePositionRecord:
     readings: Readings
     columns: tuple[str, ...] = ()
     column: str | None = None
+    notes: tuple[dict, ...] = ()  # what the reader left out, as the preview says it
 
 
 def parse_one_position_record(
@@ -262,7 +263,8 @@ def parse_one_position_record(
             "csv.unit_conflict", header=UNIT_SYMBOLS[record.unit], chosen=UNIT_SYMBOLS[unit]
         )
     readings = Readings([record.values], None, times, "record", temperatures)
-    return OnePositionRecord(readings, columns, column if columns else None)
+    left_out = tuple(note for note in record.notes if note["key"] in LEFT_OUT)
+    return OnePositionRecord(readings, columns, column if columns else None, left_out)
 
 
 def _head(text: str, lines: int = 50) -> str:

@@ -156,6 +156,7 @@ def preview_csv(
     ]
     if single:
         notes.insert(0, translate("csv.one_position_record", language, position=first))
+    notes += [translate(note["key"], language, **note["params"]) for note in parsed.notes]
     if parsed.columns:
         notes.insert(
             1,
