@@ -359,6 +359,10 @@ def test_a_last_line_cut_off_or_a_closing_remark_is_left_out_and_said(header, la
     assert left_out == [
         {"key": "allan.note_last_line_left_out", "params": {"line": line, "text": said}}
     ]
+    # power lost mid-line: the rest of the file's space left as NUL bytes
+    lost = read_static_record(text_lines((header + readings + last).encode() + bytes(5000)))
+    np.testing.assert_allclose(lost.values, RATES)
+    assert [n for n in lost.notes if n["key"] == "allan.note_last_line_left_out"] == left_out
     for refused, bad in ((readings + "0.4,abc\n", 5), (readings[:9] + "\n" + readings[9:], 2)):
         with pytest.raises(UserError) as error:
             read(header + refused)

@@ -91,10 +91,15 @@ def test_binary_is_not_text():
     assert error.value.key == "csv.encoding"
 
 
-@pytest.mark.parametrize("marks", ["\x1a", "\x1a" * 100], ids=["dos", "cp/m-padding"])
+@pytest.mark.parametrize(
+    "marks",
+    ["\x1a", "\x1a" * 100, "\x00" * 3000, "\x1a\x00\x00"],
+    ids=["dos", "cp/m-padding", "power-lost", "both"],
+)
 def test_a_dos_programs_end_of_file_mark_is_not_part_of_the_file(marks):
     """An old logger's or terminal's file ends in Ctrl-Z (0x1A), several where the last
-    record was padded: read as the same file without them, by every reader -- the table,
+    record was padded; a logger that lost power leaves the space it had set aside for its
+    file as NUL bytes: read as the same file without them, by every reader -- the table,
     one position's record, the API's CSV body, a record read in blocks (the marks, and a
     CRLF, across a block's end) -- and a Ctrl-Z inside a file is still not text."""
     from app.core.position_records import parse_one_position_record, parse_position_csv
@@ -106,8 +111,8 @@ def test_a_dos_programs_end_of_file_mark_is_not_part_of_the_file(marks):
         readings = parse_readings_csv(data)
         for got, want in zip(readings.positions, expected(), strict=True):
             np.testing.assert_allclose(got, want)
-        assert decode_text(data.encode("gb18030")) == data.rstrip("\x1a")
-        assert decode_text(data.encode("utf-16")) == data.rstrip("\x1a")
+        assert decode_text(data.encode("gb18030")) == data.rstrip("\x1a\x00")
+        assert decode_text(data.encode("utf-16")) == data.rstrip("\x1a\x00")
     record = "time_s,value\r\n0.0,10.74\r\n0.1,10.65\r\n0.2,10.70\r\n" + marks
     one = parse_one_position_record(record, "deg/h").readings
     np.testing.assert_allclose(one.positions[0], [10.74, 10.65, 10.70])

@@ -15,9 +15,11 @@ from collections.abc import Iterable
 from app.core.exceptions import UserError
 
 ENCODINGS = ("utf-8-sig", "gb18030")
-# Ctrl-Z (SUB, 0x1A): DOS's end-of-file mark, which DOS-era loggers and terminal captures
-# still write after the last line (CP/M padded a file's last 128-byte record with them)
-END_OF_FILE_MARK = "\x1a"
+# What may follow a file's last line and is not text: Ctrl-Z (SUB, 0x1A), DOS's end-of-file
+# mark, which DOS-era loggers and terminal captures still write (CP/M padded a file's last
+# 128-byte record with them); NUL bytes, the unwritten rest of the space a logger had set
+# aside for its file when it lost power (an SD card's preallocated clusters)
+END_OF_FILE_MARK = "\x1a\x00"
 
 
 def file_text(text: str) -> str:
@@ -31,8 +33,8 @@ def file_text(text: str) -> str:
     Returns
     -------
     str
-        ``text`` without a leading U+FEFF and trailing Ctrl-Z characters (0x1A); one in
-        the middle of the text is left to the reader to refuse.
+        ``text`` without a leading U+FEFF and trailing Ctrl-Z (0x1A) and NUL characters;
+        one in the middle of the text is left to the reader to refuse.
     """
     return text.lstrip("\ufeff").rstrip(END_OF_FILE_MARK)
 
@@ -43,8 +45,8 @@ def decode_text(data: bytes) -> str:
     UTF-16 is recognised by its byte-order mark; otherwise UTF-8 is tried first (strict),
     then GB18030, which the simplified-Chinese Excel writes ("另存为 CSV").  GB18030 decodes
     almost any byte string, so a control character other than tab and line ends in the
-    result marks the file as binary; Ctrl-Z marks after the last line are DOS's end of
-    file, not part of the text.
+    result marks the file as binary; Ctrl-Z marks or NUL bytes after the last line (DOS's
+    end of file, a logger's unwritten space) are not part of the text.
 
     Parameters
     ----------
@@ -132,8 +134,8 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
     """Lines of a text file's bytes, decoded incrementally: UTF-8 (with or without a BOM),
     UTF-16 by its byte-order mark (a spreadsheet's "Unicode text"), or GB18030 where the
     first block is not UTF-8 (a Chinese-locale Excel's CSV) -- as
-    :func:`decode_text` reads a whole file; CRLF or CR line ends; Ctrl-Z marks after the
-    last line dropped.
+    :func:`decode_text` reads a whole file; CRLF or CR line ends; Ctrl-Z marks and NUL
+    bytes after the last line dropped.
 
     Parameters
     ----------
@@ -156,16 +158,16 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
     first = buffer.read(chunk)
     decoder = codecs.getincrementaldecoder(_encoding_of(first))()
     pending, piece = "", first
-    held = ""  # end-of-file marks at the end of what was read: dropped if nothing follows
+    marked = False  # end-of-file marks ended what was read: text after them is not text
     while piece:
         try:
-            text = held + decoder.decode(piece)
+            text = decoder.decode(piece)
         except UnicodeDecodeError:
             raise UserError("csv.encoding") from None
         body = text.rstrip(END_OF_FILE_MARK)
-        held = text[len(body) :]
-        if _CONTROL.search(body):  # no text file holds these: bytes of another kind
+        if _CONTROL.search(body) or (marked and body):  # bytes of another kind
             raise UserError("csv.encoding")
+        marked = marked or len(body) < len(text)
         pending += body
         # a CR last may be half of a CRLF cut at the block's end: kept for the next block
         cut = len(pending) - pending.endswith("\r")
