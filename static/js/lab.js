@@ -639,7 +639,9 @@
         preview.innerHTML = `<p class="error-text">${t("js.workbook_not_csv")}</p>`;
         return;
       }
-      text = decodeFile(buffer);
+      // Ctrl-Z or NUL bytes after the last line (DOS's end of file, a logger's unwritten
+      // space) are not text: not sent (the server passes them over too)
+      text = decodeFile(buffer).replace(/[\x1a\x00]+$/, "");
       try {
         const result = await postJson("/csv/preview", body());
         if (result.layout === "record") recordPosition = result.positions[0].position;
