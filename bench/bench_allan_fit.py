@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from app.core.allan import allan_deviation
+from app.core.gyro_stream import GyroStream
 from app.core.presets import PRESETS
-from app.core.simulate import GyroStream
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the tests' generator
 from tests.noise_sources import static_record  # noqa: E402

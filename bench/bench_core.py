@@ -13,8 +13,9 @@ import time
 import numpy as np
 
 from app.core.allan import allan_deviation
+from app.core.gyro_stream import GyroStream
 from app.core.presets import PRESETS
-from app.core.simulate import GyroStream, Setup, simulate_static
+from app.core.simulate import Setup, simulate_static
 from app.core.sinusoid import heading_angles
 from app.core.solve import solve_heading
 

@@ -10,9 +10,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from app.core.gyro_stream import GyroStream
 from app.core.noise_model import GyroNoise, Window
 from app.core.presets import PRESETS
-from app.core.simulate import GyroStream
 from app.core.solve import solve_heading
 from app.db import read_session, write_session
 from app.models import Assignment, Role

@@ -9,16 +9,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.core.gyro_stream import GyroStream, turn_on_bias_deg_h
 from app.core.presets import PRESETS
 from app.core.simulate import (
-    GyroStream,
     Setup,
     axis_vectors,
     indexing_errors,
     simulate_run,
     simulate_static,
     true_rate,
-    turn_on_bias_deg_h,
 )
 from app.core.sinusoid import heading_angles
 

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from app.core.exceptions import UserError
+from app.core.gyro_stream import GyroStream
 from app.core.noise_model import GyroNoise, Window
 from app.core.presets import PRESETS
-from app.core.simulate import GyroStream
 from app.core.solve import solve_heading, solve_latitude
 from app.lab.sim import (
     MAX_PAUSE_S,

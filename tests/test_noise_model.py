@@ -10,9 +10,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+from app.core.gyro_stream import GyroStream
 from app.core.noise_model import GyroNoise, Window, back_to_back
 from app.core.presets import PRESETS
-from app.core.simulate import GyroStream
 
 pytestmark = pytest.mark.slow
 

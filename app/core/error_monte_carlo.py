@@ -12,8 +12,9 @@ import numpy as np
 
 from app.core.error_analysis import METHODS, ErrorSources
 from app.core.exceptions import UserError
+from app.core.gyro_stream import GyroStream
 from app.core.presets import GyroPreset
-from app.core.simulate import GyroStream, Setup, simulate_run
+from app.core.simulate import Setup, simulate_run
 from app.core.sinusoid import heading_angles, wrap180, wrap360
 from app.core.solve import solve_heading
 from app.core.two_axis_seeker import (

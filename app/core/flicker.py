@@ -7,7 +7,7 @@ noise is built from M first-order Gauss–Markov processes with correlation time
 evenly in log over the band [T_lo, T_hi] (``PER_DECADE`` per decade) and equal variances
 v: each contributes a Lorentzian 2vT_j/(1 + (2πfT_j)²) to the spectrum, and equal v over a
 log-uniform grid sums to S(f) ∝ 1/f between 1/(2πT_hi) and 1/(2πT_lo) (Keshner 1982;
-Van der Ziel 1950).  The same sum serves the simulator (:class:`app.core.simulate.GyroStream`,
+Van der Ziel 1950).  The same sum serves the simulator (:class:`app.core.gyro_stream.GyroStream`,
 one exact first-order recursion per component) and the σ model
 (:mod:`app.core.noise_model`, one closed-form exponential covariance per component), so the
 uncertainty the lab reports and the noise it generates are the same model.

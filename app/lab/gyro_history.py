@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from app.core.gyro_stream import GyroStream
 from app.core.presets import GyroPreset
-from app.core.simulate import GyroStream
 from app.lab.lru import LruCache
 
 HISTORY_BLOCK = 200_000  # samples replayed at a time (bounded memory)

@@ -17,13 +17,9 @@ from functools import lru_cache
 
 import numpy as np
 
+from app.core.gyro_stream import turn_on_bias_deg_h
 from app.core.presets import PRESETS
-from app.core.simulate import (
-    axis_vectors,
-    read_dial,
-    true_rate,
-    turn_on_bias_deg_h,
-)
+from app.core.simulate import axis_vectors, read_dial, true_rate
 from app.lab.gyro_history import stream_after
 from app.models import LabSession, utcnow
 
