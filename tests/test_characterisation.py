@@ -145,6 +145,22 @@ def test_bad_records_are_explained_and_nothing_is_stored(world, content, rate, m
     assert stored(world) is None
 
 
+def test_a_bench_record_cut_off_at_its_end_is_analysed_and_the_page_says_so(world):
+    """The logger was unplugged mid-line: the record is analysed without its last line,
+    and the teacher's page names the line that was left out."""
+    teacher = browser(world, "teacher1")
+    text, _ = static_record(hours=0.5)
+    rates = text.splitlines()[1:]
+    timed = "time_s,rate_deg_h\n" + "".join(f"{k / 10:.1f},{v}\n" for k, v in enumerate(rates))
+    page = shown(teacher, upload(teacher, world, timed + f"{len(rates) / 10:.1f},"))
+    assert "Characterisation stored" in page
+    assert stored(world)["samples"] == len(rates)
+    quoted = f"{len(rates) / 10:.1f},"
+    assert (
+        f"Line {len(rates) + 2} (&#39;{quoted}&#39;), the file&#39;s last, is not a reading" in page
+    )
+
+
 def test_only_the_courses_teacher_may_characterise(world):
     make_user("teacher2", Role.teacher)
     other = browser(world, "teacher2")
