@@ -9,9 +9,9 @@ a row of units under the header passed over; a time column in seconds, in millis
 carried past midnight -- read as seconds from the first reading; without a header, a
 rising first column read as the times where the rates' column is chosen, and a rate beside
 a status flag read without times; a spreadsheet's empty last column dropped; a last line
-short of a reading (cut off when the logger stopped, or a closing remark) left out, with
-a note; ``#``, ``%`` and ``//`` comment lines, the last one before the readings read as
-the header where it names their columns -- EuRoC, Kalibr and ROS write
+with fewer cells than the readings (cut off when the logger stopped, or a closing remark)
+left out, with a note; ``#``, ``%`` and ``//`` comment lines, the last one before the
+readings read as the header where it names their columns -- EuRoC, Kalibr and ROS write
 it so; which column is which: :mod:`app.core.record_columns`; what a name says of units:
 :mod:`app.core.column_names`), parsed in blocks of lines, so a 10⁷-sample record never
 exists as one string.
@@ -219,10 +219,11 @@ def read_static_record(
     units_next = False  # the line after a header may name the units
     comment: str | None = None  # the last comment line before the readings
     comment_line = 0
+    short: tuple[int, str] | None = None  # a line with fewer cells than the readings
     lines = iter(lines)
     first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
     split = _joined_decimal_comma if _one_column_with_decimal_commas(first) else None
-    for raw, last in _marking_the_last(itertools.chain(first, lines)):
+    for raw in itertools.chain(first, lines):
         line_number += 1
         text = raw.strip().lstrip("\ufeff")
         if not text:
@@ -256,15 +257,12 @@ def read_static_record(
                 rows = _look_ahead_rows(first, split, width)
                 layout, time_guessed = bare_record_layout(rows, width, column)
             clock = TimeColumn(layout.time_scale)
-        if last and (count or block) and _cut_off(cells, width):
-            notes.append(
-                {
-                    "key": "allan.note_last_line_left_out",
-                    "params": {"line": line_number, "text": _shortened(text)},
-                }
-            )
-            continue
+        if short is not None:  # a reading after a short line: that line was a bad one
+            raise UserError("allan.bad_line", line=short[0])
         if len(cells) != width:
+            if len(cells) < width and (count or block):  # the last line, if none follows
+                short = (line_number, text)
+                continue
             raise UserError(
                 "allan.bad_line",
                 line=line_number,
@@ -274,6 +272,13 @@ def read_static_record(
         block.append(cells)
         if len(block) >= BLOCK_LINES:
             flush()
+    if short is not None:  # cut off when the logger stopped, or a closing remark
+        notes.append(
+            {
+                "key": "allan.note_last_line_left_out",
+                "params": {"line": short[0], "text": _shortened(short[1])},
+            }
+        )
     if layout is not None:
         flush()
     if not values:
@@ -385,32 +390,6 @@ def _one_column_with_decimal_commas(first_lines: list[str]) -> bool:
 def _joined_decimal_comma(text: str) -> list[str]:
     """One cell: the line's decimal comma read as a point ("0,0123" → "0.0123")."""
     return [text.replace(",", ".")]
-
-
-def _marking_the_last(lines: Iterable[str]) -> Iterable[tuple[str, bool]]:
-    """Each line with whether it is the last that is not blank (blank lines after it are
-    held until it is known)."""
-    held: str | None = None
-    blanks: list[str] = []
-    for line in lines:
-        if not line.strip():
-            blanks.append(line)
-            continue
-        if held is not None:
-            yield held, False
-        yield from ((blank, False) for blank in blanks)
-        held, blanks = line, []
-    if held is not None:
-        yield held, True
-    yield from ((blank, False) for blank in blanks)
-
-
-def _cut_off(cells: list[str], width: int | None) -> bool:
-    """Whether the file's last line is short of a reading: fewer cells than the readings
-    before, or an empty one -- cut off when the logger stopped writing, or a closing
-    remark beside readings of several columns ("End of log").  A whole line with a bad
-    number stays a bad line, said as such (in a record of one column, any line is whole)."""
-    return width is not None and (len(cells) < width or not all(cell.strip() for cell in cells))
 
 
 def _shortened(text: str, length: int = 40) -> str:
