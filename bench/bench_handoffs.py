@@ -189,6 +189,22 @@ def call_handoff_chance(curve: list[tuple[float, float]], durations: np.ndarray)
     return float(np.mean(np.interp(durations, lengths, chances)))
 
 
+def call_handoff_chances(durations: np.ndarray, report=None) -> tuple[float, float]:
+    """The chance that one of the app's SQLite calls (``durations``, s) hands the
+    interpreter on, with a core free and with none (``queue_sim.CALL_HANDOFF``), each from
+    a curve measured now; ``report``: called with each curve's line."""
+    chances = []
+    cores = os.cpu_count() or 1  # the calling and the waiting thread want two of them
+    for spinning, label in ((max(cores - 2, 0), "a core free"), (cores - 1, "no core free")):
+        curve = call_handoff_curve(spinning)
+        chances.append(call_handoff_chance(curve, durations))
+        if report:
+            points = ", ".join(f"{length * 1e6:.0f} µs {chance:.0%}" for length, chance in curve)
+            report(f"a call handing the interpreter on, {label}: {points}; the app's calls:"
+                   f" {chances[-1]:.1%}")  # fmt: skip
+    return chances[0], chances[1]
+
+
 def wake_ups(busy_processes: int, count: int = 3000) -> np.ndarray:
     """Seconds of each wake-up (half a round trip of two threads waking each other) while
     ``busy_processes`` processes spin; between round trips the waking thread runs Python
@@ -304,14 +320,7 @@ def main() -> int:
         durations = np.loadtxt(args.calls) / 1e6
         print(f"{len(durations)} SQLite calls of the app: p50 {np.median(durations) * 1e6:.1f}"
               f" µs, p90 {np.percentile(durations, 90) * 1e6:.1f} µs")  # fmt: skip
-        chances = []
-        cores = os.cpu_count() or 1  # the calling and the waiting thread want two of them
-        for spinning, label in ((max(cores - 2, 0), "a core free"), (cores - 1, "no core free")):
-            curve = call_handoff_curve(spinning)
-            points = ", ".join(f"{length * 1e6:.0f} µs {chance:.0%}" for length, chance in curve)
-            chances.append(call_handoff_chance(curve, durations))
-            print(f"a call handing the interpreter on, {label}: {points}; the app's calls:"
-                  f" {chances[-1]:.1%}")  # fmt: skip
+        chances = call_handoff_chances(durations, report=print)
         print(f"  queue_sim.CALL_HANDOFF ≈ ({chances[0]:.2f}, {chances[1]:.2f})")
         return 0
     _, slope = hand_off_constants(report=print)

@@ -42,7 +42,7 @@ from websockets.asyncio.client import connect
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bench_handoffs import hand_off_constants  # noqa: E402  (bench/)
+from bench_handoffs import call_handoff_chances, hand_off_constants  # noqa: E402  (bench/)
 from capacity import cpu_seconds, postgres_pids, server_pids  # noqa: E402
 from run_queue import RunQueueWatch  # noqa: E402
 
@@ -57,6 +57,10 @@ CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
 # set the client's time of a request beside the server's
 CLIENT_TIMES = os.environ.get("GYROLAB_BENCH_CLIENT_TIMES")
 HANDOFFS_LABEL = "hand-offs just before / after the class (bench_handoffs.py)"
+CALL_HANDOFFS_LABEL = "SQLite calls handing the interpreter on (bench_handoffs.py --calls)"
+# GYROLAB_BENCH_SQLITE_CALLS=FILE (the probe's, in the server): each SQLite call's CPU, µs;
+# with --handoffs, the class's own calls give the chance that one hands the interpreter on
+SQLITE_CALLS = os.environ.get("GYROLAB_BENCH_SQLITE_CALLS")
 MACHINE_LABEL = "the whole machine during the class (/proc/stat, /proc/pressure/cpu)"
 RUN_QUEUE_LABEL = "waited for a core / ran during the class (run_queue.py)"
 LOOPS = "of it the event loops"  # the server's workers' main threads
@@ -119,6 +123,9 @@ class Tally:
     # with --handoffs: (the interpreter's hand-off, a busy wake-up's extra per core asked
     # beyond each core), s, measured just before and just after the class
     handoffs: list[tuple[float, float]] = field(default_factory=list)
+    # with --handoffs and the probe's SQLITE_CALLS: (the class's calls, their median CPU s,
+    # the chance one hands the interpreter on with a core free, with none)
+    call_handoffs: tuple[int, float, float, float] | None = None
     # with --run-queue: per group of processes, its threads' (ran, waited for a core) s, and
     # how many times they were put on a core
     run_queue: dict[str, tuple[float, float, int]] = field(default_factory=dict)
@@ -433,6 +440,12 @@ def report(name: str, tally: Tally, wall: float, lost: int, checked: int, worker
             f"- {HANDOFFS_LABEL}: the interpreter's {handoffs} µs, a busy wake-up {wakes} µs"
             " a core asked beyond each core"
         )
+    if tally.call_handoffs:
+        count, median_s, free, busy = tally.call_handoffs
+        lines.append(
+            f"- {CALL_HANDOFFS_LABEL}, the class's {count} calls (p50 {median_s * 1e6:.1f} µs),"
+            f" measured after it: a core free {free:.1%}, none free {busy:.1%}"
+        )
     if tally.run_queue:
         lines.append(f"- {RUN_QUEUE_LABEL}: " + ", ".join(
             f"{group} {waited:.2f} / {ran:.2f} s ({waited / max(ran + waited, 1e-9):.0%},"
@@ -511,6 +524,7 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
                 watch = RunQueueWatch(
                     groups if args.run_queue else {}, main_threads={"server": LOOPS}
                 )
+                calls_from = class_calls_start()
                 before = cpu()
                 with watch:
                     tally, wall = asyncio.run(run_class(server.url, course, assignment, args))
@@ -522,6 +536,8 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
                 if args.run_queue:
                     tally.machine = watch.machine()
                 tally.handoffs = waits + ([hand_off_constants()] if args.handoffs else [])
+                if args.handoffs and calls_from is not None and backend == "sqlite":
+                    tally.call_handoffs = class_call_handoffs(calls_from)
                 tally.cpu = tuple(b - a for a, b in zip(before, after, strict=True))
                 if CLIENT_TIMES:  # after the class's CPU is read: not counted in it
                     Path(CLIENT_TIMES).write_text("".join(tally.sent))
@@ -539,6 +555,28 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
     name = "SQLite" if backend == "sqlite" else "PostgreSQL"
     text = report(name, tally, wall, lost, checked, workers)
     return text, not tally.errors and lost == 0
+
+
+def class_calls_start() -> int | None:
+    """Where the class's SQLite calls begin in the probe's GYROLAB_BENCH_SQLITE_CALLS file
+    (bytes; the seeding's and the start-up's calls come before), None without it."""
+    if not SQLITE_CALLS:
+        return None
+    return Path(SQLITE_CALLS).stat().st_size if Path(SQLITE_CALLS).exists() else 0
+
+
+def class_call_handoffs(start: int) -> tuple[int, float, float, float] | None:
+    """The class's SQLite calls (the probe's file from ``start``): how many, their median
+    CPU (s), and the chance one hands the interpreter on with a core free and with none,
+    from curves measured now (bench_handoffs.py --calls: the chance drifts with the host's
+    hour as the calls' length and a wake-up's do)."""
+    with open(SQLITE_CALLS, "rb") as calls:
+        calls.seek(start)
+        durations = np.array(calls.read().split(), dtype=float) / 1e6
+    if not len(durations):
+        return None
+    free, busy = call_handoff_chances(durations)
+    return len(durations), float(np.median(durations)), free, busy
 
 
 def main() -> int:
@@ -561,7 +599,9 @@ def main() -> int:
         "--handoffs",
         action="store_true",
         help="measure the interpreter's hand-off and a busy wake-up (bench_handoffs.py, "
-        "≈ 15 s each time) just before and just after the class, for queue_model.py",
+        "≈ 15 s each time) just before and just after the class, for queue_model.py; with "
+        "the probe's GYROLAB_BENCH_SQLITE_CALLS, after the class also the chance that one "
+        "of its SQLite calls hands the interpreter on (≈ 1 min)",
     )
     parser.add_argument(
         "--run-queue",

@@ -282,6 +282,11 @@ CPU_LINE = re.compile(
 HANDOFFS_LINE = re.compile(
     r"the interpreter's ([\d /]+) µs, a busy wake-up ([\d /-]+) µs a core asked beyond"
 )
+CALL_HANDOFFS_LINE = re.compile(r"measured after it: a core free ([\d.]+)%, none free ([\d.]+)%")
+ELSEWHERE_LINE = re.compile(r"anything else (-?[\d.]+) s")
+# CPU beyond this, spent on the machine during a class by neither the class's processes nor
+# the kernel's usual few tenths: the run shared the cores (another job beside it)
+ELSEWHERE_S = 2.0
 RUN_QUEUE_GROUP = re.compile(
     r"(server|PostgreSQL|load generator|of it the event loops) ([\d.]+) / ([\d.]+) s"
     r" \(\d+%(?:, (\d+) slices)?\)"
@@ -296,9 +301,12 @@ def measured_p95(path: Path) -> dict[str, dict[str, float]]:
     """Per backend heading ("SQLite", "PostgreSQL") → route → p95 ms, from load_test's output
     (and, under the keys "cpu server", "cpu db", "cpu client", the CPU the run used, s; with
     ``load_test.py --handoffs``, under "handoff us" and "wake busy us" the mean of what was
-    measured just before and after the class; with ``--run-queue``, under "waited server",
+    measured just before and after the class, and with the probe's SQLite calls under
+    "call free" and "call busy" the chance that one hands the interpreter on; with
+    ``--run-queue``, under "waited server",
     "ran server" and so for "db" and "client", each group's time waiting for a core and on
-    one during the class, s)."""
+    one during the class, s, and under "cpu elsewhere" the machine's CPU that went to
+    neither the class's processes nor the kernel)."""
     tables: dict[str, dict[str, float]] = {}
     backend = None
     for line in path.read_text().splitlines():
@@ -316,6 +324,13 @@ def measured_p95(path: Path) -> dict[str, dict[str, float]]:
                 tables[backend][f"ran {RUN_QUEUE_KEYS[group]}"] = float(ran)
                 if slices:
                     tables[backend][f"slices {RUN_QUEUE_KEYS[group]}"] = float(slices)
+        elsewhere = ELSEWHERE_LINE.search(line)
+        if backend and load_test.MACHINE_LABEL in line and elsewhere:
+            tables[backend]["cpu elsewhere"] = float(elsewhere.group(1))
+        chances = CALL_HANDOFFS_LINE.search(line)
+        if backend and chances:
+            for key, value in zip(("call free", "call busy"), chances.groups(), strict=True):
+                tables[backend][key] = float(value) / 100
         waits = HANDOFFS_LINE.search(line)
         if backend and waits:
             for key, values in zip(("handoff us", "wake busy us"), waits.groups(), strict=True):
@@ -396,6 +411,16 @@ def main() -> int:
         "2026-11-27), not only with the chance bench_handoffs.py --calls measured",
     )
     parser.add_argument(
+        "--call-handoff",
+        type=float,
+        nargs=2,
+        metavar=("FREE", "BUSY"),
+        help="the chance (0-1) that an SQLite call hands the interpreter to a waiting thread, "
+        "with a core free and with none: e.g. what a --class-run measured after its class "
+        "(load_test.py --handoffs with the probe's GYROLAB_BENCH_SQLITE_CALLS; printed beside "
+        f"its prediction); default {CALL_HANDOFF[0]:.2f} {CALL_HANDOFF[1]:.2f}",
+    )
+    parser.add_argument(
         "--woken-at-once",
         action="store_true",
         help="a thread woken to a free interpreter runs at once (the model before "
@@ -463,7 +488,10 @@ def main() -> int:
     name = "SQLite" if args.backend == "sqlite" else "PostgreSQL"
 
     def waits_of(table: dict | None = None) -> dict[str, float]:
-        return run_waits(table or {}, args.handoff_us, args.wake_busy_us)
+        return run_waits(
+            table or {}, args.handoff_us, args.wake_busy_us, args.call_handoff,
+            args.every_call_hands,
+        )  # fmt: skip
 
     def predict(
         costs: dict, students: int, shares: list[float] | None = None, waits: dict | None = None
@@ -485,7 +513,6 @@ def main() -> int:
                     work_places=args.work_places,
                     seed=2026 + seed,
                     worker_shares=shares,
-                    call_handoff=None if args.every_call_hands else CALL_HANDOFF,
                     wake_free=not args.woken_at_once,
                     costs_in_order=not args.costs_at_random,
                     **(waits or waits_of()),
@@ -507,12 +534,22 @@ def main() -> int:
                 print("each worker's share of the run's requests (a new connection's chance):"
                       f" {' / '.join(f'{share:.0%}' for share in shares)}")  # fmt: skip
             table = measured_p95(run)[name]
+            if table.get("cpu elsewhere", 0.0) > ELSEWHERE_S:
+                print(f"\nNOTE: {run} shared the machine -- {table['cpu elsewhere']:.1f} s of"
+                      " CPU went to neither the class nor the kernel during it; its p95s are"
+                      " not the class's alone")  # fmt: skip
             waits = waits_of(table)
             result = predict(costs, students, shares, waits)
             print(f"\n{students} students, {name}, {workers} worker(s), the run in {run}:"
                   f" predicted wall {result['wall']:.1f} s; hand-off"
                   f" {waits['handoff_s'] * 1e6:.0f} µs, busy wake-up"
-                  f" {waits['wake_busy_s'] * 1e6:.0f} µs")  # fmt: skip
+                  f" {waits['wake_busy_s'] * 1e6:.0f} µs, an SQLite call hands on"
+                  f" {describe_call_handoff(waits['call_handoff'])}")  # fmt: skip
+            if "call free" in table:
+                free, busy = table["call free"], table["call busy"]
+                print(f"  (the run measured an SQLite call handing on"
+                      f" {describe_call_handoff((free, busy))} after its class:"
+                      f" --call-handoff {free:.3f} {busy:.3f})")  # fmt: skip
             compare(result, [table])
             if times:
                 inside_the_server(result, server_times(times))
@@ -545,16 +582,35 @@ def main() -> int:
 
 
 def run_waits(
-    table: dict[str, float], handoff_us: float | None, wake_busy_us: float | None
-) -> dict[str, float]:
+    table: dict[str, float],
+    handoff_us: float | None,
+    wake_busy_us: float | None,
+    call_handoff: tuple[float, float] | None = None,
+    every_call_hands: bool = False,
+) -> dict:
     """The hand-off and the busy wake-up to simulate a run with, s: as given (0 turns one
     off), else as measured beside the run (``measured_p95``'s "handoff us", "wake busy
-    us"), else the constants of ``queue_sim``."""
+    us"), else the constants of ``queue_sim``; and the chance that an SQLite call hands the
+    interpreter on (with a core free, with none): as given (``every_call_hands``: every
+    call), else ``queue_sim.CALL_HANDOFF`` -- not what the run measured after its class
+    ("call free", "call busy"), which on six runs of 2026-12-03 predicted no better
+    (bench/README.md, twenty-fifth part)."""
     if handoff_us is None:
         handoff_us = table.get("handoff us", HANDOFF_S * 1e6)
     if wake_busy_us is None:
         wake_busy_us = table.get("wake busy us", WAKE_BUSY_S * 1e6)
-    return {"handoff_s": handoff_us / 1e6, "wake_busy_s": wake_busy_us / 1e6}
+    return {
+        "handoff_s": handoff_us / 1e6,
+        "wake_busy_s": wake_busy_us / 1e6,
+        "call_handoff": None if every_call_hands else call_handoff or CALL_HANDOFF,
+    }
+
+
+def describe_call_handoff(chance: tuple[float, float] | None) -> str:
+    """``run_waits``'s call hand-off in words."""
+    if chance is None:
+        return "always"
+    return f"{chance[0]:.0%} / {chance[1]:.0%} (a core free / none)"
 
 
 def combine(results: list[dict]) -> dict:

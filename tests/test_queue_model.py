@@ -582,19 +582,42 @@ def test_the_hand_offs_measured_beside_a_run_are_read_from_its_report(tmp_path):
     assert table["wake busy us"] == pytest.approx(195.0)
     assert table["GET /lab"] == pytest.approx(20.0)
     # the run is simulated with them unless others are given; 0 turns one off
-    assert queue_model.run_waits(table, None, None) == pytest.approx(
-        {"handoff_s": 45e-6, "wake_busy_s": 195e-6}
-    )
-    assert queue_model.run_waits(table, 0.0, 100.0) == pytest.approx(
-        {"handoff_s": 0.0, "wake_busy_s": 100e-6}
-    )
+    waits = queue_model.run_waits(table, None, None)
+    assert (waits["handoff_s"], waits["wake_busy_s"]) == pytest.approx((45e-6, 195e-6))
+    waits = queue_model.run_waits(table, 0.0, 100.0)
+    assert (waits["handoff_s"], waits["wake_busy_s"]) == pytest.approx((0.0, 100e-6))
+    assert waits["call_handoff"] == queue_sim.CALL_HANDOFF  # not measured in this run
     tally.handoffs = []
     path.write_text(load_test.report("SQLite", tally, 10.0, 0, 16, 1))
     table = queue_model.measured_p95(path)["SQLite"]
     assert "handoff us" not in table
-    assert queue_model.run_waits(table, None, None) == pytest.approx(
-        {"handoff_s": queue_sim.HANDOFF_S, "wake_busy_s": queue_sim.WAKE_BUSY_S}
+    waits = queue_model.run_waits(table, None, None)
+    assert (waits["handoff_s"], waits["wake_busy_s"]) == pytest.approx(
+        (queue_sim.HANDOFF_S, queue_sim.WAKE_BUSY_S)
     )
+
+
+def test_an_sqlite_calls_chance_to_hand_on_measured_after_a_run_is_read_from_its_report(
+    tmp_path,
+):
+    """load_test.py --handoffs with the probe's SQLite calls prints the chance that one of
+    the class's calls hands the interpreter on (it drifts with the host's hour: 8 % / 10 %
+    on 2026-11-27, 20-28 % / 13-14 % on 2026-12-03); the model reads it, and simulates
+    with it when given it (not by default: it predicted no better)."""
+    import load_test
+
+    tally = load_test.Tally()
+    tally.latencies["GET /lab"] = [0.010, 0.020]
+    tally.call_handoffs = (27706, 37.6e-6, 0.207, 0.141)
+    path = tmp_path / "run.txt"
+    path.write_text(load_test.report("SQLite", tally, 10.0, 0, 16, 1))
+    assert "the class's 27706 calls (p50 37.6 µs)" in path.read_text()
+    table = queue_model.measured_p95(path)["SQLite"]
+    assert (table["call free"], table["call busy"]) == pytest.approx((0.207, 0.141))
+    assert queue_model.run_waits(table, None, None)["call_handoff"] == queue_sim.CALL_HANDOFF
+    given = queue_model.run_waits(table, None, None, (0.5, 0.25))
+    assert given["call_handoff"] == (0.5, 0.25)
+    assert queue_model.run_waits(table, None, None, None, True)["call_handoff"] is None
 
 
 def test_the_run_queue_watch_counts_a_thread_born_during_it_from_zero():
@@ -654,6 +677,12 @@ def test_the_run_queue_of_a_run_is_read_from_its_report(tmp_path):
     assert (table["ran db"], table["waited db"]) == (4.0, 0.5)
     assert (table["slices server"], table["slices db"]) == (120000, 30000)
     assert (table["ran loop"], table["waited loop"], table["slices loop"]) == (3.0, 0.25, 40000)
+    # the whole machine: what went to neither the class nor the kernel (another job beside
+    # the run, which the model then says)
+    tally.machine = (35.25, 0.0, 20.0, 3.0)  # busy, steal, idle, pressure
+    path.write_text(load_test.report("PostgreSQL", tally, 10.0, 0, 16, 2) + "\n")
+    table = queue_model.measured_p95(path)["PostgreSQL"]
+    assert table["cpu elsewhere"] == pytest.approx(35.25 - 14.25 - 9.0 - 4.0)
 
 
 def test_the_model_counts_a_wait_for_a_core_only_when_more_is_asked_than_there_are():
