@@ -10,9 +10,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from queue_sim import STREAM
+from queue_sim import STREAM, STREAM_SPLIT
 
 ID_IN_PATH = re.compile(r"/\d+")
+# the stream's functions in the thread pool (app.lab.stream), by the part of a position
+# they belong to: the connection's and each position's checks and mark (a write), the
+# gyro's take made ready (no write), each position's save (a write) -- the rest, too
+MARKING = {"_owner", "_mark_started"}
+MAKING_READY = {"SimulatedTake"}
 
 
 def route_of(method: str, path: str) -> str:
@@ -32,6 +37,9 @@ class ClassCpu:
     counts: dict[str, int]
     total_s: float
     each: dict[str, list[tuple[float, float]]] = field(default_factory=dict)
+    # the streams' thread CPU by part -- marking, making the take ready, saving -- as
+    # shares of it, where the probe's lines name the functions
+    stream_split: tuple[float, float, float] | None = None
 
 
 def attributed_costs(text: str) -> ClassCpu:
@@ -40,11 +48,17 @@ def attributed_costs(text: str) -> ClassCpu:
     stream, per frame of samples sent (the WebSockets' whole CPU over their frames)."""
     spent: dict[str, list[tuple[float, float]]] = defaultdict(list)
     stream = np.zeros(3)
+    parts = np.zeros(3)  # the streams' thread CPU marking, making ready, saving (ms)
     for line in text.splitlines():
-        kind, method, path, loop_ms, threads_ms, frames = line.split()
+        kind, method, path, loop_ms, threads_ms, frames, *by_function = line.split()
         cpu = (float(loop_ms) / 1000, float(threads_ms) / 1000)
         if kind == "websocket":
             stream += (*cpu, int(frames))
+            for pair in ",".join(by_function).split(","):
+                if "=" in pair:
+                    name, ms = pair.split("=")
+                    part = 0 if name in MARKING else 1 if name in MAKING_READY else 2
+                    parts[part] += float(ms)
         else:
             spent[route_of(method, path)].append(cpu)
     means = {route: tuple(np.mean(values, axis=0)) for route, values in spent.items()}
@@ -53,7 +67,8 @@ def attributed_costs(text: str) -> ClassCpu:
     if stream[2]:
         means[STREAM] = (stream[0] / stream[2], stream[1] / stream[2])
         counts[STREAM] = int(stream[2])
-    return ClassCpu(means, counts, float(total), dict(spent))
+    split = tuple(float(part) for part in parts / parts.sum()) if parts.sum() else None
+    return ClassCpu(means, counts, float(total), dict(spent), split)
 
 
 def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, each=False):
@@ -88,6 +103,8 @@ def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, e
         mine = requests or [seen.means[route]]
         made = [_with_own_cpu(rest, unseen_now, *cpu) for cpu in mine]
         adjusted[route] = made if requests else made[0]
+    if seen.stream_split:
+        adjusted[STREAM_SPLIT] = seen.stream_split
     return adjusted, scale, client_scale
 
 

@@ -22,13 +22,18 @@ FRAME_SECONDS = 0.2
 TEACHER_PERIOD_S = 2.0
 SAVED = "WS save (last frame → saved)"  # as load_test.py names it
 STREAM = "stream frame"
-# A position streamed: its start (the checks and the mark, in a write transaction) and its
-# save (the readings stored), each with half of what a position's frames cost in threads
-# (the probe sees a stream's whole CPU, not its parts); the frames between cost only the
-# event loop's work and the client's.
+# A position streamed: its start (the checks and the mark, in a write transaction, then
+# the gyro's take made ready outside it) and its save (the readings stored, in a write
+# transaction), with what a position's frames cost in threads shared between them as
+# measured (``costs[STREAM_SPLIT]``: the parts of a stream's thread CPU spent marking,
+# making the take ready and saving, the probe's per-function lines of a load test), else
+# half each, both under the lock (the model before 2026-12-03); the frames between cost
+# only the event loop's work and the client's.
 STREAM_START = "stream: a position started"
+STREAM_TAKE = "stream: a position's take made ready"
 STREAM_SAVE = "stream: a position saved"
-STREAMED = {STREAM, STREAM_START, STREAM_SAVE}
+STREAMED = {STREAM, STREAM_START, STREAM_TAKE, STREAM_SAVE}
+STREAM_SPLIT = "stream split"
 
 
 def student_script():
@@ -278,8 +283,17 @@ def simulate(
     streamed = costs[STREAM]
     streamed = tuple(np.mean(streamed, axis=0)) if isinstance(streamed, list) else streamed
     server, db, client, calls, trips, loop = streamed[:6]
-    half = FRAMES_PER_POSITION / 2
-    position_half = ((server - loop) * half, db * half, 0.0, calls * half, trips * half, 0.0)
+    marking, making_ready, saving = costs.get(STREAM_SPLIT, (0.5, 0.0, 0.5))
+
+    def position_part(part: float, writes: bool = True) -> tuple[float, ...]:
+        """The share ``part`` of a position's work in threads, as costs of a stage: its CPU
+        and thread-pool trips in that share; the database's work and calls shared by the
+        two writes alone (the take makes no SQLite call)."""
+        each = FRAMES_PER_POSITION * part
+        in_writes = FRAMES_PER_POSITION * part / (marking + saving) if writes else 0.0
+        return ((server - loop) * each, db * in_writes, 0.0, calls * in_writes, trips * each,
+                0.0)  # fmt: skip
+
     frame = (loop, 0.0, client, 0.0, 0.0, loop)
     lock = Gate(1)
     lock_held: list[float] = []  # how long each write held it, s
@@ -524,13 +538,19 @@ def simulate(
             left[0] -= 1
             if left[0] == 0:
                 last_frame[0] = now
-                phases(STREAM_SAVE, saved, websocket, position_half)
+                phases(STREAM_SAVE, saved, websocket, position_part(saving))
 
         def saved() -> None:
             latencies[SAVED].append(now - last_frame[0])
             run_student(script, http, websocket)
 
-        phases(STREAM_START, started, websocket, position_half)
+        def marked() -> None:
+            if making_ready:
+                phases(STREAM_TAKE, started, websocket, position_part(making_ready, False))
+            else:
+                started()
+
+        phases(STREAM_START, marked, websocket, position_part(marking))
 
     def accepted(kind: int) -> list[int] | None:
         """With ``worker_shares``: which worker each student's connection of one kind (0:

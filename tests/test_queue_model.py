@@ -165,6 +165,66 @@ def test_the_probe_gives_each_request_the_cpu_of_its_own_task(tmp_path):
     assert means.means["GET /on-the-loop/{id}"][1] == 0
 
 
+PROBED_STREAM = """
+from fastapi import WebSocket
+from starlette.concurrency import run_in_threadpool
+from starlette.testclient import TestClient
+
+def _mark_started():
+    burn(0.01)
+
+def SimulatedTake():  # the stream's functions by their names in app.lab.stream
+    burn(0.02)
+
+def _save():
+    burn(0.03)
+
+@app.websocket("/lab/sessions/{n}/stream")
+async def stream(websocket: WebSocket, n: int):
+    await websocket.accept()
+    await run_in_threadpool(_mark_started)
+    await run_in_threadpool(SimulatedTake)
+    await websocket.send_text('{"type":"samples","v":[]}')
+    await run_in_threadpool(_save)
+    await websocket.close()
+
+def talk():
+    with TestClient(app).websocket_connect("/lab/sessions/7/stream") as socket:
+        socket.receive_text()
+"""
+
+
+def test_the_probe_splits_a_streams_thread_cpu_by_function(tmp_path):
+    """A WebSocket's line also gives its thread-pool CPU by function; the model's stream
+    takes its mark, its take and its save in those shares."""
+    out = tmp_path / "cpu.txt"
+    run_probed(PROBED_STREAM, ["asyncio.to_thread(talk)"], {"GYROLAB_BENCH_REQUEST_CPU": str(out)})
+    (line,) = [line for line in out.read_text().splitlines() if line.startswith("websocket")]
+    kind, method, path, _loop_ms, threads_ms, frames, by_function = line.split()
+    assert (path, frames) == ("/lab/sessions/7/stream", "1")
+    spent = {name: float(ms) for name, ms in (pair.split("=") for pair in by_function.split(","))}
+    assert 10 <= spent["_mark_started"] < 15 and 20 <= spent["SimulatedTake"] < 25
+    assert 30 <= spent["_save"] < 37 and float(threads_ms) == pytest.approx(sum(spent.values()))
+    split = class_cpu.attributed_costs(out.read_text()).stream_split
+    assert split == pytest.approx((1 / 6, 2 / 6, 3 / 6), abs=0.03)
+
+
+def test_a_stream_makes_its_take_ready_outside_the_write_lock():
+    """With a measured split, a position's mark and save hold the lock for their shares of
+    its thread work and the take holds none; its SQLite calls are the writes' alone."""
+    table = costs()
+    table[queue_sim.STREAM_SPLIT] = (0.2, 0.3, 0.5)
+    result = queue_sim.simulate(
+        table, 1, 1, 2.0, ramp=0.0, hash_s=2 * MS, teacher=False, wake_free=False
+    )
+    held = np.array(result["lock held"])
+    positions = 8
+    frames_work = queue_sim.FRAMES_PER_POSITION * 0.3 * MS  # 15 frames of 0.3 ms in threads
+    assert np.sum(np.isclose(held, 0.2 * frames_work, atol=1e-5)) == positions
+    assert np.sum(np.isclose(held, 0.5 * frames_work, atol=1e-5)) == positions
+    assert not np.any(np.isclose(held, 0.3 * frames_work, atol=1e-5))
+
+
 def test_the_profile_probe_writes_each_routes_thread_pool_functions_by_cpu(tmp_path):
     """``GYROLAB_BENCH_PROFILE``: one cProfile file per route (ids folded), of what its
     requests ran in the thread pool, timed by the thread's CPU clock; the loop's work is

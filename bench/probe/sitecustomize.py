@@ -27,7 +27,8 @@ same in every process); and which worker answered.
 file to which each HTTP request and each WebSocket appends ``kind method path loop_ms
 threads_ms frames``: the CPU its own task spent on the event loop (each step of the app's
 coroutine, timed by the thread's CPU clock) and in the thread pool (each function it sent
-there), and for a WebSocket the frames of samples it sent.  What no request's task runs -- the
+there), and for a WebSocket the frames of samples it sent and its thread-pool CPU by
+function (``name=ms,…``: the stream's marks, takes and saves).  What no request's task runs -- the
 server reading and writing sockets, the collector, other threads -- is not in it.
 
 ``GYROLAB_BENCH_GC`` (a load test): a file to which each of the process's garbage
@@ -259,6 +260,7 @@ if _COUNTS or _LOCKS or _CALLS:
 if _CPU or _PROFILE or _WAITS:
     import contextvars
     import types
+    from collections import defaultdict
 
     import anyio.to_thread as _to_thread
 
@@ -314,7 +316,7 @@ if _CPU:
     async def _cpu_timed_call(self, scope, receive, send):
         if scope["type"] not in ("http", "websocket"):
             return await _cpu_call(self, scope, receive, send)
-        spent = [0.0, 0.0, 0]
+        spent = [0.0, 0.0, 0, defaultdict(float)]
         token = _spent.set(spent)
 
         async def counting_send(message):
@@ -328,8 +330,11 @@ if _CPU:
             _spent.reset(token)
             line = (
                 f"{scope['type']} {scope.get('method', 'WS')} {scope['path']}"
-                f" {spent[0] * 1000:.3f} {spent[1] * 1000:.3f} {spent[2]}\n"
+                f" {spent[0] * 1000:.3f} {spent[1] * 1000:.3f} {spent[2]}"
             )
+            if scope["type"] == "websocket":  # its thread CPU by function, ms
+                line += " " + ",".join(f"{k}={v * 1000:.3f}" for k, v in spent[3].items())
+            line += "\n"
             os.write(_cpu_file, line.encode())
 
     _cpu_applications.FastAPI.__call__ = _cpu_timed_call
@@ -339,12 +344,16 @@ if _CPU:
         if spent is None:
             return None
 
+        name = getattr(getattr(func, "func", func), "__name__", "?")  # run_in_threadpool's partial
+
         def timed(*call_args):
             began = _cpu_time.thread_time()
             try:
                 return func(*call_args)
             finally:
-                spent[1] += _cpu_time.thread_time() - began
+                took = _cpu_time.thread_time() - began
+                spent[1] += took
+                spent[3][name] += took
 
         return timed
 
