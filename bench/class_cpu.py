@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from queue_sim import STREAM, STREAM_SPLIT
+from queue_sim import STREAM, STREAM_SAVE, STREAM_SPLIT, STREAM_START
 
 ID_IN_PATH = re.compile(r"/\d+")
 # the stream's functions in the thread pool (app.lab.stream), by the part of a position
@@ -40,6 +40,8 @@ class ClassCpu:
     # the streams' thread CPU by part -- marking, making the take ready, saving -- as
     # shares of it, where the probe's lines name the functions
     stream_split: tuple[float, float, float] | None = None
+    # the streams' thread CPU by function, s (all of the class's WebSockets)
+    stream_functions: dict[str, float] = field(default_factory=dict)
 
 
 def attributed_costs(text: str) -> ClassCpu:
@@ -49,6 +51,7 @@ def attributed_costs(text: str) -> ClassCpu:
     spent: dict[str, list[tuple[float, float]]] = defaultdict(list)
     stream = np.zeros(3)
     parts = np.zeros(3)  # the streams' thread CPU marking, making ready, saving (ms)
+    functions: dict[str, float] = defaultdict(float)
     for line in text.splitlines():
         kind, method, path, loop_ms, threads_ms, frames, *by_function = line.split()
         cpu = (float(loop_ms) / 1000, float(threads_ms) / 1000)
@@ -59,6 +62,7 @@ def attributed_costs(text: str) -> ClassCpu:
                     name, ms = pair.split("=")
                     part = 0 if name in MARKING else 1 if name in MAKING_READY else 2
                     parts[part] += float(ms)
+                    functions[name] += float(ms) / 1000
         else:
             spent[route_of(method, path)].append(cpu)
     means = {route: tuple(np.mean(values, axis=0)) for route, values in spent.items()}
@@ -68,7 +72,38 @@ def attributed_costs(text: str) -> ClassCpu:
         means[STREAM] = (stream[0] / stream[2], stream[1] / stream[2])
         counts[STREAM] = int(stream[2])
     split = tuple(float(part) for part in parts / parts.sum()) if parts.sum() else None
-    return ClassCpu(means, counts, float(total), dict(spent), split)
+    return ClassCpu(means, counts, float(total), dict(spent), split, dict(functions))
+
+
+def locked_shares(trace: str, seen: ClassCpu) -> dict[str, float]:
+    """Per write route, the share of its thread CPU spent holding SQLite's write lock: the
+    CPU of its write transactions (the probe's ``GYROLAB_BENCH_LOCK_TRACE`` lines, ``wall_ms
+    cpu_ms kind method path function``) over its requests' thread CPU (``seen``, the CPU
+    probe of the same run); for the stream, its mark's (``_mark_started`` over the marking
+    functions) and its save's.  A write parses, checks and packs before ``BEGIN
+    IMMEDIATE`` (issue 32, item 2): the model holds the lock for this share alone."""
+    locked: dict[str, float] = defaultdict(float)
+    for line in trace.splitlines():
+        fields = line.split()
+        if len(fields) < 6 or fields[2] == "-":
+            continue  # start-up, the CLI, or a trace without the requests' names
+        cpu_s, kind, method, path, function = float(fields[1]) / 1000, *fields[2:6]
+        if kind == "websocket":
+            route = STREAM_START if function in MARKING else STREAM_SAVE
+        else:
+            route = route_of(method, path)
+        locked[route] += cpu_s
+    threads = {route: float(np.sum(cpus, axis=0)[1]) for route, cpus in seen.each.items()}
+    functions = seen.stream_functions
+    threads[STREAM_START] = sum(functions.get(name, 0.0) for name in MARKING)
+    threads[STREAM_SAVE] = sum(
+        cpu for name, cpu in functions.items() if name not in MARKING | MAKING_READY
+    )
+    return {
+        route: min(cpu / threads[route], 1.0)
+        for route, cpu in locked.items()
+        if threads.get(route, 0.0) > 0
+    }
 
 
 def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, each=False):

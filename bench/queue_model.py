@@ -82,7 +82,13 @@ sys.path.insert(0, str(ROOT / "bench"))
 import load_test  # noqa: E402  (bench/, the script's folder)
 import request_waits  # noqa: E402
 from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
-from class_cpu import attributed_costs, in_class, server_times, worker_shares  # noqa: E402
+from class_cpu import (  # noqa: E402
+    attributed_costs,
+    in_class,
+    locked_shares,
+    server_times,
+    worker_shares,
+)
 from queue_sim import (  # noqa: E402
     CALL_HANDOFF,
     HANDOFF_S,
@@ -462,6 +468,16 @@ def main() -> int:
         "measured beside predicted",
     )
     parser.add_argument(
+        "--lock-trace",
+        type=Path,
+        nargs="*",
+        default=[],
+        help="what the probe's GYROLAB_BENCH_LOCK_TRACE wrote in the --class-run runs (one "
+        "file per run, in order; SQLite): each write route holds the write lock for the "
+        "share of its thread CPU its transactions took, and does the rest before (else the "
+        "model holds it for all of the route's thread CPU)",
+    )
+    parser.add_argument(
         "--class-run",
         type=Path,
         nargs="+",
@@ -495,7 +511,11 @@ def main() -> int:
         )  # fmt: skip
 
     def predict(
-        costs: dict, students: int, shares: list[float] | None = None, waits: dict | None = None
+        costs: dict,
+        students: int,
+        shares: list[float] | None = None,
+        waits: dict | None = None,
+        locked: dict[str, float] | None = None,
     ) -> dict:
         """The class simulated once per seed (which worker each connection reaches, which
         measured costs each request draws), combined; ``shares``: each worker's chance of
@@ -516,6 +536,7 @@ def main() -> int:
                     worker_shares=shares,
                     wake_free=not args.woken_at_once,
                     costs_in_order=not args.costs_at_random,
+                    locked_shares=locked,
                     **(waits or waits_of()),
                 )
                 for seed in range(args.seeds)
@@ -540,7 +561,14 @@ def main() -> int:
                       " CPU went to neither the class nor the kernel during it; its p95s are"
                       " not the class's alone")  # fmt: skip
             waits = waits_of(table)
-            result = predict(costs, students, shares, waits)
+            locked = None
+            if len(args.lock_trace) > index:
+                seen = attributed_costs(cpu.read_text())
+                locked = locked_shares(args.lock_trace[index].read_text(), seen)
+                print("  each write's thread CPU in the write lock (the lock trace): " + ", ".join(
+                    f"{route} {share:.0%}" for route, share in sorted(locked.items())
+                ))  # fmt: skip
+            result = predict(costs, students, shares, waits, locked)
             print(f"\n{students} students, {name}, {workers} worker(s), the run in {run}:"
                   f" predicted wall {result['wall']:.1f} s; hand-off"
                   f" {waits['handoff_s'] * 1e6:.0f} µs, busy wake-up"

@@ -34,6 +34,7 @@ STREAM_TAKE = "stream: a position's take made ready"
 STREAM_SAVE = "stream: a position saved"
 STREAMED = {STREAM, STREAM_START, STREAM_TAKE, STREAM_SAVE}
 STREAM_SPLIT = "stream split"
+CONTINUED = {STREAM_TAKE, STREAM_SAVE}  # no hop through the event loop before them
 
 
 def student_script():
@@ -168,6 +169,8 @@ def simulate(
     call_handoff: tuple[float, float] | None = CALL_HANDOFF,
     wake_free: bool = True,
     costs_in_order: bool = True,
+    locked_shares: dict[str, float] | None = None,
+    stage_log: list | None = None,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -207,7 +210,11 @@ def simulate(
     one of the measured within 5 % of the k-th (scaled to this class's size) -- not at
     random (False; the teacher's always at random): a route's CPU changes over a class
     (the lab page is empty at the start, 2.3× dearer with results and charts in the
-    burst; bench/README.md, twenty-third part).
+    burst; bench/README.md, twenty-third part); ``locked_shares``: per write route (and
+    ``STREAM_START``, ``STREAM_SAVE``), the share of its thread CPU that holds SQLite's
+    write lock, the rest done before it (``class_cpu.locked_shares``); else all of it;
+    ``stage_log``: a list to which each request's and stream part's (route, its stages'
+    pools in order) is appended.
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -384,7 +391,10 @@ def simulate(
             else:
                 work = [("server", threads), ("give way", 0.0), ("hash", hash_s)]
         elif one_writer and route in WRITES:
-            work = [("lock", threads)]
+            # the part before BEGIN IMMEDIATE (parsing, checks, packing) outside the lock
+            locked = min(max((locked_shares or {}).get(route, 1.0), 0.0), 1.0)
+            work = [("server", threads * (1.0 - locked)), ("lock", threads * locked)]
+            work = work if locked < 1.0 else work[1:]
         else:
             work = [("server", threads)]
         round_trips = 0 if one_writer else int(round(calls))
@@ -398,7 +408,11 @@ def simulate(
         # (the server reading and writing its socket) before and after
         loop_inside = min(inside_place[0], loop) if inside_place and http else 0.0
         outside = loop - loop_inside
-        stages = [("client", client / 2), ("loop", outside / 2)]
+        stages = [("client", client / 2)]
+        # a position's take and its save are sent to the thread pool in the same step of the
+        # stream's coroutine as what came before them (the mark's answer, the last frame):
+        # no wait for the event loop first; everything else reaches the loop from a socket
+        stages += [] if route in CONTINUED else [("loop", outside / 2)]
         stages += [("admit", 0.0)] if http else []
         stages += [("enter", 0.0)] if slotted else []
         stages += [("loop", loop_inside)] if loop_inside else []
@@ -406,6 +420,8 @@ def simulate(
         stages += [("leave", 0.0)] if slotted else []
         stages += [("dismiss", 0.0)] if http else []
         stages += [("loop", outside / 2), ("client", client / 2)]
+        if stage_log is not None:
+            stage_log.append((route, [pool for pool, _ in stages]))
         holding = [False]  # whether this request holds one of its worker's places
         # its threads' waits: for the interpreter, a hand-off of it, a core, the write lock
         # or the database server

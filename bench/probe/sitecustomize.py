@@ -13,8 +13,10 @@ spent in it, µs: how long the interpreter is left to others at each call (a wai
 is woken for it; ``bench_handoffs.py`` measures how long a call must last for it to run).
 
 ``GYROLAB_BENCH_LOCK_TRACE`` (a load test): a file to which each SQLite write transaction
-appends one line, ``wall_ms cpu_ms``: how long it held the write lock (``BEGIN
-IMMEDIATE`` to the end of its commit or rollback) and the CPU its thread spent meanwhile.
+appends one line, ``wall_ms cpu_ms kind method path function``: how long it held the write
+lock (``BEGIN IMMEDIATE`` to the end of its commit or rollback), the CPU its thread spent
+meanwhile, the request or WebSocket it was for and the function the thread pool ran it in
+(``-`` where there was none: start-up, the CLI).
 
 ``GYROLAB_BENCH_SERVER_TIMES`` (a load test): a file to which each HTTP request appends
 ``method path ms waited_ms began_s pid``: from when the app is called (uvicorn has read
@@ -151,6 +153,12 @@ if _COUNTS or _LOCKS or _CALLS:
             pass
 
     _trace = os.open(_LOCKS, os.O_WRONLY | os.O_APPEND | os.O_CREAT) if _LOCKS else None
+    if _LOCKS:
+        import contextvars as _lock_contextvars
+
+        # set by the request's or WebSocket's task, and by the thread-pool function (below)
+        _lock_for = _lock_contextvars.ContextVar("gyrolab_bench_lock_for", default="- - -")
+        _lock_in = _lock_contextvars.ContextVar("gyrolab_bench_lock_in", default="-")
 
     if _CALLS:
         _calls = os.open(_CALLS, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
@@ -205,7 +213,8 @@ if _COUNTS or _LOCKS or _CALLS:
         def _ended(self) -> None:
             if self.began is not None and _trace is not None:
                 wall, cpu = time.perf_counter() - self.began[0], time.thread_time() - self.began[1]
-                os.write(_trace, f"{wall * 1000:.3f} {cpu * 1000:.3f}\n".encode())
+                where = f"{_lock_for.get()} {_lock_in.get()}"
+                os.write(_trace, f"{wall * 1000:.3f} {cpu * 1000:.3f} {where}\n".encode())
             self.began = None
 
         def commit(self):
@@ -257,7 +266,7 @@ if _COUNTS or _LOCKS or _CALLS:
         _base = _connection_base.BaseConnection
         _base._exec_command = _counting(_base._exec_command)
 
-if _CPU or _PROFILE or _WAITS:
+if _CPU or _PROFILE or _WAITS or _LOCKS:
     import contextvars
     import types
     from collections import defaultdict
@@ -283,6 +292,15 @@ if _CPU or _PROFILE or _WAITS:
             except BaseException as raised:  # noqa: BLE001 (handed on to the coroutine)
                 value, error = None, raised
 
+    def _function_name(func) -> str:
+        """The name of the function a thread-pool call runs, through starlette's partial and
+        the other probes' wrappers."""
+        while True:
+            inner = getattr(func, "__wrapped__", None) or getattr(func, "func", None)
+            if inner is None:
+                return getattr(func, "__name__", "?")
+            func = inner
+
     def _wrap_thread_pool(wrap) -> None:
         """Send every function a request gives the thread pool through ``wrap(func)``: the
         function to run instead, or None to run it as it is."""
@@ -293,6 +311,37 @@ if _CPU or _PROFILE or _WAITS:
 
         _to_thread.run_sync = run_sync
 
+
+if _LOCKS:
+    from fastapi import applications as _lock_applications
+
+    _lock_call = _lock_applications.FastAPI.__call__
+
+    async def _lock_noted_call(self, scope, receive, send):
+        if scope["type"] not in ("http", "websocket"):
+            return await _lock_call(self, scope, receive, send)
+        token = _lock_for.set(f"{scope['type']} {scope.get('method', 'WS')} {scope['path']}")
+        try:
+            return await _lock_call(self, scope, receive, send)
+        finally:
+            _lock_for.reset(token)
+
+    _lock_applications.FastAPI.__call__ = _lock_noted_call
+
+    def _lock_named(func):
+        name = _function_name(func)
+
+        def named(*call_args):
+            token = _lock_in.set(name)
+            try:
+                return func(*call_args)
+            finally:
+                _lock_in.reset(token)
+
+        named.__wrapped__ = func  # for the next wrapper's _function_name
+        return named
+
+    _wrap_thread_pool(_lock_named)
 
 if _CPU:
     import time as _cpu_time
@@ -344,7 +393,7 @@ if _CPU:
         if spent is None:
             return None
 
-        name = getattr(getattr(func, "func", func), "__name__", "?")  # run_in_threadpool's partial
+        name = _function_name(func)
 
         def timed(*call_args):
             began = _cpu_time.thread_time()
@@ -355,6 +404,7 @@ if _CPU:
                 spent[1] += took
                 spent[3][name] += took
 
+        timed.__wrapped__ = func  # for the next wrapper's _function_name
         return timed
 
     _wrap_thread_pool(_timed)
@@ -408,6 +458,7 @@ if _PROFILE:
                     if _profiled_calls[0] % 100 == 0:
                         _write_profiles()
 
+        profiled.__wrapped__ = func  # for the next wrapper's _function_name
         return profiled
 
     _wrap_thread_pool(_profiled)
@@ -511,6 +562,7 @@ if _WAITS:
                 state[_TRIPS] += 1
                 state[_ENDED] = ended
 
+        waited.__wrapped__ = func  # for the next wrapper's _function_name
         return waited
 
     _wrap_thread_pool(_waited)
