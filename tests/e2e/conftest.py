@@ -232,8 +232,11 @@ def browser():
         if os.environ.get("CI", "").lower() == "true":
             pytest.fail("CI=true but /usr/bin/chromium is missing: browser tests must run in CI")
         pytest.skip("Debian's chromium is not installed (python3 dev.py test installs it)")
-    from playwright.sync_api import sync_playwright
+    from playwright.sync_api import expect, sync_playwright
 
+    # the pages' own default (new_page sets 10 s) for expect's waits too: 5 s is short on a
+    # CI machine whose two cores serve three test workers, their servers and browsers
+    expect.set_options(timeout=10_000)
     with sync_playwright() as playwright:
         instance = playwright.chromium.launch(
             executable_path=str(CHROMIUM), headless=True, args=CHROMIUM_ARGS
@@ -271,6 +274,19 @@ def log_in(page, url: str, username: str, password: str) -> None:
     with page.expect_navigation():
         page.click("button[type=submit].primary")
     assert "/login" not in page.url, f"log-in as {username} failed"
+
+
+# plotly.js (4.6 MB) is fetched and parsed when the first chart comes into view: 1.3 s on an
+# idle machine, past expect's 5 s default on a CI machine busy with three test workers
+CHART_TIMEOUT_MS = 30_000
+
+
+def expect_chart_drawn(chart) -> None:
+    """Scroll a `.chart` element into view and wait until plotly has drawn it."""
+    from playwright.sync_api import expect
+
+    chart.scroll_into_view_if_needed()
+    expect(chart.locator(".main-svg").first).to_be_visible(timeout=CHART_TIMEOUT_MS)
 
 
 @pytest.hookimpl(wrapper=True)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import log_in
+from tests.e2e.conftest import expect_chart_drawn, log_in
 
 pytestmark = pytest.mark.e2e
 
@@ -36,7 +36,7 @@ def test_the_class_board_on_a_projector(demo_server, new_page, language):
     charts = page.locator(".chart[data-figure]")
     assert charts.count() >= 3
     for index in range(charts.count()):
-        expect(charts.nth(index).locator(".main-svg").first).to_be_visible()
+        expect_chart_drawn(charts.nth(index))
     # the charts sit side by side on a projector, all in the first screen's width
     boxes = [charts.nth(i).bounding_box() for i in range(3)]
     assert len({round(b["y"]) for b in boxes}) == 1 and all(

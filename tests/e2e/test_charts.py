@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import log_in
+from tests.e2e.conftest import expect_chart_drawn, log_in
 
 pytestmark = pytest.mark.e2e
 
@@ -54,8 +54,7 @@ def test_charts_are_drawn_as_they_come_into_view_with_legends_clear_of_the_axes(
         page.set_viewport_size({"width": width, "height": 844})
         for index in range(charts.count()):
             chart = charts.nth(index)
-            chart.scroll_into_view_if_needed()
-            expect(chart.locator(".main-svg").first).to_be_visible()
+            expect_chart_drawn(chart)
             page.wait_for_timeout(100 if width == 390 else 300)  # a resize redraw settles
             where = f"{chart.get_attribute('data-figure')}, {language}, {width} px"
             assert chart.evaluate(OVERLAPS) == [], f"legend on the x axis: {where}"

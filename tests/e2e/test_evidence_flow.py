@@ -9,7 +9,7 @@ import re
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import log_in
+from tests.e2e.conftest import expect_chart_drawn, log_in
 from tests.e2e.test_forms_flow import in_each_language_and_width
 from tests.e2e.test_lab_flow import paste, table
 
@@ -61,8 +61,7 @@ def test_the_desk_shows_the_evidence_of_typed_readings(demo_server, new_page):
         expect(card.locator("li[data-check='handout']")).to_contain_text("A1")
         # the part's readings drawn beside a draw of the station's gyro
         chart = card.locator(".chart[data-figure='evidence-heading']")
-        chart.scroll_into_view_if_needed()
-        expect(chart.locator(".main-svg").first).to_be_visible()
+        expect_chart_drawn(chart)
         expect(chart.locator(".xtick")).not_to_have_count(0)
         assert not teacher.evaluate(
             "() => document.documentElement.scrollWidth > window.innerWidth + 1"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import STUDENT_PASSWORD, log_in
+from tests.e2e.conftest import STUDENT_PASSWORD, expect_chart_drawn, log_in
 
 pytestmark = pytest.mark.e2e
 
@@ -46,5 +46,4 @@ def test_slider_and_scenarios_update_the_chart(live_server, new_page, locale):
     )
     names = trace_names(page)
     assert any("四位置法" in n or "four-position" in n for n in names)
-    page.locator("#dwell-chart").scroll_into_view_if_needed()
-    expect(page.locator("#dwell-chart .main-svg").first).to_be_visible()
+    expect_chart_drawn(page.locator("#dwell-chart"))

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import ARTIFACTS, STUDENT_PASSWORD, log_in
+from tests.e2e.conftest import ARTIFACTS, STUDENT_PASSWORD, expect_chart_drawn, log_in
 
 pytestmark = pytest.mark.e2e
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -93,8 +93,7 @@ def test_student_types_the_handout_tables(any_live_server, new_page):
     expect(page.locator("#summary-latitude .eta-omega")).to_have_text("0.62 %")
     for name in ("heading-fit", "heading-compass"):  # charts are drawn as they come into view
         chart = page.locator(f".chart[data-figure='{name}']")
-        chart.scroll_into_view_if_needed()
-        expect(chart.locator(".main-svg").first).to_be_visible()
+        expect_chart_drawn(chart)
 
 
 def show_simulator(section) -> None:

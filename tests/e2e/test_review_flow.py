@@ -7,7 +7,7 @@ import re
 import pytest
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import log_in
+from tests.e2e.conftest import expect_chart_drawn, log_in
 
 pytestmark = pytest.mark.e2e
 
@@ -20,7 +20,7 @@ def test_teacher_reviews_returns_and_student_resubmits(demo_server, new_page):
     teacher.locator("#assignments a", has_text="Four-position north finding").first.click()
     # 2 submitted in the demo (1 when the amendment test released student2 first)
     expect(teacher.locator(".status-filter")).to_contain_text(re.compile(r"submitted [12]"))
-    expect(teacher.locator(".chart[data-figure='class-errors'] .main-svg").first).to_be_visible()
+    expect_chart_drawn(teacher.locator(".chart[data-figure='class-errors']"))
     teacher.locator("#class-table th", has_text="Az. error").click()  # sortable
     expect(teacher.locator("#class-table th[aria-sort]")).to_have_count(1)
 
