@@ -428,6 +428,13 @@ def main() -> int:
         f"its prediction); default {CALL_HANDOFF[0]:.2f} {CALL_HANDOFF[1]:.2f}",
     )
     parser.add_argument(
+        "--loop-keeps",
+        action="store_true",
+        help="the event loop gives up the interpreter between its callbacks as an SQLite "
+        "call does (handed on with the call's chance, else kept), not queuing again behind "
+        "the waiting threads after each",
+    )
+    parser.add_argument(
         "--woken-at-once",
         action="store_true",
         help="a thread woken to a free interpreter runs at once (the model before "
@@ -537,6 +544,7 @@ def main() -> int:
                     wake_free=not args.woken_at_once,
                     costs_in_order=not args.costs_at_random,
                     locked_shares=locked,
+                    loop_keeps=args.loop_keeps,
                     **(waits or waits_of()),
                 )
                 for seed in range(args.seeds)

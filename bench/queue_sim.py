@@ -171,6 +171,7 @@ def simulate(
     costs_in_order: bool = True,
     locked_shares: dict[str, float] | None = None,
     stage_log: list | None = None,
+    loop_keeps: bool = False,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -214,7 +215,11 @@ def simulate(
     ``STREAM_START``, ``STREAM_SAVE``), the share of its thread CPU that holds SQLite's
     write lock, the rest done before it (``class_cpu.locked_shares``); else all of it;
     ``stage_log``: a list to which each request's and stream part's (route, its stages'
-    pools in order) is appended.
+    pools in order) is appended; ``loop_keeps``: the event loop, between its callbacks and
+    its tasks, gives up the interpreter as an SQLite call does (uvloop's C code releases
+    it and takes it back at once): handed on with ``call_handoff``'s chance, else kept for
+    the next callback within its switch interval (False: every callback queues again
+    behind the threads waiting).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -608,10 +613,15 @@ def simulate(
     def kept_through_call(job: Job, queue: list[Job]) -> bool:
         """At the end of a segment: whether it was an SQLite call that ended before the
         thread woken for the interpreter reached a core (the caller keeps it; the waiter
-        was woken for nothing)."""
-        if call_handoff is None or len(queue) < 2 or not job.call_share:
+        was woken for nothing) -- or, with ``loop_keeps``, the event loop's step from one
+        callback to its next."""
+        if call_handoff is None or len(queue) < 2:
             return False
-        if calls_drawn.random() >= job.call_share:
+        if job.pool == "loop" and loop_keeps:
+            pass  # its release between callbacks is like a call's
+        elif not job.call_share:
+            return False
+        elif calls_drawn.random() >= job.call_share:
             return False  # a trip to the thread pool: the thread waits, the turn passes
         chance = call_handoff[1] if overdrawn[0] > 0 else call_handoff[0]
         if calls_drawn.random() < chance:
@@ -692,6 +702,9 @@ def simulate(
                 if tasks:  # its next callback takes the interpreter again, behind others
                     job.left, job.segment = tasks[0][0], tasks[0][0] / tasks[0][2]
                     job.segment_left = job.segment
+                    if loop_keeps and kept_through_call(job, queue):
+                        turn_ends[job.worker] = now + switch_interval_s  # as after a call
+                        continue  # taken back before a waiter reached a core
                     queue.append(queue.pop(0))
                 else:
                     queue.pop(0)  # the loop goes back to waiting for sockets
