@@ -15,7 +15,7 @@ from typing import BinaryIO
 
 import numpy as np
 from fastapi import UploadFile
-from sqlmodel import Session, func, select
+from sqlmodel import Session, col, delete, func, select
 
 from app.core.data_copies import copy_keys
 from app.core.exceptions import UserError
@@ -193,6 +193,7 @@ def delete_archive(db: Session, teacher_id: int, archive_id: int) -> None:
     archive = db.get(ReadingArchive, archive_id)
     if archive is None or archive.teacher_id != teacher_id:
         raise UserError("archive.not_found", status=404)
-    for key in db.exec(select(CopyKey).where(CopyKey.archive_id == archive.id)).all():
-        db.delete(key)
+    # one statement for the keys, before the archive row: the ORM, knowing no link between
+    # the two, could delete the archive first, whose ON DELETE CASCADE took the keys
+    db.exec(delete(CopyKey).where(col(CopyKey.archive_id) == archive.id))
     db.delete(archive)
