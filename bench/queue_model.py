@@ -428,11 +428,11 @@ def main() -> int:
         f"its prediction); default {CALL_HANDOFF[0]:.2f} {CALL_HANDOFF[1]:.2f}",
     )
     parser.add_argument(
-        "--loop-keeps",
+        "--loop-queues",
         action="store_true",
-        help="the event loop gives up the interpreter between its callbacks as an SQLite "
-        "call does (handed on with the call's chance, else kept), not queuing again behind "
-        "the waiting threads after each",
+        help="the event loop queues for the interpreter again behind the waiting threads "
+        "after each of its callbacks (the model before 2026-12-05), not giving it up as an "
+        "SQLite call does (handed on with the call's chance, else kept)",
     )
     parser.add_argument(
         "--woken-at-once",
@@ -544,7 +544,7 @@ def main() -> int:
                     wake_free=not args.woken_at_once,
                     costs_in_order=not args.costs_at_random,
                     locked_shares=locked,
-                    loop_keeps=args.loop_keeps,
+                    loop_keeps=not args.loop_queues,
                     **(waits or waits_of()),
                 )
                 for seed in range(args.seeds)
@@ -613,7 +613,7 @@ def main() -> int:
     if args.department:
         department(
             costs, hash_s, args.department[0], args.department[1:], args.switch_interval,
-            waits_of(),
+            waits_of(), loop_keeps=not args.loop_queues,
         )  # fmt: skip
     return 0
 
@@ -879,10 +879,17 @@ DEPARTMENT_ROUTES = {
 
 
 def department(
-    costs, hash_s: float, students: int, workers: list[int], switch_ms: float, waits: dict
+    costs,
+    hash_s: float,
+    students: int,
+    workers: list[int],
+    switch_ms: float,
+    waits: dict,
+    loop_keeps: bool = True,
 ):
     """p95 per route of ``students`` starting within a minute, for each number of workers
-    (one core each, PostgreSQL's CPU counted in it; browsers elsewhere)."""
+    (one core each, PostgreSQL's CPU counted in it; browsers elsewhere); ``loop_keeps``:
+    as ``queue_sim.simulate``'s."""
     print(f"\ndepartment: {students} students starting within a minute, PostgreSQL; p95 ms "
           "(one core per worker, the database's CPU included in it)")  # fmt: skip
     header = " ".join(f"{name:>9s}" for name in DEPARTMENT_ROUTES.values())
@@ -891,7 +898,7 @@ def department(
         share = -(-students // count)
         result = simulate(
             costs, share, 1, 1.0, ramp=60.0, one_writer=False, clients_elsewhere=True,
-            hash_s=hash_s, switch_interval_s=switch_ms / 1000, **waits,
+            hash_s=hash_s, switch_interval_s=switch_ms / 1000, loop_keeps=loop_keeps, **waits,
         )  # fmt: skip
         p95 = {route: np.percentile(v, 95) * 1000 for route, v in result["latencies"].items()}
         row = " ".join(f"{p95.get(route, float('nan')):9.0f}" for route in DEPARTMENT_ROUTES)

@@ -171,7 +171,7 @@ def simulate(
     costs_in_order: bool = True,
     locked_shares: dict[str, float] | None = None,
     stage_log: list | None = None,
-    loop_keeps: bool = False,
+    loop_keeps: bool = True,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -219,7 +219,8 @@ def simulate(
     its tasks, gives up the interpreter as an SQLite call does (uvloop's C code releases
     it and takes it back at once): handed on with ``call_handoff``'s chance, else kept for
     the next callback within its switch interval (False: every callback queues again
-    behind the threads waiting).
+    behind the threads waiting, the model before 2026-12-05: its requests waited off a
+    core 3-8× less than the probe measured; bench/README.md, twenty-sixth part).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until

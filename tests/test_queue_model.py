@@ -89,7 +89,9 @@ def test_a_call_that_ends_before_the_waiter_runs_keeps_the_interpreter():
     """bench_handoffs.py: a thread woken at an SQLite call takes the interpreter only if it
     reaches a core before the call is over.  The writes' 60 short calls: when none hands it
     on, the writes wait no turns at their calls; with the measured chances a few; when
-    every call does, a turn at each.  A call kept still woke the waiter for nothing."""
+    every call does, a turn at each.  A call kept still woke the waiter for nothing.  (The
+    event loop's releases, which take the same chance by default, queue as before here:
+    the calls' effect alone.)"""
     mixed = costs(server=8 * MS, calls=0.0, trips=0.0)
     for route in mixed:
         if route.startswith("POST"):
@@ -97,8 +99,9 @@ def test_a_call_that_ends_before_the_waiter_runs_keeps_the_interpreter():
 
     def run(call_handoff):
         return queue_sim.simulate(
-            mixed, 40, 1, 2.0, teacher=False, work_places=0, call_handoff=call_handoff
-        )
+            mixed, 40, 1, 2.0, teacher=False, work_places=0, call_handoff=call_handoff,
+            loop_keeps=False,
+        )  # fmt: skip
 
     def p95(result: dict) -> float:
         return float(np.percentile(result["latencies"]["POST /lab/sessions/{id}/csv"], 95))
@@ -114,9 +117,11 @@ def test_a_call_that_ends_before_the_waiter_runs_keeps_the_interpreter():
 def test_the_event_loop_can_keep_the_interpreter_between_its_callbacks_as_a_call_does():
     """uvloop runs each callback in C holding no interpreter and takes it back for the
     next: the release is a call's, handed to a waiting thread only if that thread reaches a
-    core first (``loop_keeps``).  Requests whose loop work wakes many times among threads
-    that hold the interpreter: kept, their loop work waits no turns; handed on every time,
-    the model is the one without the option, request for request."""
+    core first (``loop_keeps``, the default since 2026-12-05: with it the model's requests
+    wait off a core about as long as the probe measured).  Requests whose loop work wakes
+    many times among threads that hold the interpreter: kept, their loop work waits no
+    turns; handed on every time, the model is the one without the option, request for
+    request."""
     busy = costs(server=8 * MS, calls=0.0, trips=20.0, loop=3 * MS)
 
     def run(loop_keeps: bool, call_handoff):
