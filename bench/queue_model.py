@@ -593,6 +593,7 @@ def main() -> int:
             if len(args.request_waits) > index:
                 measured = request_waits.read(args.request_waits[index])
                 request_waits.compare(request_waits.modelled(result), measured)
+                request_waits.compare_windows(request_waits.modelled(result), measured)
                 if workers == 1:
                     request_waits.compare_crowding(result["places"], measured)
             predicted[students].append((result, table))

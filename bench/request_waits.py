@@ -6,8 +6,9 @@ CPU, its threads' waits off a core (for the interpreter, for the write lock or
 PostgreSQL's answers, for the thread pool to take the function and the event loop to take
 the answer back) and its threads' waits on the run queue (the kernel's ``schedstat``).
 ``queue_sim.simulate`` reports the same split for each simulated request ("server"), and
-:func:`compare` prints the two side by side; :func:`place_queue` says how crowded the work
-places were."""
+:func:`compare` prints the two side by side per route, :func:`compare_windows` by the
+class's time (start, middle, burst); :func:`place_queue` says how crowded the work places
+were."""
 
 from __future__ import annotations
 
@@ -107,6 +108,46 @@ def compare(model: dict[str, np.ndarray], measured: dict[str, np.ndarray]) -> No
             for k in (OFF_CORE, RUN_QUEUE)
         ]
         print(f"  {route:42s} {inside:>17s} {cells[0]:>13s} {cells[1]:>13s}")
+
+
+# The load test's class by its time from the first request (s): the log-ins and first
+# streams, the streams, and the CSV saves, results and submits (its default scenario: 60 s
+# a position at 20×)
+WINDOWS = (("start", 0.0, 5.0), ("middle", 5.0, 20.0), ("burst", 20.0, float("inf")))
+
+
+def by_window(table: dict[str, np.ndarray]) -> dict[str, tuple[int, np.ndarray]]:
+    """Per window of the class's time (``WINDOWS``, from the table's first request), how
+    many requests came and their mean time inside holding a place, CPU, waits off a core
+    and on the run queue (ms), all routes together."""
+    rows = np.concatenate([rows for rows in table.values() if len(rows)])
+    when = rows[:, BEGAN] - rows[:, BEGAN].min()
+    out = {}
+    for name, start, end in WINDOWS:
+        inside = rows[(when >= start) & (when < end)]
+        means = (
+            inside[:, [INSIDE, CPU, OFF_CORE, RUN_QUEUE]].mean(axis=0)
+            if len(inside)
+            else (np.full(4, np.nan))
+        )
+        out[name] = (len(inside), means)
+    return out
+
+
+def compare_windows(model: dict[str, np.ndarray], measured: dict[str, np.ndarray]) -> None:
+    """``by_window`` of the model beside the measurement: where the class's time inside the
+    server goes at its start, between and in its burst (the model's "CPU" is what is left
+    of its time inside, with its waits for the event loop and a write place in it)."""
+    print("  inside the server by the class's time, mean ms a request: inside / CPU / off a"
+          " core / run queue (model | measured)")  # fmt: skip
+    modelled_windows, measured_windows = by_window(model), by_window(measured)
+    for name, start, end in WINDOWS:
+        span = f"{start:g}-{end:g} s" if end < float("inf") else f"from {start:g} s"
+        cells = " | ".join(
+            " / ".join(f"{value:4.1f}" for value in windows[name][1])
+            for windows in (modelled_windows, measured_windows)
+        )
+        print(f"  {name:6s} {span:9s} {cells}")
 
 
 def crowding(measured: dict[str, np.ndarray]) -> tuple[float, float]:

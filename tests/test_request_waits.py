@@ -78,6 +78,29 @@ def test_a_line_cut_short_is_left_out(tmp_path):
     assert row.tolist() == [2.0, 10.0, 5.0, 4.0, 0.5, 100.5]
 
 
+def test_the_class_is_split_by_its_time_from_its_first_request(capsys):
+    """Start, middle and burst: each window's mean time inside, CPU and waits, counted from
+    the first request (the probe's clock is the machine's, the model's from 0)."""
+
+    def row(began: float, inside: float, off: float) -> list[float]:
+        # place, inside, CPU, off a core, run queue, began
+        return [1.0, inside, inside - off - 0.5, off, 0.5, began]
+
+    measured = {
+        "GET /login": np.array([row(1000.0, 4.0, 1.0), row(1003.0, 6.0, 3.0)]),
+        "POST /lab/sessions/{id}/csv": np.array([row(1012.0, 10.0, 4.0), row(1030.0, 20.0, 9.0)]),
+    }
+    windows = request_waits.by_window(measured)
+    assert windows["start"][0] == 2 and windows["middle"][0] == 1 and windows["burst"][0] == 1
+    assert windows["start"][1].tolist() == pytest.approx([5.0, 2.5, 2.0, 0.5])
+    assert windows["burst"][1].tolist() == pytest.approx([20.0, 10.5, 9.0, 0.5])
+    model = {route: rows - [0, 0, 0, 0, 0, 1000.0] for route, rows in measured.items()}
+    request_waits.compare_windows(model, measured)
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 4 and lines[1].split()[0] == "start"
+    assert lines[3].endswith("20.0 / 10.5 /  9.0 /  0.5 | 20.0 / 10.5 /  9.0 /  0.5")
+
+
 @pytest.mark.parametrize(
     ("requests", "expected"),
     [
