@@ -618,11 +618,8 @@ def simulate(
         callback to its next."""
         if call_handoff is None or len(queue) < 2:
             return False
-        if job.pool == "loop" and loop_keeps:
-            pass  # its release between callbacks is like a call's
-        elif not job.call_share:
-            return False
-        elif calls_drawn.random() >= job.call_share:
+        loop_step = job.pool == "loop" and loop_keeps  # its release is like a call's
+        if not loop_step and (not job.call_share or calls_drawn.random() >= job.call_share):
             return False  # a trip to the thread pool: the thread waits, the turn passes
         chance = call_handoff[1] if overdrawn[0] > 0 else call_handoff[0]
         if calls_drawn.random() < chance:

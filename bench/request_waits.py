@@ -124,13 +124,8 @@ def by_window(table: dict[str, np.ndarray]) -> dict[str, tuple[int, np.ndarray]]
     when = rows[:, BEGAN] - rows[:, BEGAN].min()
     out = {}
     for name, start, end in WINDOWS:
-        inside = rows[(when >= start) & (when < end)]
-        means = (
-            inside[:, [INSIDE, CPU, OFF_CORE, RUN_QUEUE]].mean(axis=0)
-            if len(inside)
-            else (np.full(4, np.nan))
-        )
-        out[name] = (len(inside), means)
+        inside = rows[(when >= start) & (when < end)][:, [INSIDE, CPU, OFF_CORE, RUN_QUEUE]]
+        out[name] = (len(inside), inside.mean(axis=0) if len(inside) else np.full(4, np.nan))
     return out
 
 
