@@ -435,6 +435,27 @@ def main() -> int:
         "SQLite call does (handed on with the call's chance, else kept)",
     )
     parser.add_argument(
+        "--cpu-scale",
+        type=float,
+        default=1.0,
+        help="every request's server CPU (its event loop's part and a log-in's hash too) "
+        "times this: how far a p95 moves when the CPU per request is a few per cent off",
+    )
+    parser.add_argument(
+        "--wake-beside-itself",
+        action="store_true",
+        help="a busy wake-up's wait grows with the cores asked beyond the cores there are "
+        "without the woken thread (the model before 2026-12-05), not counting it as "
+        "bench_handoffs.py measured it",
+    )
+    parser.add_argument(
+        "--trips-in-one-thread",
+        action="store_true",
+        help="one thread does all of a request's work, the loop's part before it (the model "
+        "before 2026-12-05), not a pool thread woken for each trip and the coroutine's next "
+        "step on the event loop between them, as in the app",
+    )
+    parser.add_argument(
         "--woken-at-once",
         action="store_true",
         help="a thread woken to a free interpreter runs at once (the model before "
@@ -473,6 +494,15 @@ def main() -> int:
         "file per run, in order): where each request's time inside the server went (CPU, "
         "waits off a core, on the run queue), and how crowded the work places were, "
         "measured beside predicted",
+    )
+    parser.add_argument(
+        "--client-times",
+        type=Path,
+        nargs="*",
+        default=[],
+        help="what load_test.py's GYROLAB_BENCH_CLIENT_TIMES wrote in the --class-run runs "
+        "(one file per run, in order, with --server-times): each request's time outside the "
+        "app, before it and after it, measured beside predicted",
     )
     parser.add_argument(
         "--lock-trace",
@@ -517,6 +547,13 @@ def main() -> int:
             args.every_call_hands,
         )  # fmt: skip
 
+    # the model's choices where an earlier model is asked for (``queue_sim.simulate``'s)
+    options = {
+        "loop_keeps": not args.loop_queues,
+        "trips_in_turn": not args.trips_in_one_thread,
+        "wake_counts_itself": not args.wake_beside_itself,
+    }
+
     def predict(
         costs: dict,
         students: int,
@@ -530,12 +567,12 @@ def main() -> int:
         return combine(
             [
                 simulate(
-                    costs,
+                    with_cpu_scaled(costs, args.cpu_scale),
                     students,
                     workers,
                     args.cores,
                     one_writer=workers == 1,
-                    hash_s=hash_s,
+                    hash_s=hash_s * args.cpu_scale,
                     write_slots=args.write_slots,
                     switch_interval_s=args.switch_interval / 1000,
                     work_places=args.work_places,
@@ -544,7 +581,7 @@ def main() -> int:
                     wake_free=not args.woken_at_once,
                     costs_in_order=not args.costs_at_random,
                     locked_shares=locked,
-                    loop_keeps=not args.loop_queues,
+                    **options,
                     **(waits or waits_of()),
                 )
                 for seed in range(args.seeds)
@@ -590,6 +627,9 @@ def main() -> int:
             compare(result, [table])
             if times:
                 inside_the_server(result, server_times(times))
+            if times and len(args.client_times) > index:
+                outside = request_waits.outside_the_app(args.client_times[index], times)
+                request_waits.compare_outside(result, outside)
             if len(args.request_waits) > index:
                 measured = request_waits.read(args.request_waits[index])
                 request_waits.compare(request_waits.modelled(result), measured)
@@ -614,7 +654,7 @@ def main() -> int:
     if args.department:
         department(
             costs, hash_s, args.department[0], args.department[1:], args.switch_interval,
-            waits_of(), loop_keeps=not args.loop_queues,
+            waits_of(), **options,
         )  # fmt: skip
     return 0
 
@@ -642,6 +682,25 @@ def run_waits(
         "wake_busy_s": wake_busy_us / 1e6,
         "call_handoff": None if every_call_hands else call_handoff or CALL_HANDOFF,
     }
+
+
+def with_cpu_scaled(costs: dict, factor: float) -> dict:
+    """``costs`` with every request's server CPU times ``factor``: the server's, its event
+    loop's part and the request's own task's on the loop; the database's and the load
+    generator's CPU, the calls and the trips as they were (a list per route: each)."""
+    if factor == 1.0:
+        return costs
+
+    def scaled(cost):
+        if isinstance(cost, list):
+            return [scaled(each) for each in cost]
+        if not isinstance(cost, tuple) or len(cost) < 6:
+            return cost  # the stream's split: shares, not CPU
+        server, db, client, calls, trips, loop, *own_loop = cost
+        return (server * factor, db, client, calls, trips, loop * factor,
+                *(part * factor for part in own_loop))  # fmt: skip
+
+    return {route: scaled(cost) for route, cost in costs.items()}
 
 
 def describe_call_handoff(chance: tuple[float, float] | None) -> str:
@@ -675,6 +734,10 @@ def combine(results: list[dict]) -> dict:
             for route, values in p95.items()
         },
         "p50": {route: float(np.median(values)) for route, values in p50.items()},
+        "mean": {
+            route: float(np.mean(np.concatenate([x["latencies"][route] for x in results])))
+            for route in routes
+        },
         "cpu": {key: float(np.mean([x["cpu"].get(key, 0.0) for x in results])) for key in keys},
         "run queue": {
             group: tuple(
@@ -886,11 +949,12 @@ def department(
     workers: list[int],
     switch_ms: float,
     waits: dict,
-    loop_keeps: bool = True,
+    **options,
 ):
     """p95 per route of ``students`` starting within a minute, for each number of workers
-    (one core each, PostgreSQL's CPU counted in it; browsers elsewhere); ``loop_keeps``:
-    as ``queue_sim.simulate``'s."""
+    (one core each, PostgreSQL's CPU counted in it; browsers elsewhere); ``options``: the
+    model's choices, as ``queue_sim.simulate``'s (``loop_keeps``, ``trips_in_turn``,
+    ``wake_counts_itself``)."""
     print(f"\ndepartment: {students} students starting within a minute, PostgreSQL; p95 ms "
           "(one core per worker, the database's CPU included in it)")  # fmt: skip
     header = " ".join(f"{name:>9s}" for name in DEPARTMENT_ROUTES.values())
@@ -899,7 +963,7 @@ def department(
         share = -(-students // count)
         result = simulate(
             costs, share, 1, 1.0, ramp=60.0, one_writer=False, clients_elsewhere=True,
-            hash_s=hash_s, switch_interval_s=switch_ms / 1000, loop_keeps=loop_keeps, **waits,
+            hash_s=hash_s, switch_interval_s=switch_ms / 1000, **options, **waits,
         )  # fmt: skip
         p95 = {route: np.percentile(v, 95) * 1000 for route, v in result["latencies"].items()}
         row = " ".join(f"{p95.get(route, float('nan')):9.0f}" for route in DEPARTMENT_ROUTES)

@@ -172,6 +172,8 @@ def simulate(
     locked_shares: dict[str, float] | None = None,
     stage_log: list | None = None,
     loop_keeps: bool = True,
+    trips_in_turn: bool = True,
+    wake_counts_itself: bool = True,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -220,7 +222,21 @@ def simulate(
     it and takes it back at once): handed on with ``call_handoff``'s chance, else kept for
     the next callback within its switch interval (False: every callback queues again
     behind the threads waiting, the model before 2026-12-05: its requests waited off a
-    core 3-8× less than the probe measured; bench/README.md, twenty-sixth part).
+    core 3-8× less than the probe measured; bench/README.md, twenty-sixth part);
+    ``trips_in_turn``: an HTTP request's trips to the thread pool are steps of their own,
+    as in the app: its thread work is cut into one piece per trip (a write's locked part one
+    of them, between the others; on PostgreSQL each piece makes its share of the round
+    trips), each a pool thread woken for it, and between them its coroutine's steps on the
+    event loop (its own loop CPU shared among them), each waiting for the loop's other
+    callbacks and for the interpreter -- the hops the probe measures (its "dispatch" and
+    "back") -- (False: one thread does all of the request's work, giving the interpreter up
+    at each trip but keeping it if nobody waits, the loop's part before it: the model before
+    2026-12-05); ``wake_counts_itself``: a busy wake-up's mean wait is ``wake_busy_s`` for
+    each core asked beyond the cores there are counting the woken thread, as
+    bench_handoffs.py measured it (2 processes spinning on 2 cores and the waking thread:
+    half a core beyond), and a call hands the interpreter on with ``call_handoff``'s "none
+    free" chance once the cores are all asked for (False: the cores asked for without the
+    woken thread, the model before 2026-12-05: both cores busy cost a wake-up nothing).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -230,7 +246,8 @@ def simulate(
     Returns "latencies" (per route, s), "server" (per route, each HTTP request's wait for
     a work place, time from asking for it to the answer, of that its threads' waits for the
     interpreter, for a hand-off of it, for a core while holding it and for the write lock or
-    the database server, and when it asked for a place, s), "wall", "cpu" asked of
+    the database server, when it asked for a place, and the server's CPU it drew for its
+    time in the place, s), "wall", "cpu" asked of
     each pool, "lock held" (each SQLite write's time holding the lock), and "run queue":
     per group ("server", "db", "client"), the time its threads ran and the time they were
     ready and waited for a core, s -- the hand-offs included: a woken thread waits on the run
@@ -250,6 +267,7 @@ def simulate(
     inside: dict[str, list[tuple[float, float]]] = defaultdict(list)
     finished = [0]
     overdrawn = [0.0]  # the cores asked for now beyond the cores there are, per core
+    asked_now = [0.0]  # the cores asked for now
     waking = random.Random(seed + 2)
 
     # per pool, the time its threads were ready to run and waited for a core, s (what the
@@ -262,7 +280,10 @@ def simulate(
     def busy_wake(pool: str = "server", counted: bool = True) -> float:
         """How much longer a thread of ``pool`` woken now waits for a core (s); counted
         here as a wake-up and a wait on the run queue unless the caller counts it."""
-        mean = wake_busy_s * overdrawn[0]
+        beyond = overdrawn[0]
+        if wake_counts_itself:  # as bench_handoffs.py measured it: the waking thread asks too
+            beyond = max((asked_now[0] + 1.0) / cores - 1.0, 0.0)
+        mean = wake_busy_s * beyond
         wait = WAKE_SLICE_S if mean and waking.random() < mean / WAKE_SLICE_S else 0.0
         if counted:
             queued[pool] += wait
@@ -370,6 +391,16 @@ def simulate(
             if len(queue) == 1:
                 wake_to_free(loop_thread)
 
+    def one_piece_per_trip(work: list[tuple[str, float]], pieces: int) -> list:
+        """A request's thread work (its unlocked "server" and locked "lock" stages) cut into
+        ``pieces`` trips: the locked part one trip of its own, second, the rest shared
+        evenly among the others (a write's checks, then the write, then its answer)."""
+        locked = [stage for stage in work if stage[0] == "lock"]
+        unlocked = sum(amount for pool, amount in work if pool == "server")
+        others = pieces - len(locked)
+        each = [("server", unlocked / others)] * others
+        return (each[:1] + locked + each[1:]) if locked else each
+
     def phases(route: str, then, worker: int, cost: tuple | None = None) -> None:
         cost = cost or costs[route]
         if isinstance(cost, list) and costs_in_order and route in per_student:
@@ -403,12 +434,16 @@ def simulate(
             work = work if locked < 1.0 else work[1:]
         else:
             work = [("server", threads)]
+        http = route not in STREAMED  # a stream arrives on its WebSocket: no work place
+        pieces = int(round(trips)) if trips_in_turn and http and route != LOGIN else 0
+        pieces = pieces if pieces >= 2 else 0
+        if pieces:
+            work = one_piece_per_trip(work, pieces)
         round_trips = 0 if one_writer else int(round(calls))
-        if round_trips:  # the thread's work between round trips to the database server
+        if round_trips and not pieces:  # the thread's work between round trips to the database
             piece = work[0][1] / (round_trips + 1)
             trip = [("thread", piece), ("db", db / round_trips), ("wait", round_trip_s)]
             work[:1] = trip * round_trips + [("thread", piece)]
-        http = route not in STREAMED  # a stream arrives on its WebSocket: no work place
         # the event loop's part inside the app (routing, dependencies, the answer: the
         # request's own task, ``in_class``) runs holding the request's places; the rest
         # (the server reading and writing its socket) before and after
@@ -421,13 +456,33 @@ def simulate(
         stages += [] if route in CONTINUED else [("loop", outside / 2)]
         stages += [("admit", 0.0)] if http else []
         stages += [("enter", 0.0)] if slotted else []
-        stages += [("loop", loop_inside)] if loop_inside else []
-        stages += [*work, ("db", db)] if not round_trips else work
+        if pieces:  # the coroutine's steps on the loop between its trips
+            step_on_loop = ("loop step", loop_inside / (pieces + 1))
+            stages += [step_on_loop]
+            done_share = 0.0
+            for pool, amount in work:
+                if round_trips:  # its share of the round trips to the database server
+                    before = int(round(round_trips * done_share / threads))
+                    done_share += amount
+                    made = int(round(round_trips * done_share / threads)) - before
+                    segment = amount / (made + 1)
+                    trip = [("thread", segment), ("db", db / round_trips), ("wait", round_trip_s)]
+                    stages += trip * made + [("thread", segment)]
+                else:
+                    stages += [(f"{pool} piece", amount)]
+                stages += [step_on_loop]
+            stages += [] if round_trips else [("db", db)]
+        else:
+            stages += [("loop", loop_inside)] if loop_inside else []
+            stages += [*work, ("db", db)] if not round_trips else work
         stages += [("leave", 0.0)] if slotted else []
         stages += [("dismiss", 0.0)] if http else []
         stages += [("loop", outside / 2), ("client", client / 2)]
         if stage_log is not None:
             stage_log.append((route, [pool for pool, _ in stages]))
+        # the server's CPU inside its place (the probe's: its steps on the loop, its threads'
+        # and a log-in's hash; not the database server's)
+        own_cpu = loop_inside + threads + (hash_s if route == LOGIN else 0.0)
         holding = [False]  # whether this request holds one of its worker's places
         # its threads' waits: for the interpreter, a hand-off of it, a core, the write lock
         # or the database server
@@ -454,7 +509,7 @@ def simulate(
 
                 places[worker].enter(admitted)
             elif pool == "dismiss":
-                inside[route].append((waited[0], now - asked[0], *waits, asked[0]))
+                inside[route].append((waited[0], now - asked[0], *waits, asked[0], own_cpu))
                 give_back()
                 run(i + 1)
             elif pool == "give way":  # a log-in's hash: its work place to another request
@@ -465,7 +520,18 @@ def simulate(
             elif pool == "leave":
                 slots.leave()
                 run(i + 1)
-            elif pool == "lock":
+            elif pool == "loop step":
+                loop_task(work, lambda: run(i + 1), worker, 1)
+            elif pool == "server piece":
+                server_job(
+                    work, lambda: run(i + 1), calls * work / threads, worker,
+                    1.0 if calls else 0.0, waits=waits,
+                )  # fmt: skip
+            elif pool in ("lock", "lock piece"):
+                if pool == "lock piece":  # its own trip: its releases are its SQLite calls
+                    releases_in, call_share_in = calls * work / threads, 1.0 if calls else 0.0
+                else:
+                    releases_in, call_share_in = share(work), call_share
 
                 def release() -> None:
                     lock_held.append(now - taken[0])
@@ -475,7 +541,7 @@ def simulate(
                 def take() -> None:
                     taken[0] = now
                     waits[3] += now - wanted
-                    server_job(work, release, share(work), worker, call_share, waits=waits)
+                    server_job(work, release, releases_in, worker, call_share_in, waits=waits)
 
                 taken: list[float | None] = [None]
                 wanted = now
@@ -495,7 +561,7 @@ def simulate(
                 server_job(
                     work,
                     lambda: run(i + 1),
-                    trips * work / threads,
+                    0.0 if pieces else trips * work / threads,  # pieces: a trip each
                     worker,
                     woken=not after_trip,
                     waits=waits,
@@ -621,7 +687,8 @@ def simulate(
         loop_step = job.pool == "loop" and loop_keeps  # its release is like a call's
         if not loop_step and (not job.call_share or calls_drawn.random() >= job.call_share):
             return False  # a trip to the thread pool: the thread waits, the turn passes
-        chance = call_handoff[1] if overdrawn[0] > 0 else call_handoff[0]
+        none_free = asked_now[0] >= cores if wake_counts_itself else overdrawn[0] > 0
+        chance = call_handoff[1] if none_free else call_handoff[0]
         if calls_drawn.random() < chance:
             return False
         wakeups["server"] += 1  # the waiter woken, on the run queue, asleep again
@@ -644,6 +711,7 @@ def simulate(
         asked = sum(demand[pool] for pool in shared)
         scale = min(1.0, cores / asked) if asked else 1.0
         overdrawn[0] = max(asked / cores - 1.0, 0.0)
+        asked_now[0] = asked
         rate = {pool: demand[pool] * (scale if pool in shared else 1.0) / counts[pool]
                 for pool in counts}  # fmt: skip
         if holders:

@@ -8,7 +8,9 @@ the answer back) and its threads' waits on the run queue (the kernel's ``schedst
 ``queue_sim.simulate`` reports the same split for each simulated request ("server"), and
 :func:`compare` prints the two side by side per route, :func:`compare_windows` by the
 class's time (start, middle, burst); :func:`place_queue` says how crowded the work places
-were."""
+were.  :func:`outside_the_app` sets the load generator's times of each request
+(``GYROLAB_BENCH_CLIENT_TIMES``) beside the server's: the time before the app is called and
+after it has answered, which :func:`compare_outside` prints beside the model's."""
 
 from __future__ import annotations
 
@@ -46,8 +48,12 @@ def read(path: Path) -> dict[str, np.ndarray]:
 
 def modelled(result: dict) -> dict[str, np.ndarray]:
     """``queue_sim.simulate``'s (or ``combine``'s) "server" tuples in ``read``'s columns
-    (ms; CPU: what is left of the time inside, which also holds the model's waits for the
-    event loop and a write place)."""
+    (ms).  As the probe counts them: CPU the server's own inside the place (the request's
+    drawn CPU); on the run queue its threads' waits for a core (and for a hand-off of the
+    interpreter); off a core everything else inside -- the interpreter's queue, the write
+    lock or the database, and the event loop's part of the hops (its queue of callbacks).
+    Tuples without the drawn CPU (before 2026-12-05): CPU is what is left of the time
+    inside, the model's waits for the event loop with it."""
     table = {}
     for route, rows in result["server"].items():
         values = np.array(rows, dtype=float)
@@ -55,9 +61,13 @@ def modelled(result: dict) -> dict[str, np.ndarray]:
             continue
         place, asked_to_answer = values[:, 0], values[:, 1]
         inside = asked_to_answer - place
-        off_core = values[:, 2] + values[:, 5]  # the interpreter's queue, lock or database
         run_queue = values[:, 3] + values[:, 4]  # being handed the interpreter, a core
-        cpu = np.maximum(inside - off_core - run_queue, 0.0)
+        if values.shape[1] >= 8:
+            cpu = np.clip(values[:, 7], 0.0, np.maximum(inside - run_queue, 0.0))
+            off_core = np.maximum(inside - cpu - run_queue, 0.0)
+        else:
+            off_core = values[:, 2] + values[:, 5]  # the interpreter's queue, lock or database
+            cpu = np.maximum(inside - off_core - run_queue, 0.0)
         table[route] = np.column_stack(
             [place * 1000, inside * 1000, cpu * 1000, off_core * 1000, run_queue * 1000,
              values[:, 6]]
@@ -96,7 +106,7 @@ def compare(model: dict[str, np.ndarray], measured: dict[str, np.ndarray]) -> No
     waits off a core and on the run queue (p95), model beside measurement."""
     print("  inside the server holding a work place, ms: mean / p95 (model | measured);"
           " p95 of the waits off a core (interpreter, write lock or database, thread hops)"
-          " hops) and on the run queue")  # fmt: skip
+          " and on the run queue")  # fmt: skip
     print(f"  {'route':42s} {'inside':>17s} {'off a core':>13s} {'run queue':>13s}")
     for route in sorted(set(model) & set(measured)):
         m, s = model[route], measured[route]
@@ -131,8 +141,8 @@ def by_window(table: dict[str, np.ndarray]) -> dict[str, tuple[int, np.ndarray]]
 
 def compare_windows(model: dict[str, np.ndarray], measured: dict[str, np.ndarray]) -> None:
     """``by_window`` of the model beside the measurement: where the class's time inside the
-    server goes at its start, between and in its burst (the model's "CPU" is what is left
-    of its time inside, with its waits for the event loop and a write place in it)."""
+    server goes at its start, between and in its burst (``modelled``'s columns: the
+    model's "CPU" is the CPU its requests drew)."""
     print("  inside the server by the class's time, mean ms a request: inside / CPU / off a"
           " core / run queue (model | measured)")  # fmt: skip
     modelled_windows, measured_windows = by_window(model), by_window(measured)
@@ -166,3 +176,63 @@ def compare_crowding(model: tuple[float, float], measured: dict[str, np.ndarray]
     print(f"  the work places: someone waited for one {model[0]:.0%} of the time they were"
           f" asked for or held (model), {share:.0%} (measured); then {model[1]:.1f} /"
           f" {queue:.1f} waited on average")  # fmt: skip
+
+
+def outside_the_app(client_times: Path, server_times: Path) -> dict[str, tuple[int, float, float]]:
+    """Per route: how many requests were matched, and their mean time before the app was
+    called (sent, carried, read and parsed by the server) and after it answered (written,
+    carried, read by the load generator), ms.  ``client_times``: the load generator's
+    ``GYROLAB_BENCH_CLIENT_TIMES`` lines (``method path sent_s answered_s``);
+    ``server_times``: the probe's ``GYROLAB_BENCH_SERVER_TIMES`` lines (``method path ms
+    waited_ms began_s pid``), on the same clock (``time.perf_counter``).  A request is the
+    first not yet matched of its method and path that began while it was on its way."""
+    began: dict[tuple[str, str], list[tuple[float, float]]] = defaultdict(list)
+    for line in server_times.read_text().splitlines():
+        fields = line.split()
+        if len(fields) >= 5:
+            began[(fields[0], fields[1])].append((float(fields[4]), float(fields[2]) / 1000))
+    for calls in began.values():
+        calls.sort()
+    matched: dict[tuple[str, str], int] = defaultdict(int)  # the next not yet matched
+    parts: dict[str, list[tuple[float, float]]] = defaultdict(list)
+    for line in client_times.read_text().splitlines():
+        fields = line.split()
+        if len(fields) != 4:
+            continue
+        key, sent, answered = (fields[0], fields[1]), float(fields[2]), float(fields[3])
+        calls, index = began.get(key, []), matched[key]
+        while index < len(calls) and calls[index][0] < sent:
+            index += 1  # a server call the load generator did not time (the teacher's)
+        if index == len(calls) or calls[index][0] > answered:
+            continue
+        matched[key] = index + 1
+        start, took = calls[index]
+        parts[route_of(*key)].append((start - sent, answered - start - took))
+    return {
+        route: (len(values), *(float(mean) * 1000 for mean in np.mean(values, axis=0)))
+        for route, values in parts.items()
+    }
+
+
+def modelled_outside(result: dict) -> dict[str, float]:
+    """Per route, the model's mean time outside the app (ms): a request's latency less its
+    time from asking for a place to the answer (``queue_sim.simulate``'s "server"; of
+    ``combine``'s, its seeds' "mean" latency)."""
+    means = result.get("mean") or {
+        route: float(np.mean(values)) for route, values in result["latencies"].items()
+    }
+    return {
+        route: (means[route] - float(np.mean(np.array(rows)[:, 1]))) * 1000
+        for route, rows in result["server"].items()
+        if route in means and len(rows)
+    }
+
+
+def compare_outside(result: dict, measured: dict[str, tuple[int, float, float]]) -> None:
+    """``modelled_outside`` beside ``outside_the_app``'s."""
+    print("  outside the app, mean ms a request: model | measured (before the app + after it)")
+    model = modelled_outside(result)
+    for route in sorted(set(model) & set(measured)):
+        count, before, after = measured[route]
+        print(f"  {route:42s} {model[route]:5.1f} | {before + after:5.1f}"
+              f" ({before:4.1f} + {after:4.1f}, {count} requests)")  # fmt: skip

@@ -131,13 +131,17 @@ STEPS = [step for step in queue_sim.student_script() if step[0] == "request"]
 def test_the_model_splits_each_requests_time_inside_the_server():
     """Alone, a request waits for nothing but its hand-offs; in a crowd its waits for the
     interpreter, a core and the write lock are never negative and never more than its
-    time inside; ``modelled`` puts them in the probe's columns."""
+    time inside; ``modelled`` puts them in the probe's columns, its CPU the CPU each
+    request drew (4 ms in threads, and in the crowd 0.5 ms of its own task on the event
+    loop, which waits there behind the loop's other callbacks) however long it waited."""
     alone = queue_sim.simulate(costs(), 1, 1, 2.0, ramp=0.0, teacher=False, wake_free=False)
     for route, rows in alone["server"].items():
         values = np.array(rows)
-        assert values.shape[1] == 7, route
+        assert values.shape[1] == 8, route
         assert np.all(values[:, 2] == 0) and np.all(values[:, 5] == 0), route  # no queue
-    crowd = queue_sim.simulate(costs(), students=40, workers=1, cores=2.0, teacher=False)
+        assert values[:, 7] == pytest.approx(4 * MS), route
+    own_task = {route: (*cost, 0.5 * MS) for route, cost in costs().items()}
+    crowd = queue_sim.simulate(own_task, students=40, workers=1, cores=2.0, teacher=False)
     values = np.concatenate([np.array(rows) for rows in crowd["server"].values()])
     waits = values[:, 2:6]
     assert np.all(waits >= 0)
@@ -145,7 +149,7 @@ def test_the_model_splits_each_requests_time_inside_the_server():
     assert waits[:, 0].max() > 0 and waits[:, 3].max() > 0  # the interpreter, the lock
     table = request_waits.modelled(crowd)
     for route, rows in table.items():
-        assert np.all(rows[:, request_waits.CPU] >= 0), route
+        assert rows[:, request_waits.CPU] == pytest.approx(4.5), route  # ms, waits apart
         assert rows[:, request_waits.INSIDE] == pytest.approx(
             rows[:, request_waits.CPU]
             + rows[:, request_waits.OFF_CORE]
@@ -165,3 +169,45 @@ def test_a_prediction_says_how_crowded_its_places_were():
 
     few, many = crowding(5), crowding(60)
     assert 0 <= few[0] < many[0] <= 1 and many[1] >= 1
+
+
+def test_the_time_outside_the_app_is_the_load_generators_less_the_servers(tmp_path):
+    """Each request the load generator timed is set beside the server's call of the same
+    method and path that began while it was on its way: before (sent to called) and after
+    (the app's end to the answer read).  A call the load generator did not time (the
+    teacher's) is passed over; two log-ins of the same path are matched in turn."""
+    client = tmp_path / "client.txt"
+    client.write_text(
+        "GET /login 10.000 10.010\n"
+        "GET /login 10.020 10.030\n"
+        "POST /lab/sessions/4/csv 11.000 11.050\n"
+    )
+    server = tmp_path / "server.txt"
+    server.write_text(
+        "GET /login 6.000 0.1 10.002 7\n"  # 6 ms in the app: 2 ms before, 2 after
+        "GET /courses/1/assignments/1 5.000 0.1 10.500 7\n"  # the teacher's
+        "GET /login 4.000 0.1 10.024 7\n"  # 4 before, 2 after
+        "POST /lab/sessions/3/csv 1.000 0.1 10.990 7\n"  # another student's, earlier
+        "POST /lab/sessions/4/csv 40.000 0.1 11.003 7\n"  # 3 before, 7 after
+    )
+    outside = request_waits.outside_the_app(client, server)
+    assert set(outside) == {"GET /login", "POST /lab/sessions/{id}/csv"}
+    count, before, after = outside["GET /login"]
+    assert count == 2 and before == pytest.approx(3.0) and after == pytest.approx(2.0)
+    assert outside["POST /lab/sessions/{id}/csv"] == pytest.approx((1, 3.0, 7.0))
+
+
+def test_the_models_time_outside_the_app_is_its_latency_less_its_time_inside():
+    """A student alone: each request's time outside the app is its client's CPU and the
+    event loop's part outside it (2 ms and 1 ms here), the same in a seed's result and in
+    ``combine``'s of several."""
+    table = {route: (5 * MS, 0.0, 2 * MS, 10.0, 2.0, 1 * MS, 0.0) for _, route in STEPS}
+    table[queue_sim.STREAM] = (1 * MS, 0.0, 0.2 * MS, 1.0, 0.0, 1 * MS)
+    runs = [
+        queue_sim.simulate(table, 1, 1, 2.0, ramp=0.0, teacher=False, wake_free=False, seed=s)
+        for s in (1, 2)
+    ]
+    for result in (runs[0], queue_model.combine(runs)):
+        outside = request_waits.modelled_outside(result)
+        assert outside["GET /lab"] == pytest.approx(3.0, abs=1e-3)
+        assert outside["POST /lab/sessions/{id}/csv"] == pytest.approx(3.0, abs=1e-3)
