@@ -371,6 +371,14 @@ def main() -> int:
         "elsewhere; each worker simulated with its share of students)",
     )
     parser.add_argument(
+        "--department-slice",
+        type=int,
+        default=DEPARTMENT_SLICE,
+        help="with --department: this many workers simulated together on as many cores "
+        f"(default {DEPARTMENT_SLICE}; 1: each on a core of its own, the model before "
+        "2026-12-05)",
+    )
+    parser.add_argument(
         "--switch-interval",
         type=float,
         default=SWITCH_INTERVAL_S * 1000,
@@ -654,7 +662,7 @@ def main() -> int:
     if args.department:
         department(
             costs, hash_s, args.department[0], args.department[1:], args.switch_interval,
-            waits_of(), **options,
+            waits_of(), args.department_slice, **options,
         )  # fmt: skip
     return 0
 
@@ -942,6 +950,12 @@ DEPARTMENT_ROUTES = {
 }
 
 
+# The department's workers simulated together on as many cores (a slice of the machine):
+# a worker's burst borrows a core another leaves idle, as on the real machine, and the
+# simulation stays small (its time grows with the square of the students in it)
+DEPARTMENT_SLICE = 4
+
+
 def department(
     costs,
     hash_s: float,
@@ -949,21 +963,27 @@ def department(
     workers: list[int],
     switch_ms: float,
     waits: dict,
+    pooled: int = DEPARTMENT_SLICE,
     **options,
 ):
     """p95 per route of ``students`` starting within a minute, for each number of workers
-    (one core each, PostgreSQL's CPU counted in it; browsers elsewhere); ``options``: the
-    model's choices, as ``queue_sim.simulate``'s (``loop_keeps``, ``trips_in_turn``,
-    ``wake_counts_itself``)."""
+    (one core each, PostgreSQL's CPU counted in it; browsers elsewhere): ``pooled`` of the
+    workers, each with its share of the students, simulated together on as many cores (1:
+    each worker on a core of its own, the model before 2026-12-05 -- a worker's burst then
+    never finds a core another has left idle); ``options``: the model's choices, as
+    ``queue_sim.simulate``'s (``loop_keeps``, ``trips_in_turn``, ``wake_counts_itself``)."""
     print(f"\ndepartment: {students} students starting within a minute, PostgreSQL; p95 ms "
-          "(one core per worker, the database's CPU included in it)")  # fmt: skip
+          f"(one core per worker, the database's CPU included in it; {pooled} workers"
+          " simulated together on as many cores)")  # fmt: skip
     header = " ".join(f"{name:>9s}" for name in DEPARTMENT_ROUTES.values())
     print(f"  {'workers':>7s} {'each':>5s} {header} {'worst':>9s}")
     for count in workers:
         share = -(-students // count)
+        together = max(min(pooled, count), 1)
         result = simulate(
-            costs, share, 1, 1.0, ramp=60.0, one_writer=False, clients_elsewhere=True,
-            hash_s=hash_s, switch_interval_s=switch_ms / 1000, **options, **waits,
+            costs, share * together, together, float(together), ramp=60.0, one_writer=False,
+            clients_elsewhere=True, hash_s=hash_s, switch_interval_s=switch_ms / 1000,
+            worker_shares=[1 / together] * together, **options, **waits,
         )  # fmt: skip
         p95 = {route: np.percentile(v, 95) * 1000 for route, v in result["latencies"].items()}
         row = " ".join(f"{p95.get(route, float('nan')):9.0f}" for route in DEPARTMENT_ROUTES)
