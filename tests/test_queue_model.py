@@ -121,13 +121,14 @@ def test_the_event_loop_can_keep_the_interpreter_between_its_callbacks_as_a_call
     wait off a core about as long as the probe measured).  Requests whose loop work wakes
     many times among threads that hold the interpreter: kept, their loop work waits no
     turns; handed on every time, the model is the one without the option, request for
-    request."""
+    request.  (Each request's work in one thread, ``trips_in_turn=False``: its twenty
+    trips are the loop's many wake-ups here, not twenty pool threads.)"""
     busy = costs(server=8 * MS, calls=0.0, trips=20.0, loop=3 * MS)
 
     def run(loop_keeps: bool, call_handoff):
         return queue_sim.simulate(
             busy, 40, 1, 2.0, teacher=False, work_places=0, loop_keeps=loop_keeps,
-            call_handoff=call_handoff,
+            call_handoff=call_handoff, trips_in_turn=False,
         )  # fmt: skip
 
     def mean(result: dict) -> float:
@@ -1004,9 +1005,9 @@ def test_the_departments_workers_share_their_cores(capsys):
     has no such core to borrow: on a class that keeps a core busy, its p95 is higher."""
 
     def worst(pooled: int) -> float:
-        queue_model.department(costs(server=8 * MS), 2 * MS, 120, [4], 1.0, {}, pooled=pooled)
+        queue_model.department(costs(server=8 * MS), 2 * MS, 40, [4], 1.0, {}, pooled=pooled)
         row = capsys.readouterr().out.strip().splitlines()[-1].split()
-        assert row[:2] == ["4", "30"]  # 4 workers, 30 students each
+        assert row[:2] == ["4", "10"]  # 4 workers, 10 students each
         return float(row[-1])
 
     assert worst(4) < worst(1)
