@@ -291,6 +291,7 @@ HANDOFFS_LINE = re.compile(
 )
 CALL_HANDOFFS_LINE = re.compile(r"measured after it: a core free ([\d.]+)%, none free ([\d.]+)%")
 ELSEWHERE_LINE = re.compile(r"anything else (-?[\d.]+) s")
+MACHINE_BUSY_LINE = re.compile(r"busy ([\d.]+) s .*a task waited for a core during ([\d.]+) s")
 # CPU beyond this, spent on the machine during a class by neither the class's processes nor
 # the kernel's usual few tenths: the run shared the cores (another job beside it)
 ELSEWHERE_S = 2.0
@@ -313,7 +314,8 @@ def measured_p95(path: Path) -> dict[str, dict[str, float]]:
     ``--run-queue``, under "waited server",
     "ran server" and so for "db" and "client", each group's time waiting for a core and on
     one during the class, s, and under "cpu elsewhere" the machine's CPU that went to
-    neither the class's processes nor the kernel)."""
+    neither the class's processes nor the kernel, under "busy" the cores' busy time and
+    under "pressure" the time some task waited for a core, s)."""
     tables: dict[str, dict[str, float]] = {}
     backend = None
     for line in path.read_text().splitlines():
@@ -331,6 +333,9 @@ def measured_p95(path: Path) -> dict[str, dict[str, float]]:
                 tables[backend][f"ran {RUN_QUEUE_KEYS[group]}"] = float(ran)
                 if slices:
                     tables[backend][f"slices {RUN_QUEUE_KEYS[group]}"] = float(slices)
+        machine = MACHINE_BUSY_LINE.search(line)
+        if backend and load_test.MACHINE_LABEL in line and machine:
+            tables[backend]["busy"], tables[backend]["pressure"] = map(float, machine.groups())
         elsewhere = ELSEWHERE_LINE.search(line)
         if backend and load_test.MACHINE_LABEL in line and elsewhere:
             tables[backend]["cpu elsewhere"] = float(elsewhere.group(1))
@@ -759,6 +764,9 @@ def combine(results: list[dict]) -> dict:
             for group in set().union(*(x.get("wake-ups", {}) for x in results))
         },
         "lock held": [held for result in results for held in result["lock held"]],
+        "pressure": tuple(
+            float(np.mean([x.get("pressure", (0.0, 0.0))[i] for x in results])) for i in (0, 1)
+        ),
         "server": dict(server),
         "places": tuple(
             np.median([request_waits.simulated_crowding(result) for result in results], axis=0)
@@ -897,6 +905,23 @@ def run_queue(result: dict, runs: list[dict[str, float]]) -> None:
         predicted = result["wake-ups"]["loop"]
         print(f"  times on a core, the event loops: predicted wake-ups {predicted:,.0f},"
               f" measured {float(np.median(loops)):,.0f}")  # fmt: skip
+    pressed = [(run["pressure"], run["busy"]) for run in runs if "pressure" in run]
+    if pressed and "pressure" in result:
+        some, busy = result["pressure"]
+        seen_some, seen_busy = (float(np.median(v)) for v in zip(*pressed, strict=True))
+        waited = sum(w for _, w in model.values())
+        seen_waited = sum(
+            float(np.median([run[f"waited {key}"] for run in runs if f"waited {key}" in run]))
+            for key in ("server", "db", "client")
+            if any(f"waited {key}" in run for run in runs)
+        )
+        deep, seen_deep = (
+            w / t if t else 0.0 for w, t in ((waited, some), (seen_waited, seen_some))
+        )
+        print(f"  the cores: busy {busy:.1f} s predicted, {seen_busy:.1f} s measured; some"
+              f" thread waiting for one {some:.1f} s predicted, {seen_some:.1f} s measured"
+              f" (/proc/pressure/cpu), with on average {deep:.1f} / {seen_deep:.1f} waiting"
+              " then")  # fmt: skip
     for key, label in (("server", "server"), ("db", "PostgreSQL"), ("client", "load gen.")):
         ran, waited = model.get(key, (0.0, 0.0))
         seen = [(run[f"ran {key}"], run[f"waited {key}"]) for run in runs

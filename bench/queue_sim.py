@@ -253,7 +253,10 @@ def simulate(
     ready and waited for a core, s -- the hand-offs included: a woken thread waits on the run
     queue until it runs (run_queue.py measures the same in a run) -- and "wake-ups": per
     group, how many times one of its threads was woken to run (the interpreter handed to
-    it, a round trip's answer; under "loop", of the server's those of the event loops)."""
+    it, a round trip's answer; under "loop", of the server's those of the event loops),
+    and "pressure": the time some thread waited for a core (more asked of the cores than
+    they have, or one woken and not yet on a core: the kernel's /proc/pressure/cpu "some")
+    and the cores' busy time, s."""
     capacity = {"client": float("inf") if clients_elsewhere else 1.0}
     capacity |= {"server": float(workers), "db": cores, "hash": float(HASH_SLOTS * workers)}
     capacity["loop"] = float(workers)
@@ -276,6 +279,10 @@ def simulate(
     ran: dict[str, float] = defaultdict(float)
 
     wakeups: dict[str, int] = defaultdict(int)
+    # the time some thread waited for a core (more asked of the cores than they have, or a
+    # thread woken and not yet on one: what the kernel's /proc/pressure/cpu "some" counts),
+    # and the cores' busy time, s
+    pressure = [0.0, 0.0]
 
     def busy_wake(pool: str = "server", counted: bool = True) -> float:
         """How much longer a thread of ``pool`` woken now waits for a core (s); counted
@@ -726,6 +733,10 @@ def simulate(
                 next_done = min(next_done, max(turn_ends[job.worker] - now, 0.0))
         next_timer = timers[0][0] - now if timers else float("inf")
         step = min(next_done, next_timer)
+        if step < float("inf"):
+            handing = any(job.handing > 0.0 for job in holders)
+            pressure[0] += step if asked > cores + 1e-12 or handing else 0.0
+            pressure[1] += min(asked, cores) * step
         for pool, asked_of in demand.items():
             if pool in shared and step < float("inf"):
                 group = "server" if pool in ("loop", "hash") else pool
@@ -806,4 +817,5 @@ def simulate(
         "lock held": lock_held,
         "run queue": {pool: (ran[pool], queued[pool]) for pool in ran},
         "wake-ups": dict(wakeups),
+        "pressure": tuple(pressure),
     }

@@ -833,6 +833,8 @@ def test_the_run_queue_of_a_run_is_read_from_its_report(tmp_path):
     path.write_text(load_test.report("PostgreSQL", tally, 10.0, 0, 16, 2) + "\n")
     table = queue_model.measured_p95(path)["PostgreSQL"]
     assert table["cpu elsewhere"] == pytest.approx(35.25 - 14.25 - 9.0 - 4.0)
+    # and the cores' busy time, and the time some task waited for one (its pressure)
+    assert (table["busy"], table["pressure"]) == (35.25, 3.0)
 
 
 def test_the_model_counts_a_wait_for_a_core_only_when_more_is_asked_than_there_are():
@@ -1011,3 +1013,28 @@ def test_the_departments_workers_share_their_cores(capsys):
         return float(row[-1])
 
     assert worst(4) < worst(1)
+
+
+def test_the_model_says_how_long_some_thread_waited_for_a_core():
+    """ "pressure": the time some thread waited for a core, as /proc/pressure/cpu's "some"
+    counts it, and the cores' busy time.  A student alone on two cores, each woken thread
+    reaching a core at once: no one ever waits, and the cores are busy for the CPU spent.
+    A class of 20 on two cores waits only while a woken thread reaches one (the hand-offs);
+    on half a core, some thread waits for half the class, twenty times as long."""
+    alone = queue_sim.simulate(
+        costs(), 1, 1, 2.0, ramp=0.0, hash_s=2 * MS, teacher=False, wake_free=False
+    )
+    some, busy = alone["pressure"]
+    assert some == 0.0
+    assert busy == pytest.approx(sum(alone["cpu"].values()), rel=0.02)
+
+    def class_on(cores: float) -> dict:
+        return queue_sim.simulate(costs(), students=20, workers=1, cores=cores, teacher=False)
+
+    roomy, crowded = class_on(2.0), class_on(0.5)
+    assert 0 < roomy["pressure"][0] < 0.05 * roomy["wall"]
+    assert crowded["pressure"][0] > 20 * roomy["pressure"][0]
+    assert crowded["pressure"][0] > 0.4 * crowded["wall"]
+    for result in (roomy, crowded):
+        assert result["pressure"][1] == pytest.approx(sum(result["cpu"].values()), rel=0.02)
+    assert crowded["pressure"][1] <= 0.5 * crowded["wall"] + 1e-9
