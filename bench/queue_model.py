@@ -462,6 +462,12 @@ def main() -> int:
         "bench_handoffs.py measured it",
     )
     parser.add_argument(
+        "--socket-stacking",
+        action="store_true",
+        help="a thread woken through a socket by one that goes on running waits on the "
+        "waker's core until it stops or its slice ends",
+    )
+    parser.add_argument(
         "--trips-in-one-thread",
         action="store_true",
         help="one thread does all of a request's work, the loop's part before it (the model "
@@ -565,6 +571,7 @@ def main() -> int:
         "loop_keeps": not args.loop_queues,
         "trips_in_turn": not args.trips_in_one_thread,
         "wake_counts_itself": not args.wake_beside_itself,
+        "socket_stacking": args.socket_stacking,
     }
 
     def predict(

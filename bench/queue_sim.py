@@ -107,6 +107,10 @@ ROUND_TRIP_S = 17e-6
 # as a slice of WAKE_SLICE_S with the chance that gives that mean.
 WAKE_BUSY_S = 195e-6
 WAKE_SLICE_S = 2e-3
+# A thread woken through a socket is put on its waker's core ("sync" wake-ups); a waker
+# that goes on running keeps the core until it stops or its slice ends: the kernel's
+# se.slice on the 2-core machine (/proc/self/sched), 1.4 ms
+STACKED_SLICE_S = 1.4e-3
 # An SQLite call releases the GIL while the database runs; a thread waiting for the
 # interpreter is woken, but takes it only if it reaches a core before the call is over --
 # else the caller takes it back and the waiter sleeps again.  bench/bench_handoffs.py
@@ -174,6 +178,7 @@ def simulate(
     loop_keeps: bool = True,
     trips_in_turn: bool = True,
     wake_counts_itself: bool = True,
+    socket_stacking: bool = False,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -236,7 +241,12 @@ def simulate(
     bench_handoffs.py measured it (2 processes spinning on 2 cores and the waking thread:
     half a core beyond), and a call hands the interpreter on with ``call_handoff``'s "none
     free" chance once the cores are all asked for (False: the cores asked for without the
-    woken thread, the model before 2026-12-05: both cores busy cost a wake-up nothing).
+    woken thread, the model before 2026-12-05: both cores busy cost a wake-up nothing);
+    ``socket_stacking``: a thread woken through a socket by one that goes on running (the
+    load generator by the server's answer, the event loop by a request) is put on the
+    waker's core and waits there until the waker stops or its slice ends
+    (``STACKED_SLICE_S``), even with the other core idle (counted in the run queue's
+    waits, not in "pressure").
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -380,6 +390,16 @@ def simulate(
             wakeups["loop"] += job.pool == "loop"
 
     loops: list[list[list]] = [[] for _ in range(workers)]  # [work left, done] in order
+
+    def loop_left(worker: int) -> float:
+        """The CPU left in the worker's event loop's callbacks now, s: what it goes on
+        running (its current callback's rest and those queued after it)."""
+        tasks = loops[worker]
+        if not tasks:
+            return 0.0
+        running = [job for job in interpreters[worker] if job.pool == "loop"]
+        first = running[0].left if running else tasks[0][0]
+        return first + sum(task[0] for task in tasks[1:])
 
     def loop_task(work: float, done, worker: int, wakeups: float) -> None:
         """Work on the worker's event loop: one thread, one task after another, each
@@ -575,12 +595,25 @@ def simulate(
                 )
             elif pool == "wait":  # the server and then this thread woken
                 at(now + work + busy_wake("db") + busy_wake(), waited_on_database(i))
+            elif pool == "loop" and stacked_behind("client", i):
+                wait = min(sum(job.left for job in jobs if job.pool == "client"), STACKED_SLICE_S)
+                queued["server"] += wait
+                at(now + wait, lambda: loop_task(work, lambda: run(i + 1), worker, 1 + trips / 2))
             elif pool == "loop":
                 loop_task(work, lambda: run(i + 1), worker, 1 + trips / 2)
+            elif pool == "client" and stacked_behind("loop", i):
+                wait = min(loop_left(worker), STACKED_SLICE_S)
+                queued["client"] += wait
+                at(now + wait, lambda: jobs.append(Job(pool, work, lambda: run(i + 1))))
             elif pool == "db" and round_trips:  # PostgreSQL's CPU between round trips
                 jobs.append(Job(pool, work, waited_on_database(i)))
             else:
                 jobs.append(Job(pool, work, lambda: run(i + 1)))
+
+        def stacked_behind(waker: str, i: int) -> bool:
+            """Whether this stage's thread is woken through a socket by ``waker``'s (the
+            stage before it) and waits on the waker's core (``socket_stacking``)."""
+            return socket_stacking and not clients_elsewhere and i > 0 and stages[i - 1][0] == waker
 
         def waited_on_database(i: int):
             """``run(i + 1)`` once the database has answered, its time counted as waited."""

@@ -1038,3 +1038,23 @@ def test_the_model_says_how_long_some_thread_waited_for_a_core():
     for result in (roomy, crowded):
         assert result["pressure"][1] == pytest.approx(sum(result["cpu"].values()), rel=0.02)
     assert crowded["pressure"][1] <= 0.5 * crowded["wall"] + 1e-9
+
+
+def test_a_thread_woken_through_a_socket_can_wait_on_its_wakers_core():
+    """``socket_stacking``: the load generator woken by an answer waits on the event
+    loop's core while the loop goes on with its callbacks (at most a slice), and the loop
+    woken by a request while the load generator goes on.  Alone, the loop has nothing left
+    when it answers: nothing changes.  In a class the load generator waits for a core
+    longer, never more than a slice for each of its wake-ups."""
+    alone = {"ramp": 0.0, "teacher": False}
+    assert (
+        queue_sim.simulate(costs(), 1, 1, 2.0, socket_stacking=True, **alone)["latencies"]
+        == queue_sim.simulate(costs(), 1, 1, 2.0, **alone)["latencies"]
+    )
+    plain = queue_sim.simulate(costs(), 20, 1, 2.0, teacher=False)
+    stacked = queue_sim.simulate(costs(), 20, 1, 2.0, teacher=False, socket_stacking=True)
+    waited, plain_waited = stacked["run queue"]["client"][1], plain["run queue"]["client"][1]
+    assert waited > 2 * plain_waited
+    answers = sum(len(v) for route, v in stacked["latencies"].items() if route != queue_sim.SAVED)
+    frames = 20 * 8 * queue_sim.FRAMES_PER_POSITION
+    assert waited - plain_waited <= (answers + frames) * queue_sim.STACKED_SLICE_S
