@@ -673,8 +673,9 @@ def main() -> int:
             compare(result, runs)
     if args.department:
         department(
-            costs, hash_s, args.department[0], args.department[1:], args.switch_interval,
-            waits_of(), args.department_slice, **options,
+            with_cpu_scaled(costs, args.cpu_scale), hash_s * args.cpu_scale,
+            args.department[0], args.department[1:], args.switch_interval, waits_of(),
+            args.department_slice, **options,
         )  # fmt: skip
     return 0
 
