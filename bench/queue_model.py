@@ -80,6 +80,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import load_test  # noqa: E402  (bench/, the script's folder)
+import p95_interval  # noqa: E402
 import request_waits  # noqa: E402
 from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
 from class_cpu import (  # noqa: E402
@@ -524,6 +525,15 @@ def main() -> int:
         "app, before it and after it, measured beside predicted",
     )
     parser.add_argument(
+        "--model-as-run",
+        type=int,
+        default=0,
+        metavar="N",
+        help="with --class-run: simulate each run N more times with seeds the prediction did "
+        "not use and score each as if measured (inside its own p95 interval, within 10 %%): "
+        "what an exact model would score against one run",
+    )
+    parser.add_argument(
         "--lock-trace",
         type=Path,
         nargs="*",
@@ -574,6 +584,36 @@ def main() -> int:
         "socket_stacking": args.socket_stacking,
     }
 
+    def simulate_seed(
+        costs: dict,
+        students: int,
+        shares: list[float] | None,
+        waits: dict | None,
+        locked: dict[str, float] | None,
+        seed: int,
+    ) -> dict:
+        """The class simulated once with ``seed`` (which worker each connection reaches,
+        which measured costs each request draws); ``shares``: each worker's chance of a
+        new connection; ``waits``: ``waits_of``'s."""
+        return simulate(
+            with_cpu_scaled(costs, args.cpu_scale),
+            students,
+            workers,
+            args.cores,
+            one_writer=workers == 1,
+            hash_s=hash_s * args.cpu_scale,
+            write_slots=args.write_slots,
+            switch_interval_s=args.switch_interval / 1000,
+            work_places=args.work_places,
+            seed=2026 + seed,
+            worker_shares=shares,
+            wake_free=not args.woken_at_once,
+            costs_in_order=not args.costs_at_random,
+            locked_shares=locked,
+            **options,
+            **(waits or waits_of()),
+        )
+
     def predict(
         costs: dict,
         students: int,
@@ -581,29 +621,10 @@ def main() -> int:
         waits: dict | None = None,
         locked: dict[str, float] | None = None,
     ) -> dict:
-        """The class simulated once per seed (which worker each connection reaches, which
-        measured costs each request draws), combined; ``shares``: each worker's chance of
-        a new connection; ``waits``: ``waits_of``'s."""
+        """``simulate_seed`` once per seed of ``--seeds``, combined."""
         return combine(
             [
-                simulate(
-                    with_cpu_scaled(costs, args.cpu_scale),
-                    students,
-                    workers,
-                    args.cores,
-                    one_writer=workers == 1,
-                    hash_s=hash_s * args.cpu_scale,
-                    write_slots=args.write_slots,
-                    switch_interval_s=args.switch_interval / 1000,
-                    work_places=args.work_places,
-                    seed=2026 + seed,
-                    worker_shares=shares,
-                    wake_free=not args.woken_at_once,
-                    costs_in_order=not args.costs_at_random,
-                    locked_shares=locked,
-                    **options,
-                    **(waits or waits_of()),
-                )
+                simulate_seed(costs, students, shares, waits, locked, seed)
                 for seed in range(args.seeds)
             ]
         )
@@ -611,6 +632,9 @@ def main() -> int:
     costs = alone
     if args.class_cpu:  # each run predicted from the CPU per request measured in it
         predicted: dict[int, list[tuple[dict, dict]]] = defaultdict(list)
+        # per class size, each run's p95 and its interval; --model-as-run's
+        measured_rows: dict[int, list[p95_interval.Row]] = defaultdict(list)
+        exact_rows: dict[int, list[p95_interval.Row]] = defaultdict(list)
         for index, (cpu, run) in enumerate(zip(args.class_cpu, args.class_run, strict=True)):
             students = _students_of(run)
             costs = class_costs(alone, own, cpu, run, not args.mean_costs)
@@ -647,6 +671,22 @@ def main() -> int:
             compare(result, [table])
             if times:
                 inside_the_server(result, server_times(times))
+            intervals = {}
+            if len(args.client_times) > index:
+                intervals = p95_interval.run_intervals(args.client_times[index])
+                measured_rows[students] += p95_interval.compare(result["p95"], intervals)
+            for seed in range(args.seeds, args.seeds + args.model_as_run):
+                # a seed the prediction did not use, scored as a measured run (of the
+                # routes the run's requests' times have, where it has them)
+                run_of_model = simulate_seed(costs, students, shares, waits, locked, seed)
+                latencies = {
+                    route: np.array(values) * 1000
+                    for route, values in run_of_model["latencies"].items()
+                    if not intervals or route in intervals
+                }
+                exact_rows[students] += p95_interval.score(
+                    result["p95"], p95_interval.intervals_of(latencies)
+                )
             if times and len(args.client_times) > index:
                 outside = request_waits.outside_the_app(args.client_times[index], times)
                 request_waits.compare_outside(result, outside)
@@ -659,6 +699,9 @@ def main() -> int:
             predicted[students].append((result, table))
         for students, pairs in sorted(predicted.items()):
             summary(students, name, pairs)
+        for students in sorted(set(measured_rows) | set(exact_rows)):
+            print(f"\n{students} students, {name}:", end="")
+            p95_interval.print_ceiling(measured_rows[students], exact_rows[students])
     else:
         measured: dict[tuple[str, int | None], list[dict[str, float]]] = defaultdict(list)
         for path in args.compare:

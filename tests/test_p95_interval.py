@@ -1,0 +1,108 @@
+"""bench/p95_interval.py: how well one load-test run knows its own p95."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.stats import binom
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+
+import p95_interval  # noqa: E402  (bench/)
+import queue_model  # noqa: E402
+import queue_sim  # noqa: E402
+
+from tests.test_queue_model import costs  # noqa: E402
+
+
+def test_the_medians_interval_of_a_hundred_values_is_the_textbooks():
+    """The distribution-free 95 % interval of the median of 100 values is X_(40) to X_(61)
+    (the standard table; coverage 0.965)."""
+    assert p95_interval.order_statistic_ranks(100, 0.5, 0.95) == (40, 61)
+    coverage = binom.cdf(60, 100, 0.5) - binom.cdf(39, 100, 0.5)
+    assert coverage == pytest.approx(0.965, abs=0.001)
+
+
+def test_too_few_requests_cannot_bound_the_p95_from_above():
+    """14 requests (a teacher's dashboard in one run) all fall below the p95 with chance
+    0.95¹⁴ ≈ 0.49: no request is a 90 % upper bound; 59 is the fewest that bound it."""
+    assert p95_interval.order_statistic_ranks(14)[1] is None
+    assert p95_interval.order_statistic_ranks(58)[1] is None  # 0.95⁵⁸ = 0.051
+    assert p95_interval.order_statistic_ranks(59)[1] == 59  # 0.95⁵⁹ = 0.0485 ≤ 0.05
+    low, high = p95_interval.quantile_interval(np.arange(14.0))
+    assert math.isfinite(low) and high == math.inf
+
+
+def test_the_interval_holds_the_true_p95_as_often_as_it_says():
+    """Samples of 120 from an exponential distribution (drawn here, not by the model):
+    the interval holds the true p95, −ln 0.05, in ≥ 90 % of 4000 samples, and as often as
+    the binomial sum says it should, within the Monte Carlo's scatter."""
+    rng = np.random.default_rng(7)
+    truth = -math.log(0.05)
+    samples = rng.exponential(1.0, size=(4000, 120))
+    held = np.mean(
+        [low <= truth <= high for low, high in map(p95_interval.quantile_interval, samples)]
+    )
+    low_rank, high_rank = p95_interval.order_statistic_ranks(120)
+    exact = binom.cdf(high_rank - 1, 120, 0.95) - binom.cdf(low_rank - 1, 120, 0.95)
+    assert exact >= 0.90
+    assert held == pytest.approx(exact, abs=4 * math.sqrt(exact * (1 - exact) / 4000))
+
+
+def test_a_runs_intervals_are_read_from_the_load_generators_times(tmp_path):
+    """``GYROLAB_BENCH_CLIENT_TIMES``: each request's send and answer times; per route
+    the count, the p95 as the load test computes it and its interval."""
+    lines = [f"POST /lab/sessions/{i % 7}/turn {i}.0 {i}.{i % 50 + 10:03d}" for i in range(100)]
+    lines.append("GET /login 200.0 200.004")
+    path = tmp_path / "client.txt"
+    path.write_text("\n".join(lines) + "\nGET /lab cut\n")
+    intervals = p95_interval.run_intervals(path)
+    count, p95, low, high = intervals["POST /lab/sessions/{id}/turn"]
+    turns = np.array([(i % 50 + 10) for i in range(100)], dtype=float)
+    assert count == 100 and p95 == pytest.approx(np.percentile(turns, 95), abs=1e-6)
+    assert low <= p95 <= high
+    assert intervals["GET /login"][:2] == (1, pytest.approx(4.0, abs=1e-6))
+    assert "GET /lab" not in intervals  # a line cut short
+
+
+def test_the_counts_say_inside_within_ten_per_cent_and_resolved(capsys):
+    intervals = {
+        "GET /lab": (120, 100.0, 95.0, 108.0),  # resolved: −5 / +8 %
+        "POST /login": (60, 50.0, 40.0, 80.0),  # not: −20 / +60 %
+        "GET dashboard (teacher)": (14, 80.0, 40.0, math.inf),
+    }
+    predicted = {"GET /lab": 109.0, "POST /login": 70.0, "GET dashboard (teacher)": 85.0}
+    rows = p95_interval.compare(predicted, intervals)
+    counts = p95_interval.tally(rows)
+    assert counts["all"] == {"count": 3, "inside": 2, "within 10 %": 2, "resolved": 1}
+    assert counts["GET /lab"]["inside"] == 0 and counts["GET /lab"]["within 10 %"] == 1
+    out = capsys.readouterr().out
+    assert "-50 / — %" in out  # the unbounded side shown as such
+    p95_interval.print_ceiling(rows, rows)
+    assert "  2 / 3" in capsys.readouterr().out
+
+
+def test_an_exact_model_scored_against_its_own_runs_is_within_ten_per_cent_more_often():
+    """``queue_model.py --model-as-run``: seeds the prediction did not use, each scored as
+    a run. The prediction from the other seeds is inside those runs' intervals, and within
+    10 % of their p95, far more often than the same prediction made 40 % too fast (40 %
+    too slow is still inside most intervals of 20 students: their upper ends are the
+    slowest requests, or unbounded)."""
+    runs = [queue_sim.simulate(costs(), 20, 1, 2.0, teacher=False, seed=s) for s in range(6)]
+    predicted = queue_model.combine(runs[:3])["p95"]
+    held_out = []
+    for run in runs[3:]:
+        latencies = {route: np.array(v) * 1000 for route, v in run["latencies"].items()}
+        held_out.append(p95_interval.intervals_of(latencies))
+    right = p95_interval.tally(
+        [row for run in held_out for row in p95_interval.score(predicted, run)]
+    )
+    fast = {route: 0.6 * value for route, value in predicted.items()}
+    wrong = p95_interval.tally([row for run in held_out for row in p95_interval.score(fast, run)])
+    assert right["all"]["count"] == wrong["all"]["count"] > 0
+    assert right["all"]["inside"] > 2 * wrong["all"]["inside"]
+    assert right["all"]["within 10 %"] > 2 * wrong["all"]["within 10 %"]
