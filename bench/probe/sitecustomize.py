@@ -16,7 +16,9 @@ is woken for it; ``bench_handoffs.py`` measures how long a call must last for it
 appends one line, ``wall_ms cpu_ms kind method path function``: how long it held the write
 lock (``BEGIN IMMEDIATE`` to the end of its commit or rollback), the CPU its thread spent
 meanwhile, the request or WebSocket it was for and the function the thread pool ran it in
-(``-`` where there was none: start-up, the CLI).
+(``-`` where there was none: start-up, the CLI), and how long it waited for its turn
+(``app.writer_turn``) before ``BEGIN IMMEDIATE``, ms (the wall from asking to being granted;
+``-`` for a write that did not ask).
 
 ``GYROLAB_BENCH_SERVER_TIMES`` (a load test): a file to which each HTTP request appends
 ``method path ms waited_ms began_s pid``: from when the app is called (uvicorn has read
@@ -135,6 +137,7 @@ if _COUNTS or _LOCKS or _CALLS:
     import sqlite3
     import sqlite3.dbapi2
     import struct
+    import threading
     import time
 
     if _COUNTS:
@@ -159,6 +162,21 @@ if _COUNTS or _LOCKS or _CALLS:
         # set by the request's or WebSocket's task, and by the thread-pool function (below)
         _lock_for = _lock_contextvars.ContextVar("gyrolab_bench_lock_for", default="- - -")
         _lock_in = _lock_contextvars.ContextVar("gyrolab_bench_lock_in", default="-")
+        # the wait for the writers' turn of the write this thread is about to begin
+        _turn_waited = threading.local()
+
+        from app import writer_turn as _writer_turn
+
+        _turn_acquire = _writer_turn.WriterTurn.acquire
+
+        def _timed_acquire(self, *args, **kwargs):
+            asked = time.perf_counter()
+            try:
+                return _turn_acquire(self, *args, **kwargs)
+            finally:
+                _turn_waited.ms = (time.perf_counter() - asked) * 1000
+
+        _writer_turn.WriterTurn.acquire = _timed_acquire
 
     if _CALLS:
         _calls = os.open(_CALLS, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
@@ -214,7 +232,10 @@ if _COUNTS or _LOCKS or _CALLS:
             if self.began is not None and _trace is not None:
                 wall, cpu = time.perf_counter() - self.began[0], time.thread_time() - self.began[1]
                 where = f"{_lock_for.get()} {_lock_in.get()}"
-                os.write(_trace, f"{wall * 1000:.3f} {cpu * 1000:.3f} {where}\n".encode())
+                turn = getattr(_turn_waited, "ms", None)
+                _turn_waited.ms = None
+                waited = "-" if turn is None else f"{turn:.3f}"
+                os.write(_trace, f"{wall * 1000:.3f} {cpu * 1000:.3f} {where} {waited}\n".encode())
             self.began = None
 
         def commit(self):
