@@ -75,6 +75,26 @@ def attributed_costs(text: str) -> ClassCpu:
     return ClassCpu(means, counts, float(total), dict(spent), split, dict(functions))
 
 
+def lock_trace_by_route(trace: str) -> dict[str, np.ndarray]:
+    """Per write route, one row per write transaction of the probe's
+    ``GYROLAB_BENCH_LOCK_TRACE`` lines (``wall_ms cpu_ms kind method path function
+    [turn_ms]``): its wait for the writers' turn (NaN where the line has none), its hold
+    of the lock and its CPU meanwhile, ms; the stream's writes named as in
+    :func:`locked_shares`."""
+    rows: dict[str, list[tuple[float, float, float]]] = defaultdict(list)
+    for line in trace.splitlines():
+        fields = line.split()
+        if len(fields) < 6 or fields[2] == "-":
+            continue
+        if fields[2] == "websocket":
+            route = STREAM_START if fields[5] in MARKING else STREAM_SAVE
+        else:
+            route = route_of(fields[3], fields[4])
+        turn = float(fields[6]) if len(fields) > 6 and fields[6] != "-" else float("nan")
+        rows[route].append((turn, float(fields[0]), float(fields[1])))
+    return {route: np.array(values) for route, values in rows.items()}
+
+
 def locked_shares(trace: str, seen: ClassCpu) -> dict[str, float]:
     """Per write route, the share of its thread CPU spent holding SQLite's write lock: the
     CPU of its write transactions (the probe's ``GYROLAB_BENCH_LOCK_TRACE`` lines, ``wall_ms

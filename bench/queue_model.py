@@ -86,6 +86,7 @@ from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
 from class_cpu import (  # noqa: E402
     attributed_costs,
     in_class,
+    lock_trace_by_route,
     locked_shares,
     server_times,
     worker_shares,
@@ -525,6 +526,12 @@ def main() -> int:
         "app, before it and after it, measured beside predicted",
     )
     parser.add_argument(
+        "--trips-inside-lock",
+        action="store_true",
+        help="a write's thread-pool trips hand the interpreter on inside its locked part "
+        "too, in proportion to the CPU (the model before 2026-12-05's twenty-eighth part)",
+    )
+    parser.add_argument(
         "--model-as-run",
         type=int,
         default=0,
@@ -582,6 +589,7 @@ def main() -> int:
         "trips_in_turn": not args.trips_in_one_thread,
         "wake_counts_itself": not args.wake_beside_itself,
         "socket_stacking": args.socket_stacking,
+        "trips_outside_lock": not args.trips_inside_lock,
     }
 
     def simulate_seed(
@@ -671,6 +679,8 @@ def main() -> int:
             compare(result, [table])
             if times:
                 inside_the_server(result, server_times(times))
+            if len(args.lock_trace) > index:
+                compare_lock(result, lock_trace_by_route(args.lock_trace[index].read_text()))
             intervals = {}
             if len(args.client_times) > index:
                 intervals = p95_interval.run_intervals(args.client_times[index])
@@ -815,6 +825,10 @@ def combine(results: list[dict]) -> dict:
             for group in set().union(*(x.get("wake-ups", {}) for x in results))
         },
         "lock held": [held for result in results for held in result["lock held"]],
+        "lock by route": {
+            route: [pair for x in results for pair in x.get("lock by route", {}).get(route, [])]
+            for route in set().union(*(x.get("lock by route", {}) for x in results))
+        },
         "pressure": tuple(
             float(np.mean([x.get("pressure", (0.0, 0.0))[i] for x in results])) for i in (0, 1)
         ),
@@ -989,6 +1003,28 @@ def run_queue(result: dict, runs: list[dict[str, float]]) -> None:
             f"  waited for a core, {label}: predicted {waited:.2f} s ({share(ran, waited):.0%}"
             f" of {ran + waited:.1f} s wanted), measured {seen_waited:.2f} s"
             f" ({share(seen_ran, seen_waited):.0%} of {seen_ran + seen_waited:.1f} s)"
+        )
+
+
+def compare_lock(result: dict, trace: dict[str, np.ndarray]) -> None:
+    """Each write route's wait for SQLite's write lock (the writers' turn) and its hold of
+    it, the model's (``simulate``'s "lock by route") beside the run's lock trace
+    (``class_cpu.lock_trace_by_route``), mean and p95 ms."""
+    print("  the write lock per route, ms: wait for it mean / p95 | hold mean / p95"
+          " (model | lock trace)")  # fmt: skip
+    for route in sorted(set(result.get("lock by route", {})) & set(trace)):
+        model = np.array(result["lock by route"][route]) * 1000
+        seen = trace[route]
+        waited = seen[:, 0][~np.isnan(seen[:, 0])]
+
+        def both(values: np.ndarray) -> str:
+            if not len(values):
+                return "    -/    -"
+            return f"{np.mean(values):5.1f}/{np.percentile(values, 95):5.1f}"
+
+        print(
+            f"  {route:42s} {both(model[:, 0])} | {both(waited)}   "
+            f"{both(model[:, 1])} | {both(seen[:, 1])}"
         )
 
 

@@ -179,6 +179,7 @@ def simulate(
     trips_in_turn: bool = True,
     wake_counts_itself: bool = True,
     socket_stacking: bool = False,
+    trips_outside_lock: bool = True,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -246,7 +247,11 @@ def simulate(
     load generator by the server's answer, the event loop by a request) is put on the
     waker's core and waits there until the waker stops or its slice ends
     (``STACKED_SLICE_S``), even with the other core idle (counted in the run queue's
-    waits, not in "pressure").
+    waits, not in "pressure"); ``trips_outside_lock``: a write's locked part (``BEGIN
+    IMMEDIATE`` to its commit, inside one thread-pool function) gives the interpreter up
+    at its SQLite calls alone, and the thread-pool trips' releases fall in its unlocked
+    part (False: both in proportion to the CPU, the model before 2026-12-05, in which a
+    stream's save handed the interpreter on inside the lock at ≈ 1.3 trips a save).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -258,7 +263,8 @@ def simulate(
     interpreter, for a hand-off of it, for a core while holding it and for the write lock or
     the database server, when it asked for a place, and the server's CPU it drew for its
     time in the place, s), "wall", "cpu" asked of
-    each pool, "lock held" (each SQLite write's time holding the lock), and "run queue":
+    each pool, "lock held" (each SQLite write's time holding the lock; "lock by route":
+    per route, each write's wait for the lock and its hold), and "run queue":
     per group ("server", "db", "client"), the time its threads ran and the time they were
     ready and waited for a core, s -- the hand-offs included: a woken thread waits on the run
     queue until it runs (run_queue.py measures the same in a run) -- and "wake-ups": per
@@ -348,6 +354,8 @@ def simulate(
     frame = (loop, 0.0, client, 0.0, 0.0, loop)
     lock = Gate(1)
     lock_held: list[float] = []  # how long each write held it, s
+    # per route, each write's wait for the lock and its hold, s (as the lock trace has them)
+    lock_by_route: dict[str, list[tuple[float, float]]] = defaultdict(list)
     slots = Gate(write_slots * workers if write_slots else float("inf"))
     places = [Gate(work_places if work_places else float("inf")) for _ in range(workers)]
 
@@ -555,13 +563,14 @@ def simulate(
                     1.0 if calls else 0.0, waits=waits,
                 )  # fmt: skip
             elif pool in ("lock", "lock piece"):
-                if pool == "lock piece":  # its own trip: its releases are its SQLite calls
+                if pool == "lock piece" or trips_outside_lock:  # its releases: its calls
                     releases_in, call_share_in = calls * work / threads, 1.0 if calls else 0.0
                 else:
                     releases_in, call_share_in = share(work), call_share
 
                 def release() -> None:
                     lock_held.append(now - taken[0])
+                    lock_by_route[route].append((taken[0] - wanted, now - taken[0]))
                     lock.leave()
                     run(i + 1)
 
@@ -580,6 +589,14 @@ def simulate(
                             give_back()
 
                     at(now + TURN_PATIENCE_S, impatient)
+            elif pool == "server" and trips_outside_lock and locked_work:
+                # the unlocked part of a write: its calls, and every trip's release
+                in_calls = calls * work / threads
+                releases_here = in_calls + trips * work / (threads - locked_work)
+                server_job(
+                    work, lambda: run(i + 1), releases_here, worker,
+                    in_calls / releases_here if releases_here else 0.0, waits=waits,
+                )  # fmt: skip
             elif pool == "server":
                 server_job(work, lambda: run(i + 1), share(work), worker, call_share, waits=waits)
             elif pool == "thread":  # between round trips: only thread-pool trips cut it
@@ -628,6 +645,9 @@ def simulate(
         # in-process SQLite: of the releases, the calls' (round trips to PostgreSQL are
         # stages of their own, and always hand the interpreter on)
         call_share = calls / releases if one_writer and releases else 0.0
+        # the CPU of its unpieced locked stages (``trips_outside_lock``)
+        locked_work = sum(amount for stage, amount in stages if stage == "lock")
+        locked_work = locked_work if locked_work < threads - 1e-12 else 0.0
 
         def share(work: float) -> float:
             """This stage's part of the request's releases (in proportion to its CPU)."""
@@ -848,6 +868,7 @@ def simulate(
         "wall": now,
         "cpu": dict(spent),
         "lock held": lock_held,
+        "lock by route": dict(lock_by_route),
         "run queue": {pool: (ran[pool], queued[pool]) for pool in ran},
         "wake-ups": dict(wakeups),
         "pressure": tuple(pressure),

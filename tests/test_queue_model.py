@@ -122,13 +122,15 @@ def test_the_event_loop_can_keep_the_interpreter_between_its_callbacks_as_a_call
     many times among threads that hold the interpreter: kept, their loop work waits no
     turns; handed on every time, the model is the one without the option, request for
     request.  (Each request's work in one thread, ``trips_in_turn=False``: its twenty
-    trips are the loop's many wake-ups here, not twenty pool threads.)"""
+    trips are the loop's many wake-ups here, not twenty pool threads; and a write's
+    releases spread over its work, ``trips_outside_lock=False``, as the whole of its CPU
+    holds the lock here.)"""
     busy = costs(server=8 * MS, calls=0.0, trips=20.0, loop=3 * MS)
 
     def run(loop_keeps: bool, call_handoff):
         return queue_sim.simulate(
             busy, 40, 1, 2.0, teacher=False, work_places=0, loop_keeps=loop_keeps,
-            call_handoff=call_handoff, trips_in_turn=False,
+            call_handoff=call_handoff, trips_in_turn=False, trips_outside_lock=False,
         )  # fmt: skip
 
     def mean(result: dict) -> float:
@@ -330,21 +332,40 @@ def test_the_profile_probe_writes_each_routes_thread_pool_functions_by_cpu(tmp_p
 
 
 LOCKING_SCRIPT = """
-import sqlite3, sys, time
-connection = sqlite3.connect(sys.argv[1], isolation_level=None)
+import sqlite3, sys, threading, time
+from app.writer_turn import WriterTurn
+connection = sqlite3.connect(sys.argv[1], isolation_level=None, check_same_thread=False)
 connection.execute("CREATE TABLE t (x)")
 for pause in (0.0, 0.03):
     connection.execute("BEGIN IMMEDIATE")  # as app.db begins: on the connection itself
     connection.execute("INSERT INTO t VALUES (1)")
     time.sleep(pause)
     connection.commit()
+# two writers taking turns: the second asks while the first holds its turn for 40 ms
+turn, holding = WriterTurn(), threading.Event()
+def write(hold):
+    turn.acquire(10.0)
+    holding.set()
+    time.sleep(hold)
+    connection.execute("BEGIN IMMEDIATE")
+    connection.execute("INSERT INTO t VALUES (2)")
+    connection.commit()
+    turn.release()
+first = threading.Thread(target=write, args=(0.04,))
+first.start()
+holding.wait()
+second = threading.Thread(target=write, args=(0.0,))
+second.start()
+first.join()
+second.join()
 """
 
 
 def test_the_lock_trace_probe_times_each_write_from_begin_immediate_to_commit(tmp_path):
     """``GYROLAB_BENCH_LOCK_TRACE``: one line per write transaction, the wall time from
     ``BEGIN IMMEDIATE`` to its commit and the thread's CPU meanwhile (it once missed
-    every write: the app begins on the connection, not on a cursor)."""
+    every write: the app begins on the connection, not on a cursor), and the wait for the
+    writers' turn before it (``-`` for a write that did not ask for one)."""
     import os
     import subprocess
 
@@ -357,12 +378,57 @@ def test_the_lock_trace_probe_times_each_write_from_begin_immediate_to_commit(tm
         check=True,
         timeout=60,
     )
-    lines = [[float(x) for x in line.split()[:2]] for line in trace.read_text().splitlines()]
-    assert all(line.split()[2:] == ["-"] * 4 for line in trace.read_text().splitlines())
-    assert len(lines) == 2
-    (_quick_wall, quick_cpu), (paused_wall, paused_cpu) = lines
+    fields = [line.split() for line in trace.read_text().splitlines()]
+    assert [line[2:6] for line in fields] == [["-"] * 4] * 4  # no request, no thread pool
+    lines = [[float(x) for x in line[:2]] for line in fields]
+    (_quick_wall, quick_cpu), (paused_wall, paused_cpu) = lines[:2]
     assert quick_cpu >= 0
     assert paused_wall >= 30 and paused_cpu < paused_wall - 20  # the pause held it, idle
+    assert [line[6] for line in fields[:2]] == ["-", "-"]  # written without a turn
+    first, second = (float(line[6]) for line in fields[2:])
+    assert first < 10 and second >= 35  # the second waited out the first's 40 ms
+
+
+def test_the_lock_trace_is_read_per_write_route_with_each_writes_wait_for_its_turn():
+    """``class_cpu.lock_trace_by_route``: the stream's writes named by their function, a
+    line without a turn's wait (written before 2026-12-05) NaN there, start-up's skipped."""
+    trace = "\n".join([
+        "44.0 43.6 - - - - 0.007",  # start-up: no request
+        "6.0 5.7 http POST /login _run_sync_endpoint 0.5",
+        "2.0 1.1 http POST /lab/sessions/7/turn _run_sync_endpoint 4.0",
+        "3.0 1.4 websocket WS /lab/sessions/7/stream _mark_started 2.0",
+        "6.0 3.4 websocket WS /lab/sessions/7/stream _save",
+    ])  # fmt: skip
+    rows = class_cpu.lock_trace_by_route(trace)
+    assert sorted(rows) == sorted(["POST /login", "POST /lab/sessions/{id}/turn",
+                                   queue_sim.STREAM_START, queue_sim.STREAM_SAVE])  # fmt: skip
+    assert rows["POST /lab/sessions/{id}/turn"].tolist() == [[4.0, 2.0, 1.1]]
+    assert rows[queue_sim.STREAM_START].tolist() == [[2.0, 3.0, 1.4]]
+    assert np.isnan(rows[queue_sim.STREAM_SAVE][0, 0])
+
+
+def test_a_thread_pool_trip_hands_the_interpreter_on_outside_the_write_lock():
+    """A write's transaction runs inside one thread-pool function: the trips' releases
+    fall before and after it, never between ``BEGIN IMMEDIATE`` and the commit.  Streams
+    whose writes make a trip a frame among requests that hold the interpreter: with the
+    trips outside the lock (the default), a save holds the lock for less beyond its CPU
+    than with them spread over it (the model before 2026-12-05), its CPU the same."""
+    table = costs(server=8 * MS, calls=0.0, trips=0.0)
+    table[queue_sim.STREAM] = (1 * MS, 0.1 * MS, 0.2 * MS, 2.0, 1.0, 0.1 * MS)
+    shares = {queue_sim.STREAM_SAVE: 0.5, queue_sim.STREAM_START: 0.5}
+
+    def save_holds(outside: bool) -> np.ndarray:
+        result = queue_sim.simulate(
+            table, 20, 1, 2.0, teacher=False, locked_shares=shares, work_places=0,
+            trips_outside_lock=outside,
+        )  # fmt: skip
+        return np.array(result["lock by route"][queue_sim.STREAM_SAVE])[:, 1]
+
+    outside, inside = save_holds(True), save_holds(False)
+    cpu = 0.9 * MS * queue_sim.FRAMES_PER_POSITION * 0.5 * 0.5  # the save's locked half
+    assert len(outside) == len(inside) == 20 * 8  # every position saved
+    assert outside.min() >= cpu - 1e-9 and inside.min() >= cpu - 1e-9
+    assert np.mean(outside) - cpu < 0.6 * (np.mean(inside) - cpu)
 
 
 def test_class_costs_replace_each_routes_own_cpu_and_keep_the_rest():
