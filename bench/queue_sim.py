@@ -247,11 +247,12 @@ def simulate(
     load generator by the server's answer, the event loop by a request) is put on the
     waker's core and waits there until the waker stops or its slice ends
     (``STACKED_SLICE_S``), even with the other core idle (counted in the run queue's
-    waits, not in "pressure"); ``trips_outside_lock``: a write's locked part (``BEGIN
-    IMMEDIATE`` to its commit, inside one thread-pool function) gives the interpreter up
-    at its SQLite calls alone, and the thread-pool trips' releases fall in its unlocked
-    part (False: both in proportion to the CPU, the model before 2026-12-05, in which a
-    stream's save handed the interpreter on inside the lock at ≈ 1.3 trips a save).
+    waits, not in "pressure"); ``trips_outside_lock``: where ``locked_shares`` splits a
+    write into its work before ``BEGIN IMMEDIATE`` and its transaction (one thread-pool
+    function), the locked part gives the interpreter up at its SQLite calls alone and the
+    thread-pool trips' releases fall in the unlocked part (False, or a write locked for
+    all of its CPU: both in proportion to the CPU, the model before 2026-12-05, in which
+    a stream's save handed the interpreter on inside the lock at ≈ 1.3 trips a save).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -563,7 +564,8 @@ def simulate(
                     1.0 if calls else 0.0, waits=waits,
                 )  # fmt: skip
             elif pool in ("lock", "lock piece"):
-                if pool == "lock piece" or trips_outside_lock:  # its releases: its calls
+                if pool == "lock piece" or (trips_outside_lock and locked_work):
+                    # its releases: its calls (the trips' fall in the unlocked part)
                     releases_in, call_share_in = calls * work / threads, 1.0 if calls else 0.0
                 else:
                     releases_in, call_share_in = share(work), call_share
@@ -645,7 +647,8 @@ def simulate(
         # in-process SQLite: of the releases, the calls' (round trips to PostgreSQL are
         # stages of their own, and always hand the interpreter on)
         call_share = calls / releases if one_writer and releases else 0.0
-        # the CPU of its unpieced locked stages (``trips_outside_lock``)
+        # the CPU of its unpieced locked stages (``trips_outside_lock``); 0 where the lock
+        # stands for the whole of the thread's work (no lock trace: its trips in it too)
         locked_work = sum(amount for stage, amount in stages if stage == "lock")
         locked_work = locked_work if locked_work < threads - 1e-12 else 0.0
 

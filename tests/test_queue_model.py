@@ -122,15 +122,13 @@ def test_the_event_loop_can_keep_the_interpreter_between_its_callbacks_as_a_call
     many times among threads that hold the interpreter: kept, their loop work waits no
     turns; handed on every time, the model is the one without the option, request for
     request.  (Each request's work in one thread, ``trips_in_turn=False``: its twenty
-    trips are the loop's many wake-ups here, not twenty pool threads; and a write's
-    releases spread over its work, ``trips_outside_lock=False``, as the whole of its CPU
-    holds the lock here.)"""
+    trips are the loop's many wake-ups here, not twenty pool threads.)"""
     busy = costs(server=8 * MS, calls=0.0, trips=20.0, loop=3 * MS)
 
     def run(loop_keeps: bool, call_handoff):
         return queue_sim.simulate(
             busy, 40, 1, 2.0, teacher=False, work_places=0, loop_keeps=loop_keeps,
-            call_handoff=call_handoff, trips_in_turn=False, trips_outside_lock=False,
+            call_handoff=call_handoff, trips_in_turn=False,
         )  # fmt: skip
 
     def mean(result: dict) -> float:
