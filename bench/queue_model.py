@@ -532,6 +532,14 @@ def main() -> int:
         "too, in proportion to the CPU (the model before 2026-12-05's twenty-eighth part)",
     )
     parser.add_argument(
+        "--released-share",
+        type=float,
+        default=0.0,
+        help="the share of a thread's CPU that runs with the interpreter released (SQLite's "
+        "own work in its calls, the kernel's in system calls), on a core after the part that "
+        "holds it (default 0: all of it holds the interpreter)",
+    )
+    parser.add_argument(
         "--model-as-run",
         type=int,
         default=0,
@@ -590,6 +598,7 @@ def main() -> int:
         "wake_counts_itself": not args.wake_beside_itself,
         "socket_stacking": args.socket_stacking,
         "trips_outside_lock": not args.trips_inside_lock,
+        "released_share": args.released_share,
     }
 
     def simulate_seed(

@@ -180,6 +180,7 @@ def simulate(
     wake_counts_itself: bool = True,
     socket_stacking: bool = False,
     trips_outside_lock: bool = True,
+    released_share: float = 0.0,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -252,7 +253,11 @@ def simulate(
     function), the locked part gives the interpreter up at its SQLite calls alone and the
     thread-pool trips' releases fall in the unlocked part (False, or a write locked for
     all of its CPU: both in proportion to the CPU, the model before 2026-12-05, in which
-    a stream's save handed the interpreter on inside the lock at ≈ 1.3 trips a save).
+    a stream's save handed the interpreter on inside the lock at ≈ 1.3 trips a save);
+    ``released_share``: the share of a thread's CPU that runs with the interpreter released
+    (SQLite's own work inside its calls, the kernel's in system calls), run on a core after
+    the thread's part holding the interpreter (0: all of it holds the interpreter, the
+    model before 2026-12-05).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -277,6 +282,7 @@ def simulate(
     capacity = {"client": float("inf") if clients_elsewhere else 1.0}
     capacity |= {"server": float(workers), "db": cores, "hash": float(HASH_SLOTS * workers)}
     capacity["loop"] = float(workers)
+    capacity["released"] = cores  # threads' CPU without the interpreter
     now = 0.0
     jobs: list[Job] = []
     timers: list[tuple[float, int, object]] = []  # (time, tie-break, callback)
@@ -377,6 +383,13 @@ def simulate(
         woken: bool = True,
         waits: list[float] | None = None,
     ) -> None:
+        if released_share and work > 0:  # its part without the interpreter, after it
+            held_done, off = done, work * released_share
+            work -= off
+
+            def done() -> None:
+                jobs.append(Job("released", off, held_done))
+
         job = Job("server", work, done, releases + 1, worker, call_share)
         job.waits = waits
         if not switch_interval_s:
@@ -795,7 +808,7 @@ def simulate(
             pressure[1] += min(asked, cores) * step
         for pool, asked_of in demand.items():
             if pool in shared and step < float("inf"):
-                group = "server" if pool in ("loop", "hash") else pool
+                group = "server" if pool in ("loop", "hash", "released") else pool
                 queued[group] += asked_of * (1.0 - scale) * step
                 ran[group] += asked_of * scale * step
         for job in jobs:

@@ -155,6 +155,21 @@ def test_a_request_waits_for_a_work_place():
         assert first == pytest.approx(expected, abs=1e-4), places
 
 
+def test_a_threads_cpu_without_the_interpreter_runs_beside_the_others():
+    """``released_share``: two requests of 20 ms of thread CPU at once on two cores. All
+    of it holding the interpreter, they share it: 40 ms each. Half of it released (SQLite's
+    own work, system calls), the held halves share the interpreter for 20 ms and the
+    released halves then run side by side on the two cores: 30 ms each."""
+    table = costs(server=20 * MS, db=0.0, client=0.0, calls=0.0, trips=0.0, loop=0.0)
+    for released, expected in ((0.0, 40 * MS), (0.5, 30 * MS)):
+        result = queue_sim.simulate(
+            table, 2, 1, 2.0, ramp=0.0, teacher=False, switch_interval_s=0.0,
+            work_places=0, released_share=released,
+        )  # fmt: skip
+        assert result["latencies"]["GET /login"] == pytest.approx([expected] * 2, abs=1e-4)
+        assert result["cpu"]["server"] == pytest.approx(64 * 20 * MS)  # the same CPU asked
+
+
 PROBED_ROUTES = """
 @app.get("/on-the-loop/{n}")
 async def on_the_loop(n: int):
