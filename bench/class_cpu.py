@@ -85,7 +85,7 @@ def lock_trace_by_route(trace: str) -> dict[str, np.ndarray]:
     for line in trace.splitlines():
         fields = line.split()
         if len(fields) < 6 or fields[2] == "-":
-            continue
+            continue  # start-up, the CLI, or a trace without the requests' names
         if fields[2] == "websocket":
             route = STREAM_START if fields[5] in MARKING else STREAM_SAVE
         else:
@@ -102,17 +102,10 @@ def locked_shares(trace: str, seen: ClassCpu) -> dict[str, float]:
     probe of the same run); for the stream, its mark's (``_mark_started`` over the marking
     functions) and its save's.  A write parses, checks and packs before ``BEGIN
     IMMEDIATE`` (issue 32, item 2): the model holds the lock for this share alone."""
-    locked: dict[str, float] = defaultdict(float)
-    for line in trace.splitlines():
-        fields = line.split()
-        if len(fields) < 6 or fields[2] == "-":
-            continue  # start-up, the CLI, or a trace without the requests' names
-        cpu_s, kind, method, path, function = float(fields[1]) / 1000, *fields[2:6]
-        if kind == "websocket":
-            route = STREAM_START if function in MARKING else STREAM_SAVE
-        else:
-            route = route_of(method, path)
-        locked[route] += cpu_s
+    locked = {
+        route: float(np.sum(rows[:, 2])) / 1000
+        for route, rows in lock_trace_by_route(trace).items()
+    }
     threads = {route: float(np.sum(cpus, axis=0)[1]) for route, cpus in seen.each.items()}
     functions = seen.stream_functions
     threads[STREAM_START] = sum(functions.get(name, 0.0) for name in MARKING)

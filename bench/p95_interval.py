@@ -1,6 +1,6 @@
 """How well one load-test run knows its own p95: a distribution-free interval per route.
 
-A route's p95 in one run is computed from that run's 14–360 requests. If those were
+A route's p95 in one run is computed from that run's 14–720 requests. If those were
 independent draws from one latency distribution, the true 95th percentile ξ would lie
 between two of them, the l-th and u-th smallest, with a chance that depends on nothing but
 the count. The number of requests below ξ is binomial, B ~ Bin(n, q), so
@@ -27,6 +27,7 @@ from scipy.stats import binom
 
 QUANTILE = 0.95
 CONFIDENCE = 0.90
+COUNTS = ("count", "inside", "within 10 %", "resolved")  # :func:`tally`'s, per route
 
 
 def order_statistic_ranks(
@@ -129,9 +130,7 @@ def resolved(interval: tuple[int, float, float, float]) -> bool:
 
 def tally(rows: list[Row]) -> dict[str, dict[str, int]]:
     """Per route and over all ("all"): "count", "inside", "within 10 %", "resolved"."""
-    counts: dict[str, dict[str, int]] = defaultdict(
-        lambda: {"count": 0, "inside": 0, "within 10 %": 0, "resolved": 0}
-    )
+    counts: dict[str, dict[str, int]] = defaultdict(lambda: dict.fromkeys(COUNTS, 0))
     for route, interval, _, error, inside in rows:
         for key in (route, "all"):
             counts[key]["count"] += 1
@@ -156,7 +155,7 @@ def compare(
         count, p95, _, _ = interval
         print(f"  {route:42s} {count:8d} {p95:8.0f} {describe(interval):>14s} {model:9.0f}"
               f" {error:+5.0f}%  {'yes' if inside else 'no'}")  # fmt: skip
-    counts = tally(rows).get("all", {"count": 0, "inside": 0, "within 10 %": 0, "resolved": 0})
+    counts = tally(rows)["all"] if rows else dict.fromkeys(COUNTS, 0)
     print(f"  inside the run's interval: {counts['inside']} of {counts['count']}; within"
           f" 10 %: {counts['within 10 %']}; routes whose interval lies within ±10 %:"
           f" {counts['resolved']}")  # fmt: skip
