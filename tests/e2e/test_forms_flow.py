@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import expect
 
+from app.cli.demo import DEMO_ASSIGNMENT
 from tests.e2e.conftest import log_in
 from tests.factories import pdf_text
 
@@ -146,7 +147,7 @@ def test_a_released_grade_is_amended_and_the_student_sees_why(demo_server, new_p
     student.set_viewport_size({"width": 390, "height": 844})
     log_in(student, server.url, "student2", credentials["student2"])
     student.goto(f"{server.url}/lab")
-    student.locator("#sessions a").first.click()
+    student.locator("#sessions a", has_text=DEMO_ASSIGNMENT).first.click()
     expect(student.locator("#grade")).to_have_text("85 / 100")
     history = student.locator("#grade-history")
     expect(history).to_contain_text("成绩更改记录")
