@@ -829,9 +829,12 @@ def combine(results: list[dict]) -> dict:
             )
             for group in set().union(*(x.get("run queue", {}) for x in results))
         },  # fmt: skip
-        "wake-ups": {
-            group: float(np.mean([x["wake-ups"].get(group, 0) for x in results]))
-            for group in set().union(*(x.get("wake-ups", {}) for x in results))
+        **{
+            key: {
+                group: float(np.mean([x.get(key, {}).get(group, 0) for x in results]))
+                for group in set().union(*(x.get(key, {}) for x in results))
+            }
+            for key in ("wake-ups", "waiting wake-ups")
         },
         "lock held": [held for result in results for held in result["lock held"]],
         "lock by route": {
@@ -964,6 +967,16 @@ def compare(result: dict, runs: list[dict[str, float]]) -> None:
         print(f"  {route:42s} {p50:6.0f} {predicted:>18s} {shown:>28s} {error:>6s}")
 
 
+def waiting_wakes(result: dict, group: str) -> str:
+    """`` + N waiting (… in all)``: the wake-ups of ``group``'s threads while they waited
+    for the interpreter, one a switch interval (``bench_gil_wakes.py``), beside the rest."""
+    waiting = result.get("waiting wake-ups", {}).get(group, 0.0)
+    if not waiting:
+        return ""
+    every = result.get("wake-ups", {}).get(group, 0.0) + waiting
+    return f" + {waiting:,.0f} waiting for the interpreter ({every:,.0f} in all)"
+
+
 def run_queue(result: dict, runs: list[dict[str, float]]) -> None:
     """Each group's wait for a core, predicted (the model's cores shared in proportion)
     beside what the kernel counted in the runs (``load_test.py --run-queue``): waited s /
@@ -977,8 +990,9 @@ def run_queue(result: dict, runs: list[dict[str, float]]) -> None:
     loops = [run["slices loop"] for run in runs if "slices loop" in run]
     if loops and "loop" in result.get("wake-ups", {}):
         predicted = result["wake-ups"]["loop"]
-        print(f"  times on a core, the event loops: predicted wake-ups {predicted:,.0f},"
-              f" measured {float(np.median(loops)):,.0f}")  # fmt: skip
+        measured = float(np.median(loops))
+        print(f"  times on a core, the event loops: predicted wake-ups {predicted:,.0f}"
+              f"{waiting_wakes(result, 'loop')}, measured {measured:,.0f}")  # fmt: skip
     pressed = [(run["pressure"], run["busy"]) for run in runs if "pressure" in run]
     if pressed and "pressure" in result:
         some, busy = result["pressure"]
@@ -1006,8 +1020,9 @@ def run_queue(result: dict, runs: list[dict[str, float]]) -> None:
         woken = result.get("wake-ups", {}).get(key, 0.0)
         slices = [run[f"slices {key}"] for run in runs if f"slices {key}" in run]
         if slices:
-            print(f"  times on a core, {label}: predicted wake-ups {woken:,.0f}, measured"
-                  f" {float(np.median(slices)):,.0f} (schedstat's slices)")  # fmt: skip
+            print(f"  times on a core, {label}: predicted wake-ups {woken:,.0f}"
+                  f"{waiting_wakes(result, key)}, measured {float(np.median(slices)):,.0f}"
+                  " (schedstat's slices)")  # fmt: skip
         print(
             f"  waited for a core, {label}: predicted {waited:.2f} s ({share(ran, waited):.0%}"
             f" of {ran + waited:.1f} s wanted), measured {seen_waited:.2f} s"

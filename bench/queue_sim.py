@@ -302,6 +302,10 @@ def simulate(
     ran: dict[str, float] = defaultdict(float)
 
     wakeups: dict[str, int] = defaultdict(int)
+    # a thread waiting for its worker's interpreter wakes at each switch interval to ask for
+    # it (CPython's take_gil: a timed wait) and sleeps again: a time on a core each, counted
+    # only (7 µs of CPU each, already in the measured CPU; bench_gil_wakes.py)
+    waiting_wakeups: dict[str, float] = defaultdict(float)
     # the time some thread waited for a core (more asked of the cores than they have, or a
     # thread woken and not yet on one: what the kernel's /proc/pressure/cpu "some" counts),
     # and the cores' busy time, s
@@ -817,6 +821,10 @@ def simulate(
             for waiter in queue[1:]:
                 if waiter.waits is not None:
                     waiter.waits[0] += step
+                if switch_interval_s > 0 and step < float("inf"):
+                    waiting_wakeups["server"] += step / switch_interval_s
+                    if waiter.pool == "loop":
+                        waiting_wakeups["loop"] += step / switch_interval_s
         for job in holders:
             if job.waits is not None:
                 if job.handing > 0.0:
@@ -887,5 +895,6 @@ def simulate(
         "lock by route": dict(lock_by_route),
         "run queue": {pool: (ran[pool], queued[pool]) for pool in ran},
         "wake-ups": dict(wakeups),
+        "waiting wake-ups": dict(waiting_wakeups),
         "pressure": tuple(pressure),
     }

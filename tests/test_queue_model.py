@@ -1137,3 +1137,43 @@ def test_a_thread_woken_through_a_socket_can_wait_on_its_wakers_core():
     answers = sum(len(v) for route, v in stacked["latencies"].items() if route != queue_sim.SAVED)
     frames = 20 * 8 * queue_sim.FRAMES_PER_POSITION
     assert waited - plain_waited <= (answers + frames) * queue_sim.STACKED_SLICE_S
+
+
+def test_a_thread_waiting_for_the_interpreter_wakes_once_a_switch_interval():
+    """CPython's take_gil waits for the interpreter in timed waits of one switch interval,
+    so each waiting thread is put on a core once an interval (bench_gil_wakes.py: ≈ 1,000
+    a second each at 1 ms).  The model counts them beside its other wake-ups: the time its
+    threads waited for the interpreter over the interval -- the requests' own waits, the
+    event loop's and the streams'; none for a lone student or under processor sharing."""
+    table = costs(server=20 * MS, db=0.0, client=0.0, calls=0.0, trips=0.0, loop=0.0)
+
+    def run(students: int, interval: float) -> dict:
+        return queue_sim.simulate(
+            table, students, 1, 2.0, ramp=0.0, teacher=False, work_places=0,
+            switch_interval_s=interval,
+        )  # fmt: skip
+
+    for interval in (1 * MS, 5 * MS):
+        result = run(2, interval)
+        woken = result["waiting wake-ups"]
+        requests_waited = sum(row[2] for rows in result["server"].values() for row in rows)
+        assert requests_waited > 0.1
+        others = woken["server"] * interval - requests_waited  # the loop's and the streams'
+        assert woken["loop"] * interval <= others <= woken["loop"] * interval + 0.05
+    assert run(1, 1 * MS)["waiting wake-ups"] == {}
+    assert run(2, 0.0)["waiting wake-ups"] == {}
+
+
+def test_the_waiting_threads_wake_at_each_switch_interval():
+    """bench_gil_wakes.py on this machine's CPython: three threads wanting the interpreter
+    are put on a core far more often at a 1 ms switch interval than at 20 ms (about once
+    an interval each, not once a turn)."""
+    import bench_gil_wakes
+
+    before = sys.getswitchinterval()
+    short = bench_gil_wakes.contended(3, 0.001, seconds=0.3)
+    long = bench_gil_wakes.contended(3, 0.020, seconds=0.3)
+    # (a crowded host preempts the spinning threads too: a few hundred more a second each)
+    assert short.slices_per_thread_s > 2 * long.slices_per_thread_s
+    assert short.slices_per_thread_s > 300
+    assert short.adds_per_s > 0 and sys.getswitchinterval() == before  # restored
