@@ -45,8 +45,10 @@
    measured p95 (the median of the runs, and their range) beside the prediction, and the
    CPU the runs used beside the CPU the costs ask for; with ``--class-cpu`` every
    ``--class-run`` is predicted from the CPU per request measured in it (and with the
-   hand-off and busy wake-up measured just before and after its class, where
-   ``load_test.py --handoffs`` measured them: they drift with the host), then the runs of
+   hand-off measured just before and after its class, where ``load_test.py --handoffs``
+   measured it: it drifts with the host; and with a busy wake-up's wait the run's own,
+   its server threads' wait on the run queue per time on a core, where
+   ``load_test.py --run-queue`` measured it, else the one measured beside it), then the runs of
    each class size are summed up: the median predicted and measured p95 per route, each
    run's error, and whether each run's p95 lies inside the band its seeds gave (the 10th
    to 90th percentile of the seeds' p95: how far one run's p95 moves by chance alone, so
@@ -457,6 +459,13 @@ def main() -> int:
         "times this: how far a p95 moves when the CPU per request is a few per cent off",
     )
     parser.add_argument(
+        "--wake-from-handoffs",
+        action="store_true",
+        help="a busy wake-up's wait a core asked beyond as bench_handoffs.py measured it "
+        "beside the class (the model before 2026-12-05, late morning), not the run's own "
+        "wait of its server threads on the run queue per time on a core",
+    )
+    parser.add_argument(
         "--wake-beside-itself",
         action="store_true",
         help="a busy wake-up's wait grows with the cores asked beyond the cores there are "
@@ -588,7 +597,7 @@ def main() -> int:
     def waits_of(table: dict | None = None) -> dict[str, float]:
         return run_waits(
             table or {}, args.handoff_us, args.wake_busy_us, args.call_handoff,
-            args.every_call_hands,
+            args.every_call_hands, not args.wake_from_handoffs,
         )  # fmt: skip
 
     # the model's choices where an earlier model is asked for (``queue_sim.simulate``'s)
@@ -748,6 +757,7 @@ def run_waits(
     wake_busy_us: float | None,
     call_handoff: tuple[float, float] | None = None,
     every_call_hands: bool = False,
+    wake_from_run: bool = True,
 ) -> dict:
     """The hand-off and the busy wake-up to simulate a run with, s: as given (0 turns one
     off), else as measured beside the run (``measured_p95``'s "handoff us", "wake busy
@@ -755,9 +765,16 @@ def run_waits(
     interpreter on (with a core free, with none): as given (``every_call_hands``: every
     call), else ``queue_sim.CALL_HANDOFF`` -- not what the run measured after its class
     ("call free", "call busy"), which on six runs of 2026-12-03 predicted no better
-    (bench/README.md, twenty-fifth part)."""
+    (bench/README.md, twenty-fifth part).  The busy wake-up, unless given: with
+    ``wake_from_run`` the run's own wait of its server threads on the run queue per time
+    on a core ("waited server" ÷ "slices server", ``load_test.py --run-queue``) where the
+    run has them -- 86–100 µs on SQLite and 211–335 µs on PostgreSQL on 2026-12-05, where
+    ``bench_handoffs.py`` measured 135–164 µs beside each class (bench/README.md,
+    twenty-ninth part); else the one measured beside the run, else the constant."""
     if handoff_us is None:
         handoff_us = table.get("handoff us", HANDOFF_S * 1e6)
+    if wake_busy_us is None and wake_from_run and table.get("slices server"):
+        wake_busy_us = table["waited server"] / table["slices server"] * 1e6
     if wake_busy_us is None:
         wake_busy_us = table.get("wake busy us", WAKE_BUSY_S * 1e6)
     return {

@@ -826,6 +826,22 @@ def test_the_hand_offs_measured_beside_a_run_are_read_from_its_report(tmp_path):
     )
 
 
+def test_a_busy_wake_up_is_the_runs_own_wait_per_time_on_a_core():
+    """A busy wake-up's wait is the run's own: its server threads' wait on the run queue
+    per time on a core (``load_test.py --run-queue``: 93.74 s over 280,159 slices,
+    335 µs), not the one measured beside the class (``--wake-from-handoffs``: 148 µs); a
+    wake-up given by hand still wins, and a run without the run queue's figures keeps the
+    one measured beside it."""
+    table = {"wake busy us": 148.0, "waited server": 93.74, "slices server": 280159.0}
+    waits = queue_model.run_waits(table, None, None)
+    assert waits["wake_busy_s"] == pytest.approx(93.74 / 280159)
+    beside = queue_model.run_waits(table, None, None, wake_from_run=False)
+    assert beside["wake_busy_s"] == pytest.approx(148e-6)
+    assert queue_model.run_waits(table, None, 100.0)["wake_busy_s"] == pytest.approx(100e-6)
+    bare = {"wake busy us": 148.0}
+    assert queue_model.run_waits(bare, None, None)["wake_busy_s"] == pytest.approx(148e-6)
+
+
 def test_an_sqlite_calls_chance_to_hand_on_measured_after_a_run_is_read_from_its_report(
     tmp_path,
 ):
