@@ -769,8 +769,9 @@ def run_waits(
     ``wake_from_run`` the run's own wait of its server threads on the run queue per time
     on a core ("waited server" ÷ "slices server", ``load_test.py --run-queue``) where the
     run has them -- 86–100 µs on SQLite and 211–335 µs on PostgreSQL on 2026-12-05, where
-    ``bench_handoffs.py`` measured 135–164 µs beside each class (bench/README.md,
-    twenty-ninth part); else the one measured beside the run, else the constant."""
+    ``bench_handoffs.py`` measured 135–164 µs beside each class; a small gain over nine
+    runs (bench/README.md, twenty-ninth part) -- else the one measured beside the run,
+    else the constant."""
     if handoff_us is None:
         handoff_us = table.get("handoff us", HANDOFF_S * 1e6)
     if wake_busy_us is None and wake_from_run and table.get("slices server"):
