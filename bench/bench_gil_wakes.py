@@ -22,7 +22,8 @@ import sys
 import threading
 import time
 from dataclasses import dataclass
-from pathlib import Path
+
+from run_queue import thread_stats  # bench/
 
 THREADS = (1, 2, 4, 8, 16, 32)
 
@@ -37,18 +38,6 @@ class Contended:
     run_queue: float
     cores: float
     adds_per_s: float
-
-
-def _thread_stats() -> dict[int, tuple[int, int, int]]:
-    """This process's threads: (ns on a core, ns on a run queue, times on a core)."""
-    stats = {}
-    for task in Path(f"/proc/{os.getpid()}/task").iterdir():
-        try:
-            ran, waited, slices = (int(x) for x in (task / "schedstat").read_text().split())
-        except (OSError, ValueError):
-            continue
-        stats[int(task.name)] = (ran, waited, slices)
-    return stats
 
 
 def contended(threads: int, interval_s: float, seconds: float = 2.0) -> Contended:
@@ -73,10 +62,10 @@ def contended(threads: int, interval_s: float, seconds: float = 2.0) -> Contende
         for worker in workers:
             worker.start()
         time.sleep(0.2)
-        first, began, cpu = _thread_stats(), time.perf_counter(), time.process_time()
+        first, began, cpu = thread_stats(os.getpid()), time.perf_counter(), time.process_time()
         settled.set()
         time.sleep(seconds)
-        last, wall = _thread_stats(), time.perf_counter() - began
+        last, wall = thread_stats(os.getpid()), time.perf_counter() - began
         cpu = time.process_time() - cpu
         added = sum(counts)
     finally:

@@ -304,7 +304,7 @@ def simulate(
     wakeups: dict[str, int] = defaultdict(int)
     # a thread waiting for its worker's interpreter wakes at each switch interval to ask for
     # it (CPython's take_gil: a timed wait) and sleeps again: a time on a core each, counted
-    # only (7 µs of CPU each, already in the measured CPU; bench_gil_wakes.py)
+    # only (3-7 µs of CPU each, already in the measured CPU; bench_gil_wakes.py)
     waiting_wakeups: dict[str, float] = defaultdict(float)
     # the time some thread waited for a core (more asked of the cores than they have, or a
     # thread woken and not yet on one: what the kernel's /proc/pressure/cpu "some" counts),
@@ -817,14 +817,17 @@ def simulate(
                 ran[group] += asked_of * scale * step
         for job in jobs:
             job.left -= rate[job.pool] * step
+        timed_out = 0.0  # each waiter's timed waits for the interpreter in this step
+        if switch_interval_s > 0 and step < float("inf"):
+            timed_out = step / switch_interval_s
         for queue in interpreters:
             for waiter in queue[1:]:
                 if waiter.waits is not None:
                     waiter.waits[0] += step
-                if switch_interval_s > 0 and step < float("inf"):
-                    waiting_wakeups["server"] += step / switch_interval_s
+                if timed_out:
+                    waiting_wakeups["server"] += timed_out
                     if waiter.pool == "loop":
-                        waiting_wakeups["loop"] += step / switch_interval_s
+                        waiting_wakeups["loop"] += timed_out
         for job in holders:
             if job.waits is not None:
                 if job.handing > 0.0:
