@@ -53,6 +53,11 @@
    run's error, and whether each run's p95 lies inside the band its seeds gave (the 10th
    to 90th percentile of the seeds' p95: how far one run's p95 moves by chance alone, so
    how near any prediction of one run can be; ``--seeds 20`` for a band worth reading).
+   With ``--pooled`` (and ``--client-times``) the runs of one class size are also taken
+   together, as one run as long as all of them: each route's p95 over all their requests,
+   known to about 1/√K of one run's interval, against the p95 of the model's requests of
+   every seed of every run's prediction.  ``--by-time ROUTE`` sets a route's requests side
+   by side by when they were sent from the class's start.
 
 ``bench/README.md`` has how far it is from measured, and what it still leaves out.  The
 simulation is in ``queue_sim.py``; a class's own CPU per request is read in
@@ -66,6 +71,7 @@ import asyncio
 import contextlib
 import json
 import os
+import random
 import re
 import struct
 import sys
@@ -90,6 +96,7 @@ from class_cpu import (  # noqa: E402
     in_class,
     lock_trace_by_route,
     locked_shares,
+    route_of,
     server_times,
     worker_shares,
 )
@@ -549,6 +556,23 @@ def main() -> int:
         "holds it (default 0: all of it holds the interpreter)",
     )
     parser.add_argument(
+        "--by-time",
+        nargs="*",
+        default=[],
+        metavar="ROUTE",
+        help="with --client-times: each ROUTE's requests by when they were sent from the "
+        "class's start, 2 s windows, count and p50 / p95, predicted beside measured",
+    )
+    parser.add_argument(
+        "--pooled",
+        action="store_true",
+        help="with --client-times: the requests of all the --class-run runs of one class "
+        "size and database taken together, as one run K times as long: their p95 per route "
+        "(and its interval, narrower by about √K) against the p95 of the model's requests "
+        "of every seed of every run's prediction (with --model-as-run: an exact model "
+        "pooled the same way)",
+    )
+    parser.add_argument(
         "--model-as-run",
         type=int,
         default=0,
@@ -661,6 +685,9 @@ def main() -> int:
         # per class size, each run's p95 and its interval; --model-as-run's
         measured_rows: dict[int, list[p95_interval.Row]] = defaultdict(list)
         exact_rows: dict[int, list[p95_interval.Row]] = defaultdict(list)
+        # --pooled: per class size, the runs' requests and the model's, per route (ms);
+        # the model's unused seeds by seed, each pooled over the runs
+        pools = {size: Pool() for size in {_students_of(run) for run in args.class_run}}
         for index, (cpu, run) in enumerate(zip(args.class_cpu, args.class_run, strict=True)):
             students = _students_of(run)
             costs = class_costs(alone, own, cpu, run, not args.mean_costs)
@@ -701,8 +728,13 @@ def main() -> int:
                 compare_lock(result, lock_trace_by_route(args.lock_trace[index].read_text()))
             intervals = {}
             if len(args.client_times) > index:
-                intervals = p95_interval.run_intervals(args.client_times[index])
+                seen_latencies = p95_interval.client_latencies(args.client_times[index])
+                intervals = p95_interval.intervals_of(seen_latencies)
                 measured_rows[students] += p95_interval.compare(result["p95"], intervals)
+                pools[students].add_run(seen_latencies, result["pooled"])
+                sent = sent_from_start(args.client_times[index], students)
+                for route in args.by_time:
+                    compare_by_time(route, result["timelines"], sent)
             for seed in range(args.seeds, args.seeds + args.model_as_run):
                 # a seed the prediction did not use, scored as a measured run (of the
                 # routes the run's requests' times have, where it has them)
@@ -715,6 +747,7 @@ def main() -> int:
                 exact_rows[students] += p95_interval.score(
                     result["p95"], p95_interval.intervals_of(latencies)
                 )
+                pools[students].add_model_run(seed - args.seeds, latencies)
             if times and len(args.client_times) > index:
                 outside = request_waits.outside_the_app(args.client_times[index], times)
                 request_waits.compare_outside(result, outside)
@@ -730,6 +763,11 @@ def main() -> int:
         for students in sorted(set(measured_rows) | set(exact_rows)):
             print(f"\n{students} students, {name}:", end="")
             p95_interval.print_ceiling(measured_rows[students], exact_rows[students])
+        if args.pooled:
+            for students, pool in sorted(pools.items()):
+                if pool.runs:
+                    print(f"\n{students} students, {name}, {pool.runs} runs pooled:")
+                    pool.compare()
     else:
         measured: dict[tuple[str, int | None], list[dict[str, float]]] = defaultdict(list)
         for path in args.compare:
@@ -835,6 +873,11 @@ def combine(results: list[dict]) -> dict:
             for route, values in p95.items()
         },
         "p50": {route: float(np.median(values)) for route, values in p50.items()},
+        "pooled": {
+            route: np.concatenate([x["latencies"][route] for x in results]) * 1000
+            for route in routes
+        },
+        "timelines": [result.get("timeline", []) for result in results],
         "mean": {
             route: float(np.mean(np.concatenate([x["latencies"][route] for x in results])))
             for route in routes
@@ -869,6 +912,114 @@ def combine(results: list[dict]) -> dict:
         "wall": float(np.median([result["wall"] for result in results])),
         "seeds": len(results),
     }
+
+
+class Pool:
+    """The requests of several runs of one class taken together, as one run as long as
+    all of them (``--pooled``): a route's p95 over K runs' requests is known to about
+    1/√K of one run's interval (``p95_interval``), so a prediction 10 % off can be told
+    from a right one at 60 students too. The prediction pooled the same way: every seed's
+    requests of every run's prediction, each run predicted from its own CPU; the p95 of
+    that mixture is what the runs' pooled p95 estimates."""
+
+    def __init__(self) -> None:
+        self.runs = 0
+        self.seen: dict[str, list[np.ndarray]] = defaultdict(list)
+        self.model: dict[str, list[np.ndarray]] = defaultdict(list)
+        self.exact: dict[int, dict[str, list[np.ndarray]]] = defaultdict(lambda: defaultdict(list))
+
+    def add_run(self, seen: dict[str, np.ndarray], model: dict[str, np.ndarray]) -> None:
+        """One run's requests (per route, ms) and its prediction's, all seeds (ms)."""
+        self.runs += 1
+        for route, values in seen.items():
+            self.seen[route].append(values)
+        for route, values in model.items():
+            self.model[route].append(values)
+
+    def add_model_run(self, index: int, latencies: dict[str, np.ndarray]) -> None:
+        """The ``index``-th unused seed of one run's model, scored as a run (ms)."""
+        for route, values in latencies.items():
+            self.exact[index][route].append(values)
+
+    def predicted(self) -> dict[str, float]:
+        """Per route, the p95 of the model's requests of all runs and seeds (ms)."""
+        return {
+            route: float(np.percentile(np.concatenate(parts), 95))
+            for route, parts in self.model.items()
+        }
+
+    def compare(self) -> tuple[list[p95_interval.Row], list[p95_interval.Row]]:
+        """Print the pooled runs' p95 per route, its interval and the pooled prediction,
+        then the model against them beside an exact model pooled the same way (each of
+        the unused seeds, over the same runs). Returns (the model's rows, the exact's)."""
+        predicted = self.predicted()
+        seen = {route: np.concatenate(parts) for route, parts in self.seen.items()}
+        rows = p95_interval.compare(predicted, p95_interval.intervals_of(seen))
+        exact = [
+            row
+            for by_route in self.exact.values()
+            for row in p95_interval.score(
+                predicted,
+                p95_interval.intervals_of(
+                    {route: np.concatenate(parts) for route, parts in by_route.items()}
+                ),
+            )
+        ]
+        if exact:
+            p95_interval.print_ceiling(rows, exact)
+        return rows, exact
+
+
+def sent_from_start(path: Path, students: int, ramp: float = 3.0) -> dict[str, np.ndarray]:
+    """Per route, each request the load generator timed (``GYROLAB_BENCH_CLIENT_TIMES``) as
+    rows (sent, latency), s from the class's start: the first request sent less the
+    earliest student's start in the load test's ramp (``random.Random(index)``), the
+    simulation's own starts."""
+    rows: dict[str, list[tuple[float, float]]] = defaultdict(list)
+    for line in path.read_text().splitlines():
+        fields = line.split()
+        if len(fields) == 4:
+            sent, answered = float(fields[2]), float(fields[3])
+            rows[route_of(fields[0], fields[1])].append((sent, answered - sent))
+    first = min(sent for values in rows.values() for sent, _ in values)
+    start = first - min(random.Random(index).uniform(0, ramp) for index in range(students))
+    return {
+        route: np.array([(sent - start, latency) for sent, latency in values])
+        for route, values in rows.items()
+    }
+
+
+def compare_by_time(
+    route: str,
+    model: list[list[tuple[str, float, float]]],
+    measured: dict[str, np.ndarray],
+    window_s: float = 2.0,
+) -> None:
+    """One route's requests by when they were sent from the class's start, in windows of
+    ``window_s``: how many a run (the model: a seed on average), and their p50 / p95 ms,
+    the model (``simulate``'s "timeline" of each seed, ``combine``'s "timelines") beside
+    the run (``sent_from_start``). A route whose p95 is set by the few requests that meet
+    a burst shows it here."""
+    model_rows = np.array([(sent, latency) for timeline in model
+                           for name, sent, latency in timeline if name == route])  # fmt: skip
+    seen = measured.get(route)
+    if not len(model_rows) or seen is None:
+        return
+    print(f"  {route} by when it was sent (count a run, p50 / p95 ms: model | measured);"
+          f" p95 over all: {np.percentile(model_rows[:, 1], 95) * 1000:.0f} |"
+          f" {np.percentile(seen[:, 1], 95) * 1000:.0f}")  # fmt: skip
+    end = max(model_rows[:, 0].max(), seen[:, 0].max())
+    for low in np.arange(0.0, end + window_s, window_s):
+        cells = []
+        for rows, runs in ((model_rows, len(model)), (seen, 1)):
+            inside = rows[(rows[:, 0] >= low) & (rows[:, 0] < low + window_s), 1] * 1000
+            cells.append(
+                f"{len(inside) / runs:5.0f} {np.percentile(inside, 50):5.0f} /"
+                f" {np.percentile(inside, 95):5.0f}"
+                if len(inside)
+                else f"{0:5d} {'-':>13s}"
+            )
+        print(f"  {low:5.0f}-{low + window_s:<4.0f} s {cells[0]} | {cells[1]}")
 
 
 def summary(students: int, name: str, pairs: list[tuple[dict, dict]]) -> dict:

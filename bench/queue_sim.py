@@ -264,11 +264,12 @@ def simulate(
     it gives it up or another has waited ``switch_interval_s``.  A request that makes
     many short database calls therefore waits about one turn of the others per call.
 
-    Returns "latencies" (per route, s), "server" (per route, each HTTP request's wait for
-    a work place, time from asking for it to the answer, of that its threads' waits for the
-    interpreter, for a hand-off of it, for a core while holding it and for the write lock or
-    the database server, when it asked for a place, and the server's CPU it drew for its
-    time in the place, s), "wall", "cpu" asked of
+    Returns "latencies" (per route, s), "timeline" (each HTTP request's route, the
+    time it was sent from the class's start and its latency, s), "server" (per route,
+    each HTTP request's wait for a work place, time from asking for it to the answer, of
+    that its threads' waits for the interpreter, for a hand-off of it, for a core while
+    holding it and for the write lock or the database server, when it asked for a place,
+    and the server's CPU it drew for its time in the place, s), "wall", "cpu" asked of
     each pool, "lock held" (each SQLite write's time holding the lock; "lock by route":
     per route, each write's wait for the lock and its hold), and "run queue":
     per group ("server", "db", "client"), the time its threads ran and the time they were
@@ -288,6 +289,7 @@ def simulate(
     timers: list[tuple[float, int, object]] = []  # (time, tie-break, callback)
     order = iter(range(10**9))
     latencies: dict[str, list[float]] = defaultdict(list)
+    timeline: list[tuple[str, float, float]] = []  # each HTTP request's (route, sent, latency)
     # per HTTP request: (waited for a work place, from asking for it to the answer), s --
     # what the probe's GYROLAB_BENCH_SERVER_TIMES measures in the server
     inside: dict[str, list[tuple[float, float]]] = defaultdict(list)
@@ -680,6 +682,7 @@ def simulate(
 
         def answered() -> None:
             latencies[route].append(now - began)
+            timeline.append((route, began, now - began))
             then()
 
         phases(route, answered, worker)
@@ -891,6 +894,7 @@ def simulate(
             callback()
     return {
         "latencies": latencies,
+        "timeline": timeline,
         "server": inside,
         "wall": now,
         "cpu": dict(spent),

@@ -106,3 +106,68 @@ def test_an_exact_model_scored_against_its_own_runs_is_within_ten_per_cent_more_
     assert right["all"]["count"] == wrong["all"]["count"] > 0
     assert right["all"]["inside"] > 2 * wrong["all"]["inside"]
     assert right["all"]["within 10 %"] > 2 * wrong["all"]["within 10 %"]
+
+
+def test_runs_pooled_know_their_p95_about_root_k_better(capsys):
+    """``queue_model.py --pooled``: eight runs' requests taken together (lognormal draws
+    made here, not by the model) bound the true p95, exp(μ + 1.645 σ), by an interval about
+    √8 narrower than one run's, and the pooled prediction is the p95 of every seed of every
+    run's model; each unused seed, pooled over the runs, is scored as one run."""
+    rng = np.random.default_rng(11)
+    mu, sigma, route = 4.0, 0.5, "GET /lab"
+    truth = math.exp(mu + sigma * 1.6448536)
+    pool, singles = queue_model.Pool(), []
+    for _ in range(8):
+        seen = {route: rng.lognormal(mu, sigma, 60)}
+        pool.add_run(seen, {route: rng.lognormal(mu, sigma, 600)})
+        for index in range(3):
+            pool.add_model_run(index, {route: rng.lognormal(mu, sigma, 60)})
+        _, p95, low, high = p95_interval.intervals_of(seen)[route]
+        singles.append((high - low) / p95)
+    assert pool.runs == 8
+    assert pool.predicted()[route] == pytest.approx(truth, rel=0.06)
+    rows, exact = pool.compare()
+    ((_, (count, p95, low, high), _, _, _),) = rows
+    assert count == 480 and low <= truth <= high
+    assert (high - low) / p95 < 0.5 * float(np.median(singles))
+    assert len(exact) == 3 and all(row[1][0] == 480 for row in exact)
+    assert "an exact model" in capsys.readouterr().out
+
+
+def test_the_prediction_keeps_every_seeds_requests_for_pooling():
+    runs = [queue_sim.simulate(costs(), 4, 1, 2.0, teacher=False, seed=s) for s in range(3)]
+    pooled = queue_model.combine(runs)["pooled"]
+    for route, values in pooled.items():
+        assert len(values) == sum(len(run["latencies"][route]) for run in runs)
+        assert values[0] == pytest.approx(runs[0]["latencies"][route][0] * 1000)
+
+
+def test_a_routes_requests_by_when_they_were_sent_model_beside_run(tmp_path, capsys):
+    """``--by-time``: the run's requests are placed on the class's clock (its first request
+    sent at the earliest student's start in the ramp), and each 2 s window shows how many
+    requests a run had and their p50 / p95, the model's seeds averaged."""
+    import random
+
+    earliest = min(random.Random(index).uniform(0, 3.0) for index in range(4))
+    clock = 1000.0  # perf_counter's origin is arbitrary
+    lines = [f"GET /login {clock:.6f} {clock + 0.004:.6f}"]
+    lines += [
+        f"POST /lab/sessions/1/turn {clock + t:.6f} {clock + t + latency:.6f}"
+        for t, latency in ((0.5, 0.020), (1.0, 0.030), (2.5, 0.400), (3.0, 0.500))
+    ]
+    path = tmp_path / "client.txt"
+    path.write_text("\n".join(lines) + "\n")
+    sent = queue_model.sent_from_start(path, 4)
+    turn = "POST /lab/sessions/{id}/turn"
+    assert sent["GET /login"][0, 0] == pytest.approx(earliest)
+    assert sent[turn][:, 0] == pytest.approx(earliest + np.array([0.5, 1.0, 2.5, 3.0]))
+    model = [
+        [(turn, earliest + 0.5, 0.010), (turn, earliest + 2.5, 0.300), ("GET /lab", 0.1, 1.0)],
+        [(turn, earliest + 0.6, 0.012)],
+    ]
+    queue_model.compare_by_time(turn, model, sent)
+    lines = capsys.readouterr().out.splitlines()
+    assert "p95 over all" in lines[0]
+    # 0-2 s: the model 1 a run (2 over 2 seeds), the run 2 requests
+    assert lines[1].split("|")[0].split()[2] == "1"
+    assert lines[1].split("|")[1].split()[0] == "2"
