@@ -65,17 +65,27 @@ def quantile_interval(
     )
 
 
-def client_latencies(path: Path) -> dict[str, np.ndarray]:
-    """Per route, the latencies (ms) the load generator timed
-    (``GYROLAB_BENCH_CLIENT_TIMES`` lines: ``method path sent_s answered_s``)."""
-    latencies: dict[str, list[float]] = defaultdict(list)
+def client_requests(path: Path) -> dict[str, np.ndarray]:
+    """Per route, each request the load generator timed as a row (sent, latency), s
+    (``GYROLAB_BENCH_CLIENT_TIMES`` lines: ``method path sent_s answered_s``; sent on
+    ``time.perf_counter``'s clock; a line cut short is left out)."""
+    rows: dict[str, list[tuple[float, float]]] = defaultdict(list)
     for line in path.read_text().splitlines():
         fields = line.split()
         if len(fields) == 4:
-            latencies[route_of(fields[0], fields[1])].append(
-                (float(fields[3]) - float(fields[2])) * 1000
-            )
-    return {route: np.array(values) for route, values in latencies.items()}
+            sent = float(fields[2])
+            rows[route_of(fields[0], fields[1])].append((sent, float(fields[3]) - sent))
+    return {route: np.array(values).reshape(-1, 2) for route, values in rows.items()}
+
+
+def latencies_of(requests: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Per route, the latencies (ms) of :func:`client_requests`' rows."""
+    return {route: rows[:, 1] * 1000 for route, rows in requests.items()}
+
+
+def client_latencies(path: Path) -> dict[str, np.ndarray]:
+    """Per route, the latencies (ms) the load generator timed (:func:`client_requests`)."""
+    return latencies_of(client_requests(path))
 
 
 def relative(interval: tuple[int, float, float, float]) -> tuple[float, float]:

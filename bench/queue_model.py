@@ -96,7 +96,6 @@ from class_cpu import (  # noqa: E402
     in_class,
     lock_trace_by_route,
     locked_shares,
-    route_of,
     server_times,
     worker_shares,
 )
@@ -728,13 +727,13 @@ def main() -> int:
                 compare_lock(result, lock_trace_by_route(args.lock_trace[index].read_text()))
             intervals = {}
             if len(args.client_times) > index:
-                seen_latencies = p95_interval.client_latencies(args.client_times[index])
+                requests = p95_interval.client_requests(args.client_times[index])
+                seen_latencies = p95_interval.latencies_of(requests)
                 intervals = p95_interval.intervals_of(seen_latencies)
                 measured_rows[students] += p95_interval.compare(result["p95"], intervals)
                 pools[students].add_run(seen_latencies, result["pooled"])
-                sent = sent_from_start(args.client_times[index], students)
                 for route in args.by_time:
-                    compare_by_time(route, result["timelines"], sent)
+                    compare_by_time(route, result["timelines"], sent_from_start(requests, students))
             for seed in range(args.seeds, args.seeds + args.model_as_run):
                 # a seed the prediction did not use, scored as a measured run (of the
                 # routes the run's requests' times have, where it has them)
@@ -970,23 +969,15 @@ class Pool:
         return rows, exact
 
 
-def sent_from_start(path: Path, students: int, ramp: float = 3.0) -> dict[str, np.ndarray]:
-    """Per route, each request the load generator timed (``GYROLAB_BENCH_CLIENT_TIMES``) as
-    rows (sent, latency), s from the class's start: the first request sent less the
-    earliest student's start in the load test's ramp (``random.Random(index)``), the
-    simulation's own starts."""
-    rows: dict[str, list[tuple[float, float]]] = defaultdict(list)
-    for line in path.read_text().splitlines():
-        fields = line.split()
-        if len(fields) == 4:
-            sent, answered = float(fields[2]), float(fields[3])
-            rows[route_of(fields[0], fields[1])].append((sent, answered - sent))
-    first = min(sent for values in rows.values() for sent, _ in values)
+def sent_from_start(
+    requests: dict[str, np.ndarray], students: int, ramp: float = 3.0
+) -> dict[str, np.ndarray]:
+    """``p95_interval.client_requests``' rows (sent, latency) with the time sent counted
+    from the class's start: the first request sent less the earliest student's start in
+    the load test's ramp (``random.Random(index)``), the simulation's own starts."""
+    first = min(rows[:, 0].min() for rows in requests.values() if len(rows))
     start = first - min(random.Random(index).uniform(0, ramp) for index in range(students))
-    return {
-        route: np.array([(sent - start, latency) for sent, latency in values])
-        for route, values in rows.items()
-    }
+    return {route: rows - [start, 0.0] for route, rows in requests.items()}
 
 
 def compare_by_time(

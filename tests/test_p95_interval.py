@@ -157,7 +157,7 @@ def test_a_routes_requests_by_when_they_were_sent_model_beside_run(tmp_path, cap
     ]
     path = tmp_path / "client.txt"
     path.write_text("\n".join(lines) + "\n")
-    sent = queue_model.sent_from_start(path, 4)
+    sent = queue_model.sent_from_start(p95_interval.client_requests(path), 4)
     turn = "POST /lab/sessions/{id}/turn"
     assert sent["GET /login"][0, 0] == pytest.approx(earliest)
     assert sent[turn][:, 0] == pytest.approx(earliest + np.array([0.5, 1.0, 2.5, 3.0]))
