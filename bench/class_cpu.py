@@ -119,6 +119,12 @@ def locked_shares(trace: str, seen: ClassCpu) -> dict[str, float]:
     }
 
 
+# what the probe sees of a request's CPU is part of what the server's process used (its
+# threads' clocks against the process's): beyond this much more, the probe's file is not
+# the run's alone (a second run appended to it: a class's requests counted twice)
+SEEN_BEYOND_USED = 1.05
+
+
 def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, each=False):
     """The costs per request as a class spent them.  Each route's own CPU (its task's,
     ``seen`` by the probe in a load test) replaces one student's alone (``own``).  What the
@@ -131,10 +137,19 @@ def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, e
     ``each``: a route's costs are a list, one per request the class made (its own task's
     CPU as the probe saw it, the unseen part as above), for the simulation to draw from:
     a route's CPU varies (a dashboard redoing many sessions, a results read that solves, a
-    young collection run inside a request) and a p95 depends on it, not on the mean."""
+    young collection run inside a request) and a p95 depends on it, not on the mean.
+
+    Raises ValueError where the probe saw more of the server's CPU than ``used`` says the
+    run used (``SEEN_BEYOND_USED``): the probe's file holds more than that run."""
     shared = routes = [r for r in costs if r in seen.means and r in own]
     unseen = {r: costs[r][0] - sum(own[r]) for r in routes}
     scale = client_scale = 1.0
+    if used and seen.total_s > SEEN_BEYOND_USED * used["server"]:
+        raise ValueError(
+            f"the probe saw {seen.total_s:.1f} s of the server's CPU in the class's requests,"
+            f" more than the {used['server']:.1f} s the run used: its file holds more than"
+            " that run (the probe appends to its files: give each run a new one)"
+        )
     if used:
         alone_unseen = sum(seen.counts[r] * max(unseen[r], 0.0) for r in shared)
         if alone_unseen > 0:

@@ -1061,7 +1061,10 @@ def class_costs(alone, own, cpu: Path, run: Path | None, each: bool) -> dict:
     if run:
         table = next(iter(measured_p95(run).values()))
         used = {"server": table["cpu server"], "client": table["cpu client"]}
-    costs, scale, client_scale = in_class(alone, own, seen, used, each=each)
+    try:
+        costs, scale, client_scale = in_class(alone, own, seen, used, each=each)
+    except ValueError as error:
+        raise SystemExit(f"{cpu} against {run}: {error}") from error
     print(f"\neach route's own CPU as the class in {cpu} spent it:")
     for route in sorted(set(seen.means) & set(own)):
         one, there = sum(own[route]) * 1000, sum(seen.means[route]) * 1000

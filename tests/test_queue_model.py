@@ -571,6 +571,22 @@ def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
     assert loop == pytest.approx(1 * MS + 1.5 * 1 * MS)
 
 
+def test_a_probe_file_holding_more_than_its_run_is_refused():
+    """The probe appends to its files: a second run written to the same file counts the
+    class's requests twice, and the CPU it saw outgrows the CPU the run used (0.87-0.92 of
+    it in a run's own file; 1.8 with two runs' lines).  Refused, not scaled to nothing."""
+    lines = "\n".join(["http GET /lab/sessions/12 1.000 3.000 0"] * 10)
+    seen = class_cpu.attributed_costs(lines)  # 40 ms seen
+    table = costs(server=10 * MS, loop=3 * MS, client=2 * MS)
+    own = {"GET /lab/sessions/{id}": (2 * MS, 6 * MS)}
+    class_cpu.in_class(table, own, seen, {"server": 0.04, "client": 0.01})  # all of it seen
+    with pytest.raises(ValueError, match="more than that run"):
+        class_cpu.in_class(table, own, seen, {"server": 0.035, "client": 0.01})
+    twice = class_cpu.attributed_costs(lines + "\n" + lines)
+    with pytest.raises(ValueError, match="more than that run"):
+        class_cpu.in_class(table, own, twice, {"server": 0.05, "client": 0.01})
+
+
 def test_inside_the_server_a_lone_request_waits_for_no_place():
     """The model's part of each latency inside the server (what the probe's
     GYROLAB_BENCH_SERVER_TIMES measures): from asking for a work place to the answer,

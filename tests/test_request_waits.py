@@ -84,26 +84,32 @@ def test_a_line_cut_short_is_left_out(tmp_path):
 
 
 def test_the_class_is_split_by_its_time_from_its_first_request(capsys):
-    """Start, middle and burst: each window's mean time inside, CPU and waits, counted from
-    the first request (the probe's clock is the machine's, the model's from 0)."""
+    """Start, each part's streams and burst: each window's mean wait for a place, time
+    inside, CPU and waits, counted from the first request (the probe's clock is the
+    machine's, the model's from 0)."""
 
-    def row(began: float, inside: float, off: float) -> list[float]:
+    def row(began: float, place: float, inside: float, off: float) -> list[float]:
         # place, inside, CPU, off a core, run queue, began
-        return [1.0, inside, inside - off - 0.5, off, 0.5, began]
+        return [place, inside, inside - off - 0.5, off, 0.5, began]
 
     measured = {
-        "GET /login": np.array([row(1000.0, 4.0, 1.0), row(1003.0, 6.0, 3.0)]),
-        "POST /lab/sessions/{id}/csv": np.array([row(1012.0, 10.0, 4.0), row(1030.0, 20.0, 9.0)]),
+        "GET /login": np.array([row(1000.0, 1.0, 4.0, 1.0), row(1003.0, 3.0, 6.0, 3.0)]),
+        "POST /lab/sessions/{id}/turn": np.array(
+            [row(1008.0, 0.0, 7.0, 2.0), row(1016.0, 2.0, 12.0, 6.0), row(1020.0, 1.0, 14.0, 7.0)]
+        ),
+        "POST /lab/sessions/{id}/csv": np.array([row(1030.0, 5.0, 20.0, 9.0)]),
     }
     windows = request_waits.by_window(measured)
-    assert windows["start"][0] == 2 and windows["middle"][0] == 1 and windows["burst"][0] == 1
-    assert windows["start"][1].tolist() == pytest.approx([5.0, 2.5, 2.0, 0.5])
-    assert windows["burst"][1].tolist() == pytest.approx([20.0, 10.5, 9.0, 0.5])
+    assert [windows[name][0] for name in ("start", "part A", "part B", "burst")] == [2, 1, 2, 1]
+    assert windows["start"][1].tolist() == pytest.approx([2.0, 5.0, 2.5, 2.0, 0.5])
+    assert windows["part B"][1].tolist() == pytest.approx([1.5, 13.0, 6.0, 6.5, 0.5])
+    assert windows["burst"][1].tolist() == pytest.approx([5.0, 20.0, 10.5, 9.0, 0.5])
     model = {route: rows - [0, 0, 0, 0, 0, 1000.0] for route, rows in measured.items()}
     request_waits.compare_windows(model, measured)
     lines = capsys.readouterr().out.splitlines()
-    assert len(lines) == 4 and lines[1].split()[0] == "start"
-    assert lines[3].endswith("20.0 / 10.5 /  9.0 /  0.5 | 20.0 / 10.5 /  9.0 /  0.5")
+    assert len(lines) == 5 and lines[1].split()[0] == "start"
+    assert lines[3].split()[:2] == ["part", "B"]
+    assert lines[4].endswith(" 5.0 / 20.0 / 10.5 /  9.0 /  0.5 |  5.0 / 20.0 / 10.5 /  9.0 /  0.5")
 
 
 @pytest.mark.parametrize(
