@@ -980,6 +980,21 @@ def sent_from_start(
     return {route: rows - [start, 0.0] for route, rows in requests.items()}
 
 
+# the gaps between one request of a route sent and the next that ``compare_by_time`` counts
+GAP_LIMITS_S = (0.005, 0.010, 0.020)
+
+
+def close_gaps(sent, limits: tuple[float, ...] = GAP_LIMITS_S) -> np.ndarray | None:
+    """Of the gaps between one request sent and the next (``sent``: times, s, any order),
+    the share under each of ``limits``; None for fewer than two requests.  Requests sent at
+    random at a rate λ have a share 1 − e^(−λ·limit) under each."""
+    times = np.sort(np.asarray(sent, dtype=float))
+    if len(times) < 2:
+        return None
+    gaps = np.diff(times)
+    return np.array([np.mean(gaps < limit) for limit in limits])
+
+
 def compare_by_time(
     route: str,
     model: list[list[tuple[str, float, float]]],
@@ -990,7 +1005,9 @@ def compare_by_time(
     ``window_s``: how many a run (the model: a seed on average), and their p50 / p95 ms,
     the model (``simulate``'s "timeline" of each seed, ``combine``'s "timelines") beside
     the run (``sent_from_start``). A route whose p95 is set by the few requests that meet
-    a burst shows it here."""
+    a burst shows it here.  Then, in each part of the class (``request_waits.WINDOWS``), how
+    close together its requests were sent (:func:`close_gaps`; the model's within each
+    seed): a model whose requests leave more evenly than the run's meets less queueing."""
     model_rows = np.array([(sent, latency) for timeline in model
                            for name, sent, latency in timeline if name == route])  # fmt: skip
     seen = measured.get(route)
@@ -1011,6 +1028,25 @@ def compare_by_time(
                 else f"{0:5d} {'-':>13s}"
             )
         print(f"  {low:5.0f}-{low + window_s:<4.0f} s {cells[0]} | {cells[1]}")
+    under = " / ".join(f"{limit * 1000:g}" for limit in GAP_LIMITS_S)
+    print(f"  the gaps between one sent and the next, % under {under} ms, by the class's parts"
+          " (model, each seed's own averaged | measured | sent at random at the measured"
+          " rate)")  # fmt: skip
+    for name, start, end in request_waits.WINDOWS:
+        each_seed = (
+            [sent for what, sent, _ in timeline if what == route and start <= sent < end]
+            for timeline in model
+        )
+        seeds = [shares for shares in map(close_gaps, each_seed) if shares is not None]
+        times = seen[(seen[:, 0] >= start) & (seen[:, 0] < end), 0]
+        shares = close_gaps(times)
+        if not seeds or shares is None or times.max() <= times.min():
+            continue
+        rate = (len(times) - 1) / (times.max() - times.min())
+        at_random = 1.0 - np.exp(-rate * np.array(GAP_LIMITS_S))
+        cells = [" / ".join(f"{100 * x:3.0f}" for x in row)
+                 for row in (np.mean(seeds, axis=0), shares, at_random)]  # fmt: skip
+        print(f"  {name:6s} {cells[0]} | {cells[1]} | {cells[2]}")
 
 
 def summary(students: int, name: str, pairs: list[tuple[dict, dict]]) -> dict:

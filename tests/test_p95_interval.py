@@ -171,3 +171,24 @@ def test_a_routes_requests_by_when_they_were_sent_model_beside_run(tmp_path, cap
     # 0-2 s: the model 1 a run (2 over 2 seeds), the run 2 requests
     assert lines[1].split("|")[0].split()[2] == "1"
     assert lines[1].split("|")[1].split()[0] == "2"
+
+
+def test_the_gaps_between_a_routes_requests_are_counted_per_seed_and_against_chance(capsys):
+    """``--by-time`` also says how close together a route's requests were sent in each part
+    of the class: turns every 30 ms in each of the model's two seeds (interleaved, the
+    seeds would make 15 ms gaps: each seed is counted alone), every 8 ms in the run."""
+    assert queue_model.close_gaps([0.0, 0.008, 0.016, 0.030]).tolist() == pytest.approx(
+        [0.0, 2 / 3, 1.0]
+    )
+    assert queue_model.close_gaps([1.0]) is None
+    turn = "POST /lab/sessions/{id}/turn"
+    model = [[(turn, 6.0 + 0.030 * k + offset, 0.01) for k in range(20)] for offset in (0, 0.015)]
+    sent = {turn: np.array([(6.0 + 0.008 * k, 0.01) for k in range(20)])}
+    queue_model.compare_by_time(turn, model, sent)
+    lines = capsys.readouterr().out.splitlines()
+    (part_a,) = [line for line in lines if line.split()[:2] == ["part", "A"]]
+    model_cells, measured_cells, random_cells = part_a.split("|")
+    assert model_cells.split()[2:] == ["0", "/", "0", "/", "0"]
+    assert measured_cells.split() == ["0", "/", "100", "/", "100"]
+    rate = 19 / (0.008 * 19)  # 125 a second
+    assert random_cells.split()[0] == f"{100 * (1 - np.exp(-rate * 0.005)):.0f}"
