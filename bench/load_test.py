@@ -56,6 +56,10 @@ CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
 # (time.perf_counter, the same clock as the server probe's GYROLAB_BENCH_SERVER_TIMES), to
 # set the client's time of a request beside the server's
 CLIENT_TIMES = os.environ.get("GYROLAB_BENCH_CLIENT_TIMES")
+# GYROLAB_BENCH_STREAM_TIMES=FILE: each position streamed, as the load generator saw it:
+# ``session part position`` and the times (time.perf_counter, s) it sent "start" and
+# received "started", its first and its last samples, and "saved"
+STREAM_TIMES = os.environ.get("GYROLAB_BENCH_STREAM_TIMES")
 HANDOFFS_LABEL = "hand-offs just before / after the class (bench_handoffs.py)"
 CALL_HANDOFFS_LABEL = "SQLite calls handing the interpreter on (bench_handoffs.py --calls)"
 # GYROLAB_BENCH_SQLITE_CALLS=FILE (the probe's, in the server): each SQLite call's CPU, µs;
@@ -120,6 +124,7 @@ class Tally:
     ws_extensions: set[str] = field(default_factory=set)  # what the server agreed to
     cpu: tuple[float, float, float] = (0.0, 0.0, 0.0)  # s: server, PostgreSQL, load generator
     sent: list[str] = field(default_factory=list)  # with CLIENT_TIMES: each request's times
+    streamed: list[str] = field(default_factory=list)  # with STREAM_TIMES: each position's
     # with --handoffs: (the interpreter's hand-off, a busy wake-up's extra per core asked
     # beyond each core), s, measured just before and just after the class
     handoffs: list[tuple[float, float]] = field(default_factory=list)
@@ -181,6 +186,8 @@ async def stream_all_positions(
                         json={"part": part, "position": position},
                         headers={"X-CSRF-Token": token},
                     )
+                asked_at = time.perf_counter()
+                first_at = last_at = None
                 await ws.send(
                     json.dumps(
                         {
@@ -200,6 +207,7 @@ async def stream_all_positions(
                     if message["type"] == "started":
                         started_at, rate_hz = now, message["rate_hz"]
                     elif message["type"] == "samples":
+                        first_at, last_at = first_at or now, now
                         tally.frames += 1
                         tally.streamed_samples += len(message["v"])
                         due = started_at + message["done"] / rate_hz / args.speed
@@ -209,6 +217,11 @@ async def stream_all_positions(
                             now - (started_at + message["n"] / rate_hz / args.speed)
                         )
                         tally.acknowledged[session, part, position] = message["n"]
+                        if STREAM_TIMES:
+                            tally.streamed.append(
+                                f"{session} {part} {position} {asked_at:.6f} {started_at:.6f}"
+                                f" {first_at:.6f} {last_at:.6f} {now:.6f}\n"
+                            )
                         break
                     else:
                         tally.errors.append(f"stream: {message}")
@@ -541,6 +554,8 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
                 tally.cpu = tuple(b - a for a, b in zip(before, after, strict=True))
                 if CLIENT_TIMES:  # after the class's CPU is read: not counted in it
                     Path(CLIENT_TIMES).write_text("".join(tally.sent))
+                if STREAM_TIMES:
+                    Path(STREAM_TIMES).write_text("".join(tally.streamed))
             lost, checked = lost_samples(tally, database_url)
             if tally.errors:  # keep the server's log for the post-mortem
                 kept = Path(tempfile.gettempdir()) / f"gyrolab-load-{backend}-server.log"
