@@ -74,6 +74,33 @@ def test_the_probe_splits_each_requests_time_into_cpu_and_waits(tmp_path):
     assert row[request_waits.INSIDE] + row[request_waits.PLACE] == pytest.approx(total)
 
 
+PROBED_HOLD = """
+@app.get("/hold")
+async def hold():
+    sum(range(8_000_000))  # C code: keeps the interpreter to the end (≈ 90 ms here)
+    return {}
+"""
+
+
+def test_the_gil_sampler_sees_a_thread_keep_the_interpreter(tmp_path):
+    """``GYROLAB_BENCH_GIL_WAITS``: a nap every 2 ms, each line how late the sampler ran
+    Python again and how long of that it waited for a core; a route that keeps the
+    interpreter for tens of ms makes one nap that late, off a core (the interpreter), while
+    the naps around it are on time."""
+    out = tmp_path / "gil.txt"
+    calls = ["asyncio.sleep(0.05)", 'client.get("/hold")', "asyncio.sleep(0.05)"]
+    run_probed(PROBED_HOLD, calls, {"GYROLAB_BENCH_GIL_WAITS": str(out)})
+    rows = [line.split() for line in out.read_text().splitlines()]
+    assert len(rows) >= 20 and all(len(row) == 4 for row in rows)
+    began = [float(row[0]) for row in rows]
+    assert began == sorted(began)
+    late, queued = (np.array([float(row[i]) for row in rows]) for i in (1, 2))
+    assert (queued >= 0).all()
+    off_core_ms = (late - queued) / 1000
+    assert off_core_ms.max() >= 20  # the hold
+    assert np.median(off_core_ms) < 2  # the naps before and after it
+
+
 def test_a_line_cut_short_is_left_out(tmp_path):
     path = tmp_path / "waits.txt"
     path.write_text("GET /lab/sessions/3 12 2 1 1.5 0.5 4 7 0.5 0.5 2 100.5 7\nGET /lab/sess\n")

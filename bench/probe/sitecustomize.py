@@ -58,6 +58,14 @@ for the write lock), and from its end to the coroutine's next step (the loop wok
 interpreter taken, the loop's other callbacks first); the trips to the thread pool; when
 it was called (``time.perf_counter``) and which worker answered.  The probe's own reads
 of ``schedstat`` are in the thread's CPU.
+
+``GYROLAB_BENCH_GIL_WAITS`` (a load test): a file to which a thread of each process that
+loads the probe (the server's workers, and the load generator when it has the probe on
+its path) appends, every nap of 2 ms, ``began_s late_µs queued_µs pid``: how much later
+than the nap's end the thread ran Python again, and of that how long it waited for a core
+(``schedstat``) -- the rest is the wait for the interpreter.  A thread that wants the
+interpreter at a moment chosen by nothing in the class: how crowded the interpreter and
+the cores were, sampled 500 times a second.
 """
 
 import os
@@ -70,6 +78,7 @@ _CPU = os.environ.get("GYROLAB_BENCH_REQUEST_CPU")
 _PROFILE = os.environ.get("GYROLAB_BENCH_PROFILE")
 _CALLS = os.environ.get("GYROLAB_BENCH_SQLITE_CALLS")
 _WAITS = os.environ.get("GYROLAB_BENCH_REQUEST_WAITS")
+_GIL = os.environ.get("GYROLAB_BENCH_GIL_WAITS")
 
 if _GC:
     import gc as _gc
@@ -587,3 +596,39 @@ if _WAITS:
         return waited
 
     _wrap_thread_pool(_waited)
+
+if _GIL:
+    import atexit as _g_atexit
+    import threading as _g_threading
+    import time as _g_time
+
+    _GIL_NAP_S = 0.002
+    _g_lines: list[str] = []
+    _g_file = os.open(_GIL, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+
+    def _g_queued_ns() -> int:
+        with open("/proc/thread-self/schedstat") as schedstat:
+            return int(schedstat.read().split()[1])
+
+    def _g_write() -> None:
+        lines, _g_lines[:] = _g_lines[:], []
+        if lines:
+            os.write(_g_file, "".join(lines).encode())
+
+    def _gil_sampler() -> None:
+        """Nap ``_GIL_NAP_S`` again and again; each time, how much later than that the
+        thread ran Python again, and of it how long it waited for a core (schedstat):
+        the rest is the wait for the interpreter of a thread that wants it at a random
+        moment."""
+        while True:
+            queued = _g_queued_ns()
+            began = _g_time.perf_counter()
+            _g_time.sleep(_GIL_NAP_S)
+            late = _g_time.perf_counter() - began - _GIL_NAP_S
+            queued = _g_queued_ns() - queued
+            _g_lines.append(f"{began:.6f} {late * 1e6:.0f} {queued / 1000:.0f} {os.getpid()}\n")
+            if len(_g_lines) >= 100:
+                _g_write()
+
+    _g_atexit.register(_g_write)
+    _g_threading.Thread(target=_gil_sampler, daemon=True, name="gil-sampler").start()
