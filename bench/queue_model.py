@@ -87,7 +87,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-import load_test  # noqa: E402  (bench/, the script's folder)
+import convoys  # noqa: E402  (bench/, the script's folder)
+import load_test  # noqa: E402
 import p95_interval  # noqa: E402
 import request_waits  # noqa: E402
 from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
@@ -555,6 +556,15 @@ def main() -> int:
         "holds it (default 0: all of it holds the interpreter)",
     )
     parser.add_argument(
+        "--stream-times",
+        type=Path,
+        nargs="*",
+        default=[],
+        help="what load_test.py's GYROLAB_BENCH_STREAM_TIMES wrote in the --class-run runs "
+        "(one file per run, in order, with --client-times): how the students fell into "
+        "step, turn by turn, measured beside predicted (convoys.py)",
+    )
+    parser.add_argument(
         "--by-time",
         nargs="*",
         default=[],
@@ -734,6 +744,12 @@ def main() -> int:
                 pools[students].add_run(seen_latencies, result["pooled"])
                 for route in args.by_time:
                     compare_by_time(route, result["timelines"], sent_from_start(requests, students))
+                if len(args.stream_times) > index:
+                    print(f"how the class fell into step (convoys.py; {args.stream_times[index]}):")
+                    convoys.compare(
+                        [convoys.from_model({"students": seed}) for seed in result["students"]],
+                        convoys.read_run(args.client_times[index], args.stream_times[index]),
+                    )
             for seed in range(args.seeds, args.seeds + args.model_as_run):
                 # a seed the prediction did not use, scored as a measured run (of the
                 # routes the run's requests' times have, where it has them)
@@ -877,6 +893,7 @@ def combine(results: list[dict]) -> dict:
             for route in routes
         },
         "timelines": [result.get("timeline", []) for result in results],
+        "students": [result.get("students", []) for result in results],
         "mean": {
             route: float(np.mean(np.concatenate([x["latencies"][route] for x in results])))
             for route in routes

@@ -181,6 +181,8 @@ def simulate(
     socket_stacking: bool = False,
     trips_outside_lock: bool = True,
     released_share: float = 0.0,
+    script=student_script,
+    starts: list[float] | None = None,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -257,7 +259,9 @@ def simulate(
     ``released_share``: the share of a thread's CPU that runs with the interpreter released
     (SQLite's own work inside its calls, the kernel's in system calls), run on a core after
     the thread's part holding the interpreter (0: all of it holds the interpreter, the
-    model before 2026-12-05).
+    model before 2026-12-05); ``script``: a student's steps, as ``student_script``'s (the
+    load test's student, the default); ``starts``: when each student begins, s (else at
+    random in the first ``ramp`` seconds, as the load test's students).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -265,7 +269,10 @@ def simulate(
     many short database calls therefore waits about one turn of the others per call.
 
     Returns "latencies" (per route, s), "timeline" (each HTTP request's route, the
-    time it was sent from the class's start and its latency, s), "server" (per route,
+    time it was sent from the class's start and its latency, s), "students" (per student
+    in the order they arrived: "requests", its HTTP requests' route, sent and latency, and
+    "positions", each position streamed: asked for, started, its last frame, saved, s),
+    "server" (per route,
     each HTTP request's wait for a work place, time from asking for it to the answer, of
     that its threads' waits for the interpreter, for a hand-off of it, for a core while
     holding it and for the write lock or the database server, when it asked for a place,
@@ -378,7 +385,7 @@ def simulate(
     calls_drawn = random.Random(seed + 3)  # which releases hand the interpreter on
     draw = random.Random(seed + 1)  # which of a route's measured requests this one costs
     asked_of_route: dict[str, int] = defaultdict(int)  # requests of each route so far
-    per_student = Counter(route for kind, route in student_script() if kind == "request")
+    per_student = Counter(route for kind, route in script() if kind == "request")
 
     def server_job(
         work: float,
@@ -677,17 +684,24 @@ def simulate(
 
         run(0)
 
-    def request(route: str, then, worker: int) -> None:
+    def request(route: str, then, worker: int, record: dict | None = None) -> None:
         began = now
 
         def answered() -> None:
             latencies[route].append(now - began)
             timeline.append((route, began, now - began))
+            if record is not None:
+                record["requests"].append((route, began, now - began))
             then()
 
         phases(route, answered, worker)
 
-    def run_student(script, http: int, websocket: int) -> None:
+    # per student, in the order they arrived: its HTTP requests' (route, sent, latency) and
+    # each position streamed (asked, started, last frame, saved), s -- as load_test.py's
+    # GYROLAB_BENCH_CLIENT_TIMES and GYROLAB_BENCH_STREAM_TIMES record a run's (convoys.py)
+    records: list[dict] = []
+
+    def run_student(script, http: int, websocket: int, record: dict) -> None:
         """The student's next step; ``http``, ``websocket``: the workers its two connections
         went to (a browser keeps its connection alive between requests: all of them reach
         the worker that accepted it)."""
@@ -697,11 +711,13 @@ def simulate(
             return
         kind, route = step
         if kind == "request":
-            request(route, lambda: run_student(script, http, websocket), http)
+            request(route, lambda: run_student(script, http, websocket, record), http, record)
             return
         left, last_frame = [FRAMES_PER_POSITION], [0.0]
+        asked, began = now, [now]
 
         def started() -> None:
+            began[0] = now
             for j in range(1, FRAMES_PER_POSITION + 1):
                 at(now + j * FRAME_SECONDS, lambda: phases(STREAM, frame_done, websocket, frame))
 
@@ -713,7 +729,8 @@ def simulate(
 
         def saved() -> None:
             latencies[SAVED].append(now - last_frame[0])
-            run_student(script, http, websocket)
+            record["positions"].append((asked, began[0], last_frame[0], now))
+            run_student(script, http, websocket, record)
 
         def marked() -> None:
             if making_ready:
@@ -752,10 +769,13 @@ def simulate(
 
     def arrive() -> None:
         student = next(arrived)
-        run_student(student_script(), accepting(https, student), accepting(websockets, student))
+        record: dict = {"requests": [], "positions": []}
+        records.append(record)
+        run_student(script(), accepting(https, student), accepting(websockets, student), record)
 
     for index in range(students):
-        start = random.Random(index).uniform(0, ramp)  # the load test's ramp
+        # the load test's ramp, else as asked
+        start = random.Random(index).uniform(0, ramp) if starts is None else starts[index]
         at(start, arrive)
     if teacher:
         at(0.0, watch)
@@ -895,6 +915,7 @@ def simulate(
     return {
         "latencies": latencies,
         "timeline": timeline,
+        "students": records,
         "server": inside,
         "wall": now,
         "cpu": dict(spent),
