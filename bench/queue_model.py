@@ -556,6 +556,13 @@ def main() -> int:
         "holds it (default 0: all of it holds the interpreter)",
     )
     parser.add_argument(
+        "--frames-in-a-thread",
+        action="store_true",
+        help="each stream frame also queues for the interpreter as a thread's work of 1 µs "
+        "(the model before 2026-12-05's thirty-second part; in the app a frame is the event "
+        "loop's work alone)",
+    )
+    parser.add_argument(
         "--stream-times",
         type=Path,
         nargs="*",
@@ -641,6 +648,7 @@ def main() -> int:
         "socket_stacking": args.socket_stacking,
         "trips_outside_lock": not args.trips_inside_lock,
         "released_share": args.released_share,
+        "frames_on_loop": not args.frames_in_a_thread,
     }
 
     def simulate_seed(

@@ -183,6 +183,7 @@ def simulate(
     released_share: float = 0.0,
     script=student_script,
     starts: list[float] | None = None,
+    frames_on_loop: bool = True,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -261,7 +262,11 @@ def simulate(
     the thread's part holding the interpreter (0: all of it holds the interpreter, the
     model before 2026-12-05); ``script``: a student's steps, as ``student_script``'s (the
     load test's student, the default); ``starts``: when each student begins, s (else at
-    random in the first ``ramp`` seconds, as the load test's students).
+    random in the first ``ramp`` seconds, as the load test's students); ``frames_on_loop``:
+    a stream's frame is work on the event loop alone, as in the app (the tick takes the
+    samples and sends them on the loop) (False: each frame also queues for the interpreter
+    as a thread's work of 1 µs, handed to it and woken -- the model before 2026-12-05's
+    thirty-second part, in which a frame right behind another student's save waited for it).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -534,6 +539,8 @@ def simulate(
                     stages += [(f"{pool} piece", amount)]
                 stages += [step_on_loop]
             stages += [] if round_trips else [("db", db)]
+        elif frames_on_loop and route == STREAM:  # a frame: the loop's work, no thread's
+            stages += [("loop", loop_inside)] if loop_inside else []
         else:
             stages += [("loop", loop_inside)] if loop_inside else []
             stages += [*work, ("db", db)] if not round_trips else work

@@ -291,6 +291,21 @@ def test_a_positions_take_and_save_go_to_the_thread_pool_without_a_wait_for_the_
     assert stages["POST /lab/sessions/{id}/csv"][:2] == ["client", "loop"]
 
 
+def test_a_stream_frame_is_the_event_loops_work_alone():
+    """The tick takes the samples and sends them on the event loop: a frame's stages are
+    the loop's and the client's, with no thread to wake and no turn of the interpreter to
+    wait for behind another student's save (``frames_on_loop``); the model before had each
+    frame queue for the interpreter as a thread's work of 1 µs."""
+    for on_loop, thread_stages in ((True, []), (False, ["server", "db"])):
+        log: list = []
+        queue_sim.simulate(
+            costs(), 1, 1, 2.0, ramp=0.0, teacher=False, stage_log=log, frames_on_loop=on_loop
+        )
+        frames = [pools for route, pools in log if route == queue_sim.STREAM]
+        assert len(frames) == 8 * queue_sim.FRAMES_PER_POSITION
+        assert frames[0] == ["client", "loop", *thread_stages, "loop", "client"], on_loop
+
+
 def test_the_lock_trace_gives_each_writes_share_of_its_thread_cpu_in_the_lock():
     """``GYROLAB_BENCH_LOCK_TRACE`` names each transaction's request and function: a
     route's share of its thread CPU in the lock is its transactions' CPU over its thread
