@@ -101,6 +101,28 @@ def test_the_gil_sampler_sees_a_thread_keep_the_interpreter(tmp_path):
     assert np.median(off_core_ms) < 2  # the naps before and after it
 
 
+def test_each_trip_to_the_thread_pool_is_timed_from_sending_to_the_coroutines_next_step(
+    tmp_path,
+):
+    """``GYROLAB_BENCH_TRIPS``: a request whose dependency and route run in threads makes
+    two trips, each a line naming its request and function, with its times in order (sent,
+    began, ended, resumed); the route's 30 ms burn and 20 ms sleep are inside its thread."""
+    out = tmp_path / "trips.txt"
+    run_probed(PROBED_ROUTES, PROBED_CALLS, {"GYROLAB_BENCH_TRIPS": str(out)})
+    rows = [line.split() for line in out.read_text().splitlines()]
+    assert all(len(row) == 9 for row in rows)
+    mine = [row for row in rows if row[2] == "/in-a-thread/1"]
+    # the dependency by its name; the route as FastAPI sends a sync route to the pool
+    assert [(row[0], row[1]) for row in mine] == [("http", "GET")] * 2
+    assert mine[0][3] == "who" and mine[1][3] in ("in_a_thread", "_run_sync_endpoint")
+    for row in mine:
+        sent, began, ended, resumed = map(float, row[4:8])
+        assert sent <= began <= ended <= resumed
+    began, ended = float(mine[1][5]), float(mine[1][6])
+    assert ended - began >= 0.05
+    assert not [row for row in rows if row[2].startswith("/on-the-loop")]
+
+
 def test_a_line_cut_short_is_left_out(tmp_path):
     path = tmp_path / "waits.txt"
     path.write_text("GET /lab/sessions/3 12 2 1 1.5 0.5 4 7 0.5 0.5 2 100.5 7\nGET /lab/sess\n")

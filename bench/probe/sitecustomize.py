@@ -66,6 +66,13 @@ than the nap's end the thread ran Python again, and of that how long it waited f
 (``schedstat``) -- the rest is the wait for the interpreter.  A thread that wants the
 interpreter at a moment chosen by nothing in the class: how crowded the interpreter and
 the cores were, sampled 500 times a second.
+
+``GYROLAB_BENCH_TRIPS`` (a load test): a file to which each trip to the thread pool, of an
+HTTP request or a WebSocket (a stream's marks, takes and saves), appends ``kind method
+path function sent began ended resumed pid``: when the coroutine sent the function, when a
+thread began and ended it, and when the coroutine ran again (``time.perf_counter``, s) --
+each trip's dispatch, its time in the thread and its way back, per request and per
+position streamed.
 """
 
 import os
@@ -79,6 +86,7 @@ _PROFILE = os.environ.get("GYROLAB_BENCH_PROFILE")
 _CALLS = os.environ.get("GYROLAB_BENCH_SQLITE_CALLS")
 _WAITS = os.environ.get("GYROLAB_BENCH_REQUEST_WAITS")
 _GIL = os.environ.get("GYROLAB_BENCH_GIL_WAITS")
+_TRIPS = os.environ.get("GYROLAB_BENCH_TRIPS")
 
 if _GC:
     import gc as _gc
@@ -296,7 +304,7 @@ if _COUNTS or _LOCKS or _CALLS:
         _base = _connection_base.BaseConnection
         _base._exec_command = _counting(_base._exec_command)
 
-if _CPU or _PROFILE or _WAITS or _LOCKS:
+if _CPU or _PROFILE or _WAITS or _LOCKS or _TRIPS:
     import contextvars
     import types
     from collections import defaultdict
@@ -632,3 +640,47 @@ if _GIL:
 
     _g_atexit.register(_g_write)
     _g_threading.Thread(target=_gil_sampler, daemon=True, name="gil-sampler").start()
+
+if _TRIPS:
+    import time as _t_time
+
+    from fastapi import applications as _t_applications
+
+    _t_file = os.open(_TRIPS, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
+    _t_for = contextvars.ContextVar("gyrolab_trip_for", default="- - -")
+    _t_call = _t_applications.FastAPI.__call__
+
+    async def _t_noted_call(self, scope, receive, send):
+        if scope["type"] not in ("http", "websocket"):
+            return await _t_call(self, scope, receive, send)
+        token = _t_for.set(f"{scope['type']} {scope.get('method', 'WS')} {scope['path']}")
+        try:
+            return await _t_call(self, scope, receive, send)
+        finally:
+            _t_for.reset(token)
+
+    _t_applications.FastAPI.__call__ = _t_noted_call
+    _t_original = _to_thread.run_sync
+
+    async def _t_run_sync(func, *args, **kwargs):
+        times = [0.0, 0.0]
+
+        def timed(*call_args):
+            times[0] = _t_time.perf_counter()
+            try:
+                return func(*call_args)
+            finally:
+                times[1] = _t_time.perf_counter()
+
+        timed.__wrapped__ = func
+        sent = _t_time.perf_counter()
+        try:
+            return await _t_original(timed, *args, **kwargs)
+        finally:
+            line = (
+                f"{_t_for.get()} {_function_name(func)} {sent:.6f} {times[0]:.6f}"
+                f" {times[1]:.6f} {_t_time.perf_counter():.6f} {os.getpid()}\n"
+            )
+            os.write(_t_file, line.encode())
+
+    _to_thread.run_sync = _t_run_sync
