@@ -25,6 +25,7 @@ import tempfile
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from unittest.mock import patch
 
 import numpy as np
 
@@ -139,27 +140,21 @@ def measure(route: str, reps: int) -> tuple[dict, Cost]:
         _, assignment = load_test.seed(env, 2)
         probed = {"PYTHONPATH": str(PROBE), "GYROLAB_BENCH_PROBE": str(counts),
                   "GYROLAB_BENCH_REQUEST_WAITS": str(waits)}  # fmt: skip
-        saved = {name: os.environ.get(name) for name in probed}
-        os.environ.update(probed)
-        try:
-            with load_test.running_server(var_dir, "--no-demo", "--no-access-log") as server:
-                pids = server_pids(server.process.pid)
-                before: list = []
+        with (
+            patch.dict(os.environ, probed),  # the server's, then as it was
+            load_test.running_server(var_dir, "--no-demo", "--no-access-log") as server,
+        ):
+            pids = server_pids(server.process.pid)
+            before: list = []
 
-                def ready() -> None:  # the trials' costs from here
-                    before[:] = [struct.unpack("<2q", counts.read_bytes()), cpu_seconds(pids)]
+            def ready() -> None:  # the trials' costs from here
+                before[:] = [struct.unpack("<2q", counts.read_bytes()), cpu_seconds(pids)]
 
-                trials, client_cpu, sent = asyncio.run(
-                    _send(server.url, route, assignment, reps, ready)
-                )
-                used = cpu_seconds(pids) - before[1]
-                made = np.subtract(struct.unpack("<2q", counts.read_bytes()), before[0])
-        finally:
-            for name, value in saved.items():
-                if value is None:
-                    os.environ.pop(name, None)
-                else:
-                    os.environ[name] = value
+            trials, client_cpu, sent = asyncio.run(
+                _send(server.url, route, assignment, reps, ready)
+            )
+            used = cpu_seconds(pids) - before[1]
+            made = np.subtract(struct.unpack("<2q", counts.read_bytes()), before[0])
         lines = waits.read_text().splitlines()
     starts = [began for _, began in trials]
     by_trial: dict[int, list] = {}

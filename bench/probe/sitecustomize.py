@@ -176,8 +176,7 @@ if _COUNTS or _LOCKS or _CALLS:
     if _LOCKS:
         import contextvars as _lock_contextvars
 
-        # set by the request's or WebSocket's task, and by the thread-pool function (below)
-        _lock_for = _lock_contextvars.ContextVar("gyrolab_bench_lock_for", default="- - -")
+        # set by the thread-pool function (below); the request by _request_for
         _lock_in = _lock_contextvars.ContextVar("gyrolab_bench_lock_in", default="-")
         # the wait for the writers' turn of the write this thread is about to begin
         _turn_waited = threading.local()
@@ -248,7 +247,7 @@ if _COUNTS or _LOCKS or _CALLS:
         def _ended(self) -> None:
             if self.began is not None and _trace is not None:
                 wall, cpu = time.perf_counter() - self.began[0], time.thread_time() - self.began[1]
-                where = f"{_lock_for.get()} {_lock_in.get()}"
+                where = f"{_request_for.get()} {_lock_in.get()}"
                 turn = getattr(_turn_waited, "ms", None)
                 _turn_waited.ms = None
                 waited = "-" if turn is None else f"{turn:.3f}"
@@ -350,21 +349,27 @@ if _CPU or _PROFILE or _WAITS or _LOCKS or _TRIPS:
         _to_thread.run_sync = run_sync
 
 
-if _LOCKS:
-    from fastapi import applications as _lock_applications
+if _LOCKS or _TRIPS:
+    from fastapi import applications as _request_applications
 
-    _lock_call = _lock_applications.FastAPI.__call__
+    # ``kind method path`` of the request or WebSocket whose task runs now (the lock trace's
+    # and the trips' lines name it)
+    _request_for = contextvars.ContextVar("gyrolab_bench_request_for", default="- - -")
+    _request_call = _request_applications.FastAPI.__call__
 
-    async def _lock_noted_call(self, scope, receive, send):
+    async def _request_noted_call(self, scope, receive, send):
         if scope["type"] not in ("http", "websocket"):
-            return await _lock_call(self, scope, receive, send)
-        token = _lock_for.set(f"{scope['type']} {scope.get('method', 'WS')} {scope['path']}")
+            return await _request_call(self, scope, receive, send)
+        noted = f"{scope['type']} {scope.get('method', 'WS')} {scope['path']}"
+        token = _request_for.set(noted)
         try:
-            return await _lock_call(self, scope, receive, send)
+            return await _request_call(self, scope, receive, send)
         finally:
-            _lock_for.reset(token)
+            _request_for.reset(token)
 
-    _lock_applications.FastAPI.__call__ = _lock_noted_call
+    _request_applications.FastAPI.__call__ = _request_noted_call
+
+if _LOCKS:
 
     def _lock_named(func):
         name = _function_name(func)
@@ -644,22 +649,7 @@ if _GIL:
 if _TRIPS:
     import time as _t_time
 
-    from fastapi import applications as _t_applications
-
     _t_file = os.open(_TRIPS, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
-    _t_for = contextvars.ContextVar("gyrolab_trip_for", default="- - -")
-    _t_call = _t_applications.FastAPI.__call__
-
-    async def _t_noted_call(self, scope, receive, send):
-        if scope["type"] not in ("http", "websocket"):
-            return await _t_call(self, scope, receive, send)
-        token = _t_for.set(f"{scope['type']} {scope.get('method', 'WS')} {scope['path']}")
-        try:
-            return await _t_call(self, scope, receive, send)
-        finally:
-            _t_for.reset(token)
-
-    _t_applications.FastAPI.__call__ = _t_noted_call
     _t_original = _to_thread.run_sync
 
     async def _t_run_sync(func, *args, **kwargs):
@@ -678,7 +668,7 @@ if _TRIPS:
             return await _t_original(timed, *args, **kwargs)
         finally:
             line = (
-                f"{_t_for.get()} {_function_name(func)} {sent:.6f} {times[0]:.6f}"
+                f"{_request_for.get()} {_function_name(func)} {sent:.6f} {times[0]:.6f}"
                 f" {times[1]:.6f} {_t_time.perf_counter():.6f} {os.getpid()}\n"
             )
             os.write(_t_file, line.encode())
