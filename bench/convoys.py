@@ -48,7 +48,7 @@ def read_run(client_times: Path, stream_times: Path) -> list[Student]:
         )
     for line in client_times.read_text().splitlines():
         fields = line.split()
-        turn = TURN_PATH.match(fields[1]) if len(fields) == 4 and fields[0] == "POST" else None
+        turn = TURN_PATH.match(fields[1]) if len(fields) in (4, 5) and fields[0] == "POST" else None
         if turn and int(turn.group(1)) in by_session:
             by_session[int(turn.group(1))].turns.append((float(fields[2]), float(fields[3])))
     return [_in_order(student) for student in by_session.values()]

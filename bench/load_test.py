@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import contextvars
 import json
 import os
 import platform
@@ -52,10 +53,13 @@ from tests.pgserver import PostgresServer  # noqa: E402
 DATA = ROOT / "tests" / "data"
 PASSWORD = "load-test-pass-1"
 CSRF_RE = re.compile(r'name="csrf_token" value="([^"]+)"')
-# GYROLAB_BENCH_CLIENT_TIMES=FILE: each HTTP request's ``method path sent_s answered_s``
+# GYROLAB_BENCH_CLIENT_TIMES=FILE: each HTTP request's ``method path sent_s answered_s who``
 # (time.perf_counter, the same clock as the server probe's GYROLAB_BENCH_SERVER_TIMES), to
-# set the client's time of a request beside the server's
+# set the client's time of a request beside the server's; ``who``: the student's number,
+# or ``teacher`` (a run's steps per browser, in order, for replay.py)
 CLIENT_TIMES = os.environ.get("GYROLAB_BENCH_CLIENT_TIMES")
+# whose browser the running task is (each student's task sets it: a context variable)
+BROWSER: contextvars.ContextVar[str] = contextvars.ContextVar("browser", default="-")
 # GYROLAB_BENCH_STREAM_TIMES=FILE: each position streamed, as the load generator saw it:
 # ``session part position`` and the times (time.perf_counter, s) it sent "start" and
 # received "started", its first and its last samples, and "saved"
@@ -148,7 +152,8 @@ class Tally:
             raise
         self.latencies[route].append(time.perf_counter() - start)
         if CLIENT_TIMES:
-            self.sent.append(f"{method} {url} {start:.6f} {time.perf_counter():.6f}\n")
+            answered = time.perf_counter()
+            self.sent.append(f"{method} {url} {start:.6f} {answered:.6f} {BROWSER.get()}\n")
         if response.status_code not in ok:
             self.errors.append(f"{route}: HTTP {response.status_code} {response.text[:200]}")
             raise RuntimeError(f"{route} answered {response.status_code}")
@@ -236,6 +241,7 @@ def handout_csv(name: str) -> tuple[str, list[int]]:
 
 
 async def student(index: int, base: str, assignment: int, tally: Tally, args) -> None:
+    BROWSER.set(str(index))  # this student's task's own
     await asyncio.sleep(random.Random(index).uniform(0, args.ramp))
     async with browser(base) as client:
         page = await tally.request(client, "GET", "/login", "GET /login")
@@ -317,6 +323,7 @@ async def student(index: int, base: str, assignment: int, tally: Tally, args) ->
 
 
 async def teacher(base: str, course: int, assignment: int, tally: Tally, done: asyncio.Event):
+    BROWSER.set("teacher")
     async with browser(base) as client:
         page = await tally.request(client, "GET", "/login", "GET /login")
         await tally.request(

@@ -67,12 +67,12 @@ def quantile_interval(
 
 def client_requests(path: Path) -> dict[str, np.ndarray]:
     """Per route, each request the load generator timed as a row (sent, latency), s
-    (``GYROLAB_BENCH_CLIENT_TIMES`` lines: ``method path sent_s answered_s``; sent on
+    (``GYROLAB_BENCH_CLIENT_TIMES`` lines: ``method path sent_s answered_s [who]``; sent on
     ``time.perf_counter``'s clock; a line cut short is left out)."""
     rows: dict[str, list[tuple[float, float]]] = defaultdict(list)
     for line in path.read_text().splitlines():
         fields = line.split()
-        if len(fields) == 4:
+        if len(fields) in (4, 5):  # with the browser's name, or without
             sent = float(fields[2])
             rows[route_of(fields[0], fields[1])].append((sent, float(fields[3]) - sent))
     return {route: np.array(values).reshape(-1, 2) for route, values in rows.items()}

@@ -90,6 +90,7 @@ sys.path.insert(0, str(ROOT / "bench"))
 import convoys  # noqa: E402  (bench/, the script's folder)
 import load_test  # noqa: E402
 import p95_interval  # noqa: E402
+import replay  # noqa: E402
 import request_waits  # noqa: E402
 from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
 from class_cpu import (  # noqa: E402
@@ -572,6 +573,21 @@ def main() -> int:
         "step, turn by turn, measured beside predicted (convoys.py)",
     )
     parser.add_argument(
+        "--replay",
+        action="store_true",
+        help="with --client-times and --stream-times: the model's server is sent each run's "
+        "own requests and positions at the times the run sent them, open loop (replay.py), "
+        "instead of students that send each step when the last was answered -- the server's "
+        "side of the model judged apart from how the class falls into step",
+    )
+    parser.add_argument(
+        "--paced",
+        action="store_true",
+        help="with --replay: each browser's steps in order, each at its time in the run or "
+        "as long after the model answered the step before as the run's browser took, "
+        "whichever is later (the run's client times must name each request's browser)",
+    )
+    parser.add_argument(
         "--by-time",
         nargs="*",
         default=[],
@@ -658,10 +674,11 @@ def main() -> int:
         waits: dict | None,
         locked: dict[str, float] | None,
         seed: int,
+        arrivals: list | None = None,
     ) -> dict:
         """The class simulated once with ``seed`` (which worker each connection reaches,
         which measured costs each request draws); ``shares``: each worker's chance of a
-        new connection; ``waits``: ``waits_of``'s."""
+        new connection; ``waits``: ``waits_of``'s; ``arrivals``: a run's, replayed."""
         return simulate(
             with_cpu_scaled(costs, args.cpu_scale),
             students,
@@ -677,6 +694,8 @@ def main() -> int:
             wake_free=not args.woken_at_once,
             costs_in_order=not args.costs_at_random,
             locked_shares=locked,
+            arrivals=arrivals,
+            teacher=arrivals is None,
             **options,
             **(waits or waits_of()),
         )
@@ -687,11 +706,12 @@ def main() -> int:
         shares: list[float] | None = None,
         waits: dict | None = None,
         locked: dict[str, float] | None = None,
+        arrivals: list | None = None,
     ) -> dict:
         """``simulate_seed`` once per seed of ``--seeds``, combined."""
         return combine(
             [
-                simulate_seed(costs, students, shares, waits, locked, seed)
+                simulate_seed(costs, students, shares, waits, locked, seed, arrivals)
                 for seed in range(args.seeds)
             ]
         )
@@ -727,7 +747,18 @@ def main() -> int:
                 print("  each write's thread CPU in the write lock (the lock trace): " + ", ".join(
                     f"{route} {share:.0%}" for route, share in sorted(locked.items())
                 ))  # fmt: skip
-            result = predict(costs, students, shares, waits, locked)
+            arrivals = None
+            if args.replay:
+                if len(args.client_times) <= index or len(args.stream_times) <= index:
+                    parser.error("--replay needs --client-times and --stream-times of each run")
+                arrivals = replay.arrivals_of(
+                    args.client_times[index], args.stream_times[index], args.paced
+                )
+                print(
+                    f"  replayed: the run's {len(arrivals)} arrivals, "
+                    + ("each browser's paced" if args.paced else "sent at their times")
+                )
+            result = predict(costs, students, shares, waits, locked, arrivals)
             print(f"\n{students} students, {name}, {workers} worker(s), the run in {run}:"
                   f" predicted wall {result['wall']:.1f} s; hand-off"
                   f" {waits['handoff_s'] * 1e6:.0f} µs, busy wake-up"
@@ -752,7 +783,7 @@ def main() -> int:
                 pools[students].add_run(seen_latencies, result["pooled"])
                 for route in args.by_time:
                     compare_by_time(route, result["timelines"], sent_from_start(requests, students))
-                if len(args.stream_times) > index:
+                if len(args.stream_times) > index and not arrivals:
                     print(f"how the class fell into step (convoys.py; {args.stream_times[index]}):")
                     convoys.compare(
                         [convoys.from_model({"students": seed}) for seed in result["students"]],
@@ -761,7 +792,7 @@ def main() -> int:
             for seed in range(args.seeds, args.seeds + args.model_as_run):
                 # a seed the prediction did not use, scored as a measured run (of the
                 # routes the run's requests' times have, where it has them)
-                run_of_model = simulate_seed(costs, students, shares, waits, locked, seed)
+                run_of_model = simulate_seed(costs, students, shares, waits, locked, seed, arrivals)
                 latencies = {
                     route: np.array(values) * 1000
                     for route, values in run_of_model["latencies"].items()

@@ -184,6 +184,7 @@ def simulate(
     script=student_script,
     starts: list[float] | None = None,
     frames_on_loop: bool = True,
+    arrivals: list[tuple] | None = None,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -266,7 +267,14 @@ def simulate(
     a stream's frame is work on the event loop alone, as in the app (the tick takes the
     samples and sends them on the loop) (False: each frame also queues for the interpreter
     as a thread's work of 1 µs, handed to it and woken -- the model before 2026-12-05's
-    thirty-second part, in which a frame right behind another student's save waited for it).
+    thirty-second part, in which a frame right behind another student's save waited for it);
+    ``arrivals``: a trace to replay instead of the students (``students``, ``script``,
+    ``starts`` and ``teacher`` unused; ``replay.py``): each (time from the start s,
+    "request" or "stream", route, connection[, browser, think s]) -- the requests of one
+    connection reaching one worker (None: a connection of its own).  Without a browser an
+    arrival is sent at its time whatever was answered before it (open loop); a browser's
+    arrivals go in order, each at its time or ``think`` after the one before it ended,
+    whichever is later (paced).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -390,7 +398,12 @@ def simulate(
     calls_drawn = random.Random(seed + 3)  # which releases hand the interpreter on
     draw = random.Random(seed + 1)  # which of a route's measured requests this one costs
     asked_of_route: dict[str, int] = defaultdict(int)  # requests of each route so far
-    per_student = Counter(route for kind, route in script() if kind == "request")
+    # how many of each route the class asks for (a request's place in its route's order)
+    if arrivals is None:
+        per_student = Counter(route for kind, route in script() if kind == "request")
+        of_route = Counter({route: count * students for route, count in per_student.items()})
+    else:
+        of_route = Counter(arrival[2] for arrival in arrivals if arrival[1] == "request")
 
     def server_job(
         work: float,
@@ -470,10 +483,10 @@ def simulate(
 
     def phases(route: str, then, worker: int, cost: tuple | None = None) -> None:
         cost = cost or costs[route]
-        if isinstance(cost, list) and costs_in_order and route in per_student:
+        if isinstance(cost, list) and costs_in_order and route in of_route:
             # the k-th of the class's, give or take 5 % (a class of another size: the
             # same place in its order)
-            k = asked_of_route[route] * len(cost) / (per_student[route] * students)
+            k = asked_of_route[route] * len(cost) / of_route[route]
             asked_of_route[route] += 1
             spread = max(1, len(cost) // 20)
             cost = cost[min(max(int(k) + draw.randint(-spread, spread), 0), len(cost) - 1)]
@@ -717,6 +730,14 @@ def simulate(
             finished[0] += 1
             return
         kind, route = step
+        if kind == "until":  # a replayed browser's next step: its time, or think after now
+            time, think = route
+            ready = max(time, now + think)
+            if ready > now + 1e-12:
+                at(ready, lambda: run_student(script, http, websocket, record))
+            else:
+                run_student(script, http, websocket, record)
+            return
         if kind == "request":
             request(route, lambda: run_student(script, http, websocket, record), http, record)
             return
@@ -780,12 +801,49 @@ def simulate(
         records.append(record)
         run_student(script(), accepting(https, student), accepting(websockets, student), record)
 
-    for index in range(students):
-        # the load test's ramp, else as asked
-        start = random.Random(index).uniform(0, ramp) if starts is None else starts[index]
-        at(start, arrive)
-    if teacher:
-        at(0.0, watch)
+    if arrivals is not None:
+        connection_worker: dict[object, int] = {}
+        shares = worker_shares or [1.0 / workers] * workers
+
+        def worker_of(connection: object) -> int:
+            """The worker a connection reaches (each new one: by the workers' shares)."""
+            if connection is None or connection not in connection_worker:
+                worker = pick.choices(range(workers), weights=shares)[0]
+                if connection is None:
+                    return worker
+                connection_worker[connection] = worker
+            return connection_worker[connection]
+
+        # each browser's steps in order (paced), or each arrival alone (open loop)
+        browsers: dict[object, list[tuple]] = {}
+        for index, (time, kind, route, connection, *paced) in enumerate(arrivals):
+            browser = paced[0] if paced and paced[0] is not None else ("alone", index)
+            think = paced[1] if len(paced) > 1 else 0.0
+            browsers.setdefault(browser, []).append((time, kind, route, connection, think))
+
+        def replay(steps: list[tuple]) -> None:
+            record: dict = {"requests": [], "positions": []}
+            records.append(record)
+            http = next((step[3] for step in steps if step[1] == "request"), None)
+            websocket = next((step[3] for step in steps if step[1] == "stream"), None)
+
+            def script():
+                for time, kind, route, _connection, think in steps:
+                    yield "until", (time, think)
+                    yield kind, route
+
+            run_student(script(), worker_of(http), worker_of(websocket), record)
+
+        for steps in browsers.values():
+            at(steps[0][0], lambda steps=steps: replay(steps))
+        students = len(browsers)  # each browser finishes as a student does
+    else:
+        for index in range(students):
+            # the load test's ramp, else as asked
+            start = random.Random(index).uniform(0, ramp) if starts is None else starts[index]
+            at(start, arrive)
+        if teacher:
+            at(0.0, watch)
 
     def kept_through_call(job: Job, queue: list[Job]) -> bool:
         """At the end of a segment: whether it was an SQLite call that ended before the

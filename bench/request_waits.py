@@ -205,7 +205,7 @@ def outside_the_app(client_times: Path, server_times: Path) -> dict[str, tuple[i
     parts: dict[str, list[tuple[float, float]]] = defaultdict(list)
     for line in client_times.read_text().splitlines():
         fields = line.split()
-        if len(fields) != 4:
+        if len(fields) not in (4, 5):  # with the browser's name, or without
             continue
         key, sent, answered = (fields[0], fields[1]), float(fields[2]), float(fields[3])
         calls, index = began.get(key, []), matched[key]
