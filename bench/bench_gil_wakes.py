@@ -12,6 +12,12 @@ each thread's times on a core a second, the run-queue waits (thread-seconds a se
 the cores used and the loops' throughput against one thread alone.  ``queue_model.py``
 counts these wake-ups beside its others (``waiting wake-ups``); bench/README.md,
 issue 32, twenty-ninth part.
+
+``--beside``: a thread hashing passwords as a log-in does (argon2id at the app's cost,
+outside the interpreter) beside ``N`` spinning threads: how much of its time on a core it
+waits for one more (its ``schedstat``) -- beside one thread holding the interpreter the
+cores suffice, beside threads taking turns at it the woken ones land on its core
+(bench/README.md, issue 32, thirty-third part).
 """
 
 from __future__ import annotations
@@ -79,12 +85,68 @@ def contended(threads: int, interval_s: float, seconds: float = 2.0) -> Contende
     return Contended(threads, slices / wall / threads, waited / wall, cpu / wall, added / wall)
 
 
+def beside(threads: int, interval_s: float, hashes: int = 60) -> tuple[float, float, int]:
+    """``hashes`` argon2id hashes at the app's cost, one after another on a thread of their
+    own, beside ``threads`` pure-Python loops at the switch interval ``interval_s``: the
+    hash thread's (time on a core s, time waiting for one s, times put on one)."""
+    from argon2.low_level import Type, hash_secret_raw
+
+    from app.accounts.security import ARGON2_MEMORY_KIB, ARGON2_PARALLELISM, ARGON2_TIME_COST
+
+    before = sys.getswitchinterval()
+    sys.setswitchinterval(interval_s)
+    stop = threading.Event()
+    seen: list[tuple[float, float, int]] = []
+
+    def spin() -> None:
+        while not stop.is_set():
+            for _ in range(1000):
+                pass
+
+    def hash_all() -> None:
+        tid = threading.get_native_id()
+        first = thread_stats(os.getpid())[tid]
+        for index in range(hashes):
+            hash_secret_raw(
+                b"password %d" % index, b"a salt of 16 by", ARGON2_TIME_COST,
+                ARGON2_MEMORY_KIB, ARGON2_PARALLELISM, 32, Type.ID,
+            )  # fmt: skip
+        last = thread_stats(os.getpid())[tid]
+        seen.append(((last[0] - first[0]) / 1e9, (last[1] - first[1]) / 1e9, last[2] - first[2]))
+
+    spinners = [threading.Thread(target=spin) for _ in range(threads)]
+    hasher = threading.Thread(target=hash_all)
+    try:
+        for thread in spinners:
+            thread.start()
+        time.sleep(0.1)
+        hasher.start()
+        hasher.join()
+    finally:
+        stop.set()
+        for thread in spinners:
+            thread.join()
+        sys.setswitchinterval(before)
+    return seen[0]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seconds", type=float, default=2.0)
     parser.add_argument("--interval-ms", type=float, nargs="+", default=[1.0, 5.0])
+    parser.add_argument("--beside", action="store_true", help="a hashing thread beside them")
     args = parser.parse_args()
     print(f"{os.cpu_count()} cores, Python {sys.version.split()[0]}")
+    if args.beside:
+        for interval_ms in args.interval_ms:
+            print(f"\nswitch interval {interval_ms:g} ms: a thread hashing passwords beside"
+                  " N pure-Python threads; its time on a core, its wait for one")  # fmt: skip
+            for threads in (0, 1, 2, 4):
+                ran, waited, slices = beside(threads, interval_ms / 1000)
+                print(f"  N = {threads}: ran {ran:.2f} s, waited {waited:.2f} s"
+                      f" ({waited / ran:.0%} of its run), put on a core {slices:,} times"
+                      f" ({waited / max(slices, 1) * 1e6:.0f} µs a time)")  # fmt: skip
+        return
     for interval_ms in args.interval_ms:
         print(f"\nswitch interval {interval_ms:g} ms")
         print(f"  {'threads':>7s} {'on a core /s each':>18s} {'run queue':>10s}"
