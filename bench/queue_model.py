@@ -573,6 +573,14 @@ def main() -> int:
         "step, turn by turn, measured beside predicted (convoys.py)",
     )
     parser.add_argument(
+        "--landing-us",
+        type=float,
+        default=0.0,
+        help="a server thread woken to run lands on a core at random; one running a thread "
+        "outside the interpreter (a log-in's hash, the load generator) puts it off its core "
+        "this long, µs (bench_gil_wakes.py --beside: 223-424 µs a time); 0: never",
+    )
+    parser.add_argument(
         "--replay",
         action="store_true",
         help="with --client-times and --stream-times: the model's server is sent each run's "
@@ -665,6 +673,7 @@ def main() -> int:
         "trips_outside_lock": not args.trips_inside_lock,
         "released_share": args.released_share,
         "frames_on_loop": not args.frames_in_a_thread,
+        "landing_s": args.landing_us / 1e6,
     }
 
     def simulate_seed(

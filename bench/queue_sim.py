@@ -75,6 +75,8 @@ WRITES = {
 }
 LOGIN = "POST /login"
 LOGIN_LOCKED_S = 0.001
+# threads running outside the interpreter, on a core a woken server thread may land on
+OUTSIDE = ("hash", "client", "released")
 # state-changing requests wait for one of a worker's write places (web.admission,
 # GYROLAB_WRITE_CONCURRENCY) and hold it until the server has answered; the CSV preview is
 # declared read-only and passes
@@ -129,7 +131,7 @@ class Job:
 
     __slots__ = (
         "pool", "left", "done", "segment", "segment_left", "worker", "handing", "call_share",
-        "waits",
+        "waits", "bumped",
     )  # fmt: skip
 
     def __init__(
@@ -145,6 +147,7 @@ class Job:
         self.segment = self.segment_left = self.left / max(segments, 1.0)
         self.worker = worker
         self.handing = 0.0
+        self.bumped = 0.0  # off its core for a thread woken onto it (``landing_s``)
         self.call_share = call_share  # of its releases, the SQLite calls'
         # its request's waits (``simulate``'s "server" tuples): for the interpreter, being
         # handed it (on the run queue), holding it for a core, for the write lock or the
@@ -185,6 +188,7 @@ def simulate(
     starts: list[float] | None = None,
     frames_on_loop: bool = True,
     arrivals: list[tuple] | None = None,
+    landing_s: float = 0.0,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -433,12 +437,26 @@ def simulate(
         if len(queue) == 1 and woken:
             wake_to_free(job)
 
+    landing = random.Random(seed + 5)  # which core a woken server thread lands on
+
+    def land() -> None:
+        """A server thread woken to run lands on a core at random: on one running a thread
+        outside the interpreter (a hash, the load generator), that thread is off its core
+        for ``landing_s``."""
+        if not landing_s:
+            return
+        outside = [job for job in jobs if job.pool in OUTSIDE and not job.bumped
+                   and not (clients_elsewhere and job.pool == "client")]  # fmt: skip
+        if outside and landing.random() < len(outside) / cores:
+            landing.choice(outside).bumped = landing_s
+
     def wake_to_free(job: Job) -> None:
         """A thread woken from sleep (by the event loop, or the loop by a socket) finds the
         interpreter free: it still waits on the run queue to reach a core, as a thread
         handed the interpreter does (the interpreter is its meanwhile)."""
         if wake_free:
             job.handing = handoff_s + busy_wake(counted=False)
+            land()
             wakeups["server"] += 1
             wakeups["loop"] += job.pool == "loop"
 
@@ -884,7 +902,9 @@ def simulate(
                 for pool in counts}  # fmt: skip
         if holders:
             rate["interpreter"] = scale  # a holder runs on one core, shared with the rest
-        next_done = min((job.left / rate[job.pool] for job in jobs), default=float("inf"))
+        next_done = min(
+            (job.bumped or job.left / rate[job.pool] for job in jobs), default=float("inf")
+        )
         for job in holders:
             if job.handing > 0.0:
                 next_done = min(next_done, job.handing)
@@ -904,6 +924,10 @@ def simulate(
                 queued[group] += asked_of * (1.0 - scale) * step
                 ran[group] += asked_of * scale * step
         for job in jobs:
+            if job.bumped:  # waiting on its core for the thread woken onto it
+                queued["server" if job.pool != "client" else "client"] += min(job.bumped, step)
+                job.bumped = job.bumped - step if job.bumped > step + 1e-15 else 0.0
+                continue
             job.left -= rate[job.pool] * step
         timed_out = 0.0  # each waiter's timed waits for the interpreter in this step
         if switch_interval_s > 0 and step < float("inf"):
@@ -970,6 +994,7 @@ def simulate(
             turn_ends[job.worker] = now + switch_interval_s
             if queue and queue[0] is not job:  # handed to a thread that waited for it
                 queue[0].handing = handoff_s + busy_wake(counted=False)
+                land()
                 wakeups["server"] += 1
                 wakeups["loop"] += queue[0].pool == "loop"
         for job in done:

@@ -570,6 +570,26 @@ def test_a_log_in_gives_its_work_place_to_another_request_while_it_hashes():
     assert max(log_ins) < 1.5 * hash_s  # held through the hash, the second took ≥ 2 hashes
 
 
+def test_a_thread_woken_onto_a_hashs_core_puts_the_hash_off_it():
+    """``landing_s``: a server thread woken to run lands on a core at random, and on one
+    running a hash the hash waits that long (bench_gil_wakes.py --beside).  A log-in hashing
+    while other students' requests take turns at the interpreter takes longer with it; no
+    landing, no change; every request is answered either way."""
+    hash_s = 20 * MS
+    table = costs(server=4 * MS, db=0.0, client=0.5 * MS, calls=12.0, trips=3.0)
+    table[queue_sim.LOGIN] = (hash_s + 2 * MS, 0.0, 0.5 * MS, 2.0, 1.0, 0.1 * MS)
+
+    def log_ins(landing_s: float) -> list[float]:
+        result = queue_sim.simulate(
+            table, 12, 1, 2.0, ramp=0.05, hash_s=hash_s, teacher=False, landing_s=landing_s
+        )
+        assert len(result["latencies"][queue_sim.LOGIN]) == 12
+        return result["latencies"][queue_sim.LOGIN]
+
+    assert log_ins(0.0) == log_ins(0.0)  # the landings' draws change nothing without it
+    assert np.mean(log_ins(1 * MS)) > np.mean(log_ins(0.0)) + 1 * MS
+
+
 def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
     """The unseen part of each request is scaled so that the class's requests and frames
     ask the server for the CPU the run used, and the load generator likewise."""
