@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from p95_interval import client_lines
 
 TURN = "POST /lab/sessions/{id}/turn"
 TURN_PATH = re.compile(r"/lab/sessions/(\d+)/turn$")
@@ -46,11 +47,10 @@ def read_run(client_times: Path, stream_times: Path) -> list[Student]:
         by_session.setdefault(int(fields[0]), Student()).positions.append(
             (asked, started, last, saved)
         )
-    for line in client_times.read_text().splitlines():
-        fields = line.split()
-        turn = TURN_PATH.match(fields[1]) if len(fields) in (4, 5) and fields[0] == "POST" else None
+    for method, url, sent, answered, _ in client_lines(client_times):
+        turn = TURN_PATH.match(url) if method == "POST" else None
         if turn and int(turn.group(1)) in by_session:
-            by_session[int(turn.group(1))].turns.append((float(fields[2]), float(fields[3])))
+            by_session[int(turn.group(1))].turns.append((sent, answered))
     return [_in_order(student) for student in by_session.values()]
 
 

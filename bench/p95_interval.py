@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from collections import defaultdict
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -65,16 +66,24 @@ def quantile_interval(
     )
 
 
-def client_requests(path: Path) -> dict[str, np.ndarray]:
-    """Per route, each request the load generator timed as a row (sent, latency), s
-    (``GYROLAB_BENCH_CLIENT_TIMES`` lines: ``method path sent_s answered_s [who]``; sent on
-    ``time.perf_counter``'s clock; a line cut short is left out)."""
-    rows: dict[str, list[tuple[float, float]]] = defaultdict(list)
+def client_lines(path: Path) -> Iterator[tuple[str, str, float, float, str | None]]:
+    """Each request the load generator timed: (method, path, sent s, answered s, the
+    browser that sent it or None) -- ``GYROLAB_BENCH_CLIENT_TIMES`` lines, ``method path
+    sent_s answered_s [who]`` (the browser named since 2026-12-05); a line cut short is
+    left out."""
     for line in path.read_text().splitlines():
         fields = line.split()
-        if len(fields) in (4, 5):  # with the browser's name, or without
-            sent = float(fields[2])
-            rows[route_of(fields[0], fields[1])].append((sent, float(fields[3]) - sent))
+        if len(fields) in (4, 5):
+            who = fields[4] if len(fields) == 5 else None
+            yield fields[0], fields[1], float(fields[2]), float(fields[3]), who
+
+
+def client_requests(path: Path) -> dict[str, np.ndarray]:
+    """Per route, each request the load generator timed as a row (sent, latency), s
+    (:func:`client_lines`; sent on ``time.perf_counter``'s clock)."""
+    rows: dict[str, list[tuple[float, float]]] = defaultdict(list)
+    for method, url, sent, answered, _ in client_lines(path):
+        rows[route_of(method, url)].append((sent, answered - sent))
     return {route: np.array(values).reshape(-1, 2) for route, values in rows.items()}
 
 

@@ -760,9 +760,12 @@ def main() -> int:
             if args.replay:
                 if len(args.client_times) <= index or len(args.stream_times) <= index:
                     parser.error("--replay needs --client-times and --stream-times of each run")
-                arrivals = replay.arrivals_of(
-                    args.client_times[index], args.stream_times[index], args.paced
-                )
+                try:
+                    arrivals = replay.arrivals_of(
+                        args.client_times[index], args.stream_times[index], args.paced
+                    )
+                except ValueError as error:
+                    parser.error(str(error))
                 print(
                     f"  replayed: the run's {len(arrivals)} arrivals, "
                     + ("each browser's paced" if args.paced else "sent at their times")

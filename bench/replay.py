@@ -16,6 +16,7 @@ import re
 from pathlib import Path
 
 from class_cpu import route_of
+from p95_interval import client_lines
 from queue_sim import STREAM
 
 SESSION_IN_PATH = re.compile(r"/lab/sessions/(\d+)(?:/|$)")
@@ -35,23 +36,19 @@ def arrivals_of(client_times: Path, stream_times: Path, paced: bool = False) -> 
     own start, at least 0.  Lines cut short are left out."""
     steps: list[tuple[float, float, str, str, object, object]] = []
     browser_of_session: dict[int, str] = {}
-    for line in client_times.read_text().splitlines():
-        fields = line.split()
-        if len(fields) not in (4, 5):
-            continue
-        if paced and len(fields) == 4:
+    for method, url, sent, answered, who in client_lines(client_times):
+        if paced and who is None:
             raise ValueError(f"{client_times} names no browser for its requests (pacing needs "
                              "load_test.py's client times of 2026-12-05 or later)")  # fmt: skip
-        session = SESSION_IN_PATH.search(fields[1])
-        browser = fields[4] if paced else None
+        session = SESSION_IN_PATH.search(url)
+        browser = who if paced else None
         if paced:
             connection: object = ("http", browser)
             if session:
                 browser_of_session[int(session.group(1))] = browser
         else:
             connection = ("http", int(session.group(1))) if session else None
-        route = route_of(fields[0], fields[1])
-        steps.append((float(fields[2]), float(fields[3]), "request", route, connection, browser))
+        steps.append((sent, answered, "request", route_of(method, url), connection, browser))
     for line in stream_times.read_text().splitlines():
         fields = line.split()
         if len(fields) != 8:

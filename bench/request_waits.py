@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 from class_cpu import route_of
+from p95_interval import client_lines
 
 # the columns of ``read``'s arrays, ms (began: s, the probe's clock)
 PLACE, INSIDE, CPU, OFF_CORE, RUN_QUEUE, BEGAN = range(6)
@@ -203,11 +204,8 @@ def outside_the_app(client_times: Path, server_times: Path) -> dict[str, tuple[i
         calls.sort()
     matched: dict[tuple[str, str], int] = defaultdict(int)  # the next not yet matched
     parts: dict[str, list[tuple[float, float]]] = defaultdict(list)
-    for line in client_times.read_text().splitlines():
-        fields = line.split()
-        if len(fields) not in (4, 5):  # with the browser's name, or without
-            continue
-        key, sent, answered = (fields[0], fields[1]), float(fields[2]), float(fields[3])
+    for method, url, sent, answered, _ in client_lines(client_times):
+        key = (method, url)
         calls, index = began.get(key, []), matched[key]
         while index < len(calls) and calls[index][0] < sent:
             index += 1  # a server call the load generator did not time (the teacher's)
