@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 from datetime import UTC, datetime
-from zoneinfo import ZoneInfo, ZoneInfoNotFoundError, available_timezones
+from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
+from app.config import iana_zones
 from app.core.exceptions import UserError
 
 COMMON_ZONES = (
@@ -43,14 +44,14 @@ def zone(name: str | None) -> ZoneInfo:
 def valid_zone_name(name: str) -> str:
     """``name`` if it is an IANA zone, else a UserError."""
     name = name.strip()
-    if name not in available_timezones():
+    if name not in iana_zones():
         raise UserError("course.bad_timezone", name=name[:64])
     return name
 
 
 def zone_choices() -> list[str]:
     """The zones offered in a course's settings: common ones first, then all others."""
-    rest = sorted(available_timezones() - set(COMMON_ZONES))
+    rest = sorted(iana_zones() - set(COMMON_ZONES))
     return [*COMMON_ZONES, *rest]
 
 
