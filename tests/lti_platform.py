@@ -39,6 +39,8 @@ from lti1p3platform.message_launch import LTIAdvantageMessageLaunchAbstract
 from lti1p3platform.oidc_login import OIDCLoginAbstract
 from lti1p3platform.registration import Registration
 
+from tests.loopback import TLS
+
 CLIENT_ID = "gyrolab-client"
 DEPLOYMENT_ID = "deployment-1"
 CONTEXT_ID = "physics-201"
@@ -520,6 +522,7 @@ class Browser:
         self.client = httpx.Client(
             follow_redirects=True,
             timeout=20,
+            verify=TLS,
             headers=headers or {},
             cookies=self.jar,
             event_hooks={"request": [self._cookie_header]},

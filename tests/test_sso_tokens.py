@@ -16,6 +16,7 @@ from app.accounts import sso
 from app.config import get_settings
 from app.db import read_session
 from app.models import ExternalIdentity
+from tests.loopback import TLS
 from tests.oidc_forger import CLIENT_ID, CLIENT_SECRET, VARIANTS, running_forger
 
 # refused before any write; the good one is one insert
@@ -47,7 +48,7 @@ def round_trip(client: TestClient, forger, variant: str, language: str = "en"):
     headers = {"Accept-Language": language}
     start = client.get("/login/sso", headers=headers)
     assert start.status_code == 302
-    back = httpx.get(start.headers["location"]).headers["location"]
+    back = httpx.get(start.headers["location"], verify=TLS).headers["location"]
     parts = urlsplit(back)
     return client.get(f"{parts.path}?{parts.query}", headers=headers)
 

@@ -15,12 +15,13 @@ import pytest
 from app.bridge.recording import Recorder
 from tests.e2e.conftest import STUDENT_PASSWORD
 from tests.instrument_streams import dsp1750_stream
+from tests.loopback import TLS
 
 pytestmark = pytest.mark.e2e
 
 
 def test_bridge_moves_a_pty_stream_into_a_session(live_server):
-    api = httpx.Client(base_url=live_server.url, timeout=10)
+    api = httpx.Client(base_url=live_server.url, timeout=10, verify=TLS)
     token = api.post(
         "/api/v1/auth/token", data={"username": "student", "password": STUDENT_PASSWORD}
     ).json()
@@ -92,7 +93,7 @@ def test_bridge_moves_a_pty_stream_into_a_session(live_server):
 
 def test_a_recorded_dsp1750_run_replays_into_a_session(live_server, tmp_path):
     """What a class does with a teacher's capture: replay it through the real command."""
-    api = httpx.Client(base_url=live_server.url, timeout=10)
+    api = httpx.Client(base_url=live_server.url, timeout=10, verify=TLS)
     token = api.post(
         "/api/v1/auth/token", data={"username": "student", "password": STUDENT_PASSWORD}
     ).json()["access_token"]

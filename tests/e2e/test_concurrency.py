@@ -22,6 +22,7 @@ from sqlalchemy import create_engine, text
 from app.accounts.rate_leases import MAX_LEASE
 from app.db import WRITE_LOCK_KEY
 from tests.e2e.conftest import STUDENT_PASSWORD, LiveServer
+from tests.loopback import TLS
 
 pytestmark = pytest.mark.e2e
 
@@ -49,7 +50,7 @@ def write_lock_held(server: LiveServer):
 
 
 def cookie_login(url: str, username: str, password: str) -> tuple[httpx.Client, str]:
-    client = httpx.Client(base_url=url, timeout=30)
+    client = httpx.Client(base_url=url, timeout=30, verify=TLS)
     page = client.get("/login")
     token = page.text.split('name="csrf_token" value="')[1].split('"')[0]
     reply = client.post(
@@ -61,7 +62,7 @@ def cookie_login(url: str, username: str, password: str) -> tuple[httpx.Client, 
 
 
 def bearer(url: str) -> httpx.Client:
-    client = httpx.Client(base_url=url, timeout=30)
+    client = httpx.Client(base_url=url, timeout=30, verify=TLS)
     reply = client.post(
         "/api/v1/auth/token", data={"username": "student", "password": STUDENT_PASSWORD}
     )
@@ -97,7 +98,7 @@ def test_waiting_writers_do_not_stop_other_requests(any_live_server: LiveServer)
         writers[0].join(1.0)  # give them time to reach the lock
         # Every worker must still answer while both writers wait for the lock.
         for _ in range(4):
-            assert httpx.get(f"{url}/login", timeout=5).status_code == 200
+            assert httpx.get(f"{url}/login", timeout=5, verify=TLS).status_code == 200
         assert finished == {}, "a write got through while the lock was held"
     for writer in writers:
         writer.join(30)
@@ -139,6 +140,7 @@ def test_parallel_guesses_cannot_pass_the_throttle(any_live_server: LiveServer):
             f"{url}/api/v1/auth/token",
             data={"username": "guessed-teacher", "password": f"wrong-guess-{i}"},
             timeout=60,
+            verify=TLS,
         ).status_code
 
     with ThreadPoolExecutor(12) as pool:
@@ -159,6 +161,7 @@ def test_parallel_log_ins_of_one_account_all_get_through(any_live_server: LiveSe
             f"{url}/api/v1/auth/token",
             data={"username": "student", "password": password},
             timeout=60,
+            verify=TLS,
         ).status_code
 
     with ThreadPoolExecutor(5) as pool:

@@ -17,12 +17,13 @@ import websockets.sync.client as ws_client
 from sqlalchemy import create_engine, text
 
 from tests.e2e.conftest import STUDENT_PASSWORD, LiveServer, new_live_server
+from tests.loopback import TLS
 
 pytestmark = pytest.mark.e2e
 
 
 def login(url: str) -> httpx.Client:
-    client = httpx.Client(base_url=url, timeout=10)
+    client = httpx.Client(base_url=url, timeout=10, verify=TLS)
     token = client.post(
         "/api/v1/auth/token", data={"username": "student", "password": STUDENT_PASSWORD}
     ).json()
@@ -73,7 +74,7 @@ def test_kill_9_loses_no_acknowledged_write(server_to_kill: LiveServer):
             batch += 1
 
     # a live simulator stream as well (its position must be all or nothing)
-    cookie_client = httpx.Client(base_url=url, timeout=10)
+    cookie_client = httpx.Client(base_url=url, timeout=10, verify=TLS)
     page = cookie_client.get("/login")
     csrf = page.text.split('name="csrf_token" value="')[1].split('"')[0]
     cookie_client.post(
