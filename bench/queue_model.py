@@ -581,6 +581,12 @@ def main() -> int:
         "this long, µs (bench_gil_wakes.py --beside: 223-424 µs a time); 0: never",
     )
     parser.add_argument(
+        "--client-in-order",
+        action="store_true",
+        help="the load generator's client work one callback at a time, in the order they "
+        "became ready (one event loop), instead of every student's shared evenly",
+    )
+    parser.add_argument(
         "--replay",
         action="store_true",
         help="with --client-times and --stream-times: the model's server is sent each run's "
@@ -674,6 +680,7 @@ def main() -> int:
         "released_share": args.released_share,
         "frames_on_loop": not args.frames_in_a_thread,
         "landing_s": args.landing_us / 1e6,
+        "client_in_order": args.client_in_order,
     }
 
     def simulate_seed(

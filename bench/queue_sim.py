@@ -189,6 +189,7 @@ def simulate(
     frames_on_loop: bool = True,
     arrivals: list[tuple] | None = None,
     landing_s: float = 0.0,
+    client_in_order: bool = False,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -278,7 +279,11 @@ def simulate(
     connection reaching one worker (None: a connection of its own).  Without a browser an
     arrival is sent at its time whatever was answered before it (open loop); a browser's
     arrivals go in order, each at its time or ``think`` after the one before it ended,
-    whichever is later (paced).
+    whichever is later (paced); ``client_in_order``: the load generator is
+    one event loop: its client work runs one callback at a time, in the order the callbacks
+    became ready, at the load generator's share of a core (False: every student's client
+    work shared that core evenly, processor sharing, the model before 2026-12-05's
+    thirty-fourth part).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -902,9 +907,21 @@ def simulate(
                 for pool in counts}  # fmt: skip
         if holders:
             rate["interpreter"] = scale  # a holder runs on one core, shared with the rest
+        head = None  # the load generator's callback running now (``client_in_order``)
+        if client_in_order and not clients_elsewhere and counts.get("client"):
+            head = next(job for job in jobs if job.pool == "client")
+            rate["client head"] = rate["client"] * counts["client"]
+
+        def rate_of(job: Job, head: Job | None = head, rate: dict = rate) -> float:
+            if head is None or job.pool != "client":
+                return rate[job.pool]
+            return rate["client head"] if job is head else 0.0
+
         next_done = min(
-            (job.bumped or job.left / rate[job.pool] for job in jobs), default=float("inf")
-        )
+            (job.bumped or (job.left / r if (r := rate_of(job)) else float("inf"))
+             for job in jobs),
+            default=float("inf"),
+        )  # fmt: skip
         for job in holders:
             if job.handing > 0.0:
                 next_done = min(next_done, job.handing)
@@ -928,7 +945,7 @@ def simulate(
                 queued["server" if job.pool != "client" else "client"] += min(job.bumped, step)
                 job.bumped = job.bumped - step if job.bumped > step + 1e-15 else 0.0
                 continue
-            job.left -= rate[job.pool] * step
+            job.left -= rate_of(job) * step
         timed_out = 0.0  # each waiter's timed waits for the interpreter in this step
         if switch_interval_s > 0 and step < float("inf"):
             timed_out = step / switch_interval_s

@@ -590,6 +590,27 @@ def test_a_thread_woken_onto_a_hashs_core_puts_the_hash_off_it():
     assert np.mean(log_ins(1 * MS)) > np.mean(log_ins(0.0)) + 1 * MS
 
 
+def test_the_load_generators_callbacks_run_one_at_a_time_in_order():
+    """``client_in_order``: the load generator is one event loop.  Twelve students ready at
+    the same instant have their first pages one client callback apart; shared evenly
+    (processor sharing) their callbacks end together and the pages spread as the server
+    answers them."""
+    client = 4 * MS
+    table = costs(server=0.2 * MS, db=0.0, client=client, calls=0.0, trips=1.0)
+
+    def first_pages(in_order: bool) -> list[float]:
+        result = queue_sim.simulate(
+            table, 12, 1, 2.0, starts=[0.0] * 12, teacher=False, client_in_order=in_order
+        )
+        return sorted(result["latencies"]["GET /login"])
+
+    shared, in_order = first_pages(False), first_pages(True)
+    assert len(in_order) == len(shared) == 12
+    # in order: each callback (half the client work before the send) one after another
+    assert np.diff(in_order) == pytest.approx([client / 2] * 11, abs=0.2 * MS)
+    assert np.diff(shared) != pytest.approx([client / 2] * 11, abs=0.2 * MS)
+
+
 def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
     """The unseen part of each request is scaled so that the class's requests and frames
     ask the server for the CPU the run used, and the load generator likewise."""
