@@ -80,3 +80,18 @@ def test_a_switch_interval_out_of_range_is_refused_at_start(monkeypatch, value):
         Settings()
     monkeypatch.setenv("GYROLAB_SWITCH_INTERVAL_MS", "2.5")
     assert Settings().switch_interval_ms == 2.5
+
+
+@pytest.mark.parametrize("value", ["Mars/Olympus", "asia/shanghai", "", "../etc/passwd"])
+def test_a_time_zone_that_is_not_iana_is_refused_at_start(monkeypatch, value):
+    """``GYROLAB_TIMEZONE`` must name an IANA zone (the names read once, ``iana_zones``);
+    anything else stops the start with the setting's name."""
+    from pydantic import ValidationError
+
+    from app.config import Settings
+
+    monkeypatch.setenv("GYROLAB_TIMEZONE", value)
+    with pytest.raises(ValidationError, match="GYROLAB_TIMEZONE"):
+        Settings()
+    monkeypatch.setenv("GYROLAB_TIMEZONE", "Europe/Berlin")
+    assert Settings().timezone == "Europe/Berlin"
