@@ -36,8 +36,10 @@ function (``name=ms,…``: the stream's marks, takes and saves).  What no reques
 server reading and writing sockets, the collector, other threads -- is not in it.
 
 ``GYROLAB_BENCH_GC`` (a load test): a file to which each of the process's garbage
-collections appends ``pid generation ms collected``, and a full one also how many objects the
-collector now keeps in its oldest generation, and of which types most (``type:count``).
+collections appends ``pid generation ms collected began`` (``began``: ``time.perf_counter``
+at its start, the clock of ``GYROLAB_BENCH_CLIENT_TIMES``), and a full one also how many
+objects the collector now keeps in its oldest generation, and of which types most
+(``type:count``).
 
 ``GYROLAB_BENCH_PROFILE`` (a load test): a folder in which each worker keeps, rewritten
 after every 100 profiled calls (a stopped server may not run its exit code), one
@@ -100,7 +102,9 @@ if _GC:
             _gc_began[0] = _gc_time.perf_counter()
             return
         took = (_gc_time.perf_counter() - _gc_began[0]) * 1000
-        line = f"{os.getpid()} {info['generation']} {took:.3f} {info['collected']}"
+        line = (
+            f"{os.getpid()} {info['generation']} {took:.3f} {info['collected']} {_gc_began[0]:.6f}"
+        )
         if info["generation"] == 2:
             from collections import Counter
 
