@@ -17,7 +17,7 @@ import class_cpu  # noqa: E402  (bench/)
 import queue_model  # noqa: E402
 import queue_sim  # noqa: E402
 
-from tests.probed_apps import run_probed  # noqa: E402
+from tests.probed_apps import PROBE, run_probed  # noqa: E402
 
 MS = 1e-3
 
@@ -237,6 +237,28 @@ def talk():
     with TestClient(app).websocket_connect("/lab/sessions/7/stream") as socket:
         socket.receive_text()
 """
+
+
+def test_the_probe_times_each_garbage_collection_on_the_client_times_clock(tmp_path):
+    """``GYROLAB_BENCH_GC``: a line per collection, ``pid generation ms collected began``,
+    ``began`` on ``time.perf_counter`` (the load generator's clock); a full one adds what
+    the oldest generation keeps."""
+    import subprocess
+    import time
+
+    out = tmp_path / "gc.txt"
+    env = {**os.environ, "PYTHONPATH": str(PROBE), "GYROLAB_BENCH_GC": str(out)}
+    code = "import gc, time; print(time.perf_counter()); gc.collect(0); gc.collect()"
+    before = time.perf_counter()
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    after = time.perf_counter()
+    asked = float(done.stdout.split()[0])
+    lines = [line.split() for line in out.read_text().splitlines()]
+    young = [fields for fields in lines if fields[1] == "0"][-1]
+    full = lines[-1]
+    assert young[0] == full[0] and full[1] == "2" and len(full) > 5
+    assert float(young[2]) >= 0 and int(young[3]) >= 0
+    assert before <= asked <= float(young[4]) <= float(full[4]) <= after
 
 
 def test_the_probe_splits_a_streams_thread_cpu_by_function(tmp_path):
