@@ -8,7 +8,7 @@ import pytest
 
 from app.reports.pdf_cache import pdf_cache
 from app.web.work_slots import pool
-from tests.factories import new_session, post_form
+from tests.factories import do_lab, new_session, post_form
 
 
 @pytest.mark.one_backend
@@ -85,6 +85,40 @@ def test_a_pdf_is_rendered_once_per_content_and_language(student_client):
     changed = student_client.get(url)
     assert changed.status_code == 200 and changed.content != first.content
     assert cache.misses == 3
+
+
+@pytest.mark.one_backend
+def test_a_cached_report_is_found_without_drawing_its_figures(student_client, monkeypatch):
+    """The key stands for the figures by what they are drawn from: a render draws each
+    figure once, a cached download draws none, and a change only a figure shows (a
+    reading's time) is a new key."""
+    from dataclasses import replace
+
+    import app.reports.figures as figures
+    from app.db import read_session
+    from app.models import LabSession
+    from app.reports.content import build_report
+    from app.reports.pdf_cache import content_key
+
+    session_id = new_session(student_client)
+    do_lab(student_client, session_id)
+    drawn = []
+    original = figures._svg
+    monkeypatch.setattr(figures, "_svg", lambda draw: drawn.append(1) or original(draw))
+    url = f"/lab/sessions/{session_id}/report.pdf"
+    assert student_client.get(url).status_code == 200
+    assert len(drawn) == 4  # readings and fit of both parts, each drawn once
+    assert student_client.get(url).status_code == 200
+    assert len(drawn) == 4 and pdf_cache().hits == 1
+    with read_session() as db:
+        report = build_report(db, db.get(LabSession, session_id))
+    heading = report.results["heading"]
+    first = heading.positions[1]
+    retimed = replace(first, times=(first.times if first.times is not None else 0) + 1.0)
+    moved = replace(heading, positions={**heading.positions, 1: retimed})
+    other = replace(report, results={**report.results, "heading": moved})
+    assert content_key(other, "en") != content_key(report, "en")
+    assert len(drawn) == 4
 
 
 @pytest.mark.one_backend

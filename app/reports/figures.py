@@ -58,11 +58,34 @@ def _svg(draw: Callable) -> str:
     return text[text.index("<svg") :]  # no XML prologue: the SVG goes inside an <img> data URL
 
 
+def has_readings_figure(part_result) -> bool:
+    """Whether :func:`readings_svg` draws the part: it has positions, each with readings."""
+    positions = part_result.positions.values()
+    return bool(positions) and all(item.values is not None for item in positions)
+
+
+def figure_inputs(part_result) -> bytes:
+    """Everything the part's two figures are drawn from besides the language: each
+    position's readings and times, the part, and the fit's angles, means, 1σ and
+    coefficients.  Equal inputs draw equal figures (:data:`STYLE` fixes the SVG's ids),
+    so a digest of these stands for the drawings without drawing them."""
+    pieces = [part_result.part.encode()]
+    for position, item in sorted(part_result.positions.items()):
+        pieces.append(f"|{position}|".encode())
+        for array in (item.values, item.times):
+            pieces.append(b"-" if array is None else np.asarray(array, dtype=float).tobytes())
+    if (result := part_result.result) is not None:
+        fit = result.fit
+        numbers = [*fit.angles_deg, *fit.means, *(fit.position_sigmas or ()), fit.a, fit.b, fit.c]
+        pieces.append(b"|fit|" + np.asarray(numbers, dtype=float).tobytes())
+    return b"".join(pieces)
+
+
 def readings_svg(part_result, _: Callable[..., str]) -> str | None:
     """Each position's used readings against time (or reading number when untimed)."""
-    positions = sorted(part_result.positions.items())
-    if not positions or any(item.values is None for _k, item in positions):
+    if not has_readings_figure(part_result):
         return None
+    positions = sorted(part_result.positions.items())
     timed = all(item.times is not None for _k, item in positions)
 
     def draw(axes):

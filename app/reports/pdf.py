@@ -15,7 +15,7 @@ from app.lab.store import PARTS
 from app.lab.truth import heading_error
 from app.paths import TEMPLATES_DIR
 from app.reports.content import Report
-from app.reports.figures import fit_svg, readings_svg
+from app.reports.figures import fit_svg, has_readings_figure, readings_svg
 from app.web.i18n import format_datetime, translator
 from app.web.local_time import zone
 from app.web.render import templates
@@ -29,18 +29,21 @@ class Figure:
     summary: str
 
 
-def _figures(report: Report, _) -> list[Figure]:
-    """Per part: the readings, then the fit; each captioned with the page chart's summary."""
+def _figures(report: Report, _, draw: bool) -> list[Figure]:
+    """Per part: the readings, then the fit; each captioned with the page chart's summary.
+    Not ``draw``: the same figures and captions with empty images (what the PDF cache
+    keys on, with the figures' inputs: matplotlib's drawing is most of a cached report's
+    cost)."""
     out = []
     for part in PARTS:
         outcome = report.results[part]
         part_name = _(f"lab.part_short_{part}")
-        if outcome.positions and (svg := readings_svg(outcome, _)):
+        if has_readings_figure(outcome):
             caption = f"{part_name}, {_('chart.readings_title')}: {readings_summary(outcome, _)}"
-            out.append(Figure(_data_url(svg), caption))
-        if outcome.result is not None and (svg := fit_svg(outcome, _)):
+            out.append(Figure(_data_url(readings_svg(outcome, _)) if draw else "", caption))
+        if outcome.result is not None:
             caption = f"{part_name}, {_('chart.fit_title')}: {fit_summary(outcome, _)}"
-            out.append(Figure(_data_url(svg), caption))
+            out.append(Figure(_data_url(fit_svg(outcome, _)) if draw else "", caption))
     return out
 
 
@@ -53,8 +56,9 @@ def attachment_name(report: Report) -> str:
     return f"gyrolab-session-{report.session.id}-{suffix}-readings.csv"
 
 
-def report_html(report: Report, language: str) -> str:
-    """The report as one self-contained HTML document in ``language``."""
+def report_html(report: Report, language: str, draw_figures: bool = True) -> str:
+    """The report as one self-contained HTML document in ``language`` (its figures' images
+    left empty unless ``draw_figures``)."""
     _ = translator(language)
     shown_zone = zone(report.course.timezone if report.course else None)
     template = templates.env.get_template("reports/lab_report.html")
@@ -65,7 +69,7 @@ def report_html(report: Report, language: str) -> str:
         css=CSS,
         parts=PARTS,
         version=__version__,
-        figures=_figures(report, _),
+        figures=_figures(report, _, draw_figures),
         attachment_name=attachment_name(report),
         source_names=", ".join(_("source." + source) for source in report.sources),
         heading_error=heading_error,

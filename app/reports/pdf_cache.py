@@ -1,12 +1,14 @@
 """Rendered report PDFs kept per process, so that a report is laid out once per content.
 
 The key is what the PDF shows: a digest of the report's HTML in its language with the
-"generated at" time left out, and of the takes behind it (id, trim -- so the samples
+"generated at" time left out and the figures not drawn, of what the figures are drawn
+from (readings, times, fit), and of the takes behind it (id, trim -- so the samples
 attached to a long record are covered too).  Any change that shows -- new data, a
 trimmed take, the discussion, a returned review, a released grade, a partner joining,
 the truth revealed -- makes a new key, so a cached PDF is never stale and no caller has to
-remember to invalidate it.  Laying out the HTML costs milliseconds; WeasyPrint's layout
-seconds (bench/README.md, "Reports").  Bounded in bytes (``GYROLAB_REPORT_CACHE_MB``)."""
+remember to invalidate it.  Keying costs milliseconds (the figures' drawing, most of a
+report's HTML, is left to the render); WeasyPrint's layout seconds (bench/README.md,
+"Reports").  Bounded in bytes (``GYROLAB_REPORT_CACHE_MB``)."""
 
 from __future__ import annotations
 
@@ -17,6 +19,7 @@ from dataclasses import replace
 from datetime import UTC, datetime
 
 from app.reports.content import Report
+from app.reports.figures import figure_inputs
 from app.reports.pdf import report_html
 
 KEY_TIME = datetime(2000, 1, 1, tzinfo=UTC)  # the "generated at" the key is computed with
@@ -26,7 +29,10 @@ def content_key(report: Report, language: str) -> str:
     """The digest of what ``report`` shows in ``language`` (not when it was rendered)."""
     digest = hashlib.sha256()
     digest.update(f"{report.session.id}|{language}|{report.take_keys!r}|".encode())
-    digest.update(report_html(replace(report, generated_at=KEY_TIME), language).encode())
+    for part_result in report.results.values():
+        digest.update(hashlib.sha256(figure_inputs(part_result)).digest())
+    shown = replace(report, generated_at=KEY_TIME)
+    digest.update(report_html(shown, language, draw_figures=False).encode())
     return digest.hexdigest()
 
 
