@@ -147,3 +147,27 @@ def test_a_streamed_export_holds_one_slot_per_person_until_it_ends(student_clien
     del stream
     assert owner not in exports.people
     assert student_client.get(url).status_code == 200
+
+
+def test_the_figures_inputs_keep_each_run_of_numbers_apart():
+    """The key's digest of the figures' inputs: readings moved from one run to the next
+    (values to times, angles to means) are other inputs, not the same bytes."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from app.reports.figures import figure_inputs
+
+    def part(values, times, angles=(0.0, 90.0), means=(1.0, 2.0)):
+        fit = SimpleNamespace(angles_deg=angles, means=means, position_sigmas=None, a=1, b=2, c=3)
+        item = SimpleNamespace(
+            values=np.array(values), times=None if times is None else np.array(times)
+        )
+        return SimpleNamespace(part="heading", positions={1: item}, result=SimpleNamespace(fit=fit))
+
+    base = figure_inputs(part([1.0, 2.0], [3.0, 4.0]))
+    assert base == figure_inputs(part([1.0, 2.0], [3.0, 4.0]))
+    assert base != figure_inputs(part([1.0, 2.0, 3.0], [4.0]))
+    assert base != figure_inputs(part([1.0, 2.0], None))
+    shifted = figure_inputs(part([1.0, 2.0], [3.0, 4.0], angles=(0.0, 90.0, 1.0), means=(2.0,)))
+    assert base != shifted

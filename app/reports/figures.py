@@ -70,14 +70,23 @@ def figure_inputs(part_result) -> bytes:
     coefficients.  Equal inputs draw equal figures (:data:`STYLE` fixes the SVG's ids),
     so a digest of these stands for the drawings without drawing them."""
     pieces = [part_result.part.encode()]
+
+    def add(label: str, numbers) -> None:  # each run of numbers with its length: no aliasing
+        if numbers is None:
+            pieces.append(f"|{label}:-|".encode())
+            return
+        array = np.asarray(numbers, dtype=float).ravel()
+        pieces.append(f"|{label}:{array.size}|".encode() + array.tobytes())
+
     for position, item in sorted(part_result.positions.items()):
-        pieces.append(f"|{position}|".encode())
-        for array in (item.values, item.times):
-            pieces.append(b"-" if array is None else np.asarray(array, dtype=float).tobytes())
+        add(f"values {position}", item.values)
+        add(f"times {position}", item.times)
     if (result := part_result.result) is not None:
         fit = result.fit
-        numbers = [*fit.angles_deg, *fit.means, *(fit.position_sigmas or ()), fit.a, fit.b, fit.c]
-        pieces.append(b"|fit|" + np.asarray(numbers, dtype=float).tobytes())
+        add("angles", fit.angles_deg)
+        add("means", fit.means)
+        add("sigmas", fit.position_sigmas)
+        add("coefficients", [fit.a, fit.b, fit.c])
     return b"".join(pieces)
 
 
