@@ -29,7 +29,7 @@ import threading
 import time
 from dataclasses import dataclass
 
-from run_queue import thread_stats  # bench/
+from run_queue import thread_stats, thread_switches  # bench/
 
 THREADS = (1, 2, 4, 8, 16, 32)
 
@@ -37,10 +37,13 @@ THREADS = (1, 2, 4, 8, 16, 32)
 @dataclass
 class Contended:
     """``threads`` spinning threads over one watch: each thread's times on a core a
-    second, run-queue waits (thread-seconds a second), cores used and additions a second."""
+    second, of which the wake-ups from its own waits (``sleeps_per_thread_s``: voluntary
+    switches, which a crowded host's preemptions do not add to), run-queue waits
+    (thread-seconds a second), cores used and additions a second."""
 
     threads: int
     slices_per_thread_s: float
+    sleeps_per_thread_s: float
     run_queue: float
     cores: float
     adds_per_s: float
@@ -48,41 +51,67 @@ class Contended:
 
 def contended(threads: int, interval_s: float, seconds: float = 2.0) -> Contended:
     """Run ``threads`` pure-Python loops at the switch interval ``interval_s`` for
-    ``seconds`` (after 0.2 s to settle) and watch them; the main thread sleeps meanwhile."""
+    ``seconds`` and watch them; the main thread sleeps meanwhile.
+
+    The threads' counters are read before they start spinning and after they have
+    stopped (parked, not yet ended): read beside them, each of the reads' system calls
+    would wait its turn at the interpreter (seconds in all at 20 ms) and be one more
+    thread wanting it."""
     before = sys.getswitchinterval()
     sys.setswitchinterval(interval_s)
-    stop, settled = threading.Event(), threading.Event()
+    go, stop, release = threading.Event(), threading.Event(), threading.Event()
+    parked, watched = threading.Barrier(threads + 1), False
     counts = [0] * threads
 
     def spin(index: int) -> None:
+        go.wait()
         done = 0
         while not stop.is_set():
             for _ in range(1000):
                 done += 1
-            if settled.is_set():
-                counts[index] += 1000
-                done = 0
+            counts[index] += 1000
+        try:
+            parked.wait()  # stopped, not yet ended: its counters are still there to read
+        except threading.BrokenBarrierError:
+            return
+        release.wait()
 
     workers = [threading.Thread(target=spin, args=(i,)) for i in range(threads)]
     try:
         for worker in workers:
             worker.start()
-        time.sleep(0.2)
-        first, began, cpu = thread_stats(os.getpid()), time.perf_counter(), time.process_time()
-        settled.set()
+        first, first_switches = thread_stats(os.getpid()), thread_switches(os.getpid())
+        began, cpu = time.perf_counter(), time.process_time()
+        go.set()
         time.sleep(seconds)
-        last, wall = thread_stats(os.getpid()), time.perf_counter() - began
+        stop.set()
+        wall = time.perf_counter() - began
+        parked.wait()
+        watched = True
         cpu = time.process_time() - cpu
+        last, last_switches = thread_stats(os.getpid()), thread_switches(os.getpid())
         added = sum(counts)
     finally:
         stop.set()
+        go.set()
+        if not watched:  # the watch failed before the spinners parked
+            parked.abort()
+        release.set()
         for worker in workers:
             worker.join()
         sys.setswitchinterval(before)
-    spinning = [tid for tid in last if tid in first and tid != os.getpid()]
-    slices = sum(last[tid][2] - first[tid][2] for tid in spinning)
-    waited = sum(last[tid][1] - first[tid][1] for tid in spinning) / 1e9
-    return Contended(threads, slices / wall / threads, waited / wall, cpu / wall, added / wall)
+    spinning = [tid for tid in first if tid != os.getpid()]
+    slices = sum(last[tid][2] - first[tid][2] for tid in spinning if tid in last)
+    waited = sum(last[tid][1] - first[tid][1] for tid in spinning if tid in last) / 1e9
+    sleeps = sum(
+        last_switches[tid][0] - first_switches[tid][0]
+        for tid in spinning
+        if tid in first_switches and tid in last_switches
+    )
+    per_thread = wall * threads
+    return Contended(
+        threads, slices / per_thread, sleeps / per_thread, waited / wall, cpu / wall, added / wall
+    )
 
 
 def beside(threads: int, interval_s: float, hashes: int = 60) -> tuple[float, float, int]:
@@ -149,13 +178,14 @@ def main() -> None:
         return
     for interval_ms in args.interval_ms:
         print(f"\nswitch interval {interval_ms:g} ms")
-        print(f"  {'threads':>7s} {'on a core /s each':>18s} {'run queue':>10s}"
-              f" {'cores':>6s} {'throughput':>11s}")  # fmt: skip
+        print(f"  {'threads':>7s} {'on a core /s each':>18s} {'of which woken':>15s}"
+              f" {'run queue':>10s} {'cores':>6s} {'throughput':>11s}")  # fmt: skip
         alone = None
         for threads in THREADS:
             seen = contended(threads, interval_ms / 1000, args.seconds)
             alone = alone or seen.adds_per_s
-            print(f"  {threads:7d} {seen.slices_per_thread_s:18,.0f} {seen.run_queue:10.2f}"
+            print(f"  {threads:7d} {seen.slices_per_thread_s:18,.0f}"
+                  f" {seen.sleeps_per_thread_s:15,.0f} {seen.run_queue:10.2f}"
                   f" {seen.cores:6.2f} {seen.adds_per_s / alone:10.0%}")  # fmt: skip
 
 

@@ -38,6 +38,26 @@ def thread_stats(pid: int) -> dict[int, tuple[int, int, int]]:
     return stats
 
 
+def thread_switches(pid: int) -> dict[int, tuple[int, int]]:
+    """Per thread of ``pid``: (times it gave up its core to wait -- a sleep, a lock, a
+    timed wait --, times the kernel took its core from it while it could run) so far:
+    ``/proc/PID/task/TID/status``'s voluntary and nonvoluntary context switches."""
+    switches: dict[int, tuple[int, int]] = {}
+    try:
+        tasks = list(Path(f"/proc/{pid}/task").iterdir())
+    except OSError:
+        return switches
+    for task in tasks:
+        try:
+            fields = dict(line.split(":", 1) for line in (task / "status").read_text().splitlines())
+            voluntary = int(fields["voluntary_ctxt_switches"])
+            preempted = int(fields["nonvoluntary_ctxt_switches"])
+        except (OSError, ValueError, KeyError):
+            continue  # ended meanwhile
+        switches[int(task.name)] = (voluntary, preempted)
+    return switches
+
+
 def machine_times() -> tuple[float, ...]:
     """The whole machine so far, in core-seconds: (busy, of which steal, idle and waiting
     for I/O, and the kernel's CPU pressure: seconds in which at least one task waited for

@@ -1276,14 +1276,19 @@ def test_a_thread_waiting_for_the_interpreter_wakes_once_a_switch_interval():
 
 def test_the_waiting_threads_wake_at_each_switch_interval():
     """bench_gil_wakes.py on this machine's CPython: three threads wanting the interpreter
-    are put on a core far more often at a 1 ms switch interval than at 20 ms (about once
-    an interval each, not once a turn)."""
+    wake from their timed waits far more often at a 1 ms switch interval than at 20 ms
+    (about once an interval each, not once a turn).
+
+    Counted as voluntary switches: a crowded host (the suite's other worker, browsers)
+    preempts the spinning threads too, a few hundred times a second each, which made the
+    times on a core (``slices``) only 1.9x apart in one fresh-clone run; the wake-ups
+    were 10-20x apart idle and beside six busy loops on two cores (≈ 390 and 40 a second).
+    """
     import bench_gil_wakes
 
     before = sys.getswitchinterval()
     short = bench_gil_wakes.contended(3, 0.001, seconds=0.3)
     long = bench_gil_wakes.contended(3, 0.020, seconds=0.3)
-    # (a crowded host preempts the spinning threads too: a few hundred more a second each)
-    assert short.slices_per_thread_s > 2 * long.slices_per_thread_s
-    assert short.slices_per_thread_s > 300
+    assert short.sleeps_per_thread_s > 4 * long.sleeps_per_thread_s
+    assert short.sleeps_per_thread_s > 150
     assert short.adds_per_s > 0 and sys.getswitchinterval() == before  # restored
