@@ -24,6 +24,7 @@ from app.web.i18n import (
 )
 from app.web.local_time import zone as zone_of
 from app.web.signing import signed, unsigned
+from app.web.template_cache import use_code_cache
 
 SESSION_COOKIE = "gyrolab_session"
 CSRF_COOKIE = "gyrolab_csrf"
@@ -44,12 +45,15 @@ templates.env.add_extension("jinja2.ext.i18n")
 templates.env.globals["version"] = __version__
 templates.env.globals["LANGUAGE_NAMES"] = LANGUAGE_NAMES
 templates.env.globals["LANGUAGES"] = LANGUAGES
+# their compiled code kept on disk between starts (app/web/template_cache.py)
+use_code_cache(templates.env, __version__)
 
 
 def compile_templates() -> int:
     """Compile every page template now (a served worker's start-up: ≈ 0.3 s for all of
     them, which the first view of each page otherwise pays -- 30-60 ms for the lab page
-    and its includes, inside the first students' requests).  Returns how many."""
+    and its includes, inside the first students' requests; ≈ 20 ms from the code cache of
+    an earlier start, ``template_cache``).  Returns how many."""
     names = [name for name in templates.env.list_templates() if name.endswith(".html")]
     for name in names:
         templates.env.get_template(name)
