@@ -21,41 +21,43 @@ from pathlib import Path
 POLL_S = 0.25
 
 
-def thread_stats(pid: int) -> dict[int, tuple[int, int, int]]:
-    """Per thread of ``pid``: (ns on a core, ns waiting on a run queue, times it was put
-    on a core) so far."""
-    stats: dict[int, tuple[int, int, int]] = {}
+def _per_thread(pid: int, name: str, parse) -> dict:
+    """``parse(text)`` of each thread's ``/proc/PID/task/TID/<name>`` file, by thread id
+    (a thread that ends meanwhile, or whose file does not parse, left out)."""
+    found: dict = {}
     try:
         tasks = list(Path(f"/proc/{pid}/task").iterdir())
     except OSError:
-        return stats
+        return found
     for task in tasks:
         try:
-            ran, waited, slices = (task / "schedstat").read_text().split()
-        except (OSError, ValueError):
+            found[int(task.name)] = parse((task / name).read_text())
+        except (OSError, ValueError, KeyError):
             continue  # ended meanwhile
-        stats[int(task.name)] = (int(ran), int(waited), int(slices))
-    return stats
+    return found
+
+
+def _schedstat(text: str) -> tuple[int, int, int]:
+    ran, waited, slices = text.split()
+    return int(ran), int(waited), int(slices)
+
+
+def _switches(text: str) -> tuple[int, int]:
+    fields = dict(line.split(":", 1) for line in text.splitlines())
+    return int(fields["voluntary_ctxt_switches"]), int(fields["nonvoluntary_ctxt_switches"])
+
+
+def thread_stats(pid: int) -> dict[int, tuple[int, int, int]]:
+    """Per thread of ``pid``: (ns on a core, ns waiting on a run queue, times it was put
+    on a core) so far."""
+    return _per_thread(pid, "schedstat", _schedstat)
 
 
 def thread_switches(pid: int) -> dict[int, tuple[int, int]]:
     """Per thread of ``pid``: (times it gave up its core to wait -- a sleep, a lock, a
     timed wait --, times the kernel took its core from it while it could run) so far:
     ``/proc/PID/task/TID/status``'s voluntary and nonvoluntary context switches."""
-    switches: dict[int, tuple[int, int]] = {}
-    try:
-        tasks = list(Path(f"/proc/{pid}/task").iterdir())
-    except OSError:
-        return switches
-    for task in tasks:
-        try:
-            fields = dict(line.split(":", 1) for line in (task / "status").read_text().splitlines())
-            voluntary = int(fields["voluntary_ctxt_switches"])
-            preempted = int(fields["nonvoluntary_ctxt_switches"])
-        except (OSError, ValueError, KeyError):
-            continue  # ended meanwhile
-        switches[int(task.name)] = (voluntary, preempted)
-    return switches
+    return _per_thread(pid, "status", _switches)
 
 
 def machine_times() -> tuple[float, ...]:
