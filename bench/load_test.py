@@ -71,6 +71,11 @@ CALL_HANDOFFS_LABEL = "SQLite calls handing the interpreter on (bench_handoffs.p
 SQLITE_CALLS = os.environ.get("GYROLAB_BENCH_SQLITE_CALLS")
 MACHINE_LABEL = "the whole machine during the class (/proc/stat, /proc/pressure/cpu)"
 RUN_QUEUE_LABEL = "waited for a core / ran during the class (run_queue.py)"
+STEAL_LABEL = "the host's steal during the class (/proc/stat)"
+# A run in which the hypervisor kept the cores from the class for more than this share of
+# the time it wanted them measures the host as much as the app: 41-60 % in three runs of
+# 2026-12-06 made every p95 3-10x a quiet hour's (bench/README.md, thirty-seventh part)
+STEAL_NOTE_SHARE = 0.05
 LOOPS = "of it the event loops"  # the server's workers' main threads
 PARTS = ("heading", "latitude")
 # One TLS context for every simulated browser.  httpx builds a new one per client unless
@@ -432,6 +437,20 @@ def seed(env: dict, students: int) -> tuple[int, int]:
     return course, assignment
 
 
+def steal_line(busy_s: float, steal_s: float) -> str:
+    """The report's line on the hypervisor's steal over the class: its seconds, its share of
+    the time the class wanted the cores (busy + steal), and a note where that share is over
+    ``STEAL_NOTE_SHARE``."""
+    share = steal_s / (busy_s + steal_s) if busy_s + steal_s > 0 else 0.0
+    line = f"- {STEAL_LABEL}: {steal_s:.2f} s, {share:.0%} of the cores' time the class wanted"
+    if share > STEAL_NOTE_SHARE:
+        line += (
+            " -- the host kept the cores from the class: these p95s are the host's as much as"
+            " the app's (compare runs of a quiet hour)"
+        )
+    return line
+
+
 def percentile_ms(values: list[float], q: float) -> str:
     return f"{np.percentile(values, q) * 1000:.0f}" if values else "-"
 
@@ -473,6 +492,8 @@ def report(name: str, tally: Tally, wall: float, lost: int, checked: int, worker
             for group, (ran, waited, slices) in tally.run_queue.items()
         ))  # fmt: skip
     if tally.machine:
+        lines.append(steal_line(*tally.machine[:2]))
+    if tally.machine and tally.run_queue:
         busy, steal, idle, pressure = tally.machine
         mine = sum(ran for group, (ran, _, _) in tally.run_queue.items() if group != LOOPS)
         lines.append(
@@ -553,8 +574,7 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
                     group: (waits.ran_s, waits.waited_s, waits.slices)
                     for group, waits in watch.waits().items()
                 }
-                if args.run_queue:
-                    tally.machine = watch.machine()
+                tally.machine = watch.machine()
                 tally.handoffs = waits + ([hand_off_constants()] if args.handoffs else [])
                 if args.handoffs and calls_from is not None and backend == "sqlite":
                     tally.call_handoffs = class_call_handoffs(calls_from)

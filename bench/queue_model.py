@@ -304,6 +304,7 @@ HANDOFFS_LINE = re.compile(
 CALL_HANDOFFS_LINE = re.compile(r"measured after it: a core free ([\d.]+)%, none free ([\d.]+)%")
 ELSEWHERE_LINE = re.compile(r"anything else (-?[\d.]+) s")
 MACHINE_BUSY_LINE = re.compile(r"busy ([\d.]+) s .*a task waited for a core during ([\d.]+) s")
+STEAL_LINE = re.compile(r": ([\d.]+) s, (\d+)% of the cores' time")
 # CPU beyond this, spent on the machine during a class by neither the class's processes nor
 # the kernel's usual few tenths: the run shared the cores (another job beside it)
 ELSEWHERE_S = 2.0
@@ -327,7 +328,9 @@ def measured_p95(path: Path) -> dict[str, dict[str, float]]:
     "ran server" and so for "db" and "client", each group's time waiting for a core and on
     one during the class, s, and under "cpu elsewhere" the machine's CPU that went to
     neither the class's processes nor the kernel, under "busy" the cores' busy time and
-    under "pressure" the time some task waited for a core, s)."""
+    under "pressure" the time some task waited for a core, s; and under "steal" and "steal
+    share" the time the hypervisor kept the cores from the class, s, and its share of the
+    time the class wanted them)."""
     tables: dict[str, dict[str, float]] = {}
     backend = None
     for line in path.read_text().splitlines():
@@ -348,6 +351,10 @@ def measured_p95(path: Path) -> dict[str, dict[str, float]]:
         machine = MACHINE_BUSY_LINE.search(line)
         if backend and load_test.MACHINE_LABEL in line and machine:
             tables[backend]["busy"], tables[backend]["pressure"] = map(float, machine.groups())
+        stolen = STEAL_LINE.search(line)
+        if backend and load_test.STEAL_LABEL in line and stolen:
+            tables[backend]["steal"] = float(stolen.group(1))
+            tables[backend]["steal share"] = float(stolen.group(2)) / 100
         elsewhere = ELSEWHERE_LINE.search(line)
         if backend and load_test.MACHINE_LABEL in line and elsewhere:
             tables[backend]["cpu elsewhere"] = float(elsewhere.group(1))
@@ -755,6 +762,11 @@ def main() -> int:
                 print(f"\nNOTE: {run} shared the machine -- {table['cpu elsewhere']:.1f} s of"
                       " CPU went to neither the class nor the kernel during it; its p95s are"
                       " not the class's alone")  # fmt: skip
+            if table.get("steal share", 0.0) > load_test.STEAL_NOTE_SHARE:
+                print(f"\nNOTE: in {run} the host kept the cores from the class"
+                      f" {table['steal share']:.0%} of the time it wanted them"
+                      f" ({table['steal']:.1f} s of steal); the model has no steal, and the"
+                      " run's p95s are the host's as much as the app's")  # fmt: skip
             waits = waits_of(table)
             locked = None
             if len(args.lock_trace) > index:

@@ -1026,6 +1026,35 @@ def test_the_run_queue_of_a_run_is_read_from_its_report(tmp_path):
     assert (table["busy"], table["pressure"]) == (35.25, 3.0)
 
 
+def test_a_runs_steal_is_reported_and_read_with_or_without_the_run_queue(tmp_path):
+    """Every run says how long the hypervisor kept the cores from the class (steal) and its
+    share of the time the class wanted them; over 5 % it notes that the p95s are the host's
+    as much as the app's; the model reads both."""
+    import load_test
+
+    tally = load_test.Tally()
+    tally.latencies["GET /lab"] = [0.010, 0.020]
+    path = tmp_path / "run.txt"
+    for busy, steal, share, noted in ((30.0, 0.6, 0.02, False), (27.0, 41.0, 0.60, True)):
+        tally.machine = (busy, steal, 30.0, 5.0)  # no --run-queue: no groups, no machine line
+        text = load_test.report("SQLite", tally, 40.0, 0, 16, 1)
+        assert load_test.MACHINE_LABEL not in text
+        [line] = [line for line in text.splitlines() if load_test.STEAL_LABEL in line]
+        assert ("the host's as much as the app's" in line) is noted
+        path.write_text(text + "\n")
+        table = queue_model.measured_p95(path)["SQLite"]
+        assert table["steal"] == steal
+        assert table["steal share"] == pytest.approx(share, abs=0.005)
+    # with --run-queue, the machine's line as well, and the steal read from its own line
+    tally.run_queue = {"server": (14.0, 1.0, 1000)}
+    path.write_text(load_test.report("SQLite", tally, 40.0, 0, 16, 1) + "\n")
+    table = queue_model.measured_p95(path)["SQLite"]
+    assert (table["steal"], table["busy"]) == (41.0, 27.0)
+    # a run on a machine that was never read (no /proc): no steal line, nothing read
+    tally.machine, tally.run_queue = (), {}
+    assert load_test.STEAL_LABEL not in load_test.report("SQLite", tally, 40.0, 0, 16, 1)
+
+
 def test_the_model_counts_a_wait_for_a_core_only_when_more_is_asked_than_there_are():
     """One student alone on two cores never waits for one; a class on half a core waits
     for it: its groups' waits are then the time they wanted beyond what the core gave."""
