@@ -46,5 +46,7 @@ def test_load_test_runs_clean(database, request):
     assert "errors: 0; lost samples: 0 of 48 positions checked" in done.stdout
     assert "| POST /lab/sessions/{id}/submit | 3 |" in done.stdout
     assert "CPU used during the class: server " in done.stdout  # the queueing model's check
+    # whether the host kept the cores from the class, said of every run (its p95s' worth)
+    assert "the host's steal during the class (/proc/stat): " in done.stdout
     # frames go uncompressed: compressing each cost most of a frame's CPU (bench/README.md)
     assert "WebSocket extensions the server agreed to: none" in done.stdout
