@@ -55,16 +55,31 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 
+# A gap between two of thread B's back-to-back clock readings longer than this: B lost the
+# interpreter (or its core) in between.  Its loop reads the clock every ≈ 0.1 µs.
+RESUMED_AFTER_S = 20e-6
+
+
 def beside_a_waiting_thread(work) -> list[float]:
     """Runs ``work()`` in a thread while another (B) reads the clock whenever it has the
-    interpreter; returns B's readings (``time.perf_counter``), in order."""
-    marks: list[float] = []  # thread B's clock readings, as fast as it can take them
+    interpreter; returns B's readings (``time.perf_counter``), in order, that came after
+    a gap (``RESUMED_AFTER_S``): each first reading once B has the interpreter back.
+
+    Every reading was kept before 2026-12-06: ≈ 10 million a second of B's time, and on a
+    host that held the threads' cores for a minute a load test's measurement grew to 24 GB
+    and was killed.  The readings the callers look for -- B's first after the other thread
+    released the interpreter, held for ≥ 300 µs before -- all come after such a gap."""
+    marks: list[float] = []  # thread B's first clock reading after each gap
     stop = threading.Event()
 
     def waiting_thread() -> None:
         mark, clock = marks.append, time.perf_counter
+        last = clock()
         while not stop.is_set():
-            mark(clock())
+            now = clock()
+            if now - last > RESUMED_AFTER_S:
+                mark(now)
+            last = now
 
     other = threading.Thread(target=waiting_thread)
     other.start()
@@ -77,16 +92,24 @@ def beside_a_waiting_thread(work) -> list[float]:
     return marks
 
 
+def table_of(rows: int) -> sqlite3.Connection:
+    """An in-memory table of ``rows`` numbers, on a connection any thread may use.  Made
+    before the waiting thread starts: beside it each insert waits to take the interpreter
+    back (20,000 inserts took 22 s beside a reader that keeps only its resumptions)."""
+    connection = sqlite3.connect(":memory:", check_same_thread=False)
+    connection.execute("CREATE TABLE t (x)")
+    connection.executemany("INSERT INTO t VALUES (?)", [(i,) for i in range(rows)])
+    return connection
+
+
 def interpreter_handoffs(count: int = 400) -> np.ndarray:
     """Seconds from a thread's release of the interpreter to a waiting thread's first
     instruction, ``count`` times."""
     clock = time.perf_counter
     releases: list[float] = []
+    connection = table_of(20_000)  # before the waiting thread: each insert gives way
 
     def releasing_thread() -> None:
-        connection = sqlite3.connect(":memory:")
-        connection.execute("CREATE TABLE t (x)")
-        connection.executemany("INSERT INTO t VALUES (?)", [(i,) for i in range(20_000)])
         for _ in range(count):
             busy_until = clock() + 0.002
             while clock() < busy_until:  # Python: B waits for the interpreter
@@ -146,11 +169,9 @@ def call_handoffs(rows: int, count: int = 2000, python_s: float = 0.0003) -> tup
     clock = time.perf_counter
     calls: list[tuple[float, float]] = []
     spent: list[float] = []
+    connection = table_of(max(rows, 1))  # before the waiting thread: each insert gives way
 
     def calling_thread() -> None:
-        connection = sqlite3.connect(":memory:")
-        connection.execute("CREATE TABLE t (x)")
-        connection.executemany("INSERT INTO t VALUES (?)", [(i,) for i in range(max(rows, 1))])
         query = "SELECT sum(x) FROM t" if rows else "SELECT 1"
         cursor = connection.cursor()
         for _ in range(count):
