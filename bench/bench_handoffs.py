@@ -107,7 +107,7 @@ def interpreter_handoffs(count: int = 400) -> np.ndarray:
     instruction, ``count`` times."""
     clock = time.perf_counter
     releases: list[float] = []
-    connection = table_of(20_000)  # before the waiting thread: each insert gives way
+    connection = table_of(20_000)
 
     def releasing_thread() -> None:
         for _ in range(count):
@@ -169,7 +169,7 @@ def call_handoffs(rows: int, count: int = 2000, python_s: float = 0.0003) -> tup
     clock = time.perf_counter
     calls: list[tuple[float, float]] = []
     spent: list[float] = []
-    connection = table_of(max(rows, 1))  # before the waiting thread: each insert gives way
+    connection = table_of(max(rows, 1))
 
     def calling_thread() -> None:
         query = "SELECT sum(x) FROM t" if rows else "SELECT 1"
