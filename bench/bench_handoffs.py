@@ -56,19 +56,24 @@ sys.path.insert(0, str(ROOT))
 
 
 # A gap between two of thread B's back-to-back clock readings longer than this: B lost the
-# interpreter (or its core) in between.  Its loop reads the clock every ≈ 0.1 µs.
-RESUMED_AFTER_S = 20e-6
+# interpreter (or its core) in between.  Its loop reads the clock every 0.1-0.2 µs; losing
+# the interpreter and taking it back takes ≥ 5 µs.  (At 20 µs, with a 1 ms switch interval,
+# a first reading after a short hold of the other thread's was missed: the hand-off's p50
+# 22 µs against 12 µs every reading kept.)
+RESUMED_AFTER_S = 1e-6
 
 
-def beside_a_waiting_thread(work) -> list[float]:
+def beside_a_waiting_thread(work, resumed_after_s: float = RESUMED_AFTER_S) -> list[float]:
     """Runs ``work()`` in a thread while another (B) reads the clock whenever it has the
     interpreter; returns B's readings (``time.perf_counter``), in order, that came after
-    a gap (``RESUMED_AFTER_S``): each first reading once B has the interpreter back.
+    a gap (``resumed_after_s``; 0: every reading): each first reading once B has the
+    interpreter back.
 
     Every reading was kept before 2026-12-06: ≈ 10 million a second of B's time, and on a
     host that held the threads' cores for a minute a load test's measurement grew to 24 GB
     and was killed.  The readings the callers look for -- B's first after the other thread
-    released the interpreter, held for ≥ 300 µs before -- all come after such a gap."""
+    released the interpreter -- all come after such a gap: B had lost the interpreter to
+    it.  Kept, ≈ 3,000 a second of B's time."""
     marks: list[float] = []  # thread B's first clock reading after each gap
     stop = threading.Event()
 
@@ -77,7 +82,7 @@ def beside_a_waiting_thread(work) -> list[float]:
         last = clock()
         while not stop.is_set():
             now = clock()
-            if now - last > RESUMED_AFTER_S:
+            if now - last > resumed_after_s:
                 mark(now)
             last = now
 
