@@ -3,12 +3,13 @@
 
     .venv/bin/python bench/bench_handoffs.py [--postgresql]
 
-1. The interpreter handed to a waiting thread.  Thread A runs Python for 2 ms, then makes a
-   call that releases the GIL (an SQLite query of ≈ 0.3 ms); thread B, waiting to run
+1. The interpreter handed to a waiting thread.  Thread A runs Python for 0.5 ms, then makes
+   a call that releases the GIL (an SQLite query of ≈ 0.3 ms); thread B, waiting to run
    Python, takes it.  The gap is from A's release to B's first instruction: B is woken by
    the GIL's condition variable and scheduled on a core, and meanwhile nobody runs Python.
-   A class's burst hands the interpreter on thousands of times a second
-   (``queue_sim.HANDOFF_S``).
+   Measured at the app's switch interval (1 ms), as its served workers run; releases B
+   missed (A's call over first) are counted apart.  A class's burst hands the interpreter
+   on thousands of times a second (``queue_sim.HANDOFF_S``).
 2. A wake-up when more is asked of the cores than they have.  Two threads wake each other
    in turn (an event each way) while processes spin: with a core free the woken thread runs
    at once; with every core asked for, it waits for one, most times a few µs, now and then
@@ -47,6 +48,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -107,29 +109,84 @@ def table_of(rows: int) -> sqlite3.Connection:
     return connection
 
 
-def interpreter_handoffs(count: int = 400) -> np.ndarray:
-    """Seconds from a thread's release of the interpreter to a waiting thread's first
-    instruction, ``count`` times."""
+# Thread A's Python between its releases of the interpreter: about what a class's request
+# runs between two of its SQLite calls or thread-pool trips (its CPU over them: a turn's
+# 6.3 ms over 17, a CSV save's 7.3 ms over 17, a results read's 8.3 ms over 12; 0.4-0.7 ms),
+# and under the app's switch interval, so that each release is a call's, not a forced switch
+HOLD_S = 0.0005
+
+
+def app_switch_interval_s() -> float:
+    """The interpreter's switch interval the app's served workers set (s; the settings',
+    ``GYROLAB_SWITCH_INTERVAL_MS``)."""
+    from app.config import Settings
+
+    return Settings().switch_interval_ms / 1000
+
+
+@dataclass
+class Handoffs:
+    """What ``measure_handoffs`` saw: the gaps (s) of the releases the waiting thread took
+    (the interpreter idle from A's release to B's first instruction), how many releases it
+    missed (A's call was over and A took the interpreter back first: nobody waited on an
+    idle interpreter), and the switch interval they were measured at (s)."""
+
+    gaps: np.ndarray
+    missed: int
+    switch_interval_s: float
+
+
+def measure_handoffs(
+    count: int = 400,
+    hold_s: float = HOLD_S,
+    switch_interval_s: float | None = None,
+    rows: int = 20_000,
+) -> Handoffs:
+    """``count`` releases of the interpreter by a thread (A) that runs Python for ``hold_s``
+    and then makes an SQLite call, with another (B) waiting to run Python; at the app's
+    switch interval (``switch_interval_s``: else the settings'), the process's own put
+    back after; the call sums ``rows`` numbers (20,000: ≈ 0.3 ms).
+
+    Before 2026-12-06 this ran at Python's 5 ms with 2 ms holds: a waiting thread then sleeps
+    up to 5 ms between its asks for the interpreter, and a core idle that long wakes slower
+    (bench/README.md, thirty-eighth part) -- and each release it missed added A's whole next
+    hold to the mean.  The app's workers run at 1 ms: B is never asleep longer."""
     clock = time.perf_counter
     releases: list[float] = []
-    connection = table_of(20_000)
+    ends: list[float] = []
+    connection = table_of(rows)
+    interval = app_switch_interval_s() if switch_interval_s is None else switch_interval_s
 
     def releasing_thread() -> None:
         for _ in range(count):
-            busy_until = clock() + 0.002
+            busy_until = clock() + hold_s
             while clock() < busy_until:  # Python: B waits for the interpreter
                 pass
             releases.append(clock())
             connection.execute("SELECT sum(x) FROM t").fetchone()  # B takes it meanwhile
+            ends.append(clock())  # A has the interpreter back
         connection.close()
 
-    marks = beside_a_waiting_thread(releasing_thread)
-    gaps = []
-    for released in releases:
+    before = sys.getswitchinterval()
+    sys.setswitchinterval(interval)
+    try:
+        marks = beside_a_waiting_thread(releasing_thread)
+    finally:
+        sys.setswitchinterval(before)
+    gaps, missed = [], 0
+    for released, ended in zip(releases, ends, strict=True):
         after = bisect.bisect_right(marks, released)
-        if after < len(marks):
+        if after < len(marks) and marks[after] < ended:
             gaps.append(marks[after] - released)
-    return np.array(gaps)
+        else:
+            missed += 1
+    return Handoffs(np.array(gaps), missed, interval)
+
+
+def interpreter_handoffs(count: int = 400) -> np.ndarray:
+    """Seconds from a thread's release of the interpreter to a waiting thread's first
+    instruction, for the releases it took (``measure_handoffs``)."""
+    return measure_handoffs(count).gaps
 
 
 def _spin(stop) -> None:
@@ -313,8 +370,11 @@ def hand_off_constants(wakes: int = 3000, report=None) -> tuple[float, float]:
     processes spinning, against a core free); ``wakes``: wake-ups timed at each load;
     ``report``: called with each measurement's line."""
     say = report or (lambda line: None)
-    handoffs = interpreter_handoffs()
-    say(describe("the interpreter handed to a waiting thread", handoffs))
+    measured = measure_handoffs()
+    handoffs = measured.gaps
+    interval_ms = measured.switch_interval_s * 1e3
+    say(describe("the interpreter handed to a waiting thread", handoffs)
+        + f" (missed {measured.missed}; switch interval {interval_ms:g} ms)")  # fmt: skip
     cores = os.cpu_count() or 1
     free = wake_ups(cores - 1, wakes)
     say(describe(f"a wake-up with a core free ({cores - 1} spinning)", free))

@@ -1141,6 +1141,34 @@ def test_a_call_hands_the_interpreter_on_with_the_chance_of_its_length():
     assert 0.0 < spent < 0.01
 
 
+def test_the_hand_off_is_measured_at_the_apps_switch_interval_and_missed_releases_apart():
+    """bench_handoffs.py times the interpreter's hand-off as the app's workers run: at the
+    settings' switch interval (the process's own put back after), and only over the
+    releases the waiting thread took.  At Python's 5 ms with 2 ms holds the waiter slept up
+    to 5 ms between its asks, and each release it missed added a whole hold to the mean:
+    130-194 µs where the app's 1 ms gave 16-21 µs (bench/README.md, thirty-eighth part).
+    A call of a few µs (an empty table) is over before the waiter reaches a core: missed,
+    not a hand-off of a millisecond."""
+    import bench_handoffs
+
+    from app.config import Settings
+
+    interval = sys.getswitchinterval()
+    try:
+        sys.setswitchinterval(0.005)
+        measured = bench_handoffs.measure_handoffs(count=30)
+        assert sys.getswitchinterval() == 0.005  # put back
+        assert measured.switch_interval_s == Settings().switch_interval_ms / 1000
+        assert len(measured.gaps) + measured.missed == 30
+        assert all(gap > 0 for gap in measured.gaps)
+        empty = bench_handoffs.measure_handoffs(count=30, switch_interval_s=0.002, rows=0)
+        assert empty.switch_interval_s == 0.002 and sys.getswitchinterval() == 0.005
+        assert empty.missed >= 24, empty  # the waiter got in only after A had it back
+        assert len(empty.gaps) + empty.missed == 30
+    finally:
+        sys.setswitchinterval(interval)
+
+
 def test_the_thread_beside_the_work_keeps_only_its_first_reading_after_each_wait():
     """bench_handoffs.py's waiting thread reads the clock millions of times a second; it
     keeps only the first reading after each wait (a minute of a stalled host grew a load
