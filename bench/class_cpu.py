@@ -13,6 +13,7 @@ import numpy as np
 from queue_sim import STREAM, STREAM_SAVE, STREAM_SPLIT, STREAM_START
 
 ID_IN_PATH = re.compile(r"/\d+")
+WEBSOCKET = "WS"  # a server-times line's method where a WebSocket connected
 # the stream's functions in the thread pool (app.lab.stream), by the part of a position
 # they belong to: the connection's and each position's checks and mark (a write), the
 # gyro's take made ready (no write), each position's save (a write) -- the rest, too
@@ -130,9 +131,11 @@ def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, e
     ``seen`` by the probe in a load test) replaces one student's alone (``own``).  What the
     probe does not see -- the server's socket work, the collector; per frame of a lone
     stream, most of its cost -- is shared out in a class; with ``used`` (the CPU the same
-    run used: "server", "client" seconds) each route's unseen part is scaled so that the
-    class's requests and frames add up to the server's CPU, and the load generator's per
-    request to its own.  Routes the class run did not see keep one student's costs.
+    run used: "server", "client"[, "db"] seconds) each route's unseen part is scaled so
+    that the class's requests and frames add up to the server's CPU, the load generator's
+    per request to its own, and the database server's (PostgreSQL's, measured alone) to
+    what its processes used in the run.  Routes the class run did not see keep one
+    student's costs.
 
     ``each``: a route's costs are a list, one per request the class made (its own task's
     CPU as the probe saw it, the unseen part as above), for the simulation to draw from:
@@ -143,7 +146,7 @@ def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, e
     run used (``SEEN_BEYOND_USED``): the probe's file holds more than that run."""
     shared = routes = [r for r in costs if r in seen.means and r in own]
     unseen = {r: costs[r][0] - sum(own[r]) for r in routes}
-    scale = client_scale = 1.0
+    scale = client_scale = db_scale = 1.0
     if used and seen.total_s > SEEN_BEYOND_USED * used["server"]:
         raise ValueError(
             f"the probe saw {seen.total_s:.1f} s of the server's CPU in the class's requests,"
@@ -156,12 +159,15 @@ def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, e
             scale = max(used["server"] - seen.total_s, 0.0) / alone_unseen
         asked = sum(seen.counts[r] * costs[r][2] for r in shared)
         client_scale = used["client"] / asked if asked > 0 else 1.0
+        asked_of_db = sum(seen.counts[r] * costs[r][1] for r in shared)
+        if used.get("db") and asked_of_db > 0:
+            db_scale = used["db"] / asked_of_db
     adjusted = dict(costs)
     for route in routes:
         server, db, client, calls, trips, loop = costs[route]
         loop_unseen = max(loop - own[route][0], 0.0)
         unseen_now = (scale * loop_unseen, scale * max(unseen[route] - loop_unseen, 0.0))
-        rest = (db, client * client_scale, calls, trips)
+        rest = (db * db_scale, client * client_scale, calls, trips)
         requests = seen.each.get(route) if each else None
         mine = requests or [seen.means[route]]
         made = [_with_own_cpu(rest, unseen_now, *cpu) for cpu in mine]
@@ -186,7 +192,8 @@ def server_times(path: Path) -> dict[str, np.ndarray]:
     rows: dict[str, list[tuple[float, float]]] = defaultdict(list)
     for line in path.read_text().splitlines():
         method, route, took, waited, *_when_and_where = line.split()
-        rows[route_of(method, route)].append((float(waited), float(took)))
+        if method != WEBSOCKET:
+            rows[route_of(method, route)].append((float(waited), float(took)))
     return {route: np.array(values) for route, values in rows.items()}
 
 
@@ -200,6 +207,7 @@ def worker_shares(path: Path) -> list[float] | None:
         fields = line.split()
         if len(fields) < 6:
             return None
-        served[fields[5]] += 1
+        if fields[0] != WEBSOCKET:
+            served[fields[5]] += 1
     total = sum(served.values())
     return sorted((count / total for count in served.values()), reverse=True) if total else None

@@ -87,7 +87,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-import convoys  # noqa: E402  (bench/, the script's folder)
+import connections  # noqa: E402  (bench/, the script's folder)
+import convoys  # noqa: E402
 import load_test  # noqa: E402
 import p95_interval  # noqa: E402
 import replay  # noqa: E402
@@ -528,7 +529,15 @@ def main() -> int:
         help="what the probe's GYROLAB_BENCH_SERVER_TIMES wrote in the --class-run runs (one "
         "file per run, in order): the server's part of each latency, and of it the wait "
         "for a work place, measured beside predicted; with several workers, each worker's "
-        "share of the run's requests is its chance of a new connection in the simulation",
+        "share of the run's requests is its chance of a new connection in the simulation; "
+        "with --client-times too, each student's HTTP connection and WebSocket reach the "
+        "workers they reached in the run (the probe's WebSocket lines, since 2026-12-06)",
+    )
+    parser.add_argument(
+        "--connections-at-random",
+        action="store_true",
+        help="with --server-times and --client-times: the connections reach the workers at "
+        "random in the runs' shares, not as in the run (the model before 2026-12-06)",
     )
     parser.add_argument(
         "--request-waits",
@@ -698,10 +707,13 @@ def main() -> int:
         locked: dict[str, float] | None,
         seed: int,
         arrivals: list | None = None,
+        placed: connections.Connections | None = None,
     ) -> dict:
         """The class simulated once with ``seed`` (which worker each connection reaches,
         which measured costs each request draws); ``shares``: each worker's chance of a
-        new connection; ``waits``: ``waits_of``'s; ``arrivals``: a run's, replayed."""
+        new connection; ``waits``: ``waits_of``'s; ``arrivals``: a run's, replayed;
+        ``placed``: the workers each browser's connections reached in the run (then
+        ``shares`` unused)."""
         return simulate(
             with_cpu_scaled(costs, args.cpu_scale),
             students,
@@ -719,6 +731,8 @@ def main() -> int:
             locked_shares=locked,
             arrivals=arrivals,
             teacher=arrivals is None,
+            student_workers=placed.of_students(students) if placed else None,
+            teacher_worker=placed.http.get(connections.TEACHER) if placed else None,
             **options,
             **(waits or waits_of()),
         )
@@ -730,11 +744,12 @@ def main() -> int:
         waits: dict | None = None,
         locked: dict[str, float] | None = None,
         arrivals: list | None = None,
+        placed: connections.Connections | None = None,
     ) -> dict:
         """``simulate_seed`` once per seed of ``--seeds``, combined."""
         return combine(
             [
-                simulate_seed(costs, students, shares, waits, locked, seed, arrivals)
+                simulate_seed(costs, students, shares, waits, locked, seed, arrivals, placed)
                 for seed in range(args.seeds)
             ]
         )
@@ -754,7 +769,19 @@ def main() -> int:
             print_costs(costs, args.backend)
             times = args.server_times[index] if len(args.server_times) > index else None
             shares = worker_shares(times) if times and workers > 1 else None
-            if shares:
+            placed = None
+            if shares and len(args.client_times) > index and not args.connections_at_random:
+                placed = connections.connections_of(times, args.client_times[index])
+                if placed is None or placed.of_students(students) is None:
+                    placed = None
+            if placed:
+                http, streams = (
+                    " / ".join(f"{share:.0%}" for share in placed.shares(kind))
+                    for kind in (placed.http, placed.websocket)
+                )
+                print("each student's connections reach the workers they reached in the run:"
+                      f" HTTP {http}, WebSocket {streams}")  # fmt: skip
+            elif shares:
                 print("each worker's share of the run's requests (a new connection's chance):"
                       f" {' / '.join(f'{share:.0%}' for share in shares)}")  # fmt: skip
             table = measured_p95(run)[name]
@@ -789,7 +816,7 @@ def main() -> int:
                     f"  replayed: the run's {len(arrivals)} arrivals, "
                     + ("each browser's paced" if args.paced else "sent at their times")
                 )
-            result = predict(costs, students, shares, waits, locked, arrivals)
+            result = predict(costs, students, shares, waits, locked, arrivals, placed)
             print(f"\n{students} students, {name}, {workers} worker(s), the run in {run}:"
                   f" predicted wall {result['wall']:.1f} s; hand-off"
                   f" {waits['handoff_s'] * 1e6:.0f} µs, busy wake-up"
@@ -823,7 +850,9 @@ def main() -> int:
             for seed in range(args.seeds, args.seeds + args.model_as_run):
                 # a seed the prediction did not use, scored as a measured run (of the
                 # routes the run's requests' times have, where it has them)
-                run_of_model = simulate_seed(costs, students, shares, waits, locked, seed, arrivals)
+                run_of_model = simulate_seed(
+                    costs, students, shares, waits, locked, seed, arrivals, placed
+                )
                 latencies = {
                     route: np.array(values) * 1000
                     for route, values in run_of_model["latencies"].items()
@@ -1184,6 +1213,7 @@ def class_costs(alone, own, cpu: Path, run: Path | None, each: bool) -> dict:
     if run:
         table = next(iter(measured_p95(run).values()))
         used = {"server": table["cpu server"], "client": table["cpu client"]}
+        used["db"] = table.get("cpu db", 0.0)  # PostgreSQL's processes (SQLite: in the server)
     try:
         costs, scale, client_scale = in_class(alone, own, seen, used, each=each)
     except ValueError as error:

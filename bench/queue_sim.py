@@ -190,6 +190,8 @@ def simulate(
     arrivals: list[tuple] | None = None,
     landing_s: float = 0.0,
     client_in_order: bool = False,
+    student_workers: list[tuple[int, int]] | None = None,
+    teacher_worker: int | None = None,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -283,7 +285,10 @@ def simulate(
     one event loop: its client work runs one callback at a time, in the order the callbacks
     became ready, at the load generator's share of a core (False: every student's client
     work shared that core evenly, processor sharing, the model before 2026-12-05's
-    thirty-fourth part).
+    thirty-fourth part); ``student_workers``: per student (the load test's number), the
+    worker its HTTP connection and its WebSocket reached, as a run measured them
+    (``connections.py``; ``worker_shares`` then unused); ``teacher_worker``: the
+    teacher's (else each at random).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -810,6 +815,8 @@ def simulate(
         return pick.randrange(workers) if connections is None else connections[student]
 
     teachers_worker = pick.randrange(workers)
+    if teacher_worker is not None:
+        teachers_worker = teacher_worker
 
     def watch() -> None:
         if finished[0] < students:
@@ -818,11 +825,15 @@ def simulate(
     def look_again() -> None:
         at(now + TEACHER_PERIOD_S, watch)
 
-    def arrive() -> None:
+    def arrive(index: int) -> None:
         student = next(arrived)
         record: dict = {"requests": [], "positions": []}
         records.append(record)
-        run_student(script(), accepting(https, student), accepting(websockets, student), record)
+        if student_workers is not None:  # the run's own
+            http, websocket = student_workers[index]
+        else:
+            http, websocket = accepting(https, student), accepting(websockets, student)
+        run_student(script(), http, websocket, record)
 
     if arrivals is not None:
         connection_worker: dict[object, int] = {}
@@ -864,7 +875,7 @@ def simulate(
         for index in range(students):
             # the load test's ramp, else as asked
             start = random.Random(index).uniform(0, ramp) if starts is None else starts[index]
-            at(start, arrive)
+            at(start, lambda index=index: arrive(index))
         if teacher:
             at(0.0, watch)
 

@@ -19,7 +19,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
-from class_cpu import route_of
+from class_cpu import WEBSOCKET, route_of
 from p95_interval import client_lines
 
 # the columns of ``read``'s arrays, ms (began: s, the probe's clock)
@@ -198,7 +198,7 @@ def outside_the_app(client_times: Path, server_times: Path) -> dict[str, tuple[i
     began: dict[tuple[str, str], list[tuple[float, float]]] = defaultdict(list)
     for line in server_times.read_text().splitlines():
         fields = line.split()
-        if len(fields) >= 5:
+        if len(fields) >= 5 and fields[0] != WEBSOCKET:  # a WebSocket connecting: no request
             began[(fields[0], fields[1])].append((float(fields[4]), float(fields[2]) / 1000))
     for calls in began.values():
         calls.sort()

@@ -25,7 +25,8 @@ meanwhile, the request or WebSocket it was for and the function the thread pool 
 the request's head) to its answer's start -- the server's part of the latency the load
 generator measures -- and of it the wait before the app proper began (the body, a work
 place); when it was called (``time.perf_counter``, the machine's monotonic clock, the
-same in every process); and which worker answered.
+same in every process); and which worker answered.  A WebSocket appends ``WS path - -
+began_s pid`` when it connects: which worker its connection reached.
 
 ``GYROLAB_BENCH_REQUEST_CPU`` (a load test, or ``queue_model.py``'s measuring run): a
 file to which each HTTP request and each WebSocket appends ``kind method path loop_ms
@@ -125,6 +126,9 @@ if _TIMES:
     _call = _applications.FastAPI.__call__
 
     async def _timed_call(self, scope, receive, send):
+        if scope["type"] == "websocket":  # which worker the connection reached
+            line = f"WS {scope['path']} - - {_time.perf_counter():.6f} {os.getpid()}\n"
+            os.write(_times, line.encode())
         if scope["type"] != "http":
             return await _call(self, scope, receive, send)
         began = _time.perf_counter()
