@@ -863,7 +863,7 @@ def test_connections_reach_the_workers_in_their_shares():
 
     def burst_p95(shares):
         result = queue_sim.simulate(
-            costs(), 40, 2, 2.0, one_writer=False, teacher=False, worker_shares=shares
+            costs(), 50, 2, 2.0, one_writer=False, teacher=False, worker_shares=shares
         )
         return np.percentile(result["latencies"]["POST /lab/sessions/{id}/csv"], 95)
 
