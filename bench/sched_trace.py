@@ -1,0 +1,142 @@
+"""Where a class's threads waited for a core, from the kernel's scheduler trace: each wait
+from the moment a thread was woken (or preempted) to the moment it was put on a core,
+by what the cores were doing when it began -- its core idle, its core busy and the other
+idle, both busy -- or because it was preempted.  run_queue.py measures the sums
+(schedstat); this says which kind of wait they are made of, for the queueing model.
+
+Record while a load test runs, as root, then write the events out as text::
+
+    perf sched record -a -o perf.data -- sleep 75 &
+    .venv/bin/python bench/load_test.py --backend postgresql --students 60
+    perf script -i perf.data -F comm,pid,tid,cpu,time,event,trace > sched.txt
+    .venv/bin/python bench/sched_trace.py sched.txt --server PID PID --client PID
+
+(the server's worker processes and the load generator's, by process id; PostgreSQL's
+processes by their name)."""
+
+from __future__ import annotations
+
+import argparse
+import re
+from collections import defaultdict
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+LINE = re.compile(r"^\s*(\S.*?)\s+(\d+)/(\d+)\s+\[(\d+)\]\s+([\d.]+):\s+sched:(\w+):\s+(.*)$")
+FIELD = re.compile(r"(\w+)=(\S+)")
+IDLE = 0  # the idle task's pid
+KINDS = ("woken, its core idle", "woken, its core busy, another idle", "woken, every core busy",
+         "preempted")  # fmt: skip
+WAKES = ("sched_waking", "sched_wakeup_new")
+
+
+@dataclass(frozen=True)
+class Event:
+    """One scheduler event: when (s), on which core, its name, the task that ran it (thread
+    id, process id, name) and its fields (``next_pid=…``)."""
+
+    time: float
+    cpu: int
+    name: str
+    tid: int
+    pid: int
+    comm: str
+    fields: dict[str, str]
+
+
+def events_of(lines: Iterable[str]) -> Iterator[Event]:
+    """The ``sched:`` events of ``perf script -F comm,pid,tid,cpu,time,event,trace``."""
+    for line in lines:
+        match = LINE.match(line)
+        if match:
+            comm, pid, tid, cpu, time, name, rest = match.groups()
+            fields = dict(FIELD.findall(rest))
+            yield Event(float(time), int(cpu), name, int(tid), int(pid), comm, fields)
+
+
+def waits_by_kind(
+    events: Iterable[Event], group_of: Callable[[int, str], str | None]
+) -> dict[tuple[str, str], list[float]]:
+    """Each wait for a core (s) of every thread ``group_of(process id, process name)``
+    names, by (group, kind): from its wake-up or its preemption to its next time on a core.
+    A thread's process is known from the events it ran; one woken before it ran any is
+    placed by the name the wake-up gives."""
+    process: dict[int, tuple[int, str]] = {}  # thread id → (process id, name)
+    running: dict[int, int] = {}  # core → thread id on it (IDLE: none)
+    waiting: dict[int, tuple[float, str]] = {}  # thread id → (since, kind)
+    waits: dict[tuple[str, str], list[float]] = defaultdict(list)
+
+    def group(tid: int, comm: str = "") -> str | None:
+        pid, name = process.get(tid, (tid, comm))
+        return group_of(pid, name)
+
+    for event in events:
+        process[event.tid] = (event.pid, event.comm)
+        if event.name == "sched_switch":
+            before, after = int(event.fields["prev_pid"]), int(event.fields["next_pid"])
+            if before != IDLE and event.fields["prev_state"].startswith("R") and group(before):
+                waiting[before] = (event.time, KINDS[3])
+            if after in waiting:
+                since, kind = waiting.pop(after)
+                name = group(after, event.fields.get("next_comm", ""))
+                if name:
+                    waits[name, kind].append(event.time - since)
+            running[event.cpu] = after
+        elif event.name in WAKES:
+            woken = int(event.fields["pid"])
+            if woken in waiting or not group(woken, event.fields.get("comm", "")):
+                continue
+            target = int(event.fields["target_cpu"])
+            if running.get(target, IDLE) == IDLE:
+                kind = KINDS[0]
+            elif any(tid == IDLE for core, tid in running.items() if core != target):
+                kind = KINDS[1]
+            else:
+                kind = KINDS[2]
+            waiting[woken] = (event.time, kind)
+    return dict(waits)
+
+
+def report(waits: dict[tuple[str, str], list[float]]) -> list[str]:
+    """Per group and kind: how many waits, their sum (s), mean, p50, p90 and p99 (µs)."""
+    lines = []
+    for name in sorted({group for group, _ in waits}):
+        total = sum(sum(values) for (group, _), values in waits.items() if group == name)
+        lines.append(f"{name}: waited {total:.2f} s in all")
+        for kind in KINDS:
+            values = np.array(waits.get((name, kind), [])) * 1e6
+            if len(values):
+                p50, p90, p99 = np.percentile(values, [50, 90, 99])
+                lines.append(
+                    f"  {kind:36s} {len(values):7d} waits {values.sum() / 1e6:6.2f} s,"
+                    f" mean {values.mean():5.0f} µs, p50 {p50:5.0f}, p90 {p90:5.0f}, p99 {p99:5.0f}"
+                )
+    return lines
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("trace", type=Path, help="perf script's text of a perf sched record")
+    parser.add_argument("--server", type=int, nargs="+", default=[], help="worker process ids")
+    parser.add_argument("--client", type=int, nargs="+", default=[], help="load generator's")
+    parser.add_argument("--database", default="postgres", help="the database's process name")
+    args = parser.parse_args()
+    server, client = set(args.server), set(args.client)
+
+    def group_of(pid: int, name: str) -> str | None:
+        if pid in server:
+            return "server"
+        if pid in client:
+            return "load generator"
+        return "database" if name == args.database else None
+
+    with args.trace.open() as lines:
+        print("\n".join(report(waits_by_kind(events_of(lines), group_of))))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

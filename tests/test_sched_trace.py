@@ -1,0 +1,80 @@
+"""Where a class's threads waited for a core, from the scheduler's trace
+(``bench/sched_trace.py``), on a trace written out by hand in ``perf script``'s format."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
+
+import sched_trace  # noqa: E402  (bench/)
+
+
+def switch(time: float, cpu: int, before: tuple[str, int, int], state: str, after: tuple) -> str:
+    """A ``sched_switch`` line: ``before`` (name, process id, thread id) leaves the core in
+    ``state`` for ``after`` (name, thread id)."""
+    name, pid, tid = before
+    return (
+        f"{name:>16s} {pid}/{tid} [{cpu:03d}] {time:.6f}: sched:sched_switch: prev_comm={name}"
+        f" prev_pid={tid} prev_prio=120 prev_state={state} ==> next_comm={after[0]}"
+        f" next_pid={after[1]} next_prio=120"
+    )
+
+
+def waking(time: float, cpu: int, by: tuple[str, int, int], woken: tuple, target: int) -> str:
+    name, pid, tid = by
+    return (
+        f"{name:>16s} {pid}/{tid} [{cpu:03d}] {time:.6f}: sched:sched_waking:"
+        f" comm={woken[0]} pid={woken[1]} prio=120 target_cpu={target:03d}"
+    )
+
+
+IDLE0, IDLE1 = ("swapper/0", 0, 0), ("swapper/1", 0, 0)
+SERVER, OTHER = ("python", 100, 101), ("python", 100, 102)  # two threads of a worker
+CLIENT, DATABASE = ("python", 200, 200), ("postgres", 300, 300)
+
+TRACE = [
+    switch(9.990, 0, IDLE0, "R", ("python", 102)),
+    switch(9.991, 0, OTHER, "S", ("python", 101)),  # both server threads have run
+    switch(9.999, 1, IDLE1, "R", ("python", 200)),
+    switch(10.000, 0, SERVER, "S", ("swapper/0", 0)),
+    waking(10.001, 1, CLIENT, ("python", 101), 0),  # its core idle: 20 µs
+    switch(10.001020, 0, IDLE0, "R", ("python", 101)),
+    waking(10.0019, 0, SERVER, ("postgres", 300), 1),  # the other core busy, none idle
+    switch(10.002, 1, CLIENT, "R+", ("postgres", 300)),  # the load generator preempted
+    switch(10.002300, 1, DATABASE, "S", ("python", 200)),  # …for 300 µs
+    waking(10.003, 1, CLIENT, ("python", 102), 0),  # every core busy: 500 µs
+    switch(10.003500, 0, SERVER, "S", ("python", 102)),
+    "          python 100/101 [000] 10.004: sched:sched_stat_runtime: comm=python pid=101",
+]
+
+
+def group_of(pid: int, name: str) -> str | None:
+    return {100: "server", 200: "client"}.get(pid) or ("db" if name == "postgres" else None)
+
+
+def test_each_wait_is_told_by_what_the_cores_were_doing_when_it_began():
+    waits = sched_trace.waits_by_kind(sched_trace.events_of(TRACE), group_of)
+    idle, busy, preempted = sched_trace.KINDS[0], sched_trace.KINDS[2], sched_trace.KINDS[3]
+    assert set(waits) == {("server", idle), ("server", busy), ("client", preempted),
+                          ("db", busy)}  # fmt: skip
+    assert waits["server", idle] == [pytest.approx(20e-6, abs=1e-9)]
+    assert waits["server", busy] == [pytest.approx(500e-6, abs=1e-9)]
+    assert waits["client", preempted] == [pytest.approx(300e-6, abs=1e-9)]
+    assert waits["db", busy] == [pytest.approx(100e-6, abs=1e-9)]
+
+
+def test_the_report_sums_each_groups_waits():
+    waits = sched_trace.waits_by_kind(sched_trace.events_of(TRACE), group_of)
+    lines = sched_trace.report(waits)
+    assert lines[0] == "client: waited 0.00 s in all" and "preempted" in lines[1]
+    server = lines.index("server: waited 0.00 s in all")
+    assert lines[server + 1].split()[:5] == ["woken,", "its", "core", "idle", "1"]
+
+
+def test_threads_outside_the_groups_are_not_counted():
+    waits = sched_trace.waits_by_kind(sched_trace.events_of(TRACE), lambda pid, name: None)
+    assert waits == {}
