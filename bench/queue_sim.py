@@ -189,6 +189,7 @@ def simulate(
     frames_on_loop: bool = True,
     arrivals: list[tuple] | None = None,
     landing_s: float = 0.0,
+    landing_on: tuple[str, ...] = OUTSIDE,
     client_in_order: bool = False,
     student_workers: list[tuple[int, int]] | None = None,
     teacher_worker: int | None = None,
@@ -451,11 +452,12 @@ def simulate(
 
     def land() -> None:
         """A server thread woken to run lands on a core at random: on one running a thread
-        outside the interpreter (a hash, the load generator), that thread is off its core
-        for ``landing_s``."""
+        outside the interpreter of a pool in ``landing_on`` (a hash, the load generator),
+        that thread is off its core for ``landing_s``, not asking for one meanwhile (the
+        woken thread has it)."""
         if not landing_s:
             return
-        outside = [job for job in jobs if job.pool in OUTSIDE and not job.bumped
+        outside = [job for job in jobs if job.pool in landing_on and not job.bumped
                    and not (clients_elsewhere and job.pool == "client")]  # fmt: skip
         if outside and landing.random() < len(outside) / cores:
             landing.choice(outside).bumped = landing_s
@@ -906,7 +908,8 @@ def simulate(
         # simulation's time with one or two jobs; the same arithmetic in the same order)
         counts: dict[str, int] = {}
         for job in jobs:
-            counts[job.pool] = counts.get(job.pool, 0) + 1
+            if not job.bumped:  # off its core: the thread woken onto it has the core
+                counts[job.pool] = counts.get(job.pool, 0) + 1
         holders = [queue[0] for queue in interpreters if queue]
         working = 0
         for job in holders:
@@ -933,7 +936,7 @@ def simulate(
         rates = []  # each job's rate, in the order of ``jobs``
         for job in jobs:
             if head is None or job.pool != "client":
-                rates.append(rate[job.pool])
+                rates.append(rate.get(job.pool, 0.0))
             else:
                 rates.append(rate["client head"] if job is head else 0.0)
 

@@ -613,6 +613,30 @@ def test_a_thread_woken_onto_a_hashs_core_puts_the_hash_off_it():
     assert np.mean(log_ins(1 * MS)) > np.mean(log_ins(0.0)) + 1 * MS
 
 
+def test_a_thread_put_off_its_core_leaves_the_core_to_the_thread_woken_onto_it():
+    """A landed-on thread waits without running and without holding a core: the cores'
+    busy time and the load generator's time on one stay as without landings however long it
+    waits (before 2026-12-06 it kept its share of the cores idle meanwhile: the load
+    generator 'ran' 0.56 s for 0.19 s of CPU with 5 ms landings); ``landing_on``: which
+    threads outside the interpreter a woken one lands on."""
+    hash_s = 20 * MS
+    table = costs(server=4 * MS, db=0.0, client=0.5 * MS, calls=12.0, trips=3.0)
+    table[queue_sim.LOGIN] = (hash_s + 2 * MS, 0.0, 0.5 * MS, 2.0, 1.0, 0.1 * MS)
+
+    def run(landing_s: float, on: tuple[str, ...] = queue_sim.OUTSIDE) -> dict:
+        return queue_sim.simulate(
+            table, 12, 1, 2.0, ramp=0.05, hash_s=hash_s, teacher=False, landing_s=landing_s,
+            landing_on=on,
+        )  # fmt: skip
+
+    still = run(0.0)
+    for landed in (run(5 * MS), run(5 * MS, ("hash",))):
+        assert landed["pressure"][1] == pytest.approx(still["pressure"][1], rel=1e-6)
+        assert landed["run queue"]["client"][0] == pytest.approx(still["run queue"]["client"][0])
+    everyone, hashes_only = run(5 * MS), run(5 * MS, ("hash",))
+    assert everyone["run queue"]["client"][1] > 10 * hashes_only["run queue"]["client"][1] > 0
+
+
 def test_the_load_generators_callbacks_run_one_at_a_time_in_order():
     """``client_in_order``: the load generator is one event loop.  Twelve students ready at
     the same instant have their first pages one client callback apart; shared evenly
