@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 from class_cpu import WEBSOCKET, route_of
-from p95_interval import client_lines
+from connections import matched_requests
 
 # the columns of ``read``'s arrays, ms (began: s, the probe's clock)
 PLACE, INSIDE, CPU, OFF_CORE, RUN_QUEUE, BEGAN = range(6)
@@ -193,27 +193,14 @@ def outside_the_app(client_times: Path, server_times: Path) -> dict[str, tuple[i
     carried, read by the load generator), ms.  ``client_times``: the load generator's
     ``GYROLAB_BENCH_CLIENT_TIMES`` lines (``method path sent_s answered_s``);
     ``server_times``: the probe's ``GYROLAB_BENCH_SERVER_TIMES`` lines (``method path ms
-    waited_ms began_s pid``), on the same clock (``time.perf_counter``).  A request is the
-    first not yet matched of its method and path that began while it was on its way."""
-    began: dict[tuple[str, str], list[tuple[float, float]]] = defaultdict(list)
-    for line in server_times.read_text().splitlines():
-        fields = line.split()
-        if len(fields) >= 5 and fields[0] != WEBSOCKET:  # a WebSocket connecting: no request
-            began[(fields[0], fields[1])].append((float(fields[4]), float(fields[2]) / 1000))
-    for calls in began.values():
-        calls.sort()
-    matched: dict[tuple[str, str], int] = defaultdict(int)  # the next not yet matched
+    waited_ms began_s pid``), on the same clock (``time.perf_counter``), matched as
+    :func:`connections.matched_requests` does."""
+    fields = (line.split() for line in server_times.read_text().splitlines())
+    requests = [row for row in fields if len(row) >= 5 and row[0] != WEBSOCKET]  # no WebSocket
     parts: dict[str, list[tuple[float, float]]] = defaultdict(list)
-    for method, url, sent, answered, _ in client_lines(client_times):
-        key = (method, url)
-        calls, index = began.get(key, []), matched[key]
-        while index < len(calls) and calls[index][0] < sent:
-            index += 1  # a server call the load generator did not time (the teacher's)
-        if index == len(calls) or calls[index][0] > answered:
-            continue
-        matched[key] = index + 1
-        start, took = calls[index]
-        parts[route_of(*key)].append((start - sent, answered - start - took))
+    for (method, url, sent, answered, _), row in matched_requests(client_times, requests):
+        start, took = float(row[4]), float(row[2]) / 1000
+        parts[route_of(method, url)].append((start - sent, answered - start - took))
     return {
         route: (len(values), *(float(mean) * 1000 for mean in np.mean(values, axis=0)))
         for route, values in parts.items()
