@@ -18,7 +18,15 @@ from sqlmodel import select
 from app.db import read_session, write_session
 from app.lti import grades, keys
 from app.lti.platforms import PlatformFields, add_platform
-from app.models import Enrollment, ExternalIdentity, LtiGradePost, LtiPlatform, Role, User
+from app.models import (
+    Enrollment,
+    ExternalIdentity,
+    LtiContext,
+    LtiGradePost,
+    LtiPlatform,
+    Role,
+    User,
+)
 from tests.factories import CSRF_RE, HEADING, VERTICAL, make_user, post_form, without_tokens
 from tests.lti_platform import (
     CLIENT_ID,
@@ -115,6 +123,7 @@ def test_deep_link_launch_roster_session_and_grade_reach_the_platform(lti):
 
     # the roster came from NRPS after the teacher's launch: three learners, not the observer
     # and not the member the LMS lists as inactive
+    wait_for_roster_sync()
     with read_session() as db:
         enrolled = set(
             db.exec(select(User.display_name).join(Enrollment, Enrollment.student_id == User.id))
@@ -181,6 +190,20 @@ def arrived(scores: list, count: int, seconds: float = 10) -> list:
     while len(scores) < count and time.monotonic() < deadline:
         time.sleep(0.05)
     return scores
+
+
+def wait_for_roster_sync(seconds: float = 10) -> None:
+    """The roster is fetched in a task after the launch's response, so a client that has
+    already loaded the next page may be ahead of it; wait until the sync has been recorded."""
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        with read_session() as db:
+            contexts = db.exec(select(LtiContext)).all()
+        if contexts and all(c.roster_synced_at or c.roster_problem for c in contexts):
+            assert not any(c.roster_problem for c in contexts), contexts
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"the roster was not synced within {seconds} s")
 
 
 def wait_until_sent(count: int, seconds: float = 10) -> None:
