@@ -1,8 +1,10 @@
 """Where a class's threads waited for a core, from the kernel's scheduler trace: each wait
 from the moment a thread was woken (or preempted) to the moment it was put on a core,
 by what the cores were doing when it began -- its core idle, its core busy and the other
-idle, both busy -- or because it was preempted.  run_queue.py measures the sums
-(schedstat); this says which kind of wait they are made of, for the queueing model.
+idle, both busy -- or because it was preempted; and how many cores were busy while some
+thread waited (a core left idle meanwhile is one the queueing model's cores would have
+used).  run_queue.py measures the sums (schedstat); this says which kind of wait they are
+made of, for the queueing model.
 
 Record while a load test runs, as root, then write the events out as text::
 
@@ -100,6 +102,46 @@ def waits_by_kind(
     return dict(waits)
 
 
+def busy_while_waiting(events: Iterable[Event]) -> dict[int, float]:
+    """The time (s) some thread -- any -- waited for a core, by how many cores were busy
+    meanwhile: a scheduler that never leaves a core idle while a thread waits has it all
+    under the full count (a thread woken onto an idle core waits there until the core is
+    up, under one fewer).  The kernel's trace of a class on two cores: 1.46 cores busy on
+    average while a thread waited (bench/README.md, fortieth part)."""
+    running: dict[int, int] = {}  # core → thread id on it (IDLE: none)
+    waiting: set[int] = set()
+    spent: dict[int, float] = defaultdict(float)
+    last = None
+    for event in events:
+        if last is not None and waiting:
+            spent[sum(1 for tid in running.values() if tid != IDLE)] += event.time - last
+        last = event.time
+        waiting.discard(event.tid)  # on a core: it runs this event
+        if event.name == "sched_switch":
+            before, after = int(event.fields["prev_pid"]), int(event.fields["next_pid"])
+            if before != IDLE and event.fields["prev_state"].startswith("R"):
+                waiting.add(before)
+            waiting.discard(after)
+            running[event.cpu] = after
+        elif event.name in WAKES:
+            woken = int(event.fields["pid"])
+            if woken not in running.values():
+                waiting.add(woken)
+    return dict(spent)
+
+
+def busy_report(spent: dict[int, float]) -> str:
+    total = sum(spent.values())
+    if not total:
+        return "no thread waited for a core"
+    mean = sum(busy * time for busy, time in spent.items()) / total
+    cells = ", ".join(f"{busy}: {time:.2f} s" for busy, time in sorted(spent.items()))
+    return (
+        f"some thread waited for a core during {total:.2f} s; the cores busy then {cells}"
+        f" (on average {mean:.2f})"
+    )
+
+
 def report(waits: dict[tuple[str, str], list[float]]) -> list[str]:
     """Per group and kind: how many waits, their sum (s), mean, p50, p90 and p99 (µs)."""
     lines = []
@@ -135,6 +177,8 @@ def main() -> int:
 
     with args.trace.open() as lines:
         print("\n".join(report(waits_by_kind(events_of(lines), group_of))))
+    with args.trace.open() as lines:
+        print(busy_report(busy_while_waiting(events_of(lines))))
     return 0
 
 

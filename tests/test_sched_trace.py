@@ -78,3 +78,26 @@ def test_the_report_sums_each_groups_waits():
 def test_threads_outside_the_groups_are_not_counted():
     waits = sched_trace.waits_by_kind(sched_trace.events_of(TRACE), lambda pid, name: None)
     assert waits == {}
+
+
+def test_the_cores_busy_while_a_thread_waits():
+    """A thread woken onto the idle core waits 20 µs with the other core busy; the three
+    later waits (100, 300 and 500 µs) have both cores busy."""
+    spent = sched_trace.busy_while_waiting(sched_trace.events_of(TRACE))
+    assert spent == {1: pytest.approx(20e-6, abs=1e-9), 2: pytest.approx(900e-6, abs=1e-9)}
+    assert sched_trace.busy_report(spent).endswith("(on average 1.98)")
+    assert sched_trace.busy_report({}) == "no thread waited for a core"
+
+
+def test_a_thread_seen_running_no_longer_waits_though_its_switch_was_not_traced():
+    """A thread woken, then seen running an event of its own with no ``sched_switch`` to it
+    in the trace (lost, or before the trace began): it waited until then, not for good."""
+    lines = [
+        switch(1.000, 0, IDLE0, "R", ("python", 101)),
+        switch(1.000, 1, IDLE1, "R", ("python", 200)),
+        waking(1.001, 1, CLIENT, ("python", 102), 0),  # both cores busy
+        "          python 100/102 [000] 1.002: sched:sched_stat_runtime: comm=python pid=102",
+        switch(1.010, 0, SERVER, "S", ("swapper/0", 0)),
+    ]
+    spent = sched_trace.busy_while_waiting(sched_trace.events_of(lines))
+    assert spent == {2: pytest.approx(1e-3, abs=1e-9)}
