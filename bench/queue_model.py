@@ -37,8 +37,10 @@
    GIL); each hand-off to a waiting thread leaves the interpreter idle while that thread
    is woken (``queue_sim.HANDOFF_S``, measured by ``bench_handoffs.py``), longer when more
    is asked of the cores than they have (``WAKE_BUSY_S``); the event loop runs its tasks
-   one by one. The load generator is one Python thread; every pool shares the machine's
-   cores (when more is asked of them than they have, each slows in proportion).  Each
+   one by one. The load generator is one Python thread; each thread ready to run sits on
+   one of the machine's cores (a woken one on an idle core if there is one, else on
+   either) and shares that core with the others there (``--cores-shared-evenly``: every
+   ready thread shares all the cores, each slowing in proportion, as before).  Each
    prediction is the median of ``--seeds`` simulations (which worker each connection
    reaches, which measured costs each request draws).
 3. Compare: ``--compare`` reads the tables ``load_test.py`` printed and puts each route's
@@ -607,6 +609,21 @@ def main() -> int:
         "generator preempted 2,536 times, the server's threads 29,726)",
     )
     parser.add_argument(
+        "--cores-shared-evenly",
+        action="store_true",
+        help="every ready thread shares all the cores evenly (the model before 2026-12-06's "
+        "fortieth part), instead of each sitting on one core and sharing that one with the "
+        "others there (a woken thread to an idle core if there is one, else to either)",
+    )
+    parser.add_argument(
+        "--balance-us",
+        type=float,
+        default=0.0,
+        help="each thread on its own core: how long a core idles while another has two "
+        "ready threads before it takes one, µs (0: at once; the kernel's trace of a class: "
+        "more makes the model's burst far too slow)",
+    )
+    parser.add_argument(
         "--client-in-order",
         action="store_true",
         help="the load generator's client work one callback at a time, in the order they "
@@ -708,6 +725,8 @@ def main() -> int:
         "landing_s": args.landing_us / 1e6,
         "landing_on": tuple(args.landing_on),
         "client_in_order": args.client_in_order,
+        "per_core": not args.cores_shared_evenly,
+        "balance_s": args.balance_us / 1e6,
     }
 
     def simulate_seed(
@@ -1305,7 +1324,7 @@ def waiting_wakes(result: dict, group: str) -> str:
 
 
 def run_queue(result: dict, runs: list[dict[str, float]]) -> None:
-    """Each group's wait for a core, predicted (the model's cores shared in proportion)
+    """Each group's wait for a core, predicted (as the model shares its cores)
     beside what the kernel counted in the runs (``load_test.py --run-queue``): waited s /
     ran s and the waited share of the time wanted.  For SQLite the database is the
     server's own threads."""

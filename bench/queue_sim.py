@@ -193,6 +193,8 @@ def simulate(
     client_in_order: bool = False,
     student_workers: list[tuple[int, int]] | None = None,
     teacher_worker: int | None = None,
+    per_core: bool = True,
+    balance_s: float = 0.0,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -289,7 +291,14 @@ def simulate(
     thirty-fourth part); ``student_workers``: per student (the load test's number), the
     worker its HTTP connection and its WebSocket reached, as a run measured them
     (``connections.py``; ``worker_shares`` then unused); ``teacher_worker``: the
-    teacher's (else each at random).
+    teacher's (else each at random); ``per_core``: each thread ready to run sits on one
+    core and shares that core alone with the others on it (a thread woken goes to an idle
+    core if there is one, else to either at random, and stays there while it runs),
+    instead of every ready thread sharing all the cores evenly; ``balance_s``: with
+    ``per_core``, how long a core idles while another has two ready threads before it takes
+    one (0: at once, no core idles while a thread waits; the kernel's balancing skips a
+    core idle for shorter than its migration cost, 0.5 ms, and leaves a thread that ran in
+    the last 0.5 ms where it is); whole cores only (else shared evenly).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -899,6 +908,91 @@ def simulate(
         queued["server"] += handoff_s
         return True
 
+    per_core = per_core and float(cores).is_integer() and cores >= 1
+    core_count = int(cores) if per_core else 1
+    thread_limit = {pool: capacity[pool] for pool in ("client", "server", "loop")}
+    placed: dict[object, int] = {}  # per ready thread (a job, a holder, "client"), its core
+    placing = random.Random(seed + 7)
+    imbalanced_since: list[float | None] = [None]
+
+    def shared_per_core(holders: list[Job], head: Job | None):
+        """``per_core``'s rates: each job's (in the order of ``jobs``), each working
+        holder's; per group the share of a core its ready threads ran and waited; the
+        cores busy, whether a thread waits for one, and the time to the next balancing."""
+        ready: list[tuple[object, str]] = [(job, "server") for job in holders
+                                           if job.handing <= 0.0]  # fmt: skip
+        # a pool's jobs beyond its threads (the load generator's one event loop, a worker's
+        # interpreter shared evenly) share its threads' cores: one ready thread each; the
+        # database's processes, the hashes and the threads' work without the interpreter
+        # are threads of their own each, however many
+        of_pool: dict[str, list[Job]] = defaultdict(list)
+        for job in jobs:
+            if not job.bumped and in_shares[job.pool]:
+                of_pool[job.pool].append(job)
+        threads_of: dict[str, int] = {}
+        for pool, members in of_pool.items():
+            threads_of[pool] = min(len(members), int(thread_limit.get(pool, len(members))))
+            if threads_of[pool] == len(members) and thread_limit.get(pool) != 1:
+                ready += [(job, group_of[pool]) for job in members]
+            else:
+                ready += [((pool, k), group_of[pool]) for k in range(threads_of[pool])]
+        on = [0] * core_count
+        core_of = {}
+        for key, _ in ready:
+            core = placed.get(key)
+            if core is not None:
+                core_of[key] = core
+                on[core] += 1
+        for key, _ in ready:
+            if key not in core_of:  # woken: an idle core if there is one
+                idle = [core for core in range(core_count) if not on[core]]
+                core = placing.choice(idle) if idle else placing.randrange(core_count)
+                core_of[key] = core
+                on[core] += 1
+        due = infinity
+        while True:
+            idle = [core for core in range(core_count) if not on[core]]
+            crowded = [core for core in range(core_count) if on[core] > 1]
+            if not idle or not crowded:
+                imbalanced_since[0] = None
+                break
+            if imbalanced_since[0] is None:
+                imbalanced_since[0] = now
+            if now - imbalanced_since[0] < balance_s - 1e-9:  # (a step: a ns at least)
+                due = imbalanced_since[0] + balance_s - now
+                break
+            source = max(crowded, key=lambda core: on[core])
+            moved = placing.choice([key for key, core in core_of.items() if core == source])
+            core_of[moved] = idle[0]
+            on[source] -= 1
+            on[idle[0]] += 1
+        placed.clear()
+        placed.update(core_of)
+        shares: dict[str, list[float]] = defaultdict(lambda: [0.0, 0.0])
+        for key, group in ready:
+            share = 1.0 / on[core_of[key]]
+            shares[group][0] += share
+            shares[group][1] += 1.0 - share
+        pool_rate = {}  # a pool's jobs beyond its threads: its threads' rate, shared
+        for pool, members in of_pool.items():
+            if threads_of[pool] < len(members) or thread_limit.get(pool) == 1:
+                pool_rate[pool] = sum(1.0 / on[core_of[pool, k]] for k in range(threads_of[pool]))
+        job_rates = []
+        for job in jobs:
+            if job.bumped:
+                job_rates.append(0.0)
+            elif not in_shares[job.pool]:  # the clients on their own machines
+                job_rates.append(1.0)
+            elif job.pool not in pool_rate:
+                job_rates.append(1.0 / on[core_of[job]])
+            elif head is not None and job.pool == "client":
+                job_rates.append(pool_rate["client"] if job is head else 0.0)
+            else:
+                job_rates.append(pool_rate[job.pool] / len(of_pool[job.pool]))
+        holder_rates = {job: 1.0 / on[core_of[job]] for job in holders if job in core_of}
+        busy = sum(1 for n in on if n)
+        return job_rates, holder_rates, shares, busy, any(n > 1 for n in on), due
+
     infinity = float("inf")
     in_shares = {pool: not (clients_elsewhere and pool == "client") for pool in capacity}
     group_of = {pool: "server" if pool in ("loop", "hash", "released") else pool
@@ -939,8 +1033,13 @@ def simulate(
                 rates.append(rate.get(job.pool, 0.0))
             else:
                 rates.append(rate["client head"] if job is head else 0.0)
-
+        holder_rates: dict[Job, float] = {}
         next_done = infinity
+        if per_core:
+            rates, holder_rates, on_cores, busy, contended, next_done = shared_per_core(
+                holders, head
+            )
+
         for job, r in zip(jobs, rates, strict=True):
             until = job.bumped or (job.left / r if r else infinity)
             if until < next_done:
@@ -949,7 +1048,8 @@ def simulate(
             if job.handing > 0.0:
                 next_done = min(next_done, job.handing)
                 continue
-            next_done = min(next_done, min(job.left, job.segment_left) / rate["interpreter"])
+            holder_rate = holder_rates[job] if per_core else rate["interpreter"]
+            next_done = min(next_done, min(job.left, job.segment_left) / holder_rate)
             if len(interpreters[job.worker]) > 1:
                 next_done = min(next_done, max(turn_ends[job.worker] - now, 0.0))
         next_timer = timers[0][0] - now if timers else infinity
@@ -960,10 +1060,17 @@ def simulate(
                 if job.handing > 0.0:
                     handing = True
                     break
-            pressure[0] += step if asked > cores + 1e-12 or handing else 0.0
-            pressure[1] += min(asked, cores) * step
+            if per_core:
+                pressure[0] += step if contended or handing else 0.0
+                pressure[1] += busy * step
+                for group, (running, waiting) in on_cores.items():
+                    ran[group] += running * step
+                    queued[group] += waiting * step
+            else:
+                pressure[0] += step if asked > cores + 1e-12 or handing else 0.0
+                pressure[1] += min(asked, cores) * step
             for pool, asked_of in demand.items():
-                if in_shares[pool]:
+                if in_shares[pool] and not per_core:
                     group = group_of[pool]
                     queued[group] += asked_of * (1.0 - scale) * step
                     ran[group] += asked_of * scale * step
@@ -986,6 +1093,8 @@ def simulate(
                         waiting_wakeups["loop"] += timed_out
         interpreter_rate = rate.get("interpreter", 0.0)
         for job in holders:
+            if per_core and job.handing <= 0.0:
+                interpreter_rate = holder_rates[job]
             if job.waits is not None:
                 if job.handing > 0.0:
                     job.waits[1] += min(job.handing, step)

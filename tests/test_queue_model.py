@@ -1422,3 +1422,35 @@ def test_the_waiting_threads_wake_at_each_switch_interval():
     assert short.sleeps_per_thread_s > 4 * long.sleeps_per_thread_s
     assert short.sleeps_per_thread_s > 150
     assert short.adds_per_s > 0 and sys.getswitchinterval() == before  # restored
+
+
+def test_threads_on_their_own_cores_leave_a_core_idle_until_balanced():
+    """``per_core``: three log-ins' hashes at once on two cores.  Shared evenly (the fluid
+    model) each runs at two thirds of a core and all end together; each on its own core,
+    the third shares a core with one of the others while the lone one ends first, and the
+    pair goes on sharing their core until balancing moves one of them to the idle one (at
+    once with ``balance_s`` 0; never within the run with a long ``balance_s``).  The cores'
+    busy time is the same; only the idle core's time differs."""
+    hash_s = 100 * MS
+    table = costs(server=0.1 * MS, db=0.0, client=0.0, calls=0.0, trips=1.0)
+    table[queue_sim.LOGIN] = (hash_s + 0.1 * MS, 0.0, 0.0, 0.0, 1.0, 0.0)
+
+    def log_ins(**options) -> tuple[list[float], dict]:
+        result = queue_sim.simulate(
+            table, 3, 1, 2.0, starts=[0.0] * 3, teacher=False, clients_elsewhere=True,
+            hash_s=hash_s, **options,
+        )  # fmt: skip
+        return sorted(result["latencies"][queue_sim.LOGIN]), result
+
+    shared, fluid = log_ins(per_core=False)
+    balanced, at_once = log_ins()
+    stuck, never = log_ins(balance_s=10.0)
+    assert shared == pytest.approx([0.150] * 3, abs=5 * MS)
+    assert balanced == pytest.approx([0.100, 0.150, 0.150], abs=5 * MS)
+    assert stuck == pytest.approx([0.100, 0.200, 0.200], abs=5 * MS)
+    busy = [result["pressure"][1] for result in (fluid, at_once, never)]
+    assert busy == pytest.approx([busy[0]] * 3, rel=1e-3)
+    # the stuck pair waited 100 ms each for their core while the other idled
+    assert never["run queue"]["server"][1] - at_once["run queue"]["server"][1] == pytest.approx(
+        0.100, abs=5 * MS
+    )
