@@ -925,35 +925,43 @@ def simulate(
         # interpreter shared evenly) share its threads' cores: one ready thread each; the
         # database's processes, the hashes and the threads' work without the interpreter
         # are threads of their own each, however many
-        of_pool: dict[str, list[Job]] = defaultdict(list)
+        of_pool: dict[str, list[Job]] = {}
         for job in jobs:
             if not job.bumped and in_shares[job.pool]:
-                of_pool[job.pool].append(job)
-        threads_of: dict[str, int] = {}
+                members = of_pool.get(job.pool)
+                if members is None:
+                    of_pool[job.pool] = [job]
+                else:
+                    members.append(job)
+        threads_of: dict[str, int] = {}  # of the pools whose jobs share their threads
         for pool, members in of_pool.items():
-            threads_of[pool] = min(len(members), int(thread_limit.get(pool, len(members))))
-            if threads_of[pool] == len(members) and thread_limit.get(pool) != 1:
-                ready += [(job, group_of[pool]) for job in members]
+            limit = thread_limit.get(pool)
+            group = group_of[pool]
+            if limit is None or (limit != 1 and len(members) <= limit):
+                ready += [(job, group) for job in members]
             else:
-                ready += [((pool, k), group_of[pool]) for k in range(threads_of[pool])]
+                threads_of[pool] = min(len(members), int(limit))
+                ready += [((pool, k), group) for k in range(threads_of[pool])]
         on = [0] * core_count
         core_of = {}
+        fresh = []
         for key, _ in ready:
             core = placed.get(key)
-            if core is not None:
+            if core is None:
+                fresh.append(key)
+            else:
                 core_of[key] = core
                 on[core] += 1
-        for key, _ in ready:
-            if key not in core_of:  # woken: an idle core if there is one
-                idle = [core for core in range(core_count) if not on[core]]
-                core = placing.choice(idle) if idle else placing.randrange(core_count)
-                core_of[key] = core
-                on[core] += 1
+        for key in fresh:  # woken: an idle core if there is one
+            if 0 in on:
+                core = placing.choice([core for core in range(core_count) if not on[core]])
+            else:
+                core = placing.randrange(core_count)
+            core_of[key] = core
+            on[core] += 1
         due = infinity
         while True:
-            idle = [core for core in range(core_count) if not on[core]]
-            crowded = [core for core in range(core_count) if on[core] > 1]
-            if not idle or not crowded:
+            if 0 not in on or max(on) < 2:
                 imbalanced_since[0] = None
                 break
             if imbalanced_since[0] is None:
@@ -961,22 +969,27 @@ def simulate(
             if now - imbalanced_since[0] < balance_s - 1e-9:  # (a step: a ns at least)
                 due = imbalanced_since[0] + balance_s - now
                 break
-            source = max(crowded, key=lambda core: on[core])
+            target = on.index(0)
+            source = max((core for core in range(core_count) if on[core] > 1),
+                         key=lambda core: on[core])  # fmt: skip
             moved = placing.choice([key for key, core in core_of.items() if core == source])
-            core_of[moved] = idle[0]
+            core_of[moved] = target
             on[source] -= 1
-            on[idle[0]] += 1
+            on[target] += 1
         placed.clear()
         placed.update(core_of)
-        shares: dict[str, list[float]] = defaultdict(lambda: [0.0, 0.0])
+        share_of = [1.0 / n if n else 0.0 for n in on]
+        shares: dict[str, list[float]] = {}
         for key, group in ready:
-            share = 1.0 / on[core_of[key]]
-            shares[group][0] += share
-            shares[group][1] += 1.0 - share
-        pool_rate = {}  # a pool's jobs beyond its threads: its threads' rate, shared
-        for pool, members in of_pool.items():
-            if threads_of[pool] < len(members) or thread_limit.get(pool) == 1:
-                pool_rate[pool] = sum(1.0 / on[core_of[pool, k]] for k in range(threads_of[pool]))
+            share = share_of[core_of[key]]
+            cell = shares.get(group)
+            if cell is None:
+                shares[group] = [share, 1.0 - share]
+            else:
+                cell[0] += share
+                cell[1] += 1.0 - share
+        pool_rate = {pool: sum(share_of[core_of[pool, k]] for k in range(threads))
+                     for pool, threads in threads_of.items()}  # fmt: skip
         job_rates = []
         for job in jobs:
             if job.bumped:
@@ -984,14 +997,14 @@ def simulate(
             elif not in_shares[job.pool]:  # the clients on their own machines
                 job_rates.append(1.0)
             elif job.pool not in pool_rate:
-                job_rates.append(1.0 / on[core_of[job]])
+                job_rates.append(share_of[core_of[job]])
             elif head is not None and job.pool == "client":
                 job_rates.append(pool_rate["client"] if job is head else 0.0)
             else:
                 job_rates.append(pool_rate[job.pool] / len(of_pool[job.pool]))
-        holder_rates = {job: 1.0 / on[core_of[job]] for job in holders if job in core_of}
-        busy = sum(1 for n in on if n)
-        return job_rates, holder_rates, shares, busy, any(n > 1 for n in on), due
+        holder_rates = {job: share_of[core_of[job]] for job in holders if job in core_of}
+        busy = core_count - on.count(0)
+        return job_rates, holder_rates, shares, busy, max(on) > 1, due
 
     infinity = float("inf")
     in_shares = {pool: not (clients_elsewhere and pool == "client") for pool in capacity}
@@ -1027,18 +1040,19 @@ def simulate(
         if client_in_order and not clients_elsewhere and counts.get("client"):
             head = next(job for job in jobs if job.pool == "client")
             rate["client head"] = rate["client"] * counts["client"]
-        rates = []  # each job's rate, in the order of ``jobs``
-        for job in jobs:
-            if head is None or job.pool != "client":
-                rates.append(rate.get(job.pool, 0.0))
-            else:
-                rates.append(rate["client head"] if job is head else 0.0)
         holder_rates: dict[Job, float] = {}
         next_done = infinity
         if per_core:
             rates, holder_rates, on_cores, busy, contended, next_done = shared_per_core(
                 holders, head
             )
+        else:
+            rates = []  # each job's rate, in the order of ``jobs``
+            for job in jobs:
+                if head is None or job.pool != "client":
+                    rates.append(rate.get(job.pool, 0.0))
+                else:
+                    rates.append(rate["client head"] if job is head else 0.0)
 
         for job, r in zip(jobs, rates, strict=True):
             until = job.bumped or (job.left / r if r else infinity)
