@@ -93,7 +93,7 @@ def test_students_placed_on_their_runs_workers_go_there_whatever_the_shares():
     def burst_p95(placed, shares=None):
         result = queue_sim.simulate(
             costs(), 50, 2, 2.0, one_writer=False, teacher=False, worker_shares=shares,
-            student_workers=placed,
+            student_workers=placed, per_core=False,  # the workers under test, not the cores
         )  # fmt: skip
         return np.percentile(result["latencies"]["POST /lab/sessions/{id}/csv"], 95)
 
@@ -108,7 +108,7 @@ def test_the_teachers_worker_is_the_one_it_reached():
     def dashboard_p95(teacher_worker):
         result = queue_sim.simulate(
             costs(), 60, 2, 2.0, one_writer=False, student_workers=[(0, 0)] * 60,
-            teacher_worker=teacher_worker,
+            teacher_worker=teacher_worker, per_core=False,  # the workers under test
         )  # fmt: skip
         return np.percentile(result["latencies"]["GET dashboard (teacher)"], 95)
 
