@@ -1083,11 +1083,11 @@ def simulate(
             else:
                 pressure[0] += step if asked > cores + 1e-12 or handing else 0.0
                 pressure[1] += min(asked, cores) * step
-            for pool, asked_of in demand.items():
-                if in_shares[pool] and not per_core:
-                    group = group_of[pool]
-                    queued[group] += asked_of * (1.0 - scale) * step
-                    ran[group] += asked_of * scale * step
+                for pool, asked_of in demand.items():
+                    if in_shares[pool]:
+                        group = group_of[pool]
+                        queued[group] += asked_of * (1.0 - scale) * step
+                        ran[group] += asked_of * scale * step
         for job, r in zip(jobs, rates, strict=True):
             if job.bumped:  # waiting on its core for the thread woken onto it
                 queued["server" if job.pool != "client" else "client"] += min(job.bumped, step)
