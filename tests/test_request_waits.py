@@ -97,8 +97,13 @@ def test_the_gil_sampler_sees_a_thread_keep_the_interpreter(tmp_path):
     late, queued = (np.array([float(row[i]) for row in rows]) for i in (1, 2))
     assert (queued >= 0).all()
     off_core_ms = (late - queued) / 1000
-    assert off_core_ms.max() >= 20  # the hold
-    assert np.median(off_core_ms) < 2  # the naps before and after it
+    held = int(np.argmax(off_core_ms))
+    assert off_core_ms[held] >= 20  # the hold
+    # the naps after it, when nothing else in the process runs Python, are on time (those
+    # before it share the interpreter with the app's start on a crowded host: a fresh
+    # clone's run saw 4-9 ms off a core in its first naps)
+    after = off_core_ms[held + 1 :]
+    assert len(after) >= 10 and np.median(after) < 2
 
 
 def test_each_trip_to_the_thread_pool_is_timed_from_sending_to_the_coroutines_next_step(
