@@ -627,9 +627,8 @@ if _GIL:
     _g_lines: list[str] = []
     _g_file = os.open(_GIL, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
 
-    def _g_queued_ns() -> int:
-        with open("/proc/thread-self/schedstat") as schedstat:
-            return int(schedstat.read().split()[1])
+    def _g_queued_ns(schedstat: int) -> int:
+        return int(os.pread(schedstat, 100, 0).split()[1])
 
     def _g_write() -> None:
         lines, _g_lines[:] = _g_lines[:], []
@@ -640,13 +639,16 @@ if _GIL:
         """Nap ``_GIL_NAP_S`` again and again; each time, how much later than that the
         thread ran Python again, and of it how long it waited for a core (schedstat):
         the rest is the wait for the interpreter of a thread that wants it at a random
-        moment."""
+        moment.  The clock starts before the first read of ``schedstat``: a read lets the
+        interpreter go, and a thread that took it meanwhile (a route that keeps it for
+        90 ms) delays the nap there as much as after the sleep."""
+        schedstat = os.open("/proc/thread-self/schedstat", os.O_RDONLY)  # this thread's
         while True:
-            queued = _g_queued_ns()
             began = _g_time.perf_counter()
+            queued = _g_queued_ns(schedstat)
             _g_time.sleep(_GIL_NAP_S)
+            queued = _g_queued_ns(schedstat) - queued
             late = _g_time.perf_counter() - began - _GIL_NAP_S
-            queued = _g_queued_ns() - queued
             _g_lines.append(f"{began:.6f} {late * 1e6:.0f} {queued / 1000:.0f} {os.getpid()}\n")
             if len(_g_lines) >= 100:
                 _g_write()
