@@ -41,4 +41,9 @@ def run_probed(routes: str, calls: list[str], env: dict[str, str]) -> None:
     lines = "\n".join(f"        await {call}" for call in calls)
     script = HEAD + routes + MAIN.format(calls=lines)
     full = {**os.environ, "PYTHONPATH": str(PROBE), **env}
-    subprocess.run([sys.executable, "-c", script], env=full, check=True, timeout=60)
+    done = subprocess.run(
+        [sys.executable, "-c", script], env=full, check=True, timeout=60, capture_output=True
+    )
+    # Python reports an error in sitecustomize on stderr and runs on without the rest of it
+    errors = done.stderr.decode(errors="replace")
+    assert "Error in sitecustomize" not in errors, errors

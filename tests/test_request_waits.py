@@ -128,6 +128,19 @@ def test_each_trip_to_the_thread_pool_is_timed_from_sending_to_the_coroutines_ne
     assert not [row for row in rows if row[2].startswith("/on-the-loop")]
 
 
+def test_the_request_waits_and_the_trips_are_taken_in_one_run(tmp_path):
+    """Both probes at once: each request's line and each trip's (the request waits' own
+    count of trips once took the trips' file name, and the trips were lost with an error
+    in sitecustomize)."""
+    waits, trips = tmp_path / "waits.txt", tmp_path / "trips.txt"
+    env = {"GYROLAB_BENCH_REQUEST_WAITS": str(waits), "GYROLAB_BENCH_TRIPS": str(trips)}
+    run_probed(PROBED_ROUTES, PROBED_CALLS, env)
+    lines = waits.read_text().splitlines()
+    assert len(lines) == 3 and all(len(line.split()) == 14 for line in lines)
+    mine = [line.split() for line in trips.read_text().splitlines() if "/in-a-thread/1" in line]
+    assert [row[3] for row in mine][0] == "who" and len(mine) == 2
+
+
 def test_a_line_cut_short_is_left_out(tmp_path):
     path = tmp_path / "waits.txt"
     path.write_text("GET /lab/sessions/3 12 2 1 1.5 0.5 4 7 0.5 0.5 2 100.5 7\nGET /lab/sess\n")

@@ -536,7 +536,7 @@ if _WAITS:
     # began, admitted, loop cpu, loop wall, dispatch, thread cpu, thread wall, thread queued,
     # back, trips, a function's end (until the coroutine's next step)
     _BEGAN, _ADMITTED, _LOOP_CPU, _LOOP_WALL, _DISPATCH = range(5)
-    _T_CPU, _T_WALL, _T_QUEUED, _BACK, _TRIPS, _ENDED = range(5, 11)
+    _T_CPU, _T_WALL, _T_QUEUED, _BACK, _TRIP_COUNT, _ENDED = range(5, 11)
 
     def _queued_s() -> float:
         """This thread's time ready to run but waiting for a core so far (the kernel's)."""
@@ -576,11 +576,11 @@ if _WAITS:
             _w_state.reset(token)
             total = _w_time.perf_counter() - state[_BEGAN]
             admitted = state[_ADMITTED] - state[_BEGAN] if state[_ADMITTED] else total
-            parts = (total, admitted, *state[_LOOP_CPU:_TRIPS])
+            parts = (total, admitted, *state[_LOOP_CPU:_TRIP_COUNT])
             line = f"{scope['method']} {scope['path']} " + " ".join(
                 f"{part * 1000:.3f}" for part in parts
             )
-            line += f" {int(state[_TRIPS])} {state[_BEGAN]:.6f} {os.getpid()}\n"
+            line += f" {int(state[_TRIP_COUNT])} {state[_BEGAN]:.6f} {os.getpid()}\n"
             os.write(_w_file, line.encode())
 
     _w_applications.FastAPI.__call__ = _waits_call
@@ -610,7 +610,7 @@ if _WAITS:
                 state[_T_CPU] += _w_time.thread_time() - cpu
                 ended = _w_time.perf_counter()
                 state[_T_WALL] += ended - began
-                state[_TRIPS] += 1
+                state[_TRIP_COUNT] += 1
                 state[_ENDED] = ended
 
         waited.__wrapped__ = func  # for the next wrapper's _function_name
