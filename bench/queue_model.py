@@ -116,6 +116,7 @@ from queue_sim import (  # noqa: E402
     WRITE_SLOTS,
     simulate,
 )
+from sched_trace import busy_report  # noqa: E402
 
 from tests.e2e.conftest import running_server  # noqa: E402
 from tests.pgserver import PostgresServer  # noqa: E402
@@ -852,6 +853,8 @@ def main() -> int:
                   f" {waits['handoff_s'] * 1e6:.0f} µs, busy wake-up"
                   f" {waits['wake_busy_s'] * 1e6:.0f} µs, an SQLite call hands on"
                   f" {describe_call_handoff(waits['call_handoff'])}")  # fmt: skip
+            if result.get("busy while waiting"):
+                print(f"  the model's cores: {busy_report(result['busy while waiting'])}")
             if "call free" in table:
                 free, busy = table["call free"], table["call busy"]
                 print(f"  (the run measured an SQLite call handing on"
@@ -1050,6 +1053,10 @@ def combine(results: list[dict]) -> dict:
         "pressure": tuple(
             float(np.mean([x.get("pressure", (0.0, 0.0))[i] for x in results])) for i in (0, 1)
         ),
+        "busy while waiting": {
+            busy: float(np.mean([x.get("busy while waiting", {}).get(busy, 0.0) for x in results]))
+            for busy in set().union(*(x.get("busy while waiting", {}) for x in results))
+        },
         "server": dict(server),
         "places": tuple(
             np.median([request_waits.simulated_crowding(result) for result in results], axis=0)

@@ -323,7 +323,9 @@ def simulate(
     it, a round trip's answer; under "loop", of the server's those of the event loops),
     and "pressure": the time some thread waited for a core (more asked of the cores than
     they have, or one woken and not yet on a core: the kernel's /proc/pressure/cpu "some")
-    and the cores' busy time, s."""
+    and the cores' busy time, s; "busy while waiting": the time some thread waited for a
+    core, by how many cores were busy meanwhile, s (with ``per_core`` and ``balance_s``, a
+    core can idle while a thread waits; shared evenly, never)."""
     capacity = {"client": float("inf") if clients_elsewhere else 1.0}
     capacity |= {"server": float(workers), "db": cores, "hash": float(HASH_SLOTS * workers)}
     capacity["loop"] = float(workers)
@@ -356,6 +358,9 @@ def simulate(
     # thread woken and not yet on one: what the kernel's /proc/pressure/cpu "some" counts),
     # and the cores' busy time, s
     pressure = [0.0, 0.0]
+    # the time some thread waited for a core, by how many cores were busy meanwhile (the
+    # kernel's, from a trace: ``sched_trace.busy_while_waiting``), s
+    busy_waiting: dict[float, float] = defaultdict(float)
 
     def busy_wake(pool: str = "server", counted: bool = True) -> float:
         """How much longer a thread of ``pool`` woken now waits for a core (s); counted
@@ -1077,12 +1082,16 @@ def simulate(
             if per_core:
                 pressure[0] += step if contended or handing else 0.0
                 pressure[1] += busy * step
+                if contended or handing:
+                    busy_waiting[busy] += step
                 for group, (running, waiting) in on_cores.items():
                     ran[group] += running * step
                     queued[group] += waiting * step
             else:
                 pressure[0] += step if asked > cores + 1e-12 or handing else 0.0
                 pressure[1] += min(asked, cores) * step
+                if asked > cores + 1e-12 or handing:
+                    busy_waiting[round(min(asked, cores), 2)] += step
                 for pool, asked_of in demand.items():
                     if in_shares[pool]:
                         group = group_of[pool]
@@ -1189,4 +1198,5 @@ def simulate(
         "wake-ups": dict(wakeups),
         "waiting wake-ups": dict(waiting_wakeups),
         "pressure": tuple(pressure),
+        "busy while waiting": dict(busy_waiting),
     }

@@ -130,12 +130,109 @@ def busy_while_waiting(events: Iterable[Event]) -> dict[int, float]:
     return dict(spent)
 
 
-def busy_report(spent: dict[int, float]) -> str:
+@dataclass(frozen=True)
+class Episode:
+    """A time some core was idle while a thread waited in another core's queue: when it
+    began (s), how long it lasted (s), what began it and what ended it."""
+
+    began: float
+    length: float
+    began_by: str  # "a core went idle", "woken onto a busy core", "preempted"
+    ended_by: str  # "migrated", "ran on its own core", "the idle core took other work"
+
+
+def idle_episodes(events: Iterable[Event]) -> list[Episode]:
+    """Each time some core idled while a thread waited on another's queue: the kernel
+    leaves a thread where it was queued unless a balancing moves it (a core newly idle
+    pulls only a thread that has not run in the last ``migration_cost_ns``, 0.5 ms, and
+    otherwise waits for a tick), so such times end either by a migration or by the
+    thread's own core coming free.  A thread woken waits on its wake-up's ``target_cpu``;
+    one preempted, on its core; a ``sched_migrate_task`` moves it."""
+    running: dict[int, int] = {}  # core → thread id on it (IDLE: none)
+    waiting: dict[int, int] = {}  # thread id → the core whose queue it is in
+    episodes: list[Episode] = []
+    since: tuple[float, str] | None = None
+
+    def stranded() -> bool:
+        idle = {core for core, tid in running.items() if tid == IDLE}
+        return bool(idle) and any(core not in idle for core in waiting.values())
+
+    for event in events:
+        cause, ended = "", ""
+        if event.tid != IDLE:
+            waiting.pop(event.tid, None)  # on a core: it runs this event
+        if event.name == "sched_switch":
+            before, after = int(event.fields["prev_pid"]), int(event.fields["next_pid"])
+            if before != IDLE and event.fields["prev_state"].startswith("R"):
+                waiting[before] = event.cpu
+                cause = "preempted"
+            was_idle = running.get(event.cpu, IDLE) == IDLE
+            queued_on = waiting.pop(after, None)
+            if not was_idle:
+                ended = "ran on its own core"
+            elif queued_on is not None and queued_on != event.cpu:
+                ended = "migrated"
+            else:  # a thread woken onto the idle core, or one the trace did not see queued
+                ended = "the idle core took other work"
+            running[event.cpu] = after
+            if after == IDLE:
+                cause = "a core went idle"
+        elif event.name in WAKES:
+            woken = int(event.fields["pid"])
+            if woken not in running.values():
+                waiting[woken] = int(event.fields["target_cpu"])
+                cause = "woken onto a busy core"
+        elif event.name == "sched_migrate_task":
+            moved = int(event.fields["pid"])
+            if moved in waiting:
+                waiting[moved] = int(event.fields["dest_cpu"])
+                ended = "migrated"
+        now = stranded()
+        if now and since is None:
+            since = (event.time, cause or "a core went idle")
+        elif not now and since is not None:
+            began, began_by = since
+            episodes.append(Episode(began, event.time - began, began_by, ended or "migrated"))
+            since = None
+    return episodes
+
+
+EPISODE_BINS_MS = (0.0, 0.05, 0.2, 0.5, 1.0, 2.0, 4.0, 8.0)
+
+
+def episodes_report(episodes: list[Episode]) -> list[str]:
+    """How many such times and how long in all, by length (ms), and by what began and
+    ended them."""
+    if not episodes:
+        return ["no core idled while a thread waited on another's queue"]
+    lengths = np.array([episode.length for episode in episodes]) * 1000
+    lines = [f"a core idle while a thread waited on another's queue: {len(episodes)} times,"
+             f" {lengths.sum() / 1000:.2f} s in all"]  # fmt: skip
+    edges = [*EPISODE_BINS_MS, np.inf]
+    for low, high in zip(edges, edges[1:], strict=False):
+        inside = (lengths >= low) & (lengths < high)
+        if inside.any():
+            span = f"{low:g}-{high:g} ms" if np.isfinite(high) else f"{low:g} ms and more"
+            lines.append(
+                f"  {span:>14s}: {int(inside.sum()):6d} times, {lengths[inside].sum():8.1f} ms"
+            )
+    for label, key in (("began by", "began_by"), ("ended by", "ended_by")):
+        spent: dict[str, list[float]] = defaultdict(list)
+        for episode in episodes:
+            spent[getattr(episode, key)].append(episode.length)
+        cells = "; ".join(f"{name}: {len(values)} times, {sum(values) * 1000:.0f} ms"
+                          for name, values in sorted(spent.items()))  # fmt: skip
+        lines.append(f"  {label} -- {cells}")
+    return lines
+
+
+def busy_report(spent: dict[int, float] | dict[float, float]) -> str:
+    """``busy_while_waiting``'s (or the model's "busy while waiting") in a line."""
     total = sum(spent.values())
     if not total:
         return "no thread waited for a core"
     mean = sum(busy * time for busy, time in spent.items()) / total
-    cells = ", ".join(f"{busy}: {time:.2f} s" for busy, time in sorted(spent.items()))
+    cells = ", ".join(f"{busy:g}: {time:.2f} s" for busy, time in sorted(spent.items()))
     return (
         f"some thread waited for a core during {total:.2f} s; the cores busy then {cells}"
         f" (on average {mean:.2f})"
@@ -179,6 +276,8 @@ def main() -> int:
         print("\n".join(report(waits_by_kind(events_of(lines), group_of))))
     with args.trace.open() as lines:
         print(busy_report(busy_while_waiting(events_of(lines))))
+    with args.trace.open() as lines:
+        print("\n".join(episodes_report(idle_episodes(events_of(lines)))))
     return 0
 
 

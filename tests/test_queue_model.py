@@ -1456,3 +1456,11 @@ def test_threads_on_their_own_cores_leave_a_core_idle_until_balanced():
     assert never["run queue"]["server"][1] - at_once["run queue"]["server"][1] == pytest.approx(
         0.100, abs=5 * MS
     )
+    # and what a kernel trace says of it (``sched_trace.busy_while_waiting``): while some
+    # thread waited, both cores were busy -- but for the stuck pair's last 100 ms, on one
+    # (with none busy: the wakes of the requests before, a thread woken onto an idle core
+    # not yet on it)
+    waited = [result["busy while waiting"] for result in (fluid, at_once, never)]
+    assert [v for w in waited for v in (w.get(2, 0.0), w.get(1, 0.0))] == pytest.approx(
+        [0.150, 0.0, 0.100, 0.0, 0.100, 0.100], abs=12 * MS
+    )

@@ -101,3 +101,49 @@ def test_a_thread_seen_running_no_longer_waits_though_its_switch_was_not_traced(
     ]
     spent = sched_trace.busy_while_waiting(sched_trace.events_of(lines))
     assert spent == {2: pytest.approx(1e-3, abs=1e-9)}
+
+
+def migrate(time: float, cpu: int, moved: tuple[str, int], source: int, target: int) -> str:
+    return (
+        f"     migration/{cpu} 18/18 [{cpu:03d}] {time:.6f}: sched:sched_migrate_task:"
+        f" comm={moved[0]} pid={moved[1]} prio=120 orig_cpu={source} dest_cpu={target}"
+    )
+
+
+def test_a_core_idle_while_a_thread_waits_on_the_others_queue():
+    """Three times one core idles while a thread waits in the other's queue: until the
+    waiter's own core comes free (300 µs), until it is moved (100 µs), until the idle core
+    takes a thread woken onto it (600 µs) -- the waiter still waiting then, on a busy
+    core.  A thread woken while both cores are busy, or onto the idle core, is no such
+    time."""
+    lines = [
+        switch(1.000, 0, IDLE0, "R", ("python", 101)),
+        switch(1.000, 1, IDLE1, "R", ("python", 200)),
+        waking(1.0005, 1, CLIENT, ("python", 102), 0),  # both cores busy: none
+        switch(1.001, 1, CLIENT, "S", ("swapper/1", 0)),  # core 1 idle, 102 waits on 0
+        switch(1.0013, 0, SERVER, "S", ("python", 102)),  # …until its own core is free
+        waking(1.002, 0, OTHER, ("python", 200), 0),  # onto busy core 0, core 1 idle
+        migrate(1.0021, 0, ("python", 200), 0, 1),  # …until moved
+        switch(1.0022, 1, IDLE1, "R", ("python", 200)),
+        switch(1.003, 1, CLIENT, "S", ("swapper/1", 0)),  # nothing waits: none
+        waking(1.0035, 0, OTHER, ("python", 101), 1),  # onto the idle core: none
+        switch(1.0036, 1, IDLE1, "R", ("python", 101)),
+        switch(1.0038, 1, SERVER, "S", ("swapper/1", 0)),
+        waking(1.004, 0, OTHER, ("postgres", 300), 0),  # onto busy core 0, core 1 idle
+        waking(1.0044, 0, OTHER, ("python", 200), 1),
+        switch(1.0046, 1, IDLE1, "R", ("python", 200)),  # …until core 1 takes another
+    ]
+    episodes = sched_trace.idle_episodes(sched_trace.events_of(lines))
+    assert [(e.began, e.began_by, e.ended_by) for e in episodes] == [
+        (1.001, "a core went idle", "ran on its own core"),
+        (1.002, "woken onto a busy core", "migrated"),
+        (1.004, "woken onto a busy core", "the idle core took other work"),
+    ]
+    assert [e.length for e in episodes] == pytest.approx([300e-6, 100e-6, 600e-6], abs=1e-9)
+    report = sched_trace.episodes_report(episodes)
+    assert report[0] == (
+        "a core idle while a thread waited on another's queue: 3 times, 0.00 s in all"
+    )
+    bins = [line.split()[:3] for line in report[1:4]]
+    assert bins == [["0.05-0.2", "ms:", "1"], ["0.2-0.5", "ms:", "1"], ["0.5-1", "ms:", "1"]]
+    assert sched_trace.episodes_report([])[0].startswith("no core idled")
