@@ -41,9 +41,8 @@ def run_probed(routes: str, calls: list[str], env: dict[str, str]) -> None:
     lines = "\n".join(f"        await {call}" for call in calls)
     script = HEAD + routes + MAIN.format(calls=lines)
     full = {**os.environ, "PYTHONPATH": str(PROBE), **env}
-    done = subprocess.run(
-        [sys.executable, "-c", script], env=full, check=True, timeout=60, capture_output=True
-    )
-    # Python reports an error in sitecustomize on stderr and runs on without the rest of it
+    done = subprocess.run([sys.executable, "-c", script], env=full, timeout=60, capture_output=True)
     errors = done.stderr.decode(errors="replace")
+    assert done.returncode == 0, errors
+    # Python reports an error in sitecustomize on stderr and runs on without the rest of it
     assert "Error in sitecustomize" not in errors, errors
