@@ -625,6 +625,14 @@ def main() -> int:
         "more makes the model's burst far too slow)",
     )
     parser.add_argument(
+        "--yielding",
+        nargs="*",
+        default=[],
+        choices=["hash", "client", "released", "db"],
+        help="each thread on its own core: these pools' threads run only on what the others "
+        "leave of their core (a long-running thread behind threads woken for short bursts)",
+    )
+    parser.add_argument(
         "--client-in-order",
         action="store_true",
         help="the load generator's client work one callback at a time, in the order they "
@@ -728,6 +736,7 @@ def main() -> int:
         "client_in_order": args.client_in_order,
         "per_core": not args.cores_shared_evenly,
         "balance_s": args.balance_us / 1e6,
+        "yielding": tuple(args.yielding),
     }
 
     def simulate_seed(

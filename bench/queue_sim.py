@@ -195,6 +195,7 @@ def simulate(
     teacher_worker: int | None = None,
     per_core: bool = True,
     balance_s: float = 0.0,
+    yielding: tuple[str, ...] = (),
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -984,16 +985,34 @@ def simulate(
         placed.clear()
         placed.update(core_of)
         share_of = [1.0 / n if n else 0.0 for n in on]
+        if not yielding:
+            share_by_key = {key: share_of[core_of[key]] for key, _ in ready}
+        else:  # a yielding pool's threads run on what the others leave of their core
+            share_by_key = {}
+            weak = {key for key, _ in ready
+                    if (key.pool if isinstance(key, Job) else key[0]) in yielding}  # fmt: skip
+            strong_on = [0] * core_count
+            for key, _ in ready:
+                if key not in weak:
+                    strong_on[core_of[key]] += 1
+            for key, _ in ready:
+                core = core_of[key]
+                if key not in weak:
+                    share_by_key[key] = 1.0 / strong_on[core]
+                else:
+                    share_by_key[key] = (
+                        0.0 if strong_on[core] else 1.0 / (on[core] - strong_on[core])
+                    )
         shares: dict[str, list[float]] = {}
         for key, group in ready:
-            share = share_of[core_of[key]]
+            share = share_by_key[key]
             cell = shares.get(group)
             if cell is None:
                 shares[group] = [share, 1.0 - share]
             else:
                 cell[0] += share
                 cell[1] += 1.0 - share
-        pool_rate = {pool: sum(share_of[core_of[pool, k]] for k in range(threads))
+        pool_rate = {pool: sum(share_by_key[pool, k] for k in range(threads))
                      for pool, threads in threads_of.items()}  # fmt: skip
         job_rates = []
         for job in jobs:
@@ -1002,12 +1021,12 @@ def simulate(
             elif not in_shares[job.pool]:  # the clients on their own machines
                 job_rates.append(1.0)
             elif job.pool not in pool_rate:
-                job_rates.append(share_of[core_of[job]])
+                job_rates.append(share_by_key[job])
             elif head is not None and job.pool == "client":
                 job_rates.append(pool_rate["client"] if job is head else 0.0)
             else:
                 job_rates.append(pool_rate[job.pool] / len(of_pool[job.pool]))
-        holder_rates = {job: share_of[core_of[job]] for job in holders if job in core_of}
+        holder_rates = {job: share_by_key[job] for job in holders if job in core_of}
         busy = core_count - on.count(0)
         return job_rates, holder_rates, shares, busy, max(on) > 1, due
 
