@@ -299,7 +299,10 @@ def simulate(
     ``per_core``, how long a core idles while another has two ready threads before it takes
     one (0: at once, no core idles while a thread waits; the kernel's balancing skips a
     core idle for shorter than its migration cost, 0.5 ms, and leaves a thread that ran in
-    the last 0.5 ms where it is); whole cores only (else shared evenly).
+    the last 0.5 ms where it is); ``yielding``: with ``per_core``, the pools ("hash",
+    "client", …) whose threads run only on what the others leave of their core (a
+    long-running thread behind threads woken for short bursts; none by default); whole
+    cores only (else shared evenly).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
