@@ -199,3 +199,30 @@ def print_ceiling(measured: list[Row], exact: list[Row]) -> None:
         print(f"  {route:42s} {share(mine, 'within 10 %'):>13s} {share(mine, 'inside'):>9s} |"
               f" {share(exact_counts, 'within 10 %'):>13s} {share(exact_counts, 'inside'):>9s}"
               f" {share(exact_counts, 'resolved'):>9s}")  # fmt: skip
+
+
+def between_runs(per_run: dict[str, list[np.ndarray]]) -> dict[str, tuple[float, bool]]:
+    """Per route with two runs or more, from each run's requests (ms): its p95's largest
+    over smallest of the runs, and whether every run's p95 lies within 10 % of the runs'
+    median -- how far runs of one class, same code and hour, differ on their own."""
+    spread = {}
+    for route, runs in per_run.items():
+        p95s = np.array([np.percentile(values, 95) for values in runs if len(values)])
+        if len(p95s) >= 2 and p95s.min() > 0:
+            middle = float(np.median(p95s))
+            within = bool(np.all(np.abs(p95s / middle - 1.0) <= 0.10))
+            spread[route] = (float(p95s.max() / p95s.min()), within)
+    return spread
+
+
+def describe_spread(spread: dict[str, tuple[float, bool]]) -> str:
+    """``between_runs`` in a line."""
+    if not spread:
+        return "the runs' own spread: fewer than two runs a route"
+    ratios = np.array([ratio for ratio, _ in spread.values()])
+    within = sum(1 for _, ok in spread.values() if ok)
+    return (
+        f"the runs' own p95s, largest over smallest: {np.median(ratios):.2f}× for the median"
+        f" route ({ratios.min():.2f}–{ratios.max():.2f}×); every run within 10 % of the runs'"
+        f" median on {within} of {len(spread)} routes"
+    )

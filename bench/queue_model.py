@@ -924,6 +924,7 @@ def main() -> int:
                 if pool.runs:
                     print(f"\n{students} students, {name}, {pool.runs} runs pooled:")
                     pool.compare()
+                    print("  " + p95_interval.describe_spread(p95_interval.between_runs(pool.seen)))
     else:
         measured: dict[tuple[str, int | None], list[dict[str, float]]] = defaultdict(list)
         for path in args.compare:

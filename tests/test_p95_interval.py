@@ -192,3 +192,28 @@ def test_the_gaps_between_a_routes_requests_are_counted_per_seed_and_against_cha
     assert measured_cells.split() == ["0", "/", "100", "/", "100"]
     rate = 19 / (0.008 * 19)  # 125 a second
     assert random_cells.split()[0] == f"{100 * (1 - np.exp(-rate * 0.005)):.0f}"
+
+
+def test_the_runs_own_spread_is_each_routes_p95_largest_over_smallest():
+    """Three runs of a route whose p95s are 100, 105 and 150 ms: 1.5× apart, and the third
+    is more than 10 % from the runs' median (105); a route whose runs agree within 10 %;
+    a route seen in one run only is left out."""
+    steady = np.linspace(0.0, 100.0 / 0.95, 1001)  # its p95: 100 ms
+
+    def run(scale: float) -> np.ndarray:
+        return steady * scale
+
+    spread = p95_interval.between_runs(
+        {
+            "POST /login": [run(1.0), run(1.05), run(1.5)],
+            "GET /lab": [run(1.0), run(1.05), run(1.08)],
+            "GET /login": [run(1.0)],
+        }
+    )
+    assert set(spread) == {"POST /login", "GET /lab"}
+    assert spread["POST /login"][0] == pytest.approx(1.5) and not spread["POST /login"][1]
+    assert spread["GET /lab"][0] == pytest.approx(1.08) and spread["GET /lab"][1]
+    line = p95_interval.describe_spread(spread)
+    assert "1.29× for the median route (1.08–1.50×)" in line
+    assert line.endswith("on 1 of 2 routes")
+    assert p95_interval.describe_spread({}).endswith("fewer than two runs a route")
