@@ -22,7 +22,7 @@ import argparse
 import re
 from collections import defaultdict
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -102,32 +102,88 @@ def waits_by_kind(
     return dict(waits)
 
 
+@dataclass
+class Cores:
+    """What the cores run and which threads wait in whose queue, event by event: a thread
+    woken waits on its wake-up's ``target_cpu``, one preempted on its core, and a
+    ``sched_migrate_task`` moves it; a thread seen running an event of its own waits no
+    longer, even if its switch to a core was not in the trace."""
+
+    running: dict[int, int] = field(default_factory=dict)  # core → thread id (IDLE: none)
+    waiting: dict[int, int] = field(default_factory=dict)  # thread id → the core it waits on
+
+    def apply(self, event: Event) -> tuple[str, str]:
+        """Take ``event`` in; returns what it may have begun (a thread preempted or woken
+        onto a busy core, a core gone idle) and what it may have ended (a waiting thread
+        run on its own core or moved, the idle core given other work), "" for none."""
+        cause, ended = "", ""
+        if event.tid != IDLE:
+            self.waiting.pop(event.tid, None)  # on a core: it runs this event
+        if event.name == "sched_switch":
+            before, after = int(event.fields["prev_pid"]), int(event.fields["next_pid"])
+            if before != IDLE and event.fields["prev_state"].startswith("R"):
+                self.waiting[before] = event.cpu
+                cause = "preempted"
+            was_idle = self.running.get(event.cpu, IDLE) == IDLE
+            queued_on = self.waiting.pop(after, None)
+            if not was_idle:
+                ended = "ran on its own core"
+            elif queued_on is not None and queued_on != event.cpu:
+                ended = "migrated"
+            else:  # a thread woken onto the idle core, or one the trace did not see queued
+                ended = "the idle core took other work"
+            self.running[event.cpu] = after
+            if after == IDLE:
+                cause = "a core went idle"
+        elif event.name in WAKES:
+            woken = int(event.fields["pid"])
+            if woken not in self.running.values():
+                self.waiting[woken] = int(event.fields["target_cpu"])
+                cause = "woken onto a busy core"
+        elif event.name == "sched_migrate_task":
+            moved = int(event.fields["pid"])
+            if moved in self.waiting:
+                self.waiting[moved] = int(event.fields["dest_cpu"])
+                ended = "migrated"
+        return cause, ended
+
+    def busy(self) -> int:
+        return sum(1 for tid in self.running.values() if tid != IDLE)
+
+    def stranded(self) -> bool:
+        """Whether some core is idle while a thread waits in another core's queue."""
+        idle = {core for core, tid in self.running.items() if tid == IDLE}
+        return bool(idle) and any(core not in idle for core in self.waiting.values())
+
+
 def busy_while_waiting(events: Iterable[Event]) -> dict[int, float]:
     """The time (s) some thread -- any -- waited for a core, by how many cores were busy
     meanwhile: a scheduler that never leaves a core idle while a thread waits has it all
     under the full count (a thread woken onto an idle core waits there until the core is
     up, under one fewer).  The kernel's trace of a class on two cores: 1.46 cores busy on
     average while a thread waited (bench/README.md, fortieth part)."""
-    running: dict[int, int] = {}  # core → thread id on it (IDLE: none)
-    waiting: set[int] = set()
+    cores = Cores()
     spent: dict[int, float] = defaultdict(float)
     last = None
     for event in events:
-        if last is not None and waiting:
-            spent[sum(1 for tid in running.values() if tid != IDLE)] += event.time - last
+        if last is not None and cores.waiting:
+            spent[cores.busy()] += event.time - last
         last = event.time
-        waiting.discard(event.tid)  # on a core: it runs this event
-        if event.name == "sched_switch":
-            before, after = int(event.fields["prev_pid"]), int(event.fields["next_pid"])
-            if before != IDLE and event.fields["prev_state"].startswith("R"):
-                waiting.add(before)
-            waiting.discard(after)
-            running[event.cpu] = after
-        elif event.name in WAKES:
-            woken = int(event.fields["pid"])
-            if woken not in running.values():
-                waiting.add(woken)
+        cores.apply(event)
     return dict(spent)
+
+
+def busy_report(spent: dict[int, float] | dict[float, float]) -> str:
+    """``busy_while_waiting``'s (or the model's "busy while waiting") in a line."""
+    total = sum(spent.values())
+    if not total:
+        return "no thread waited for a core"
+    mean = sum(busy * time for busy, time in spent.items()) / total
+    cells = ", ".join(f"{busy:g}: {time:.2f} s" for busy, time in sorted(spent.items()))
+    return (
+        f"some thread waited for a core during {total:.2f} s; the cores busy then {cells}"
+        f" (on average {mean:.2f})"
+    )
 
 
 @dataclass(frozen=True)
@@ -142,52 +198,17 @@ class Episode:
 
 
 def idle_episodes(events: Iterable[Event]) -> list[Episode]:
-    """Each time some core idled while a thread waited on another's queue: the kernel
-    leaves a thread where it was queued unless a balancing moves it (a core newly idle
-    pulls only a thread that has not run in the last ``migration_cost_ns``, 0.5 ms, and
-    otherwise waits for a tick), so such times end either by a migration or by the
-    thread's own core coming free.  A thread woken waits on its wake-up's ``target_cpu``;
-    one preempted, on its core; a ``sched_migrate_task`` moves it."""
-    running: dict[int, int] = {}  # core → thread id on it (IDLE: none)
-    waiting: dict[int, int] = {}  # thread id → the core whose queue it is in
+    """Each time some core idled while a thread waited on another's queue (``Cores``): the
+    kernel leaves a thread where it was queued unless a balancing moves it (a core newly
+    idle pulls only a thread that has not run in the last ``migration_cost_ns``, 0.5 ms,
+    and otherwise waits for a tick), so such times end either by a migration or by the
+    thread's own core coming free."""
+    cores = Cores()
     episodes: list[Episode] = []
     since: tuple[float, str] | None = None
-
-    def stranded() -> bool:
-        idle = {core for core, tid in running.items() if tid == IDLE}
-        return bool(idle) and any(core not in idle for core in waiting.values())
-
     for event in events:
-        cause, ended = "", ""
-        if event.tid != IDLE:
-            waiting.pop(event.tid, None)  # on a core: it runs this event
-        if event.name == "sched_switch":
-            before, after = int(event.fields["prev_pid"]), int(event.fields["next_pid"])
-            if before != IDLE and event.fields["prev_state"].startswith("R"):
-                waiting[before] = event.cpu
-                cause = "preempted"
-            was_idle = running.get(event.cpu, IDLE) == IDLE
-            queued_on = waiting.pop(after, None)
-            if not was_idle:
-                ended = "ran on its own core"
-            elif queued_on is not None and queued_on != event.cpu:
-                ended = "migrated"
-            else:  # a thread woken onto the idle core, or one the trace did not see queued
-                ended = "the idle core took other work"
-            running[event.cpu] = after
-            if after == IDLE:
-                cause = "a core went idle"
-        elif event.name in WAKES:
-            woken = int(event.fields["pid"])
-            if woken not in running.values():
-                waiting[woken] = int(event.fields["target_cpu"])
-                cause = "woken onto a busy core"
-        elif event.name == "sched_migrate_task":
-            moved = int(event.fields["pid"])
-            if moved in waiting:
-                waiting[moved] = int(event.fields["dest_cpu"])
-                ended = "migrated"
-        now = stranded()
+        cause, ended = cores.apply(event)
+        now = cores.stranded()
         if now and since is None:
             since = (event.time, cause or "a core went idle")
         elif not now and since is not None:
@@ -224,19 +245,6 @@ def episodes_report(episodes: list[Episode]) -> list[str]:
                           for name, values in sorted(spent.items()))  # fmt: skip
         lines.append(f"  {label} -- {cells}")
     return lines
-
-
-def busy_report(spent: dict[int, float] | dict[float, float]) -> str:
-    """``busy_while_waiting``'s (or the model's "busy while waiting") in a line."""
-    total = sum(spent.values())
-    if not total:
-        return "no thread waited for a core"
-    mean = sum(busy * time for busy, time in spent.items()) / total
-    cells = ", ".join(f"{busy:g}: {time:.2f} s" for busy, time in sorted(spent.items()))
-    return (
-        f"some thread waited for a core during {total:.2f} s; the cores busy then {cells}"
-        f" (on average {mean:.2f})"
-    )
 
 
 def report(waits: dict[tuple[str, str], list[float]]) -> list[str]:
