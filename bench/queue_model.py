@@ -111,6 +111,7 @@ from queue_sim import (  # noqa: E402
     STREAM,
     STREAM_SPLIT,
     SWITCH_INTERVAL_S,
+    TIMELINE_BIN_S,
     WAKE_BUSY_S,
     WORK_PLACES,
     WRITE_SLOTS,
@@ -864,6 +865,9 @@ def main() -> int:
                   f" {describe_call_handoff(waits['call_handoff'])}")  # fmt: skip
             if result.get("busy while waiting"):
                 print(f"  the model's cores: {busy_report(result['busy while waiting'])}")
+            if result.get("threads by time"):
+                print("\n".join(request_waits.threads_report(
+                    result["threads by time"], TIMELINE_BIN_S, "the model's threads")))  # fmt: skip
             if "call free" in table:
                 free, busy = table["call free"], table["call busy"]
                 print(f"  (the run measured an SQLite call handing on"
@@ -1066,6 +1070,13 @@ def combine(results: list[dict]) -> dict:
         "busy while waiting": {
             busy: float(np.mean([x.get("busy while waiting", {}).get(busy, 0.0) for x in results]))
             for busy in set().union(*(x.get("busy while waiting", {}) for x in results))
+        },
+        "threads by time": {
+            key: tuple(
+                float(np.mean([x["threads by time"].get(key, (0.0, 0.0))[i] for x in results]))
+                for i in (0, 1)
+            )
+            for key in set().union(*(x.get("threads by time", {}) for x in results))
         },
         "server": dict(server),
         "places": tuple(

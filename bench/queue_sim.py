@@ -122,6 +122,8 @@ STACKED_SLICE_S = 1.4e-3
 # with none free, 7-23 % of calls of any length (10 %).  None: every call hands it on
 # (the model before 2026-11-27).
 CALL_HANDOFF = (0.08, 0.10)
+# "threads by time": each group's time run and waited for a core in bins of the class's time
+TIMELINE_BIN_S = 0.25
 
 
 class Job:
@@ -329,7 +331,10 @@ def simulate(
     they have, or one woken and not yet on a core: the kernel's /proc/pressure/cpu "some")
     and the cores' busy time, s; "busy while waiting": the time some thread waited for a
     core, by how many cores were busy meanwhile, s (with ``per_core`` and ``balance_s``, a
-    core can idle while a thread waits; shared evenly, never)."""
+    core can idle while a thread waits; shared evenly, never); "threads by time": per
+    (bin of ``TIMELINE_BIN_S`` from the class's start, group), the time its threads ran and
+    waited for a core, s, as "run queue" counts them but with the log-ins' hashes a group
+    of their own ("hash"; ``sched_trace.threads_by_time`` reads the same from a trace)."""
     capacity = {"client": float("inf") if clients_elsewhere else 1.0}
     capacity |= {"server": float(workers), "db": cores, "hash": float(HASH_SLOTS * workers)}
     capacity["loop"] = float(workers)
@@ -352,6 +357,9 @@ def simulate(
     # kernel's schedstat counts as run-queue waits: run_queue.py), and the time they ran
     queued: dict[str, float] = defaultdict(float)
     ran: dict[str, float] = defaultdict(float)
+    # both as they stood at the end of each bin of the class's time ("threads by time")
+    marks: list[tuple[int, dict[str, float], dict[str, float]]] = []
+    next_mark = TIMELINE_BIN_S
 
     wakeups: dict[str, int] = defaultdict(int)
     # a thread waiting for its worker's interpreter wakes at each switch interval to ask for
@@ -1035,7 +1043,7 @@ def simulate(
 
     infinity = float("inf")
     in_shares = {pool: not (clients_elsewhere and pool == "client") for pool in capacity}
-    group_of = {pool: "server" if pool in ("loop", "hash", "released") else pool
+    group_of = {pool: "server" if pool in ("loop", "released") else pool
                 for pool in capacity}  # fmt: skip
     while jobs or timers or any(interpreters):
         # (one step to the next event: written out for speed -- a step is ≈ 20 µs of the
@@ -1095,6 +1103,9 @@ def simulate(
                 next_done = min(next_done, max(turn_ends[job.worker] - now, 0.0))
         next_timer = timers[0][0] - now if timers else infinity
         step = min(next_done, next_timer)
+        crossing = now + step >= next_mark and step < infinity
+        if crossing:  # the totals at the step's start, for the bins it ends
+            at_step = (dict(ran), dict(queued))
         if step < infinity:
             handing = False
             for job in holders:
@@ -1121,7 +1132,9 @@ def simulate(
                         ran[group] += asked_of * scale * step
         for job, r in zip(jobs, rates, strict=True):
             if job.bumped:  # waiting on its core for the thread woken onto it
-                queued["server" if job.pool != "client" else "client"] += min(job.bumped, step)
+                queued[job.pool if job.pool in ("client", "hash") else "server"] += min(
+                    job.bumped, step
+                )
                 job.bumped = job.bumped - step if job.bumped > step + 1e-15 else 0.0
                 continue
             job.left -= r * step
@@ -1152,6 +1165,15 @@ def simulate(
             job.left -= interpreter_rate * step
             job.segment_left -= interpreter_rate * step
         now += step
+        while crossing and now >= next_mark:  # each bin's end within the step, its totals
+            part = (next_mark - (now - step)) / step if step else 1.0
+            marks.append((
+                round(next_mark / TIMELINE_BIN_S) - 1,
+                *({key: was.get(key, 0.0) + (total - was.get(key, 0.0)) * part
+                   for key, total in totals.items()}
+                  for was, totals in zip(at_step, (ran, queued), strict=True)),
+            ))  # fmt: skip
+            next_mark += TIMELINE_BIN_S
         done = []
         remaining = []
         for job in jobs:
@@ -1216,9 +1238,44 @@ def simulate(
         "cpu": dict(spent),
         "lock held": lock_held,
         "lock by route": dict(lock_by_route),
-        "run queue": {pool: (ran[pool], queued[pool]) for pool in ran},
+        "run queue": {
+            group: (
+                sum(ran[pool] for pool in ran if fold(pool) == group),
+                sum(queued[pool] for pool in queued if fold(pool) == group),
+            )
+            for group in {fold(pool) for pool in ran}
+        },
         "wake-ups": dict(wakeups),
         "waiting wake-ups": dict(waiting_wakeups),
         "pressure": tuple(pressure),
         "busy while waiting": dict(busy_waiting),
+        "threads by time": binned(marks, ran, queued),
     }
+
+
+def fold(group: str) -> str:
+    """A group of "threads by time" as "run queue" counts it: the hashes are the server's."""
+    return "server" if group == "hash" else group
+
+
+def binned(
+    marks: list[tuple[int, dict[str, float], dict[str, float]]],
+    ran: dict[str, float],
+    queued: dict[str, float],
+) -> dict[tuple[int, str], tuple[float, float]]:
+    """Per (bin, group), the time run and waited for a core within the bin, s: the
+    differences of the totals as they stood at each bin's end (the last bin ends with the
+    class; within a step the rates hold, so a step over a bin's end is split there)."""
+    out: dict[tuple[int, str], tuple[float, float]] = {}
+    before: tuple[dict[str, float], dict[str, float]] = ({}, {})
+    last = marks[-1][0] + 1 if marks else 0
+    for index, ran_then, queued_then in [*marks, (last, ran, queued)]:
+        for group in set(ran_then) | set(queued_then):
+            cell = (
+                ran_then.get(group, 0.0) - before[0].get(group, 0.0),
+                queued_then.get(group, 0.0) - before[1].get(group, 0.0),
+            )
+            if cell != (0.0, 0.0):
+                out[index, group] = cell
+        before = (ran_then, queued_then)
+    return out

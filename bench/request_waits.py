@@ -148,6 +148,52 @@ def by_window(table: dict[str, np.ndarray]) -> dict[str, tuple[int, np.ndarray]]
     return out
 
 
+THREAD_GROUPS = ("server", "hash", "client", "db")
+
+
+def threads_by_window(
+    bins: dict[tuple[int, str], tuple[float, ...]], bin_s: float
+) -> dict[tuple[str, str], tuple[float, ...]]:
+    """Per (window of ``WINDOWS``, group), the sums of ``bins``' columns: per (bin of
+    ``bin_s`` from the class's start, group), the time the group's threads ran and waited
+    for a core, s (``queue_sim.simulate``'s "threads by time"), and from a trace the part
+    of the wait before work (``sched_trace.threads_by_time``)."""
+    width = max((len(cell) for cell in bins.values()), default=2)
+    out: dict[tuple[str, str], tuple[float, ...]] = {}
+    for name, start, end in WINDOWS:
+        for group in THREAD_GROUPS:
+            cells = [cell for (index, of), cell in bins.items()
+                     if of == group and start <= index * bin_s < end]  # fmt: skip
+            out[name, group] = tuple(sum(cell[i] for cell in cells) for i in range(width))
+    return out
+
+
+def threads_report(
+    bins: dict[tuple[int, str], tuple[float, ...]], bin_s: float, whose: str
+) -> list[str]:
+    """``threads_by_window`` in lines: per window, each group's time run / waited for a
+    core (s; a trace's, then the part of it before work) and the waiting threads on
+    average (waited over the window's length)."""
+    windows = threads_by_window(bins, bin_s)
+    last = max((index for index, _ in bins), default=-1) + 1
+    three = any(len(cell) > 2 for cell in bins.values())
+    what = "s run / s waited for a core" + (" / of it before work" if three else "")
+    lines = [f"  {whose} by the class's time, {what} (threads waiting on average):"
+             f" {' · '.join(THREAD_GROUPS)}"]  # fmt: skip
+    for name, start, end in WINDOWS:
+        length = min(end, last * bin_s) - start
+        if length <= 0:
+            continue
+        span = f"{start:g}-{end:g} s" if end < float("inf") else f"from {start:g} s"
+        cells = " · ".join(
+            " / ".join(f"{value:5.2f}" for value in windows[name, group])
+            + f" ({windows[name, group][1] / length:4.2f})"
+            for group in THREAD_GROUPS
+        )
+        lines.append(f"  {name:6s} {span:10s} {cells}")
+    return lines
+
+
 def compare_windows(model: dict[str, np.ndarray], measured: dict[str, np.ndarray]) -> None:
     """``by_window`` of the model beside the measurement: where the class's time inside the
     server goes at its start, between and in its burst (``modelled``'s columns: the

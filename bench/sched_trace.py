@@ -247,6 +247,113 @@ def episodes_report(episodes: list[Episode]) -> list[str]:
     return lines
 
 
+HASH_CPU_S = (0.015, 0.045)  # a worker's thread on a core this long between sleeps: a hash
+CLASS_LEAD_S = 0.1  # the class's start, before its first hash (the model's first: ≈ 0.1 s)
+
+
+WORK_AFTER_S = 100e-6  # a thread that runs this long after a wait did work with its core
+
+
+def threads_by_time(
+    events: list[Event],
+    group_of: Callable[[int, str], str | None],
+    bin_s: float,
+    start: float | None = None,
+) -> tuple[dict[tuple[int, str], tuple[float, ...]], float]:
+    """Per (bin of ``bin_s`` from the class's start, group), the time the group's threads
+    ran, waited for a core (from a wake-up or a preemption to the next time on a core),
+    and of that wait, the part after which the thread ran ``WORK_AFTER_S`` or more before
+    leaving the core again, s -- as ``queue_sim.simulate``'s "threads by time", whose
+    threads wait only to work (a thread of the machine's is often woken to find the
+    interpreter taken, and sleeps again within microseconds).
+
+    ``group_of(process id, name)`` names "server", "client" or "db".  A server thread
+    other than a worker's main one (its event loop) that ran between ``HASH_CPU_S`` of CPU
+    from a wake-up to its next sleep was hashing a log-in's password (argon2id keeps its
+    thread on a core 15-25 ms without the interpreter; a thread holding the interpreter
+    lets it go at each database call, and every millisecond when another waits), and
+    counts as "hash" from that wake-up to that sleep: in a 60-student class, 61 such
+    times for 61 log-ins.  ``start``: the class's, on the trace's clock; by default
+    ``CLASS_LEAD_S`` before the first hash (a class begins with its log-ins).  Returns the
+    bins and the start taken."""
+    process: dict[int, tuple[int, str]] = {}
+
+    def group(tid: int, comm: str = "") -> str | None:
+        pid, name = process.get(tid, (tid, comm))
+        return group_of(pid, name) if tid != IDLE else None
+
+    # first pass: each server thread's times between a wake-up and its next sleep, and
+    # the CPU it ran in each; the long ones are hashes
+    hashes: dict[int, list[tuple[float, float]]] = defaultdict(list)
+    awake: dict[int, list[float]] = {}  # thread id → [woken at, CPU so far, on a core since]
+    low, high = HASH_CPU_S
+    for event in events:
+        process[event.tid] = (event.pid, event.comm)
+        if event.name in WAKES:
+            awake.setdefault(int(event.fields["pid"]), [event.time, 0.0, -1.0])
+        elif event.name == "sched_switch":
+            before, after = int(event.fields["prev_pid"]), int(event.fields["next_pid"])
+            run = awake.get(before)
+            if run is not None and run[2] >= 0:
+                run[1] += event.time - run[2]
+                run[2] = -1.0
+                if not event.fields["prev_state"].startswith("R"):
+                    del awake[before]
+                    main = process.get(before, (before, ""))[0] == before
+                    if low <= run[1] <= high and not main and group(before) == "server":
+                        hashes[before].append((run[0], event.time))
+            if after in awake:
+                awake[after][2] = event.time
+    firsts = [spans[0][0] for spans in hashes.values()]
+    if start is None:
+        start = (min(firsts) - CLASS_LEAD_S) if firsts else (events[0].time if events else 0.0)
+
+    def group_at(tid: int, time: float) -> str | None:
+        name = group(tid)
+        if name == "server" and any(a <= time <= b for a, b in hashes.get(tid, ())):
+            return "hash"
+        return name
+
+    bins: dict[tuple[int, str], list[float]] = defaultdict(lambda: [0.0, 0.0, 0.0])
+
+    def spread(name: str | None, since: float, until: float, column: int) -> None:
+        if name is None:
+            return
+        since = max(since, start)
+        while since < until:
+            index = int((since - start) // bin_s)
+            end = start + (index + 1) * bin_s
+            if end <= since:  # on a bin's edge, as floats round it
+                index += 1
+                end = start + (index + 1) * bin_s
+            end = min(until, end)
+            bins[index, name][column] += end - since
+            since = end
+
+    running: dict[int, tuple[int, float]] = {}  # core → (thread id, on it since)
+    ready: dict[int, float] = {}  # thread id → waiting for a core since
+    waited: dict[int, tuple[str | None, float, float]] = {}  # on a core now: its last wait
+    for event in events:
+        if event.name in WAKES:
+            ready.setdefault(int(event.fields["pid"]), event.time)
+        elif event.name == "sched_switch":
+            before, after = int(event.fields["prev_pid"]), int(event.fields["next_pid"])
+            if event.cpu in running:
+                tid, since = running[event.cpu]
+                spread(group_at(tid, event.time), since, event.time, 0)
+                wait = waited.pop(tid, None)
+                if wait is not None and event.time - since >= WORK_AFTER_S:
+                    spread(*wait, 2)
+            running[event.cpu] = (after, event.time)
+            if before != IDLE and event.fields["prev_state"].startswith("R"):
+                ready[before] = event.time
+            if after in ready:
+                wait = (group_at(after, event.time), ready.pop(after), event.time)
+                spread(*wait, 1)
+                waited[after] = wait
+    return {key: tuple(cell) for key, cell in bins.items()}, start
+
+
 def report(waits: dict[tuple[str, str], list[float]]) -> list[str]:
     """Per group and kind: how many waits, their sum (s), mean, p50, p90 and p99 (µs)."""
     lines = []
@@ -270,8 +377,14 @@ def main() -> int:
     parser.add_argument("--server", type=int, nargs="+", default=[], help="worker process ids")
     parser.add_argument("--client", type=int, nargs="+", default=[], help="load generator's")
     parser.add_argument("--database", default="postgres", help="the database's process name")
+    parser.add_argument(
+        "--class-start", type=float, default=None,
+        help="the class's start on the trace's clock (default: just before its first hash)",
+    )  # fmt: skip
     args = parser.parse_args()
     server, client = set(args.server), set(args.client)
+    from queue_sim import TIMELINE_BIN_S  # the model's bins (imported here: a heavy module)
+    from request_waits import threads_report
 
     def group_of(pid: int, name: str) -> str | None:
         if pid in server:
@@ -286,6 +399,16 @@ def main() -> int:
         print(busy_report(busy_while_waiting(events_of(lines))))
     with args.trace.open() as lines:
         print("\n".join(episodes_report(idle_episodes(events_of(lines)))))
+    groups = {"server": "server", "load generator": "client", "database": "db"}
+    with args.trace.open() as lines:
+        bins, start = threads_by_time(
+            list(events_of(lines)),
+            lambda pid, name: groups.get(group_of(pid, name) or ""),
+            TIMELINE_BIN_S,
+            args.class_start,
+        )
+    print(f"the class from {start:.3f} s on the trace's clock")
+    print("\n".join(threads_report(bins, TIMELINE_BIN_S, "the kernel's threads")))
     return 0
 
 

@@ -17,6 +17,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "bench"))
 import class_cpu  # noqa: E402  (bench/)
 import queue_model  # noqa: E402
 import queue_sim  # noqa: E402
+import request_waits  # noqa: E402
 
 from tests.probed_apps import PROBE, run_probed  # noqa: E402
 
@@ -1464,6 +1465,38 @@ def test_threads_on_their_own_cores_leave_a_core_idle_until_balanced():
     assert [v for w in waited for v in (w.get(2, 0.0), w.get(1, 0.0))] == pytest.approx(
         [0.150, 0.0, 0.100, 0.0, 0.100, 0.100], abs=12 * MS
     )
+
+
+def test_the_threads_time_run_and_waited_is_told_by_the_classs_time():
+    """The model's "threads by time": three log-ins' 300 ms hashes at once on two cores,
+    each thread on a core and never balanced.  The lone hash runs alone to 0.3 s; the
+    other two share a core to 0.6 s, each waiting half of that.  In bins of 0.25 s the
+    hashes ran 0.5, 0.3 and 0.1 s and waited 0.25, 0.25 and 0.1 s (a step over a bin's
+    end split there); the bins add up to "run queue", where the hashes are the server's."""
+    hash_s = 300 * MS
+    table = costs(server=0.1 * MS, db=0.0, client=0.0, calls=0.0, trips=1.0)
+    table[queue_sim.LOGIN] = (hash_s + 0.1 * MS, 0.0, 0.0, 0.0, 1.0, 0.0)
+    result = queue_sim.simulate(
+        table, 3, 1, 2.0, starts=[0.0] * 3, teacher=False, clients_elsewhere=True,
+        hash_s=hash_s, balance_s=10.0,
+    )  # fmt: skip
+    bins = result["threads by time"]
+    assert queue_sim.TIMELINE_BIN_S == 0.25
+    hashing = [bins.get((index, "hash"), (0.0, 0.0)) for index in range(4)]
+    # (the hashes begin a few ms in: the log-in page and the log-in's own work come first)
+    assert [ran for ran, _ in hashing] == pytest.approx([0.5, 0.3, 0.1, 0.0], abs=10 * MS)
+    assert [waited for _, waited in hashing] == pytest.approx([0.25, 0.25, 0.1, 0.0], abs=10 * MS)
+    for group, (ran, waited) in result["run queue"].items():
+        members = ("server", "hash") if group == "server" else (group,)
+        cells = [cell for (_, of), cell in bins.items() if of in members]
+        assert sum(c[0] for c in cells) == pytest.approx(ran, abs=1e-9)
+        assert sum(c[1] for c in cells) == pytest.approx(waited, abs=1e-9)
+    windows = request_waits.threads_by_window(bins, queue_sim.TIMELINE_BIN_S)
+    assert windows["start", "hash"] == pytest.approx((0.9, 0.6), abs=10 * MS)
+    assert windows["part A", "hash"] == (0.0, 0.0)
+    report = request_waits.threads_report(bins, queue_sim.TIMELINE_BIN_S, "the model's threads")
+    assert [line[2:8].strip() for line in report[1:]] == [n for n, _, _ in request_waits.WINDOWS]
+    assert report[1].split(" · ")[1].split()[:3] == ["0.90", "/", "0.60"]  # the hashes
 
 
 def test_a_yielding_hash_runs_on_what_the_other_threads_leave_of_its_core():

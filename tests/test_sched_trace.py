@@ -147,3 +147,48 @@ def test_a_core_idle_while_a_thread_waits_on_the_others_queue():
     bins = [line.split()[:3] for line in report[1:4]]
     assert bins == [["0.05-0.2", "ms:", "1"], ["0.2-0.5", "ms:", "1"], ["0.5-1", "ms:", "1"]]
     assert sched_trace.episodes_report([])[0].startswith("no core idled")
+
+
+def test_the_threads_time_run_and_waited_is_told_by_the_classs_time_and_a_hash_by_its_length():
+    """``threads_by_time``: a worker's pool thread runs 24 ms between its wake-up and its
+    sleep, put off its core once for 1 ms by the worker's main thread -- a log-in's hash;
+    the class begins 0.1 s before it.  Two short threads wait 0.2 ms (then run 50 µs: a
+    thread woken for nothing) and 0.3 ms (then run 2 ms: before work); the load generator
+    is put off its core for 0.5 ms by the database, which waited 1 ms for it."""
+    main, hasher = ("python", 100, 100), ("python", 100, 102)
+    short, worker = ("python", 100, 103), ("python", 100, 104)
+    lines = [
+        switch(0.950, 1, IDLE1, "R", ("python", 200)),
+        waking(1.000, 1, CLIENT, ("python", 102), 0),
+        switch(1.000, 0, IDLE0, "R", ("python", 102)),
+        waking(1.005, 1, CLIENT, ("python", 100), 0),
+        switch(1.005, 0, hasher, "R", ("python", 100)),  # the hash put off its core…
+        switch(1.006, 0, main, "S", ("python", 102)),  # …for 1 ms
+        waking(1.011, 0, hasher, ("postgres", 300), 1),
+        switch(1.012, 1, CLIENT, "R", ("postgres", 300)),  # the database waited 1 ms
+        switch(1.0125, 1, DATABASE, "S", ("python", 200)),  # the client 0.5 ms
+        switch(1.025, 0, hasher, "S", ("swapper/0", 0)),  # 24 ms of CPU: a hash
+        waking(1.030, 1, CLIENT, ("python", 103), 0),
+        switch(1.0302, 0, IDLE0, "R", ("python", 103)),
+        switch(1.03025, 0, short, "S", ("swapper/0", 0)),  # woken for nothing
+        waking(1.040, 1, CLIENT, ("python", 104), 0),
+        switch(1.0403, 0, IDLE0, "R", ("python", 104)),
+        switch(1.0423, 0, worker, "S", ("swapper/0", 0)),  # 2 ms of work
+        switch(1.050, 1, CLIENT, "S", ("swapper/1", 0)),
+    ]
+    events = list(sched_trace.events_of(lines))
+    bins, start = sched_trace.threads_by_time(events, group_of, 0.01)
+    assert start == pytest.approx(0.900)
+    cell = {key: pytest.approx(value, abs=1e-9) for key, value in {
+        (10, "hash"): (0.009, 0.001, 0.001), (11, "hash"): (0.010, 0.0, 0.0),
+        (12, "hash"): (0.005, 0.0, 0.0), (10, "server"): (0.001, 0.0, 0.0),
+        (13, "server"): (0.00005, 0.0002, 0.0), (14, "server"): (0.002, 0.0003, 0.0003),
+        (11, "db"): (0.0005, 0.001, 0.001), (11, "client"): (0.0095, 0.0005, 0.0005),
+    }.items()}  # fmt: skip
+    assert {key: bins[key] for key in cell} == cell
+    assert not [key for key in bins if key[1] == "hash" and key not in cell]
+    assert sum(bins[key][0] for key in bins if key[1] == "client") == pytest.approx(0.0995)
+    # the class's start given: the same time, other bins
+    later, start = sched_trace.threads_by_time(events, group_of, 0.01, start=1.0)
+    assert start == 1.0 and later[0, "hash"] == bins[10, "hash"]
+    assert sum(later[key][0] for key in later if key[1] == "client") == pytest.approx(0.0495)
