@@ -259,6 +259,7 @@ def threads_by_time(
     group_of: Callable[[int, str], str | None],
     bin_s: float,
     start: float | None = None,
+    length: float = float("inf"),
 ) -> tuple[dict[tuple[int, str], tuple[float, ...]], float]:
     """Per (bin of ``bin_s`` from the class's start, group), the time the group's threads
     ran, waited for a core (from a wake-up or a preemption to the next time on a core),
@@ -274,7 +275,8 @@ def threads_by_time(
     lets it go at each database call, and every millisecond when another waits), and
     counts as "hash" from that wake-up to that sleep: in a 60-student class, 61 such
     times for 61 log-ins.  ``start``: the class's, on the trace's clock; by default
-    ``CLASS_LEAD_S`` before the first hash (a class begins with its log-ins).  Returns the
+    ``CLASS_LEAD_S`` before the first hash (a class begins with its log-ins); ``length``:
+    the class's (the load test's wall time), the trace after it left out.  Returns the
     bins and the start taken."""
     process: dict[int, tuple[int, str]] = {}
 
@@ -319,7 +321,7 @@ def threads_by_time(
     def spread(name: str | None, since: float, until: float, column: int) -> None:
         if name is None:
             return
-        since = max(since, start)
+        since, until = max(since, start), min(until, start + length)
         while since < until:
             index = int((since - start) // bin_s)
             end = start + (index + 1) * bin_s
@@ -381,6 +383,10 @@ def main() -> int:
         "--class-start", type=float, default=None,
         help="the class's start on the trace's clock (default: just before its first hash)",
     )  # fmt: skip
+    parser.add_argument(
+        "--class-length", type=float, default=float("inf"),
+        help="the class's length, s (the load test's wall time; default: to the trace's end)",
+    )  # fmt: skip
     args = parser.parse_args()
     server, client = set(args.server), set(args.client)
     from queue_sim import TIMELINE_BIN_S  # the model's bins (imported here: a heavy module)
@@ -406,6 +412,7 @@ def main() -> int:
             lambda pid, name: groups.get(group_of(pid, name) or ""),
             TIMELINE_BIN_S,
             args.class_start,
+            args.class_length,
         )
     print(f"the class from {start:.3f} s on the trace's clock")
     print("\n".join(threads_report(bins, TIMELINE_BIN_S, "the kernel's threads")))

@@ -192,3 +192,7 @@ def test_the_threads_time_run_and_waited_is_told_by_the_classs_time_and_a_hash_b
     later, start = sched_trace.threads_by_time(events, group_of, 0.01, start=1.0)
     assert start == 1.0 and later[0, "hash"] == bins[10, "hash"]
     assert sum(later[key][0] for key in later if key[1] == "client") == pytest.approx(0.0495)
+    # and its length: nothing after it
+    cut, _ = sched_trace.threads_by_time(events, group_of, 0.01, start=1.0, length=0.0121)
+    assert sum(cut[key][0] for key in cut if key[1] == "client") == pytest.approx(0.012)
+    assert cut[1, "db"] == pytest.approx((0.0001, 0.001, 0.001))  # its wait before it ends
