@@ -147,7 +147,10 @@ def running_forger():
     server = uvicorn.Server(config)
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()
+    deadline = time.monotonic() + 20
     while not server.started:
+        if time.monotonic() > deadline or not thread.is_alive():
+            raise RuntimeError("the forged OpenID provider did not start")
         time.sleep(0.02)
     port = server.servers[0].sockets[0].getsockname()[1]
     forger.url = f"http://127.0.0.1:{port}"

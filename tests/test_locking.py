@@ -218,11 +218,11 @@ def test_an_sqlite_write_keeps_its_place_unless_it_must_wait_for_another(app, ro
         time.sleep(0.3)
         turn.release()
 
-    writer = threading.Thread(target=another_writer)
+    writer = threading.Thread(target=another_writer, daemon=True)
     writer.start()
-    taken.wait()
+    assert taken.wait(10)
     waited = _gives_way(rows)
-    writer.join()
+    writer.join(10)
     assert len(waited) == 1 and 0.04 <= waited[0] < 0.25, waited  # after its patience
 
 

@@ -253,7 +253,9 @@ def test_the_probe_times_each_garbage_collection_on_the_client_times_clock(tmp_p
     env = {**os.environ, "PYTHONPATH": str(PROBE), "GYROLAB_BENCH_GC": str(out)}
     code = "import gc, time; print(time.perf_counter()); gc.collect(0); gc.collect()"
     before = time.perf_counter()
-    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+    done = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120
+    )
     after = time.perf_counter()
     asked = float(done.stdout.split()[0])
     lines = [line.split() for line in out.read_text().splitlines()]
@@ -1004,17 +1006,17 @@ def test_the_run_queue_watch_counts_a_thread_born_during_it_from_zero():
         burnt.release()
         done.wait()  # alive at the watch's last poll
 
-    before = threading.Thread(target=burn)
+    before = threading.Thread(target=burn, daemon=True)
     before.start()
-    burnt.acquire()  # its CPU spent before the watch: not counted
+    assert burnt.acquire(timeout=30)  # its CPU spent before the watch: not counted
     watching = {"me": lambda: [os.getpid()]}
     with run_queue.RunQueueWatch(watching, poll_s=0.05, main_threads={"me": "main"}) as watch:
-        born = threading.Thread(target=burn)
+        born = threading.Thread(target=burn, daemon=True)
         born.start()
-        burnt.acquire()
+        assert burnt.acquire(timeout=30)
     done.set()
-    before.join()
-    born.join()
+    before.join(10)
+    born.join(10)
     waits = watch.waits()["me"]
     assert 0.3 <= waits.ran_s < 0.5  # the born thread's 0.3 s from zero, not the other's
     assert waits.waited_s >= 0.0 and 0.0 <= waits.waited_share < 1.0

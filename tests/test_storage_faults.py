@@ -153,6 +153,7 @@ def test_the_lms_grade_sender_reports_a_full_disk_as_requests_do(monkeypatch, ca
     import logging
     import sqlite3
     import threading
+    import time
 
     from sqlalchemy.exc import OperationalError
 
@@ -170,15 +171,17 @@ def test_the_lms_grade_sender_reports_a_full_disk_as_requests_do(monkeypatch, ca
 
     async def three_rounds():
         task = asyncio.create_task(grades.run_sender(period_s=0.01))
-        while len(rounds) < 3:
+        deadline = time.monotonic() + 20  # fails below, rather than waiting forever
+        while len(rounds) < 3 and time.monotonic() < deadline:
             await asyncio.sleep(0.01)
         task.cancel()
 
     with caplog.at_level(logging.INFO):
         # a loop of its own, in a thread of its own: a browser test before this one on the
         # same worker may have left a running loop in the main thread
-        runner = threading.Thread(target=lambda: asyncio.run(three_rounds()))
+        runner = threading.Thread(target=lambda: asyncio.run(three_rounds()), daemon=True)
         runner.start()
         runner.join(30)
+    assert len(rounds) >= 3 and not runner.is_alive(), rounds
     messages = [r for r in caplog.records if "cannot be written" in r.getMessage()]
     assert len(messages) == 1 and not any(r.exc_info for r in caplog.records)

@@ -58,8 +58,9 @@ def record_heading(student_client, session_id: int, dwell: float) -> None:
                 assert turn(student_client, session_id, "heading", position).status_code == 200
             ws.send_json({"action": "start", "part": "heading", "position": position,
                           "dwell_s": dwell, "speed": 6000})  # fmt: skip
-            while ws.receive_json()["type"] not in ("saved", "error"):
+            while (frame := ws.receive_json())["type"] not in ("saved", "error"):
                 pass
+            assert frame["type"] == "saved", frame
 
 
 @pytest.mark.one_backend  # the words and the σ of a run; streamed saves on both: test_stream

@@ -170,15 +170,13 @@ def test_an_impatient_writer_is_told_once_and_keeps_its_place_in_the_queue():
 
     first = threading.Thread(target=waiter, args=("first", 0.05))
     first.start()
-    while turn.queued < 1:
-        time.sleep(0.001)
+    wait_until(lambda: turn.queued >= 1)
     second = threading.Thread(target=waiter, args=("second", 0.0))
     second.start()
-    while turn.queued < 2:
-        time.sleep(0.001)
+    wait_until(lambda: turn.queued >= 2)
     time.sleep(0.2)
     turn.release()
-    first.join()
-    second.join()
+    first.join(10)
+    second.join(10)
     assert order == ["first", "second"]
     assert len(told) == 1 and 0.04 <= told[0] < 0.2, told
