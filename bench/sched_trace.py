@@ -3,8 +3,9 @@ from the moment a thread was woken (or preempted) to the moment it was put on a 
 by what the cores were doing when it began -- its core idle, its core busy and the other
 idle, both busy -- or because it was preempted; and how many cores were busy while some
 thread waited (a core left idle meanwhile is one the queueing model's cores would have
-used).  run_queue.py measures the sums (schedstat); this says which kind of wait they are
-made of, for the queueing model.
+used); each group's time run and waited by the class's time; and what the cores ran while
+a group waited (both busy, or one idle beside the wait).  run_queue.py measures the sums
+(schedstat); this says which kind of wait they are made of, for the queueing model.
 
 Record while a load test runs, as root, then write the events out as text::
 
@@ -254,38 +255,21 @@ CLASS_LEAD_S = 0.1  # the class's start, before its first hash (the model's firs
 WORK_AFTER_S = 100e-6  # a thread that runs this long after a wait did work with its core
 
 
-def threads_by_time(
-    events: list[Event],
-    group_of: Callable[[int, str], str | None],
-    bin_s: float,
-    start: float | None = None,
-    length: float = float("inf"),
-) -> tuple[dict[tuple[int, str], tuple[float, ...]], float]:
-    """Per (bin of ``bin_s`` from the class's start, group), the time the group's threads
-    ran, waited for a core (from a wake-up or a preemption to the next time on a core),
-    and of that wait, the part after which the thread ran ``WORK_AFTER_S`` or more before
-    leaving the core again, s -- as ``queue_sim.simulate``'s "threads by time", whose
-    threads wait only to work (a thread of the machine's is often woken to find the
-    interpreter taken, and sleeps again within microseconds).
-
-    ``group_of(process id, name)`` names "server", "client" or "db".  A server thread
-    other than a worker's main one (its event loop) that ran between ``HASH_CPU_S`` of CPU
-    from a wake-up to its next sleep was hashing a log-in's password (argon2id keeps its
-    thread on a core 15-25 ms without the interpreter; a thread holding the interpreter
-    lets it go at each database call, and every millisecond when another waits), and
-    counts as "hash" from that wake-up to that sleep: in a 60-student class, 61 such
-    times for 61 log-ins.  ``start``: the class's, on the trace's clock; by default
-    ``CLASS_LEAD_S`` before the first hash (a class begins with its log-ins); ``length``:
-    the class's (the load test's wall time), the trace after it left out.  Returns the
-    bins and the start taken."""
+def class_groups(
+    events: list[Event], group_of: Callable[[int, str], str | None], start: float | None = None
+) -> tuple[Callable[[int, float], str | None], float]:
+    """Each thread's group at a time -- ``group_of(process id, name)``'s, or "hash" while a
+    worker's thread other than its main one hashes a log-in's password (between a wake-up
+    and its next sleep it ran ``HASH_CPU_S`` of CPU) -- and the class's start: ``start``,
+    or ``CLASS_LEAD_S`` before the first hash (``threads_by_time``)."""
     process: dict[int, tuple[int, str]] = {}
 
-    def group(tid: int, comm: str = "") -> str | None:
-        pid, name = process.get(tid, (tid, comm))
+    def group(tid: int) -> str | None:
+        pid, name = process.get(tid, (tid, ""))
         return group_of(pid, name) if tid != IDLE else None
 
-    # first pass: each server thread's times between a wake-up and its next sleep, and
-    # the CPU it ran in each; the long ones are hashes
+    # each server thread's times between a wake-up and its next sleep, and the CPU it ran
+    # in each; the long ones are hashes
     hashes: dict[int, list[tuple[float, float]]] = defaultdict(list)
     awake: dict[int, list[float]] = {}  # thread id → [woken at, CPU so far, on a core since]
     low, high = HASH_CPU_S
@@ -315,6 +299,35 @@ def threads_by_time(
         if name == "server" and any(a <= time <= b for a, b in hashes.get(tid, ())):
             return "hash"
         return name
+
+    return group_at, start
+
+
+def threads_by_time(
+    events: list[Event],
+    group_of: Callable[[int, str], str | None],
+    bin_s: float,
+    start: float | None = None,
+    length: float = float("inf"),
+) -> tuple[dict[tuple[int, str], tuple[float, ...]], float]:
+    """Per (bin of ``bin_s`` from the class's start, group), the time the group's threads
+    ran, waited for a core (from a wake-up or a preemption to the next time on a core),
+    and of that wait, the part after which the thread ran ``WORK_AFTER_S`` or more before
+    leaving the core again, s -- as ``queue_sim.simulate``'s "threads by time", whose
+    threads wait only to work (a thread of the machine's is often woken to find the
+    interpreter taken, and sleeps again within microseconds).
+
+    ``group_of(process id, name)`` names "server", "client" or "db".  A server thread
+    other than a worker's main one (its event loop) that ran between ``HASH_CPU_S`` of CPU
+    from a wake-up to its next sleep was hashing a log-in's password (argon2id keeps its
+    thread on a core 15-25 ms without the interpreter; a thread holding the interpreter
+    lets it go at each database call, and every millisecond when another waits), and
+    counts as "hash" from that wake-up to that sleep: in a 60-student class, 61 such
+    times for 61 log-ins.  ``start``: the class's, on the trace's clock; by default
+    ``CLASS_LEAD_S`` before the first hash (a class begins with its log-ins); ``length``:
+    the class's (the load test's wall time), the trace after it left out.  Returns the
+    bins and the start taken."""
+    group_at, start = class_groups(events, group_of, start)
 
     bins: dict[tuple[int, str], list[float]] = defaultdict(lambda: [0.0, 0.0, 0.0])
 
@@ -356,6 +369,90 @@ def threads_by_time(
     return {key: tuple(cell) for key, cell in bins.items()}, start
 
 
+@dataclass
+class Beside:
+    """A group's time waiting for a core (thread-seconds) and, over the same time, what the
+    core it waited on ran ("own") and what the other cores ran ("other"), by group ("idle":
+    nothing; "other": a thread of no group's), s."""
+
+    waited: float = 0.0
+    own: dict[str, float] = field(default_factory=lambda: defaultdict(float))
+    other: dict[str, float] = field(default_factory=lambda: defaultdict(float))
+
+
+def waits_beside(
+    events: list[Event],
+    group_of: Callable[[int, str], str | None],
+    windows: Iterable[tuple[str, float, float]],
+    start: float | None = None,
+) -> dict[tuple[str, str], Beside]:
+    """Per (window of the class, group), its threads' waits for a core and what ran
+    beside them (``Beside``): whether a thread waited because both cores had work, or
+    while a core idled.  ``windows``: (name, from, to), s from the class's start (by
+    default ``CLASS_LEAD_S`` before its first hash, as ``threads_by_time``); a thread
+    waits as ``Cores`` follows it, on the core it was woken onto or preempted on, and
+    its group is the one it had when it began to wait."""
+    group_at, start = class_groups(events, group_of, start)
+    spans = [(name, start + low, start + high) for name, low, high in windows]
+    cores = Cores()
+    cells: dict[tuple[str, str], Beside] = {}
+    waiting: dict[int, tuple[str, int]] = {}  # thread id → (its group, the core it waits on)
+    on_core: dict[int, str] = {}  # core → its thread's group ("idle", "other")
+    last = None
+    for event in events:
+        if last is not None and event.time > last and waiting:
+            span = next((name for name, low, high in spans if low <= last < high), None)
+            if span is not None:
+                step = event.time - last
+                for name, core in waiting.values():
+                    cell = cells.get((span, name))
+                    if cell is None:
+                        cell = cells[span, name] = Beside()
+                    cell.waited += step
+                    for other, group in on_core.items():
+                        (cell.own if other == core else cell.other)[group] += step
+                    if core not in on_core:  # a core the trace has not seen switch yet
+                        cell.own["idle"] += step
+        last = event.time
+        cores.apply(event)
+        if event.name == "sched_switch":
+            after = int(event.fields["next_pid"])
+            on_core[event.cpu] = "idle" if after == IDLE else (
+                group_at(after, event.time) or "other")  # fmt: skip
+        for tid in [tid for tid in waiting if tid not in cores.waiting]:
+            del waiting[tid]
+        for tid, core in cores.waiting.items():
+            known = waiting.get(tid)
+            if known is None:
+                name = group_at(tid, event.time)
+                if name is not None:
+                    waiting[tid] = (name, core)
+            elif known[1] != core:
+                waiting[tid] = (known[0], core)
+    return cells
+
+
+def beside_report(cells: dict[tuple[str, str], Beside], windows) -> list[str]:
+    """``waits_beside`` in lines: per window and group, the time waited and the shares of
+    it that its own core and the other cores ran each group, or idled."""
+    lines = ["what ran beside a group's waits for a core: s waited; its own core's share by"
+             " group | the other cores' (idle: nothing ran)"]  # fmt: skip
+    for window, _, _ in windows:
+        for (span, name), cell in sorted(cells.items()):
+            if span != window or cell.waited <= 0:
+                continue
+
+            def shares(spent: dict[str, float], of: float) -> str:
+                return " ".join(f"{group} {value / of:.0%}" for group, value in
+                                sorted(spent.items(), key=lambda item: -item[1])
+                                if value / of >= 0.005)  # fmt: skip
+
+            own = shares(cell.own, cell.waited)
+            other = shares(cell.other, sum(cell.other.values()) or 1.0)
+            lines.append(f"  {window:6s} {name:7s} {cell.waited:6.2f} s: {own} | {other}")
+    return lines
+
+
 def report(waits: dict[tuple[str, str], list[float]]) -> list[str]:
     """Per group and kind: how many waits, their sum (s), mean, p50, p90 and p99 (µs)."""
     lines = []
@@ -390,7 +487,7 @@ def main() -> int:
     args = parser.parse_args()
     server, client = set(args.server), set(args.client)
     from queue_sim import TIMELINE_BIN_S  # the model's bins (imported here: a heavy module)
-    from request_waits import threads_report
+    from request_waits import WINDOWS, threads_report
 
     def group_of(pid: int, name: str) -> str | None:
         if pid in server:
@@ -416,6 +513,15 @@ def main() -> int:
         )
     print(f"the class from {start:.3f} s on the trace's clock")
     print("\n".join(threads_report(bins, TIMELINE_BIN_S, "the kernel's threads")))
+    windows = [(name, low, min(high, args.class_length)) for name, low, high in WINDOWS]
+    with args.trace.open() as lines:
+        cells = waits_beside(
+            list(events_of(lines)),
+            lambda pid, name: groups.get(group_of(pid, name) or ""),
+            windows,
+            args.class_start,
+        )
+    print("\n".join(beside_report(cells, windows)))
     return 0
 
 

@@ -149,34 +149,38 @@ def test_a_core_idle_while_a_thread_waits_on_the_others_queue():
     assert sched_trace.episodes_report([])[0].startswith("no core idled")
 
 
+MAIN, HASHER = ("python", 100, 100), ("python", 100, 102)
+SHORT, WORKER = ("python", 100, 103), ("python", 100, 104)
+# a log-in's hash on core 0, put off it for 1 ms by the worker's main thread; the
+# database and the load generator on core 1, then two short threads of the worker
+A_HASH = [
+    switch(0.950, 1, IDLE1, "R", ("python", 200)),
+    waking(1.000, 1, CLIENT, ("python", 102), 0),
+    switch(1.000, 0, IDLE0, "R", ("python", 102)),
+    waking(1.005, 1, CLIENT, ("python", 100), 0),
+    switch(1.005, 0, HASHER, "R", ("python", 100)),  # the hash put off its core…
+    switch(1.006, 0, MAIN, "S", ("python", 102)),  # …for 1 ms
+    waking(1.011, 0, HASHER, ("postgres", 300), 1),
+    switch(1.012, 1, CLIENT, "R", ("postgres", 300)),  # the database waited 1 ms
+    switch(1.0125, 1, DATABASE, "S", ("python", 200)),  # the client 0.5 ms
+    switch(1.025, 0, HASHER, "S", ("swapper/0", 0)),  # 24 ms of CPU: a hash
+    waking(1.030, 1, CLIENT, ("python", 103), 0),
+    switch(1.0302, 0, IDLE0, "R", ("python", 103)),
+    switch(1.03025, 0, SHORT, "S", ("swapper/0", 0)),  # woken for nothing
+    waking(1.040, 1, CLIENT, ("python", 104), 0),
+    switch(1.0403, 0, IDLE0, "R", ("python", 104)),
+    switch(1.0423, 0, WORKER, "S", ("swapper/0", 0)),  # 2 ms of work
+    switch(1.050, 1, CLIENT, "S", ("swapper/1", 0)),
+]
+
+
 def test_the_threads_time_run_and_waited_is_told_by_the_classs_time_and_a_hash_by_its_length():
     """``threads_by_time``: a worker's pool thread runs 24 ms between its wake-up and its
     sleep, put off its core once for 1 ms by the worker's main thread -- a log-in's hash;
     the class begins 0.1 s before it.  Two short threads wait 0.2 ms (then run 50 µs: a
     thread woken for nothing) and 0.3 ms (then run 2 ms: before work); the load generator
     is put off its core for 0.5 ms by the database, which waited 1 ms for it."""
-    main, hasher = ("python", 100, 100), ("python", 100, 102)
-    short, worker = ("python", 100, 103), ("python", 100, 104)
-    lines = [
-        switch(0.950, 1, IDLE1, "R", ("python", 200)),
-        waking(1.000, 1, CLIENT, ("python", 102), 0),
-        switch(1.000, 0, IDLE0, "R", ("python", 102)),
-        waking(1.005, 1, CLIENT, ("python", 100), 0),
-        switch(1.005, 0, hasher, "R", ("python", 100)),  # the hash put off its core…
-        switch(1.006, 0, main, "S", ("python", 102)),  # …for 1 ms
-        waking(1.011, 0, hasher, ("postgres", 300), 1),
-        switch(1.012, 1, CLIENT, "R", ("postgres", 300)),  # the database waited 1 ms
-        switch(1.0125, 1, DATABASE, "S", ("python", 200)),  # the client 0.5 ms
-        switch(1.025, 0, hasher, "S", ("swapper/0", 0)),  # 24 ms of CPU: a hash
-        waking(1.030, 1, CLIENT, ("python", 103), 0),
-        switch(1.0302, 0, IDLE0, "R", ("python", 103)),
-        switch(1.03025, 0, short, "S", ("swapper/0", 0)),  # woken for nothing
-        waking(1.040, 1, CLIENT, ("python", 104), 0),
-        switch(1.0403, 0, IDLE0, "R", ("python", 104)),
-        switch(1.0423, 0, worker, "S", ("swapper/0", 0)),  # 2 ms of work
-        switch(1.050, 1, CLIENT, "S", ("swapper/1", 0)),
-    ]
-    events = list(sched_trace.events_of(lines))
+    events = list(sched_trace.events_of(A_HASH))
     bins, start = sched_trace.threads_by_time(events, group_of, 0.01)
     assert start == pytest.approx(0.900)
     cell = {key: pytest.approx(value, abs=1e-9) for key, value in {
@@ -196,3 +200,35 @@ def test_the_threads_time_run_and_waited_is_told_by_the_classs_time_and_a_hash_b
     cut, _ = sched_trace.threads_by_time(events, group_of, 0.01, start=1.0, length=0.0121)
     assert sum(cut[key][0] for key in cut if key[1] == "client") == pytest.approx(0.012)
     assert cut[1, "db"] == pytest.approx((0.0001, 0.001, 0.001))  # its wait before it ends
+
+
+def test_what_ran_beside_a_groups_waits_tells_a_full_machine_from_an_idle_core():
+    """``waits_beside``: the hash waited 1 ms on its core while the worker's main thread
+    ran there and the load generator on the other; the database 1 ms behind the load
+    generator, beside the hash; the load generator 0.5 ms behind the database; the two
+    short threads 0.5 ms on core 0 while it was idle (woken, not yet on it)."""
+    events = list(sched_trace.events_of(A_HASH))
+    windows = [("early", 0.0, 0.12), ("late", 0.12, 1.0)]  # the class from 0.9 s
+    cells = sched_trace.waits_beside(events, group_of, windows)
+    seen = {key: (round(cell.waited * 1e6), {k: round(v * 1e6) for k, v in cell.own.items()},
+                  {k: round(v * 1e6) for k, v in cell.other.items()})
+            for key, cell in cells.items()}  # fmt: skip
+    assert seen == {
+        ("early", "hash"): (1000, {"server": 1000}, {"client": 1000}),
+        ("early", "db"): (1000, {"client": 1000}, {"hash": 1000}),
+        ("early", "client"): (500, {"db": 500}, {"hash": 500}),
+        ("late", "server"): (500, {"idle": 500}, {"client": 500}),
+    }
+    report = sched_trace.beside_report(cells, windows)
+    assert "  early  hash      0.00 s: server 100% | client 100%" in report
+    assert "  late   server    0.00 s: idle 100% | client 100%" in report
+    # the class's start given: every wait in the second window
+    later = sched_trace.waits_beside(events, group_of, windows, start=0.88)
+    assert {key: cell.waited for key, cell in later.items()} == pytest.approx(
+        {
+            ("late", "hash"): 0.001,
+            ("late", "db"): 0.001,
+            ("late", "client"): 0.0005,
+            ("late", "server"): 0.0005,
+        }  # fmt: skip
+    )
