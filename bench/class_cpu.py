@@ -126,7 +126,10 @@ def locked_shares(trace: str, seen: ClassCpu) -> dict[str, float]:
 SEEN_BEYOND_USED = 1.05
 
 
-def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, each=False):
+def in_class(
+    costs, own, seen: ClassCpu, used: dict[str, float] | None = None, each=False,
+    frame_weight: float = 1.0,
+):  # fmt: skip
     """The costs per request as a class spent them.  Each route's own CPU (its task's,
     ``seen`` by the probe in a load test) replaces one student's alone (``own``).  What the
     probe does not see -- the server's socket work, the collector; per frame of a lone
@@ -141,6 +144,10 @@ def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, e
     CPU as the probe saw it, the unseen part as above), for the simulation to draw from:
     a route's CPU varies (a dashboard redoing many sessions, a results read that solves, a
     young collection run inside a request) and a p95 depends on it, not on the mean.
+
+    ``frame_weight``: with ``used``, the load generator's CPU per stream frame counts this
+    many times its share beside the requests' (1: each as one student's alone, scaled
+    alike), the total still the run's.
 
     Raises ValueError where the probe saw more of the server's CPU than ``used`` says the
     run used (``SEEN_BEYOND_USED``): the probe's file holds more than that run."""
@@ -157,7 +164,8 @@ def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, e
         alone_unseen = sum(seen.counts[r] * max(unseen[r], 0.0) for r in shared)
         if alone_unseen > 0:
             scale = max(used["server"] - seen.total_s, 0.0) / alone_unseen
-        asked = sum(seen.counts[r] * costs[r][2] for r in shared)
+        asked = sum(seen.counts[r] * costs[r][2] * (frame_weight if r == STREAM else 1.0)
+                    for r in shared)  # fmt: skip
         client_scale = used["client"] / asked if asked > 0 else 1.0
         asked_of_db = sum(seen.counts[r] * costs[r][1] for r in shared)
         if used.get("db") and asked_of_db > 0:
@@ -167,7 +175,8 @@ def in_class(costs, own, seen: ClassCpu, used: dict[str, float] | None = None, e
         server, db, client, calls, trips, loop = costs[route]
         loop_unseen = max(loop - own[route][0], 0.0)
         unseen_now = (scale * loop_unseen, scale * max(unseen[route] - loop_unseen, 0.0))
-        rest = (db * db_scale, client * client_scale, calls, trips)
+        weight = frame_weight if route == STREAM and used else 1.0
+        rest = (db * db_scale, client * client_scale * weight, calls, trips)
         requests = seen.each.get(route) if each else None
         mine = requests or [seen.means[route]]
         made = [_with_own_cpu(rest, unseen_now, *cpu) for cpu in mine]

@@ -634,6 +634,22 @@ def main() -> int:
         "leave of their core (a long-running thread behind threads woken for short bursts)",
     )
     parser.add_argument(
+        "--hash-scale",
+        type=float,
+        default=1.0,
+        metavar="X",
+        help="a log-in's password hash X times its CPU measured alone (beside a busy core: "
+        "1.08-1.13, bench/README.md forty-third part)",
+    )
+    parser.add_argument(
+        "--client-frame-weight",
+        type=float,
+        default=1.0,
+        metavar="W",
+        help="with --class-run: the load generator's CPU per stream frame W times its share "
+        "beside its requests' as one student's alone has them (the run's total kept)",
+    )
+    parser.add_argument(
         "--client-in-order",
         action="store_true",
         help="the load generator's client work one callback at a time, in the order they "
@@ -713,6 +729,8 @@ def main() -> int:
     if args.class_cpu and (not own or len(args.class_run or []) != len(args.class_cpu)):
         parser.error("--class-cpu needs costs measured with each request's own CPU, and one "
                      "--class-run per --class-cpu file")  # fmt: skip
+    if args.hash_scale != 1.0:
+        hash_s *= args.hash_scale
     print(f"a log-in's password hash: {hash_s * 1000:.1f} ms of CPU, outside the interpreter")
     workers = 1 if args.backend == "sqlite" else 2
     name = "SQLite" if args.backend == "sqlite" else "PostgreSQL"
@@ -806,7 +824,7 @@ def main() -> int:
         pools = {size: Pool() for size in {_students_of(run) for run in args.class_run}}
         for index, (cpu, run) in enumerate(zip(args.class_cpu, args.class_run, strict=True)):
             students = _students_of(run)
-            costs = class_costs(alone, own, cpu, run, not args.mean_costs)
+            costs = class_costs(alone, own, cpu, run, not args.mean_costs, args.client_frame_weight)
             print_costs(costs, args.backend)
             times = args.server_times[index] if len(args.server_times) > index else None
             shares = worker_shares(times) if times and workers > 1 else None
@@ -1262,10 +1280,14 @@ def summary(students: int, name: str, pairs: list[tuple[dict, dict]]) -> dict:
     return counts
 
 
-def class_costs(alone, own, cpu: Path, run: Path | None, each: bool) -> dict:
+def class_costs(
+    alone, own, cpu: Path, run: Path | None, each: bool, frame_weight: float = 1.0
+) -> dict:
     """The costs per request as the class in ``cpu`` (the probe's lines) spent them,
     printed beside one student's alone; ``run``: what load_test.py printed in that run
-    (its CPU totals); ``each``: a list per route, one per request the class made."""
+    (its CPU totals); ``each``: a list per route, one per request the class made;
+    ``frame_weight``: the load generator's CPU per stream frame against its requests'
+    (``class_cpu.in_class``)."""
     seen = attributed_costs(cpu.read_text())
     used = None
     if run:
@@ -1273,7 +1295,9 @@ def class_costs(alone, own, cpu: Path, run: Path | None, each: bool) -> dict:
         used = {"server": table["cpu server"], "client": table["cpu client"]}
         used["db"] = table.get("cpu db", 0.0)  # PostgreSQL's processes (SQLite: in the server)
     try:
-        costs, scale, client_scale = in_class(alone, own, seen, used, each=each)
+        costs, scale, client_scale = in_class(
+            alone, own, seen, used, each=each, frame_weight=frame_weight
+        )
     except ValueError as error:
         raise SystemExit(f"{cpu} against {run}: {error}") from error
     print(f"\neach route's own CPU as the class in {cpu} spent it:")

@@ -678,6 +678,25 @@ def test_with_the_runs_cpu_the_class_costs_add_up_to_it():
     assert loop == pytest.approx(1 * MS + 1.5 * 1 * MS)
 
 
+def test_the_load_generators_cpu_can_weigh_a_frame_apart_from_a_request():
+    """``frame_weight``: ten requests of 2 ms of the load generator's CPU alone and forty
+    frames of 0.2 ms ask 28 ms.  Weighed alike, the 14 ms a run used is each at 0.5×: 1 ms
+    a request, 0.1 ms a frame.  A frame weighed at a quarter of a request's share, the
+    11 ms another run used is 1 ms a request and 0.025 ms a frame."""
+    lines = ["http GET /lab/sessions/12 1.000 3.000 0"] * 10 + ["websocket - - 4.0 4.0 40"]
+    seen = class_cpu.attributed_costs("\n".join(lines))
+    table = costs(server=10 * MS, loop=3 * MS, client=2 * MS)
+    own = {"GET /lab/sessions/{id}": (2 * MS, 6 * MS), queue_sim.STREAM: (0.1 * MS, 0.1 * MS)}
+    for weight, client, frame in ((1.0, 0.014, 0.1 * MS), (0.25, 0.011, 0.025 * MS)):
+        used = {"server": 0.09, "client": client}
+        adjusted, _, _ = class_cpu.in_class(table, own, seen, used, frame_weight=weight)
+        assert adjusted["GET /lab/sessions/{id}"][2] == pytest.approx(1 * MS), weight
+        assert adjusted[queue_sim.STREAM][2] == pytest.approx(frame), weight
+    # without the run's CPU there is nothing to share out: one student's costs, as they are
+    alone, _, _ = class_cpu.in_class(table, own, seen, frame_weight=0.25)
+    assert alone[queue_sim.STREAM][2] == pytest.approx(0.2 * MS)
+
+
 def test_a_probe_file_holding_more_than_its_run_is_refused():
     """The probe appends to its files: a second run written to the same file counts the
     class's requests twice, and the CPU it saw outgrows the CPU the run used (0.87-0.92 of
