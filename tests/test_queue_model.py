@@ -396,11 +396,17 @@ for pause in (0.0, 0.03):
     connection.execute("INSERT INTO t VALUES (1)")
     time.sleep(pause)
     connection.commit()
-# two writers taking turns: the second asks while the first holds its turn for 40 ms
+# two writers taking turns: the second asks while the first holds its turn, which the
+# first keeps 40 ms from then (not from its own start: on a crowded host the second
+# thread once began 40 ms late and found the turn free)
 turn, holding = WriterTurn(), threading.Event()
 def write(hold):
     turn.acquire(10.0)
     holding.set()
+    if hold:
+        deadline = time.monotonic() + 10
+        while turn.queued < 1 and time.monotonic() < deadline:
+            time.sleep(0.001)
     time.sleep(hold)
     connection.execute("BEGIN IMMEDIATE")
     connection.execute("INSERT INTO t VALUES (2)")
