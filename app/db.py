@@ -274,8 +274,15 @@ class _TurnsOnEngine:
 
 def _postgres_engine(url: str) -> Engine:
     # Each worker runs sync routes on a thread pool of 40; enough connections that a burst
-    # waits on the write lock rather than on the pool.
-    engine = create_engine(url, pool_pre_ping=True, pool_size=10, max_overflow=30)
+    # waits on the write lock rather than on the pool.  A wait for a lock (the writers'
+    # advisory lock, a row) lasts at most the busy timeout, as SQLite's does: past it the
+    # request answers 503 "busy" (``database_busy``) instead of waiting for ever -- unless
+    # the URL sets the connection's options itself.
+    options = {} if "options" in make_url(url).query else {
+        "options": f"-c lock_timeout={BUSY_TIMEOUT_MS}"}  # fmt: skip
+    engine = create_engine(
+        url, pool_pre_ping=True, pool_size=10, max_overflow=30, connect_args=options
+    )
 
     @event.listens_for(engine, "begin")
     def _on_begin(connection) -> None:

@@ -33,7 +33,9 @@ def run_migrations_online() -> None:
     engine = make_engine(url)
     with engine.connect() as connection:
         if connection.dialect.name == "postgresql":
-            # Several servers may start at once: one migrates, the others wait and find head.
+            # Several servers may start at once: one migrates, the others wait and find head
+            # -- for as long as the migration takes, not the app's lock timeout (app.db)
+            connection.exec_driver_sql("SET lock_timeout = 0")
             connection.exec_driver_sql(f"SELECT pg_advisory_lock({MIGRATION_LOCK_KEY})")
             connection.commit()
         sqlite = connection.dialect.name == "sqlite"

@@ -351,3 +351,56 @@ def test_a_log_in_locks_its_account_not_the_database(app):
     first.join(10)
     second.join(10)
     assert finished == ["beta", "first alpha", "alpha"]
+
+
+@pytest.mark.postgres_only
+def test_a_write_lock_held_past_the_lock_timeout_answers_503_busy(student_client):
+    """As SQLite's busy timeout does (test_storage_faults): a PostgreSQL writer waits for the
+    writers' advisory lock at most the lock timeout (the busy timeout's 10 s; shortened to
+    0.2 s here), then the request answers 503 "busy" with Retry-After and nothing written,
+    instead of waiting for as long as another holds the lock; the next request after the
+    lock is let go works."""
+    from sqlalchemy import event
+
+    from app.db import BUSY_TIMEOUT_MS, WRITE_LOCK_KEY, get_engine
+    from tests.factories import new_session
+
+    engine = get_engine()
+    with engine.connect() as connection:
+        setting = connection.exec_driver_sql("SHOW lock_timeout").scalar()
+    assert setting == f"{BUSY_TIMEOUT_MS // 1000}s"
+
+    def short_timeout(dbapi_connection, _record) -> None:
+        with dbapi_connection.cursor() as cursor:
+            cursor.execute("SET lock_timeout = 200")
+        dbapi_connection.commit()
+
+    event.listen(engine, "connect", short_timeout)
+    engine.dispose()
+    holder = make_engine(engine.url.render_as_string(hide_password=False))
+    try:
+        session_id = new_session(student_client)
+        page = f"/lab/sessions/{session_id}"
+        token = student_client.get(page).text.split('name="csrf_token" value="')[1].split('"')[0]
+        with holder.connect() as other:  # another process's exclusive write, held
+            other.exec_driver_sql(f"SELECT pg_advisory_lock({WRITE_LOCK_KEY})")
+            reply = student_client.post(
+                f"{page}/turn",
+                json={"part": "heading", "position": 2},
+                headers={"X-CSRF-Token": token, "Accept": "application/json"},
+            )
+            assert reply.status_code == 503 and reply.headers["Retry-After"] == "2"
+            assert "very busy" in reply.json()["detail"]
+            other.exec_driver_sql(f"SELECT pg_advisory_unlock({WRITE_LOCK_KEY})")
+        reply = student_client.post(
+            f"{page}/turn",
+            json={"part": "heading", "position": 2},
+            headers={"X-CSRF-Token": token},
+        )
+        assert reply.status_code == 200
+        with read_session() as db:
+            assert db.get(LabSession, session_id).sim_table_heading == 2
+    finally:
+        holder.dispose()
+        event.remove(engine, "connect", short_timeout)
+        engine.dispose()
