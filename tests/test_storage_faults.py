@@ -185,3 +185,35 @@ def test_the_lms_grade_sender_reports_a_full_disk_as_requests_do(monkeypatch, ca
     assert len(rounds) >= 3 and not runner.is_alive(), rounds
     messages = [r for r in caplog.records if "cannot be written" in r.getMessage()]
     assert len(messages) == 1 and not any(r.exc_info for r in caplog.records)
+
+
+def test_a_command_that_meets_the_write_lock_held_says_so_in_a_sentence(
+    var_dir, monkeypatch, capsys
+):
+    """``gyrolab`` meets another writer holding the lock past the busy timeout (shortened to
+    0.2 s here; PostgreSQL's lock_timeout likewise): one sentence and exit status 3,
+    nothing written -- not a database traceback."""
+    import sqlite3
+
+    from app import db as app_db
+    from app.cli.main import main
+    from app.models import User
+
+    monkeypatch.setattr(app_db, "BUSY_TIMEOUT_MS", 200)
+    app_db.engine_for.cache_clear()
+    holder = sqlite3.connect(var_dir / "gyrolab.db", isolation_level=None)
+    holder.execute("BEGIN IMMEDIATE")
+    try:
+        status = main(["create-user", "--username", "held", "--password", "a-long-password-1"])
+    finally:
+        holder.execute("ROLLBACK")
+        holder.close()
+    assert status == 3
+    assert capsys.readouterr().err == (
+        "error: The lab is very busy this moment, so nothing was saved."
+        " Try again in a few seconds.\n"
+    )
+    with read_session() as db:
+        assert db.exec(select(User).where(User.username == "held")).first() is None
+    app_db.engine_for.cache_clear()
+    assert main(["create-user", "--username", "held", "--password", "a-long-password-1"]) == 0

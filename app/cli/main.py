@@ -234,7 +234,21 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    return args.handler(args)
+    from sqlalchemy.exc import DBAPIError
+
+    from app.db import database_busy
+
+    try:
+        return args.handler(args)
+    except DBAPIError as error:
+        if not database_busy(error):
+            raise
+        # another writer held the write lock past the busy timeout (SQLite's, PostgreSQL's
+        # lock_timeout): nothing was written; a sentence, not a traceback
+        from app.web.i18n import translate
+
+        print(f"error: {translate('error.busy', 'en')}", file=sys.stderr)
+        return 3
 
 
 if __name__ == "__main__":
