@@ -284,6 +284,16 @@ def post_json(client, path: str, body: dict, page: str):
     )
 
 
+def turn_heading_table(client, session_id: int, position: int, token: str):
+    """The heading part's table turned to ``position``, as the lab page's script asks (JSON,
+    the page's CSRF token)."""
+    return client.post(
+        f"/lab/sessions/{session_id}/turn",
+        json={"part": "heading", "position": position},
+        headers={"X-CSRF-Token": token, "Accept": "application/json"},
+    )
+
+
 def save_manual(client, session_id, part, columns, unit="deg/h"):
     return post_json(
         client,

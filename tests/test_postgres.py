@@ -363,7 +363,7 @@ def test_a_write_lock_held_past_the_lock_timeout_answers_503_busy(student_client
     from sqlalchemy import event
 
     from app.db import BUSY_TIMEOUT_MS, WRITE_LOCK_KEY, get_engine
-    from tests.factories import new_session
+    from tests.factories import csrf_from, new_session, turn_heading_table
 
     engine = get_engine()
     with engine.connect() as connection:
@@ -381,22 +381,14 @@ def test_a_write_lock_held_past_the_lock_timeout_answers_503_busy(student_client
     try:
         session_id = new_session(student_client)
         page = f"/lab/sessions/{session_id}"
-        token = student_client.get(page).text.split('name="csrf_token" value="')[1].split('"')[0]
+        token = csrf_from(student_client, page)
         with holder.connect() as other:  # another process's exclusive write, held
             other.exec_driver_sql(f"SELECT pg_advisory_lock({WRITE_LOCK_KEY})")
-            reply = student_client.post(
-                f"{page}/turn",
-                json={"part": "heading", "position": 2},
-                headers={"X-CSRF-Token": token, "Accept": "application/json"},
-            )
+            reply = turn_heading_table(student_client, session_id, 2, token)
             assert reply.status_code == 503 and reply.headers["Retry-After"] == "2"
             assert "very busy" in reply.json()["detail"]
             other.exec_driver_sql(f"SELECT pg_advisory_unlock({WRITE_LOCK_KEY})")
-        reply = student_client.post(
-            f"{page}/turn",
-            json={"part": "heading", "position": 2},
-            headers={"X-CSRF-Token": token},
-        )
+        reply = turn_heading_table(student_client, session_id, 2, token)
         assert reply.status_code == 200
         with read_session() as db:
             assert db.get(LabSession, session_id).sim_table_heading == 2

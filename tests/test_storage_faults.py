@@ -12,7 +12,15 @@ from sqlmodel import select
 
 from app.db import read_session
 from app.models import LabSession
-from tests.factories import API, new_api_session, new_session, post_form, token_for
+from tests.factories import (
+    API,
+    csrf_from,
+    new_api_session,
+    new_session,
+    post_form,
+    token_for,
+    turn_heading_table,
+)
 
 pytestmark = pytest.mark.sqlite_only
 
@@ -115,23 +123,15 @@ def test_a_write_lock_held_past_the_busy_timeout_answers_503_busy(student_client
     try:
         session_id = new_session_id(student_client)
         page = f"/lab/sessions/{session_id}"
-        token = student_client.get(page).text.split('name="csrf_token" value="')[1].split('"')[0]
+        token = csrf_from(student_client, page)
         holder.execute("BEGIN IMMEDIATE")
-        reply = student_client.post(
-            f"{page}/turn",
-            json={"part": "heading", "position": 2},
-            headers={"X-CSRF-Token": token, "Accept": "application/json"},
-        )
+        reply = turn_heading_table(student_client, session_id, 2, token)
         assert reply.status_code == 503 and reply.headers["Retry-After"] == "2"
         assert "very busy" in reply.json()["detail"]
         reply = student_client.post(f"{page}/submit", data={"csrf_token": token})
         assert reply.status_code == 503 and "very busy" in reply.text
         holder.execute("ROLLBACK")
-        reply = student_client.post(
-            f"{page}/turn",
-            json={"part": "heading", "position": 2},
-            headers={"X-CSRF-Token": token},
-        )
+        reply = turn_heading_table(student_client, session_id, 2, token)
         assert reply.status_code == 200
         with read_session() as db:
             assert db.get(LabSession, session_id).sim_table_heading == 2
