@@ -234,13 +234,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    from sqlalchemy.exc import DBAPIError
-
-    from app.db import database_busy
-
     try:
         return args.handler(args)
-    except DBAPIError as error:
+    except Exception as error:
+        # (imported only now: the science commands never load the database's modules)
+        from app.db import database_busy
+
         if not database_busy(error):
             raise
         # another writer held the write lock past the busy timeout (SQLite's, PostgreSQL's
