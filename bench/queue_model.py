@@ -107,6 +107,7 @@ from class_cpu import (  # noqa: E402
 from queue_sim import (  # noqa: E402
     CALL_HANDOFF,
     HANDOFF_S,
+    LOGIN_TRIPS_AFTER_HASH,
     OUTSIDE,
     STREAM,
     STREAM_SPLIT,
@@ -642,6 +643,14 @@ def main() -> int:
         "1.08-1.13, bench/README.md forty-third part)",
     )
     parser.add_argument(
+        "--login-trips-after-hash",
+        type=int,
+        default=LOGIN_TRIPS_AFTER_HASH,
+        metavar="N",
+        help="a log-in's last N round trips to PostgreSQL after its hash, as the app makes "
+        "them (0: all before it, the model before the forty-fourth part)",
+    )
+    parser.add_argument(
         "--client-frame-weight",
         type=float,
         default=1.0,
@@ -756,6 +765,7 @@ def main() -> int:
         "per_core": not args.cores_shared_evenly,
         "balance_s": args.balance_us / 1e6,
         "yielding": tuple(args.yielding),
+        "login_trips_after_hash": args.login_trips_after_hash,
     }
 
     def simulate_seed(

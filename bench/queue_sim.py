@@ -84,6 +84,11 @@ WRITE_SLOTS = 8
 WORK_PLACES = 2  # GYROLAB_REQUEST_CONCURRENCY: HTTP requests inside a worker at once
 TURN_PATIENCE_S = 0.05  # app.db: a write waiting longer for the lock gives its place back
 HASH_SLOTS = 4
+# A log-in's round trips to PostgreSQL after its password hash: a connection checked out
+# (its ping), the transaction begun, the charges deleted, the session row inserted, the
+# commit (``accounts.security.log_in``, ``accounts.pages.login``; counted in the app by
+# ``test_a_log_ins_round_trips_after_its_hash_are_the_models``)
+LOGIN_TRIPS_AFTER_HASH = 5
 
 
 # a served worker's sys.getswitchinterval(): GYROLAB_SWITCH_INTERVAL_MS, 1 ms since
@@ -198,6 +203,7 @@ def simulate(
     per_core: bool = True,
     balance_s: float = 0.0,
     yielding: tuple[str, ...] = (),
+    login_trips_after_hash: int = LOGIN_TRIPS_AFTER_HASH,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -304,7 +310,10 @@ def simulate(
     the last 0.5 ms where it is); ``yielding``: with ``per_core``, the pools ("hash",
     "client", …) whose threads run only on what the others leave of their core (a
     long-running thread behind threads woken for short bursts; none by default); whole
-    cores only (else shared evenly).
+    cores only (else shared evenly); ``login_trips_after_hash``: on PostgreSQL, a log-in's
+    last round trips that the app makes after the password hash, without its work place
+    (the charges deleted, the session row inserted, the commit; 0: all before the hash,
+    the model before 2026-12-06 night).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -576,7 +585,13 @@ def simulate(
         if pieces:
             work = one_piece_per_trip(work, pieces)
         round_trips = 0 if one_writer else int(round(calls))
-        if round_trips and not pieces:  # the thread's work between round trips to the database
+        after_hash = min(login_trips_after_hash, round_trips) if route == LOGIN else 0
+        if after_hash:  # the session row and its commit after the hash, as the app does
+            piece = threads / (round_trips + 2)
+            trip = [("thread", piece), ("db", db / round_trips), ("wait", round_trip_s)]
+            work = [*trip * (round_trips - after_hash), ("thread", piece), ("give way", 0.0),
+                    ("hash", hash_s), *trip * after_hash, ("thread", piece)]  # fmt: skip
+        elif round_trips and not pieces:  # the thread's work between round trips to the database
             piece = work[0][1] / (round_trips + 1)
             trip = [("thread", piece), ("db", db / round_trips), ("wait", round_trip_s)]
             work[:1] = trip * round_trips + [("thread", piece)]

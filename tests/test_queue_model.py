@@ -1311,6 +1311,76 @@ def test_postgresqls_round_trips_are_shared_among_a_requests_trips():
         assert stages.count("wait") == 10 and stages.count("loop step") == 5
 
 
+def test_a_log_in_on_postgresql_makes_its_last_round_trips_after_the_hash():
+    """The app writes a log-in's session row after the password hash, its work place given
+    back: the model's log-in makes its last ``LOGIN_TRIPS_AFTER_HASH`` round trips after
+    the hash (0: all before it, the model before).  Alone, its latency is the same either
+    way: its CPU, its hash and one round trip per call."""
+    alone = {"ramp": 0.0, "teacher": False, "round_trip_s": 0.1 * MS, "wake_free": False}
+    login = "POST /login"
+    latencies = {}
+    for after in (0, queue_sim.LOGIN_TRIPS_AFTER_HASH):
+        log: list = []
+        result = queue_sim.simulate(
+            costs(), 1, 1, 2.0, one_writer=False, hash_s=2 * MS, stage_log=log,
+            login_trips_after_hash=after, **alone,
+        )  # fmt: skip
+        stages = dict(log)[login]
+        assert stages.count("wait") == 10  # the route's ten calls, each a round trip
+        assert stages[stages.index("hash") :].count("wait") == after
+        assert stages.index("give way") < stages.index("hash")
+        latencies[after] = result["latencies"][login]
+    # 2 client, 1 loop, 1 thread, 2 hash, 1 database, 10 round trips of 0.1 ms
+    assert latencies[0] == pytest.approx([8 * MS], abs=1e-5)
+    assert latencies[queue_sim.LOGIN_TRIPS_AFTER_HASH] == pytest.approx(latencies[0], abs=1e-5)
+
+
+@pytest.mark.postgres_only
+def test_a_log_ins_round_trips_after_its_hash_are_the_models(client):
+    """The model's ``LOGIN_TRIPS_AFTER_HASH`` is what the app does: after a log-in's
+    password check, its round trips to PostgreSQL -- a connection's ping, BEGIN, each
+    statement, COMMIT -- counted as SQLAlchemy sends them."""
+    from sqlalchemy import event
+
+    import app.accounts.security as security
+    from app.config import get_settings
+    from app.db import engine_for
+    from app.models import Role
+    from tests.factories import PASSWORD, csrf_from, make_user
+
+    make_user("counted", Role.student)
+    token = csrf_from(client, "/login")
+    sent: list[str] = []
+    engine = engine_for(get_settings().database_url)
+    listeners = {
+        "before_cursor_execute": lambda *args: sent.append(args[2].split()[0].upper()),
+        "begin": lambda *args: sent.append("BEGIN"),
+        "commit": lambda *args: sent.append("COMMIT"),
+    }
+    for name, listener in listeners.items():
+        event.listen(engine, name, listener)
+    checked = security.check_password
+
+    def marked(*args, **kwargs):
+        sent.append("hash")
+        return checked(*args, **kwargs)
+
+    try:
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setattr(security, "check_password", marked)
+            answer = client.post(
+                "/login",
+                data={"username": "counted", "password": PASSWORD, "csrf_token": token},
+            )
+    finally:
+        for name, listener in listeners.items():
+            event.remove(engine, name, listener)
+    assert answer.status_code == 303
+    after = sent[sent.index("hash") + 1 :]
+    assert "INSERT" in after and after[-1] == "COMMIT"  # the session row, committed
+    assert len(after) == queue_sim.LOGIN_TRIPS_AFTER_HASH, after
+
+
 def test_the_cpu_scale_moves_the_servers_cpu_alone():
     """``--cpu-scale``: each request's server CPU (its loop's part and its own task's on
     the loop too) times the factor, in a route's list of requests as in a mean; the
@@ -1334,12 +1404,14 @@ def test_a_wake_up_counts_itself_among_the_cores_asked_for():
     wake-up with the cores' spinners and the waking thread all asking, so with both cores
     busy a woken thread already waits (half a core beyond).  Eight students on two cores
     pay for it; without the woken thread counted (the model before) the two busy cores
-    cost it nothing, and the class is no slower for ``wake_busy_s``.  Alone, neither pays."""
+    cost it nothing, and the class is no slower for ``wake_busy_s``.  Alone, neither pays.
+    (The log-ins' round trips all inside their work places, so that the worker's two
+    places keep two threads at most asking for the two cores.)"""
 
     def mean_latency(students: int, busy: float, counts_itself: bool) -> float:
         result = queue_sim.simulate(
             costs(), students, 1, 2.0, ramp=0.0, teacher=False, one_writer=False,
-            wake_busy_s=busy, wake_counts_itself=counts_itself,
+            wake_busy_s=busy, wake_counts_itself=counts_itself, login_trips_after_hash=0,
         )  # fmt: skip
         return float(np.mean(result["latencies"]["GET /lab/sessions/{id}"]))
 
