@@ -585,16 +585,15 @@ def simulate(
         if pieces:
             work = one_piece_per_trip(work, pieces)
         round_trips = 0 if one_writer else int(round(calls))
-        after_hash = min(login_trips_after_hash, round_trips) if route == LOGIN else 0
-        if after_hash:  # the session row and its commit after the hash, as the app does
-            piece = threads / (round_trips + 2)
+        if round_trips and not pieces:  # the thread's work between round trips to the database
+            # a log-in's last ones after its hash (the session row and its commit, as the
+            # app makes them), with a piece of the thread's work after them
+            after_hash = min(login_trips_after_hash, round_trips) if route == LOGIN else 0
+            piece = work[0][1] / (round_trips + 1 + (after_hash > 0))
             trip = [("thread", piece), ("db", db / round_trips), ("wait", round_trip_s)]
-            work = [*trip * (round_trips - after_hash), ("thread", piece), ("give way", 0.0),
-                    ("hash", hash_s), *trip * after_hash, ("thread", piece)]  # fmt: skip
-        elif round_trips and not pieces:  # the thread's work between round trips to the database
-            piece = work[0][1] / (round_trips + 1)
-            trip = [("thread", piece), ("db", db / round_trips), ("wait", round_trip_s)]
-            work[:1] = trip * round_trips + [("thread", piece)]
+            work[:1] = trip * (round_trips - after_hash) + [("thread", piece)]
+            if after_hash:  # after the give-way and the hash
+                work += trip * after_hash + [("thread", piece)]
         # the event loop's part inside the app (routing, dependencies, the answer: the
         # request's own task, ``in_class``) runs holding the request's places; the rest
         # (the server reading and writing its socket) before and after
