@@ -18,7 +18,7 @@ next sample offset, attempt numbers, throttle windows) is correct without per-si
     advisory lock in SHARED mode, so row writers run in parallel, and locks what its
     read-check-write needs: rows with ``SELECT … FOR UPDATE`` (``lock_rows``: the lab
     session, then its owner for the storage quota; the student starting a session), names
-    with advisory locks (``lock_keys``: a log-in's account and address for the throttle),
+    with advisory locks (``lock_keys``: a log-in's account, for the throttle),
     so two writes to one thing queue and writes to different things do not;
   - any other writer (``writer``: account administration, courses, assignments, reviews,
     joining a lab group -- rare, and their checks span many rows) takes the same advisory
@@ -354,7 +354,7 @@ def lock_rows(session: Session, model, *ids: int) -> bool:
 
 
 def lock_keys(session: Session, *keys: str) -> bool:
-    """Transaction-scoped advisory locks on names (a log-in's account and address) in a
+    """Transaction-scoped advisory locks on names (a log-in's account) in a
     row writer's transaction on PostgreSQL, for a read-check-write over rows that do not
     exist yet (the throttle's counts, then a new row); taken in sorted order, in one
     statement (one round trip: a class logs in at once)."""

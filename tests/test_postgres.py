@@ -313,44 +313,65 @@ def test_one_session_per_student_and_assignment_when_started_at_once(app, backen
 
 
 @pytest.mark.postgres_only
-def test_a_log_in_locks_its_account_not_the_database(app):
-    """The throttle's count-then-charge runs under advisory locks on the account and the
-    address: a log-in to another account goes through while one is being checked; a
-    second log-in to the same account waits for it."""
-    from app.accounts.security import log_in
+def test_a_log_in_locks_its_account_not_the_database(app, monkeypatch):
+    """The throttle's count-then-charge runs under an advisory lock on the account alone:
+    while alpha's attempt is being counted and charged, a log-in to another account from
+    the same address, without a device cookie (a class behind one address, each student's
+    first log-in), goes through; a second log-in to alpha waits for the first."""
+    import app.accounts.security as security
     from app.config import get_settings
-    from app.db import lock_keys
+    from app.db import NAMED_LOCKS, get_engine
 
     for name in ("alpha", "beta"):
         make_user(name)
     settings = get_settings()
+    counting = security.login_wait
     holding, release = threading.Event(), threading.Event()
     finished: list[str] = []
 
-    def checking_alpha() -> None:
-        with write_session(rows=True) as db:
-            lock_keys(db, "account:alpha")
+    def held_for_alpha(db, account, *args):
+        wait = counting(db, account, *args)  # inside the locked transaction
+        if account == "alpha" and not holding.is_set():
             holding.set()
             release.wait(10)
-        finished.append("first alpha")
+        return wait
 
-    def log_in_as(name: str, address: str) -> None:
+    monkeypatch.setattr(security, "login_wait", held_for_alpha)
+
+    def log_in_as(name: str, done: str) -> None:
         with write_session(rows=True) as db:
-            outcome = log_in(db, name, "correct-horse-42", address, settings)
+            outcome = security.log_in(db, name, "correct-horse-42", "10.0.0.2", settings)
             assert outcome.user is not None
-        finished.append(name)
+        finished.append(done)
 
-    first = threading.Thread(target=checking_alpha)
+    first = threading.Thread(target=log_in_as, args=("alpha", "first alpha"))
     first.start()
-    holding.wait(10)
-    second = threading.Thread(target=log_in_as, args=("alpha", "10.0.0.2"))
+    assert holding.wait(10)
+    second = threading.Thread(target=log_in_as, args=("alpha", "second alpha"))
     second.start()
-    log_in_as("beta", "10.0.0.3")  # does not wait for alpha's check
+    with get_engine().connect() as watcher:  # the second alpha waits for the account's lock
+        for _ in range(500):
+            waiting = watcher.execute(
+                text(
+                    "SELECT count(*) FROM pg_locks WHERE locktype = 'advisory' AND NOT granted"
+                    " AND classid = :space AND objsubid = 2 AND database = "
+                    "(SELECT oid FROM pg_database WHERE datname = current_database())"
+                ),
+                {"space": NAMED_LOCKS},
+            ).scalar()
+            if waiting:
+                break
+            threading.Event().wait(0.01)
+    assert waiting == 1
+    beta = threading.Thread(target=log_in_as, args=("beta", "beta"))
+    beta.start()
+    beta.join(10)  # same address, no device cookie: not held up by alpha's check
     assert finished == ["beta"]
     release.set()
     first.join(10)
     second.join(10)
-    assert finished == ["beta", "first alpha", "alpha"]
+    assert finished[0] == "beta"
+    assert sorted(finished[1:]) == ["first alpha", "second alpha"]
 
 
 @pytest.mark.postgres_only

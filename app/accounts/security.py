@@ -254,9 +254,14 @@ def log_in(
     account = _account_key(username)
     address = address[:128]
     device = trusted_device(device_cookie, account, settings.secret_key)
-    # the throttle is a read-check-write (count, then charge): one at a time per account,
-    # address and device (PostgreSQL row writers; SQLite's single writer needs nothing)
-    lock_keys(db, f"account:{account}", f"address:{address}", f"device:{device}")
+    # the throttle is a read-check-write (count, then charge): one at a time per account
+    # (PostgreSQL row writers; SQLite's single writer needs nothing).  Everything charged
+    # here is the account's: its pair (account + address), its account count, or its
+    # device (a device cookie names its account).  The address and the device are not
+    # locked: an address's failures are written after the hash, never here, and a class
+    # behind one address -- or every browser without a device cookie -- would otherwise
+    # check its passwords one log-in at a time
+    lock_keys(db, f"account:{account}")
     wait, trusted = login_wait(db, account, address, device, settings)
     if wait:
         return LoginOutcome(None, "throttled", wait)
