@@ -71,6 +71,11 @@ CALL_HANDOFFS_LABEL = "SQLite calls handing the interpreter on (bench_handoffs.p
 SQLITE_CALLS = os.environ.get("GYROLAB_BENCH_SQLITE_CALLS")
 MACHINE_LABEL = "the whole machine during the class (/proc/stat, /proc/pressure/cpu)"
 RUN_QUEUE_LABEL = "waited for a core / ran during the class (run_queue.py)"
+# each group's CPU by the class's time, for queue_model.py to set beside its own
+RUN_QUEUE_BIN_S = 0.25
+RAN_BY_TIME_LABEL = (
+    f"on a core in each {RUN_QUEUE_BIN_S} s from the first request (run_queue.py), s"
+)
 STEAL_LABEL = "the host's steal during the class (/proc/stat)"
 # A run in which the hypervisor kept the cores from the class for more than this share of
 # the time it wanted them measures the host as much as the app: 41-60 % in three runs of
@@ -145,11 +150,17 @@ class Tally:
     run_queue: dict[str, tuple[float, float, int]] = field(default_factory=dict)
     # with --run-queue: the whole machine over the class (run_queue.machine_times)
     machine: tuple[float, ...] = ()
+    # when the class's first request was sent (time.perf_counter), and with --run-queue
+    # per group of processes its time on a core in each RUN_QUEUE_BIN_S from then, s
+    first_sent: float | None = None
+    ran_by_time: dict[str, list[float]] = field(default_factory=dict)
 
     async def request(
         self, client: httpx.AsyncClient, method: str, url: str, route: str, ok=(200,), **kw
     ) -> httpx.Response:
         start = time.perf_counter()
+        if self.first_sent is None:
+            self.first_sent = start
         try:
             response = await client.request(method, url, **kw)
         except httpx.HTTPError as error:
@@ -491,6 +502,11 @@ def report(name: str, tally: Tally, wall: float, lost: int, checked: int, worker
             f" {slices} slices)"
             for group, (ran, waited, slices) in tally.run_queue.items()
         ))  # fmt: skip
+    if tally.ran_by_time:
+        lines.append(f"- {RAN_BY_TIME_LABEL}: " + "; ".join(
+            f"{group} " + " ".join(f"{ran:.3f}" for ran in series)
+            for group, series in tally.ran_by_time.items()
+        ))  # fmt: skip
     if tally.machine:
         lines.append(steal_line(*tally.machine[:2]))
     if tally.machine and tally.run_queue:
@@ -575,6 +591,8 @@ def run_backend(backend: str, args) -> tuple[str, bool]:
                     for group, waits in watch.waits().items()
                 }
                 tally.machine = watch.machine()
+                if args.run_queue and tally.first_sent is not None:
+                    tally.ran_by_time = watch.ran_by_time(tally.first_sent, RUN_QUEUE_BIN_S)
                 tally.handoffs = waits + ([hand_off_constants()] if args.handoffs else [])
                 if args.handoffs and calls_from is not None and backend == "sqlite":
                     tally.call_handoffs = class_call_handoffs(calls_from)

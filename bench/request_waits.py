@@ -194,6 +194,41 @@ def threads_report(
     return lines
 
 
+def ran_report(
+    bins: dict[tuple[int, str], tuple[float, ...]], bin_s: float,
+    measured: dict[str, list[float]], measured_bin_s: float,
+) -> list[str]:  # fmt: skip
+    """Per window of ``WINDOWS``, each group's CPU, s: the model's (its "threads by time",
+    the hashes folded into the server) beside what the run's threads ran in the same window
+    (``measured``: per group "server", "db", "client", its time on a core in each
+    ``measured_bin_s`` from the class's first request, as ``load_test.py --run-queue``
+    prints it), and the two added up -- where the model spends the class's CPU at other
+    times than the run did."""
+    windows = threads_by_window(bins, bin_s)
+    groups = ("server", "db", "client")
+    last = min(
+        (max((index for index, _ in bins), default=-1) + 1) * bin_s,
+        max((len(series) for series in measured.values()), default=0) * measured_bin_s,
+    )
+    lines = ["  CPU run by the class's time, s, model | run (schedstat): "
+             + " · ".join(groups) + " · in all"]  # fmt: skip
+    for name, start, end in WINDOWS:
+        end = min(end, last)
+        if end <= start:
+            continue
+        model = {group: windows[name, group][0] for group in groups}
+        model["server"] += windows[name, "hash"][0]
+        run = {
+            group: sum(measured.get(group, [])[int(round(start / measured_bin_s)):
+                                               int(round(end / measured_bin_s))])
+            for group in groups
+        }  # fmt: skip
+        cells = " · ".join(f"{model[group]:5.2f} | {run[group]:5.2f}" for group in groups)
+        total = f"{sum(model.values()):5.2f} | {sum(run.values()):5.2f}"
+        lines.append(f"  {name:6s} {start:g}-{end:g} s  {cells} · {total}")
+    return lines
+
+
 def compare_windows(model: dict[str, np.ndarray], measured: dict[str, np.ndarray]) -> None:
     """``by_window`` of the model beside the measurement: where the class's time inside the
     server goes at its start, between and in its burst (``modelled``'s columns: the

@@ -14,9 +14,12 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+
+import numpy as np
 
 POLL_S = 0.25
 
@@ -123,6 +126,8 @@ class RunQueueWatch:
         self._last: dict[str, dict[tuple[int, int], tuple[int, int, int]]] = {}
         self._autogroups: dict[str, set[str]] = {name: set() for name in groups}
         self._machine: list[tuple[float, ...]] = []
+        # at each poll: (time.perf_counter(), per group its threads' time on a core so far, s)
+        self._series: list[tuple[float, dict[str, float]]] = []
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._watch, name="run-queue-watch", daemon=True)
 
@@ -138,6 +143,11 @@ class RunQueueWatch:
                     if key not in start:  # born during the watch: from zero
                         start[key] = stats if first else (0, 0, 0)
                     seen[key] = stats
+        self._series.append((time.perf_counter(), {
+            name: sum(stats[0] - self._first[name][key][0]
+                      for key, stats in self._last[name].items()) / 1e9
+            for name in self.groups
+        }))  # fmt: skip
 
     def _watch(self) -> None:
         while not self._stop.wait(self.poll_s):
@@ -161,6 +171,12 @@ class RunQueueWatch:
         first, last = self._machine
         return tuple(b - a for a, b in zip(first, last, strict=True))
 
+    def ran_by_time(self, since: float, bin_s: float = POLL_S) -> dict[str, list[float]]:
+        """Per group, its threads' time on a core in each ``bin_s`` from ``since`` (a
+        ``time.perf_counter()``: the class's first request) to the last poll, s
+        (:func:`binned`)."""
+        return binned(self._series, since, bin_s)
+
     def waits(self) -> dict[str, Waits]:
         result = {}
         for name in self.groups:
@@ -171,6 +187,27 @@ class RunQueueWatch:
                 mains = [(pid, tid) for pid, tid in last if pid == tid]
                 result[self.main_threads[name]] = _summed(start, last, mains, groups)
         return result
+
+
+def binned(
+    series: list[tuple[float, dict[str, float]]], since: float, bin_s: float
+) -> dict[str, list[float]]:
+    """Per group, the growth of its running total in each ``bin_s`` from ``since`` to the
+    last sample: ``series`` is (time, per group a total so far), in time order; the total
+    at a bin's edge is interpolated linearly between the samples around it (before the
+    first sample: the first's).  A poll every ``POLL_S`` puts each bin's CPU within a poll
+    of when it was spent."""
+    if not series:
+        return {}
+    times = np.array([when for when, _ in series])
+    bins = int((times[-1] - since) // bin_s) if times[-1] > since else 0
+    edges = since + bin_s * np.arange(bins + 1)
+    out = {}
+    for name in series[0][1]:
+        totals = np.array([values.get(name, 0.0) for _, values in series])
+        at_edges = np.interp(edges, times, totals)
+        out[name] = [round(float(x), 4) for x in np.diff(at_edges)]
+    return out
 
 
 def _summed(start: dict, last: dict, keys: list, groups: tuple[str, ...]) -> Waits:

@@ -1081,6 +1081,128 @@ def test_the_run_queue_of_a_run_is_read_from_its_report(tmp_path):
     assert (table["busy"], table["pressure"]) == (35.25, 3.0)
 
 
+def test_a_running_total_is_binned_by_the_classs_time():
+    """run_queue.binned: each bin's growth of a total sampled at uneven times, the edges
+    interpolated between the samples (before the first: the first's)."""
+    import run_queue
+
+    series = [(10.0, {"a": 0.0, "b": 1.0}), (10.25, {"a": 0.1, "b": 1.0}),
+              (10.5, {"a": 0.3, "b": 1.5}), (11.0, {"a": 0.4, "b": 1.5})]  # fmt: skip
+    assert run_queue.binned(series, 10.0, 0.25) == {
+        "a": pytest.approx([0.1, 0.2, 0.05, 0.05]), "b": pytest.approx([0.0, 0.5, 0.0, 0.0])
+    }  # fmt: skip
+    # from before the first sample: nothing grew there
+    assert run_queue.binned(series, 9.5, 0.5)["a"] == pytest.approx([0.0, 0.3, 0.1])
+    assert run_queue.binned([], 0.0, 0.25) == {}
+
+
+def test_the_run_queue_watch_tells_a_groups_cpu_by_the_classs_time():
+    """RunQueueWatch.ran_by_time: a process that burns 0.2 s of CPU after 0.3 s asleep
+    shows its CPU in the bins after it began, and next to none before.  (Another process:
+    a thread of the watch's own process would hold its interpreter and starve the polls.)"""
+    import subprocess
+    import sys
+    import time
+
+    import run_queue
+
+    burner = subprocess.Popen(
+        [sys.executable, "-c", (
+            "import sys, time\n"
+            "print('ready', flush=True); sys.stdin.readline()\n"
+            "print('burning', flush=True); end = time.thread_time() + 0.2\n"
+            "while time.thread_time() < end: pass\n"
+            "print('done', flush=True); sys.stdin.readline()\n"
+        )],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert burner.stdout.readline().strip() == "ready"
+        with run_queue.RunQueueWatch({"it": lambda: [burner.pid]}, poll_s=0.02) as watch:
+            start = time.perf_counter()
+            time.sleep(0.3)
+            burner.stdin.write("go\n")
+            burner.stdin.flush()
+            assert burner.stdout.readline().strip() == "burning"
+            began = time.perf_counter()
+            assert burner.stdout.readline().strip() == "done"
+            time.sleep(0.3)  # the burn's last bin whole before the watch ends
+    finally:
+        burner.stdin.write("end\n")
+        burner.stdin.close()
+        burner.wait(10)
+    bins = watch.ran_by_time(start, 0.1)["it"]
+    before = int((began - start) // 0.1)  # the whole bins before the burn began
+    assert before >= 2 and sum(bins[:before]) < 0.03
+    assert 0.17 <= sum(bins) <= 0.3
+
+
+def test_a_runs_cpu_by_its_time_is_read_and_set_beside_the_models(tmp_path):
+    """load_test.py --run-queue prints each group's CPU by the class's time; the model
+    reads it and sets it beside its own threads' by window."""
+    import load_test
+    import request_waits
+
+    tally = load_test.Tally()
+    tally.latencies["GET /lab"] = [0.010, 0.020]
+    tally.ran_by_time = {
+        "server": [0.4] * 40, "load generator": [0.05] * 40, "PostgreSQL": [0.1] * 40,
+    }  # fmt: skip
+    path = tmp_path / "run.txt"
+    path.write_text(load_test.report("PostgreSQL", tally, 10.0, 0, 16, 2) + "\n")
+    measured = queue_model.ran_by_time(path)
+    assert measured == {"server": [0.4] * 40, "client": [0.05] * 40, "db": [0.1] * 40}
+    # the model's 0.25 s bins: the server 0.2 s a bin, the hashes 1 s in its first bin
+    bins = {(index, "server"): (0.2, 0.0) for index in range(40)}
+    bins[0, "hash"] = (1.0, 0.0)
+    lines = request_waits.ran_report(bins, 0.25, measured, load_test.RUN_QUEUE_BIN_S)
+    start = next(line for line in lines if line.strip().startswith("start"))
+    # 0-5 s: the model's server 20 bins × 0.2 + 1 s of hashes; the run's 20 × 0.4
+    assert "5.00 |  8.00" in start and "0.00 |  1.00" in start and "0.00 |  2.00" in start
+    assert start.rstrip().endswith("5.00 | 11.00")
+    # a window cut at the last bin either has (part A: 5-10 s), a window after it none
+    assert any(line.strip().startswith("part A 5-10 s") for line in lines)
+    assert not any(line.strip().startswith("part B") for line in lines)
+
+
+def test_the_load_generators_cpu_per_frame_is_fitted_to_when_a_run_spent_it(tmp_path):
+    """class_cpu.fitted_frame_weight: a run whose load generator spent 0.9× its requests'
+    alone CPU, 0.1× its frames' and 0.02 s a bin besides, bin by bin, gives back a frame
+    weight of 0.1 / 0.9; a run without requests' CPU tells none."""
+    from class_cpu import fitted_frame_weight
+
+    costs = {"GET /lab": (0.0, 0.0, 0.002), "POST /lab/sessions/{id}/turn": (0.0, 0.0, 0.003),
+             queue_sim.STREAM: (0.0, 0.0, 0.0013)}  # fmt: skip
+    rng = np.random.default_rng(5)
+    t0 = 100.0
+    lines, spent = [], []  # (when, CPU) as the load generator spent it
+    for route, low, high, count in (("GET /lab", 0.0, 2.0, 100), ("/lab/sessions/7/turn",
+                                     4.0, 8.0, 50)):  # fmt: skip
+        name = "GET /lab" if route == "GET /lab" else "POST /lab/sessions/{id}/turn"
+        method, path = ("GET", "/lab") if route == "GET /lab" else ("POST", route)
+        for sent in np.sort(rng.uniform(low, high, count)):
+            answered = sent + rng.uniform(0.01, 0.2)
+            lines.append(f"{method} {path} {t0 + sent:.6f} {t0 + answered:.6f} 3\n")
+            spent += [(sent, 0.9 * costs[name][2] / 2), (answered, 0.9 * costs[name][2] / 2)]
+    lines.sort(key=lambda line: float(line.split()[2]))
+    lines[0] = lines[0].replace(lines[0].split()[2], f"{t0:.6f}")  # the class's first
+    spent[0] = (0.0, spent[0][1])
+    positions = []
+    for k in range(20):
+        first = 3.0 + 0.1 * k
+        positions.append(f"{k} heading 1 0 0 {t0 + first:.6f} {t0 + first + 5:.6f} 0\n")
+        spent += [(when, 0.1 * 0.0013) for when in np.linspace(first, first + 5, 20)]
+    client, stream = tmp_path / "client.txt", tmp_path / "stream.txt"
+    client.write_text("".join(lines))
+    stream.write_text("".join(positions))
+    edges = np.arange(0.0, 10.25, 0.25)
+    when, cpu = zip(*spent, strict=True)
+    ran = np.histogram(when, bins=edges, weights=cpu)[0] + 0.02
+    weight = fitted_frame_weight(list(ran), 0.25, client, stream, 400, costs)
+    assert weight == pytest.approx(0.1 / 0.9, rel=1e-6)
+    assert fitted_frame_weight([0.02] * 40, 0.25, client, stream, 400, costs) is None
+
+
 def test_a_runs_steal_is_reported_and_read_with_or_without_the_run_queue(tmp_path):
     """Every run says how long the hypervisor kept the cores from the class (steal) and its
     share of the time the class wanted them; over 5 % it notes that the p95s are the host's
