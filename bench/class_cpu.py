@@ -220,3 +220,61 @@ def worker_shares(path: Path) -> list[float] | None:
             served[fields[5]] += 1
     total = sum(served.values())
     return sorted((count / total for count in served.values()), reverse=True) if total else None
+
+
+def fitted_frame_weight(
+    client_ran: list[float], bin_s: float, client_times: Path, stream_times: Path,
+    frames: int, costs: dict,
+) -> float | None:  # fmt: skip
+    """The load generator's CPU per stream frame against its requests' as a run spent them
+    (``in_class``'s ``frame_weight``), from when it spent it.
+
+    ``client_ran``: its CPU in each ``bin_s`` from the class's first request
+    (``load_test.py --run-queue``); ``client_times``, ``stream_times``: the run's requests
+    (``method path sent answered [who]``) and positions (``session part position asked
+    started first last saved``); ``frames``: the run's stream frames; ``costs``: one
+    student's alone, per route (its third field the load generator's CPU).  In each bin,
+
+        ran_b = k_r · R_b + k_f · F_b + k_0,
+
+    where R_b is the alone CPU of the requests sent or answered in it (half each) and F_b
+    that of the frames streamed in it (a position's spread evenly from its first sample to
+    its last), solved for k ≥ 0 by non-negative least squares (k_0: what the load generator
+    does every bin whatever it sends).  Returns k_f / k_r, or None where the bins do not
+    tell it (no requests' CPU fitted)."""
+    from scipy.optimize import nnls
+
+    requests = []
+    for line in client_times.read_text().splitlines():
+        fields = line.split()
+        if len(fields) in (4, 5):
+            requests.append((route_of(*fields[:2]), float(fields[2]), float(fields[3])))
+    spans = []
+    for line in stream_times.read_text().splitlines():
+        fields = line.split()
+        if len(fields) == 8:
+            spans.append((float(fields[5]), float(fields[6])))
+    if not requests or not spans or not client_ran or STREAM not in costs:
+        return None
+    start = min(sent for _, sent, _ in requests)
+    end = max(answered for _, _, answered in requests)
+    bins = min(len(client_ran), int((end - start) // bin_s) + 1)
+    asked = np.zeros((bins, 3))
+    asked[:, 2] = 1.0
+
+    def add(when: float, column: int, amount: float) -> None:
+        index = int((when - start) // bin_s)
+        if 0 <= index < bins:
+            asked[index, column] += amount
+
+    for route, sent, answered in requests:
+        if route in costs:
+            add(sent, 0, costs[route][2] / 2)
+            add(answered, 0, costs[route][2] / 2)
+    per_position = frames / len(spans)
+    frame_cost = costs[STREAM][2]
+    for first, last in spans:
+        for when in np.linspace(first, last, max(int(round(per_position)), 1)):
+            add(float(when), 1, frame_cost * per_position / max(int(round(per_position)), 1))
+    (requests_k, frames_k, _), _ = nnls(asked, np.asarray(client_ran[:bins], dtype=float))
+    return float(frames_k / requests_k) if requests_k > 0 else None

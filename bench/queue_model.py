@@ -98,6 +98,7 @@ import request_waits  # noqa: E402
 from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
 from class_cpu import (  # noqa: E402
     attributed_costs,
+    fitted_frame_weight,
     in_class,
     lock_trace_by_route,
     locked_shares,
@@ -299,6 +300,7 @@ def password_hash_cpu(tries: int = 5) -> float:
 # --- 3. measured against predicted -----------------------------------------------------------
 
 
+FRAMES_LINE = re.compile(r"(\d+) stream frames")
 CPU_LINE = re.compile(
     r"CPU used during the class: server ([\d.]+) s, PostgreSQL ([\d.]+) s, "
     r"load generator ([\d.]+) s"
@@ -323,6 +325,24 @@ RUN_QUEUE_KEYS = {
     "server": "server", "PostgreSQL": "db", "load generator": "client",
     load_test.LOOPS: "loop",
 }  # fmt: skip
+
+
+def ran_by_time(path: Path) -> dict[str, list[float]]:
+    """Per group ("server", "db", "client"), its threads' time on a core in each
+    ``load_test.RUN_QUEUE_BIN_S`` from the class's first request, s, as ``load_test.py
+    --run-queue`` printed it (the last class in the file); empty where it did not."""
+    found: dict[str, list[float]] = {}
+    for line in path.read_text().splitlines():
+        if load_test.RAN_BY_TIME_LABEL not in line:
+            continue
+        found = {}
+        for part in line.split(load_test.RAN_BY_TIME_LABEL + ":", 1)[1].split(";"):
+            words = part.split()
+            numbers = [word for word in words if re.fullmatch(r"-?[\d.]+", word)]
+            group = " ".join(word for word in words if word not in numbers)
+            if group in RUN_QUEUE_KEYS:
+                found[RUN_QUEUE_KEYS[group]] = [float(number) for number in numbers]
+    return found
 
 
 def measured_p95(path: Path) -> dict[str, dict[str, float]]:
@@ -896,6 +916,23 @@ def main() -> int:
             if result.get("threads by time"):
                 print("\n".join(request_waits.threads_report(
                     result["threads by time"], TIMELINE_BIN_S, "the model's threads")))  # fmt: skip
+                if measured_ran := ran_by_time(run):
+                    print("\n".join(request_waits.ran_report(
+                        result["threads by time"], TIMELINE_BIN_S, measured_ran,
+                        load_test.RUN_QUEUE_BIN_S,
+                    )))  # fmt: skip
+                    frames = FRAMES_LINE.search(run.read_text())
+                    if (measured_ran.get("client") and frames and len(args.client_times) > index
+                            and len(args.stream_times) > index):  # fmt: skip
+                        weight = fitted_frame_weight(
+                            measured_ran["client"], load_test.RUN_QUEUE_BIN_S,
+                            args.client_times[index], args.stream_times[index],
+                            int(frames.group(1)), alone,
+                        )  # fmt: skip
+                        if weight is not None:
+                            print(f"  the load generator's CPU per frame against its requests'"
+                                  f" as the run spent it: {weight:.2f} (fitted by the bin;"
+                                  f" --client-frame-weight to use it)")  # fmt: skip
             if "call free" in table:
                 free, busy = table["call free"], table["call busy"]
                 print(f"  (the run measured an SQLite call handing on"
