@@ -327,6 +327,20 @@ RUN_QUEUE_KEYS = {
 }  # fmt: skip
 
 
+def run_frame_weight(run: Path, index: int, args, alone: dict) -> float | None:
+    """The load generator's CPU per frame against its requests' as run number ``index``
+    spent it (``class_cpu.fitted_frame_weight``), or None where the run does not tell it
+    (no ``--run-queue`` line, no client or stream times given for it)."""
+    ran = ran_by_time(run).get("client")
+    frames = FRAMES_LINE.search(run.read_text())
+    if not ran or not frames or len(args.client_times) <= index or len(args.stream_times) <= index:
+        return None
+    return fitted_frame_weight(
+        ran, load_test.RUN_QUEUE_BIN_S, args.client_times[index], args.stream_times[index],
+        int(frames.group(1)), alone,
+    )  # fmt: skip
+
+
 def ran_by_time(path: Path) -> dict[str, list[float]]:
     """Per group ("server", "db", "client"), its threads' time on a core in each
     ``load_test.RUN_QUEUE_BIN_S`` from the class's first request, s, as ``load_test.py
@@ -652,7 +666,8 @@ def main() -> int:
         default=[],
         choices=["hash", "client", "released", "db"],
         help="each thread on its own core: these pools' threads run only on what the others "
-        "leave of their core (a long-running thread behind threads woken for short bursts)",
+        "leave of their core, and a thread woken does not wait for them (a long-running "
+        "thread behind threads woken for short bursts, as the kernel's EEVDF has it)",
     )
     parser.add_argument(
         "--hash-scale",
@@ -672,11 +687,13 @@ def main() -> int:
     )
     parser.add_argument(
         "--client-frame-weight",
-        type=float,
+        type=lambda value: value if value == "fit" else float(value),
         default=1.0,
         metavar="W",
         help="with --class-run: the load generator's CPU per stream frame W times its share "
-        "beside its requests' as one student's alone has them (the run's total kept)",
+        "beside its requests' as one student's alone has them (the run's total kept); "
+        "'fit': each run's own, fitted to when it spent its CPU (needs the run's "
+        "--run-queue line, --client-times and --stream-times)",
     )
     parser.add_argument(
         "--client-in-order",
@@ -854,7 +871,16 @@ def main() -> int:
         pools = {size: Pool() for size in {_students_of(run) for run in args.class_run}}
         for index, (cpu, run) in enumerate(zip(args.class_cpu, args.class_run, strict=True)):
             students = _students_of(run)
-            costs = class_costs(alone, own, cpu, run, not args.mean_costs, args.client_frame_weight)
+            frame_weight = args.client_frame_weight
+            if frame_weight == "fit":
+                frame_weight = run_frame_weight(run, index, args, alone)
+                if frame_weight is None:
+                    parser.error(
+                        f"--client-frame-weight fit: {run} does not tell it (needs its"
+                        " --run-queue line, --client-times and --stream-times)"
+                    )
+                print(f"\nthe load generator's CPU per frame fitted to {run}: {frame_weight:.2f}")
+            costs = class_costs(alone, own, cpu, run, not args.mean_costs, frame_weight)
             print_costs(costs, args.backend)
             times = args.server_times[index] if len(args.server_times) > index else None
             shares = worker_shares(times) if times and workers > 1 else None
@@ -921,18 +947,11 @@ def main() -> int:
                         result["threads by time"], TIMELINE_BIN_S, measured_ran,
                         load_test.RUN_QUEUE_BIN_S,
                     )))  # fmt: skip
-                    frames = FRAMES_LINE.search(run.read_text())
-                    if (measured_ran.get("client") and frames and len(args.client_times) > index
-                            and len(args.stream_times) > index):  # fmt: skip
-                        weight = fitted_frame_weight(
-                            measured_ran["client"], load_test.RUN_QUEUE_BIN_S,
-                            args.client_times[index], args.stream_times[index],
-                            int(frames.group(1)), alone,
-                        )  # fmt: skip
-                        if weight is not None:
-                            print(f"  the load generator's CPU per frame against its requests'"
-                                  f" as the run spent it: {weight:.2f} (fitted by the bin;"
-                                  f" --client-frame-weight to use it)")  # fmt: skip
+                    weight = run_frame_weight(run, index, args, alone)
+                    if weight is not None and args.client_frame_weight != "fit":
+                        print(f"  the load generator's CPU per frame against its requests'"
+                              f" as the run spent it: {weight:.2f} (fitted by the bin;"
+                              f" --client-frame-weight fit to use it)")  # fmt: skip
             if "call free" in table:
                 free, busy = table["call free"], table["call busy"]
                 print(f"  (the run measured an SQLite call handing on"

@@ -309,8 +309,11 @@ def simulate(
     core idle for shorter than its migration cost, 0.5 ms, and leaves a thread that ran in
     the last 0.5 ms where it is); ``yielding``: with ``per_core``, the pools ("hash",
     "client", …) whose threads run only on what the others leave of their core (a
-    long-running thread behind threads woken for short bursts; none by default); whole
-    cores only (else shared evenly); ``login_trips_after_hash``: on PostgreSQL, a log-in's
+    long-running thread behind threads woken for short bursts; none by default), and a
+    thread woken waits for a core only as long as the other pools' threads ask for more
+    than the cores there are (it goes before the long runners, as the kernel's EEVDF puts
+    a thread woken for a short burst before one that has run for long); whole cores only
+    (else shared evenly); ``login_trips_after_hash``: on PostgreSQL, a log-in's
     last round trips that the app makes after the password hash, without its work place
     (the charges deleted, the session row inserted, the commit; 0: all before the hash,
     the model before 2026-12-06 night).
@@ -1081,6 +1084,9 @@ def simulate(
         scale = min(1.0, cores / asked) if asked else 1.0
         overdrawn[0] = max(asked / cores - 1.0, 0.0)
         asked_now[0] = asked
+        if yielding and per_core:  # a thread woken goes before the long runners
+            asked_now[0] -= sum(demand[pool] for pool in yielding
+                                if pool in demand and in_shares[pool])  # fmt: skip
         rate = {pool: demand[pool] * (scale if in_shares[pool] else 1.0) / counts[pool]
                 for pool in counts}  # fmt: skip
         if holders:

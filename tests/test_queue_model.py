@@ -1749,3 +1749,24 @@ def test_a_yielding_hash_runs_on_what_the_other_threads_leave_of_its_core():
     assert pages == pytest.approx([20 * MS, 40 * MS], abs=1 * MS)
     assert pages_yielded == pytest.approx([20 * MS, 20 * MS], abs=1 * MS)
     assert log_ins_yielded[0] == pytest.approx(log_ins[0] + 20 * MS, abs=1 * MS)
+
+
+def test_a_thread_woken_beside_a_yielding_hash_does_not_wait_for_its_core():
+    """``yielding``: a thread woken (a round trip to PostgreSQL answered) goes before the
+    long runners, so a busy wake-up counts only the other pools' threads.  Two cores, two
+    log-ins' 100 ms hashes, and a page of 10 ms of CPU in five round trips that comes
+    while both run; a busy wake-up is a whole slice when the cores are asked one beyond
+    (``wake_busy_s`` = ``WAKE_SLICE_S``).  With the hashes yielding, the page takes its
+    10 ms (and the round trips' 17 µs); were they counted, each round trip's two wake-ups
+    would add 2 ms each (30 ms)."""
+    hash_s = 100 * MS
+    table = costs(server=10 * MS, db=0.0, client=0.0, calls=5.0, trips=1.0, loop=0.0)
+    table[queue_sim.LOGIN] = (hash_s + 0.1 * MS, 0.0, 0.0, 0.0, 1.0, 0.0)
+    result = queue_sim.simulate(
+        table, 3, 1, 2.0, starts=[0.0, 0.0, 0.05], teacher=False, clients_elsewhere=True,
+        hash_s=hash_s, switch_interval_s=0.0, one_writer=False, handoff_s=0.0,
+        wake_busy_s=queue_sim.WAKE_SLICE_S, yielding=("hash",),
+    )  # fmt: skip
+    during = [latency for route, sent, latency in result["timeline"]
+              if route == "GET /login" and sent >= 0.05]  # fmt: skip
+    assert during == pytest.approx([10 * MS], abs=0.5 * MS)
