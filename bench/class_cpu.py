@@ -223,17 +223,17 @@ def worker_shares(path: Path) -> list[float] | None:
 
 
 def fitted_frame_weight(
-    client_ran: list[float], bin_s: float, client_times: Path, stream_times: Path,
-    frames: int, costs: dict,
+    client_ran: list[float], bin_s: float, requests: list[tuple[str, float, float]],
+    spans: list[tuple[float, float]], frames: int, costs: dict,
 ) -> float | None:  # fmt: skip
     """The load generator's CPU per stream frame against its requests' as a run spent them
     (``in_class``'s ``frame_weight``), from when it spent it.
 
     ``client_ran``: its CPU in each ``bin_s`` from the class's first request
-    (``load_test.py --run-queue``); ``client_times``, ``stream_times``: the run's requests
-    (``method path sent answered [who]``) and positions (``session part position asked
-    started first last saved``); ``frames``: the run's stream frames; ``costs``: one
-    student's alone, per route (its third field the load generator's CPU).  In each bin,
+    (``load_test.py --run-queue``); ``requests``: the run's (route, sent, answered);
+    ``spans``: each position's (first sample, last sample); ``frames``: the run's stream
+    frames; ``costs``: one student's alone, per route (its third field the load
+    generator's CPU).  In each bin,
 
         ran_b = k_r · R_b + k_f · F_b + k_0,
 
@@ -244,16 +244,6 @@ def fitted_frame_weight(
     tell it (no requests' CPU fitted)."""
     from scipy.optimize import nnls
 
-    requests = []
-    for line in client_times.read_text().splitlines():
-        fields = line.split()
-        if len(fields) in (4, 5):
-            requests.append((route_of(*fields[:2]), float(fields[2]), float(fields[3])))
-    spans = []
-    for line in stream_times.read_text().splitlines():
-        fields = line.split()
-        if len(fields) == 8:
-            spans.append((float(fields[5]), float(fields[6])))
     if not requests or not spans or not client_ran or STREAM not in costs:
         return None
     start = min(sent for _, sent, _ in requests)
@@ -272,9 +262,10 @@ def fitted_frame_weight(
             add(sent, 0, costs[route][2] / 2)
             add(answered, 0, costs[route][2] / 2)
     per_position = frames / len(spans)
-    frame_cost = costs[STREAM][2]
+    count = max(int(round(per_position)), 1)
+    frame_cost = costs[STREAM][2] * per_position / count
     for first, last in spans:
-        for when in np.linspace(first, last, max(int(round(per_position)), 1)):
-            add(float(when), 1, frame_cost * per_position / max(int(round(per_position)), 1))
+        for when in np.linspace(first, last, count):
+            add(float(when), 1, frame_cost)
     (requests_k, frames_k, _), _ = nnls(asked, np.asarray(client_ran[:bins], dtype=float))
     return float(frames_k / requests_k) if requests_k > 0 else None

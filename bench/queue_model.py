@@ -102,6 +102,7 @@ from class_cpu import (  # noqa: E402
     in_class,
     lock_trace_by_route,
     locked_shares,
+    route_of,
     server_times,
     worker_shares,
 )
@@ -335,10 +336,15 @@ def run_frame_weight(run: Path, index: int, args, alone: dict) -> float | None:
     frames = FRAMES_LINE.search(run.read_text())
     if not ran or not frames or len(args.client_times) <= index or len(args.stream_times) <= index:
         return None
+    lines = p95_interval.client_lines(args.client_times[index])
+    requests = [(route_of(method, url), sent, answered)
+                for method, url, sent, answered, _ in lines]  # fmt: skip
+    spans = [(float(fields[5]), float(fields[6]))
+             for fields in map(str.split, args.stream_times[index].read_text().splitlines())
+             if len(fields) == 8]  # fmt: skip
     return fitted_frame_weight(
-        ran, load_test.RUN_QUEUE_BIN_S, args.client_times[index], args.stream_times[index],
-        int(frames.group(1)), alone,
-    )  # fmt: skip
+        ran, load_test.RUN_QUEUE_BIN_S, requests, spans, int(frames.group(1)), alone
+    )
 
 
 def ran_by_time(path: Path) -> dict[str, list[float]]:

@@ -1169,7 +1169,8 @@ def test_the_load_generators_cpu_per_frame_is_fitted_to_when_a_run_spent_it(tmp_
     """class_cpu.fitted_frame_weight: a run whose load generator spent 0.9× its requests'
     alone CPU, 0.1× its frames' and 0.02 s a bin besides, bin by bin, gives back a frame
     weight of 0.1 / 0.9; a run without requests' CPU tells none."""
-    from class_cpu import fitted_frame_weight
+    import p95_interval
+    from class_cpu import fitted_frame_weight, route_of
 
     costs = {"GET /lab": (0.0, 0.0, 0.002), "POST /lab/sessions/{id}/turn": (0.0, 0.0, 0.003),
              queue_sim.STREAM: (0.0, 0.0, 0.0013)}  # fmt: skip
@@ -1195,12 +1196,18 @@ def test_the_load_generators_cpu_per_frame_is_fitted_to_when_a_run_spent_it(tmp_
     client, stream = tmp_path / "client.txt", tmp_path / "stream.txt"
     client.write_text("".join(lines))
     stream.write_text("".join(positions))
+    requests = [
+        (route_of(method, url), sent, answered)
+        for method, url, sent, answered, _ in p95_interval.client_lines(client)
+    ]
+    spans = [(float(fields[5]), float(fields[6]))
+             for fields in map(str.split, stream.read_text().splitlines())]  # fmt: skip
     edges = np.arange(0.0, 10.25, 0.25)
     when, cpu = zip(*spent, strict=True)
     ran = np.histogram(when, bins=edges, weights=cpu)[0] + 0.02
-    weight = fitted_frame_weight(list(ran), 0.25, client, stream, 400, costs)
+    weight = fitted_frame_weight(list(ran), 0.25, requests, spans, 400, costs)
     assert weight == pytest.approx(0.1 / 0.9, rel=1e-6)
-    assert fitted_frame_weight([0.02] * 40, 0.25, client, stream, 400, costs) is None
+    assert fitted_frame_weight([0.02] * 40, 0.25, requests, spans, 400, costs) is None
 
 
 def test_a_runs_steal_is_reported_and_read_with_or_without_the_run_queue(tmp_path):
