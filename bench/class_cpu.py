@@ -128,7 +128,7 @@ SEEN_BEYOND_USED = 1.05
 
 def in_class(
     costs, own, seen: ClassCpu, used: dict[str, float] | None = None, each=False,
-    frame_weight: float = 1.0,
+    frame_weight: float = 1.0, client_floor_s: float = 0.0,
 ):  # fmt: skip
     """The costs per request as a class spent them.  Each route's own CPU (its task's,
     ``seen`` by the probe in a load test) replaces one student's alone (``own``).  What the
@@ -147,7 +147,9 @@ def in_class(
 
     ``frame_weight``: with ``used``, the load generator's CPU per stream frame counts this
     many times its share beside the requests' (1: each as one student's alone, scaled
-    alike), the total still the run's.
+    alike), the total still the run's; ``client_floor_s``: of the load generator's CPU in
+    ``used``, what it spent whatever it sent (``fitted_client_cpu``'s floor times the
+    class's time), left out of its requests' and frames' (the model runs it apart).
 
     Raises ValueError where the probe saw more of the server's CPU than ``used`` says the
     run used (``SEEN_BEYOND_USED``): the probe's file holds more than that run."""
@@ -166,7 +168,8 @@ def in_class(
             scale = max(used["server"] - seen.total_s, 0.0) / alone_unseen
         asked = sum(seen.counts[r] * costs[r][2] * (frame_weight if r == STREAM else 1.0)
                     for r in shared)  # fmt: skip
-        client_scale = used["client"] / asked if asked > 0 else 1.0
+        sent = max(used["client"] - client_floor_s, 0.0)
+        client_scale = sent / asked if asked > 0 else 1.0
         asked_of_db = sum(seen.counts[r] * costs[r][1] for r in shared)
         if used.get("db") and asked_of_db > 0:
             db_scale = used["db"] / asked_of_db
@@ -222,12 +225,35 @@ def worker_shares(path: Path) -> list[float] | None:
     return sorted((count / total for count in served.values()), reverse=True) if total else None
 
 
-def fitted_frame_weight(
+@dataclass(frozen=True)
+class ClientFit:
+    """The load generator's CPU as a run spent it, fitted by the bin
+    (``fitted_client_cpu``): ``requests`` and ``frames``, its CPU per request and per
+    frame against one student's alone; ``floor``, the share of a core it spent whatever it
+    sent (its event loop's timers, its collector)."""
+
+    requests: float
+    frames: float
+    floor: float
+    span_s: float  # the class's time the bins covered, s
+
+    @property
+    def floor_s(self) -> float:
+        """What it spent whatever it sent over the class, CPU s."""
+        return self.floor * self.span_s
+
+    @property
+    def frame_weight(self) -> float:
+        """Its CPU per frame against its requests' (``in_class``'s ``frame_weight``)."""
+        return self.frames / self.requests
+
+
+def fitted_client_cpu(
     client_ran: list[float], bin_s: float, requests: list[tuple[str, float, float]],
     spans: list[tuple[float, float]], frames: int, costs: dict,
-) -> float | None:  # fmt: skip
-    """The load generator's CPU per stream frame against its requests' as a run spent them
-    (``in_class``'s ``frame_weight``), from when it spent it.
+) -> ClientFit | None:  # fmt: skip
+    """The load generator's CPU per request, per frame and whatever it sends, as a run
+    spent them, from when it spent it.
 
     ``client_ran``: its CPU in each ``bin_s`` from the class's first request
     (``load_test.py --run-queue``); ``requests``: the run's (route, sent, answered);
@@ -239,9 +265,9 @@ def fitted_frame_weight(
 
     where R_b is the alone CPU of the requests sent or answered in it (half each) and F_b
     that of the frames streamed in it (a position's spread evenly from its first sample to
-    its last), solved for k ≥ 0 by non-negative least squares (k_0: what the load generator
-    does every bin whatever it sends).  Returns k_f / k_r, or None where the bins do not
-    tell it (no requests' CPU fitted)."""
+    its last), solved for k ≥ 0 by non-negative least squares.  Returns k_r, k_f,
+    k_0 / ``bin_s`` (the floor, a share of a core) and the bins' time, or None where the
+    bins do not tell it (no requests' CPU fitted)."""
     from scipy.optimize import nnls
 
     if not requests or not spans or not client_ran or STREAM not in costs:
@@ -267,5 +293,7 @@ def fitted_frame_weight(
     for first, last in spans:
         for when in np.linspace(first, last, count):
             add(float(when), 1, frame_cost)
-    (requests_k, frames_k, _), _ = nnls(asked, np.asarray(client_ran[:bins], dtype=float))
-    return float(frames_k / requests_k) if requests_k > 0 else None
+    (requests_k, frames_k, floor_k), _ = nnls(asked, np.asarray(client_ran[:bins], dtype=float))
+    if requests_k <= 0:
+        return None
+    return ClientFit(float(requests_k), float(frames_k), float(floor_k) / bin_s, bins * bin_s)

@@ -97,8 +97,9 @@ import replay  # noqa: E402
 import request_waits  # noqa: E402
 from capacity import postgres_pids, server_pids, thread_cpu  # noqa: E402
 from class_cpu import (  # noqa: E402
+    ClientFit,
     attributed_costs,
-    fitted_frame_weight,
+    fitted_client_cpu,
     in_class,
     lock_trace_by_route,
     locked_shares,
@@ -328,10 +329,10 @@ RUN_QUEUE_KEYS = {
 }  # fmt: skip
 
 
-def run_frame_weight(run: Path, index: int, args, alone: dict) -> float | None:
-    """The load generator's CPU per frame against its requests' as run number ``index``
-    spent it (``class_cpu.fitted_frame_weight``), or None where the run does not tell it
-    (no ``--run-queue`` line, no client or stream times given for it)."""
+def run_client_fit(run: Path, index: int, args, alone: dict) -> ClientFit | None:
+    """The load generator's CPU per request, per frame and whatever it sent as run number
+    ``index`` spent it (``class_cpu.fitted_client_cpu``), or None where the run does not
+    tell it (no ``--run-queue`` line, no client or stream times given for it)."""
     ran = ran_by_time(run).get("client")
     frames = FRAMES_LINE.search(run.read_text())
     if not ran or not frames or len(args.client_times) <= index or len(args.stream_times) <= index:
@@ -342,7 +343,7 @@ def run_frame_weight(run: Path, index: int, args, alone: dict) -> float | None:
     spans = [(float(fields[5]), float(fields[6]))
              for fields in map(str.split, args.stream_times[index].read_text().splitlines())
              if len(fields) == 8]  # fmt: skip
-    return fitted_frame_weight(
+    return fitted_client_cpu(
         ran, load_test.RUN_QUEUE_BIN_S, requests, spans, int(frames.group(1)), alone
     )
 
@@ -702,6 +703,13 @@ def main() -> int:
         "--run-queue line, --client-times and --stream-times)",
     )
     parser.add_argument(
+        "--client-floor",
+        action="store_true",
+        help="with --class-run: the load generator's CPU whatever it sends (a share of a "
+        "core, fitted to each run as --client-frame-weight fit is, with the same files) run "
+        "apart while the class runs, not spread over its requests and frames",
+    )
+    parser.add_argument(
         "--client-in-order",
         action="store_true",
         help="the load generator's client work one callback at a time, in the order they "
@@ -820,12 +828,13 @@ def main() -> int:
         seed: int,
         arrivals: list | None = None,
         placed: connections.Connections | None = None,
+        client_floor: float = 0.0,
     ) -> dict:
         """The class simulated once with ``seed`` (which worker each connection reaches,
         which measured costs each request draws); ``shares``: each worker's chance of a
         new connection; ``waits``: ``waits_of``'s; ``arrivals``: a run's, replayed;
         ``placed``: the workers each browser's connections reached in the run (then
-        ``shares`` unused)."""
+        ``shares`` unused); ``client_floor``: the load generator's, a share of a core."""
         return simulate(
             with_cpu_scaled(costs, args.cpu_scale),
             students,
@@ -845,6 +854,7 @@ def main() -> int:
             teacher=arrivals is None,
             student_workers=placed.of_students(students) if placed else None,
             teacher_worker=placed.http.get(connections.TEACHER) if placed else None,
+            client_floor=client_floor,
             **options,
             **(waits or waits_of()),
         )
@@ -857,11 +867,14 @@ def main() -> int:
         locked: dict[str, float] | None = None,
         arrivals: list | None = None,
         placed: connections.Connections | None = None,
+        client_floor: float = 0.0,
     ) -> dict:
         """``simulate_seed`` once per seed of ``--seeds``, combined."""
         return combine(
             [
-                simulate_seed(costs, students, shares, waits, locked, seed, arrivals, placed)
+                simulate_seed(
+                    costs, students, shares, waits, locked, seed, arrivals, placed, client_floor
+                )
                 for seed in range(args.seeds)
             ]
         )
@@ -877,16 +890,23 @@ def main() -> int:
         pools = {size: Pool() for size in {_students_of(run) for run in args.class_run}}
         for index, (cpu, run) in enumerate(zip(args.class_cpu, args.class_run, strict=True)):
             students = _students_of(run)
-            frame_weight = args.client_frame_weight
-            if frame_weight == "fit":
-                frame_weight = run_frame_weight(run, index, args, alone)
-                if frame_weight is None:
+            frame_weight, floor = args.client_frame_weight, None
+            if frame_weight == "fit" or args.client_floor:
+                fit = run_client_fit(run, index, args, alone)
+                if fit is None:
                     parser.error(
-                        f"--client-frame-weight fit: {run} does not tell it (needs its"
-                        " --run-queue line, --client-times and --stream-times)"
+                        f"--client-frame-weight fit, --client-floor: {run} does not tell it"
+                        " (needs its --run-queue line, --client-times and --stream-times)"
                     )
-                print(f"\nthe load generator's CPU per frame fitted to {run}: {frame_weight:.2f}")
-            costs = class_costs(alone, own, cpu, run, not args.mean_costs, frame_weight)
+                print(f"\nthe load generator's CPU fitted to {run}: {fit.requests:.2f}×"
+                      f" its requests' alone, {fit.frames:.2f}× its frames', a floor of"
+                      f" {fit.floor:.3f} of a core (frames {fit.frame_weight:.2f}×)")  # fmt: skip
+                frame_weight = fit.frame_weight if frame_weight == "fit" else frame_weight
+                floor = fit if args.client_floor else None
+            costs = class_costs(
+                alone, own, cpu, run, not args.mean_costs, frame_weight,
+                floor.floor_s if floor else 0.0,
+            )  # fmt: skip
             print_costs(costs, args.backend)
             times = args.server_times[index] if len(args.server_times) > index else None
             shares = worker_shares(times) if times and workers > 1 else None
@@ -937,7 +957,10 @@ def main() -> int:
                     f"  replayed: the run's {len(arrivals)} arrivals, "
                     + ("each browser's paced" if args.paced else "sent at their times")
                 )
-            result = predict(costs, students, shares, waits, locked, arrivals, placed)
+            result = predict(
+                costs, students, shares, waits, locked, arrivals, placed,
+                floor.floor if floor else 0.0,
+            )  # fmt: skip
             print(f"\n{students} students, {name}, {workers} worker(s), the run in {run}:"
                   f" predicted wall {result['wall']:.1f} s; hand-off"
                   f" {waits['handoff_s'] * 1e6:.0f} µs, busy wake-up"
@@ -953,11 +976,12 @@ def main() -> int:
                         result["threads by time"], TIMELINE_BIN_S, measured_ran,
                         load_test.RUN_QUEUE_BIN_S,
                     )))  # fmt: skip
-                    weight = run_frame_weight(run, index, args, alone)
-                    if weight is not None and args.client_frame_weight != "fit":
+                    fit = run_client_fit(run, index, args, alone)
+                    if fit is not None and args.client_frame_weight != "fit":
                         print(f"  the load generator's CPU per frame against its requests'"
-                              f" as the run spent it: {weight:.2f} (fitted by the bin;"
-                              f" --client-frame-weight fit to use it)")  # fmt: skip
+                              f" as the run spent it: {fit.frame_weight:.2f}, and a floor of"
+                              f" {fit.floor:.3f} of a core (fitted by the bin; use them:"
+                              f" --client-frame-weight fit --client-floor)")  # fmt: skip
             if "call free" in table:
                 free, busy = table["call free"], table["call busy"]
                 print(f"  (the run measured an SQLite call handing on"
@@ -1353,13 +1377,14 @@ def summary(students: int, name: str, pairs: list[tuple[dict, dict]]) -> dict:
 
 
 def class_costs(
-    alone, own, cpu: Path, run: Path | None, each: bool, frame_weight: float = 1.0
-) -> dict:
+    alone, own, cpu: Path, run: Path | None, each: bool, frame_weight: float = 1.0,
+    client_floor_s: float = 0.0,
+) -> dict:  # fmt: skip
     """The costs per request as the class in ``cpu`` (the probe's lines) spent them,
     printed beside one student's alone; ``run``: what load_test.py printed in that run
     (its CPU totals); ``each``: a list per route, one per request the class made;
-    ``frame_weight``: the load generator's CPU per stream frame against its requests'
-    (``class_cpu.in_class``)."""
+    ``frame_weight``: the load generator's CPU per stream frame against its requests';
+    ``client_floor_s``: its CPU whatever it sent, run apart (``class_cpu.in_class``)."""
     seen = attributed_costs(cpu.read_text())
     used = None
     if run:
@@ -1368,8 +1393,9 @@ def class_costs(
         used["db"] = table.get("cpu db", 0.0)  # PostgreSQL's processes (SQLite: in the server)
     try:
         costs, scale, client_scale = in_class(
-            alone, own, seen, used, each=each, frame_weight=frame_weight
-        )
+            alone, own, seen, used, each=each, frame_weight=frame_weight,
+            client_floor_s=client_floor_s,
+        )  # fmt: skip
     except ValueError as error:
         raise SystemExit(f"{cpu} against {run}: {error}") from error
     print(f"\neach route's own CPU as the class in {cpu} spent it:")

@@ -129,6 +129,9 @@ STACKED_SLICE_S = 1.4e-3
 CALL_HANDOFF = (0.08, 0.10)
 # "threads by time": each group's time run and waited for a core in bins of the class's time
 TIMELINE_BIN_S = 0.25
+# ``client_floor``: the load generator's CPU whatever it sends (its event loop's timers,
+# its collector), run as a piece of client work this often while the class runs
+CLIENT_FLOOR_PERIOD_S = 0.01
 
 
 class Job:
@@ -204,6 +207,7 @@ def simulate(
     balance_s: float = 0.0,
     yielding: tuple[str, ...] = (),
     login_trips_after_hash: int = LOGIN_TRIPS_AFTER_HASH,
+    client_floor: float = 0.0,
 ) -> dict:
     """Latencies per route of ``students`` running the scenario at once (seconds);
     ``costs``: per route (server, database, client CPU s, SQLite calls, thread trips,
@@ -316,7 +320,11 @@ def simulate(
     (else shared evenly); ``login_trips_after_hash``: on PostgreSQL, a log-in's
     last round trips that the app makes after the password hash, without its work place
     (the charges deleted, the session row inserted, the commit; 0: all before the hash,
-    the model before 2026-12-06 night).
+    the model before 2026-12-06 night); ``client_floor``: the share of a core the load
+    generator spends whatever it sends, from the class's start until its last student is
+    done (a piece of its client work every ``CLIENT_FLOOR_PERIOD_S``, in line with its
+    other callbacks; ``class_cpu.fitted_client_cpu``'s floor; 0: none, its CPU all in its
+    requests' and frames', the model before 2026-12-07).
 
     The interpreter, as CPython's GIL does it: a thread that gives it up and wants it
     back queues behind the threads already waiting; the one holding it keeps it until
@@ -923,6 +931,16 @@ def simulate(
             at(start, lambda index=index: arrive(index))
         if teacher:
             at(0.0, watch)
+
+    def floor_tick() -> None:
+        """The load generator's floor: its next piece of CPU, while a student is not done."""
+        if finished[0] < students:
+            spent["client"] += client_floor * CLIENT_FLOOR_PERIOD_S
+            jobs.append(Job("client", client_floor * CLIENT_FLOOR_PERIOD_S, lambda: None))
+            at(now + CLIENT_FLOOR_PERIOD_S, floor_tick)
+
+    if client_floor > 0 and not clients_elsewhere:
+        at(0.0, floor_tick)
 
     def kept_through_call(job: Job, queue: list[Job]) -> bool:
         """At the end of a segment: whether it was an SQLite call that ended before the

@@ -701,6 +701,40 @@ def test_the_load_generators_cpu_can_weigh_a_frame_apart_from_a_request():
     # without the run's CPU there is nothing to share out: one student's costs, as they are
     alone, _, _ = class_cpu.in_class(table, own, seen, frame_weight=0.25)
     assert alone[queue_sim.STREAM][2] == pytest.approx(0.2 * MS)
+    # 5 ms of a run's 16 ms spent whatever it sent (``client_floor_s``): run apart, the
+    # other 11 ms shared out as before
+    used = {"server": 0.09, "client": 0.016}
+    apart, _, _ = class_cpu.in_class(
+        table, own, seen, used, frame_weight=0.25, client_floor_s=0.005
+    )
+    assert apart["GET /lab/sessions/{id}"][2] == pytest.approx(1 * MS)
+    assert apart[queue_sim.STREAM][2] == pytest.approx(0.025 * MS)
+
+
+def test_the_load_generators_floor_runs_while_the_class_does_and_delays_its_callbacks():
+    """``client_floor``: the load generator spends its share of a core from the class's
+    start to its last student's end, in line with its requests' client work.  One student
+    with 1 ms of client work a request: with a floor of 0.5 the load generator asks for
+    half a core more over the class, and its callbacks wait behind the floor's pieces."""
+    table = costs(server=1 * MS, db=0.0, client=1 * MS, calls=0.0, trips=1.0, loop=0.0)
+
+    def run(floor: float) -> dict:
+        return queue_sim.simulate(
+            table, 1, 1, 2.0, starts=[0.0], teacher=False, switch_interval_s=0.0,
+            handoff_s=0.0, client_in_order=True, client_floor=floor,
+        )  # fmt: skip
+
+    bare, floored = run(0.0), run(0.5)
+    floor_cpu = floored["cpu"]["client"] - bare["cpu"]["client"]
+    assert floor_cpu == pytest.approx(
+        0.5 * floored["wall"], abs=0.5 * queue_sim.CLIENT_FLOOR_PERIOD_S
+    )
+    ran = floored["run queue"]["client"][0] - bare["run queue"]["client"][0]
+    assert ran == pytest.approx(floor_cpu, rel=1e-3)
+    assert floored["wall"] > bare["wall"]
+    waited = {name: sum(map(sum, result["latencies"].values())) for name, result in
+              (("bare", bare), ("floored", floored))}  # fmt: skip
+    assert waited["floored"] > waited["bare"] + 0.01
 
 
 def test_a_probe_file_holding_more_than_its_run_is_refused():
@@ -1166,11 +1200,13 @@ def test_a_runs_cpu_by_its_time_is_read_and_set_beside_the_models(tmp_path):
 
 
 def test_the_load_generators_cpu_per_frame_is_fitted_to_when_a_run_spent_it(tmp_path):
-    """class_cpu.fitted_frame_weight: a run whose load generator spent 0.9× its requests'
-    alone CPU, 0.1× its frames' and 0.02 s a bin besides, bin by bin, gives back a frame
-    weight of 0.1 / 0.9; a run without requests' CPU tells none."""
+    """class_cpu.fitted_client_cpu: a run whose load generator spent 0.9× its requests'
+    alone CPU, 0.1× its frames' and 0.02 s a bin besides, bin by bin, gives back 0.9, 0.1
+    (a frame weight of 0.1 / 0.9) and a floor of 0.08 of a core over the class's time (its
+    first request to its last answer, in whole bins); a run without requests' CPU tells
+    none."""
     import p95_interval
-    from class_cpu import fitted_frame_weight, route_of
+    from class_cpu import fitted_client_cpu, route_of
 
     costs = {"GET /lab": (0.0, 0.0, 0.002), "POST /lab/sessions/{id}/turn": (0.0, 0.0, 0.003),
              queue_sim.STREAM: (0.0, 0.0, 0.0013)}  # fmt: skip
@@ -1205,9 +1241,13 @@ def test_the_load_generators_cpu_per_frame_is_fitted_to_when_a_run_spent_it(tmp_
     edges = np.arange(0.0, 10.25, 0.25)
     when, cpu = zip(*spent, strict=True)
     ran = np.histogram(when, bins=edges, weights=cpu)[0] + 0.02
-    weight = fitted_frame_weight(list(ran), 0.25, requests, spans, 400, costs)
-    assert weight == pytest.approx(0.1 / 0.9, rel=1e-6)
-    assert fitted_frame_weight([0.02] * 40, 0.25, requests, spans, 400, costs) is None
+    fit = fitted_client_cpu(list(ran), 0.25, requests, spans, 400, costs)
+    assert (fit.requests, fit.frames) == (pytest.approx(0.9), pytest.approx(0.1))
+    assert fit.frame_weight == pytest.approx(0.1 / 0.9, rel=1e-6)
+    assert fit.floor == pytest.approx(0.08)
+    last = max(answered for _, _, answered in requests) - t0
+    assert last < fit.span_s <= last + 0.25 and fit.floor_s == pytest.approx(0.08 * fit.span_s)
+    assert fitted_client_cpu([0.02] * 40, 0.25, requests, spans, 400, costs) is None
 
 
 def test_a_runs_steal_is_reported_and_read_with_or_without_the_run_queue(tmp_path):
