@@ -677,6 +677,14 @@ def main() -> int:
         "thread behind threads woken for short bursts, as the kernel's EEVDF has it)",
     )
     parser.add_argument(
+        "--yield-share",
+        type=float,
+        default=0.0,
+        metavar="S",
+        help="with --yielding: the least a yielding thread runs, as a share S of an even "
+        "share of its core (0: only what the others leave; 1: an even share)",
+    )
+    parser.add_argument(
         "--hash-scale",
         type=float,
         default=1.0,
@@ -816,6 +824,7 @@ def main() -> int:
         "per_core": not args.cores_shared_evenly,
         "balance_s": args.balance_us / 1e6,
         "yielding": tuple(args.yielding),
+        "yield_share": args.yield_share,
         "login_trips_after_hash": args.login_trips_after_hash,
     }
 

@@ -206,6 +206,7 @@ def simulate(
     per_core: bool = True,
     balance_s: float = 0.0,
     yielding: tuple[str, ...] = (),
+    yield_share: float = 0.0,
     login_trips_after_hash: int = LOGIN_TRIPS_AFTER_HASH,
     client_floor: float = 0.0,
 ) -> dict:
@@ -317,8 +318,12 @@ def simulate(
     thread woken waits for a core only as long as the other pools' threads ask for more
     than the cores there are (it goes before the long runners, as the kernel's EEVDF puts
     a thread woken for a short burst before one that has run for long); whole cores only
-    (else shared evenly); ``login_trips_after_hash``: on PostgreSQL, a log-in's
-    last round trips that the app makes after the password hash, without its work place
+    (else shared evenly); ``yield_share``: with ``yielding``, the least a yielding thread
+    runs, as a share of an even share of its core (EEVDF is fair over time: a long runner
+    waits behind short bursts, not forever behind threads that keep running; 0: only what
+    the others leave, 1: an even share, as if nothing yielded);
+    ``login_trips_after_hash``: on PostgreSQL, a log-in's last round trips that the app
+    makes after the password hash, without its work place
     (the charges deleted, the session row inserted, the commit; 0: all before the hash,
     the model before 2026-12-06 night); ``client_floor``: the share of a core the load
     generator spends whatever it sends, from the class's start until its last student is
@@ -1041,14 +1046,16 @@ def simulate(
             for key, _ in ready:
                 if key not in weak:
                     strong_on[core_of[key]] += 1
+            # each yielding thread's least share (``yield_share`` of an even one)
+            guaranteed = [yield_share / n if n else 0.0 for n in on]
             for key, _ in ready:
                 core = core_of[key]
                 if key not in weak:
-                    share_by_key[key] = 1.0 / strong_on[core]
+                    left = 1.0 - (on[core] - strong_on[core]) * guaranteed[core]
+                    share_by_key[key] = left / strong_on[core]
                 else:
-                    share_by_key[key] = (
-                        0.0 if strong_on[core] else 1.0 / (on[core] - strong_on[core])
-                    )
+                    weak_on = on[core] - strong_on[core]
+                    share_by_key[key] = guaranteed[core] if strong_on[core] else 1.0 / weak_on
         shares: dict[str, list[float]] = {}
         for key, group in ready:
             share = share_by_key[key]

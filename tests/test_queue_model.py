@@ -1817,3 +1817,23 @@ def test_a_thread_woken_beside_a_yielding_hash_does_not_wait_for_its_core():
     during = [latency for route, sent, latency in result["timeline"]
               if route == "GET /login" and sent >= 0.05]  # fmt: skip
     assert during == pytest.approx([10 * MS], abs=0.5 * MS)
+
+
+@pytest.mark.parametrize(("share", "page_ms"), [(0.0, 100.0), (0.5, 400 / 3), (1.0, 200.0)])
+def test_a_yielding_hash_keeps_its_least_share_of_its_core(share, page_ms):
+    """``yield_share``: on one core, a log-in's 100 ms hash (yielding) beside a page of
+    100 ms of CPU, both sent at once.  The hash gets ``share`` of an even share (half the
+    core) while the page runs: the page ends at 100 ms / (1 − share / 2) -- 100 ms with
+    nothing left to the hash, 133 ms with a quarter of the core, 200 ms shared evenly --
+    and the log-in, whose work is the same 100 ms, at 200 ms whatever the share."""
+    hash_s = 100 * MS
+    table = costs(server=100 * MS, db=0.0, client=0.0, calls=0.0, trips=1.0, loop=0.0)
+    table[queue_sim.LOGIN] = (hash_s + 1e-6, 0.0, 0.0, 0.0, 1.0, 0.0)
+    arrivals = [(0.0, "request", queue_sim.LOGIN, None), (0.0, "request", "GET /lab", None)]
+    result = queue_sim.simulate(
+        table, 0, 1, 1.0, arrivals=arrivals, clients_elsewhere=True, hash_s=hash_s,
+        switch_interval_s=0.0, one_writer=False, handoff_s=0.0, wake_busy_s=0.0,
+        yielding=("hash",), yield_share=share,
+    )  # fmt: skip
+    assert result["latencies"]["GET /lab"] == pytest.approx([page_ms * MS], abs=0.5 * MS)
+    assert result["latencies"][queue_sim.LOGIN] == pytest.approx([200 * MS], abs=0.5 * MS)
