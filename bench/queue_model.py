@@ -900,8 +900,8 @@ def main() -> int:
         for index, (cpu, run) in enumerate(zip(args.class_cpu, args.class_run, strict=True)):
             students = _students_of(run)
             frame_weight, floor = args.client_frame_weight, None
+            fit = run_client_fit(run, index, args, alone)  # None where the run does not tell it
             if frame_weight == "fit" or args.client_floor:
-                fit = run_client_fit(run, index, args, alone)
                 if fit is None:
                     parser.error(
                         f"--client-frame-weight fit, --client-floor: {run} does not tell it"
@@ -985,7 +985,6 @@ def main() -> int:
                         result["threads by time"], TIMELINE_BIN_S, measured_ran,
                         load_test.RUN_QUEUE_BIN_S,
                     )))  # fmt: skip
-                    fit = run_client_fit(run, index, args, alone)
                     if fit is not None and args.client_frame_weight != "fit":
                         print(f"  the load generator's CPU per frame against its requests'"
                               f" as the run spent it: {fit.frame_weight:.2f}, and a floor of"
