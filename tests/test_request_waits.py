@@ -105,10 +105,19 @@ def test_the_gil_sampler_sees_a_thread_keep_the_interpreter(tmp_path):
     assert len(rows) >= 20 and all(len(row) == 4 for row in rows)
     began, late, queued = (np.array([float(row[i]) for row in rows]) for i in (0, 1, 2))
     assert (np.diff(began) >= 0).all() and (queued >= 0).all()
-    off_core_ms = (late - queued) / 1000
+    late_ms, queued_ms = late / 1000, queued / 1000
+    off_core_ms = late_ms - queued_ms
     ended = began + 0.002 + late / 1e6
     during = (ended > asked) & (began < answered)
-    assert off_core_ms[during].max() >= 20  # the hold
+    assert late_ms[during].max() >= 20  # the hold: the sampler ran Python again that late
+    # and off a core, waiting for the interpreter -- when the host lets the sampler have a
+    # core as soon as it wakes, judged by its naps in the 50 ms either side.  On a crowded
+    # host (the suite beside Chromium) the sampler has waited for a core through the whole
+    # hold, its 2 ms nap over before the route began and its wait all in the run queue
+    # (seen: 0.13 ms off a core), so there only the lateness is certain.
+    near = ~during & ((np.abs(began - asked) < 0.05) | (np.abs(ended - answered) < 0.05))
+    if near.any() and queued_ms[near].max() < 1:
+        assert off_core_ms[during].max() >= 20
     # the naps after it, when nothing else in the process runs Python, are on time
     after = off_core_ms[began > answered]
     assert len(after) >= 10 and np.median(after) < 2
