@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 
 import numpy as np
@@ -377,3 +378,53 @@ def test_the_gyros_history_is_replayed_off_the_event_loop(student_client, monkey
     with connect(student_client, session_id) as ws:
         frames = record(ws, part="heading", position=1, dwell_s=20, speed=6000)
     assert frames[-1]["type"] == "saved" and on_loop == [False]
+
+
+class CountingInbox(asyncio.Queue):
+    """A stream's inbox that counts how often the pacer waited on it."""
+
+    waits = 0
+
+    def get(self):
+        self.waits += 1
+        return super().get()
+
+
+@pytest.mark.parametrize("loop", ["uvloop", "asyncio"])
+def test_each_frame_is_one_wait_on_the_event_loop_whatever_its_clock(loop):
+    """uvicorn runs on uvloop, whose clock and timers count whole milliseconds: a frame's
+    timer fires while the clock still reads up to 1 ms short.  The frame is due then, once:
+    waiting again until the clock agreed spun the loop dozens of times a frame (783 waits
+    for these 12)."""
+    import uvloop
+
+    from app.lab.stream import FramePacer
+
+    frame_s, frames = 0.02, 12
+
+    async def pace():
+        inbox = CountingInbox()
+        pacer = FramePacer(inbox, frame_s)
+        due = [await pacer.due() for _ in range(frames)]
+        return inbox.waits, due
+
+    waits, due = (uvloop.run if loop == "uvloop" else asyncio.run)(pace())
+    assert waits == frames
+    elapsed = [seconds for seconds, stopped in due if not stopped]
+    assert len(elapsed) == frames
+    # each frame's samples are due by at least its own tick: none held back a frame
+    assert all(s >= (k + 1) * frame_s - 1e-9 for k, s in enumerate(elapsed))
+
+
+def test_a_stop_is_due_at_once_and_other_client_frames_wait_for_the_tick():
+    from app.lab.stream import FramePacer
+
+    async def pace():
+        inbox = CountingInbox()
+        pacer = FramePacer(inbox, frame_s=60.0)
+        for message in ({}, {"action": "start"}, {"action": "stop"}):
+            inbox.put_nowait(message)
+        return await pacer.due(), inbox.waits
+
+    (elapsed, stopped), waits = asyncio.run(pace())
+    assert stopped and elapsed < 60.0 and waits == 3

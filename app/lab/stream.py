@@ -194,6 +194,51 @@ async def _read_into(websocket: WebSocket, inbox: asyncio.Queue) -> None:
         await inbox.put(None)
 
 
+_TICK = object()  # FramePacer: the frame's time came first (no client frame)
+
+
+class FramePacer:
+    """When a recording's next frame of samples is due: every ``FRAME_SECONDS`` of the
+    event loop's clock, or at once when the client says stop.  The server alone paces a
+    recording -- samples are due by the clock -- so frames a client sends in between change
+    nothing.
+
+    The timer's firing is the tick.  uvicorn runs on uvloop, whose clock counts whole
+    milliseconds and whose timers are set in whole milliseconds: a timer can fire while
+    ``loop.time()`` still reads up to 1 ms before its deadline.  Waiting again until the
+    clock agrees would spin the event loop through that millisecond: dozens of wake-ups a
+    frame on a quiet server, about four in a class of 60 (bench/README.md, part 48)."""
+
+    def __init__(self, inbox: asyncio.Queue, frame_s: float = FRAME_SECONDS) -> None:
+        self.inbox = inbox
+        self.frame_s = frame_s
+        self.loop = asyncio.get_running_loop()
+        self.started = self.loop.time()
+        self.next_tick = self.started + frame_s
+
+    async def due(self) -> tuple[float, bool]:
+        """Wait for the next frame: (seconds since the start whose samples are due, whether
+        the client stopped).  On a tick that is at least the tick's own time, so that
+        the clock's millisecond never holds a sample back a frame.  Raises ``_Closed``
+        when the client went away."""
+        while True:
+            try:  # (asyncio.timeout_at, not wait_for: no task made per frame, ≈ 60 µs less)
+                async with asyncio.timeout_at(self.next_tick):
+                    incoming = await self.inbox.get()
+            except TimeoutError:
+                incoming = _TICK
+            if incoming is None:
+                raise _Closed()
+            now = self.loop.time()
+            ticked = incoming is _TICK
+            stopped = not ticked and incoming.get("action") == "stop"
+            if ticked or stopped or now >= self.next_tick:
+                due_at = max(now, self.next_tick) if ticked else now
+                self.next_tick = max(self.next_tick + self.frame_s, now)
+                return due_at - self.started, stopped
+            # any other client frame before the tick: not a reason to send samples
+
+
 async def _record(
     websocket: WebSocket, session_id: int, message: dict, inbox: asyncio.Queue
 ) -> None:
@@ -221,26 +266,11 @@ async def _record(
         }
     )
     values, times = [], []
-    # The server alone paces a recording: samples are due by the clock (rate × speed ×
-    # elapsed time), so frames a client sends in between change nothing.
-    loop = asyncio.get_running_loop()
-    started = loop.time()
-    next_tick = started + FRAME_SECONDS
+    pacer = FramePacer(inbox)
     stopped = False
     while len(values) < total and not stopped:
-        try:  # (asyncio.timeout, not wait_for: no task made per frame, ≈ 60 µs less)
-            async with asyncio.timeout(max(0.0, next_tick - loop.time())):
-                incoming = await inbox.get()
-        except TimeoutError:
-            incoming = {}
-        if incoming is None:
-            raise _Closed()
-        stopped = incoming.get("action") == "stop"
-        now = loop.time()
-        if not stopped and now < next_tick:
-            continue  # any other client frame: not a reason to send samples
-        next_tick = max(next_tick + FRAME_SECONDS, now)
-        due = min(total, int(take.rate_hz * speed * (now - started)))
+        elapsed, stopped = await pacer.due()
+        due = min(total, int(take.rate_hz * speed * elapsed))
         count = due - len(values)
         if stopped and not values:
             count = max(count, 1)
