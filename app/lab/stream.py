@@ -198,32 +198,43 @@ _TICK = object()  # FramePacer: the frame's time came first (no client frame)
 
 
 class FramePacer:
-    """When a recording's next frame of samples is due: every ``FRAME_SECONDS`` of the
-    event loop's clock, or at once when the client says stop.  The server alone paces a
-    recording -- samples are due by the clock -- so frames a client sends in between change
-    nothing.
+    """When a recording's next frame of samples is due, and how many samples are due by
+    then: a frame every ``FRAME_SECONDS`` of the event loop's clock, or at once when the
+    client says stop.  The server alone paces a recording -- samples are due by the clock
+    (``samples_per_s`` × the time since the start) -- so frames a client sends in between
+    change nothing.
 
     The timer's firing is the tick.  uvicorn runs on uvloop, whose clock counts whole
     milliseconds and whose timers are set in whole milliseconds: a timer can fire while
     ``loop.time()`` still reads up to 1 ms before its deadline.  Waiting again until the
     clock agrees would spin the event loop through that millisecond: dozens of wake-ups a
-    frame on a quiet server, about four in a class of 60 (bench/README.md, part 48)."""
+    frame on a quiet server, about four in a class of 60 (bench/README.md, part 48).  A
+    tick's samples are those due by the tick's own time (ticks multiplied out, not summed,
+    and 1 µs allowed for rounding): the time since the start falls a rounding error short
+    of a sample due exactly at a tick more often than not, and that sample would wait a
+    frame."""
 
-    def __init__(self, inbox: asyncio.Queue, frame_s: float = FRAME_SECONDS) -> None:
+    def __init__(
+        self, inbox: asyncio.Queue, samples_per_s: float, frame_s: float = FRAME_SECONDS
+    ) -> None:
         self.inbox = inbox
+        self.samples_per_s = samples_per_s
         self.frame_s = frame_s
         self.loop = asyncio.get_running_loop()
-        self.started = self.loop.time()
-        self.next_tick = self.started + frame_s
+        self.started = self.anchor = self.loop.time()
+        self.ticks = 1  # the next tick: anchor + ticks × frame_s
 
-    async def due(self) -> tuple[float, bool]:
-        """Wait for the next frame: (seconds since the start whose samples are due, whether
-        the client stopped).  On a tick that is at least the tick's own time, so that
-        the clock's millisecond never holds a sample back a frame.  Raises ``_Closed``
-        when the client went away."""
+    @property
+    def next_tick(self) -> float:
+        return self.anchor + self.ticks * self.frame_s
+
+    async def due(self) -> tuple[int, bool]:
+        """Wait for the next frame: (how many samples are due since the start, whether the
+        client stopped).  Raises ``_Closed`` when the client went away."""
         while True:
+            deadline = self.next_tick
             try:  # (asyncio.timeout_at, not wait_for: no task made per frame, ≈ 60 µs less)
-                async with asyncio.timeout_at(self.next_tick):
+                async with asyncio.timeout_at(deadline):
                     incoming = await self.inbox.get()
             except TimeoutError:
                 incoming = _TICK
@@ -232,11 +243,16 @@ class FramePacer:
             now = self.loop.time()
             ticked = incoming is _TICK
             stopped = not ticked and incoming.get("action") == "stop"
-            if ticked or stopped or now >= self.next_tick:
-                due_at = max(now, self.next_tick) if ticked else now
-                self.next_tick = max(self.next_tick + self.frame_s, now)
-                return due_at - self.started, stopped
+            if ticked or stopped or now >= deadline:
+                break
             # any other client frame before the tick: not a reason to send samples
+        due_at = max(now, deadline) if ticked else now
+        if now < deadline + self.frame_s:
+            self.ticks += 1
+        else:  # a frame or more late: the next frame at once, and the ticks counted anew
+            self.anchor, self.ticks = now, 0
+        # (+1 µs: the clock's arithmetic is exact to a few ns; no sample waits for it)
+        return int(self.samples_per_s * (due_at - self.started + 1e-6)), stopped
 
 
 async def _record(
@@ -266,12 +282,11 @@ async def _record(
         }
     )
     values, times = [], []
-    pacer = FramePacer(inbox)
+    pacer = FramePacer(inbox, take.rate_hz * speed)
     stopped = False
     while len(values) < total and not stopped:
-        elapsed, stopped = await pacer.due()
-        due = min(total, int(take.rate_hz * speed * elapsed))
-        count = due - len(values)
+        due, stopped = await pacer.due()
+        count = min(total, due) - len(values)
         if stopped and not values:
             count = max(count, 1)
         if count <= 0:
