@@ -74,6 +74,13 @@ def test_a_live_recording_read_frame_by_frame_is_the_same_timeline():
     assert np.array_equal(np.concatenate([v for v, _ in pieces]), whole_values)
     assert np.array_equal(np.concatenate([t for _, t in pieces]), whole_times)
     assert take.end_s == whole_times[-1] + 0.1
+    # a take built with its dwell (the stream's, in the thread pool) makes that much at
+    # once, and then in blocks past it: the same timeline
+    made = SimulatedTake(lab, "latitude", 2, start_s=40.0, dwell_s=120.0)
+    assert made.samples_in(120.0) == 1200 and made.produced == 0
+    pieces = [made.next(count) for count in [40, 1160, 1, 1799]]
+    assert np.array_equal(np.concatenate([v for v, _ in pieces]), whole_values)
+    assert made.end_s == take.end_s
 
 
 def test_a_long_history_is_replayed_once_and_every_take_is_the_same(monkeypatch):

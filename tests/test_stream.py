@@ -380,6 +380,31 @@ def test_the_gyros_history_is_replayed_off_the_event_loop(student_client, monkey
     assert frames[-1]["type"] == "saved" and on_loop == [False]
 
 
+def test_a_recordings_noise_is_made_off_the_event_loop(student_client, monkeypatch):
+    """The take is built in the thread pool with the recording's whole dwell: the frames
+    on the event loop only hand its samples out (made frame by frame there, ≈ 1 ms a
+    position held up every other student's frames)."""
+    from app.core.gyro_stream import GyroStream
+
+    reads = []
+    read = GyroStream.read
+
+    def watched(self, *args, **kwargs):
+        try:
+            asyncio.get_running_loop()
+            reads.append("loop")
+        except RuntimeError:
+            reads.append("pool")
+        return read(self, *args, **kwargs)
+
+    monkeypatch.setattr(GyroStream, "read", watched)
+    session_id = new_session(student_client, preset="tactical-fog")
+    with connect(student_client, session_id) as ws:
+        frames = record(ws, part="heading", position=1, dwell_s=30, speed=60)
+    assert frames[-1] == {"type": "saved", "part": "heading", "position": 1, "n": 300}
+    assert reads and set(reads) == {"pool"}, reads
+
+
 class CountingInbox(asyncio.Queue):
     """A stream's inbox that counts how often the pacer waited on it."""
 

@@ -192,7 +192,11 @@ class SimulatedTake:
         settle_s: float = 0.0,
         *,
         start_s: float | None = None,
+        dwell_s: float = 0.0,
     ) -> None:
+        """``dwell_s``: the recording's length, whose noise is made here (a live recording
+        builds its take in the thread pool: made later, frame by frame, the noise would be
+        the event loop's work, ≈ 1 ms a position that holds up every student's frames)."""
         preset = preset_for(session)
         self.preset = preset
         self.rate_hz = preset.sample_rate_hz
@@ -228,6 +232,15 @@ class SimulatedTake:
         self.up = float(vector[2])
         self.produced = 0
         self._ahead, self._used = np.empty(0), 0  # noise made ahead, and how much is used
+        if dwell_s > 0:
+            self._ahead = self._read(self.samples_in(dwell_s))
+
+    def samples_in(self, dwell_s: float) -> int:
+        """How many samples a recording of ``dwell_s`` seconds holds (at least one)."""
+        return max(1, int(round(dwell_s * self.rate_hz)))
+
+    def _read(self, count: int) -> np.ndarray:
+        return self.stream.read(np.full(count, self.true_rate), self.up)
 
     @property
     def end_s(self) -> float:
@@ -237,16 +250,16 @@ class SimulatedTake:
     def next(self, count: int) -> tuple[np.ndarray, np.ndarray]:
         """The next ``count`` samples and their gyro times (s since switch-on).
 
-        The gyro's noise is made ``READ_AHEAD`` samples at a time and handed out in the
-        pieces asked for: a live recording asks for a few samples per frame, and making
-        them frame by frame cost a numpy call per noise component (19 for the tactical
-        FOG) each time -- ≈ 1.2 s of the 60-student class's ≈ 16 s of server CPU
+        The gyro's noise is made ahead -- the whole recording's when the take was built
+        with its ``dwell_s``, past that ``READ_AHEAD`` samples at a time -- and handed out
+        in the pieces asked for: a live recording asks for a few samples per frame, and
+        making them frame by frame cost a numpy call per noise component (19 for the
+        tactical FOG) each time -- ≈ 1.2 s of the 60-student class's ≈ 16 s of server CPU
         (bench/README.md).  The samples are the same, however they are cut
         (``GyroStream`` reads any chunking identically)."""
         while self._ahead.size - self._used < count:
             block = max(READ_AHEAD, count - (self._ahead.size - self._used))
-            made = self.stream.read(np.full(block, self.true_rate), self.up)
-            self._ahead = np.concatenate([self._ahead[self._used :], made])
+            self._ahead = np.concatenate([self._ahead[self._used :], self._read(block)])
             self._used = 0
         values = self._ahead[self._used : self._used + count]
         self._used += count

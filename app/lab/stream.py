@@ -268,9 +268,10 @@ async def _record(
     async with write_slot():
         session = await run_in_threadpool(_mark_started, cookie, session_id, part, position)
     # the take replays the gyro's noise since switch-on (up to 6 h: 216,000 samples at
-    # 10 Hz, ≈ 60 ms): in the pool, so that the other students' frames are not held up
-    take = await run_in_threadpool(SimulatedTake, session, part, position, settle)
-    total = max(1, int(round(dwell * take.rate_hz)))
+    # 10 Hz, ≈ 60 ms) and makes the recording's: in the pool, so that the other students'
+    # frames are not held up
+    take = await run_in_threadpool(SimulatedTake, session, part, position, settle, dwell_s=dwell)
+    total = take.samples_in(dwell)
     await websocket.send_json(
         {
             "type": "started",
