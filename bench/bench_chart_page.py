@@ -25,13 +25,14 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import httpx
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from bench_web import free_ports, wait_for  # noqa: E402
 
 from app.main import PLOTLY_JS, PLOTLY_URL  # noqa: E402
 
@@ -56,27 +57,19 @@ def chromium_cpu_s() -> float:
 
 def serve(var_dir: Path) -> tuple[subprocess.Popen, str]:
     """The demo on a free port: (the server, its URL), once it answers."""
-    import socket
-
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
+    [port] = free_ports(1)
     env = {**os.environ, "GYROLAB_VAR_DIR": str(var_dir)}
     server = subprocess.Popen(
         [sys.executable, "-m", "app.cli.main", "serve", "--port", str(port)],
         env=env, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT,
     )  # fmt: skip
     url = f"http://127.0.0.1:{port}"
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline:
-        try:
-            if httpx.get(f"{url}/login", timeout=1).status_code == 200:
-                return server, url
-        except httpx.HTTPError:
-            pass
-        time.sleep(0.2)
-    server.kill()
-    raise SystemExit("the demo server did not start")
+    try:
+        wait_for(f"{url}/login", server)
+    except RuntimeError:
+        server.kill()
+        raise
+    return server, url
 
 
 def main_thread(cdp) -> tuple[float, float]:
