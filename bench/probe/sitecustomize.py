@@ -625,6 +625,7 @@ if _GIL:
 
     _GIL_NAP_S = 0.002
     _g_lines: list[str] = []
+    _g_naps = [0]  # naps made so far (a test waits for enough of them)
     _g_file = os.open(_GIL, os.O_WRONLY | os.O_APPEND | os.O_CREAT)
 
     def _g_queued_ns(schedstat: int) -> int:
@@ -650,6 +651,7 @@ if _GIL:
             queued = _g_queued_ns(schedstat) - queued
             late = _g_time.perf_counter() - began - _GIL_NAP_S
             _g_lines.append(f"{began:.6f} {late * 1e6:.0f} {queued / 1000:.0f} {os.getpid()}\n")
+            _g_naps[0] += 1
             if len(_g_lines) >= 100:
                 _g_write()
 
