@@ -189,6 +189,55 @@ def test_a_loggers_record_as_one_positions_csv(client, auth):
 
 
 @pytest.mark.one_backend  # the body's parsing; storing is the same as for any CSV
+def test_a_csv_body_is_read_as_the_lab_page_reads_a_file(client, auth):
+    """Full-width digits and the minus sign "−" (a Chinese input method, a typeset handout)
+    read as typed; a header or a row of units naming another unit than ``?unit=``, a
+    Western Windows program's "°/s" included, refused and nothing stored; a clock coarser
+    than the readings spread over its ticks; a first column that does not rise (a
+    "1,234.5" under one name) no times but refused, not stored as time 1 and 234.5."""
+    from app.lab.samples import unpack
+
+    session_id = new_api_session(client, auth)
+    url = f"{API}/sessions/{session_id}/heading/positions/1"
+    csv = {**auth, "Content-Type": "text/csv"}
+    values = handout("handout_horizontal.csv")[1]
+    wide = str.maketrans("0123456789.-", "０１２３４５６７８９．－")
+    typed = "\n".join(f"{v}".translate(wide) for v in values) + "\n−1.5\n"
+    response = client.put(url, content=typed.encode(), headers=csv)
+    assert response.status_code == 200, response.text
+    with read_session() as db:
+        chunk = db.exec(select(SampleChunk).order_by(SampleChunk.id.desc())).first()
+    assert unpack(chunk.values).tolist() == pytest.approx([*values, -1.5])
+
+    western = "Zeit [s];Drehrate [°/s]\r\n" + "\r\n".join(
+        f"{k},0;{v / 3600:.9f}".replace(".", ",") for k, v in enumerate(values)
+    )
+    units_row = "time,rate\ns,deg/s\n" + "\n".join(f"{k},{v / 3600}" for k, v in enumerate(values))
+    for body in (western.encode("cp1252"), units_row.encode()):
+        refused = client.put(url + "?unit=deg/h", content=body, headers=csv)
+        assert refused.status_code == 400 and refused.json()["key"] == "csv.unit_conflict"
+        assert "°/s, but °/h is chosen" in refused.json()["detail"]
+        response = client.put(url + "?unit=deg/s", content=body, headers=csv)
+        assert response.status_code == 200, response.text
+        with read_session() as db:
+            chunk = db.exec(select(SampleChunk).order_by(SampleChunk.id.desc())).first()
+        assert unpack(chunk.values).tolist() == pytest.approx(values, rel=1e-6)  # °/h
+
+    ticks = "time_s,value\n" + "\n".join(f"{k // 2},{v}" for k, v in enumerate(values))
+    response = client.put(url, content=ticks, headers=csv)
+    assert response.status_code == 200, response.text
+    with read_session() as db:
+        chunk = db.exec(select(SampleChunk).order_by(SampleChunk.id.desc())).first()
+    assert unpack(chunk.times)[:4].tolist() == [0.0, 0.5, 1.0, 1.5]
+    for body in ("value\n" + "1,234.5\n" * 10, "time_s,value\n" + "".join(
+        f"{10 - k},{v}\n" for k, v in enumerate(values))):  # fmt: skip
+        refused = client.put(url, content=body, headers=csv)
+        assert refused.status_code == 400, refused.text
+    with read_session() as db:
+        assert len(db.exec(select(SampleChunk)).all()) == 4  # the four saved above
+
+
+@pytest.mark.one_backend  # the body's parsing; storing is the same as for any CSV
 def test_one_axis_of_an_imus_record_is_the_column_the_script_names(client, auth):
     """An IMU's file of three gyro axes: refused without ``?column=`` (no axis guessed),
     read from the column named (its header cell or its number); a column it does not

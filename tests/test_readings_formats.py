@@ -83,6 +83,47 @@ def test_chinese_headers_in_every_encoding_excel_writes(encoding):
         np.testing.assert_allclose(got, want)
 
 
+def test_a_western_windows_programs_record_is_read_with_its_degree_sign():
+    """A degree sign in Windows-1252 ("°/s": 0xB0 then "/") is neither UTF-8 nor GB18030: read as
+    Windows-1252 whole or in blocks, its unit in the header known to every reader -- one
+    position's record and a record read in blocks; a row of units under the names too."""
+    from app.core.position_records import parse_one_position_record
+    from app.core.static_record import read_static_record
+    from app.core.text_files import decode_text, text_lines
+
+    text = "Zeit [s];Drehrate [°/s]\r\n0,0;0,0041\r\n0,1;0,0042\r\n0,2;0,0040\r\n"
+    data = text.encode("cp1252")
+    assert decode_text(data) == text
+    for chunk in (32, 1 << 20):  # the encoding told from the first block, as it holds "°"
+        lines = list(text_lines(data, chunk=chunk))
+        assert lines[0] == "Zeit [s];Drehrate [°/s]" and len(lines) == 4
+        record = read_static_record(text_lines(data, chunk=chunk))
+        assert record.unit == "deg/s"
+        np.testing.assert_allclose(record.values, [0.0041, 0.0042, 0.0040])
+    with pytest.raises(UserError) as error:
+        parse_one_position_record(decode_text(data), "deg/h")
+    assert error.value.key == "csv.unit_conflict"
+    units_row = "time,rate\ns,deg/s\n0.0,0.0041\n0.1,0.0042\n"
+    assert read_static_record(text_lines(units_row.encode())).unit == "deg/s"
+    one = parse_one_position_record(units_row, "deg/s").readings.positions[0]
+    np.testing.assert_allclose(one, [0.0041, 0.0042])
+    with pytest.raises(UserError) as error:
+        parse_one_position_record(units_row, "deg/h")
+    assert error.value.key == "csv.unit_conflict"
+
+
+def test_one_positions_record_typed_in_full_width_is_read_as_the_table_reads_it():
+    """A Chinese input method in full-width mode, and the minus sign "−": one position's
+    record reads them as the pasted table does (not as a header with no readings)."""
+    from app.core.position_records import parse_one_position_record, parse_position_csv
+
+    typed = "１０．７４\n１０．６５\n－０．５\n−0.4\n"
+    want = [10.74, 10.65, -0.5, -0.4]
+    one = parse_one_position_record(typed, "deg/h").readings.positions[0]
+    np.testing.assert_allclose(one, want)
+    np.testing.assert_allclose(parse_position_csv(typed)[0], want)
+
+
 def test_binary_is_not_text():
     from app.core.text_files import decode_text
 

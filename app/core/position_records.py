@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.core.clock_stamps import spread_within_ticks
+from app.core.column_names import column_name, rate_unit
 from app.core.exceptions import UserError
 from app.core.readings import Readings, _number, parse_readings_csv
 from app.core.record_columns import ColumnChoiceNeeded
@@ -20,7 +21,7 @@ from app.core.spreadsheet_text import (
     spreadsheet_delimiter,
 )
 from app.core.static_record import LEFT_OUT, read_static_record
-from app.core.text_files import decode_text, file_text
+from app.core.text_files import decode_text, file_text, plain_text
 from app.core.typed_numbers import is_number
 from app.core.units import UNIT_SYMBOLS
 
@@ -58,7 +59,9 @@ def parse_static_record(text: str) -> np.ndarray:
     return readings.positions[0]
 
 
-def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None]:
+def parse_position_csv(
+    data: bytes | str, unit: str | None = None
+) -> tuple[np.ndarray, np.ndarray | None]:
     r"""One position's readings: one value per line, or ``time_s,value`` per line.
 
     What a device or a script sends (``text/csv`` to the API) and the fallback for a static
@@ -69,12 +72,19 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
     ``;`` instead of a comma (a spreadsheet's copy, a European export), and then a decimal
     comma is read as a point -- as the lab page reads a pasted or uploaded table.  A
     comma-separated record of one column with decimal commas ("11,5" per line) is read as
-    such where it cannot be times and values (:func:`_decimal_comma_column`).
+    such where it cannot be times and values (:func:`_decimal_comma_column`).  A Chinese
+    input method's full-width digits and signs, and the minus sign "−", are read as the
+    lab page reads them typed or pasted (:func:`app.core.text_files.plain_text`).
 
     Parameters
     ----------
     data : bytes or str
-        The CSV, as bytes (UTF-8, UTF-16 with a byte-order mark, or GB18030) or text.
+        The CSV, as bytes (UTF-8, UTF-16 with a byte-order mark, GB18030 or
+        Windows-1252) or text.
+    unit : str, optional
+        The unit the readings are said to be in (canonical): a header or a row of units
+        naming another rate unit for the readings' column is refused, as a logger's
+        record's is (``csv.unit_conflict``).
 
     Returns
     -------
@@ -88,11 +98,11 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
     UserError
         ``csv.encoding``, ``csv.unreadable``, ``csv.not_a_number`` or ``csv.out_of_range``
         (with the line), ``csv.one_or_two_columns``, ``csv.times_on_every_line``,
-        ``csv.empty``.
+        ``csv.empty``, ``csv.unit_conflict``.
     """
     if isinstance(data, bytes):
         data = decode_text(data)
-    data = file_text(data)
+    data = plain_text(file_text(data))
     delimiter = spreadsheet_delimiter(data)
     if delimiter == "," and _spaced_columns(data):  # "0.1  10.74": a script's or logger's
         rows = [line.split() for line in data.splitlines()]
@@ -112,8 +122,10 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
             continue
         if number == 1 and not all(is_number(cell) for cell in cells):
             header = cells  # such as "time_s,value"
+            _check_unit(rate_unit(column_name(cells[-1]).unit), unit)
             continue
         if number == 2 and header is not None and is_units_row(cells):
+            _check_unit(rate_unit(cells[-1].lower()), unit)
             continue  # "s, °/h" under the names
         if len(cells) > 2:
             raise UserError(
@@ -134,6 +146,12 @@ def parse_position_csv(data: bytes | str) -> tuple[np.ndarray, np.ndarray | None
     if not values:
         raise UserError("csv.empty")
     return np.array(values), (np.array(times) if times else None)
+
+
+def _check_unit(named: str | None, unit: str | None) -> None:
+    """Refuse a rate unit named in a header against the one the readings are said to be in."""
+    if named is not None and unit is not None and named != unit:
+        raise UserError("csv.unit_conflict", header=UNIT_SYMBOLS[named], chosen=UNIT_SYMBOLS[unit])
 
 
 def _spaced_columns(text: str) -> bool:
@@ -199,7 +217,8 @@ def parse_one_position_record(
     chooses: one reading per line, ``time,value`` (seconds, a logger's clock, ns since
     1970), with or without a header, units in the header, a header behind ``#``
     (:func:`app.core.static_record.read_static_record`, which reads it in blocks); an
-    IMU's record of several axes, one of its columns.
+    IMU's record of several axes, one of its columns.  Full-width digits and signs, and
+    the minus sign "−", as typed or pasted (:func:`app.core.text_files.plain_text`).
 
     Parameters
     ----------
@@ -229,7 +248,7 @@ def parse_one_position_record(
         (``csv.not_a_record``), several columns of rates and none chosen
         (``csv.choose_column``), a chosen column the file does not have, no readings.
     """
-    text = file_text(text)
+    text = plain_text(file_text(text))
     columns: tuple[str, ...] = ()
     try:
         record = read_static_record(io.StringIO(text), column=column, guess=False)

@@ -25,7 +25,7 @@ import csv
 import io
 import itertools
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -36,7 +36,7 @@ from app.core.clock_stamps import (
     is_clock_stamp,
     seconds_from_first,
 )
-from app.core.column_names import AngleOutput, comment_text
+from app.core.column_names import AngleOutput, comment_text, rate_unit
 from app.core.exceptions import UserError
 from app.core.record_columns import Layout, bare_record_layout, header_layout
 from app.core.spreadsheet_text import (
@@ -217,6 +217,7 @@ def read_static_record(
     header: list[str] | None = None  # the header's cells, once seen
     header_text = ""
     units_next = False  # the line after a header may name the units
+    units: list[str] | None = None  # that line's cells, where it does
     comment: str | None = None  # the last comment line before the readings
     comment_line = 0
     short: tuple[int, str] | None = None  # a line with fewer cells than the readings
@@ -238,6 +239,7 @@ def read_static_record(
         if units_next:
             units_next = False
             if is_units_row(cells):
+                units = cells
                 continue  # "s, °/h, °C" under the names
         if layout is None:
             named = _header_in_comment(comment, split, len(cells))
@@ -250,6 +252,9 @@ def read_static_record(
                 if header is None:
                     raise UserError("allan.bad_line", line=line_number)
                 layout = header_layout(header, column, guess=guess)
+                if layout.rate_unit is None and units is not None and layout.value < len(units):
+                    # the rates' unit in the row of units under the names, not in the name
+                    layout = replace(layout, rate_unit=rate_unit(units[layout.value].lower()))
             elif named is not None and _holds_a_number(cells):  # a ROS frame's name, say
                 layout = header_layout(named, column, guess=guess)
                 notes.append({"key": "allan.note_comment_header", "params": {"line": comment_line}})

@@ -1,5 +1,6 @@
 """Text as students and teachers save and type it: files in UTF-8 (with or without a
-byte-order mark), UTF-16 from some spreadsheets, or GB18030 from a Chinese-locale Excel --
+byte-order mark), UTF-16 from some spreadsheets, GB18030 from a Chinese-locale Excel, or
+Windows-1252 from a Western Windows program --
 whole (:func:`decode_text`) or line by line in bounded memory (:func:`text_lines`), without
 the end-of-file marks DOS-era programs leave after the last line (:func:`file_text`); a
 Chinese input method's full-width forms."""
@@ -14,7 +15,9 @@ from collections.abc import Iterable
 
 from app.core.exceptions import UserError
 
-ENCODINGS = ("utf-8-sig", "gb18030")
+# Windows-1252 last: a Western Windows program's file ("Rate [°/s]") that is neither; it
+# decodes all but five bytes, so the control-character check below still refuses binary
+ENCODINGS = ("utf-8-sig", "gb18030", "cp1252")
 # What may follow a file's last line and is not text: Ctrl-Z (SUB, 0x1A), DOS's end-of-file
 # mark, which DOS-era loggers and terminal captures still write (CP/M padded a file's last
 # 128-byte record with them); NUL bytes, the unwritten rest of the space a logger had set
@@ -43,9 +46,10 @@ def decode_text(data: bytes) -> str:
     """The text of an uploaded file.
 
     UTF-16 is recognised by its byte-order mark; otherwise UTF-8 is tried first (strict),
-    then GB18030, which the simplified-Chinese Excel writes ("另存为 CSV").  GB18030 decodes
-    almost any byte string, so a control character other than tab and line ends in the
-    result marks the file as binary; Ctrl-Z marks or NUL bytes after the last line (DOS's
+    then GB18030, which the simplified-Chinese Excel writes ("另存为 CSV"), then
+    Windows-1252, a Western Windows program's ("°/s" is no GB18030).  These decode almost
+    any byte string, so a control character other than tab and line ends in the result
+    marks the file as binary; Ctrl-Z marks or NUL bytes after the last line (DOS's
     end of file, a logger's unwritten space) are not part of the text.
 
     Parameters
@@ -132,8 +136,9 @@ def shown_name(text: str) -> str:
 
 def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
     """Lines of a text file's bytes, decoded incrementally: UTF-8 (with or without a BOM),
-    UTF-16 by its byte-order mark (a spreadsheet's "Unicode text"), or GB18030 where the
-    first block is not UTF-8 (a Chinese-locale Excel's CSV) -- as
+    UTF-16 by its byte-order mark (a spreadsheet's "Unicode text"), GB18030 where the
+    first block is not UTF-8 (a Chinese-locale Excel's CSV), Windows-1252 where it is
+    neither -- as
     :func:`decode_text` reads a whole file; CRLF or CR line ends; Ctrl-Z marks and NUL
     bytes after the last line dropped.
 
@@ -189,11 +194,14 @@ _CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
 
 def _encoding_of(first: bytes) -> str:
     """The encoding of a file from its first block: UTF-16 by its byte-order mark, UTF-8
-    where the block decodes as UTF-8 (but for a character cut at its end), else GB18030."""
+    where the block decodes as UTF-8 (but for a character cut at its end), else GB18030
+    where it decodes as that, else Windows-1252 (:func:`decode_text`'s order)."""
     if first.startswith((b"\xff\xfe", b"\xfe\xff")):
         return "utf-16"
-    try:
-        codecs.getincrementaldecoder("utf-8")().decode(first, final=False)
-    except UnicodeDecodeError:
-        return "gb18030"
-    return "utf-8-sig"
+    for encoding in ("utf-8", "gb18030"):
+        try:
+            codecs.getincrementaldecoder(encoding)().decode(first, final=False)
+        except UnicodeDecodeError:
+            continue
+        return "utf-8-sig" if encoding == "utf-8" else encoding
+    return "cp1252"

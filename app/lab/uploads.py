@@ -120,13 +120,17 @@ def csv_position(body: bytes, unit: str, column: str | None = None) -> Arrays:
     try:
         if column is not None:  # a column chosen: the record's reader, which knows columns
             raise UserError("csv.not_a_record")
-        values, times = parse_position_csv(body)
-        if times is None or epoch_scale(float(times[0])) is None:
+        values, times = parse_position_csv(body, unit)
+        if times is None:
             return values, times, None
-        # times too large for seconds (a clock in ns since 1970): the record's reader
+        if epoch_scale(float(times[0])) is None and bool(np.all(np.diff(times) > 0)):
+            return values, times, None
+        # times too large for seconds (a clock in ns since 1970), or not rising (a clock
+        # coarser than the readings, or "1,234.5" under one name: no times): the record's
+        # reader, which spreads a coarse clock's ticks and refuses what is not a record
         raise UserError("csv.not_a_record")
     except UserError as error:
-        if error.key == "csv.encoding":
+        if error.key in ("csv.encoding", "csv.unit_conflict"):
             raise
         try:
             readings = parse_one_position_record(decode_text(body), unit, column).readings

@@ -541,16 +541,20 @@
   document.querySelectorAll('.method-panel[data-method="manual"]').forEach(setupGrid);
 
   // --- CSV file ---------------------------------------------------------------------------
-  // UTF-8 first, then GB18030 (what a Chinese-locale Excel saves); UTF-16 by its mark.
+  // UTF-8 first, then GB18030 (what a Chinese-locale Excel saves), then Windows-1252 (a
+  // Western Windows program's "°/s"); UTF-16 by its mark -- as the server reads a file.
   function decodeFile(buffer) {
     const bytes = new Uint8Array(buffer);
     if (bytes[0] === 0xff && bytes[1] === 0xfe) return new TextDecoder("utf-16le").decode(bytes);
     if (bytes[0] === 0xfe && bytes[1] === 0xff) return new TextDecoder("utf-16be").decode(bytes);
-    try {
-      return new TextDecoder("utf-8", { fatal: true }).decode(bytes);
-    } catch (error) {
-      return new TextDecoder("gb18030").decode(bytes);
+    for (const encoding of ["utf-8", "gb18030"]) {
+      try {
+        return new TextDecoder(encoding, { fatal: true }).decode(bytes);
+      } catch (error) {
+        // the next encoding
+      }
     }
+    return new TextDecoder("windows-1252").decode(bytes);
   }
 
   // An Excel workbook chosen by mistake: .xlsx is a zip ("PK\x03\x04"), .xls an OLE file.

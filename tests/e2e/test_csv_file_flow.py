@@ -76,7 +76,9 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
 ):
     """A real gyro's logger writes one file per position (its clock, the rate): the first
     is offered for the first empty position, the next for the position chosen in the
-    preview -- its angle follows the choice -- and each is saved there."""
+    preview -- its angle follows the choice -- and each is saved there.  The next comes
+    from a Western Windows program (Windows-1252, "°/s" in its header): its unit is read
+    from the header, and the preview asks for it while another is chosen."""
     page = new_page()
     log_in(page, live_server.url, "student", STUDENT_PASSWORD)
     page.context.add_cookies([{"name": "gyrolab_lang", "value": "zh-CN", "url": live_server.url}])
@@ -102,7 +104,15 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
     expect(page.locator("#take-history tbody tr")).to_have_count(1)
 
     panel = csv_panel(page)
-    panel.locator(".csv-file").set_input_files(logger_file(3))
+    western = tmp_path / "pos3.csv"
+    lines = ["Zeit;Drehrate [°/s]"] + [
+        f"14:00:{k:02d},0;{float(value) / 3600:.9f}".replace(".", ",")
+        for k, value in enumerate(columns[2])
+    ]
+    western.write_bytes(("\r\n".join(lines) + "\r\n").encode("cp1252"))
+    panel.locator(".csv-file").set_input_files(str(western))
+    expect(panel.locator(".csv-preview .error-text")).to_contain_text("读数单位为 °/s")
+    panel.locator(".unit").select_option("deg/s")
     choice = panel.locator(".csv-preview select.record-position")
     expect(choice).to_have_value("2")  # the first position still empty
     angle_before = panel.locator(".csv-preview tbody tr td").nth(1).inner_text()
