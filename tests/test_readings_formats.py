@@ -124,6 +124,29 @@ def test_one_positions_record_typed_in_full_width_is_read_as_the_table_reads_it(
     np.testing.assert_allclose(parse_position_csv(typed)[0], want)
 
 
+def test_a_long_text_is_made_plain_block_by_block_as_it_is_whole():
+    """A long record's blocks of lines that are ASCII are left as they are; the others are
+    normalised as the whole text would be -- full-width forms at a block's start and end,
+    "。" between digits, a text without line ends."""
+    import unicodedata
+
+    from app.core.text_files import PLAIN_BLOCK, plain_text
+
+    def whole(text: str) -> str:
+        return unicodedata.normalize("NFKC", text).replace("\u2212", "-").replace("10。74", "10.74")
+
+    header = "时间,角速率 (°/h)\n"
+    lines = "".join(f"{k * 0.1:.1f},10.7{k % 10}\n" for k in range(PLAIN_BLOCK // 8))
+    for text in (
+        header + lines + "１０．７４，－０．５\n" + lines + "10。74\n−0.4",
+        "１" * (PLAIN_BLOCK + 5),
+        lines + "\n".join(["１０．７４"] * (PLAIN_BLOCK // 4)),
+    ):
+        assert len(text) > PLAIN_BLOCK
+        assert plain_text(text) == whole(text)
+    assert plain_text(header + lines).endswith(lines)
+
+
 def test_binary_is_not_text():
     from app.core.text_files import decode_text
 
