@@ -174,6 +174,8 @@ def _decimal_comma_column(
     ``time_s,value`` pairs as read."""
     if header is None and bool(np.all(np.diff(times) > 0)):
         return None  # rising times, as most records have: decided without a scan
+    if header is not None and len(header) != 1:
+        return None  # two names ("time_s,value"): pairs, whatever the numbers (no scan)
     lines: list[tuple[int, str]] = []
     for number, row in enumerate(rows, start=1):
         cells = [c.strip() for c in row if c.strip()]
