@@ -74,6 +74,17 @@ def test_import_gb18030_file_from_excel(teacher_client):
     assert names == {"张三", "李四"}
 
 
+def test_a_western_excels_roster_keeps_its_accented_names():
+    """A roster saved by Excel in a Western locale (Windows-1252): neither UTF-8 nor
+    GB18030, read with its names as written, not refused."""
+    from app.accounts.roster_csv import parse_roster
+
+    roster = "username,display_name\r\ns101,Zoë Müller\r\ns102,Ana Peña\r\n"
+    parsed = parse_roster(roster.encode("cp1252"))
+    assert not parsed.problems
+    assert [row.display_name for row in parsed.rows] == ["Zoë Müller", "Ana Peña"]
+
+
 def test_student_numbers_in_full_width_forms_are_imported_as_ascii(teacher_client):
     """A registrar's list typed with a Chinese input method in full-width mode."""
     course_id = create_course(teacher_client)
