@@ -112,6 +112,9 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
     western.write_bytes(("\r\n".join(lines) + "\r\n").encode("cp1252"))
     panel.locator(".csv-file").set_input_files(str(western))
     expect(panel.locator(".csv-preview .error-text")).to_contain_text("读数单位为 °/s")
+    accept = panel.locator(".accept-csv")
+    expect(accept).to_be_disabled()
+    assert float(accept.evaluate("b => getComputedStyle(b).opacity")) < 1  # and looks it
     panel.locator(".unit").select_option("deg/s")
     choice = panel.locator(".csv-preview select.record-position")
     expect(choice).to_have_value("2")  # the first position still empty
