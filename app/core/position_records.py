@@ -149,7 +149,8 @@ def parse_position_csv(
 
 
 def _check_unit(named: str | None, unit: str | None) -> None:
-    """Refuse a rate unit named in a header against the one the readings are said to be in."""
+    """Refuse a rate unit a header names against the one the readings are said to be in
+    (``csv.unit_conflict``), in both one-position readers."""
     if named is not None and unit is not None and named != unit:
         raise UserError("csv.unit_conflict", header=UNIT_SYMBOLS[named], chosen=UNIT_SYMBOLS[unit])
 
@@ -279,10 +280,7 @@ def parse_one_position_record(
         raise UserError("csv.record_of_angles", unit=record.angle.unit)
     times = None if record.times_s is None else [record.times_s]
     temperatures = None if record.temperatures_c is None else [record.temperatures_c]
-    if record.unit is not None and record.unit != unit:
-        raise UserError(
-            "csv.unit_conflict", header=UNIT_SYMBOLS[record.unit], chosen=UNIT_SYMBOLS[unit]
-        )
+    _check_unit(record.unit, unit)
     readings = Readings([record.values], None, times, "record", temperatures)
     left_out = tuple(note for note in record.notes if note["key"] in LEFT_OUT)
     return OnePositionRecord(readings, columns, column if columns else None, left_out)
