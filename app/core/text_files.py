@@ -23,6 +23,9 @@ ENCODINGS = ("utf-8-sig", "gb18030", "cp1252")
 # 128-byte record with them); NUL bytes, the unwritten rest of the space a logger had set
 # aside for its file when it lost power (an SD card's preallocated clusters)
 END_OF_FILE_MARK = "\x1a\x00"
+# control characters no text file has (tab, LF and CR are text): a file that decodes with
+# one of them in it is binary
+_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
 
 
 def file_text(text: str) -> str:
@@ -77,7 +80,7 @@ def decode_text(data: bytes) -> str:
             text = data.decode(encoding).rstrip(END_OF_FILE_MARK)
         except UnicodeDecodeError:
             continue
-        if not any(ord(ch) < 32 and ch not in "\t\r\n" for ch in text):
+        if not _CONTROL.search(text):  # a regular expression: 0.05 s for 18 MB, not 1 s
             return text
     raise UserError("csv.encoding")
 
@@ -204,9 +207,6 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
 def _line_ends(text: str) -> str:
     """CRLF and a bare CR (an old Mac's line end) as LF."""
     return text.replace("\r\n", "\n").replace("\r", "\n")
-
-
-_CONTROL = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f]")
 
 
 def _encoding_of(first: bytes) -> str:
