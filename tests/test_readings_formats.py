@@ -8,7 +8,9 @@ import io
 import numpy as np
 import pytest
 
+from app.core import position_records
 from app.core.exceptions import UserError
+from app.core.position_records import parse_position_csv
 from app.core.readings import parse_readings_csv
 
 
@@ -493,3 +495,98 @@ def test_a_long_file_that_cannot_be_read_says_why(text, key):
 def test_a_time_in_another_unit_is_not_taken_for_seconds():
     readings = parse_readings_csv("position,time (ms),rate\n1,0,1\n1,500,2\n2,1000,3\n")
     assert readings.layout == "long" and readings.times_s is None
+
+
+def _record_bodies(seed: int, count: int):
+    """Records of one position in the spellings a device or a script sends, a few with a
+    fault: headers, units rows, comments, blank lines, CRLF and bare CR ends, decimal
+    commas under one name, falling times, cells numpy and the line-by-line reader might
+    read differently ("nan", "1_0", "1e400", "1e", ".", "+-1", an empty cell, spaces)."""
+    rng = np.random.default_rng(seed)
+    heads = [
+        "time_s,value",
+        "value",
+        "t,rate (deg/s)",
+        "rate",
+        '"time_s","value"',
+        "# gyro",
+        "",
+        "0.5,10.7",
+        "10.7",
+        "time_s,value,temp",
+    ]
+    seconds = ["s,deg/h", "s,°/s", "# note", "", "0.6,10.8", "10.8", "deg/h"]
+    odd = [
+        "nan",
+        "1_0",
+        "1e400",
+        "1e",
+        ".",
+        "+-1",
+        "",
+        "1,,2",
+        "1,2,3",
+        "11,5",
+        "-.5",
+        "5.",
+        "1E+02",
+        "0x1",
+        "inf",
+        " 3",
+        "  ",
+        "\t",
+        "1.0 2.0",
+        " 1.5 , 2.5\t",
+        "1. 5",
+        "- 1",
+    ]
+    for _ in range(count):
+        width = int(rng.integers(1, 3))
+        decimal_commas = rng.random() < 0.15
+        separator = ", " if rng.random() < 0.2 else ","  # as a script may write them
+        lines = [str(rng.choice(heads)), str(rng.choice(seconds))]
+        start = float(rng.choice([1.0, 100.0, 0.0]))
+        for k in range(int(rng.integers(0, 12))):
+            value = f"{rng.normal(10, 2):.{int(rng.integers(0, 8))}f}"
+            time = f"{start + k * rng.choice([0.1, -0.1, 1.0]):.3f}"
+            if decimal_commas:  # "11,5": one column of numbers, or times and values?
+                lines.append(value.replace(".", ","))
+            else:
+                lines.append(f"{time}{separator}{value}" if width == 2 else value)
+        if lines[2:] and rng.random() < 0.4:
+            lines[int(rng.integers(2, len(lines)))] = str(rng.choice(odd))
+        end = str(rng.choice(["\n", "\r\n", "\r"], p=[0.6, 0.3, 0.1]))
+        yield end.join(lines) + (end if rng.random() < 0.8 else "")
+
+
+def _outcome(body: str):
+    try:
+        values, times = parse_position_csv(body.encode(), "deg/h")
+    except UserError as error:
+        return error.key, error.params
+    return values.tolist(), None if times is None else times.tolist()
+
+
+def test_a_plain_record_read_by_numpy_is_read_as_line_by_line(monkeypatch):
+    # the fast reader (numpy's) of a comma-separated record of plain numbers must give
+    # what the line-by-line reader gives, or leave the record to it
+    bodies = list(_record_bodies(7, 3000))
+    fast = [_outcome(body) for body in bodies]
+    taken = sum(position_records._plain_numbers(body, "deg/h") is not None for body in bodies)
+    monkeypatch.setattr(position_records, "_plain_numbers", lambda data, unit: None)
+    for body, outcome in zip(bodies, fast, strict=True):
+        assert outcome == _outcome(body), body
+    assert taken > 400  # the fast reader took many of them, and left the rest
+    assert taken < len(bodies) - 400
+
+
+def test_many_plain_lines_are_read_by_numpy():
+    times = np.arange(200_000) * 0.01
+    values = np.random.default_rng(1).normal(10, 0.1, times.size)
+    body = "time_s,value\n" + "\n".join(
+        f"{t:.2f},{v:.6f}" for t, v in zip(times, values, strict=True)
+    )
+    assert position_records._plain_numbers(body, None) is not None
+    read_values, read_times = parse_position_csv(body.encode(), None)
+    assert np.array_equal(read_values, [float(f"{v:.6f}") for v in values])
+    assert np.array_equal(read_times, [float(f"{t:.2f}") for t in times])
