@@ -187,3 +187,99 @@ def test_the_preview_says_which_row_it_passed_over_in_the_page_language(student_
         [float(v.mean()) for v in canonical.positions], abs=1e-12
     )
     assert results["theta_deg"] == pytest.approx(-10.753, abs=5e-4)  # the handout's θ
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "P1,P2,P3,P4\n11.51,3.2,-11.4,-3.1\n11.49,3.1,-11.5,-3.2\nMean,11.50,3.15,-11.45\n",
+        "P1,P2,P3,P4\n11.51,3.2,-11.4,-3.1\n11.49,3.1,-11.5,-3.2\n平均值\n",
+        "11.51,3.2,-11.4,-3.1\n11.49,3.1,-11.5,-3.2\nMean,11.50,3.15,-11.45,-3.15\n",
+        "位置,读数\n1,11.51\n1,11.49\n2,3.2\n2,3.1\n3,-11.4\n3,-11.5\n4,-3.1\n4,-3.2\nmean,0\n",
+        "位置1,11.51,11.49\n位置2,3.2,3.1\n位置3,-11.4,-11.5\n位置4,-3.1,-3.2\n平均值,1,2\n",
+    ],
+    ids=["label-under-position-1", "label-alone", "headerless", "long", "on-its-side"],
+)
+def test_a_summary_row_is_passed_over_in_every_layout_as_the_grid_passes_it(text):
+    # the lab page's grid leaves such a pasted row out wherever its label stands; a file
+    # was refused ("'Mean' is not a number"), or read "mean" as a fifth position
+    readings = parse_readings_csv(text)
+    assert [v.tolist() for v in readings.positions] == [
+        [11.51, 11.49], [3.2, 3.1], [-11.4, -11.5], [-3.1, -3.2]
+    ]  # fmt: skip
+    assert [label.lower() for _, label in readings.skipped] in (["mean"], ["平均值"])
+
+
+def handout_with_means(written) -> str:
+    """The handout's Table 1 with a last row of each column's mean, unlabelled, as a
+    spreadsheet's =AVERAGE row writes it (``written`` formats each mean)."""
+    columns = handout("handout_horizontal.csv")
+    lines = ["P1,P2,P3,P4"]
+    lines += [",".join(f"{columns[k][row]:.2f}" for k in range(1, 5)) for row in range(10)]
+    lines.append(",".join(written(float(np.mean(columns[k]))) for k in range(1, 5)))
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize(
+    "written",
+    [repr, "{:.3f}".format, "{:.10g}".format, "{:.4e}".format],
+    ids=["repr", "3", "g", "e"],
+)
+def test_an_unlabelled_row_of_means_is_told_by_its_decimals_and_left_out(written):
+    readings = parse_readings_csv(handout_with_means(written))
+    assert [v.size for v in readings.positions] == [10, 10, 10, 10]
+    assert readings.means_row == 12
+    expected = handout("handout_horizontal.csv")
+    for got, k in zip(readings.positions, range(1, 5), strict=True):
+        np.testing.assert_allclose(got, expected[k])
+    assert readings.left_out() == [("csv.means_row_skipped", {"line": 12})]
+
+
+def test_a_row_that_is_not_every_columns_mean_stays_a_reading():
+    # written to the readings' own two places, the means are readings as far as anyone
+    # can tell; one column off by more than its last digit's half unit: a reading
+    assert parse_readings_csv(handout_with_means("{:.2f}".format)).means_row is None
+    shifted = handout_with_means("{:.3f}".format).rstrip("\n").rsplit(",", 1)
+    text = f"{shifted[0]},{float(shifted[1]) + 0.002:.3f}\n"
+    readings = parse_readings_csv(text)
+    assert readings.means_row is None and [v.size for v in readings.positions] == [11] * 4
+    # fewer than three readings above it: no pattern to tell it by
+    assert parse_readings_csv("P1,P2\n1.1,2.1\n1.2,2.2\n1.15,2.15\n").means_row is None
+
+
+def test_genuine_last_readings_are_never_taken_for_means():
+    # 20,000 tables of a quantised gyro's readings (0.01 °/h, σ from a tenth of a step to
+    # ten steps; one to four positions; 3 to 15 rows): the last row is always kept
+    rng = np.random.default_rng(20261207)
+    for _ in range(20_000):
+        width, count = int(rng.integers(1, 5)), int(rng.integers(4, 16))
+        sigma = 0.01 * 10.0 ** rng.uniform(-1, 1)
+        table = np.round(rng.normal(rng.uniform(-15, 15, width), sigma, (count, width)), 2)
+        text = "\n".join(",".join(f"{v:.{int(rng.integers(2, 4))}f}" for v in row) for row in table)
+        readings = parse_readings_csv(",".join(f"P{k + 1}" for k in range(width)) + "\n" + text)
+        assert readings.means_row is None, text
+
+
+def test_the_preview_and_the_command_line_say_the_row_of_means_was_left_out(
+    student_client, capsys, tmp_path
+):
+    from app.cli.main import main
+
+    text = handout_with_means("{:.3f}".format)
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    body = {"part": "heading", "unit": "deg/h", "text": text}
+    english = post_json(student_client, f"{page}/csv/preview", body, page)
+    assert [p["n"] for p in english.json()["positions"]] == [10, 10, 10, 10]
+    assert english.json()["notes"] == [
+        "Line 12 was passed over: it is each position's mean of the readings above it "
+        "(a spreadsheet's AVERAGE row), not a reading."
+    ]
+    student_client.cookies.set("gyrolab_lang", "zh-CN")
+    chinese = post_json(student_client, f"{page}/csv/preview", body, page)
+    assert chinese.json()["notes"][0].startswith("第 12 行已跳过")
+    path = tmp_path / "table.csv"
+    path.write_text(text)
+    assert main(["solve", "heading", str(path), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert "Line 12 was passed over" in err and "Line 12" not in out

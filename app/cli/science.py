@@ -127,6 +127,12 @@ def _solve(args: argparse.Namespace) -> int:
         _finite(f"--{name.replace('_', '-')}", getattr(args, name))
     readings = parse_readings_csv(_read_text(args.file), part=args.part)
     result = solve_readings(args.part, readings, args)
+    if readings.left_out():  # a row of means passed over: said, beside the output
+        from app.web.i18n import translator
+
+        say = translator(args.language)
+        for key, params in readings.left_out():
+            print(say(key, **params), file=sys.stderr)
     warm_up = temperature_summary(readings, args.language)
     if args.json:
         payload = result.to_json()

@@ -4,7 +4,9 @@
   "Position 1", "P1", the handout's own "位置 | 1 | 2 | 3 | 4", the turntable's angles
   "0° | 90° | …": :mod:`app.core.table_headers`) and one reading per row; other columns
   (``sample``, 序号, ``time``...) are ignored and blank cells allowed; a row of means or
-  other summary ("平均值", "mean") is passed over and reported (``Readings.skipped``).
+  other summary ("平均值", "mean") is passed over and reported (``Readings.skipped``), as
+  is a last row of each column's mean without a label (a spreadsheet's ``=AVERAGE``,
+  :mod:`app.core.means_row`; ``Readings.means_row``).
   Turned on its side -- one row per position, its name first -- it is read the same way.
 
 Either may be separated by semicolons or tabs instead of commas, with decimal commas
@@ -33,6 +35,7 @@ import numpy as np
 
 from app.core.exceptions import UserError
 from app.core.long_headers import long_columns
+from app.core.means_row import is_row_of_means, written_decimals
 from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
@@ -55,6 +58,18 @@ class Readings:
     layout: str = "wide"
     temperatures_c: list[np.ndarray] | None = None  # long layout's optional temperature_c
     skipped: list[tuple[int, str]] = field(default_factory=list)  # summary rows: line, label
+    means_row: int | None = None  # the line of an unlabelled row of means, left out
+
+    def left_out(self) -> list[tuple[str, dict]]:
+        """What the reader passed over, as message keys and their values: each summary
+        row, and an unlabelled row of means."""
+        notes = [
+            ("csv.summary_skipped", {"line": line, "label": label}) for line, label in self.skipped
+        ]
+        if self.means_row is not None:
+            notes.append(("csv.means_row_skipped", {"line": self.means_row}))
+        return notes
+
     numbers: list[int] | None = None  # long layout: the positions' numbers as the file gives
 
 
@@ -117,6 +132,20 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     names = [column_name(cell) for cell in header]
     if len(rows) > 1 and is_units_row(rows[1][1]):
         del rows[1]  # "s, °/h, °/h…" under the names: a note, as a unit after a name is
+    # a row of means or other summary ("平均值 | 10.71 …", "mean" under a position's
+    # column, a long table's "mean" row), in any layout: left out and said, as the lab
+    # page's grid leaves a pasted one out
+    skipped = [(line, label) for line, row in rows[1:] if (label := summary_label(row))]
+    if skipped:
+        rows = rows[:1] + [(line, row) for line, row in rows[1:] if not summary_label(row)]
+    readings = _parse_layout(rows, header_line, header, names, part)
+    readings.skipped = skipped
+    return readings
+
+
+def _parse_layout(rows, header_line: int, header: list[str], names, part: str | None) -> Readings:
+    """The readings of a table whose first row is ``header`` (which may be numbers: no
+    header), in the layout it is in."""
     long = long_columns(header)
     if long is not None:
         body = rows[1:]
@@ -176,20 +205,24 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
         )
     order = sorted(columns, key=columns.get)
     values: list[list[float]] = [[] for _ in order]
-    skipped = []
+    decimals = [0] * len(order)  # the most decimals a reading of each column is written to
+    cells: list[str] = []
+    above = decimals  # the same, for the rows above the last
     for line, row in rows:
-        label = summary_label([cell for index, cell in enumerate(row) if index not in columns])
-        if label is not None:  # "平均值 | 10.71 | 2.79 …": the handout's row of means
-            skipped.append((line, label))
-            continue
-        for slot, index in enumerate(order):
-            cell = row[index].strip() if index < len(row) else ""
+        cells = [row[index].strip() if index < len(row) else "" for index in order]
+        above = list(decimals)
+        for slot, cell in enumerate(cells):
             if cell:
                 values[slot].append(_number(cell, line, f"position_{slot + 1}"))
+                decimals[slot] = max(decimals[slot], written_decimals(cell, significant=True) or 0)
+    means_row = None
+    if all(cells) and is_row_of_means(cells, [v[:-1] for v in values], above):
+        means_row = rows[-1][0]  # a spreadsheet's =AVERAGE row, unlabelled: no reading
+        values = [v[:-1] for v in values]
     for slot, column in enumerate(values, start=1):
         if not column:
             raise UserError("readings.empty_position", position=slot)
-    return Readings([np.array(v) for v in values], None, None, "wide", skipped=skipped)
+    return Readings([np.array(v) for v in values], None, None, "wide", means_row=means_row)
 
 
 def _parse_rows_of_positions(rows) -> Readings:

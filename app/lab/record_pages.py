@@ -150,10 +150,7 @@ def preview_csv(
             }
         )
     language = request_language(request)
-    notes = [
-        translate("csv.summary_skipped", language, line=line, label=label)
-        for line, label in readings.skipped
-    ]
+    notes = [translate(key, language, **params) for key, params in readings.left_out()]
     if single:
         notes.insert(0, translate("csv.one_position_record", language, position=first))
     notes += [translate(note["key"], language, **note["params"]) for note in parsed.notes]

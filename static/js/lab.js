@@ -131,10 +131,14 @@
   // digits ("10。74", the "." key in Chinese punctuation) or the minus sign "−" too.
   const plain = (text) =>
     text.normalize("NFKC").replace(/\u2212/g, "-").replace(/(\d)\u3002(?=\d)/g, "$1.");
+  // A cell's number as written, a decimal comma as a point ("10,74" → "10.74").
+  function numberText(text) {
+    const value = plain(text).trim();
+    return /^[-+]?\d*,\d+([eE][-+]?\d+)?$/.test(value) ? value.replace(",", ".") : value;
+  }
   function parseCell(text) {
-    let value = plain(text).trim();
+    const value = numberText(text);
     if (value === "") return { empty: true };
-    if (/^[-+]?\d*,\d+([eE][-+]?\d+)?$/.test(value)) value = value.replace(",", ".");
     if (!/^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/.test(value)) return { error: "js.not_a_number" };
     const number = Number(value);
     if (!Number.isFinite(number)) return { error: "js.not_finite" };
@@ -277,7 +281,38 @@
       body = body.map((row) => row.slice(skip));
       notes.push(note);
     }
+    if (isRowOfMeans(body)) {
+      body = body.slice(0, -1);
+      notes.push("js.means_row_skipped");
+    }
     return { rows: body, notes };
+  }
+
+  // A last row that is each column's mean of the rows above it, written to more decimals
+  // than they are: a spreadsheet's =AVERAGE row without a label (app.core.means_row).
+  function writtenDecimals(text, significant = false) {
+    const match = /^[-+]?(\d*)(?:\.(\d*))?(?:[eE]([-+]?\d+))?$/.exec(text);
+    if (!match || !(match[1] || match[2])) return null;
+    const fraction = significant ? (match[2] || "").replace(/0+$/, "") : (match[2] || "");
+    return fraction.length - Number(match[3] || 0);
+  }
+  function isRowOfMeans(rows) {
+    if (rows.length < 2) return false;
+    const last = rows[rows.length - 1].map(numberText);
+    const width = Math.max(...rows.map((row) => row.length));
+    let longer = false;
+    for (let c = 0; c < width; c++) {
+      const above = rows.slice(0, -1).map((row) => numberText(row[c] || "")).filter((cell) => cell !== "");
+      const decimals = writtenDecimals(last[c] || "");
+      if (decimals === null || above.length < 3) return false;
+      const values = above.map((cell) => parseCell(cell));
+      if (values.some((parsed) => parsed.error)) return false;
+      const mean = values.reduce((sum, parsed) => sum + parsed.value, 0) / values.length;
+      if (Math.abs(Number(last[c]) - mean) > 0.5 * 10 ** -decimals + 1e-12 * Math.max(1, Math.abs(mean))) return false;
+      const finer = writtenDecimals(last[c], true);  // "6.020" is no finer than "6.02"
+      longer = longer || above.every((cell) => finer > (writtenDecimals(cell, true) ?? 0));
+    }
+    return longer;
   }
 
   // Cells of each line: tabs (a spreadsheet's copy), else semicolons, else commas -- unless
