@@ -590,3 +590,29 @@ def test_many_plain_lines_are_read_by_numpy():
     read_values, read_times = parse_position_csv(body.encode(), None)
     assert np.array_equal(read_values, [float(f"{v:.6f}") for v in values])
     assert np.array_equal(read_times, [float(f"{t:.2f}") for t in times])
+
+
+@pytest.mark.parametrize("separator", [",", ";", "\t"])
+@pytest.mark.parametrize("hint", ["sep={}", '"sep={}"', "\ufeffsep={}", "SEP={}"])
+def test_excels_first_line_naming_the_separator_is_read_as_excel_reads_it(separator, hint):
+    # programs that write for Excel put "sep=;" above the table; every reader refused it
+    from app.core.static_record import read_static_record
+    from app.lab.uploads import csv_position
+
+    first = hint.format(separator) + "\r\n"
+    decimal = "," if separator != "," else "."
+    table = first + "\r\n".join(
+        separator.join(row)
+        for row in [["P1", "P2", "P3"], ["10.74", "-0.5", "2.88"], ["10.65", "-0.4", "x"]]
+    ).replace(".", decimal)
+    with pytest.raises(UserError) as bad:
+        parse_readings_csv(table)
+    assert bad.value.params["line"] == 4  # the file's own line numbers
+    readings = parse_readings_csv(table.replace("x", "2" + decimal + "69"))
+    assert [v.tolist() for v in readings.positions] == [[10.74, 10.65], [-0.5, -0.4], [2.88, 2.69]]
+    record = first + "\n".join(
+        separator.join(row) for row in [["time_s", "rate"], ["0", "1.5"], ["0.1", "1.6"]]
+    ).replace(".", decimal)
+    assert read_static_record(io.StringIO(record)).values.tolist() == [1.5, 1.6]
+    values, times, _ = csv_position(record.encode(), "deg/h")
+    assert values.tolist() == [1.5, 1.6] and times.tolist() == [0.0, 0.1]

@@ -41,6 +41,7 @@ from app.core.spreadsheet_text import (
     is_units_row,
     spreadsheet_delimiter,
     title_lines_blanked,
+    without_separator_hint,
 )
 from app.core.table_headers import column_name, evenly_round, numbered_columns, summary_label
 from app.core.text_files import file_text, plain_text
@@ -115,8 +116,9 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     UserError
         With the line and column of the first problem.
     """
-    text = title_lines_blanked(plain_text(file_text(text)))
-    delimiter = spreadsheet_delimiter(text)
+    hint, text = without_separator_hint(plain_text(file_text(text)))
+    text = title_lines_blanked(text)
+    delimiter = hint or spreadsheet_delimiter(text)
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
         rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))
     except csv.Error as error:

@@ -1,7 +1,8 @@
 """How spreadsheets and instruments write a table of readings as text: the column separator
-(a tab when copied, a semicolon in Europe), decimal commas, a title line or two above the
-table, a row of units under its names, and one column of decimal commas that a comma
-separator would split in two.  The layouts themselves are :mod:`app.core.readings`.
+(a tab when copied, a semicolon in Europe, named on a first line "sep=;"), decimal commas,
+a title line or two above the table, a row of units under its names, and one column of
+decimal commas that a comma separator would split in two.  The layouts themselves are
+:mod:`app.core.readings`.
 """
 
 from __future__ import annotations
@@ -10,6 +11,35 @@ import re
 
 from app.core.text_files import plain_text
 from app.core.typed_numbers import is_number
+
+# Excel's first line naming the separator ("sep=;"), which programs that write for Excel
+# put above the table so that any locale's Excel splits it right
+SEPARATOR_HINT = re.compile(r'\s*"?sep=([,;\t])"?[,;\t]*\s*', re.IGNORECASE)
+
+
+def separator_hint(line: str) -> str | None:
+    """The separator a file's first line names, as Excel reads it: "sep=;" → ";".
+
+    Parameters
+    ----------
+    line : str
+        The file's first line (a byte-order mark before it allowed).
+
+    Returns
+    -------
+    str or None
+        ``,``, ``;`` or a tab; None for any other line.
+    """
+    match = SEPARATOR_HINT.fullmatch(line.lstrip("\ufeff"))
+    return match.group(1) if match else None
+
+
+def without_separator_hint(text: str) -> tuple[str | None, str]:
+    """A file's text with its "sep=;" first line blanked (the lines keep their numbers),
+    and the separator it names (None where there is no such line)."""
+    first, end, rest = text.partition("\n")
+    hint = separator_hint(first.rstrip("\r"))
+    return (hint, end + rest) if hint is not None else (None, text)
 
 
 def spreadsheet_delimiter(text: str) -> str:

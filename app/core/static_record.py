@@ -2,7 +2,8 @@
 
 Reading: CSV text (``value`` per line, ``time_s,value``, ``time_s,value,temperature_c``, the
 bridge's long layout ``position,angle_deg,time_s,value[,temperature_c]``, with or without a
-header; commas, tabs or semicolons (then decimal commas), or spaces between the columns;
+header; commas, tabs or semicolons (then decimal commas), or spaces between the columns
+(Excel's first line "sep=;" naming the separator);
 one column with decimal commas ("0,0123" per line) where it cannot be times and values;
 a row of units under the header passed over; a time column in seconds, in milliseconds
 (``time_ms``) or as a logger's clock -- "2026-11-28 10:00:00.123", ISO 8601, a time of day
@@ -44,6 +45,7 @@ from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
     one_column_of_decimal_commas,
+    separator_hint,
 )
 
 BLOCK_LINES = 200_000
@@ -234,6 +236,9 @@ def read_static_record(
                 comment, comment_line = remark, line_number
             continue
         if split is None:
+            if (hint := separator_hint(raw.rstrip("\r\n"))) is not None:  # Excel's "sep=;"
+                split = _splitter(hint)
+                continue
             split = _splitter(text)
         cells = split(text)
         if units_next:
