@@ -476,6 +476,7 @@ ACCESS = {
     "GET /lab/sessions/{session_id}": "owner",
     "POST /lab/sessions/{session_id}/manual": "owner",
     "POST /lab/sessions/{session_id}/csv/preview": "owner",
+    "POST /lab/sessions/{session_id}/csv/workbook": "owner",
     "POST /lab/sessions/{session_id}/csv": "owner",
     "POST /lab/sessions/{session_id}/turn": "owner",
     "POST /lab/sessions/{session_id}/plane": "owner",
@@ -535,6 +536,11 @@ JSON_BODIES = {  # routes of the lab page that take JSON (fetch) rather than for
 }
 
 
+RAW_BODIES = {  # routes of the lab page that take a file's bytes as they are
+    "/csv/workbook": b"PK\x03\x04 an Excel workbook's bytes",
+}
+
+
 def request(client, method, path, headers=None):
     headers = dict(headers or {})
     if method in ("POST", "PUT"):
@@ -542,6 +548,19 @@ def request(client, method, path, headers=None):
             return client.request(method, path, json={"samples": [1.0] * 10}, headers=headers)
         page = "/login" if "gyrolab_session" not in client.cookies else "/lab"
         token = csrf_from(client, page)
+        raw = next((s for s in RAW_BODIES if path.startswith("/lab/") and path.endswith(s)), None)
+        if raw:
+            return client.request(
+                method,
+                path,
+                content=RAW_BODIES[raw],
+                headers={
+                    **headers,
+                    "X-CSRF-Token": token,
+                    "Content-Type": "application/octet-stream",
+                    "Accept": "application/json",
+                },
+            )
         suffix = next(
             (s for s in JSON_BODIES if path.startswith("/lab/") and path.endswith(s)), None
         )

@@ -29,6 +29,7 @@ from tests.conftest import snapshot
 from tests.factories import (
     ACCESS,
     JSON_BODIES,
+    RAW_BODIES,
     browser,
     build_world,
     concrete,
@@ -183,7 +184,7 @@ def test_anonymous_is_refused(ids):
                     wrong.append((route, "accepted"))
                 continue
             response = request(anonymous, method, path)
-            json_route = method == "POST" and any(path.endswith(s) for s in JSON_BODIES)
+            json_route = method == "POST" and path.endswith((*JSON_BODIES, *RAW_BODIES))
             if path.startswith("/api/") or json_route:
                 if response.status_code != 401:  # JSON callers get JSON, not a redirect
                     wrong.append((route, response.status_code))

@@ -28,6 +28,8 @@ from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.solve import solve_heading, solve_latitude
 from app.core.text_files import decode_text
 from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
+from app.core.workbook_sheets import is_workbook
+from app.core.workbook_text import workbook_text
 
 WARM_GYRO_S = 3600.0  # simulate's default: a lab gyro is usually left on
 
@@ -41,8 +43,8 @@ def to_json_text(payload: dict) -> str:
 
 
 def _read_text(path: str) -> str:
-    """The file's text in UTF-8, UTF-16 (by its byte-order mark) or GB18030, as a page's
-    upload reads it."""
+    """The file's text in UTF-8, UTF-16 (by its byte-order mark), GB18030 or Windows-1252,
+    or an Excel workbook's sheet of readings, as a page's upload reads it."""
     try:
         if path == "-":
             binary = getattr(sys.stdin, "buffer", None)
@@ -56,7 +58,7 @@ def _read_text(path: str) -> str:
         raise CommandError(f"no such file: {path}") from None
     except OSError as error:
         raise CommandError(f"cannot read {path}: {error.strerror}") from None
-    return decode_text(data)
+    return workbook_text(data) if is_workbook(data) else decode_text(data)
 
 
 def _finite(name: str, value: float | None) -> None:

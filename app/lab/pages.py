@@ -288,7 +288,6 @@ JS_MESSAGES = (
     "js.mean",
     "js.angle",
     "js.too_large",
-    "js.workbook_not_csv",
     "chart.time_s",
     "chart.rate_deg_h",
     "js.pasted",

@@ -8,7 +8,7 @@ from datetime import datetime
 from typing import Annotated
 
 import numpy as np
-from fastapi import APIRouter, Body, Form, Request
+from fastapi import APIRouter, Body, Depends, Form, Request
 from fastapi.responses import Response, StreamingResponse
 
 from app.accounts.deps import CsrfProtected, CurrentUser
@@ -22,6 +22,7 @@ from app.core.position_records import (
 from app.core.readings import Readings, parse_readings_csv
 from app.core.static_record import names_its_columns_in_a_comment
 from app.core.units import canonical_unit, to_deg_per_hour
+from app.core.workbook_text import workbook_text
 from app.lab.deps import OwnedSession, OwnSessionId
 from app.lab.exports import Selection, readings_csv, session_json
 from app.lab.grid import grid_readings
@@ -44,6 +45,7 @@ router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 # it is the caller's (lab.deps: why).
 
 MAX_CSV_CHARS = 5_000_000
+MAX_WORKBOOK_BYTES = 5_000_000  # as a CSV file chosen on the page (lab.js MAX_FILE_BYTES)
 
 
 @router.post("/sessions/{session_id}/manual", dependencies=[CsrfProtected, RowWriteSession])
@@ -115,6 +117,30 @@ def check_position_count(count: int, limit: int) -> None:
             count=count,
             limit=limit,
         )
+
+
+async def workbook_body(request: Request) -> bytes:
+    """A workbook's bytes, as the page sends them (the only async step: reading them)."""
+    data = await request.body()
+    if len(data) > MAX_WORKBOOK_BYTES:
+        raise UserError("lab.file_too_large", limit_mb=MAX_WORKBOOK_BYTES // 1_000_000)
+    return data
+
+
+@router.post("/sessions/{session_id}/csv/workbook", dependencies=[CsrfProtected, ReadOnlySession])
+def workbook_as_text(
+    session_id: ObjectId,
+    user: CurrentUser,
+    db: SessionDep,
+    data: Annotated[bytes, Depends(workbook_body)],
+):
+    """An Excel workbook chosen as the file: its sheet of readings as the text the page
+    then previews and saves as a CSV file's (:func:`app.core.workbook_text.workbook_text`)."""
+    recordable_session(db, user, session_id, InputMethod.csv)
+    text = workbook_text(data)
+    if len(text) > MAX_CSV_CHARS:
+        raise UserError("lab.file_too_large", limit_mb=MAX_CSV_CHARS // 1_000_000)
+    return {"text": text}
 
 
 @router.post("/sessions/{session_id}/csv/preview", dependencies=[CsrfProtected, ReadOnlySession])

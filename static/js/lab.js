@@ -20,10 +20,17 @@
   GyroCharts.showAll(figures);
 
   async function postJson(path, body) {
+    return postBody(path, "application/json", JSON.stringify(body));
+  }
+  // A file's bytes as they are (an Excel workbook, which the server reads).
+  async function postBytes(path, buffer) {
+    return postBody(path, "application/octet-stream", buffer);
+  }
+  async function postBody(path, type, body) {
     const response = await fetch(base + path, {
       method: "POST",
-      headers: { "Content-Type": "application/json", "X-CSRF-Token": config.csrf },
-      body: JSON.stringify(body),
+      headers: { "Content-Type": type, Accept: "application/json", "X-CSRF-Token": config.csrf },
+      body,
     });
     let payload = {};
     try { payload = await response.json(); } catch (error) { payload = {}; }
@@ -592,7 +599,7 @@
     return new TextDecoder("windows-1252").decode(bytes);
   }
 
-  // An Excel workbook chosen by mistake: .xlsx is a zip ("PK\x03\x04"), .xls an OLE file.
+  // An Excel workbook: .xlsx is a zip ("PK\x03\x04"), .xls an OLE file.
   function isWorkbook(buffer) {
     const head = new Uint8Array(buffer, 0, Math.min(4, buffer.byteLength));
     const starts = (magic) => magic.every((byte, i) => head[i] === byte);
@@ -674,14 +681,14 @@
         return;
       }
       const buffer = await file.arrayBuffer();
-      if (isWorkbook(buffer)) {
-        preview.innerHTML = `<p class="error-text">${t("js.workbook_not_csv")}</p>`;
-        return;
-      }
-      // Ctrl-Z or NUL bytes after the last line (DOS's end of file, a logger's unwritten
-      // space) are not text: not sent (the server passes them over too)
-      text = decodeFile(buffer).replace(/[\x1a\x00]+$/, "");
       try {
+        if (isWorkbook(buffer)) {  // its sheet of readings, as text, from the server
+          text = (await postBytes("/csv/workbook", buffer)).text;
+        } else {
+          // Ctrl-Z or NUL bytes after the last line (DOS's end of file, a logger's
+          // unwritten space) are not text: not sent (the server passes them over too)
+          text = decodeFile(buffer).replace(/[\x1a\x00]+$/, "");
+        }
         const result = await postJson("/csv/preview", body());
         if (result.layout === "record") recordPosition = result.positions[0].position;
         columnChoices = result.columns || [];

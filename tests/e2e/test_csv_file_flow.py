@@ -1,6 +1,7 @@
 """The lab page's CSV file, in a real browser: a spreadsheet's table chosen as a file is
-previewed and saved; an Excel workbook chosen by mistake is named as such, with the fix, in
-the page's language -- never garbled bytes sent to the server."""
+previewed and saved; an Excel workbook (.xlsx) is read from its sheet of readings and
+previewed as the same table saved as CSV; an Excel 97-2003 file is named as such, with the
+fix, in the page's language -- never garbled bytes sent to the server."""
 
 from __future__ import annotations
 
@@ -17,16 +18,21 @@ from tests.test_position_record_files import imu_file
 
 pytestmark = pytest.mark.e2e
 
-WORKBOOK_WORDS = {"en": "This is an Excel workbook, not a CSV file", "zh-CN": "这是 Excel 工作簿"}
+OLD_EXCEL_WORDS = {
+    "en": "This is an Excel 97-2003 workbook (.xls)",
+    "zh-CN": "这是 Excel 97-2003 工作簿",
+}
+OLE_MAGIC = b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1"
 
 
 def workbook_of(rows: list[list[str]]) -> bytes:
+    """The rows in a workbook's first sheet, numbers as numbers (as Excel holds them)."""
     buffer = io.BytesIO()
     book = xlsxwriter.Workbook(buffer, {"in_memory": True})
     sheet = book.add_worksheet()
     for r, row in enumerate(rows):
         for c, value in enumerate(row):
-            sheet.write(r, c, value)
+            sheet.write(r, c, value if r == 0 else float(value))
     book.close()
     return buffer.getvalue()
 
@@ -54,18 +60,26 @@ def test_a_csv_file_is_previewed_and_saved_and_a_workbook_is_named(
     rows = table("handout_horizontal.csv")
     header = [f"position_{k}" for k in range(1, 5)]
 
+    old = tmp_path / "readings.xls"
+    old.write_bytes(OLE_MAGIC + b"\x00" * 504)
+    panel.locator(".csv-file").set_input_files(str(old))
+    expect(panel.locator(".csv-preview .error-text")).to_contain_text(OLD_EXCEL_WORDS[language])
+    expect(panel.locator(".accept-csv")).to_be_disabled()
+
     book = tmp_path / "readings.xlsx"
     book.write_bytes(workbook_of([header, *rows]))
     panel.locator(".csv-file").set_input_files(str(book))
-    expect(panel.locator(".csv-preview .error-text")).to_contain_text(WORKBOOK_WORDS[language])
-    expect(panel.locator(".accept-csv")).to_be_disabled()
+    preview = panel.locator(".csv-preview tbody tr")
+    expect(preview).to_have_count(4)
+    expect(preview.nth(0).locator("td").nth(2)).to_have_text(str(len(rows)))
+    expect(panel.locator(".accept-csv")).to_be_enabled()
+    from_book = preview.nth(0).locator("td").all_inner_texts()
 
     readings = tmp_path / "readings.csv"  # the same sheet saved as CSV by a Chinese Excel
     readings.write_bytes("\n".join(",".join(row) for row in [header, *rows]).encode("gb18030"))
     panel.locator(".csv-file").set_input_files(str(readings))
-    preview = panel.locator(".csv-preview tbody tr")
     expect(preview).to_have_count(4)
-    expect(preview.nth(0).locator("td").nth(2)).to_have_text(str(len(rows)))
+    expect(preview.nth(0).locator("td")).to_have_text(from_book)  # the book read as its CSV
     with page.expect_navigation():
         panel.locator(".accept-csv").click()
     expect(page.locator("#take-history tbody tr")).to_have_count(4)

@@ -1,0 +1,167 @@
+"""A student's readings saved as an Excel workbook (.xlsx): read from its sheet of readings
+as a CSV file is, on the lab page and by ``gyrolab solve`` (workbooks written here by
+xlsxwriter, not by the app's own reader's library)."""
+
+from __future__ import annotations
+
+import io
+import json
+import zipfile
+from datetime import datetime, timedelta
+
+import numpy as np
+import pytest
+import xlsxwriter
+
+from app.core.exceptions import UserError
+from app.core.readings import parse_readings_csv
+from app.core.workbook_sheets import OLE_MAGIC
+from app.core.workbook_text import READINGS_LIMITS, workbook_text
+from tests.factories import _form_token, handout, new_session, post_json
+
+
+def workbook(*sheets: list[list[object]], formulas: bool = False) -> bytes:
+    """A workbook of the given sheets' rows; ``formulas``: a last row of =AVERAGE under
+    each numeric column, its value stored as Excel stores the last calculation."""
+    buffer = io.BytesIO()
+    book = xlsxwriter.Workbook(buffer, {"in_memory": True})
+    for rows in sheets:
+        sheet = book.add_worksheet()
+        for r, row in enumerate(rows):
+            for c, value in enumerate(row):
+                if value is not None:
+                    sheet.write(r, c, value)
+        if formulas:
+            numbers = [row for row in rows if all(isinstance(v, float) for v in row[1:])]
+            for c in range(1, len(rows[0])):
+                mean = float(np.mean([row[c] for row in numbers]))
+                column = chr(ord("A") + c)
+                sheet.write_formula(
+                    len(rows), c, f"=AVERAGE({column}2:{column}{len(rows)})", None, mean
+                )
+    book.close()
+    return buffer.getvalue()
+
+
+def handout_rows() -> list[list[object]]:
+    columns = handout("handout_horizontal.csv")
+    rows: list[list[object]] = [["序号", "位置1", "位置2", "位置3", "位置4"]]
+    rows += [[n + 1, *(columns[k][n] for k in range(1, 5))] for n in range(10)]
+    return rows
+
+
+def test_the_sheet_of_readings_is_read_past_a_cover_sheet_and_its_average_row():
+    cover = [["陀螺寻北实验 数据记录"], ["姓名", "张三"], ["日期", "2026-12-07"]]
+    data = workbook(cover, handout_rows(), formulas=True)
+    text = workbook_text(data)
+    readings = parse_readings_csv(text)
+    expected = handout("handout_horizontal.csv")
+    for got, k in zip(readings.positions, range(1, 5), strict=True):
+        assert got.tolist() == expected[k]  # each cell's value exactly, as typed
+    # the =AVERAGE row, unlabelled, is told by its decimals and left out (sheet row 12)
+    assert readings.means_row == 12
+
+
+def test_a_line_the_readers_name_is_the_sheets_own_row():
+    rows = handout_rows()
+    rows[7][2] = "n/a"  # row 8 of the sheet, position 2
+    data = workbook([[None], *rows])  # the table starts at row 2: row 1 left empty
+    with pytest.raises(UserError) as bad:
+        parse_readings_csv(workbook_text(data))
+    assert bad.value.key == "csv.not_a_number" and bad.value.params["line"] == 9
+
+
+def test_a_loggers_record_with_its_clock_reads_as_one_positions_record():
+    from app.core.position_records import parse_one_position_record
+
+    start = datetime(2026, 12, 7, 10, 0, 0)
+    rows = [["时间", "角速度 (°/h)"]]
+    rows += [[start + timedelta(seconds=0.1 * k), 10.0 + 0.01 * (k % 7)] for k in range(50)]
+    buffer = io.BytesIO()
+    book = xlsxwriter.Workbook(buffer, {"in_memory": True})
+    sheet = book.add_worksheet()
+    stamp = book.add_format({"num_format": "yyyy-mm-dd hh:mm:ss.000"})
+    sheet.write_row(0, 0, rows[0])
+    for r, (when, value) in enumerate(rows[1:], start=1):
+        sheet.write_datetime(r, 0, when, stamp)
+        sheet.write_number(r, 1, value)
+    book.close()
+    record = parse_one_position_record(workbook_text(buffer.getvalue()), "deg/h")
+    times = record.readings.times_s[0]
+    np.testing.assert_allclose(times, 0.1 * np.arange(50), atol=1e-3)
+    assert record.readings.positions[0].tolist() == [row[1] for row in rows[1:]]
+
+
+def zip_of(members: dict[str, bytes]) -> bytes:
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
+        for name, data in members.items():
+            archive.writestr(name, data)
+    return buffer.getvalue()
+
+
+@pytest.mark.parametrize(
+    ("data", "key"),
+    [
+        (OLE_MAGIC + b"\x00" * 500, "workbook.old_excel"),
+        (b"PK\x03\x04 cut short", "workbook.unreadable"),
+        (zip_of({"readings.csv": b"position_1\n10.74\n"}), "workbook.unreadable"),
+        (
+            zip_of({"xl/big.bin": b"\x00" * (READINGS_LIMITS.max_unpacked_bytes + 1)}),
+            "workbook.too_large",
+        ),
+        (
+            zip_of(
+                {"xl/worksheets/sheet1.xml": b"<row/>" * (READINGS_LIMITS.max_sheet_elements + 1)}
+            ),
+            "workbook.too_many_cells",
+        ),
+    ],
+    ids=["xls", "cut", "zipped-csv", "bomb", "empty-rows"],
+)
+def test_a_workbook_that_cannot_be_read_is_refused_with_its_reason(data, key):
+    with pytest.raises(UserError) as refused:
+        workbook_text(data)
+    assert refused.value.key == key
+
+
+def test_the_lab_page_reads_a_workbook_as_the_text_it_previews_and_saves(student_client):
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    data = workbook(handout_rows(), formulas=True)
+    token = _form_token(student_client, page)
+    headers = {"Content-Type": "application/octet-stream", "Accept": "application/json"}
+    refused = student_client.post(f"{page}/csv/workbook", content=data, headers=headers)
+    assert refused.status_code == 403  # no CSRF token
+    response = student_client.post(
+        f"{page}/csv/workbook", content=data, headers={**headers, "X-CSRF-Token": token}
+    )
+    assert response.status_code == 200, response.text
+    text = response.json()["text"]
+    body = {"part": "heading", "unit": "deg/h", "text": text}
+    preview = post_json(student_client, f"{page}/csv/preview", body, page).json()
+    assert [p["n"] for p in preview["positions"]] == [10, 10, 10, 10]
+    assert "AVERAGE" in preview["notes"][0]
+    saved = post_json(student_client, f"{page}/csv", body, page)
+    assert saved.status_code == 200 and saved.json()["saved"] == [1, 2, 3, 4]
+    theta = student_client.get(f"{page}/results.json").json()["heading"]["theta_deg"]
+    assert theta == pytest.approx(-10.753, abs=5e-4)  # the handout's θ
+    student_client.cookies.set("gyrolab_lang", "zh-CN")
+    old = student_client.post(
+        f"{page}/csv/workbook",
+        content=OLE_MAGIC + b"\x00" * 64,
+        headers={**headers, "X-CSRF-Token": token},
+    )
+    assert old.status_code == 400 and "Excel 97-2003" in old.json()["detail"]
+    assert "另存为" in old.json()["detail"]
+
+
+def test_gyrolab_solve_reads_a_workbook(tmp_path, capsys):
+    from app.cli.main import main
+
+    path = tmp_path / "readings.xlsx"
+    path.write_bytes(workbook(handout_rows(), formulas=True))
+    assert main(["solve", "heading", str(path), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
+    assert "Line 12 was passed over" in err
