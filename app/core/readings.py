@@ -59,6 +59,7 @@ class Readings:
     layout: str = "wide"
     temperatures_c: list[np.ndarray] | None = None  # long layout's optional temperature_c
     skipped: list[tuple[int, str]] = field(default_factory=list)  # summary rows: line, label
+    numbers: list[int] | None = None  # long layout: the positions' numbers as the file gives
     means_row: int | None = None  # the line of an unlabelled row of means, left out
 
     def left_out(self) -> list[tuple[str, dict]]:
@@ -70,8 +71,6 @@ class Readings:
         if self.means_row is not None:
             notes.append(("csv.means_row_skipped", {"line": self.means_row}))
         return notes
-
-    numbers: list[int] | None = None  # long layout: the positions' numbers as the file gives
 
 
 def _number(text: str, line: int, column: str) -> float:

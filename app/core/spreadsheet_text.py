@@ -35,8 +35,20 @@ def separator_hint(line: str) -> str | None:
 
 
 def without_separator_hint(text: str) -> tuple[str | None, str]:
-    """A file's text with its "sep=;" first line blanked (the lines keep their numbers),
-    and the separator it names (None where there is no such line)."""
+    """A file's text with its "sep=;" first line blanked (the lines keep their numbers).
+
+    Parameters
+    ----------
+    text : str
+        The file's whole text.
+
+    Returns
+    -------
+    hint : str or None
+        The separator the first line names; None where there is no such line.
+    text : str
+        ``text``, that line empty.
+    """
     first, end, rest = text.partition("\n")
     hint = separator_hint(first.rstrip("\r"))
     return (hint, end + rest) if hint is not None else (None, text)

@@ -42,14 +42,36 @@ class SheetLimits:
 
 
 def is_workbook(data: bytes) -> bool:
-    """Whether ``data`` is a workbook (a zip such as .xlsx, or an old .xls), not text."""
+    """Whether an upload is a workbook, not text.
+
+    Parameters
+    ----------
+    data : bytes
+        The file's bytes.
+
+    Returns
+    -------
+    bool
+        True for a zip (such as .xlsx: "PK\\x03\\x04") or an OLE file (an old .xls).
+    """
     return data.startswith((ZIP_MAGIC, OLE_MAGIC))
 
 
 def cell_text(value: object) -> str:
-    """A cell as text: a whole number without ".0" (2023010101, not 2023010101.0), other
-    numbers as Python writes them (the shortest text that reads back as the same float),
-    a date or time as ISO 8601, text as it is, an empty cell as ""."""
+    """A workbook cell's value as text.
+
+    Parameters
+    ----------
+    value : object
+        What openpyxl reads from the cell: None, a bool, a number, a date or time, text.
+
+    Returns
+    -------
+    str
+        A whole number without ".0" (2023010101, not 2023010101.0), other numbers as
+        Python writes them (the shortest text that reads back as the same float), a date
+        or time as ISO 8601, text as it is, an empty cell as "".
+    """
     if value is None:
         return ""
     if isinstance(value, bool):
