@@ -288,9 +288,18 @@ def test_past_a_title_the_lines_keep_their_numbers_and_more_titles_are_not_a_tab
     with pytest.raises(UserError) as caught:
         parse_readings_csv("标题\n位置1,位置2\n10.74,-0.50\n10.65,x\n")
     assert caught.value.key == "csv.not_a_number" and caught.value.params["line"] == 4
+    # a title, the student's name and number in cells of their own, the date: passed over
+    about = "陀螺寻北实验\n姓名：张三,学号：2023001\n日期：2026-12-07\n"
+    readings = parse_readings_csv(about + "位置1,位置2\n10.74,-0.50\n")
+    assert [v.tolist() for v in readings.positions] == [[10.74], [-0.5]]
     with pytest.raises(UserError) as caught:
-        parse_readings_csv("a\nb\nc\n位置1,位置2\n10.74,-0.50\n")
-    assert caught.value.key == "csv.unknown_layout" and caught.value.params["line"] == 1
+        parse_readings_csv(about + "位置1,位置2\n10.74,-0.50\n10.65,x\n")
+    assert caught.value.key == "csv.not_a_number" and caught.value.params["line"] == 6
+    # more lines than a table has above it, or a row of numbers above: no table found
+    for above in ("a\n" * 11, "1.5,2.5\nb\n"):
+        with pytest.raises(UserError) as caught:
+            parse_readings_csv(above + "位置1,位置2\n10.74,-0.50\n")
+        assert caught.value.key == "csv.unknown_layout" and caught.value.params["line"] == 1
     # one column, no separator anywhere: a name above it is its header, nothing is skipped
     readings = parse_readings_csv("位置1\n10.74\n10.65\n")
     np.testing.assert_allclose(readings.positions[0], [10.74, 10.65])
@@ -616,3 +625,13 @@ def test_excels_first_line_naming_the_separator_is_read_as_excel_reads_it(separa
     assert read_static_record(io.StringIO(record)).values.tolist() == [1.5, 1.6]
     values, times, _ = csv_position(record.encode(), "deg/h")
     assert values.tolist() == [1.5, 1.6] and times.tolist() == [0.0, 0.1]
+
+
+@pytest.mark.parametrize(
+    "above", ["Lab 3, group 2\n", "实验三；第二组\n", "Lab 3\nZhang San, 2023001\n2026-12-07\n"]
+)
+def test_the_separator_is_the_tables_not_a_title_lines(above):
+    # a title or a name above a table copied from a spreadsheet: the tab its rows hold
+    table = "P1\tP2\tP3\n10,74\t-0,5\t2,88\n10,65\t-0,4\t2,69\n"
+    readings = parse_readings_csv(above + table)
+    assert [v.tolist() for v in readings.positions] == [[10.74, 10.65], [-0.5, -0.4], [2.88, 2.69]]

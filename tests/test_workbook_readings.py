@@ -31,13 +31,19 @@ def workbook(*sheets: list[list[object]], formulas: bool = False) -> bytes:
             for c, value in enumerate(row):
                 if value is not None:
                     sheet.write(r, c, value)
-        if formulas:
-            numbers = [row for row in rows if all(isinstance(v, float) for v in row[1:])]
-            for c in range(1, len(rows[0])):
+        if formulas and any(isinstance(v, float) for row in rows for v in row):
+            width = max(len(row) for row in rows)
+            numbers = [
+                row
+                for row in rows
+                if len(row) == width and all(isinstance(v, float) for v in row[1:])
+            ]
+            for c in range(1, width):
                 mean = float(np.mean([row[c] for row in numbers]))
                 column = chr(ord("A") + c)
+                first = len(rows) - len(numbers) + 1  # the readings' first row, from 1
                 sheet.write_formula(
-                    len(rows), c, f"=AVERAGE({column}2:{column}{len(rows)})", None, mean
+                    len(rows), c, f"=AVERAGE({column}{first}:{column}{len(rows)})", None, mean
                 )
     book.close()
     return buffer.getvalue()
@@ -165,3 +171,13 @@ def test_gyrolab_solve_reads_a_workbook(tmp_path, capsys):
     out, err = capsys.readouterr()
     assert json.loads(out)["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
     assert "Line 12 was passed over" in err
+
+
+def test_a_students_sheet_with_lines_about_the_table_above_it():
+    # as students lay a sheet out: a title, their name and number in cells of their own,
+    # the date, an empty row, then the table (the lines keep the sheet's row numbers)
+    about = [["陀螺寻北实验数据"], ["姓名：张三", "学号：2023001"], ["日期", "2026-12-07"], [None]]
+    rows = handout_rows()
+    readings = parse_readings_csv(workbook_text(workbook([*about, *rows], formulas=True)))
+    assert [v.size for v in readings.positions] == [10, 10, 10, 10]
+    assert readings.means_row == 16  # the =AVERAGE row, sheet row 16

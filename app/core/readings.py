@@ -129,13 +129,46 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     ]
     if not rows:
         raise UserError("csv.empty")
+    try:
+        return _read_table(rows, part)
+    except UserError as error:
+        if error.key != "csv.unknown_layout":
+            raise
+        return _below_lines_about_it(rows, part, error)
+
+
+PREAMBLE_ROWS = 10  # lines about the table above it, at most: a title, a name, a date…
+
+
+def _below_lines_about_it(rows, part: str | None, unknown: UserError) -> Readings:
+    """A table under lines about it -- a title, the student's name and number in cells of
+    their own, the date, the gyro's serial number -- more than the title lines
+    :func:`app.core.spreadsheet_text.title_lines_blanked` passes over: read from the first
+    row (within ``PREAMBLE_ROWS``) that heads a table in a layout this module reads, as
+    long as no line above it holds two numbers (a row of readings is no line about them).
+    Where none does, the first row's ``unknown`` layout is said."""
+    for start in range(1, min(PREAMBLE_ROWS, len(rows) - 1) + 1):
+        if sum(is_number(cell.strip()) for cell in rows[start - 1][1]) >= 2:
+            break  # readings above: no table starts below them
+        try:
+            return _read_table(rows[start:], part)
+        except UserError as error:
+            if error.key != "csv.unknown_layout":
+                raise  # a table known from this row on, with a problem in it
+    raise unknown
+
+
+def _read_table(rows, part: str | None) -> Readings:
+    """The readings of a table whose first row is its header (or its first row of numbers,
+    where it has no header): a row of units under the header passed over, and rows of
+    means or other summaries left out and said, in any layout."""
     header_line, header = rows[0]
     names = [column_name(cell) for cell in header]
     if len(rows) > 1 and is_units_row(rows[1][1]):
-        del rows[1]  # "s, °/h, °/h…" under the names: a note, as a unit after a name is
+        rows = [rows[0], *rows[2:]]  # "s, °/h, °/h…" under the names: a unit after a name
     # a row of means or other summary ("平均值 | 10.71 …", "mean" under a position's
-    # column, a long table's "mean" row), in any layout: left out and said, as the lab
-    # page's grid leaves a pasted one out
+    # column, a long table's "mean" row): left out and said, as the lab page's grid leaves
+    # a pasted one out
     skipped = [(line, label) for line, row in rows[1:] if (label := summary_label(row))]
     if skipped:
         rows = rows[:1] + [(line, row) for line, row in rows[1:] if not summary_label(row)]

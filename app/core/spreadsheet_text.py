@@ -65,17 +65,24 @@ def spreadsheet_delimiter(text: str) -> str:
     Returns
     -------
     str
-        A tab or ``;`` when the first line that is not a ``#`` comment holds one (what a
-        spreadsheet copies to the clipboard, and what spreadsheets in Europe write, with
-        decimal commas), else ``,``.
+        The one of a tab, ``;`` and ``,`` that the most of the first ``SEPARATOR_LINES``
+        lines (not ``#`` comments) hold -- a tab or ``;`` before the comma where they tie
+        (what a spreadsheet copies to the clipboard, and what spreadsheets in Europe write,
+        with decimal commas); ``,`` where none does.  Lines about the table above it (a
+        title, a name) hold none, or fewer than the table's rows do.
     """
-    first = next(
-        (line for line in text.splitlines() if line.strip() and not line.startswith("#")), ""
-    )
-    for candidate in ("\t", ";"):
-        if candidate in first:
-            return candidate
-    return ","
+    lines = [
+        line
+        for line in LINE_END.split(text, maxsplit=4 * SEPARATOR_LINES)[: 4 * SEPARATOR_LINES]
+        if line.strip() and not line.startswith("#")
+    ][:SEPARATOR_LINES]
+    counts = {mark: sum(mark in line for line in lines) for mark in ("\t", ";", ",")}
+    most = max(counts.values())
+    return next((mark for mark, count in counts.items() if count == most and most), ",")
+
+
+SEPARATOR_LINES = 20  # lines looked at for the separator: a preamble and the table's start
+LINE_END = re.compile(r"\r\n|\r|\n")
 
 
 DECIMAL_COMMA = re.compile(r"([+-]?\d*),(\d+(?:[eE][+-]?\d+)?)")
