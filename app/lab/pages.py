@@ -297,6 +297,7 @@ JS_MESSAGES = (
     "js.leading_columns_skipped",
     "js.summary_rows_skipped",
     "js.means_row_skipped",
+    "js.lines_above_skipped",
     "js.record_position",
     "js.record_column",
     "js.position_problem",

@@ -243,10 +243,31 @@
     return rows;
   }
 
+  // Lines about the table above its header, as a whole sheet copied has them (a title, a
+  // name and student number, the date): passed over up to the first row, within ten,
+  // that names two positions or more, where no line above it holds two numbers --
+  // app.core.readings reads a file so.
+  const isText = (cell) => cell !== "" && Boolean(parseCell(cell).error);
+  const namesPositions = (row) => row.filter((cell) => isText(cell) && namesPosition(cell)).length >= 2;
+  function linesAbove(rows) {
+    if (rows.length === 0 || namesPositions(rows[0])) return 0;
+    for (let r = 1; r < Math.min(rows.length, 11); r++) {
+      const numbers = rows[r - 1].filter((cell) => cell !== "" && !parseCell(cell).error).length;
+      if (numbers >= 2) return 0;  // readings above: no table starts below them
+      if (namesPositions(rows[r])) return r;
+    }
+    return 0;
+  }
+
   function parseBlock(text, columns) {
     const lines = plain(text).replace(/\r\n?/g, "\n").split("\n").filter((line) => line.trim() !== "");
-    const rows = splitLines(lines);
+    let rows = splitLines(lines);
     const notes = [];
+    const above = linesAbove(rows);
+    if (above) {
+      rows = rows.slice(above);
+      notes.push("js.lines_above_skipped");
+    }
     let header = null;
     let body = rows;
     if (body.length && (rows[0].some((cell) => cell !== "" && parseCell(cell).error) ||

@@ -142,14 +142,18 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     expect(first.nth(0)).to_have_value("11.10")  # position 1 untouched
     expect(third).to_have_value("9.77")
     expect(status).to_contain_text("each position's readings put in its own column")
-    # A spreadsheet's =AVERAGE row under the readings, without a label: told by its
-    # decimals (app.core.means_row) and left out, as a file's is
+    # A whole sheet copied: lines about the table above its header (a title, the name and
+    # student number), and a spreadsheet's =AVERAGE row under the readings, without a
+    # label, told by its decimals (app.core.means_row): both left out, as a file's are
     readings = [[10.74, -0.5, -11.2, 0.1], [10.65, -0.41, -11.3, 0.12], [10.8, -0.46, -11.25, 0.09]]
     means = [sum(column) / 3 for column in zip(*readings, strict=True)]
-    block = "\n".join("\t".join(f"{v:.2f}" for v in row) for row in readings)
+    block = "陀螺寻北实验\n姓名：张三\t学号：2023001\nP1\tP2\tP3\tP4\n" + "\n".join(
+        "\t".join(f"{v:.2f}" for v in row) for row in readings
+    )
     paste(
         page, "#part-heading .readings-grid tbody input", block + "\n" + "\t".join(map(str, means))
     )
+    expect(page.locator("#part-heading .grid-status")).to_contain_text("a title, a name, a date")
     heading = page.locator("#part-heading .readings-grid tbody tr")
     expect(heading.nth(2).locator("input").nth(0)).to_have_value("10.80")
     expect(heading.nth(3).locator("input").nth(0)).to_have_value("10.74")  # the first paste's
