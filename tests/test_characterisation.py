@@ -128,7 +128,7 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
         ("x\n" + "1.0\n" * 7000 + "oops\n", "10", "Line 7002 of the record is not a reading"),
         ("position_1,position_2\n1,2\n", "10", "one static record"),
         ("x\n" + "1.0\n" * 7000, "10", "never change"),
-        (b"\x00\x01\x81\x00", "10", "not text (UTF-8 or GB18030)"),
+        (b"\x00\x01\x81\x00", "10", "not text (UTF-8, UTF-16, GB18030 or Windows-1252)"),
         # rates no gyro gives: the fit's squares overflowed (a 500)
         (
             "".join(f"{(-1) ** k * 3e300 * (1 + k % 7)!r}\n" for k in range(7000)),
@@ -275,3 +275,26 @@ def test_a_record_saved_as_unicode_text_is_read(world):
     reply = upload(teacher, world, text.encode("utf-16"), rate="")
     assert reply.status_code == 303, reply.text[-500:]
     assert stored(world)["rate_hz"] == pytest.approx(10.0)
+
+
+@pytest.mark.one_backend  # the record's reading does not depend on the database
+def test_a_record_saved_as_an_excel_workbook_is_read(world):
+    """A bench record a teacher kept in Excel (.xlsx): its sheet of readings read as its
+    CSV would be, the rate from its time column."""
+    import io
+
+    import xlsxwriter
+
+    teacher = browser(world, "teacher1")
+    rates = np.random.default_rng(7).normal(10.0, 0.5, 7_200)
+    buffer = io.BytesIO()
+    book = xlsxwriter.Workbook(buffer, {"in_memory": True})
+    sheet = book.add_worksheet()
+    sheet.write_row(0, 0, ["time_s", "rate (deg/h)"])
+    for k, rate in enumerate(rates, start=1):
+        sheet.write_row(k, 0, [0.1 * (k - 1), float(rate)])
+    book.close()
+    reply = upload(teacher, world, buffer.getvalue(), rate="")
+    assert reply.status_code == 303, reply.text[-500:]
+    summary = stored(world)
+    assert summary["rate_hz"] == pytest.approx(10.0) and summary["samples"] == 7_200

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import math
 from typing import Annotated
 
@@ -12,6 +13,8 @@ from app.core.allan_summary import dwell_lines, note_lines, term_rows
 from app.core.exceptions import FieldProblems, UserError
 from app.core.presets import PRESETS
 from app.core.typed_numbers import parse_typed_number
+from app.core.workbook_sheets import is_workbook
+from app.core.workbook_text import workbook_text
 from app.courses import characterisation
 from app.courses.assignment_form import form_context, form_values, parse_assignment_form
 from app.lab.chart_texts import class_text
@@ -131,17 +134,21 @@ def update_settings(
 
 def _record_source(record: UploadFile):
     """The uploaded record as a binary file, read in blocks (spooled to disk by the server):
-    gzip-compressed CSV (``.gz``, or the gzip magic bytes) is decompressed as it is read."""
+    gzip-compressed CSV (``.gz``, or the gzip magic bytes) is decompressed as it is read;
+    an Excel workbook's sheet of readings is read as its text
+    (:func:`app.core.workbook_text.workbook_text`, bounded)."""
     import gzip
 
     handle = record.file
     handle.seek(0)
-    magic = handle.read(2)
+    magic = handle.read(8)
     handle.seek(0)
     if not magic:
         raise UserError("characterisation.no_file")
-    if magic == b"\x1f\x8b":
+    if magic[:2] == b"\x1f\x8b":
         return gzip.GzipFile(fileobj=handle, mode="rb")
+    if is_workbook(magic):
+        return io.BytesIO(workbook_text(handle.read()).encode())
     return handle
 
 
