@@ -1,8 +1,9 @@
 """Excel workbooks (.xlsx) people upload instead of CSV: a sheet's rows as text.
 
-The file is untrusted: its unpacked size and each worksheet's XML elements are bounded
-before any XML is parsed (openpyxl parses a sheet twice, ≈ 6 µs an element, empty or not:
-10 MB of "<row/>" is a 20 kB upload of 1.6 million), and openpyxl parses through
+The file is untrusted: its unpacked size, each worksheet's XML elements and all its parts'
+together (shared strings, styles) are bounded before any XML is parsed (openpyxl parses a
+sheet twice, ≈ 6 µs an element, empty or not: 10 MB of "<row/>" is a 20 kB upload of 1.6
+million; 1.5 million shared strings, a 67 kB upload, took 12 s), and openpyxl parses through
 defusedxml (no entity expansion, no external entities).  An Excel 97-2003 file (.xls),
 which openpyxl cannot read, is named as such.  The callers -- a class roster
 (:mod:`app.accounts.roster_workbook`), a student's readings (:mod:`app.core.workbook_text`)
@@ -105,11 +106,14 @@ def _checked(data: bytes, limits: SheetLimits) -> None:
             unpacked = sum(member.file_size for member in archive.infolist())
             if unpacked > limits.max_unpacked_bytes:
                 raise UserError(limits.too_large, limit_mb=limits.max_unpacked_bytes // 1_000_000)
+            total = 0  # every part's: openpyxl reads the shared strings and styles whole
             for member in archive.infolist():
+                elements = _elements(archive, member)
+                total += elements
                 if (
                     member.filename.startswith("xl/worksheets/")
-                    and _elements(archive, member) > limits.max_sheet_elements
-                ):
+                    and elements > limits.max_sheet_elements
+                ) or total > 2 * limits.max_sheet_elements:
                     raise UserError(limits.too_many_elements, limit=limits.max_sheet_elements)
     except UserError:
         raise
