@@ -194,3 +194,29 @@ def test_a_students_sheet_with_lines_about_the_table_above_it():
     readings = parse_readings_csv(workbook_text(workbook([*about, *rows], formulas=True)))
     assert [v.size for v in readings.positions] == [10, 10, 10, 10]
     assert readings.means_row == 16  # the =AVERAGE row, sheet row 16
+
+
+def test_workbooks_are_read_a_few_at_a_time(student_client):
+    """Up to ≈ 4 s of parsing each: two at once in a process, one per student; past that
+    a clear refusal at once, and the student's next try is read."""
+    from app.web.work_slots import WORKBOOKS_AT_ONCE, pool
+
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    headers = {
+        "Content-Type": "application/octet-stream",
+        "Accept": "application/json",
+        "X-CSRF-Token": _form_token(student_client, page),
+    }
+    data = workbook(handout_rows())
+    others = range(99_990, 99_990 + WORKBOOKS_AT_ONCE)
+    for other in others:  # other students' workbooks under way
+        pool("workbooks").take(other)
+    try:
+        busy = student_client.post(f"{page}/csv/workbook", content=data, headers=headers)
+        assert busy.status_code == 503 and "reading other workbooks" in busy.json()["detail"]
+    finally:
+        for other in others:
+            pool("workbooks").give_back(other)
+    read = student_client.post(f"{page}/csv/workbook", content=data, headers=headers)
+    assert read.status_code == 200 and read.json()["text"].startswith("序号\t位置1")

@@ -38,7 +38,7 @@ from app.web.deps import ObjectId, ReadOnlySession, RowWriteSession, SessionDep
 from app.web.exports import attachment
 from app.web.i18n import translate
 from app.web.render import flash, redirect, request_language
-from app.web.work_slots import held_while_streaming
+from app.web.work_slots import held_while_streaming, pool
 
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 # A route that changes a session reads it in its handler, after ``OwnSessionId`` checked
@@ -137,7 +137,8 @@ def workbook_as_text(
     """An Excel workbook chosen as the file: its sheet of readings as the text the page
     then previews and saves as a CSV file's (:func:`app.core.workbook_text.workbook_text`)."""
     recordable_session(db, user, session_id, InputMethod.csv)
-    text = workbook_text(data)
+    with pool("workbooks").slot(user.id):
+        text = workbook_text(data)
     if len(text) > MAX_CSV_CHARS:
         raise UserError("lab.file_too_large", limit_mb=MAX_CSV_CHARS // 1_000_000)
     return {"text": text}

@@ -5,7 +5,7 @@ worker's threads and memory (issue 31: one student's twelve renders of a 6,666-p
 discussion took 84–108 s and 1 GB).  Used for PDF reports (``GYROLAB_REPORT_RENDERS`` at
 once, the class zip holding its teacher's slot while it renders) and for the Allan
 analysis of an uploaded bench record (one at a time: 10⁷ readings take ≈ 13 s and
-0.6 GB)."""
+0.6 GB), and for a student's Excel workbook read as the text of its readings."""
 
 from __future__ import annotations
 
@@ -101,13 +101,15 @@ def held_while_streaming(name: str, person_id: int, blocks: Iterable) -> HeldStr
     return HeldStream(pool(name), person_id, blocks)
 
 
+WORKBOOKS_AT_ONCE = 2  # Excel workbooks read into a lab page's text per process
 EXPORTS_AT_ONCE = 4  # streamed exports (1e6-sample CSV/JSON, the class's data zip) per process
 _pools: dict[str, WorkPool] = {}
 _pools_lock = threading.Lock()
 
 
 def pool(name: str) -> WorkPool:
-    """The process's pool for ``name`` ("reports" or "analysis"), made on first use."""
+    """The process's pool for ``name`` ("reports", "exports", "workbooks" or "analysis"),
+    made on first use."""
     with _pools_lock:
         if name not in _pools:
             from app.config import get_settings
@@ -117,6 +119,10 @@ def pool(name: str) -> WorkPool:
                 _pools[name] = WorkPool(size, "report.busy", "report.busy_person")
             elif name == "exports":
                 _pools[name] = WorkPool(EXPORTS_AT_ONCE, "export.busy", "export.busy_person", 5)
+            elif name == "workbooks":  # a student's .xlsx read: up to ≈ 4 s of parsing
+                _pools[name] = WorkPool(
+                    WORKBOOKS_AT_ONCE, "work.busy_workbook", "work.busy_person", 5
+                )
             else:
                 _pools[name] = WorkPool(1, "work.busy_analysis", "work.busy_person", 60)
         return _pools[name]
