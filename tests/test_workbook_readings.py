@@ -220,3 +220,16 @@ def test_workbooks_are_read_a_few_at_a_time(student_client):
             pool("workbooks").give_back(other)
     read = student_client.post(f"{page}/csv/workbook", content=data, headers=headers)
     assert read.status_code == 200 and read.json()["text"].startswith("序号\t位置1")
+
+
+def test_gyrolab_allan_reads_a_workbook(tmp_path, capsys):
+    from app.cli.main import main
+
+    rates = np.random.default_rng(8).normal(10.0, 0.5, 7_200)
+    path = tmp_path / "bench.xlsx"
+    path.write_bytes(
+        workbook([["time_s", "rate"], *([0.1 * k, float(r)] for k, r in enumerate(rates))])
+    )
+    assert main(["allan", str(path), "--json"]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["samples"] == 7_200 and result["rate_hz"] == pytest.approx(10.0)

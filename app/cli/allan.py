@@ -12,10 +12,13 @@ from app.core.allan_summary import dwell_lines, note_lines, summary_lines, term_
 from app.core.static_record import read_static_record
 from app.core.text_files import text_lines
 from app.core.units import UNITS
+from app.core.workbook_sheets import is_workbook
+from app.core.workbook_text import workbook_text
 
 
 def _open_record(path: str):
-    """The record's lines, read as the file is parsed (never the whole text at once)."""
+    """The record's lines, read as the file is parsed (never the whole text at once; an
+    Excel workbook's sheet of readings, bounded, whole)."""
     if path == "-":
         binary = getattr(sys.stdin, "buffer", None)
         return text_lines(binary) if binary is not None else iter(sys.stdin)
@@ -28,6 +31,11 @@ def _open_record(path: str):
 
     def lines():
         with handle:
+            if is_workbook(handle.read(8)):  # an Excel workbook: its sheet of readings
+                handle.seek(0)
+                yield from workbook_text(handle.read()).splitlines()
+                return
+            handle.seek(0)
             yield from text_lines(handle)
 
     return lines()
