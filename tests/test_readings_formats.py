@@ -635,3 +635,14 @@ def test_the_separator_is_the_tables_not_a_title_lines(above):
     table = "P1\tP2\tP3\n10,74\t-0,5\t2,88\n10,65\t-0,4\t2,69\n"
     readings = parse_readings_csv(above + table)
     assert [v.tolist() for v in readings.positions] == [[10.74, 10.65], [-0.5, -0.4], [2.88, 2.69]]
+
+
+@pytest.mark.parametrize("label", ["单位", "单位：", "Unit", "units:"])
+def test_a_row_of_units_named_as_such_in_its_first_cell_is_passed_over(label):
+    text = f"序号,P1,P2\n{label},°/h,°/h\n1,10.74,-0.5\n2,10.65,-0.4\n"
+    readings = parse_readings_csv(text)
+    assert [v.tolist() for v in readings.positions] == [[10.74, 10.65], [-0.5, -0.4]]
+    # beside a cell that is no unit, the label makes no row of units: said as such
+    with pytest.raises(UserError) as caught:
+        parse_readings_csv(f"序号,P1,P2\n{label},abc,°/h\n1,10.74,-0.5\n")
+    assert caught.value.key == "csv.not_a_number" and caught.value.params["line"] == 2

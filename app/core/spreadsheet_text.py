@@ -189,10 +189,14 @@ UNIT_NAME = re.compile(
 )
 
 
+UNITS_LABELS = frozenset({"unit", "units", "单位"})  # a row's label: "单位 | °/h | °/h…"
+
+
 def is_units_row(cells: list[str]) -> bool:
     """Whether a row under a header only names units ("s, °/h, °/h", "(deg/h)", "度/小时"),
-    as an instrument's or a spreadsheet's export writes them: every cell empty or a unit,
-    and at least one a rate ("/", dph or dps).  Like a unit after a column name, it is a
+    as an instrument's or a spreadsheet's export writes them: every cell empty or a unit
+    (the first may name the row, "单位" or "unit"), and at least one a rate ("/", dph or
+    dps).  Like a unit after a column name, it is a
     note: the unit of the readings is the one the student or the script chose.
 
     Parameters
@@ -207,6 +211,8 @@ def is_units_row(cells: list[str]) -> bool:
     """
     names = [re.sub(r"[\s()\[\]]", "", plain_text(cell)).lower() for cell in cells]
     names = [name for name in names if name]
+    if names and names[0].rstrip(":：") in UNITS_LABELS:
+        names = names[1:]  # "单位 | °/h | °/h…": the row named as the units' in its first cell
     return (
         bool(names)
         and all(UNIT_NAME.fullmatch(name) for name in names)

@@ -158,8 +158,10 @@
   const ROW_NUMBER_NAMES = new Set(["sample", "n", "#", "no", "no.", "index", "序号", "编号", "次数", "row", "i"]);
   // A row under the names that only names units, as app.core.readings.is_units_row reads it.
   const UNIT_NAME = /^(?:°|deg|rad|mrad|dph|dps|s|ms|h|hr|min|hz|°c|℃|c|k|v|mv|lsb|度|秒|小时|摄氏度)(?:\/(?:s|h|hr|min|秒|小时))?$/;
+  const UNITS_LABELS = new Set(["unit", "units", "单位"]);  // the row named in its first cell
   function isUnitsRow(cells) {
-    const names = cells.map((cell) => plain(cell).replace(/[\s()[\]]/g, "").toLowerCase()).filter(Boolean);
+    let names = cells.map((cell) => plain(cell).replace(/[\s()[\]]/g, "").toLowerCase()).filter(Boolean);
+    if (names.length && UNITS_LABELS.has(names[0].replace(/[:：]+$/, ""))) names = names.slice(1);
     return names.length > 0 && names.every((name) => UNIT_NAME.test(name)) &&
       names.some((name) => name.includes("/") || name === "dph" || name === "dps");
   }

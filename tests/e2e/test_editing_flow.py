@@ -104,9 +104,9 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     page = new_page()
     log_in(page, live_server.url, "student", STUDENT_PASSWORD)
     start_practice(page, live_server.url)
-    block = "位置1\t位置2\t位置3\t位置4\n(°/h)\t(°/h)\t(°/h)\t(°/h)\n" + "\n".join(
-        ["10.74\t-0.50\t-11.20\t0.10"] * 10
-    )
+    block = "序号\t位置1\t位置2\t位置3\t位置4\n单位：\t(°/h)\t(°/h)\t(°/h)\t(°/h)\n" + "\n".join(
+        f"{k}\t10.74\t-0.50\t-11.20\t0.10" for k in range(1, 11)
+    )  # the units row named as such in its first cell, under a row-number column's name
     paste(page, "#part-heading .readings-grid tbody input", block)
     first = page.locator("#part-heading .readings-grid tbody tr").first.locator("input")
     expect(first.nth(0)).to_have_value("10.74")
