@@ -646,3 +646,28 @@ def test_a_row_of_units_named_as_such_in_its_first_cell_is_passed_over(label):
     with pytest.raises(UserError) as caught:
         parse_readings_csv(f"序号,P1,P2\n{label},abc,°/h\n1,10.74,-0.5\n")
     assert caught.value.key == "csv.not_a_number" and caught.value.params["line"] == 2
+
+
+@pytest.mark.parametrize(
+    ("header", "angle"),
+    [
+        ("角度,读数", "{}°"),
+        ("angle,rate", "{} deg"),
+        ("dial,reading,note", "{}"),
+        ("转台刻度,角速度", "{}度"),
+        ("位置,刻度,读数", "{}°"),
+    ],
+)
+def test_a_long_tables_angles_as_students_write_them(header, angle):
+    # a turntable's angle with its unit in the cell, and the dial named as students name it
+    rows = [(0, 11.51), (0, 11.49), (90, 3.2), (90, 3.1), (180, -11.4), (270, -3.1)]
+    width = header.count(",") + 1
+    lines = []
+    for dial, value in rows:
+        cells = [angle.format(dial), str(value)]
+        if header.startswith("位置"):
+            cells.insert(0, str([0, 90, 180, 270].index(dial) + 1))
+        lines.append(",".join(cells + ["ok"] * (width - len(cells))))
+    readings = parse_readings_csv(header + "\n" + "\n".join(lines) + "\n")
+    assert readings.angles_deg == [0.0, 90.0, 180.0, 270.0]
+    assert [v.tolist() for v in readings.positions] == [[11.51, 11.49], [3.2, 3.1], [-11.4], [-3.1]]

@@ -23,7 +23,8 @@ ROLE_NAMES = {
         "位置", "位置号", "位置编号", "位置序号",
     ),
     "angle_deg": (
-        "angle", "table angle", "turntable angle", "dial angle", "position angle",
+        "angle", "table angle", "turntable angle", "dial angle", "position angle", "dial",
+        "dial reading", "刻度", "转台刻度", "刻度盘",
         "elevation", "tilt", "角度", "转台角度", "转角", "位置角", "位置角度", "转台位置角",
         "仰角", "俯仰角", "倾角",
     ),

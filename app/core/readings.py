@@ -43,7 +43,13 @@ from app.core.spreadsheet_text import (
     title_lines_blanked,
     without_separator_hint,
 )
-from app.core.table_headers import column_name, evenly_round, numbered_columns, summary_label
+from app.core.table_headers import (
+    ANGLE,
+    column_name,
+    evenly_round,
+    numbered_columns,
+    summary_label,
+)
 from app.core.text_files import file_text, plain_text
 from app.core.typed_numbers import NumberOutOfRange, is_number, parse_decimal
 
@@ -294,7 +300,7 @@ def _parse_long(index: dict[str, int], rows) -> Readings:
         if not label:
             raise UserError("csv.no_position", line=line)
         if keyed == "angle_deg":
-            label = _angle_label(_number(label, line, "angle_deg"))
+            label = _angle_label(_angle(label, line))
         entry = grouped.get(label)
         if entry is None:
             entry = grouped[label] = {"values": [], "times": [], "temps": [], "angle": None}
@@ -307,7 +313,7 @@ def _parse_long(index: dict[str, int], rows) -> Readings:
         if "temperature_c" in index:
             entry["temps"].append(_number(cell("temperature_c"), line, "temperature_c"))
         if "angle_deg" in index:
-            angle = _number(cell("angle_deg"), line, "angle_deg")
+            angle = _angle(cell("angle_deg"), line)
             if entry["angle"] is None:
                 entry["angle"] = angle
             elif abs(entry["angle"] - angle) > 1e-9:
@@ -339,6 +345,12 @@ def _parse_long(index: dict[str, int], rows) -> Readings:
 
 def _angle_label(angle: float) -> str:
     return f"{angle:g}"
+
+
+def _angle(cell: str, line: int) -> float:
+    """A turntable angle as a cell gives it: "90", or with its unit, "90°", "90度"."""
+    written = ANGLE.fullmatch(cell)
+    return _number(written.group(1) if written else cell, line, "angle_deg")
 
 
 def _position_numbers(labels: list[str]) -> list[int] | None:
