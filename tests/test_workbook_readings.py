@@ -16,17 +16,20 @@ import xlsxwriter
 from app.core.exceptions import UserError
 from app.core.readings import parse_readings_csv
 from app.core.workbook_sheets import OLE_MAGIC
-from app.core.workbook_text import READINGS_LIMITS, workbook_text
+from app.core.workbook_text import READINGS_LIMITS, workbook_readings, workbook_text
 from tests.factories import _form_token, handout, new_session, post_json
 
 
-def workbook(*sheets: list[list[object]], formulas: bool = False) -> bytes:
-    """A workbook of the given sheets' rows; ``formulas``: a last row of =AVERAGE under
-    each numeric column, its value stored as Excel stores the last calculation."""
+def workbook(
+    *sheets: list[list[object]], formulas: bool = False, names: tuple[str, ...] = ()
+) -> bytes:
+    """A workbook of the given sheets' rows (named ``names``, else Sheet1…); ``formulas``:
+    a last row of =AVERAGE under each numeric column, its value stored as Excel stores the
+    last calculation."""
     buffer = io.BytesIO()
     book = xlsxwriter.Workbook(buffer, {"in_memory": True})
-    for rows in sheets:
-        sheet = book.add_worksheet()
+    for index, rows in enumerate(sheets):
+        sheet = book.add_worksheet(names[index] if index < len(names) else None)
         for r, row in enumerate(rows):
             for c, value in enumerate(row):
                 if value is not None:
@@ -233,3 +236,60 @@ def test_gyrolab_allan_reads_a_workbook(tmp_path, capsys):
     assert main(["allan", str(path), "--json"]) == 0
     result = json.loads(capsys.readouterr().out)
     assert result["samples"] == 7_200 and result["rate_hz"] == pytest.approx(10.0)
+
+
+def latitude_rows() -> list[list[object]]:
+    columns = handout("handout_vertical.csv")
+    rows: list[list[object]] = [["序号", *(f"位置{k}" for k in columns)]]
+    rows += [[n + 1, *(columns[k][n] for k in columns)] for n in range(len(columns[1]))]
+    return rows
+
+
+@pytest.mark.parametrize(
+    ("names", "heading", "latitude"),
+    [
+        (("A 寻北", "B 纬度"), "A 寻北", "B 纬度"),
+        (("Part B", "Part A"), "Part A", "Part B"),
+        (("水平", "竖直"), "水平", "竖直"),
+        (("A", "B"), "A", "B"),
+        (("第一组", "第二组"), "第一组", "第一组"),  # names that say nothing: the first
+    ],
+)
+def test_a_workbook_of_both_parts_offers_its_sheets_and_reads_each_parts_own(
+    names, heading, latitude
+):
+    rows = {names[0]: handout_rows(), names[1]: latitude_rows()}
+    if names[0] == "Part B":
+        rows = {names[0]: latitude_rows(), names[1]: handout_rows()}
+    data = workbook(*rows.values(), names=names)
+    for part, expected in (("heading", heading), ("latitude", latitude)):
+        book = workbook_readings(data, part=part)
+        assert book.sheet == expected and book.sheets == names
+        assert parse_readings_csv(book.text).positions[0].tolist() == [
+            row[1] for row in rows[expected][1:]
+        ]
+    chosen = workbook_readings(data, sheet=names[1], part="heading")
+    assert chosen.sheet == names[1]
+    with pytest.raises(UserError) as missing:
+        workbook_readings(data, sheet="Sheet9")
+    assert missing.value.key == "workbook.no_such_sheet"
+
+
+def test_the_lab_route_offers_the_sheets_and_reads_the_one_asked_for(student_client):
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    headers = {
+        "Content-Type": "application/octet-stream",
+        "Accept": "application/json",
+        "X-CSRF-Token": _form_token(student_client, page),
+    }
+    data = workbook(handout_rows(), latitude_rows(), names=("寻北", "纬度"))
+    route = f"{page}/csv/workbook"
+    latitude = student_client.post(f"{route}?part=latitude", content=data, headers=headers).json()
+    assert latitude["sheet"] == "纬度" and latitude["sheets"] == ["寻北", "纬度"]
+    chosen = student_client.post(f"{route}?part=latitude&sheet=寻北", content=data, headers=headers)
+    assert chosen.json()["sheet"] == "寻北" and chosen.json()["text"].startswith("序号\t位置1")
+    missing = student_client.post(f"{route}?sheet=x", content=data, headers=headers)
+    assert missing.status_code == 400 and "x" in missing.json()["detail"]
+    bad_part = student_client.post(f"{route}?part=x", content=data, headers=headers)
+    assert bad_part.status_code == 422

@@ -16,7 +16,6 @@ import io
 import math
 import zipfile
 import zlib
-from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import date, datetime, time
 
@@ -121,14 +120,9 @@ def _checked(data: bytes, limits: SheetLimits) -> None:
         raise UserError(limits.unreadable) from None
 
 
-def sheet_rows(
-    data: bytes,
-    limits: SheetLimits,
-    max_rows: int,
-    chosen: Callable[[list[Row]], bool] | None = None,
-) -> list[Row]:
-    """The non-empty rows of a workbook's first worksheet, or of the first one ``chosen``
-    accepts, at most ``max_rows`` + 1 of them (one more says "too many").
+def sheet_rows(data: bytes, limits: SheetLimits, max_rows: int) -> list[Row]:
+    """The non-empty rows of a workbook's first worksheet, at most ``max_rows`` + 1 of them
+    (one more says "too many").
 
     Parameters
     ----------
@@ -138,9 +132,6 @@ def sheet_rows(
         The bounds, and the keys of the problems.
     max_rows : int
         The most rows wanted.
-    chosen : callable, optional
-        Given a sheet's rows, whether it is the sheet wanted; by default the first sheet.
-        Where none is, the first sheet's rows.
 
     Returns
     -------
@@ -154,10 +145,42 @@ def sheet_rows(
         With ``limits``' keys: an .xls, anything that is not a readable .xlsx, a workbook
         that unpacks too large, a worksheet of too many XML elements.
     """
+    return all_sheets(data, limits, max_rows, first_only=True)[0][1]
+
+
+def all_sheets(
+    data: bytes, limits: SheetLimits, max_rows: int, *, first_only: bool = False
+) -> list[tuple[str, list[Row]]]:
+    """Each worksheet's name and non-empty rows, in the workbook's order, at most
+    ``max_rows`` + 1 rows of each (:func:`sheet_rows`; ``first_only``: the first sheet
+    alone, the others not parsed).
+
+    Parameters
+    ----------
+    data : bytes
+        The uploaded file.
+    limits : SheetLimits
+        The bounds, and the keys of the problems (every part's XML elements together are
+        bounded, so reading every sheet is bounded too).
+    max_rows : int
+        The most rows wanted of a sheet.
+    first_only : bool
+        Read the first sheet only.
+
+    Returns
+    -------
+    list of (str, list of (int, list of str))
+        Each sheet's name and rows; at least one.
+
+    Raises
+    ------
+    UserError
+        As :func:`sheet_rows`.
+    """
     _checked(data, limits)
     import openpyxl  # only when a workbook is uploaded (0.2 s to import)
 
-    sheets: list[list[Row]] = []
+    sheets: list[tuple[str, list[Row]]] = []
     try:
         workbook = openpyxl.load_workbook(
             io.BytesIO(data), read_only=True, data_only=True, keep_links=False
@@ -172,9 +195,9 @@ def sheet_rows(
                         rows.append((number, cells))
                         if len(rows) > max_rows:
                             break
-                sheets.append(rows)
-                if chosen is None or chosen(rows):
-                    return rows
+                sheets.append((str(sheet.title), rows))
+                if first_only:
+                    break
         finally:
             workbook.close()
     except UserError:
@@ -184,4 +207,4 @@ def sheet_rows(
         raise UserError(limits.unreadable) from None
     if not sheets:
         raise UserError(limits.unreadable)
-    return sheets[0]
+    return sheets

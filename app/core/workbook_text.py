@@ -1,8 +1,10 @@
 """A student's readings saved as an Excel workbook (.xlsx), read as the text of a CSV file.
 
 Students type their readings into Excel or WPS and save the workbook as it is.  Its sheet
-of readings -- the first sheet with two rows that hold a number, so a cover sheet of
-notes before it is passed over -- becomes tab-separated text, one line per row of the
+of readings -- the one the student chooses where several hold readings (one a part, say),
+else the one whose name says it holds the part being recorded ("纬度", "Part B"), else the
+first sheet with two rows that hold a number, so a cover sheet of notes before it is
+passed over -- becomes tab-separated text, one line per row of the
 sheet (empty rows as empty lines, so a line the readers name is the sheet's own row), and
 is then read as a pasted table or a file is (:mod:`app.core.readings`,
 :mod:`app.core.static_record`).  A number is the value the cell holds, written as the
@@ -13,9 +15,11 @@ and time as ISO 8601, which a logger's clock column is read from.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from app.core.exceptions import UserError
 from app.core.typed_numbers import is_number
-from app.core.workbook_sheets import Row, SheetLimits, sheet_rows
+from app.core.workbook_sheets import Row, SheetLimits, all_sheets
 
 READINGS_LIMITS = SheetLimits(
     max_unpacked_bytes=30_000_000,
@@ -30,13 +34,101 @@ READINGS_LIMITS = SheetLimits(
 MAX_ROWS = 200_000
 
 
+# how a sheet's name says which part of the lab it holds: A, the heading (north finding,
+# the axis horizontal); B, the latitude (the axis turned in the vertical plane)
+PART_WORDS = {
+    "heading": (
+        "寻北",
+        "水平",
+        "方位",
+        "heading",
+        "horizontal",
+        "north",
+        "parta",
+        "a部分",
+        "部分a",
+    ),
+    "latitude": ("纬度", "竖直", "垂直", "latitude", "vertical", "partb", "b部分", "部分b"),
+}
+PART_LETTERS = {"heading": "a", "latitude": "b"}  # a sheet named "A" or "B" alone
+
+
+@dataclass(frozen=True)
+class WorkbookReadings:
+    """A workbook's sheet of readings as text, the sheet's name, and the names of every
+    sheet that holds readings (where several do, the student chooses)."""
+
+    text: str
+    sheet: str
+    sheets: tuple[str, ...]
+
+
 def _holds_readings(rows: list[Row]) -> bool:
     """Whether a sheet holds readings: two rows at least with a number in them."""
     return sum(any(is_number(cell) for cell in cells) for _, cells in rows[:50]) >= 2
 
 
+def _for_part(names: list[str], part: str | None) -> str | None:
+    """The one sheet whose name says it holds ``part`` ("纬度", "Part B", "B"), if one does."""
+    if part not in PART_WORDS:
+        return None
+    said = [
+        name
+        for name in names
+        if (plain := "".join(name.lower().split())) == PART_LETTERS[part]
+        or any(word in plain for word in PART_WORDS[part])
+    ]
+    return said[0] if len(said) == 1 else None
+
+
+def workbook_readings(
+    data: bytes, sheet: str | None = None, part: str | None = None
+) -> WorkbookReadings:
+    """A workbook's sheet of readings as tab-separated text.
+
+    Parameters
+    ----------
+    data : bytes
+        The uploaded .xlsx.
+    sheet : str, optional
+        The sheet chosen (its name); by default the one sheet whose name says it holds
+        ``part`` where one does, else the first sheet that holds readings (two rows with
+        a number in them; a cover sheet before it is passed over), else the first sheet.
+    part : {"heading", "latitude"}, optional
+        The part of the lab the readings are for.
+
+    Returns
+    -------
+    WorkbookReadings
+        One line per row of the sheet, up to its last non-empty one, cells separated by
+        tabs (a tab or a line break inside a cell's text is a space); the sheet read; the
+        sheets that hold readings.
+
+    Raises
+    ------
+    UserError
+        ``workbook.old_excel`` (an .xls), ``workbook.unreadable``, ``workbook.too_large``,
+        ``workbook.too_many_cells``, ``workbook.too_many_rows``, ``workbook.no_such_sheet``.
+    """
+    sheets = all_sheets(data, READINGS_LIMITS, MAX_ROWS)
+    names = [name for name, rows in sheets if _holds_readings(rows)]
+    if sheet is not None and sheet not in dict(sheets):
+        raise UserError("workbook.no_such_sheet", sheet=sheet[:100])
+    chosen = sheet or _for_part(names, part) or (names[0] if names else sheets[0][0])
+    rows = dict(sheets)[chosen]
+    if len(rows) > MAX_ROWS:
+        raise UserError("workbook.too_many_rows", limit=MAX_ROWS)
+    lines: list[str] = []
+    for number, cells in rows:
+        lines.extend([""] * (number - 1 - len(lines)))
+        while cells and not cells[-1]:
+            cells.pop()
+        lines.append("\t".join(" ".join(cell.split()) for cell in cells))
+    return WorkbookReadings("\n".join(lines) + "\n", chosen, tuple(names))
+
+
 def workbook_text(data: bytes) -> str:
-    """The sheet of readings of a workbook as tab-separated text.
+    """The text of a workbook's first sheet of readings (:func:`workbook_readings`).
 
     Parameters
     ----------
@@ -46,22 +138,11 @@ def workbook_text(data: bytes) -> str:
     Returns
     -------
     str
-        One line per row of the sheet, up to its last non-empty one, cells separated by
-        tabs (a tab or a line break inside a cell's text is a space).
+        Its sheet of readings as tab-separated text, a line per row of the sheet.
 
     Raises
     ------
     UserError
-        ``workbook.old_excel`` (an .xls), ``workbook.unreadable``, ``workbook.too_large``,
-        ``workbook.too_many_cells``, ``workbook.too_many_rows``.
+        As :func:`workbook_readings`.
     """
-    rows = sheet_rows(data, READINGS_LIMITS, MAX_ROWS, chosen=_holds_readings)
-    if len(rows) > MAX_ROWS:
-        raise UserError("workbook.too_many_rows", limit=MAX_ROWS)
-    lines: list[str] = []
-    for number, cells in rows:
-        lines.extend([""] * (number - 1 - len(lines)))
-        while cells and not cells[-1]:
-            cells.pop()
-        lines.append("\t".join(" ".join(cell.split()) for cell in cells))
-    return "\n".join(lines) + "\n"
+    return workbook_readings(data).text

@@ -300,6 +300,7 @@ JS_MESSAGES = (
     "js.lines_above_skipped",
     "js.record_position",
     "js.record_column",
+    "js.workbook_sheet",
     "js.position_problem",
     "js.long_paste_held",
     "js.long_paste_bad",

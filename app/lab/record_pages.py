@@ -8,7 +8,7 @@ from datetime import datetime
 from typing import Annotated
 
 import numpy as np
-from fastapi import APIRouter, Body, Depends, Form, Request
+from fastapi import APIRouter, Body, Depends, Form, Query, Request
 from fastapi.responses import Response, StreamingResponse
 
 from app.accounts.deps import CsrfProtected, CurrentUser
@@ -22,7 +22,7 @@ from app.core.position_records import (
 from app.core.readings import Readings, parse_readings_csv
 from app.core.static_record import names_its_columns_in_a_comment
 from app.core.units import canonical_unit, to_deg_per_hour
-from app.core.workbook_text import workbook_text
+from app.core.workbook_text import workbook_readings
 from app.lab.deps import OwnedSession, OwnSessionId
 from app.lab.exports import Selection, readings_csv, session_json
 from app.lab.grid import grid_readings
@@ -133,15 +133,19 @@ def workbook_as_text(
     user: CurrentUser,
     db: SessionDep,
     data: Annotated[bytes, Depends(workbook_body)],
+    part: Annotated[Part, Query()] = Part.heading,
+    sheet: Annotated[str | None, Query(min_length=1, max_length=100)] = None,
 ):
-    """An Excel workbook chosen as the file: its sheet of readings as the text the page
-    then previews and saves as a CSV file's (:func:`app.core.workbook_text.workbook_text`)."""
+    """An Excel workbook chosen as the file: its sheet of readings (``sheet``, else the
+    one for ``part``) as the text the page then previews and saves as a CSV file's, and the
+    sheets that hold readings, to choose from
+    (:func:`app.core.workbook_text.workbook_readings`)."""
     recordable_session(db, user, session_id, InputMethod.csv)
     with pool("workbooks").slot(user.id):
-        text = workbook_text(data)
-    if len(text) > MAX_CSV_CHARS:
+        book = workbook_readings(data, sheet, part.value)
+    if len(book.text) > MAX_CSV_CHARS:
         raise UserError("lab.file_too_large", limit_mb=MAX_CSV_CHARS // 1_000_000)
-    return {"text": text}
+    return {"text": book.text, "sheet": book.sheet, "sheets": list(book.sheets)}
 
 
 @router.post("/sessions/{session_id}/csv/preview", dependencies=[CsrfProtected, ReadOnlySession])

@@ -637,6 +637,8 @@
     let recordPosition = null;  // a one-position record: the position it is saved as
     let recordColumn = null;  // an IMU's record of several axes: the gyro's column
     let columnChoices = [];  // the columns the file offers ({value, label})
+    let sheet = null;  // an Excel workbook: the sheet read
+    let sheets = [];  // …and the sheets that hold readings, where the student may choose
 
     function body() {
       const data = { part: panel.dataset.part, unit: panel.querySelector(".unit").value, text };
@@ -661,6 +663,31 @@
       select.value = recordColumn;
       select.addEventListener("change", () => {
         recordColumn = select.value;
+        showPreview(true);
+      });
+      label.appendChild(select);
+      return label;
+    }
+
+    // An Excel workbook of several sheets of readings (one a part, say): which, chosen here.
+    function sheetChoice() {
+      const label = document.createElement("label");
+      label.className = "inline-label";
+      label.textContent = t("js.workbook_sheet") + " ";
+      const select = document.createElement("select");
+      select.className = "workbook-sheet";
+      sheets.forEach((name) => {
+        const option = document.createElement("option");
+        option.value = name;
+        option.textContent = name;
+        select.appendChild(option);
+      });
+      select.value = sheet;
+      select.addEventListener("change", () => {
+        sheet = select.value;
+        recordPosition = null;
+        recordColumn = null;
+        columnChoices = [];
         showPreview(true);
       });
       label.appendChild(select);
@@ -696,6 +723,8 @@
         recordPosition = null;
         recordColumn = null;
         columnChoices = [];
+        sheet = null;
+        sheets = [];
       }
       const file = input.files[0];
       if (!file) return;
@@ -706,7 +735,10 @@
       const buffer = await file.arrayBuffer();
       try {
         if (isWorkbook(buffer)) {  // its sheet of readings, as text, from the server
-          text = (await postBytes("/csv/workbook", buffer)).text;
+          const query = new URLSearchParams({ part: panel.dataset.part });
+          if (sheet !== null) query.set("sheet", sheet);
+          const book = await postBytes(`/csv/workbook?${query}`, buffer);
+          ({ text, sheet, sheets } = book);
         } else {
           // Ctrl-Z or NUL bytes after the last line (DOS's end of file, a logger's
           // unwritten space) are not text: not sent (the server passes them over too)
@@ -721,6 +753,7 @@
         preview.innerHTML = `<p>${t("js.preview_title")}</p><table class="table compact"><thead><tr><th>#</th><th class="num">${t("js.angle")}</th><th class="num">n</th><th class="num">${t("js.mean")}</th><th>${t("js.samples")}</th></tr></thead><tbody>${rows}</tbody></table>`;
         if (result.layout === "record") preview.prepend(positionChoice(result));
         if (columnChoices.length) preview.prepend(columnChoice());
+        if (sheets.length > 1) preview.prepend(sheetChoice());
         (result.notes || []).forEach((note) => {  // a row of means passed over: said, not read
           const line = document.createElement("p");
           line.className = "muted";
@@ -735,6 +768,7 @@
         preview.replaceChildren(message);
         // a column chosen that cannot be read (a counter, say): another can still be chosen
         if (columnChoices.length && recordColumn !== null) preview.prepend(columnChoice());
+        if (sheets.length > 1) preview.prepend(sheetChoice());  // and another sheet
       }
     }
     input.addEventListener("change", showPreview);

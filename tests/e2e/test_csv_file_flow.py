@@ -12,7 +12,7 @@ import pytest
 import xlsxwriter
 from playwright.sync_api import expect
 
-from tests.e2e.conftest import STUDENT_PASSWORD, log_in
+from tests.e2e.conftest import STUDENT_PASSWORD, axe_problems, log_in
 from tests.e2e.test_lab_flow import start_practice, table
 from tests.test_position_record_files import imu_file
 
@@ -25,14 +25,16 @@ OLD_EXCEL_WORDS = {
 OLE_MAGIC = b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1"
 
 
-def workbook_of(rows: list[list[str]]) -> bytes:
-    """The rows in a workbook's first sheet, numbers as numbers (as Excel holds them)."""
+def workbook_of(*sheets: list[list[str]], names: tuple[str, ...] = ()) -> bytes:
+    """The rows in a workbook's sheets (named ``names``), numbers as numbers (as Excel
+    holds them)."""
     buffer = io.BytesIO()
     book = xlsxwriter.Workbook(buffer, {"in_memory": True})
-    sheet = book.add_worksheet()
-    for r, row in enumerate(rows):
-        for c, value in enumerate(row):
-            sheet.write(r, c, value if r == 0 else float(value))
+    for index, rows in enumerate(sheets):
+        sheet = book.add_worksheet(names[index] if index < len(names) else None)
+        for r, row in enumerate(rows):
+            for c, value in enumerate(row):
+                sheet.write(r, c, value if r == 0 else float(value))
     book.close()
     return buffer.getvalue()
 
@@ -66,14 +68,26 @@ def test_a_csv_file_is_previewed_and_saved_and_a_workbook_is_named(
     expect(panel.locator(".csv-preview .error-text")).to_contain_text(OLD_EXCEL_WORDS[language])
     expect(panel.locator(".accept-csv")).to_be_disabled()
 
+    # a workbook of both parts, a sheet each: part A's read, the other offered
     book = tmp_path / "readings.xlsx"
-    book.write_bytes(workbook_of([header, *rows]))
+    vertical = table("handout_vertical.csv")
+    names = ("B 纬度", "A 寻北")
+    book.write_bytes(workbook_of([header, *vertical], [header, *rows], names=names))
     panel.locator(".csv-file").set_input_files(str(book))
     preview = panel.locator(".csv-preview tbody tr")
     expect(preview).to_have_count(4)
     expect(preview.nth(0).locator("td").nth(2)).to_have_text(str(len(rows)))
     expect(panel.locator(".accept-csv")).to_be_enabled()
     from_book = preview.nth(0).locator("td").all_inner_texts()
+    chosen = panel.locator("select.workbook-sheet")
+    expect(chosen).to_have_value("A 寻北")
+    assert axe_problems(page) == []  # the sheet's choice is labelled, as the page's fields
+    chosen.select_option("B 纬度")
+    expect(preview.nth(0).locator("td").nth(3)).to_have_text(
+        f"{np.mean([float(r[0]) for r in vertical]):.3f}"
+    )
+    panel.locator("select.workbook-sheet").select_option("A 寻北")
+    expect(preview.nth(0).locator("td")).to_have_text(from_book)
 
     readings = tmp_path / "readings.csv"  # the same sheet saved as CSV by a Chinese Excel
     readings.write_bytes("\n".join(",".join(row) for row in [header, *rows]).encode("gb18030"))
