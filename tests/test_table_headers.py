@@ -283,3 +283,30 @@ def test_the_preview_and_the_command_line_say_the_row_of_means_was_left_out(
     assert main(["solve", "heading", str(path), "--json"]) == 0
     out, err = capsys.readouterr()
     assert "Line 12 was passed over" in err and "Line 12" not in out
+
+
+@pytest.mark.parametrize(
+    ("text", "numbers"),
+    [
+        ("位置3\n10.74\n10.65\n", [3]),
+        ("P2,P4\n2.88,-0.96\n2.69,-0.96\n", [2, 4]),
+        ("位置2,2.88,2.69\n位置4,-0.96,-0.96\n", [2, 4]),  # on its side
+    ],
+)
+def test_a_table_of_some_positions_keeps_their_numbers(text, numbers):
+    # as a long table does ("a file of position 3 alone is position 3"); refused before as
+    # "position columns must be position_1 … position_N without gaps"
+    readings = parse_readings_csv(text)
+    assert readings.numbers == numbers and all(v.size == 2 for v in readings.positions)
+    with pytest.raises(UserError) as twice:
+        parse_readings_csv("P1,P2,P1\n1,2,3\n")
+    assert twice.value.key == "csv.position_columns"
+
+
+def test_a_file_of_one_positions_column_is_saved_as_that_position(student_client):
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    body = {"part": "heading", "unit": "deg/h", "text": "位置3\n" + "\n".join(["-9.11"] * 10)}
+    [row] = post_json(student_client, f"{page}/csv/preview", body, page).json()["positions"]
+    assert row["position"] == 3 and row["n"] == 10
+    assert post_json(student_client, f"{page}/csv", body, page).json()["saved"] == [3]

@@ -65,7 +65,7 @@ class Readings:
     layout: str = "wide"
     temperatures_c: list[np.ndarray] | None = None  # long layout's optional temperature_c
     skipped: list[tuple[int, str]] = field(default_factory=list)  # summary rows: line, label
-    numbers: list[int] | None = None  # long layout: the positions' numbers as the file gives
+    numbers: list[int] | None = None  # the positions' numbers as the file gives, not 1…N
     means_row: int | None = None  # the line of an unlabelled row of means, left out
 
     def left_out(self) -> list[tuple[str, dict]]:
@@ -238,8 +238,12 @@ def _headerless_columns(rows) -> dict[int, int] | None:
 
 
 def _parse_wide(columns: dict[int, int], rows) -> Readings:
+    """The readings of a wide table's position columns (column index → position number).
+    A table of some positions only ("位置3" alone, a workbook's sheet of one position)
+    keeps the numbers its header gives, as a long table does; a position named twice is
+    refused."""
     numbers = sorted(columns.values())
-    if numbers != list(range(1, len(numbers) + 1)):
+    if len(set(numbers)) != len(numbers):
         raise UserError(
             "csv.position_columns",
         )
@@ -253,16 +257,18 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
         above = list(decimals)
         for slot, cell in enumerate(cells):
             if cell:
-                values[slot].append(_number(cell, line, f"position_{slot + 1}"))
+                values[slot].append(_number(cell, line, f"position_{numbers[slot]}"))
                 decimals[slot] = max(decimals[slot], written_decimals(cell, significant=True) or 0)
     means_row = None
     if all(cells) and is_row_of_means(cells, [v[:-1] for v in values], above):
         means_row = rows[-1][0]  # a spreadsheet's =AVERAGE row, unlabelled: no reading
         values = [v[:-1] for v in values]
-    for slot, column in enumerate(values, start=1):
+    for number, column in zip(numbers, values, strict=True):
         if not column:
-            raise UserError("readings.empty_position", position=slot)
-    return Readings([np.array(v) for v in values], None, None, "wide", means_row=means_row)
+            raise UserError("readings.empty_position", position=number)
+    given = None if numbers == list(range(1, len(numbers) + 1)) else numbers
+    arrays = [np.array(v) for v in values]
+    return Readings(arrays, None, None, "wide", numbers=given, means_row=means_row)
 
 
 def _parse_rows_of_positions(rows) -> Readings:
@@ -276,12 +282,12 @@ def _parse_rows_of_positions(rows) -> Readings:
         columns[number] = [
             _number(c.strip(), line, f"position_{number}") for c in row[1:] if c.strip()
         ]
-    if sorted(columns) != list(range(1, len(columns) + 1)):
-        raise UserError("csv.position_columns")
-    for number in sorted(columns):
+    numbers = sorted(columns)
+    for number in numbers:
         if not columns[number]:
             raise UserError("readings.empty_position", position=number)
-    return Readings([np.array(columns[k]) for k in sorted(columns)], None, None, "wide")
+    given = None if numbers == list(range(1, len(numbers) + 1)) else numbers
+    return Readings([np.array(columns[k]) for k in numbers], None, None, "wide", numbers=given)
 
 
 def _parse_long(index: dict[str, int], rows) -> Readings:
