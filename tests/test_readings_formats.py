@@ -671,3 +671,19 @@ def test_a_long_tables_angles_as_students_write_them(header, angle):
     readings = parse_readings_csv(header + "\n" + "\n".join(lines) + "\n")
     assert readings.angles_deg == [0.0, 90.0, 180.0, 270.0]
     assert [v.tolist() for v in readings.positions] == [[11.51, 11.49], [3.2, 3.1], [-11.4], [-3.1]]
+
+
+def test_a_quoted_decimal_comma_in_a_comma_separated_file_is_one_number():
+    # LibreOffice in a European locale, saving with commas: each number quoted, "11,51"
+    from app.core.static_record import read_static_record
+    from app.lab.uploads import csv_position
+
+    table = '"P1","P2","P3"\n"11,51","3,2","-11,4"\n"11,49","3,1","-11,5"\n'
+    readings = parse_readings_csv(table)
+    assert [v.tolist() for v in readings.positions] == [[11.51, 11.49], [3.2, 3.1], [-11.4, -11.5]]
+    record = '"time_s","rate"\n"0,0","11,51"\n"0,1","11,49"\n"0,2","11,50"\n'
+    assert read_static_record(io.StringIO(record)).values.tolist() == [11.51, 11.49, 11.5]
+    values, times, _ = csv_position(record.encode(), "deg/h")
+    assert values.tolist() == [11.51, 11.49, 11.5] and times.tolist() == [0.0, 0.1, 0.2]
+    # unquoted, a comma still separates the cells: "11,51" is two cells
+    assert parse_readings_csv("P1,P2\n11,51\n").positions[1].tolist() == [51.0]

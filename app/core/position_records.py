@@ -115,8 +115,12 @@ def parse_position_csv(
             rows = list(csv.reader(io.StringIO(data, newline=""), delimiter=delimiter))
         except csv.Error as error:
             raise UserError("csv.unreadable", detail=str(error)) from None
-    if delimiter != ",":
-        rows = [[decimal_point(cell) for cell in row] for row in rows]
+    # a decimal comma: where the separator is not the comma, or in a cell the writer quoted
+    # because it holds one ("11,51" from a European spreadsheet saving with commas)
+    rows = [
+        [decimal_point(cell) if delimiter != "," or "," in cell else cell for cell in row]
+        for row in rows
+    ]
     values, times, header = _read_rows(rows, unit)
     if times and delimiter == "," and (one_column := _decimal_comma_column(rows, header, times)):
         return np.array(one_column), None

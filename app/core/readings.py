@@ -129,7 +129,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     except csv.Error as error:
         raise UserError("csv.unreadable", detail=str(error)) from None
     rows = [
-        (number, row if delimiter == "," else [decimal_point(cell) for cell in row])
+        (number, [decimal_point(cell) if delimiter != "," or "," in cell else cell for cell in row])
         for number, row in enumerate(rows, start=1)
         if any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")
     ]

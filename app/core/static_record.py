@@ -369,8 +369,8 @@ def _splitter(first: str) -> Callable[[str], list[str]]:
     if "," in first:
 
         def commas(text: str) -> list[str]:  # a spreadsheet's empty last column dropped
-            if '"' in text:
-                return [c.strip() for c in next(csv.reader([text.rstrip(",")]))]
+            if '"' in text:  # quoted: a cell holding a comma holds a decimal comma
+                return [decimal_point(c.strip()) for c in next(csv.reader([text.rstrip(",")]))]
             return [c.strip() for c in text.rstrip(",").split(",")]
 
         return commas
