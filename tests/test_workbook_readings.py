@@ -200,7 +200,7 @@ def test_a_students_sheet_with_lines_about_the_table_above_it():
 
 
 def test_workbooks_are_read_a_few_at_a_time(student_client):
-    """Up to ≈ 4 s of parsing each: two at once in a process, one per student; past that
+    """Up to ≈ 7 s of parsing each: two at once in a process, one per student; past that
     a clear refusal at once, and the student's next try is read."""
     from app.web.work_slots import WORKBOOKS_AT_ONCE, pool
 

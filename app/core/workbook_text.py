@@ -4,13 +4,13 @@ Students type their readings into Excel or WPS and save the workbook as it is.  
 of readings -- the one the student chooses where several hold readings (one a part, say),
 else the one whose name says it holds the part being recorded ("纬度", "Part B"), else the
 first sheet with two rows that hold a number, so a cover sheet of notes before it is
-passed over -- becomes tab-separated text, one line per row of the
-sheet (empty rows as empty lines, so a line the readers name is the sheet's own row), and
-is then read as a pasted table or a file is (:mod:`app.core.readings`,
-:mod:`app.core.static_record`).  A number is the value the cell holds, written as the
-shortest text that reads back as the same float: a typed 10.74 is "10.74"; a formula's
-value as last calculated (an ``=AVERAGE`` row, which the readers then leave out); a date
-and time as ISO 8601, which a logger's clock column is read from.
+passed over -- becomes tab-separated text, one line per row of the sheet (empty rows as
+empty lines, so a line the readers name is the sheet's own row), and is then read as a
+pasted table or a file is (:mod:`app.core.readings`, :mod:`app.core.static_record`).  A
+number is the value the cell holds, written as the shortest text that reads back as the
+same float: a typed 10.74 is "10.74"; a formula's value as last calculated (an
+``=AVERAGE`` row, which the readers then leave out); a date and time as ISO 8601, which a
+logger's clock column is read from.
 """
 
 from __future__ import annotations
@@ -23,7 +23,8 @@ from app.core.workbook_sheets import Row, SheetLimits, all_sheets
 
 READINGS_LIMITS = SheetLimits(
     max_unpacked_bytes=30_000_000,
-    # ≈ 3.6 s of parsing at most; a 10 Hz record of an hour in two columns has ≈ 250,000
+    # a sheet ≈ 3.6 s of parsing at most, the whole workbook twice that (every sheet is
+    # read, to offer those of readings); a 10 Hz record of an hour in two columns: ≈ 250,000
     max_sheet_elements=600_000,
     max_columns=40,  # eight positions and their labels, an IMU's axes
     old_excel="workbook.old_excel",

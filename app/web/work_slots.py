@@ -119,7 +119,7 @@ def pool(name: str) -> WorkPool:
                 _pools[name] = WorkPool(size, "report.busy", "report.busy_person")
             elif name == "exports":
                 _pools[name] = WorkPool(EXPORTS_AT_ONCE, "export.busy", "export.busy_person", 5)
-            elif name == "workbooks":  # a student's .xlsx read: up to ≈ 4 s of parsing
+            elif name == "workbooks":  # a student's .xlsx read: up to ≈ 7 s of parsing
                 _pools[name] = WorkPool(
                     WORKBOOKS_AT_ONCE, "work.busy_workbook", "work.busy_person", 5
                 )
