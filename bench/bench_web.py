@@ -265,6 +265,30 @@ def main() -> None:
                 )
             )
 
+            times = np.arange(big.size) * 0.01
+            text = "time_s,value\n" + "\n".join(
+                f"{t:.2f},{v:.6f}" for t, v in zip(times, big, strict=True)
+            )
+            csv_body = text.encode()
+
+            def csv_upload(_k: int) -> None:
+                client.put(
+                    f"/api/v1/sessions/{session}/heading/positions/1",
+                    headers={**auth, "Content-Type": "text/csv"},
+                    content=csv_body,
+                ).raise_for_status()
+                client.get(f"/api/v1/sessions/{session}/results", headers=auth).raise_for_status()
+
+            as_csv = median_of(3, csv_upload)
+            results.append(
+                (
+                    "upload 1e6 samples (text/csv, time_s,value) + solve (s, median of 3)",
+                    f"{as_csv:.3f}",
+                    f"{len(csv_body) / 1e6:.0f} MB; raw float64 {binary:.3f} s → "
+                    f"{as_csv / binary:.1f}×; BLOB write → {as_csv / ceiling:.1f}×",
+                )
+            )
+
             start = time.perf_counter()
             for _ in range(60):
                 client.post(
