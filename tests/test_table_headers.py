@@ -310,3 +310,77 @@ def test_a_file_of_one_positions_column_is_saved_as_that_position(student_client
     [row] = post_json(student_client, f"{page}/csv/preview", body, page).json()["positions"]
     assert row["position"] == 3 and row["n"] == 10
     assert post_json(student_client, f"{page}/csv", body, page).json()["saved"] == [3]
+
+
+def stacked(first: str, second: str, separator: str = ",") -> str:
+    """Both of the handout's tables in one file, one under the other, each under a title
+    (as the handout prints them, its tables 1 and 2)."""
+    lines = [first]
+    for name in ("handout_horizontal.csv", "handout_vertical.csv"):
+        columns = handout(name)
+        if name.endswith("vertical.csv"):
+            lines += ["", second]
+        lines.append(separator.join(["位置", "1", "2", "3", "4"]))
+        for row in range(len(columns[1])):
+            lines.append(separator.join(["", *(f"{columns[k][row]:.2f}" for k in range(1, 5))]))
+        lines.append(
+            separator.join(["平均值", *(f"{np.mean(columns[k]):.2f}" for k in range(1, 5))])
+        )
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize(
+    ("first", "second"),
+    [
+        (
+            "表 1 光纤陀螺在水平面内4个位置的采样值/(°/h)",
+            "表 2 光纤陀螺在竖直面内4个位置的采样值/(°/h)",
+        ),
+        ("Part A: heading", "Part B: latitude"),
+        ("A", "B"),
+    ],
+)
+@pytest.mark.parametrize("separator", [",", "\t"])
+def test_both_parts_tables_in_one_file_each_under_its_title(first, second, separator):
+    text = stacked(first, second, separator)
+    for part, name in (("heading", "handout_horizontal.csv"), ("latitude", "handout_vertical.csv")):
+        readings = parse_readings_csv(text, part=part)
+        expected = handout(name)
+        assert [v.tolist() for v in readings.positions] == [expected[k] for k in range(1, 5)]
+        assert len(readings.skipped) == 1  # its own row of means, on its own line
+    assert parse_readings_csv(text, part="latitude").skipped[0][0] == 27
+
+
+def test_a_second_table_whose_title_names_no_part_is_refused_not_read_as_readings():
+    # "位置 | 1 | 2 | 3 | 4" again was read as a row of readings 1, 2, 3, 4, and the two
+    # tables as one of 21 readings a position
+    text = stacked("Table 1", "Table 2")
+    for part in ("heading", None):
+        with pytest.raises(UserError) as again:
+            parse_readings_csv(text, part=part)
+        assert again.value.key == "csv.header_again"
+        assert again.value.params == {"line": 16, "header": 2}
+
+
+def test_a_title_names_a_part_only_where_it_names_one_without_numbers():
+    from app.core.part_names import part_named, part_titles
+
+    assert part_named("表 2 光纤陀螺在竖直面内4个位置的采样值") == "latitude"
+    assert part_named("Sheet B") is None and part_named("b") == "latitude"
+    assert part_named("寻北实验：水平面与竖直面") is None  # both parts: neither
+    text = "水平,1.5,2.5\n竖直面\nheading\n"
+    assert [named for _, _, named in part_titles(text)] == ["latitude", "heading"]
+
+
+def test_each_parts_csv_panel_takes_its_own_table_of_the_file(student_client):
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    text = stacked(
+        "表 1 光纤陀螺在水平面内4个位置的采样值", "表 2 光纤陀螺在竖直面内4个位置的采样值"
+    )
+    for part, name in (("heading", "handout_horizontal.csv"), ("latitude", "handout_vertical.csv")):
+        body = {"part": part, "unit": "deg/h", "text": text}
+        rows = post_json(student_client, f"{page}/csv/preview", body, page).json()["positions"]
+        means = [round(float(np.mean(handout(name)[k])), 3) for k in range(1, 5)]
+        assert [round(row["mean_deg_h"], 3) for row in rows] == means
+        assert post_json(student_client, f"{page}/csv", body, page).json()["saved"] == [1, 2, 3, 4]

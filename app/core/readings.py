@@ -36,6 +36,7 @@ import numpy as np
 from app.core.exceptions import UserError
 from app.core.long_headers import long_columns
 from app.core.means_row import is_row_of_means, written_decimals
+from app.core.part_names import part_table
 from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
@@ -122,6 +123,8 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
         With the line and column of the first problem.
     """
     hint, text = without_separator_hint(plain_text(file_text(text)))
+    if part is not None:  # both parts' tables in one file, each under its title: part's
+        text = part_table(text, part)
     text = title_lines_blanked(text)
     delimiter = hint or spreadsheet_delimiter(text)
     try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
@@ -170,6 +173,11 @@ def _read_table(rows, part: str | None) -> Readings:
     means or other summaries left out and said, in any layout."""
     header_line, header = rows[0]
     names = [column_name(cell) for cell in header]
+    written = _cells(header)
+    if len(written) > 1 and not all(is_number(cell) for cell in written):  # a table's header
+        again = next((line for line, row in rows[1:] if _cells(row) == written), None)
+        if again is not None:  # a second table under the first ("位置 | 1 | 2 | 3 | 4" again)
+            raise UserError("csv.header_again", line=again, header=header_line)
     if len(rows) > 1 and is_units_row(rows[1][1]):
         rows = [rows[0], *rows[2:]]  # "s, °/h, °/h…" under the names: a unit after a name
     # a row of means or other summary ("平均值 | 10.71 …", "mean" under a position's
@@ -181,6 +189,14 @@ def _read_table(rows, part: str | None) -> Readings:
     readings = _parse_layout(rows, header_line, header, names, part)
     readings.skipped = skipped
     return readings
+
+
+def _cells(row: list[str]) -> list[str]:
+    """A row's cells as written, without the empty ones at its end."""
+    cells = [cell.strip() for cell in row]
+    while cells and not cells[-1]:
+        cells.pop()
+    return cells
 
 
 def _parse_layout(rows, header_line: int, header: list[str], names, part: str | None) -> Readings:

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from app.core.exceptions import UserError
+from app.core.part_names import part_named
 from app.core.typed_numbers import is_number
 from app.core.workbook_sheets import Row, SheetLimits, all_sheets
 
@@ -33,25 +34,6 @@ READINGS_LIMITS = SheetLimits(
     too_many_elements="workbook.too_many_cells",
 )
 MAX_ROWS = 200_000
-
-
-# how a sheet's name says which part of the lab it holds: A, the heading (north finding,
-# the axis horizontal); B, the latitude (the axis turned in the vertical plane)
-PART_WORDS = {
-    "heading": (
-        "寻北",
-        "水平",
-        "方位",
-        "heading",
-        "horizontal",
-        "north",
-        "parta",
-        "a部分",
-        "部分a",
-    ),
-    "latitude": ("纬度", "竖直", "垂直", "latitude", "vertical", "partb", "b部分", "部分b"),
-}
-PART_LETTERS = {"heading": "a", "latitude": "b"}  # a sheet named "A" or "B" alone
 
 
 @dataclass(frozen=True)
@@ -71,14 +53,7 @@ def _holds_readings(rows: list[Row]) -> bool:
 
 def _for_part(names: list[str], part: str | None) -> str | None:
     """The one sheet whose name says it holds ``part`` ("纬度", "Part B", "B"), if one does."""
-    if part not in PART_WORDS:
-        return None
-    said = [
-        name
-        for name in names
-        if (plain := "".join(name.lower().split())) == PART_LETTERS[part]
-        or any(word in plain for word in PART_WORDS[part])
-    ]
+    said = [name for name in names if part is not None and part_named(name) == part]
     return said[0] if len(said) == 1 else None
 
 
