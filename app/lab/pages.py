@@ -14,6 +14,7 @@ from sqlmodel import Session
 from app.accounts.deps import CurrentUser
 from app.core.exceptions import UserError
 from app.core.long_headers import ROLE_NAMES
+from app.core.part_names import PART_LETTERS, PART_WORDS
 from app.core.presets import PRESETS
 from app.core.table_headers import SUMMARY_LABELS
 from app.core.units import UNIT_SYMBOLS, UNITS
@@ -132,6 +133,8 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         "gridLimit": GRID_LIMIT,  # a longer paste is held and saved as pasted, not shown
         "summaryLabels": SHOWN_SUMMARY_LABELS,  # a pasted row of means is no reading
         "longRoles": LONG_ROLES,  # a pasted table of one reading per row beside its position
+        "partWords": PART_WORDS,  # both parts' tables pasted, each under its title
+        "partLetters": PART_LETTERS,
         "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
         "plane": session.sim_plane_dial_deg,
         "messages": client_messages(JS_MESSAGES, _.language),
@@ -298,6 +301,8 @@ JS_MESSAGES = (
     "js.summary_rows_skipped",
     "js.means_row_skipped",
     "js.lines_above_skipped",
+    "js.own_table_taken",
+    "js.second_table_skipped",
     "js.record_position",
     "js.record_column",
     "js.workbook_sheet",

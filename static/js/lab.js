@@ -250,7 +250,10 @@
   // that names two positions or more, where no line above it holds two numbers --
   // app.core.readings reads a file so.
   const isText = (cell) => cell !== "" && Boolean(parseCell(cell).error);
-  const namesPositions = (row) => row.filter((cell) => isText(cell) && namesPosition(cell)).length >= 2;
+  // a header: two positions named ("位置1", "P2", "90°"), or numbered beside a label, as the
+  // handout's "位置 | 1 | 2 | 3 | 4"
+  const namesPositions = (row) => row.filter((cell) => isText(cell) && namesPosition(cell)).length >= 2 ||
+    (row.some(isText) && numbersThePositions(row.filter((cell) => cell !== "" && !isText(cell))));
   function linesAbove(rows) {
     if (rows.length === 0 || namesPositions(rows[0])) return 0;
     for (let r = 1; r < Math.min(rows.length, 11); r++) {
@@ -261,10 +264,40 @@
     return 0;
   }
 
-  function parseBlock(text, columns) {
+  // Both parts' tables pasted, each under a title that names its part (the handout's
+  // "表 1 …水平面内…", "表 2 …竖直面内…", "Part B"): this part's table alone, as
+  // app.core.part_names reads a file; a second table under a title that names no part is
+  // left out at its repeated header, never read as readings.
+  function partNamed(text) {
+    const flat = text.toLowerCase().replace(/\s+/g, "");
+    const named = Object.keys(config.partWords).filter((part) =>
+      flat === config.partLetters[part] || config.partWords[part].some((word) => flat.includes(word)));
+    return named.length === 1 ? named[0] : null;
+  }
+  function ownTable(rows, part) {
+    const titles = [];
+    rows.forEach((row, r) => {
+      const cells = row.filter((cell) => cell !== "");
+      const named = cells.some((cell) => !parseCell(cell).error) ? null : partNamed(cells.join(" "));
+      if (named) titles.push([r, named]);
+    });
+    const own = titles.filter(([, named]) => named === part);
+    if (new Set(titles.map(([, named]) => named)).size < 2 || own.length !== 1) return null;
+    const at = titles.findIndex(([r]) => r === own[0][0]);
+    const end = at + 1 < titles.length ? titles[at + 1][0] : rows.length;
+    return rows.slice(own[0][0] + 1, end);
+  }
+  const sameRow = (a, b) => a.join("\t").replace(/\t+$/, "") === b.join("\t").replace(/\t+$/, "");
+
+  function parseBlock(text, columns, part) {
     const lines = plain(text).replace(/\r\n?/g, "\n").split("\n").filter((line) => line.trim() !== "");
     let rows = splitLines(lines);
     const notes = [];
+    const own = part ? ownTable(rows, part) : null;
+    if (own) {
+      rows = own;
+      notes.push("js.own_table_taken");
+    }
     const above = linesAbove(rows);
     if (above) {
       rows = rows.slice(above);
@@ -278,6 +311,16 @@
       body = body.slice(1);
       notes.push("js.header_skipped");
       if (body.length && isUnitsRow(body[0])) body = body.slice(1);  // "s, °/h…": a note
+    }
+    if (header && header.some(isText) && header.filter((cell) => cell !== "").length > 1) {  // a second table's
+      const again = body.findIndex((row) => sameRow(row, header));
+      if (again >= 0) {
+        body = body.slice(0, again);
+        while (body.length && !body[body.length - 1].some((cell) => cell !== "" && !isText(cell))) {
+          body.pop();  // the second table's title above its header
+        }
+        notes.push("js.second_table_skipped");
+      }
     }
     const long = header && longColumns(header);
     if (long) {  // each position's readings to its own column, from the grid's first
@@ -479,7 +522,7 @@
       const text = (event.clipboardData || window.clipboardData).getData("text");
       if (!target || !/[\t\n;]|,.*,|\s\S/.test(plain(text).trim())) return;
       event.preventDefault();
-      const { rows, notes, whole } = parseBlock(text, columns);
+      const { rows, notes, whole } = parseBlock(text, columns, panel.dataset.part);
       const startRow = whole ? 0 : target.closest("tr").sectionRowIndex;
       const startColumn = whole ? 0 : Number(target.dataset.column) - 1;
       if (startRow + rows.length > config.gridLimit) {

@@ -9,6 +9,7 @@ from playwright.sync_api import expect
 
 from tests.e2e.conftest import STUDENT_PASSWORD, log_in
 from tests.e2e.test_lab_flow import paste, start_practice, table
+from tests.factories import handout
 
 pytestmark = pytest.mark.e2e
 
@@ -159,6 +160,27 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     expect(heading.nth(3).locator("input").nth(0)).to_have_value("10.74")  # the first paste's
     expect(page.locator("#part-heading .grid-status")).to_contain_text("AVERAGE row")
     expect(page.locator("#part-heading .grid-status")).to_contain_text("Pasted 3 rows")
+    # both of the handout's tables pasted into part B's grid, each under its own title:
+    # part B's table alone, from under its title (app.core.part_names reads a file so)
+    from tests.test_table_headers import stacked
+
+    both = stacked(
+        "表 1 光纤陀螺在水平面内4个位置的采样值", "表 2 光纤陀螺在竖直面内4个位置的采样值", "\t"
+    )
+    paste(page, "#part-latitude .readings-grid tbody input", both)
+    latitude = page.locator("#part-latitude .readings-grid tbody tr")
+    vertical = handout("handout_vertical.csv")
+    expect(latitude.nth(0).locator("input").nth(0)).to_have_value(f"{vertical[1][0]:.2f}")
+    expect(latitude.nth(9).locator("input").nth(3)).to_have_value(f"{vertical[4][9]:.2f}")
+    expect(latitude).to_have_count(10)  # ten rows of part B's readings: no header, no means
+    expect(page.locator("#part-latitude .grid-status")).to_contain_text("this part's table taken")
+    # under titles that name no part, the second table's header ends the paste: its
+    # "位置 | 1 | 2 | 3 | 4" is never read as a row of readings
+    paste(page, "#part-heading .readings-grid tbody input", stacked("Table 1", "Table 2", "\t"))
+    grid = page.locator("#part-heading .readings-grid tbody tr")
+    expect(grid.nth(9).locator("input").nth(0)).to_have_value("10.84")  # table 1's last
+    expect(grid).to_have_count(10)
+    expect(page.locator("#part-heading .grid-status")).to_contain_text("a second table")
 
 
 def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, new_page):
