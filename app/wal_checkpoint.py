@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import logging
 import os
+import queue
 import sqlite3
 import threading
 import time
@@ -104,12 +105,18 @@ class Checkpointer:
         # path → the log's state and the checkpoint's report when first seen together, and when
         self._unchanged: dict[str, tuple[tuple[int, int], Checkpoint, float]] = {}
         self._lock = threading.Lock()
+        # paths an engine stopped using, to forget under the lock: unwatch runs in the
+        # engine's finalizer, which the collector may run in any thread at any allocation --
+        # this thread's own, inside look() with the lock held (a test run hung so, every
+        # later engine waiting on the lock); a SimpleQueue's put may be called there
+        self._gone: queue.SimpleQueue[str] = queue.SimpleQueue()
         self._thread: threading.Thread | None = None
         self.last: dict[str, Checkpoint] = {}  # path → the last checkpoint's report
 
     def watch(self, path: str) -> None:
         """Checkpoint ``path``'s log from now on (once per engine that uses it)."""
         with self._lock:
+            self._forget_gone()
             self._watched[path] = self._watched.get(path, 0) + 1
             if self._thread is None or not self._thread.is_alive():
                 self._thread = threading.Thread(
@@ -118,8 +125,23 @@ class Checkpointer:
                 self._thread.start()
 
     def unwatch(self, path: str) -> None:
-        """One engine fewer uses ``path`` (the last one gone: no longer watched)."""
-        with self._lock:
+        """One engine fewer uses ``path`` (the last one gone: no longer watched).  Never
+        waits for the lock: where another holder has it (or this thread, the finalizer run
+        inside a locked section), the path is forgotten by the next one to take it."""
+        self._gone.put(path)
+        if self._lock.acquire(blocking=False):
+            try:
+                self._forget_gone()
+            finally:
+                self._lock.release()
+
+    def _forget_gone(self) -> None:
+        """Forget, under the lock, the engines that stopped using their paths."""
+        while True:
+            try:
+                path = self._gone.get_nowait()
+            except queue.Empty:
+                return
             left = self._watched.get(path, 0) - 1
             if left > 0:
                 self._watched[path] = left
@@ -131,6 +153,7 @@ class Checkpointer:
 
     def watching(self, path: str) -> bool:
         with self._lock:
+            self._forget_gone()
             return path in self._watched
 
     def look(self) -> None:
@@ -140,6 +163,7 @@ class Checkpointer:
         it has stayed as it is for ``STALE_AFTER_S`` (then, as SQLite's own would, once more
         is written)."""
         with self._lock:
+            self._forget_gone()
             paths = list(self._watched)
         for path in paths:
             log = log_pages(path)

@@ -282,3 +282,32 @@ def test_a_reader_that_stays_is_waited_for_a_while_then_left_alone(tmp_path):
     reader.execute("COMMIT")
     reader.close()
     connection.close()
+
+
+def test_an_engine_finalized_while_the_lock_is_held_never_blocks(tmp_path):
+    """An engine's finalizer runs where the collector runs: in any thread, at any
+    allocation -- once in the checkpointer's own thread inside ``look()``, the lock held.
+    Its ``unwatch`` waited there for that lock for good, and every engine made after it
+    waited in ``watch`` (a CI run hung so at an app's start)."""
+    import threading
+
+    from app.wal_checkpoint import Checkpointer
+
+    checkpointer = Checkpointer(interval_s=3600.0)
+    path = str(tmp_path / "gone.db")
+    checkpointer.watch(path)
+    checkpointer.watch(path)  # two engines on one file
+
+    def finalizer_inside_a_locked_section() -> None:
+        with checkpointer._lock:  # as look() holds it when the collector runs
+            checkpointer.unwatch(path)
+
+    thread = threading.Thread(target=finalizer_inside_a_locked_section, daemon=True)
+    thread.start()
+    thread.join(5.0)
+    assert not thread.is_alive(), "unwatch waited for the lock its own thread held"
+    assert checkpointer.watching(path)  # one engine is left: still watched
+    checkpointer.unwatch(path)  # the last one, from another thread, the lock free
+    assert not checkpointer.watching(path)
+    checkpointer.watch(path)  # a new engine on the file: watched again
+    assert checkpointer.watching(path)
