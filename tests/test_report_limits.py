@@ -171,3 +171,26 @@ def test_the_figures_inputs_keep_each_run_of_numbers_apart():
     assert base != figure_inputs(part([1.0, 2.0], None))
     shifted = figure_inputs(part([1.0, 2.0], [3.0, 4.0], angles=(0.0, 90.0, 1.0), means=(2.0,)))
     assert base != shifted
+
+
+def test_a_slot_given_back_by_a_finalizer_inside_the_pools_lock_never_blocks():
+    """A streamed export's slot is given back by its ``__del__`` wherever the collector
+    runs it -- possibly in a thread inside ``take()`` with the pool's lock held."""
+    import threading
+
+    from app.web.work_slots import WorkPool
+
+    work = WorkPool(2, "export.busy", "export.busy_person")
+    work.take(1)
+
+    def finalizer_inside_the_lock() -> None:
+        with work._lock:  # as take() holds it when the collector runs a __del__
+            work.give_back(1)
+
+    thread = threading.Thread(target=finalizer_inside_the_lock, daemon=True)
+    thread.start()
+    thread.join(5.0)
+    assert not thread.is_alive(), "give_back waited for the lock its own thread held"
+    assert work.people == set()
+    work.take(1)  # the slot is free again
+    work.take(2)

@@ -24,7 +24,9 @@ class WorkPool:
     def __init__(self, size: int, busy_key: str, person_key: str, retry_s: int = 10) -> None:
         self._slots = threading.BoundedSemaphore(size)
         self._people: set[int] = set()
-        self._lock = threading.Lock()
+        # reentrant: a HeldStream's __del__ gives its slot back wherever the collector runs
+        # it, which may be this very thread inside take() or give_back(), the lock held
+        self._lock = threading.RLock()
         self.busy_key, self.person_key, self.retry_s = busy_key, person_key, retry_s
 
     @property
