@@ -245,17 +245,17 @@ def main() -> None:
                     f"sqlite3 BLOB write {ceiling * 1000:.0f} ms → {ours / ceiling:.0f}×",
                 )
             )
-            body = big.astype("<f8").tobytes()
 
-            def raw_upload(_k: int) -> None:
+            def upload(content_type: str, body: bytes) -> None:
                 client.put(
                     f"/api/v1/sessions/{session}/heading/positions/1",
-                    headers={**auth, "Content-Type": "application/octet-stream"},
+                    headers={**auth, "Content-Type": content_type},
                     content=body,
                 ).raise_for_status()
                 client.get(f"/api/v1/sessions/{session}/results", headers=auth).raise_for_status()
 
-            binary = median_of(5, raw_upload)
+            raw = big.astype("<f8").tobytes()
+            binary = median_of(5, lambda _k: upload("application/octet-stream", raw))
             results.append(
                 (
                     "upload 1e6 samples (raw float64) + solve (s, median of 5)",
@@ -270,16 +270,7 @@ def main() -> None:
                 f"{t:.2f},{v:.6f}" for t, v in zip(times, big, strict=True)
             )
             csv_body = text.encode()
-
-            def csv_upload(_k: int) -> None:
-                client.put(
-                    f"/api/v1/sessions/{session}/heading/positions/1",
-                    headers={**auth, "Content-Type": "text/csv"},
-                    content=csv_body,
-                ).raise_for_status()
-                client.get(f"/api/v1/sessions/{session}/results", headers=auth).raise_for_status()
-
-            as_csv = median_of(3, csv_upload)
+            as_csv = median_of(3, lambda _k: upload("text/csv", csv_body))
             results.append(
                 (
                     "upload 1e6 samples (text/csv, time_s,value) + solve (s, median of 3)",

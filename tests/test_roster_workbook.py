@@ -130,10 +130,11 @@ EMPTY_ROWS = (  # 1.6 million empty rows in 10 MB of XML: a 20 kB upload
 )
 
 
-def with_shared_strings(count: int) -> bytes:
-    """A real workbook whose shared strings are ``count`` one-letter strings (1.5 million
-    in a 67 kB upload took openpyxl 12 s to read)."""
-    original = zipfile.ZipFile(io.BytesIO(workbook([["学号", "姓名"], ["2024001", "张三"]])))
+def with_shared_strings(count: int, base: bytes | None = None) -> bytes:
+    """A real workbook (``base``, else a roster's) whose shared strings are ``count``
+    one-letter strings (1.5 million in a 67 kB upload took openpyxl 12 s to read)."""
+    base = base or workbook([["学号", "姓名"], ["2024001", "张三"]])
+    original = zipfile.ZipFile(io.BytesIO(base))
     members = {name: original.read(name) for name in original.namelist()}
     members["xl/sharedStrings.xml"] = (
         b'<?xml version="1.0"?><sst xmlns="http://schemas.openxmlformats.org/spreadsheetml/'

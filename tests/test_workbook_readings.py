@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import io
 import json
-import zipfile
 from datetime import datetime, timedelta
 
 import numpy as np
@@ -18,6 +17,7 @@ from app.core.readings import parse_readings_csv
 from app.core.workbook_sheets import OLE_MAGIC
 from app.core.workbook_text import READINGS_LIMITS, workbook_readings, workbook_text
 from tests.factories import _form_token, handout, new_session, post_json
+from tests.test_roster_workbook import with_shared_strings, zip_of
 
 
 def workbook(
@@ -101,24 +101,8 @@ def test_a_loggers_record_with_its_clock_reads_as_one_positions_record():
     assert record.readings.positions[0].tolist() == [row[1] for row in rows[1:]]
 
 
-def zip_of(members: dict[str, bytes]) -> bytes:
-    buffer = io.BytesIO()
-    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as archive:
-        for name, data in members.items():
-            archive.writestr(name, data)
-    return buffer.getvalue()
-
-
 def shared_strings(count: int) -> bytes:
-    """A real workbook whose shared strings are ``count`` one-letter strings (1.5 million
-    in a 67 kB upload took openpyxl 12 s to read)."""
-    original = zipfile.ZipFile(io.BytesIO(workbook([["P1", "P2"], [1.0, 2.0], [1.5, 2.5]])))
-    members = {name: original.read(name) for name in original.namelist()}
-    members["xl/sharedStrings.xml"] = (
-        b'<?xml version="1.0"?><sst xmlns="http://schemas.openxmlformats.org/spreadsheetml/'
-        b'2006/main">' + b"<si><t>a</t></si>" * count + b"</sst>"
-    )
-    return zip_of(members)
+    return with_shared_strings(count, workbook([["P1", "P2"], [1.0, 2.0], [1.5, 2.5]]))
 
 
 @pytest.mark.parametrize(

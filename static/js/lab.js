@@ -690,74 +690,45 @@
       return data;
     }
 
-    // An IMU's record of several axes: which column is the gyro's, chosen here.
-    function columnChoice() {
+    // A choice the file leaves to the student, beside the preview: a labelled select.
+    function labelledChoice(labelKey, className, options, value, chosen) {
       const label = document.createElement("label");
       label.className = "inline-label";
-      label.textContent = t("js.record_column") + " ";
+      label.textContent = t(labelKey) + " ";
       const select = document.createElement("select");
-      select.className = "record-column";
-      columnChoices.forEach((choice) => {
+      select.className = className;
+      options.forEach((choice) => {
         const option = document.createElement("option");
         option.value = choice.value;
         option.textContent = choice.label;
         select.appendChild(option);
       });
-      select.value = recordColumn;
+      select.value = value;
       select.addEventListener("change", () => {
-        recordColumn = select.value;
+        chosen(select.value);
         showPreview(true);
       });
       label.appendChild(select);
       return label;
     }
 
+    // An IMU's record of several axes: which column is the gyro's, chosen here.
+    const columnChoice = () => labelledChoice("js.record_column", "record-column", columnChoices,
+      recordColumn, (value) => { recordColumn = value; });
+
     // An Excel workbook of several sheets of readings (one a part, say): which, chosen here.
-    function sheetChoice() {
-      const label = document.createElement("label");
-      label.className = "inline-label";
-      label.textContent = t("js.workbook_sheet") + " ";
-      const select = document.createElement("select");
-      select.className = "workbook-sheet";
-      sheets.forEach((name) => {
-        const option = document.createElement("option");
-        option.value = name;
-        option.textContent = name;
-        select.appendChild(option);
-      });
-      select.value = sheet;
-      select.addEventListener("change", () => {
-        sheet = select.value;
+    const sheetChoice = () => labelledChoice("js.workbook_sheet", "workbook-sheet",
+      sheets.map((name) => ({ value: name, label: name })), sheet, (value) => {
+        sheet = value;
         recordPosition = null;
         recordColumn = null;
         columnChoices = [];
-        showPreview(true);
       });
-      label.appendChild(select);
-      return label;
-    }
 
     // A one-position record (a gyro logger's file): which position it is, chosen here.
-    function positionChoice(result) {
-      const label = document.createElement("label");
-      label.className = "inline-label";
-      label.textContent = t("js.record_position") + " ";
-      const select = document.createElement("select");
-      select.className = "record-position";
-      for (let k = 1; k <= result.position_count; k++) {
-        const option = document.createElement("option");
-        option.value = String(k);
-        option.textContent = String(k);
-        select.appendChild(option);
-      }
-      select.value = String(recordPosition);
-      select.addEventListener("change", () => {
-        recordPosition = Number(select.value);
-        showPreview(true);
-      });
-      label.appendChild(select);
-      return label;
-    }
+    const positionChoice = (result) => labelledChoice("js.record_position", "record-position",
+      Array.from({ length: result.position_count }, (_, k) => ({ value: String(k + 1), label: String(k + 1) })),
+      String(recordPosition), (value) => { recordPosition = Number(value); });
 
     async function showPreview(keepFile) {
       accept.disabled = true;

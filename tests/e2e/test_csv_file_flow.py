@@ -5,16 +5,14 @@ fix, in the page's language -- never garbled bytes sent to the server."""
 
 from __future__ import annotations
 
-import io
-
 import numpy as np
 import pytest
-import xlsxwriter
 from playwright.sync_api import expect
 
 from tests.e2e.conftest import STUDENT_PASSWORD, axe_problems, log_in
 from tests.e2e.test_lab_flow import start_practice, table
 from tests.test_position_record_files import imu_file
+from tests.test_workbook_readings import workbook
 
 pytestmark = pytest.mark.e2e
 
@@ -28,15 +26,8 @@ OLE_MAGIC = b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1"
 def workbook_of(*sheets: list[list[str]], names: tuple[str, ...] = ()) -> bytes:
     """The rows in a workbook's sheets (named ``names``), numbers as numbers (as Excel
     holds them)."""
-    buffer = io.BytesIO()
-    book = xlsxwriter.Workbook(buffer, {"in_memory": True})
-    for index, rows in enumerate(sheets):
-        sheet = book.add_worksheet(names[index] if index < len(names) else None)
-        for r, row in enumerate(rows):
-            for c, value in enumerate(row):
-                sheet.write(r, c, value if r == 0 else float(value))
-    book.close()
-    return buffer.getvalue()
+    as_held = [[rows[0], *([float(v) for v in row] for row in rows[1:])] for rows in sheets]
+    return workbook(*as_held, names=names)
 
 
 def csv_panel(page):
