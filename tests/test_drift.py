@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from app.cli.main import main
+from app.core.long_readings import readings_to_long_csv
 from app.core.presets import PRESETS
-from app.core.readings import readings_to_long_csv
 from app.core.simulate import Setup, simulate_run
 from app.core.solve import solve_heading
 

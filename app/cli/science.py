@@ -19,9 +19,11 @@ from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude, render_text
 from app.core.gyro_stream import GyroStream
 from app.core.jsonsafe import json_safe
+from app.core.long_readings import readings_to_long_csv
 from app.core.noise_model import GyroNoise, Window, back_to_back
 from app.core.presets import PRESETS
-from app.core.readings import Readings, parse_readings_csv, readings_to_long_csv
+from app.core.readings import parse_readings_csv
+from app.core.readings_data import Readings
 from app.core.record_checks import WARM_UP_LIMIT_C
 from app.core.simulate import Setup, simulate_run, simulate_static
 from app.core.sinusoid import elevation_angles, heading_angles

@@ -13,7 +13,8 @@ import numpy as np
 from app.core.clock_stamps import spread_within_ticks
 from app.core.column_names import column_name, rate_unit
 from app.core.exceptions import UserError
-from app.core.readings import Readings, _number, parse_readings_csv
+from app.core.readings import parse_readings_csv
+from app.core.readings_data import Readings, cell_number
 from app.core.record_columns import ColumnChoiceNeeded
 from app.core.spreadsheet_text import (
     decimal_point,
@@ -155,7 +156,7 @@ def _read_rows(
                 line=number,
             )
         numbers = [
-            _number(cell, number, name)
+            cell_number(cell, number, name)
             for cell, name in zip(cells, ("time_s", "value")[2 - len(cells) :], strict=True)
         ]
         values.append(numbers[-1])
@@ -250,7 +251,7 @@ def _decimal_comma_column(
         lines.append((number, ",".join(cells)))
     if not one_column_of_decimal_commas(header, [line for _number, line in lines]):
         return None
-    return [_number(line.replace(",", "."), number, "value") for number, line in lines]
+    return [cell_number(line.replace(",", "."), number, "value") for number, line in lines]
 
 
 # what is said of a file read as one position's record (any other problem: it is none)

@@ -15,10 +15,10 @@ Either may be separated by semicolons or tabs instead of commas, with decimal co
   position columns; a first column counting 1, 2, 3… is taken as row numbers.
 * long — one reading per row beside its position: header ``position,angle_deg,value`` with
   optional ``time_s`` and ``temperature_c`` (GyroLab's export), or as students name it --
-  "position, rate", "angle, reading (°/h)", "位置, 角速度" (:mod:`app.core.long_headers`).
-  The position is keyed by its number ("3", "P3", "位置3"; kept, so a file of position 3
-  alone is position 3), a label, or the turntable's angle; the angle of each position is
-  used as given.
+  "position, rate", "angle, reading (°/h)", "位置, 角速度" (:mod:`app.core.long_headers`),
+  read by :mod:`app.core.long_readings`.  The position is keyed by its number ("3", "P3",
+  "位置3"; kept, so a file of position 3 alone is position 3), a label, or the turntable's
+  angle; the angle of each position is used as given.
 
 Under either header a row naming only units ("s, °/h, °/h") is passed over, as a unit
 after a column name is: the readings' unit is the one chosen with the file.
@@ -28,15 +28,15 @@ from __future__ import annotations
 
 import csv
 import io
-import re
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from app.core.exceptions import UserError
 from app.core.long_headers import long_columns
+from app.core.long_readings import parse_long
 from app.core.means_row import is_row_of_means, written_decimals
 from app.core.part_names import part_table
+from app.core.readings_data import WIDE_COLUMN, Readings, cell_number
 from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
@@ -45,58 +45,12 @@ from app.core.spreadsheet_text import (
     without_separator_hint,
 )
 from app.core.table_headers import (
-    ANGLE,
     column_name,
-    evenly_round,
     numbered_columns,
     summary_label,
 )
 from app.core.text_files import file_text, plain_text
-from app.core.typed_numbers import NumberOutOfRange, is_number, parse_decimal
-
-WIDE_COLUMN = re.compile(r"^position_(\d+)$")
-MAX_POSITION_NUMBER = 360  # one position per degree of the turntable at most
-
-
-@dataclass
-class Readings:
-    positions: list[np.ndarray]
-    angles_deg: list[float] | None  # given by the long layout, else None
-    times_s: list[np.ndarray] | None = None
-    layout: str = "wide"
-    temperatures_c: list[np.ndarray] | None = None  # long layout's optional temperature_c
-    skipped: list[tuple[int, str]] = field(default_factory=list)  # summary rows: line, label
-    numbers: list[int] | None = None  # the positions' numbers as the file gives, not 1…N
-    means_row: int | None = None  # the line of an unlabelled row of means, left out
-
-    def left_out(self) -> list[tuple[str, dict]]:
-        """What the reader passed over, as message keys and their values: each summary
-        row, and an unlabelled row of means."""
-        notes = [
-            ("csv.summary_skipped", {"line": line, "label": label}) for line, label in self.skipped
-        ]
-        if self.means_row is not None:
-            notes.append(("csv.means_row_skipped", {"line": self.means_row}))
-        return notes
-
-
-def _number(text: str, line: int, column: str) -> float:
-    try:
-        return parse_decimal(text)
-    except NumberOutOfRange as error:
-        raise UserError(
-            "csv.out_of_range",
-            line=line,
-            column=column,
-            value=text[:40],
-        ) from error
-    except ValueError as error:
-        raise UserError(
-            "csv.not_a_number",
-            line=line,
-            column=column,
-            value=text[:40],
-        ) from error
+from app.core.typed_numbers import is_number
 
 
 def parse_readings_csv(text: str, part: str | None = None) -> Readings:
@@ -208,7 +162,7 @@ def _parse_layout(rows, header_line: int, header: list[str], names, part: str | 
         if part is not None and "part" in long:
             column = long["part"]
             body = [(n, r) for n, r in body if column < len(r) and r[column].strip() == part]
-        return _parse_long(long, body)
+        return parse_long(long, body)
     if len(rows) > 1 and all(
         WIDE_COLUMN.match(column_name(row[0])) and all(is_number(c) for c in row[1:] if c.strip())
         for _, row in rows
@@ -273,7 +227,7 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
         above = list(decimals)
         for slot, cell in enumerate(cells):
             if cell:
-                values[slot].append(_number(cell, line, f"position_{numbers[slot]}"))
+                values[slot].append(cell_number(cell, line, f"position_{numbers[slot]}"))
                 decimals[slot] = max(decimals[slot], written_decimals(cell, significant=True) or 0)
     means_row = None
     if all(cells) and is_row_of_means(cells, [v[:-1] for v in values], above):
@@ -296,7 +250,7 @@ def _parse_rows_of_positions(rows) -> Readings:
         if number in columns:
             raise UserError("csv.position_twice", line=line, position=number)
         columns[number] = [
-            _number(c.strip(), line, f"position_{number}") for c in row[1:] if c.strip()
+            cell_number(c.strip(), line, f"position_{number}") for c in row[1:] if c.strip()
         ]
     numbers = sorted(columns)
     for number in numbers:
@@ -304,134 +258,3 @@ def _parse_rows_of_positions(rows) -> Readings:
             raise UserError("readings.empty_position", position=number)
     given = None if numbers == list(range(1, len(numbers) + 1)) else numbers
     return Readings([np.array(columns[k]) for k in numbers], None, None, "wide", numbers=given)
-
-
-def _parse_long(index: dict[str, int], rows) -> Readings:
-    """One reading per row, keyed by its position (a number, "P2", "位置2", a label) or by
-    the turntable's angle.  Positions keep the numbers the file gives them."""
-    keyed = "position" if "position" in index else "angle_deg"
-    labels: list[str] = []
-    grouped: dict[str, dict] = {}
-    for line, row in rows:
-
-        def cell(name: str, row=row) -> str:
-            position = index.get(name)
-            return row[position].strip() if position is not None and position < len(row) else ""
-
-        label = cell(keyed)
-        if not label:
-            raise UserError("csv.no_position", line=line)
-        if keyed == "angle_deg":
-            label = _angle_label(_angle(label, line))
-        entry = grouped.get(label)
-        if entry is None:
-            entry = grouped[label] = {"values": [], "times": [], "temps": [], "angle": None}
-            labels.append(label)
-        elif keyed == "angle_deg" and labels[-1] != label:
-            raise UserError("csv.angle_returns", line=line, angle=label)
-        entry["values"].append(_number(cell("value"), line, "value"))
-        if "time_s" in index:
-            entry["times"].append(_number(cell("time_s"), line, "time_s"))
-        if "temperature_c" in index:
-            entry["temps"].append(_number(cell("temperature_c"), line, "temperature_c"))
-        if "angle_deg" in index:
-            angle = _angle(cell("angle_deg"), line)
-            if entry["angle"] is None:
-                entry["angle"] = angle
-            elif abs(entry["angle"] - angle) > 1e-9:
-                raise UserError(
-                    "csv.angle_changes",
-                    line=line,
-                    position=label,
-                )
-    if not labels:
-        raise UserError("csv.empty")
-    numbers = _position_numbers(labels) if keyed == "position" else None
-    has_angles = "angle_deg" in index
-    if numbers is not None and not has_angles and _angles_named_positions(numbers):
-        for label, angle in zip(labels, numbers, strict=True):  # "position" 0, 90, 180, 270
-            grouped[label]["angle"] = float(angle)
-        has_angles = True
-        numbers = None
-    if numbers is not None:
-        order = sorted(range(len(labels)), key=numbers.__getitem__)
-        labels, numbers = [labels[k] for k in order], [numbers[k] for k in order]
-    angles = [grouped[label]["angle"] for label in labels] if has_angles else None
-    times = [np.array(grouped[label]["times"]) for label in labels] if "time_s" in index else None
-    positions = [np.array(grouped[label]["values"]) for label in labels]
-    temperatures = None
-    if "temperature_c" in index:
-        temperatures = [np.array(grouped[label]["temps"]) for label in labels]
-    return Readings(positions, angles, times, "long", temperatures, numbers=numbers)
-
-
-def _angle_label(angle: float) -> str:
-    return f"{angle:g}"
-
-
-def _angle(cell: str, line: int) -> float:
-    """A turntable angle as a cell gives it: "90", or with its unit, "90°", "90度"."""
-    written = ANGLE.fullmatch(cell)
-    return _number(written.group(1) if written else cell, line, "angle_deg")
-
-
-def _position_numbers(labels: list[str]) -> list[int] | None:
-    """The positions' numbers as the labels give them ("3", "P3", "位置3", "第3位置"),
-    counted from 1 where the labels count from 0; None where a label is no number."""
-    numbers = []
-    for label in labels:
-        name = column_name(label)
-        match = WIDE_COLUMN.match(name)
-        if match:
-            numbers.append(int(match.group(1)))
-        elif label.isdigit():
-            numbers.append(int(label))
-        else:
-            return None
-    if max(numbers) > MAX_POSITION_NUMBER:
-        raise UserError("csv.position_number", position=max(numbers), limit=MAX_POSITION_NUMBER)
-    if len(set(numbers)) != len(numbers):
-        raise UserError("csv.position_twice_named", positions=", ".join(labels))
-    if 0 in numbers and sorted(numbers) == list(range(len(numbers))):
-        return [number + 1 for number in numbers]  # counted from 0
-    return numbers
-
-
-def _angles_named_positions(numbers: list[int]) -> bool:
-    """Labels that are the turntable's angles, not positions' numbers: 0, 90, 180, 270."""
-    return max(numbers) > 8 and evenly_round([float(n) for n in numbers], from_zero=False)
-
-
-def readings_to_long_csv(
-    positions, angles_deg, times_s=None, value_format: str = ".6f", temperatures_c=None
-) -> str:
-    """Write the long layout: ``position,angle_deg,time_s,value[,temperature_c]``.
-
-    Parameters
-    ----------
-    positions : sequence of numpy.ndarray
-        Each position's readings (°/h).
-    angles_deg : sequence of float
-        Each position's angle (°).
-    times_s : sequence of numpy.ndarray, optional
-        Each reading's time (s); default 0, 1, 2 ... within each position.
-    value_format : str
-        Format of the readings.
-    temperatures_c : sequence of numpy.ndarray, optional
-        Each reading's case temperature (°C).
-
-    Returns
-    -------
-    str
-        The CSV text.
-    """
-    buffer = io.StringIO()
-    buffer.write("position,angle_deg,time_s,value" + (",temperature_c" if temperatures_c else ""))
-    buffer.write("\n")
-    for number, (values, angle) in enumerate(zip(positions, angles_deg, strict=True), start=1):
-        times = times_s[number - 1] if times_s is not None else np.arange(len(values), dtype=float)
-        temps = temperatures_c[number - 1] if temperatures_c else None
-        for index, (time, value) in enumerate(zip(times, values, strict=True)):
-            extra = f",{temps[index]:.3f}" if temps is not None else ""
-            buffer.write(f"{number},{angle:.6g},{time:.3f},{value:{value_format}}{extra}\n")
-    return buffer.getvalue()

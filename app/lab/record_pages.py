@@ -19,7 +19,8 @@ from app.core.position_records import (
     OnePositionRecord,
     parse_one_position_record,
 )
-from app.core.readings import Readings, parse_readings_csv
+from app.core.readings import parse_readings_csv
+from app.core.readings_data import Readings
 from app.core.static_record import names_its_columns_in_a_comment
 from app.core.units import canonical_unit, to_deg_per_hour
 from app.core.workbook_text import workbook_readings

@@ -1,0 +1,83 @@
+"""What a readings file gives -- each position's readings, and where the file says them,
+their angles, times and temperatures -- and the reader of one cell's number, shared by
+the wide and long layouts (:mod:`app.core.readings`, :mod:`app.core.long_readings`) and
+the one-position records (:mod:`app.core.position_records`)."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from app.core.exceptions import UserError
+from app.core.typed_numbers import NumberOutOfRange, parse_decimal
+
+WIDE_COLUMN = re.compile(r"^position_(\d+)$")
+MAX_POSITION_NUMBER = 360  # one position per degree of the turntable at most
+
+
+@dataclass
+class Readings:
+    """Each position's readings (°/h as written) and what the file says beside them."""
+
+    positions: list[np.ndarray]
+    angles_deg: list[float] | None  # given by the long layout, else None
+    times_s: list[np.ndarray] | None = None
+    layout: str = "wide"
+    temperatures_c: list[np.ndarray] | None = None  # long layout's optional temperature_c
+    skipped: list[tuple[int, str]] = field(default_factory=list)  # summary rows: line, label
+    numbers: list[int] | None = None  # the positions' numbers as the file gives, not 1…N
+    means_row: int | None = None  # the line of an unlabelled row of means, left out
+
+    def left_out(self) -> list[tuple[str, dict]]:
+        """What the reader passed over, as message keys and their values: each summary
+        row, and an unlabelled row of means."""
+        notes = [
+            ("csv.summary_skipped", {"line": line, "label": label}) for line, label in self.skipped
+        ]
+        if self.means_row is not None:
+            notes.append(("csv.means_row_skipped", {"line": self.means_row}))
+        return notes
+
+
+def cell_number(text: str, line: int, column: str) -> float:
+    """A cell's number, as :func:`app.core.typed_numbers.parse_decimal` reads it.
+
+    Parameters
+    ----------
+    text : str
+        The cell, stripped (a decimal comma already made a point).
+    line : int
+        The file's line it is on, for the message.
+    column : str
+        The column's name, for the message.
+
+    Returns
+    -------
+    float
+        The number written.
+
+    Raises
+    ------
+    UserError
+        ``csv.not_a_number`` where it is no number; ``csv.out_of_range`` where it is
+        beyond the range a reading may take (both with its line, column and first 40
+        characters).
+    """
+    try:
+        return parse_decimal(text)
+    except NumberOutOfRange as error:
+        raise UserError(
+            "csv.out_of_range",
+            line=line,
+            column=column,
+            value=text[:40],
+        ) from error
+    except ValueError as error:
+        raise UserError(
+            "csv.not_a_number",
+            line=line,
+            column=column,
+            value=text[:40],
+        ) from error
