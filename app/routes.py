@@ -19,9 +19,9 @@ from app.explore import pages as explore_pages
 from app.home import pages as home
 from app.lab import admin_pages as lab_admin_pages
 from app.lab import api as lab_api
+from app.lab import file_pages, partner_pages, record_pages, stream
 from app.lab import home_pages as lab_home_pages
 from app.lab import pages as lab_pages
-from app.lab import partner_pages, record_pages, stream
 from app.lti import admin_pages as lti_admin_pages
 from app.lti import course_pages as lti_course_pages
 from app.lti import pages as lti_pages
@@ -53,6 +53,7 @@ ROUTERS: tuple[APIRouter, ...] = (
     lab_home_pages.router,
     lab_pages.router,
     record_pages.router,
+    file_pages.router,
     partner_pages.router,
     review_pages.router,
     board_pages.router,

@@ -10,7 +10,13 @@ import pytest
 
 from app.core.exceptions import UserError
 from app.core.readings import parse_readings_csv
-from app.core.table_headers import column_name, numbered_columns, summary_label
+from app.core.table_headers import (
+    column_name,
+    header_angles,
+    numbered_columns,
+    summary_label,
+    turned_other_way,
+)
 from tests.factories import DATA, handout, new_session, post_json
 
 # the handout's Table 1 (four positions in the horizontal plane), as printed: the means row
@@ -384,3 +390,66 @@ def test_each_parts_csv_panel_takes_its_own_table_of_the_file(student_client):
         means = [round(float(np.mean(handout(name)[k])), 3) for k in range(1, 5)]
         assert [round(row["mean_deg_h"], 3) for row in rows] == means
         assert post_json(student_client, f"{page}/csv", body, page).json()["saved"] == [1, 2, 3, 4]
+
+
+def test_a_headers_angles_and_which_way_they_run():
+    assert header_angles(["0°", "90°", "180°", "270°"], True) == [0, 90, 180, 270]
+    assert header_angles(["序号", "0", "90", "180", "270"], True) == [0, 90, 180, 270]
+    assert header_angles(["位置", "1", "2", "3", "4"], True) is None  # counting, no angles
+    assert header_angles(["P1", "P2", "P3", "P4"], True) is None
+    ccw = [0.0, -90.0, -180.0, -270.0]  # lab-reference §3: clockwise positive
+    assert turned_other_way([0, 90, 180, 270], ccw)
+    assert turned_other_way([30, 120, 210, 300], ccw)  # from any start
+    assert not turned_other_way([0, 270, 180, 90], ccw)  # the dial read the session's way
+    assert not turned_other_way([0, 90, 180, 270], [0, 90, 180, 270])
+    assert not turned_other_way([0, 180], [0, -180])  # two positions: either way alike
+    assert not turned_other_way([0, 90, 180, 270], [0, 90, 180])
+    assert turned_other_way([0, 120, 240], [0, -120, -240])
+    assert not turned_other_way([0, 90, 180, 270], [0, 45, 90, 135])  # neither way
+
+
+def test_a_header_of_angles_round_the_other_way_is_said_and_read_in_column_order(
+    student_client, capsys, tmp_path
+):
+    """The handout turns counter-clockwise: positions 1-4 at 0°, −90°, −180°, −270°.  A
+    header "0°, 90°, 180°, 270°" may be the turns made or the dial's readings; the columns
+    stay positions 1-4 in order, and the preview and ``solve`` say the angles run the
+    other way, so that a student whose dial it is can check."""
+    from app.cli.main import main
+
+    rows = "\n".join(
+        ",".join(f"{v:.2f}" for v in row)
+        for row in zip(*handout("handout_horizontal.csv").values(), strict=True)
+    )
+    session_id = new_session(student_client)  # counter-clockwise
+    page = f"/lab/sessions/{session_id}"
+
+    def preview(header: str, path: str = page) -> dict:
+        body = {"part": "heading", "unit": "deg/h", "text": f"{header}\n{rows}\n"}
+        response = post_json(student_client, f"{path}/csv/preview", body, path)
+        assert response.status_code == 200, response.text
+        return response.json()
+
+    other_way = preview("0°,90°,180°,270°")
+    assert [p["position"] for p in other_way["positions"]] == [1, 2, 3, 4]
+    assert [p["angle_deg"] for p in other_way["positions"]] == [0, -90, -180, -270]
+    assert other_way["notes"] == [
+        "The columns are headed 0°, 90°, 180°, 270°, but this session's positions 1–4 are "
+        "at 0°, -90°, -180°, -270°: round the other way. The columns are read in order as "
+        "positions 1–4; if the headings are the dial's readings, check the session's "
+        "turning direction before saving."
+    ]
+    assert preview("0°,270°,180°,90°")["notes"] == []  # the session's way round
+    assert preview("位置,1,2,3,4".replace("位置,", ""))["notes"] == []  # no angles
+    student_client.cookies.set("gyrolab_lang", "zh-CN")
+    assert preview("0°,90°,180°,270°")["notes"][0].startswith("各列的表头为 0°, 90°, 180°, 270°")
+    clockwise = new_session(student_client, rotation="cw")
+    assert preview("0°,90°,180°,270°", f"/lab/sessions/{clockwise}")["notes"] == []
+
+    path = tmp_path / "angles.csv"
+    path.write_text(f"0°,90°,180°,270°\n{rows}\n")
+    assert main(["solve", "heading", str(path), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert "give --rotation cw" in err and "--rotation" not in out
+    assert main(["solve", "heading", str(path), "--json", "--rotation", "cw"]) == 0
+    assert capsys.readouterr().err == ""

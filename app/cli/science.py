@@ -28,6 +28,7 @@ from app.core.record_checks import WARM_UP_LIMIT_C
 from app.core.simulate import Setup, simulate_run, simulate_static
 from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.solve import solve_heading, solve_latitude
+from app.core.table_headers import turned_other_way
 from app.core.text_files import decode_text
 from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
 from app.core.workbook_sheets import is_workbook
@@ -68,17 +69,46 @@ def _finite(name: str, value: float | None) -> None:
         raise CommandError(f"{name} must be a finite number")
 
 
+def position_angles(part: str, readings: Readings, args: argparse.Namespace) -> np.ndarray:
+    """Each position's angle: as the file gives them (a long table), else the nominal ones
+    of ``--rotation``, ``--start-angle`` and ``--step`` for the positions' numbers."""
+    if readings.angles_deg is not None:
+        return np.asarray(readings.angles_deg)
+    numbers = np.asarray(readings.numbers or range(1, len(readings.positions) + 1))  # "P3"
+    if part == "heading":
+        angles = heading_angles(numbers.max(), args.rotation, args.start_angle, args.step)
+        return angles[numbers - 1]
+    return elevation_angles(numbers.max(), args.start_angle, args.step)[numbers - 1]
+
+
+def said_beside(part: str, readings: Readings, args: argparse.Namespace) -> list[str]:
+    """What ``solve`` says on stderr beside its output: the rows a table's reader passed
+    over, and a header of angles round the other way from ``--rotation``."""
+    from app.web.i18n import translator
+
+    say = translator(args.language)
+    said = [say(key, **params) for key, params in readings.left_out()]
+    header = readings.header_angles
+    if header is not None and part == "heading":
+        expected = [float(angle) for angle in position_angles(part, readings, args)]
+        if turned_other_way(header, expected):
+            said.append(
+                say(
+                    "cli.header_angles_other_way",
+                    header=", ".join(f"{angle:g}°" for angle in header),
+                    session=", ".join(f"{angle:g}°" for angle in expected),
+                    count=len(expected),
+                    rotation=args.rotation,
+                    other="cw" if args.rotation == "ccw" else "ccw",
+                )
+            )
+    return said
+
+
 def solve_readings(part: str, readings: Readings, args: argparse.Namespace):
     """Solve ``readings`` as the ``solve`` command does (shared with tests and the API)."""
     positions = [to_deg_per_hour(values, args.unit) for values in readings.positions]
-    numbers = np.asarray(readings.numbers or range(1, len(positions) + 1))  # "P3": the 3rd
-    if readings.angles_deg is not None:
-        angles = np.asarray(readings.angles_deg)
-    elif part == "heading":
-        angles = heading_angles(numbers.max(), args.rotation, args.start_angle, args.step)
-        angles = angles[numbers - 1]
-    else:
-        angles = elevation_angles(numbers.max(), args.start_angle, args.step)[numbers - 1]
+    angles = position_angles(part, readings, args)
     known = _known_noise(readings, positions, getattr(args, "gyro_preset", None))
     known["times_s"] = readings.times_s  # drift fitted (5+ positions) or checked (warm-up)
     known["temperatures_c"] = readings.temperatures_c or None
@@ -131,12 +161,8 @@ def _solve(args: argparse.Namespace) -> int:
         _finite(f"--{name.replace('_', '-')}", getattr(args, name))
     readings = parse_readings_csv(_read_text(args.file), part=args.part)
     result = solve_readings(args.part, readings, args)
-    if readings.left_out():  # a row of means passed over: said, beside the output
-        from app.web.i18n import translator
-
-        say = translator(args.language)
-        for key, params in readings.left_out():
-            print(say(key, **params), file=sys.stderr)
+    for line in said_beside(args.part, readings, args):  # beside the output, not in it
+        print(line, file=sys.stderr)
     warm_up = temperature_summary(readings, args.language)
     if args.json:
         payload = result.to_json()

@@ -46,6 +46,7 @@ from app.core.spreadsheet_text import (
 )
 from app.core.table_headers import (
     column_name,
+    header_angles,
     numbered_columns,
     summary_label,
 )
@@ -175,7 +176,9 @@ def _parse_layout(rows, header_line: int, header: list[str], names, part: str | 
         return _parse_wide(wide, rows[1:])
     numbered = numbered_columns(header, more_rows=len(rows) > 1)
     if numbered is not None:  # "位置 | 1 | 2 | 3 | 4" as the handout's tables, "0° | 90° …"
-        return _parse_wide(numbered, rows[1:])
+        readings = _parse_wide(numbered, rows[1:])
+        readings.header_angles = header_angles(header, more_rows=len(rows) > 1)
+        return readings
     headerless = _headerless_columns(rows)
     if headerless is not None:
         return _parse_wide(headerless, rows)

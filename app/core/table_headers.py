@@ -165,6 +165,39 @@ def numbered_columns(cells: list[str], more_rows: bool) -> dict[int, int] | None
     return None
 
 
+def header_angles(cells: list[str], more_rows: bool) -> list[float] | None:
+    """The turntable's angles a header heads its position columns with, in column order.
+
+    The columns are still read in order as positions 1, 2, …: students head them so for
+    a table turned either way ("0°, 90°, 180°, 270°" as the turns made), so the angles
+    only serve to say where they disagree with the session's (:func:`turned_other_way`).
+
+    Parameters
+    ----------
+    cells : list of str
+        The header row's cells.
+    more_rows : bool
+        Whether rows follow it.
+
+    Returns
+    -------
+    list of float or None
+        Each position column's angle (°), or None where the header numbers the positions
+        otherwise ("位置 | 1 | 2 | 3 | 4") or is no such header.
+    """
+    if numbered_columns(cells, more_rows) is None:
+        return None
+    stripped = [UNIT_SUFFIX.sub("", plain_text(c).strip()) for c in cells]
+    used = [cell for cell in stripped if cell]
+    angles = [angle for cell in used if (angle := _angle(cell)) is not None]
+    if angles:
+        return angles
+    written = [cell for cell in used if is_number(cell)]
+    if written == [str(k) for k in range(1, len(written) + 1)]:
+        return None  # counting the positions, not angles
+    return [float(cell) for cell in written]
+
+
 def summary_label(cells: list[str]) -> str | None:
     """The label of a row that summarises the readings instead of holding one: "平均值",
     "mean", "标准差", "σ" … in any of the row's cells (the handout ends its tables with
@@ -185,3 +218,39 @@ def summary_label(cells: list[str]) -> str | None:
         if name.lower() in SUMMARY_LABELS:
             return name
     return None
+
+
+def turned_other_way(given: list[float], expected: list[float]) -> bool:
+    """Whether angles go round the other way from the expected ones.
+
+    True where, measured from the first, each given angle is minus the expected one
+    (mod 360°) and not the expected one itself: a header "0°, 90°, 180°, 270°" over a
+    table turned counter-clockwise, whose positions are at 0°, −90°, −180°, −270°
+    (lab-reference §3: angles clockwise positive).  Two positions 180° apart, the same
+    either way, are never the other way.
+
+    Parameters
+    ----------
+    given : list of float
+        The angles a table heads its columns with (°), in column order.
+    expected : list of float
+        The session's angles of the same positions (°), in order.
+
+    Returns
+    -------
+    bool
+        Whether ``given`` runs opposite to ``expected``.
+    """
+    if len(given) != len(expected) or len(given) < 3:
+        return False
+
+    def offsets(angles: list[float], sign: float) -> list[float]:
+        return [(sign * (angle - angles[0])) % 360.0 for angle in angles]
+
+    def same(first: list[float], second: list[float]) -> bool:
+        return all(
+            abs((a - b + 180.0) % 360.0 - 180.0) < 1e-6 for a, b in zip(first, second, strict=True)
+        )
+
+    ahead = offsets(given, 1.0)
+    return same(ahead, offsets(expected, -1.0)) and not same(ahead, offsets(expected, 1.0))

@@ -135,6 +135,10 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
         "longRoles": LONG_ROLES,  # a pasted table of one reading per row beside its position
         "partWords": PART_WORDS,  # both parts' tables pasted, each under its title
         "partLetters": PART_LETTERS,
+        "angles": {  # each position's angle: a pasted header of angles the other way is said
+            part: [nominal_angle(session, part, k) for k in range(1, position_count(session) + 1)]
+            for part in ("heading", "latitude")
+        },
         "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
         "plane": session.sim_plane_dial_deg,
         "messages": client_messages(JS_MESSAGES, _.language),
@@ -300,6 +304,7 @@ JS_MESSAGES = (
     "js.leading_columns_skipped",
     "js.summary_rows_skipped",
     "js.means_row_skipped",
+    "js.header_angles_other_way",
     "js.lines_above_skipped",
     "js.own_table_taken",
     "js.second_table_skipped",

@@ -188,6 +188,30 @@
     const step = 360 / values.length;
     return values[0] === 0 && values.every((value, i) => Math.abs(value - i * step) < 1e-9);
   }
+  // The angles a header heads its position columns with ("0° | 90° | 180° | 270°", or
+  // "0, 90, 180, 270" over rows), in column order; null where it counts them ("1, 2, 3, 4")
+  // or names them -- app.core.table_headers.header_angles.
+  function headerAngles(header) {
+    const named = header.map(headerName).filter((name) => name !== "");
+    const angles = named.filter((name) => ANGLE_NAME.test(name)).map((name) => parseFloat(name));
+    if (angles.length >= 3) return angles;
+    const numbers = named.filter((name) => /^[+-]?\d+(?:\.\d+)?$/.test(name));
+    if (numbers.length < 3 || numbers.every((name, i) => name === String(i + 1))) return null;
+    return numbersThePositions(numbers) ? numbers.map(Number) : null;
+  }
+  // Whether angles run round the other way from the session's (clockwise positive,
+  // lab-reference §3) -- app.core.table_headers.turned_other_way.
+  function turnedOtherWay(given, expected) {
+    if (!given || given.length !== expected.length || given.length < 3) return false;
+    const offsets = (angles, sign) => angles.map((angle) => ((sign * (angle - angles[0])) % 360 + 360) % 360);
+    const same = (a, b) => a.every((value, i) => Math.abs(((value - b[i] + 540) % 360) - 180) < 1e-6);
+    const ahead = offsets(given, 1);
+    return same(ahead, offsets(expected, -1)) && !same(ahead, offsets(expected, 1));
+  }
+  const degrees = (angles) => angles.map((angle) => `${angle}°`).join(", ");
+  // A note as said: a message's key, or its key and values.
+  const said = (note) => (Array.isArray(note) ? t(note[0], note[1]) : t(note));
+
   // A row of means or another summary ("平均值", "mean"): the handout ends its tables with one;
   // its labels are the server's, sent with the page.
   const SUMMARY_LABELS = new Set(config.summaryLabels);  // app.core.table_headers.SUMMARY_LABELS
@@ -321,6 +345,11 @@
         }
         notes.push("js.second_table_skipped");
       }
+    }
+    const angles = header && headerAngles(header);
+    const expected = (config.angles[part] || []).slice(0, angles ? angles.length : 0);
+    if (angles && turnedOtherWay(angles, expected)) {  // read in column order all the same
+      notes.push(["js.header_angles_other_way", { header: degrees(angles), session: degrees(expected), count: expected.length }]);
     }
     const long = header && longColumns(header);
     if (long) {  // each position's readings to its own column, from the grid's first
@@ -514,7 +543,7 @@
       }
       held = values;
       const counts = Object.entries(values).map(([position, list]) => `${t("js.position", { n: position })}: n = ${list.length}`);
-      status.textContent = [t("js.long_paste_held", { rows: rows.length, counts: counts.join(", ") }), ...notes.map((key) => t(key))].join(" ");
+      status.textContent = [t("js.long_paste_held", { rows: rows.length, counts: counts.join(", ") }), ...notes.map(said)].join(" ");
       status.classList.remove("error-text");
     }
     body.addEventListener("paste", (event) => {
@@ -542,7 +571,7 @@
         });
       });
       validate();
-      const extra = notes.map((key) => t(key));
+      const extra = notes.map(said);
       if (dropped) extra.push(t("js.cells_dropped", { n: dropped, columns }));
       status.textContent = `${t("js.pasted", { rows: rows.length })} ${extra.join(" ")} ${status.textContent}`.trim();
       status.classList.toggle("error-text", Boolean(dropped) || status.classList.contains("error-text"));

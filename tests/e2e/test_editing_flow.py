@@ -181,6 +181,20 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     expect(grid.nth(9).locator("input").nth(0)).to_have_value("10.84")  # table 1's last
     expect(grid).to_have_count(10)
     expect(page.locator("#part-heading .grid-status")).to_contain_text("a second table")
+    # columns headed by angles round the other way from the session's (counter-clockwise:
+    # 0°, −90°, −180°, −270°): pasted in column order all the same, and said, as the file
+    # preview says it (app.core.table_headers.turned_other_way)
+    angled = "0°\t90°\t180°\t270°\n" + "\n".join(["10.74\t-0.50\t-11.20\t0.10"] * 10)
+    paste(page, "#part-heading .readings-grid tbody input", angled)
+    expect(grid.nth(0).locator("input").nth(1)).to_have_value("-0.50")  # position 2: in order
+    expect(page.locator("#part-heading .grid-status")).to_contain_text(
+        "headed 0°, 90°, 180°, 270°, but this session's positions 1–4 are at 0°, -90°, -180°, "
+        "-270°: round the other way"
+    )
+    session_way = angled.replace("0°\t90°\t180°\t270°", "0°\t270°\t180°\t90°")
+    paste(page, "#part-heading .readings-grid tbody input", session_way)
+    expect(page.locator("#part-heading .grid-status")).to_contain_text("Pasted 10 rows")
+    expect(page.locator("#part-heading .grid-status")).not_to_contain_text("other way")
 
 
 def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, new_page):
