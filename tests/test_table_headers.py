@@ -5,6 +5,8 @@ and said."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -453,3 +455,54 @@ def test_a_header_of_angles_round_the_other_way_is_said_and_read_in_column_order
     assert "give --rotation cw" in err and "--rotation" not in out
     assert main(["solve", "heading", str(path), "--json", "--rotation", "cw"]) == 0
     assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize(
+    ("text", "unit"),
+    [
+        ("位置1 (°/s),位置2 (°/s),位置3 (°/s),位置4 (°/s)\n", "deg/s"),
+        ("位置1（度/秒）,位置2（度/秒）,位置3（度/秒）,位置4（度/秒）\n", "deg/s"),
+        ("P1 [rad/s],P2 [rad/s],P3 [rad/s],P4 [rad/s]\n", "rad/s"),
+        ("序号,P1,P2,P3,P4\n单位：,°/h,°/h,°/h,°/h\n", "deg/h"),  # a row of units
+        ("位置,1,2,3,4\n,(度/小时),(度/小时),(度/小时),(度/小时)\n", "deg/h"),
+        ("time (s),P1 (°/s),P2 (°/h),P3,P4\n", None),  # two units: neither is said
+        ("P1,P2,P3,P4\n", None),
+    ],
+)
+def test_the_rate_unit_a_tables_header_names(text, unit):
+    readings = parse_readings_csv(text + "0,10.74,2.88,-9.11,-0.96\n" * 2)
+    assert readings.named_unit == unit
+
+
+def test_a_table_in_degrees_a_second_is_never_read_as_degrees_an_hour(
+    student_client, capsys, tmp_path
+):
+    """°/s read as °/h is 3600 times too small.  A table whose header names its unit is
+    refused under another one on the lab page, as a logger's record is; ``gyrolab solve``
+    reads it in the unit the header names unless told otherwise, and refuses a clash."""
+    from app.cli.main import main
+
+    columns = handout("handout_horizontal.csv")
+    text = "位置1 (°/s),位置2 (°/s),位置3 (°/s),位置4 (°/s)\n" + "\n".join(
+        ",".join(f"{columns[k][row] / 3600:.9f}" for k in range(1, 5)) for row in range(10)
+    )
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    body = {"part": "heading", "unit": "deg/h", "text": text}
+    refused = post_json(student_client, f"{page}/csv/preview", body, page)
+    assert refused.status_code == 400
+    assert refused.json()["detail"] == (
+        "The file's header gives the readings in °/s, but °/h is chosen: choose °/s."
+    )
+    assert post_json(student_client, f"{page}/csv", body, page).status_code == 400
+    saved = post_json(student_client, f"{page}/csv", {**body, "unit": "deg/s"}, page)
+    assert saved.status_code == 200 and saved.json()["saved"] == [1, 2, 3, 4]
+    results = student_client.get(f"{page}/results.json").json()["heading"]
+    assert results["theta_deg"] == pytest.approx(-10.753, abs=5e-4)  # the handout's θ
+
+    path = tmp_path / "per-second.csv"
+    path.write_text(text)
+    assert main(["solve", "heading", str(path), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
+    assert main(["solve", "heading", str(path), "--unit", "deg/h"]) == 2
+    assert "but °/h is chosen: choose °/s" in capsys.readouterr().err

@@ -30,7 +30,13 @@ from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.solve import solve_heading, solve_latitude
 from app.core.table_headers import turned_other_way
 from app.core.text_files import decode_text
-from app.core.units import EARTH_RATE_DEG_H, UNITS, to_deg_per_hour
+from app.core.units import (
+    DEG_PER_HOUR,
+    EARTH_RATE_DEG_H,
+    UNITS,
+    check_named_unit,
+    to_deg_per_hour,
+)
 from app.core.workbook_sheets import is_workbook
 from app.core.workbook_text import workbook_text
 
@@ -107,7 +113,9 @@ def said_beside(part: str, readings: Readings, args: argparse.Namespace) -> list
 
 def solve_readings(part: str, readings: Readings, args: argparse.Namespace):
     """Solve ``readings`` as the ``solve`` command does (shared with tests and the API)."""
-    positions = [to_deg_per_hour(values, args.unit) for values in readings.positions]
+    check_named_unit(readings.named_unit, args.unit)  # °/s read as °/h: 3600 times too small
+    unit = args.unit or readings.named_unit or DEG_PER_HOUR
+    positions = [to_deg_per_hour(values, unit) for values in readings.positions]
     angles = position_angles(part, readings, args)
     known = _known_noise(readings, positions, getattr(args, "gyro_preset", None))
     known["times_s"] = readings.times_s  # drift fitted (5+ positions) or checked (warm-up)
@@ -351,7 +359,12 @@ def add_science_commands(commands) -> None:
         "elevation from the north horizon)",
     )
     solve.add_argument("--step", type=float, default=90.0, help="step between positions (deg)")
-    solve.add_argument("--unit", choices=UNITS, default="deg/h")
+    solve.add_argument(
+        "--unit",
+        choices=UNITS,
+        default=None,
+        help="the readings' unit (default: as the table's header names it, else deg/h)",
+    )
     solve.add_argument("--latitude", type=float, help="true latitude φ0 (for percent errors)")
     solve.add_argument(
         "--earth-rate",

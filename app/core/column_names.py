@@ -33,6 +33,14 @@ RATE_UNITS = {
     "rads^-1": RAD_PER_SECOND,
     "rads-1": RAD_PER_SECOND,
     "rad_s": RAD_PER_SECOND,
+    "度/小时": DEG_PER_HOUR,  # as Chinese tables write them
+    "度/时": DEG_PER_HOUR,
+    "°/小时": DEG_PER_HOUR,
+    "°/时": DEG_PER_HOUR,
+    "度/秒": DEG_PER_SECOND,
+    "°/秒": DEG_PER_SECOND,
+    "弧度/秒": RAD_PER_SECOND,
+    "rad/秒": RAD_PER_SECOND,
 }
 # ROS's sensor_msgs/Imu angular velocity, in rad/s by the message's definition (REP 103)
 ROS_ANGULAR_VELOCITY = re.compile(r"(?:.*\.)?angular_velocity\.[xyz]")

@@ -25,7 +25,7 @@ from app.core.spreadsheet_text import (
 from app.core.static_record import LEFT_OUT, read_static_record
 from app.core.text_files import decode_text, file_text, plain_text
 from app.core.typed_numbers import is_number
-from app.core.units import UNIT_SYMBOLS
+from app.core.units import check_named_unit
 
 
 def parse_static_record(text: str) -> np.ndarray:
@@ -145,10 +145,10 @@ def _read_rows(
             continue
         if number == 1 and not all(is_number(cell) for cell in cells):
             header = cells  # such as "time_s,value"
-            _check_unit(rate_unit(column_name(cells[-1]).unit), unit)
+            check_named_unit(rate_unit(column_name(cells[-1]).unit), unit)
             continue
         if number == 2 and header is not None and is_units_row(cells):
-            _check_unit(rate_unit(cells[-1].lower()), unit)
+            check_named_unit(rate_unit(cells[-1].lower()), unit)
             continue  # "s, °/h" under the names
         if len(cells) > 2:
             raise UserError(
@@ -210,13 +210,6 @@ def _plain_numbers(data: str, unit: str | None) -> tuple[np.ndarray, np.ndarray 
     if header is not None and len(header) == 1:
         return None  # one name over two columns: perhaps decimal commas
     return np.concatenate([values, table[:, 1]]), times_s
-
-
-def _check_unit(named: str | None, unit: str | None) -> None:
-    """Refuse a rate unit a header names against the one the readings are said to be in
-    (``csv.unit_conflict``), in both one-position readers."""
-    if named is not None and unit is not None and named != unit:
-        raise UserError("csv.unit_conflict", header=UNIT_SYMBOLS[named], chosen=UNIT_SYMBOLS[unit])
 
 
 def _spaced_columns(text: str) -> bool:
@@ -344,7 +337,7 @@ def parse_one_position_record(
         raise UserError("csv.record_of_angles", unit=record.angle.unit)
     times = None if record.times_s is None else [record.times_s]
     temperatures = None if record.temperatures_c is None else [record.temperatures_c]
-    _check_unit(record.unit, unit)
+    check_named_unit(record.unit, unit)
     readings = Readings([record.values], None, times, "record", temperatures)
     left_out = tuple(note for note in record.notes if note["key"] in LEFT_OUT)
     return OnePositionRecord(readings, columns, column if columns else None, left_out)

@@ -28,11 +28,13 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 
 import numpy as np
 
+from app.core.column_names import rate_unit
 from app.core.exceptions import UserError
-from app.core.long_headers import long_columns
+from app.core.long_headers import long_columns, name_and_unit
 from app.core.long_readings import parse_long
 from app.core.means_row import is_row_of_means, written_decimals
 from app.core.part_names import part_table
@@ -133,7 +135,8 @@ def _read_table(rows, part: str | None) -> Readings:
         again = next((line for line, row in rows[1:] if _cells(row) == written), None)
         if again is not None:  # a second table under the first ("位置 | 1 | 2 | 3 | 4" again)
             raise UserError("csv.header_again", line=again, header=header_line)
-    if len(rows) > 1 and is_units_row(rows[1][1]):
+    units = rows[1][1] if len(rows) > 1 and is_units_row(rows[1][1]) else []
+    if units:
         rows = [rows[0], *rows[2:]]  # "s, °/h, °/h…" under the names: a unit after a name
     # a row of means or other summary ("平均值 | 10.71 …", "mean" under a position's
     # column, a long table's "mean" row): left out and said, as the lab page's grid leaves
@@ -143,7 +146,17 @@ def _read_table(rows, part: str | None) -> Readings:
         rows = rows[:1] + [(line, row) for line, row in rows[1:] if not summary_label(row)]
     readings = _parse_layout(rows, header_line, header, names, part)
     readings.skipped = skipped
+    readings.named_unit = _named_rate_unit(header, units)
     return readings
+
+
+def _named_rate_unit(header: list[str], units: list[str]) -> str | None:
+    """The one rate unit a table's header ("位置1 (°/s)", "rate [rad/s]") and its row of
+    units ("°/s | °/s …") name, canonical; None where they name none, or several."""
+    named = {rate_unit(name_and_unit(cell)[1]) for cell in header}
+    named |= {rate_unit(re.sub(r"[\s()\[\]]", "", plain_text(cell)).lower()) for cell in units}
+    named.discard(None)
+    return named.pop() if len(named) == 1 else None
 
 
 def _cells(row: list[str]) -> list[str]:

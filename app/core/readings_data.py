@@ -30,6 +30,7 @@ class Readings:
     numbers: list[int] | None = None  # the positions' numbers as the file gives, not 1…N
     means_row: int | None = None  # the line of an unlabelled row of means, left out
     header_angles: list[float] | None = None  # a wide header's angles ("0° | 90° …")
+    named_unit: str | None = None  # the rate unit the header or a row of units names
 
     def left_out(self) -> list[tuple[str, dict]]:
         """What the reader passed over, as message keys and their values: each summary

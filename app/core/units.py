@@ -179,3 +179,30 @@ def unit_doubt(adev_min_deg_h: float) -> dict | None:
     if low <= adev_min_deg_h <= high or not math.isfinite(adev_min_deg_h):
         return None
     return {"key": "allan.note_unit_doubt", "params": {"floor": f"{adev_min_deg_h:.3g}"}}
+
+
+def check_named_unit(named: str | None, chosen: str | None) -> None:
+    """Refuse readings said to be in one rate unit when their file names another.
+
+    Parameters
+    ----------
+    named : str or None
+        The canonical unit the file's header or row of units names ("deg/s"), if any.
+    chosen : str or None
+        The canonical unit the readings are said to be in, if any.
+
+    Returns
+    -------
+    None
+        Where the two agree, or either is not given.
+
+    Raises
+    ------
+    UserError
+        ``csv.unit_conflict`` with both units' symbols, where both are given and differ
+        (°/s read as °/h would be 3600 times too small).
+    """
+    if named is not None and chosen is not None and named != chosen:
+        raise UserError(
+            "csv.unit_conflict", header=UNIT_SYMBOLS[named], chosen=UNIT_SYMBOLS[chosen]
+        )

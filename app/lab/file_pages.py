@@ -20,7 +20,7 @@ from app.core.readings import parse_readings_csv
 from app.core.readings_data import Readings
 from app.core.static_record import names_its_columns_in_a_comment
 from app.core.table_headers import turned_other_way
-from app.core.units import canonical_unit, to_deg_per_hour
+from app.core.units import canonical_unit, check_named_unit, to_deg_per_hour
 from app.core.workbook_text import workbook_readings
 from app.lab.schemas import CsvUpload
 from app.lab.service import record_positions, recordable_session
@@ -62,6 +62,7 @@ def parse_csv_upload(body: CsvUpload, *, suggest: bool = False) -> OnePositionRe
             if record_error.key in RECORD_PROBLEMS:  # a record, with a problem in it
                 raise
             raise error from None  # neither: the table's message, which names the layouts
+    check_named_unit(parsed.readings.named_unit, unit)  # a table's "(°/s)": not read as °/h
     return checked(parsed)
 
 

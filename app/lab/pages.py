@@ -12,6 +12,7 @@ from sqlalchemy.exc import OperationalError
 from sqlmodel import Session
 
 from app.accounts.deps import CurrentUser
+from app.core.column_names import RATE_UNITS
 from app.core.exceptions import UserError
 from app.core.long_headers import ROLE_NAMES
 from app.core.part_names import PART_LETTERS, PART_WORDS
@@ -139,6 +140,7 @@ def session_page(request: Request, session: OwnedSession, user: CurrentUser, db:
             part: [nominal_angle(session, part, k) for k in range(1, position_count(session) + 1)]
             for part in ("heading", "latitude")
         },
+        "rateUnits": RATE_UNITS,  # a pasted header's "(°/s)" against the grid's unit
         "table": {"heading": session.sim_table_heading, "latitude": session.sim_table_latitude},
         "plane": session.sim_plane_dial_deg,
         "messages": client_messages(JS_MESSAGES, _.language),
@@ -305,6 +307,7 @@ JS_MESSAGES = (
     "js.summary_rows_skipped",
     "js.means_row_skipped",
     "js.header_angles_other_way",
+    "js.unit_named_other",
     "js.lines_above_skipped",
     "js.own_table_taken",
     "js.second_table_skipped",

@@ -209,6 +209,23 @@
     return same(ahead, offsets(expected, -1)) && !same(ahead, offsets(expected, 1));
   }
   const degrees = (angles) => angles.map((angle) => `${angle}°`).join(", ");
+  // The rate unit a pasted header ("位置1 (°/s)", "rate [rad/s]") and its row of units
+  // name, canonical ("deg/s"); null where they name none or several -- as
+  // app.core.readings reads a file's, which the lab page then holds to the chosen unit.
+  const RATE_UNITS = new Map(Object.entries(config.rateUnits));
+  function namedRateUnit(header, units) {
+    const named = new Set();
+    (header || []).forEach((cell) => {
+      const bracketed = plain(cell).trim().toLowerCase().match(/[(\[（【]([^()\[\]（）【】]*)[)\]）】]$/);
+      const unit = bracketed && RATE_UNITS.get(bracketed[1].replace(/[\s·]/g, ""));
+      if (unit) named.add(unit);
+    });
+    (units || []).forEach((cell) => {
+      const unit = RATE_UNITS.get(plain(cell).replace(/[\s()[\]（）]/g, "").toLowerCase());
+      if (unit) named.add(unit);
+    });
+    return named.size === 1 ? [...named][0] : null;
+  }
   // A note as said: a message's key, or its key and values.
   const said = (note) => (Array.isArray(note) ? t(note[0], note[1]) : t(note));
 
@@ -328,13 +345,17 @@
       notes.push("js.lines_above_skipped");
     }
     let header = null;
+    let unitsRow = null;
     let body = rows;
     if (body.length && (rows[0].some((cell) => cell !== "" && parseCell(cell).error) ||
         (body.length > 1 && numbersThePositions(rows[0])))) {
       header = body[0];
       body = body.slice(1);
       notes.push("js.header_skipped");
-      if (body.length && isUnitsRow(body[0])) body = body.slice(1);  // "s, °/h…": a note
+      if (body.length && isUnitsRow(body[0])) {  // "s, °/h…": a note
+        unitsRow = body[0];
+        body = body.slice(1);
+      }
     }
     if (header && header.some(isText) && header.filter((cell) => cell !== "").length > 1) {  // a second table's
       const again = body.findIndex((row) => sameRow(row, header));
@@ -354,7 +375,7 @@
     const long = header && longColumns(header);
     if (long) {  // each position's readings to its own column, from the grid's first
       notes.push("js.long_block");
-      return { rows: longBlock(body.filter((row) => !isSummary(row)), long, columns), notes, whole: true };
+      return { rows: longBlock(body.filter((row) => !isSummary(row)), long, columns), notes, whole: true, named: namedRateUnit(header, unitsRow) };
     }
     const summaries = body.filter(isSummary).length;
     if (summaries) {
@@ -387,7 +408,7 @@
       body = body.slice(0, -1);
       notes.push("js.means_row_skipped");
     }
-    return { rows: body, notes };
+    return { rows: body, notes, named: namedRateUnit(header, unitsRow) };
   }
 
   // A last row that is each column's mean of the rows above it, written to more decimals
@@ -551,7 +572,13 @@
       const text = (event.clipboardData || window.clipboardData).getData("text");
       if (!target || !/[\t\n;]|,.*,|\s\S/.test(plain(text).trim())) return;
       event.preventDefault();
-      const { rows, notes, whole } = parseBlock(text, columns, panel.dataset.part);
+      const { rows, notes, whole, named } = parseBlock(text, columns, panel.dataset.part);
+      const unit = panel.querySelector(".unit");
+      const clash = named !== null && named !== unit.value;  // °/s typed as °/h: 3600 times too small
+      if (clash) {
+        const symbol = (value) => [...unit.options].find((option) => option.value === value).textContent;
+        notes.push(["js.unit_named_other", { named: symbol(named), chosen: symbol(unit.value) }]);
+      }
       const startRow = whole ? 0 : target.closest("tr").sectionRowIndex;
       const startColumn = whole ? 0 : Number(target.dataset.column) - 1;
       if (startRow + rows.length > config.gridLimit) {
@@ -574,7 +601,7 @@
       const extra = notes.map(said);
       if (dropped) extra.push(t("js.cells_dropped", { n: dropped, columns }));
       status.textContent = `${t("js.pasted", { rows: rows.length })} ${extra.join(" ")} ${status.textContent}`.trim();
-      status.classList.toggle("error-text", Boolean(dropped) || status.classList.contains("error-text"));
+      status.classList.toggle("error-text", Boolean(dropped) || clash || status.classList.contains("error-text"));
     });
     panel.querySelector(".add-rows").addEventListener("click", () => addRows(5));
     panel.querySelector(".clear-grid").addEventListener("click", () => {

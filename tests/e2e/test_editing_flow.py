@@ -4,6 +4,8 @@ in the history) -- in a real browser, at a phone's and a laptop's width, in both
 
 from __future__ import annotations
 
+import re
+
 import pytest
 from playwright.sync_api import expect
 
@@ -195,6 +197,18 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     paste(page, "#part-heading .readings-grid tbody input", session_way)
     expect(page.locator("#part-heading .grid-status")).to_contain_text("Pasted 10 rows")
     expect(page.locator("#part-heading .grid-status")).not_to_contain_text("other way")
+    # a header naming the readings' unit other than the grid's: said, as a file under
+    # another unit is refused (°/s saved as °/h would be 3600 times too small)
+    per_second = "P1 (°/s)\tP2 (°/s)\tP3 (°/s)\tP4 (°/s)\n" + "\n".join(["0.0030\t-0.0001"] * 10)
+    paste(page, "#part-heading .readings-grid tbody input", per_second)
+    status = page.locator("#part-heading .grid-status")
+    expect(status).to_contain_text(
+        "The pasted header gives the readings in °/s, but the grid's unit is °/h: choose °/s"
+    )
+    expect(status).to_have_class(re.compile("error-text"))
+    page.locator("#part-heading .unit").first.select_option("deg/s")
+    paste(page, "#part-heading .readings-grid tbody input", per_second)
+    expect(status).not_to_contain_text("choose °/s")
 
 
 def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, new_page):
