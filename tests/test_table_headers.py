@@ -19,6 +19,7 @@ from app.core.table_headers import (
     summary_label,
     turned_other_way,
 )
+from app.web.i18n import translate
 from tests.factories import DATA, handout, new_session, post_json
 
 # the handout's Table 1 (four positions in the horizontal plane), as printed: the means row
@@ -467,6 +468,7 @@ def test_a_header_of_angles_round_the_other_way_is_said_and_read_in_column_order
         ("位置,1,2,3,4\n,(度/小时),(度/小时),(度/小时),(度/小时)\n", "deg/h"),
         ("time (s),P1 (°/s),P2 (°/h),P3,P4\n", None),  # two units: neither is said
         ("P1,P2,P3,P4\n", None),
+        ("P1,P2,P3,P4,wind (m/s)\n", None),  # a speed is no rate of turn: neither read nor refused
     ],
 )
 def test_the_rate_unit_a_tables_header_names(text, unit):
@@ -506,3 +508,44 @@ def test_a_table_in_degrees_a_second_is_never_read_as_degrees_an_hour(
     assert json.loads(capsys.readouterr().out)["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
     assert main(["solve", "heading", str(path), "--unit", "deg/h"]) == 2
     assert "but °/h is chosen: choose °/s" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("reader", "text", "unit"),
+    [
+        ("table", "P1 (mdeg/s),P2 (mdeg/s),P3 (mdeg/s),P4 (mdeg/s)\n", "mdeg/s"),
+        ("table", "P1,P2,P3,P4\nmdeg/s,mdeg/s,mdeg/s,mdeg/s\n", "mdeg/s"),
+        ("table", "位置,1,2,3,4\n单位,度/分,度/分,度/分,度/分\n", "度/分"),
+        ("table", "位置1 [°/min],位置2 [°/min],位置3 [°/min],位置4 [°/min]\n", "°/min"),
+        ("record", "time_s,rate (mdeg/s)\n", "mdeg/s"),
+        ("record", "time_s,value\ns,mrad/s\n", "mrad/s"),
+        ("bench", "time_s,gyro (mdeg/s)\n", "mdeg/s"),
+        ("bench", "time,gyro\ns,deg/min\n", "deg/min"),
+    ],
+)
+def test_a_rate_in_a_unit_gyrolab_does_not_read_is_refused_by_name(reader, text, unit):
+    """A milli-degree a second read as °/s would be 1000 times too large, as °/h 3.6 times
+    too small: refused, naming the unit, by the table, one-position record and bench
+    record readers alike (before, a header's unit was passed over as a note and a row of
+    units refused as "'mdeg/s' is not a number")."""
+    from app.core.position_records import parse_one_position_record
+    from app.core.static_record import read_static_record
+    from app.core.text_files import text_lines
+
+    rows = (
+        "0,10.74,2.88,-9.11,-0.96\n"
+        if reader == "table"
+        else "".join(f"{k * 0.1:.1f},{10.74 + 0.01 * (k % 3)}\n" for k in range(20))
+    )
+    with pytest.raises(UserError) as refused:
+        if reader == "table":
+            labelled = text.startswith("位置,")  # the handout's label column: a cell first
+            parse_readings_csv(text + (rows if labelled else rows.split(",", 1)[1]) * 2)
+        elif reader == "record":
+            parse_one_position_record(text + rows, "deg/h", None)
+        else:
+            read_static_record(text_lines((text + rows).encode()))
+    assert refused.value.key == "csv.unit_unread" and refused.value.params == {"unit": unit}
+    assert translate("csv.unit_unread", "en", unit=unit).endswith(
+        "which GyroLab does not read: convert them to °/h, °/s or rad/s first."
+    )

@@ -11,6 +11,7 @@ import math
 import re
 from dataclasses import dataclass
 
+from app.core.exceptions import UserError
 from app.core.units import DEG_PER_HOUR, DEG_PER_SECOND, RAD_PER_SECOND
 
 COMMENT_MARKS = ("#", "%", "//")
@@ -135,6 +136,40 @@ def rate_unit(unit: str | None) -> str | None:
     if unit is None:
         return None
     return RATE_UNITS.get(unit.replace(" ", "").replace("·", ""))
+
+
+# A rate unit as written, read or not: an angle over a time ("mdeg/s", "°/min", "度/分"),
+# never a speed ("m/s")
+RATE_LIKE = re.compile(
+    r"(?:m|µ|μ|u|k)?(?:deg|degrees?|°|º|˚|rad|arcsec|arcmin|度|弧度|角秒)"
+    r"\s*/\s*(?:s|sec|h|hr|min|秒|小时|时|分|分钟)"
+)
+
+
+def readable_rate_unit(unit: str | None) -> str | None:
+    """The canonical rate unit a header's unit text names, refusing one GyroLab cannot read.
+
+    Parameters
+    ----------
+    unit : str or None
+        The unit as written in a header or a row of units ("°/s", "mdeg/s").
+
+    Returns
+    -------
+    str or None
+        "deg/h", "deg/s" or "rad/s" as :func:`rate_unit`; None where the text names no
+        rate.
+
+    Raises
+    ------
+    UserError
+        ``csv.unit_unread`` where the text names a rate in another unit ("mdeg/s",
+        "°/min"): read as one of the three, its readings would be wrong by a factor.
+    """
+    named = rate_unit(unit)
+    if named is None and unit is not None and RATE_LIKE.fullmatch(unit.replace(" ", "").lower()):
+        raise UserError("csv.unit_unread", unit=unit.strip()[:20])
+    return named
 
 
 @dataclass(frozen=True)

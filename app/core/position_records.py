@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.core.clock_stamps import spread_within_ticks
-from app.core.column_names import column_name, rate_unit
+from app.core.column_names import column_name, readable_rate_unit
 from app.core.exceptions import UserError
 from app.core.readings import parse_readings_csv
 from app.core.readings_data import Readings, cell_number
@@ -145,10 +145,10 @@ def _read_rows(
             continue
         if number == 1 and not all(is_number(cell) for cell in cells):
             header = cells  # such as "time_s,value"
-            check_named_unit(rate_unit(column_name(cells[-1]).unit), unit)
+            check_named_unit(readable_rate_unit(column_name(cells[-1]).unit), unit)
             continue
         if number == 2 and header is not None and is_units_row(cells):
-            check_named_unit(rate_unit(cells[-1].lower()), unit)
+            check_named_unit(readable_rate_unit(cells[-1].lower()), unit)
             continue  # "s, °/h" under the names
         if len(cells) > 2:
             raise UserError(

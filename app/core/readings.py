@@ -32,7 +32,7 @@ import re
 
 import numpy as np
 
-from app.core.column_names import rate_unit
+from app.core.column_names import readable_rate_unit
 from app.core.exceptions import UserError
 from app.core.long_headers import long_columns, name_and_unit
 from app.core.long_readings import parse_long
@@ -152,9 +152,12 @@ def _read_table(rows, part: str | None) -> Readings:
 
 def _named_rate_unit(header: list[str], units: list[str]) -> str | None:
     """The one rate unit a table's header ("位置1 (°/s)", "rate [rad/s]") and its row of
-    units ("°/s | °/s …") name, canonical; None where they name none, or several."""
-    named = {rate_unit(name_and_unit(cell)[1]) for cell in header}
-    named |= {rate_unit(re.sub(r"[\s()\[\]]", "", plain_text(cell)).lower()) for cell in units}
+    units ("°/s | °/s …") name, canonical; None where they name none, or several; a rate
+    in a unit GyroLab does not read ("mdeg/s") refused."""
+    named = {readable_rate_unit(name_and_unit(cell)[1]) for cell in header}
+    named |= {
+        readable_rate_unit(re.sub(r"[\s()\[\]]", "", plain_text(cell)).lower()) for cell in units
+    }
     named.discard(None)
     return named.pop() if len(named) == 1 else None
 

@@ -27,6 +27,7 @@ from app.core.column_names import (
     angle_output,
     column_name,
     rate_unit,
+    readable_rate_unit,
 )
 from app.core.exceptions import UserError
 from app.core.long_headers import is_value_name
@@ -200,7 +201,7 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
         temperature if temperature != value else None,
         position,
         scale,
-        rate_unit(names[value].unit)
+        readable_rate_unit(names[value].unit)
         or (RAD_PER_SECOND if ROS_ANGULAR_VELOCITY.fullmatch(names[value].base) else None),
         header[value].strip(),
         angle_output(names[value]),

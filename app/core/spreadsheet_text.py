@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 
+from app.core.column_names import RATE_LIKE
 from app.core.text_files import plain_text
 from app.core.typed_numbers import is_number
 
@@ -215,6 +216,6 @@ def is_units_row(cells: list[str]) -> bool:
         names = names[1:]  # "单位 | °/h | °/h…": the row named as the units' in its first cell
     return (
         bool(names)
-        and all(UNIT_NAME.fullmatch(name) for name in names)
+        and all(UNIT_NAME.fullmatch(name) or RATE_LIKE.fullmatch(name) for name in names)
         and any("/" in name or name in ("dph", "dps") for name in names)
     )

@@ -37,7 +37,7 @@ from app.core.clock_stamps import (
     is_clock_stamp,
     seconds_from_first,
 )
-from app.core.column_names import AngleOutput, comment_text, rate_unit
+from app.core.column_names import AngleOutput, comment_text, readable_rate_unit
 from app.core.exceptions import UserError
 from app.core.record_columns import Layout, bare_record_layout, header_layout
 from app.core.spreadsheet_text import (
@@ -259,7 +259,9 @@ def read_static_record(
                 layout = header_layout(header, column, guess=guess)
                 if layout.rate_unit is None and units is not None and layout.value < len(units):
                     # the rates' unit in the row of units under the names, not in the name
-                    layout = replace(layout, rate_unit=rate_unit(units[layout.value].lower()))
+                    layout = replace(
+                        layout, rate_unit=readable_rate_unit(units[layout.value].lower())
+                    )
             elif named is not None and _holds_a_number(cells):  # a ROS frame's name, say
                 layout = header_layout(named, column, guess=guess)
                 notes.append({"key": "allan.note_comment_header", "params": {"line": comment_line}})

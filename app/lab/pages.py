@@ -308,6 +308,7 @@ JS_MESSAGES = (
     "js.means_row_skipped",
     "js.header_angles_other_way",
     "js.unit_named_other",
+    "js.unit_unread",
     "js.lines_above_skipped",
     "js.own_table_taken",
     "js.second_table_skipped",

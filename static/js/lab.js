@@ -158,11 +158,13 @@
   const ROW_NUMBER_NAMES = new Set(["sample", "n", "#", "no", "no.", "index", "序号", "编号", "次数", "row", "i"]);
   // A row under the names that only names units, as app.core.readings.is_units_row reads it.
   const UNIT_NAME = /^(?:°|deg|rad|mrad|dph|dps|s|ms|h|hr|min|hz|°c|℃|c|k|v|mv|lsb|度|秒|小时|摄氏度)(?:\/(?:s|h|hr|min|秒|小时))?$/;
+  // a rate unit, read or not ("mdeg/s", "°/min"), never a speed ("m/s"): app.core.column_names.RATE_LIKE
+  const RATE_LIKE = /^(?:m|µ|μ|u|k)?(?:deg|degrees?|°|º|˚|rad|arcsec|arcmin|度|弧度|角秒)\/(?:s|sec|h|hr|min|秒|小时|时|分|分钟)$/;
   const UNITS_LABELS = new Set(["unit", "units", "单位"]);  // the row named in its first cell
   function isUnitsRow(cells) {
     let names = cells.map((cell) => plain(cell).replace(/[\s()[\]]/g, "").toLowerCase()).filter(Boolean);
     if (names.length && UNITS_LABELS.has(names[0].replace(/[:：]+$/, ""))) names = names.slice(1);
-    return names.length > 0 && names.every((name) => UNIT_NAME.test(name)) &&
+    return names.length > 0 && names.every((name) => UNIT_NAME.test(name) || RATE_LIKE.test(name)) &&
       names.some((name) => name.includes("/") || name === "dph" || name === "dps");
   }
 
@@ -215,16 +217,19 @@
   const RATE_UNITS = new Map(Object.entries(config.rateUnits));
   function namedRateUnit(header, units) {
     const named = new Set();
+    let unread = null;  // a rate in a unit GyroLab does not read ("mdeg/s", "°/min")
+    const take = (text) => {
+      const key = plain(text).replace(/[\s·()[\]（）]/g, "").toLowerCase();
+      const unit = RATE_UNITS.get(key);
+      if (unit) named.add(unit);
+      else if (RATE_LIKE.test(key)) unread = unread || text.trim();
+    };
     (header || []).forEach((cell) => {
-      const bracketed = plain(cell).trim().toLowerCase().match(/[(\[（【]([^()\[\]（）【】]*)[)\]）】]$/);
-      const unit = bracketed && RATE_UNITS.get(bracketed[1].replace(/[\s·]/g, ""));
-      if (unit) named.add(unit);
+      const bracketed = plain(cell).trim().match(/[(\[（【]([^()\[\]（）【】]*)[)\]）】]$/);
+      if (bracketed) take(bracketed[1]);
     });
-    (units || []).forEach((cell) => {
-      const unit = RATE_UNITS.get(plain(cell).replace(/[\s()[\]（）]/g, "").toLowerCase());
-      if (unit) named.add(unit);
-    });
-    return named.size === 1 ? [...named][0] : null;
+    (units || []).forEach(take);
+    return { unit: named.size === 1 ? [...named][0] : null, unread };
   }
   // A note as said: a message's key, or its key and values.
   const said = (note) => (Array.isArray(note) ? t(note[0], note[1]) : t(note));
@@ -574,10 +579,13 @@
       event.preventDefault();
       const { rows, notes, whole, named } = parseBlock(text, columns, panel.dataset.part);
       const unit = panel.querySelector(".unit");
-      const clash = named !== null && named !== unit.value;  // °/s typed as °/h: 3600 times too small
-      if (clash) {
+      // °/s typed as °/h: 3600 times too small; mdeg/s as either: wrong by a factor
+      const clash = Boolean(named.unread) || (named.unit !== null && named.unit !== unit.value);
+      if (named.unread) {
+        notes.push(["js.unit_unread", { unit: named.unread }]);
+      } else if (clash) {
         const symbol = (value) => [...unit.options].find((option) => option.value === value).textContent;
-        notes.push(["js.unit_named_other", { named: symbol(named), chosen: symbol(unit.value) }]);
+        notes.push(["js.unit_named_other", { named: symbol(named.unit), chosen: symbol(unit.value) }]);
       }
       const startRow = whole ? 0 : target.closest("tr").sectionRowIndex;
       const startColumn = whole ? 0 : Number(target.dataset.column) - 1;

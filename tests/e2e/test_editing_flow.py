@@ -209,6 +209,11 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     page.locator("#part-heading .unit").first.select_option("deg/s")
     paste(page, "#part-heading .readings-grid tbody input", per_second)
     expect(status).not_to_contain_text("choose °/s")
+    # a row of units in a unit GyroLab does not read: said, never read as the grid's unit
+    milli = "P1\tP2\tP3\tP4\nmdeg/s\tmdeg/s\tmdeg/s\tmdeg/s\n" + "\n".join(["2.98\t0.80"] * 10)
+    paste(page, "#part-heading .readings-grid tbody input", milli)
+    expect(status).to_contain_text("in mdeg/s, which GyroLab does not read")
+    expect(status).to_have_class(re.compile("error-text"))
 
 
 def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, new_page):
