@@ -12,6 +12,7 @@ from app.core import position_records
 from app.core.exceptions import UserError
 from app.core.position_records import parse_position_csv
 from app.core.readings import parse_readings_csv
+from tests.factories import DATA, handout
 
 
 def expected() -> list[np.ndarray]:
@@ -687,3 +688,84 @@ def test_a_quoted_decimal_comma_in_a_comma_separated_file_is_one_number():
     assert values.tolist() == [11.51, 11.49, 11.5] and times.tolist() == [0.0, 0.1, 0.2]
     # unquoted, a comma still separates the cells: "11,51" is two cells
     assert parse_readings_csv("P1,P2\n11,51\n").positions[1].tolist() == [51.0]
+
+
+def handout_with_spaces(fixed_width: bool) -> str:
+    """The handout's Table 1 as a text file of columns between spaces: its "位置 1 2 3 4"
+    header over a label column left empty, "采样值" beside the fifth row, the row of means
+    last -- as a fixed-width export (padded) or typed with single spaces."""
+    columns = handout("handout_horizontal.csv")
+    cell = "{:>9}".format if fixed_width else str
+
+    def line(label: str, values) -> str:
+        return " ".join([cell(label), *(cell(f"{v:.2f}") for v in values)]).rstrip()
+
+    lines = [line("位置", [1, 2, 3, 4]).replace(".00", "")]
+    lines += [
+        line("采样值" if row == 4 else "", [columns[k][row] for k in range(1, 5)])
+        for row in range(10)
+    ]
+    return "\n".join([*lines, line("平均值", [10.71, 2.79, -8.95, -0.94])]) + "\n"
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        handout_with_spaces(fixed_width=True),
+        handout_with_spaces(fixed_width=False),
+        "P1   P2   P3   P4\n"
+        + "".join(
+            " ".join(f"{columns:.2f}" for columns in row) + "\n"
+            for row in zip(*handout("handout_horizontal.csv").values(), strict=True)
+        ),
+        "Position 1   Position 2   Position 3   Position 4\n"  # names holding a space
+        + "".join(
+            "  ".join(f"{v:.2f}" for v in row) + "\n"
+            for row in zip(*handout("handout_horizontal.csv").values(), strict=True)
+        ),
+        "".join(  # MATLAB's save -ascii: no header, numbers in e-notation
+            "".join(f"{v:16.7e}" for v in row) + "\n"
+            for row in zip(*handout("handout_horizontal.csv").values(), strict=True)
+        ),
+    ],
+    ids=["handout-fixed-width", "handout-single-spaces", "names", "names-with-spaces", "matlab"],
+)
+def test_a_table_of_columns_between_spaces_reads_as_its_csv(text):
+    """A .txt or .dat of columns between spaces, as MATLAB, a fixed-width export or a
+    student's editor writes it (the grid splits a paste so too): read as the same table
+    in CSV.  Before, it was refused as an unknown layout."""
+    readings = parse_readings_csv(text)
+    as_csv = parse_readings_csv((DATA / "handout_horizontal.csv").read_text())
+    for got, want in zip(readings.positions, as_csv.positions, strict=True):
+        np.testing.assert_allclose(got, want)
+    if "平均值" in text:
+        assert readings.skipped == [(12, "平均值")]
+
+
+def test_a_one_position_record_between_spaces_is_still_a_record():
+    """Two columns between spaces are a logger's time and reading, not a table."""
+    from app.core.position_records import parse_one_position_record
+
+    text = "".join(f"{k * 0.1:.1f} {10.74 + 0.01 * (k % 3):.2f}\n" for k in range(20))
+    with pytest.raises(UserError) as table:
+        parse_readings_csv(text)
+    assert table.value.key == "csv.unknown_layout"
+    record = parse_one_position_record(text, "deg/h", None)
+    assert record.readings.layout == "record" and record.readings.times_s[0][1] == 0.1
+
+
+def test_the_lab_page_saves_a_text_file_of_columns_between_spaces(student_client):
+    from tests.factories import new_session, post_json
+
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    body = {"part": "heading", "unit": "deg/h", "text": handout_with_spaces(fixed_width=True)}
+    preview = post_json(student_client, f"{page}/csv/preview", body, page)
+    assert preview.status_code == 200, preview.text
+    assert [p["n"] for p in preview.json()["positions"]] == [10, 10, 10, 10]
+    assert preview.json()["notes"] == [
+        "Line 12 ('平均值') was passed over: a summary of the readings, not a reading."
+    ]
+    assert post_json(student_client, f"{page}/csv", body, page).json()["saved"] == [1, 2, 3, 4]
+    heading = student_client.get(f"{page}/results.json").json()["heading"]
+    assert heading["theta_deg"] == pytest.approx(-10.753, abs=5e-4)  # the handout's θ

@@ -10,7 +10,9 @@
   Turned on its side -- one row per position, its name first -- it is read the same way.
 
 Either may be separated by semicolons or tabs instead of commas, with decimal commas
-("10,74"), as spreadsheets in many European locales write them.
+("10,74"), as spreadsheets in many European locales write them, or by spaces where a file
+holds none of those (MATLAB's ``save -ascii``, a fixed-width export:
+:func:`app.core.spreadsheet_text.spaced_cells`).
   A table of numbers only (no header) is read the same way when it has three or more
   position columns; a first column counting 1, 2, 3… is taken as row numbers.
 * long — one reading per row beside its position: header ``position,angle_deg,value`` with
@@ -42,6 +44,8 @@ from app.core.readings_data import WIDE_COLUMN, Readings, cell_number
 from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
+    separated_by_spaces,
+    spaced_cells,
     spreadsheet_delimiter,
     title_lines_blanked,
     without_separator_hint,
@@ -84,10 +88,13 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
         text = part_table(text, part)
     text = title_lines_blanked(text)
     delimiter = hint or spreadsheet_delimiter(text)
-    try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
-        rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))
-    except csv.Error as error:
-        raise UserError("csv.unreadable", detail=str(error)) from None
+    if hint is None and separated_by_spaces(text):  # "10.74  2.88  -9.11  -0.96"
+        rows, delimiter = spaced_cells(text), " "
+    else:
+        try:  # newline="": lines may end in \n, \r\n or a bare \r (old Mac files)
+            rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))
+        except csv.Error as error:
+            raise UserError("csv.unreadable", detail=str(error)) from None
     rows = [
         (number, [decimal_point(cell) if delimiter != "," or "," in cell else cell for cell in row])
         for number, row in enumerate(rows, start=1)

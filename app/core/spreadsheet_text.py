@@ -83,6 +83,69 @@ def spreadsheet_delimiter(text: str) -> str:
 
 
 SEPARATOR_LINES = 20  # lines looked at for the separator: a preamble and the table's start
+
+
+def separated_by_spaces(text: str) -> bool:
+    """Whether a file's columns are separated by spaces: none of its first
+    ``SEPARATOR_LINES`` lines holds a tab, ``;`` or ``,`` and one at least holds two cells
+    between spaces ("10.74  2.88  -9.11  -0.96", as MATLAB's ``save -ascii`` or a
+    fixed-width export writes a table; the grid splits a paste so too).
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+
+    Returns
+    -------
+    bool
+        True where the columns can only be split at spaces.
+    """
+    lines = [
+        line
+        for line in LINE_END.split(text, maxsplit=4 * SEPARATOR_LINES)[: 4 * SEPARATOR_LINES]
+        if line.strip() and not line.startswith("#")
+    ][:SEPARATOR_LINES]
+    return not any(mark in line for line in lines for mark in "\t;,") and any(
+        len(line.split()) > 1 for line in lines
+    )
+
+
+def spaced_cells(text: str) -> list[list[str]]:
+    """A table separated by spaces, split into cells line by line.
+
+    A line of numbers is split at every run of spaces.  A line of names whose words hold
+    single spaces ("Position 1   Position 2", "位置 1  位置 2") is split at runs of two
+    or more where that gives as many cells as the most lines of numbers hold.  Where some
+    lines start with a label the rows of numbers lack ("位置 1 2 3 4", "平均值 10.71 …"),
+    those rows get an empty first cell, as a spreadsheet's label column has.
+
+    Parameters
+    ----------
+    text : str
+        The file's text.
+
+    Returns
+    -------
+    list of list of str
+        Each line's cells (an empty line: no cells).
+    """
+    lines = LINE_END.split(text)
+    split = [line.split() for line in lines]
+    widths = [len(cells) for cells in split if cells and all(is_number(c) for c in cells)]
+    width = max(set(widths), key=widths.count) if widths else None
+    for index, (line, cells) in enumerate(zip(lines, split, strict=True)):
+        if width is not None and len(cells) != width and not all(is_number(c) for c in cells):
+            wide = [cell for cell in re.split(r"\s{2,}", line.strip()) if cell]
+            if len(wide) == width:
+                split[index] = wide
+    if width is not None and any(len(c) == width + 1 and not is_number(c[0]) for c in split):
+        # a label column, as the handout prints it ("位置 | 1 | 2 | 3 | 4", "平均值 …"): its
+        # empty cells are lost between spaces, so the rows of numbers get them back
+        split = [[""] + c if len(c) == width and all(map(is_number, c)) else c for c in split]
+    return split
+
+
 LINE_END = re.compile(r"\r\n|\r|\n")
 
 
