@@ -502,9 +502,42 @@ def test_a_long_file_that_cannot_be_read_says_why(text, key):
     assert caught.value.key == key
 
 
-def test_a_time_in_another_unit_is_not_taken_for_seconds():
-    readings = parse_readings_csv("position,time (ms),rate\n1,0,1\n1,500,2\n2,1000,3\n")
+def test_a_time_in_minutes_is_not_taken_for_seconds():
+    readings = parse_readings_csv("position,time (min),rate\n1,0,1\n1,0.5,2\n2,1,3\n")
     assert readings.layout == "long" and readings.times_s is None
+
+
+@pytest.mark.parametrize(
+    ("header", "times"),
+    [
+        ("position,time_s,rate", ["0", "0.5", "60", "60.5"]),
+        ("position,time (ms),rate", ["0", "500", "60000", "60500"]),
+        ("position,time_ms,rate", ["0", "500", "60000", "60500"]),
+        ("位置,时间（毫秒）,读数", ["0", "500", "60000", "60500"]),
+        ("位置,时间,读数", ["12:00:00", "12:00:00.5", "12:01:00", "12:01:00.5"]),  # a clock
+        (
+            "position,time,rate",
+            ["2026-11-28 12:00:00", "2026-11-28T12:00:00.5"] * 1
+            + ["28.11.2026 12:01:00", "2026年11月28日 12时01分00.5秒"],
+        ),
+    ],
+)
+def test_a_long_tables_times_in_seconds_milliseconds_or_a_loggers_clock(header, times):
+    """Before, a time in ms was passed over (the drift fit and warm-up check lost it) and
+    a clock stamp ("12:00:01") refused as not a number."""
+    rows = [
+        f"{position},{time},{value}"
+        for position, time, value in zip(
+            [1, 1, 2, 2], times, [10.74, 10.65, 2.88, 2.69], strict=True
+        )
+    ]
+    readings = parse_readings_csv("\n".join([header, *rows]) + "\n")
+    first = readings.times_s[0][0]
+    got = [list(t - first) for t in readings.times_s]
+    assert got == [[0.0, 0.5], [60.0, 60.5]]
+    with pytest.raises(UserError) as refused:
+        parse_readings_csv(f"{header}\n1,25:00:00,10.74\n")
+    assert refused.value.key == "csv.not_a_number"
 
 
 def _record_bodies(seed: int, count: int):

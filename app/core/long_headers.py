@@ -37,12 +37,14 @@ ROLE_NAMES = {
     "temperature_c": ("temperature", "temp", "温度"),
     "part": ("part",),
 }  # fmt: skip
-# the units a role may be written in ("time (ms)" is not seconds: not read as the times)
+# the units a role may be written in (a time in ms is read as the role "time_ms"; "time
+# (min)" is not taken for seconds: not read as the times)
 ROLE_UNITS = {
     "angle_deg": {None, "deg", "°", "度", "degree", "degrees"},
     "time_s": {None, "s", "sec", "秒"},
     "temperature_c": {None, "c", "°c", "℃"},
 }
+MILLISECONDS = {"ms", "毫秒"}
 _SUFFIXED_UNIT = re.compile(r"^(.+?) (deg|c)$")  # the rates' and times' own: column_name
 _ROLE_OF = {name: role for role, names in ROLE_NAMES.items() for name in names}
 
@@ -103,16 +105,20 @@ def long_columns(header: list[str]) -> dict[str, int] | None:
     Returns
     -------
     dict or None
-        Role (``position``, ``angle_deg``, ``value``, ``time_s``, ``temperature_c``,
-        ``part``) → column index, or None.
+        Role (``position``, ``angle_deg``, ``value``, ``time_s`` or ``time_ms``,
+        ``temperature_c``, ``part``) → column index, or None.
     """
     found: dict[str, list[int]] = {}
     for index, cell in enumerate(header):
         name, unit = name_and_unit(cell)
         role = _ROLE_OF.get(name)
-        if role is not None and unit in ROLE_UNITS.get(role, {unit}):
+        if role == "time_s" and unit in MILLISECONDS:
+            found.setdefault("time_ms", []).append(index)  # "time (ms)": read, in seconds
+        elif role is not None and unit in ROLE_UNITS.get(role, {unit}):
             found.setdefault(role, []).append(index)
     roles = {role: indexes[0] for role, indexes in found.items() if len(indexes) == 1}
+    if "time_s" in roles and "time_ms" in roles:  # two clocks: neither is the times
+        del roles["time_s"], roles["time_ms"]
     if "value" not in roles or not ({"position", "angle_deg"} & roles.keys()):
         return None
     return roles

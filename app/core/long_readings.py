@@ -11,6 +11,7 @@ import io
 
 import numpy as np
 
+from app.core.clock_stamps import clock_seconds, is_clock_stamp
 from app.core.exceptions import UserError
 from app.core.readings_data import MAX_POSITION_NUMBER, WIDE_COLUMN, Readings, cell_number
 from app.core.table_headers import ANGLE, column_name, evenly_round
@@ -44,6 +45,8 @@ def parse_long(index: dict[str, int], rows) -> Readings:
         within a position or returns to one left, a position named twice.
     """
     keyed = "position" if "position" in index else "angle_deg"
+    clock = next((name for name in ("time_s", "time_ms") if name in index), None)
+    origin: list[int] = []  # the first date of clock stamps, shared by the whole file
     labels: list[str] = []
     grouped: dict[str, dict] = {}
     for line, row in rows:
@@ -64,8 +67,8 @@ def parse_long(index: dict[str, int], rows) -> Readings:
         elif keyed == "angle_deg" and labels[-1] != label:
             raise UserError("csv.angle_returns", line=line, angle=label)
         entry["values"].append(cell_number(cell("value"), line, "value"))
-        if "time_s" in index:
-            entry["times"].append(cell_number(cell("time_s"), line, "time_s"))
+        if clock is not None:
+            entry["times"].append(_seconds(cell(clock), line, clock, origin))
         if "temperature_c" in index:
             entry["temps"].append(cell_number(cell("temperature_c"), line, "temperature_c"))
         if "angle_deg" in index:
@@ -91,12 +94,25 @@ def parse_long(index: dict[str, int], rows) -> Readings:
         order = sorted(range(len(labels)), key=numbers.__getitem__)
         labels, numbers = [labels[k] for k in order], [numbers[k] for k in order]
     angles = [grouped[label]["angle"] for label in labels] if has_angles else None
-    times = [np.array(grouped[label]["times"]) for label in labels] if "time_s" in index else None
+    times = [np.array(grouped[label]["times"]) for label in labels] if clock else None
     positions = [np.array(grouped[label]["values"]) for label in labels]
     temperatures = None
     if "temperature_c" in index:
         temperatures = [np.array(grouped[label]["temps"]) for label in labels]
     return Readings(positions, angles, times, "long", temperatures, numbers=numbers)
+
+
+def _seconds(cell: str, line: int, clock: str, origin: list[int]) -> float:
+    """A time as a cell gives it, in seconds: a number of seconds (``time_s``) or of
+    milliseconds (``time_ms``), or a logger's clock stamp ("12:00:01.5", "2026-11-28
+    12:00:01"; :func:`app.core.clock_stamps.clock_seconds`, from ``origin``'s midnight)."""
+    if is_clock_stamp(cell):
+        try:
+            return float(clock_seconds([cell], origin)[0])
+        except ValueError:
+            pass  # "25:00:00": said as not a number below
+    seconds = cell_number(cell, line, clock)
+    return seconds / 1000.0 if clock == "time_ms" else seconds
 
 
 def _angle_label(angle: float) -> str:
