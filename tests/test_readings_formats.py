@@ -12,6 +12,7 @@ from app.core import position_records
 from app.core.exceptions import UserError
 from app.core.position_records import parse_position_csv
 from app.core.readings import parse_readings_csv
+from app.web.i18n import translate
 from tests.factories import DATA, handout
 
 
@@ -802,3 +803,34 @@ def test_the_lab_page_saves_a_text_file_of_columns_between_spaces(student_client
     assert post_json(student_client, f"{page}/csv", body, page).json()["saved"] == [1, 2, 3, 4]
     heading = student_client.get(f"{page}/results.json").json()["heading"]
     assert heading["theta_deg"] == pytest.approx(-10.753, abs=5e-4)  # the handout's θ
+
+
+@pytest.mark.parametrize("error", ["#DIV/0!", "#N/A", "#VALUE!", "#ref!"])
+def test_a_spreadsheets_error_value_is_a_problem_never_a_comment(error):
+    """A row whose first cell is a failed formula ("#DIV/0!") was passed over as a "#"
+    comment, with the row's other readings; now every reader names it, and a comment is
+    still a comment."""
+    from app.core.position_records import parse_one_position_record
+    from app.core.static_record import read_static_record
+    from app.core.text_files import text_lines
+
+    rows = "10.74,2.88,-9.11,-0.96\n" * 3
+    with pytest.raises(UserError) as table:
+        parse_readings_csv(f"P1,P2,P3,P4\n{rows}{error},2.88,-9.11,-0.96\n")
+    assert table.value.key == "csv.spreadsheet_error"
+    assert table.value.params == {"line": 5, "column": "position_1", "value": error}
+    assert translate("csv.spreadsheet_error", "en", **table.value.params).endswith(
+        "is a spreadsheet's error (a formula that failed), not a reading: correct the "
+        "formula or delete the cell."
+    )
+    hashed = "".join(f"#{line}" for line in rows.splitlines(keepends=True))  # commented out
+    commented = parse_readings_csv(f"# exported 2026-11-28\nP1,P2,P3,P4\n{rows}{hashed}")
+    assert [v.size for v in commented.positions] == [3, 3, 3, 3]
+    record = "time_s,value\n" + "".join(f"{k / 10},{10 + k % 3}\n" for k in range(30))
+    for read in (
+        lambda text: parse_one_position_record(text, "deg/h", None),
+        lambda text: read_static_record(text_lines(text.encode())),
+    ):
+        with pytest.raises(UserError) as refused:
+            read(record + f"{error},10.74\n")
+        assert refused.value.params["line"] == 32  # said at its line, not passed over

@@ -76,6 +76,53 @@ class ColumnName:
     unit: str | None
 
 
+# A spreadsheet's error values (Excel's, LibreOffice's): a cell's failed formula, not a
+# comment mark though it starts with "#"
+SPREADSHEET_ERRORS = frozenset(
+    {
+        "#DIV/0!", "#N/A", "#VALUE!", "#REF!", "#NAME?", "#NUM!", "#NULL!", "#SPILL!",
+        "#CALC!", "#FIELD!", "#GETTING_DATA", "#BLOCKED!", "#CONNECT!", "#BUSY!",
+        "#UNKNOWN!", "#N/A!",
+    }
+)  # fmt: skip
+_FIRST_CELL = re.compile(r"[^,;\t]*")
+
+
+def is_spreadsheet_error(cell: str) -> bool:
+    """Whether a cell is a spreadsheet's error value ("#DIV/0!", "#N/A", "#VALUE!"…).
+
+    Parameters
+    ----------
+    cell : str
+        One cell.
+
+    Returns
+    -------
+    bool
+        True for one of ``SPREADSHEET_ERRORS``, in any case.
+    """
+    return cell.strip().upper() in SPREADSHEET_ERRORS
+
+
+def is_hash_comment(line: str) -> bool:
+    """Whether a line (or its first cell) is a ``#`` comment: it starts with "#" and is no
+    spreadsheet's error value -- a row whose first reading is "#DIV/0!" is a row of
+    readings with a problem, never passed over as a comment.
+
+    Parameters
+    ----------
+    line : str
+        A line, or its first cell.
+
+    Returns
+    -------
+    bool
+        True for "# exported by …", False for "#DIV/0!,2.88,…".
+    """
+    text = line.lstrip()
+    return text.startswith("#") and not is_spreadsheet_error(_FIRST_CELL.match(text).group())
+
+
 def comment_text(text: str) -> str | None:
     """The text of a comment line after its mark (``#``, ``%``, ``//``), or None.
 
@@ -89,6 +136,8 @@ def comment_text(text: str) -> str | None:
     str or None
         "timestamp [ns],w_x [rad s^-1]" for "#timestamp [ns],w_x [rad s^-1]".
     """
+    if is_spreadsheet_error(_FIRST_CELL.match(text).group()):
+        return None  # "#DIV/0!,10.7": a line of readings with a failed formula
     for mark in COMMENT_MARKS:
         if text.startswith(mark):
             return text[len(mark) :].strip()

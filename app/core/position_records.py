@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.core.clock_stamps import spread_within_ticks
-from app.core.column_names import column_name, readable_rate_unit
+from app.core.column_names import column_name, is_hash_comment, readable_rate_unit
 from app.core.exceptions import UserError
 from app.core.readings import parse_readings_csv
 from app.core.readings_data import Readings, cell_number
@@ -141,7 +141,7 @@ def _read_rows(
     header: list[str] | None = None
     for number, row in enumerate(rows, start=1):
         cells = [c.strip() for c in row if c.strip()]
-        if not cells or cells[0].startswith("#"):
+        if not cells or is_hash_comment(cells[0]):
             continue
         if number == 1 and not all(is_number(cell) for cell in cells):
             header = cells  # such as "time_s,value"
@@ -217,7 +217,7 @@ def _spaced_columns(text: str) -> bool:
     header or comment) has no comma and two numbers with spaces between them."""
     for line in text.splitlines()[:3]:
         cells = line.split()
-        if not cells or cells[0].startswith("#") or "," in line:
+        if not cells or is_hash_comment(cells[0]) or "," in line:
             continue
         if all(is_number(cell) for cell in cells):
             return len(cells) > 1
@@ -237,7 +237,7 @@ def _decimal_comma_column(
     lines: list[tuple[int, str]] = []
     for number, row in enumerate(rows, start=1):
         cells = [c.strip() for c in row if c.strip()]
-        if not cells or cells[0].startswith("#") or (number == 1 and header is not None):
+        if not cells or is_hash_comment(cells[0]) or (number == 1 and header is not None):
             continue
         if number == 2 and header is not None and is_units_row(cells):
             continue

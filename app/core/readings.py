@@ -34,7 +34,7 @@ import re
 
 import numpy as np
 
-from app.core.column_names import readable_rate_unit
+from app.core.column_names import is_hash_comment, readable_rate_unit
 from app.core.exceptions import UserError
 from app.core.long_headers import long_columns, name_and_unit
 from app.core.long_readings import parse_long
@@ -98,7 +98,7 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
     rows = [
         (number, [decimal_point(cell) if delimiter != "," or "," in cell else cell for cell in row])
         for number, row in enumerate(rows, start=1)
-        if any(cell.strip() for cell in row) and not row[0].lstrip().startswith("#")
+        if any(cell.strip() for cell in row) and not is_hash_comment(row[0])
     ]
     if not rows:
         raise UserError("csv.empty")

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from app.core.column_names import is_spreadsheet_error
 from app.core.exceptions import UserError
 from app.core.typed_numbers import NumberOutOfRange, parse_decimal
 
@@ -67,6 +68,8 @@ def cell_number(text: str, line: int, column: str) -> float:
         beyond the range a reading may take (both with its line, column and first 40
         characters).
     """
+    if is_spreadsheet_error(text):  # "#DIV/0!": a formula that failed, not a reading
+        raise UserError("csv.spreadsheet_error", line=line, column=column, value=text[:40])
     try:
         return parse_decimal(text)
     except NumberOutOfRange as error:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 
-from app.core.column_names import RATE_LIKE
+from app.core.column_names import RATE_LIKE, is_hash_comment
 from app.core.text_files import plain_text
 from app.core.typed_numbers import is_number
 
@@ -75,7 +75,7 @@ def spreadsheet_delimiter(text: str) -> str:
     lines = [
         line
         for line in LINE_END.split(text, maxsplit=4 * SEPARATOR_LINES)[: 4 * SEPARATOR_LINES]
-        if line.strip() and not line.startswith("#")
+        if line.strip() and not is_hash_comment(line)
     ][:SEPARATOR_LINES]
     counts = {mark: sum(mark in line for line in lines) for mark in ("\t", ";", ",")}
     most = max(counts.values())
@@ -104,7 +104,7 @@ def separated_by_spaces(text: str) -> bool:
     lines = [
         line
         for line in LINE_END.split(text, maxsplit=4 * SEPARATOR_LINES)[: 4 * SEPARATOR_LINES]
-        if line.strip() and not line.startswith("#")
+        if line.strip() and not is_hash_comment(line)
     ][:SEPARATOR_LINES]
     return not any(mark in line for line in lines for mark in "\t;,") and any(
         len(line.split()) > 1 for line in lines
@@ -195,7 +195,7 @@ def title_lines_blanked(text: str) -> str:
     titles = []
     for index, line in enumerate(head[: TITLE_LINES + 2]):
         cell = line.strip()
-        if not cell or cell.startswith("#"):
+        if not cell or is_hash_comment(cell):
             continue
         separator = next((mark for mark in "\t;," if mark in cell), None)
         if separator is not None:
