@@ -309,6 +309,7 @@ JS_MESSAGES = (
     "js.header_angles_other_way",
     "js.unit_named_other",
     "js.unit_unread",
+    "js.spreadsheet_error",
     "js.lines_above_skipped",
     "js.own_table_taken",
     "js.second_table_skipped",

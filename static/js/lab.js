@@ -143,9 +143,12 @@
     const value = plain(text).trim();
     return /^[-+]?\d*,\d+([eE][-+]?\d+)?$/.test(value) ? value.replace(",", ".") : value;
   }
+  // a spreadsheet's error value, a formula that failed: app.core.column_names.SPREADSHEET_ERRORS
+  const SPREADSHEET_ERROR = /^#(?:DIV\/0!|N\/A!?|VALUE!|REF!|NAME\?|NUM!|NULL!|SPILL!|CALC!|FIELD!|GETTING_DATA|BLOCKED!|CONNECT!|BUSY!|UNKNOWN!)$/i;
   function parseCell(text) {
     const value = numberText(text);
     if (value === "") return { empty: true };
+    if (SPREADSHEET_ERROR.test(value.trim())) return { error: "js.spreadsheet_error", failed: true };
     if (!/^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/.test(value)) return { error: "js.not_a_number" };
     const number = Number(value);
     if (!Number.isFinite(number)) return { error: "js.not_finite" };
@@ -295,7 +298,8 @@
   // name and student number, the date): passed over up to the first row, within ten,
   // that names two positions or more, where no line above it holds two numbers --
   // app.core.readings reads a file so.
-  const isText = (cell) => cell !== "" && Boolean(parseCell(cell).error);
+  // a cell of words (a name, a label), not a number nor a reading's failed formula ("#DIV/0!")
+  const isText = (cell) => cell !== "" && Boolean(parseCell(cell).error) && !parseCell(cell).failed;
   // a header: two positions named ("位置1", "P2", "90°"), or numbered beside a label, as the
   // handout's "位置 | 1 | 2 | 3 | 4"
   const namesPositions = (row) => row.filter((cell) => isText(cell) && namesPosition(cell)).length >= 2 ||
@@ -352,7 +356,7 @@
     let header = null;
     let unitsRow = null;
     let body = rows;
-    if (body.length && (rows[0].some((cell) => cell !== "" && parseCell(cell).error) ||
+    if (body.length && (rows[0].some(isText) ||
         (body.length > 1 && numbersThePositions(rows[0])))) {
       header = body[0];
       body = body.slice(1);
@@ -401,7 +405,7 @@
       const counts = body.length > 1 && body[0].length > 1 && /^[01]$/.test(firstColumn[0]) &&
         firstColumn.every((cell, i) => cell === String(i + Number(firstColumn[0])));
       const labels = body.length > 0 && body[0].length > 1 && firstColumn.some((cell) => cell !== "") &&
-        firstColumn.every((cell) => cell === "" || parseCell(cell).error);  // "采样值" beside the rows
+        firstColumn.every((cell) => cell === "" || isText(cell));  // "采样值" beside the rows
       if (counts || labels) skip = 1;
       if (counts) note = "js.row_numbers_skipped";
     }

@@ -214,6 +214,16 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     paste(page, "#part-heading .readings-grid tbody input", milli)
     expect(status).to_contain_text("in mdeg/s, which GyroLab does not read")
     expect(status).to_have_class(re.compile("error-text"))
+    # a spreadsheet's failed formula first in the paste: a row of readings with a bad cell,
+    # never taken for a header and skipped
+    failed = "#DIV/0!\t2.88\t-9.11\t-0.96\n" + "\n".join(["10.74\t2.88\t-9.11\t-0.96"] * 9)
+    paste(page, "#part-heading .readings-grid tbody input", failed)
+    expect(status).not_to_contain_text("header row skipped")
+    bad = page.locator("#part-heading .readings-grid input.invalid")
+    expect(bad).to_have_count(1)
+    expect(bad).to_have_attribute(
+        "title", "'#DIV/0!' is a spreadsheet's error (a formula that failed), not a reading"
+    )
 
 
 def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, new_page):
