@@ -455,8 +455,28 @@
     if (all.includes("\t")) split = (line) => line.split("\t");
     else if (all.includes(";")) split = (line) => line.split(";");
     else if (all.includes(",") && !(lines.every((line) => (line.match(/,/g) || []).length === 1) && !all.includes("."))) split = (line) => line.split(",");
-    else split = (line) => line.trim().split(/\s+/);
+    else return spacedCells(lines);
     return lines.map((line) => split(line).map((cell) => cell.trim()));
+  }
+  // Columns between spaces, as app.core.spreadsheet_text.spaced_cells splits a file: a
+  // line of names holding single spaces ("Position 1   Position 2") at runs of two where
+  // that gives the rows' width; a label column's empty cells, lost between spaces, given
+  // back to the rows of numbers ("位置 1 2 3 4" over "10.74 2.88 …").
+  function spacedCells(lines) {
+    const isNumber = (cell) => /^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/.test(cell);
+    let split = lines.map((line) => line.trim().split(/\s+/).filter(Boolean));
+    const widths = split.filter((cells) => cells.length && cells.every(isNumber)).map((cells) => cells.length);
+    if (!widths.length) return split;
+    const width = widths.sort((a, b) => widths.filter((w) => w === b).length - widths.filter((w) => w === a).length)[0];
+    split = split.map((cells, i) => {
+      if (cells.length === width || cells.every(isNumber)) return cells;
+      const wide = lines[i].trim().split(/\s{2,}/).filter(Boolean);
+      return wide.length === width ? wide : cells;
+    });
+    if (split.some((cells) => cells.length === width + 1 && !isNumber(cells[0]))) {
+      split = split.map((cells) => (cells.length === width && cells.every(isNumber) ? ["", ...cells] : cells));
+    }
+    return split;
   }
 
   function setupGrid(panel) {

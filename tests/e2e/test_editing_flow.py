@@ -214,6 +214,15 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     paste(page, "#part-heading .readings-grid tbody input", milli)
     expect(status).to_contain_text("in mdeg/s, which GyroLab does not read")
     expect(status).to_have_class(re.compile("error-text"))
+    # the handout's table as a text editor holds it, columns between spaces: its label
+    # column's empty cells are lost between spaces, and the rows keep their first reading
+    from tests.test_readings_formats import handout_with_spaces
+
+    paste(page, "#part-heading .readings-grid tbody input", handout_with_spaces(fixed_width=True))
+    horizontal = handout("handout_horizontal.csv")
+    expect(grid.nth(0).locator("input").nth(0)).to_have_value(f"{horizontal[1][0]:.2f}")
+    expect(grid.nth(9).locator("input").nth(3)).to_have_value(f"{horizontal[4][9]:.2f}")
+    expect(status).to_contain_text("a row of means or another summary skipped")
     # a spreadsheet's failed formula first in the paste: a row of readings with a bad cell,
     # never taken for a header and skipped
     failed = "#DIV/0!\t2.88\t-9.11\t-0.96\n" + "\n".join(["10.74\t2.88\t-9.11\t-0.96"] * 9)
