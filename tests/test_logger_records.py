@@ -371,3 +371,25 @@ def test_a_last_line_cut_off_or_a_closing_remark_is_left_out_and_said(header, la
     with pytest.raises(UserError) as error:
         read("".join(f"{rate}\n" for rate in RATES) + "oops\n")
     assert (error.value.key, error.value.params["line"]) == ("allan.bad_line", 5)
+
+
+@pytest.mark.parametrize(
+    ("encoding", "remark"),
+    [("cp1252", "# stopped at 25 °C"), ("gb18030", "# 记录结束，25 °C"), ("utf-8", "# 结束 °C")],
+)
+def test_a_first_non_ascii_byte_past_the_first_block_chooses_the_encoding(encoding, remark):
+    """A long logger record whose first MiB is ASCII and whose last lines say "°C" in its
+    own encoding: read whole.  Before, the first block chose UTF-8 and the record was
+    refused as "not text" at the remark."""
+    readings = "".join(f"{k / 10:.1f},{10 + (k % 7) * 0.01:.2f}\n" for k in range(30_000))
+    data = ("time_s,value\n" + readings).encode() + f"{remark}\n3000.0,10.00\n".encode(encoding)
+    chunk = 64 << 10  # the remark some blocks past the first
+    assert data.index(b"# ") > 4 * chunk
+    lines = list(text_lines(data, chunk=chunk))
+    assert lines[-1] == "3000.0,10.00" and len(lines) == 30_003
+    if encoding != "cp1252":  # its "°C" is also two Chinese bytes: read so, in a remark
+        assert remark in lines
+    record = read_static_record(text_lines(data, chunk=chunk))
+    assert record.values.size == 30_001
+    with pytest.raises(UserError):  # bytes of no text at all are still refused
+        list(text_lines(data + b"\xff\xfe\x00\x81\x00", chunk=chunk))

@@ -158,7 +158,7 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
     """Lines of a text file's bytes, decoded incrementally: UTF-8 (with or without a BOM),
     UTF-16 by its byte-order mark (a spreadsheet's "Unicode text"), GB18030 where the
     first block is not UTF-8 (a Chinese-locale Excel's CSV), Windows-1252 where it is
-    neither -- as
+    neither, each told by the first block that is not ASCII only -- as
     :func:`decode_text` reads a whole file; CRLF or CR line ends; Ctrl-Z marks and NUL
     bytes after the last line dropped.
 
@@ -181,14 +181,27 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
     """
     buffer = io.BytesIO(data) if isinstance(data, bytes | bytearray) else data
     first = buffer.read(chunk)
-    decoder = codecs.getincrementaldecoder(_encoding_of(first))()
+    encoding = _encoding_of(first)
+    decoder = codecs.getincrementaldecoder(encoding)()
     pending, piece = "", first
     marked = False  # end-of-file marks ended what was read: text after them is not text
+    plain = encoding == "utf-8-sig"  # every byte so far ASCII: any of the encodings alike
     while piece:
         try:
             text = decoder.decode(piece)
         except UnicodeDecodeError:
-            raise UserError("csv.encoding") from None
+            if not plain:
+                raise UserError("csv.encoding") from None
+            # the first non-ASCII byte further on than the blocks that chose UTF-8 (a
+            # logger's "°C" in Windows-1252 at the end of a long record): the encoding is
+            # chosen by this block instead, as if it had been the first
+            decoder = codecs.getincrementaldecoder(_encoding_of(piece))()
+            plain = False
+            try:
+                text = decoder.decode(piece)
+            except UnicodeDecodeError:
+                raise UserError("csv.encoding") from None
+        plain = plain and piece.isascii()
         body = text.rstrip(END_OF_FILE_MARK)
         if _CONTROL.search(body) or (marked and body):  # bytes of another kind
             raise UserError("csv.encoding")
