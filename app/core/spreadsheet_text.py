@@ -8,6 +8,7 @@ decimal commas that a comma separator would split in two.  The layouts themselve
 from __future__ import annotations
 
 import re
+from collections import Counter
 
 from app.core.column_names import RATE_LIKE, is_hash_comment
 from app.core.text_files import plain_text
@@ -133,7 +134,7 @@ def spaced_cells(text: str) -> list[list[str]]:
     lines = LINE_END.split(text)
     split = [line.split() for line in lines]
     widths = [len(cells) for cells in split if cells and all(is_number(c) for c in cells)]
-    width = max(set(widths), key=widths.count) if widths else None
+    width = Counter(widths).most_common(1)[0][0] if widths else None
     for index, (line, cells) in enumerate(zip(lines, split, strict=True)):
         if width is not None and len(cells) != width and not all(is_number(c) for c in cells):
             wide = [cell for cell in re.split(r"\s{2,}", line.strip()) if cell]

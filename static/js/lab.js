@@ -467,7 +467,9 @@
     let split = lines.map((line) => line.trim().split(/\s+/).filter(Boolean));
     const widths = split.filter((cells) => cells.length && cells.every(isNumber)).map((cells) => cells.length);
     if (!widths.length) return split;
-    const width = widths.sort((a, b) => widths.filter((w) => w === b).length - widths.filter((w) => w === a).length)[0];
+    const counts = new Map();  // the rows' most common width, counted once (a logger's 60,000 lines)
+    widths.forEach((w) => counts.set(w, (counts.get(w) || 0) + 1));
+    const width = [...counts.entries()].reduce((best, entry) => (entry[1] > best[1] ? entry : best))[0];
     split = split.map((cells, i) => {
       if (cells.length === width || cells.every(isNumber)) return cells;
       const wide = lines[i].trim().split(/\s{2,}/).filter(Boolean);
