@@ -277,10 +277,10 @@ def test_a_bad_line_is_named_and_too_many_readings_are_refused(monkeypatch):
     with pytest.raises(UserError) as error:
         read_static_record(io.StringIO("value\n1\n2\nthree\n4\n"))
     assert error.value.key == "allan.bad_line" and error.value.params["line"] == 4
-    import app.core.static_record as static
+    import app.core.record_blocks as blocks
 
-    monkeypatch.setattr(static, "MAX_SAMPLES", 10)
-    monkeypatch.setattr(static, "BLOCK_LINES", 4)
+    monkeypatch.setattr(blocks, "MAX_SAMPLES", 10)
+    monkeypatch.setattr(blocks, "BLOCK_LINES", 4)
     with pytest.raises(UserError) as error:
         read_static_record(io.StringIO("\n".join(["1"] * 20)))
     assert error.value.key == "allan.too_many"

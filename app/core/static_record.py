@@ -14,8 +14,8 @@ with fewer cells than the readings (cut off when the logger stopped, or a closin
 left out, with a note; ``#``, ``%`` and ``//`` comment lines, the last one before the
 readings read as the header where it names their columns -- EuRoC, Kalibr and ROS write
 it so; which column is which: :mod:`app.core.record_columns`; what a name says of units:
-:mod:`app.core.column_names`), parsed in blocks of lines, so a 10⁷-sample record never
-exists as one string.
+:mod:`app.core.column_names`), parsed in blocks of lines (:mod:`app.core.record_blocks`),
+so a 10⁷-sample record never exists as one string.
 
 Preparing the record for the analysis: :mod:`app.core.record_preparation`.
 """
@@ -39,6 +39,7 @@ from app.core.clock_stamps import (
 )
 from app.core.column_names import AngleOutput, comment_text, readable_rate_unit
 from app.core.exceptions import UserError
+from app.core.record_blocks import Progress, RecordBlocks
 from app.core.record_columns import Layout, bare_record_layout, header_layout
 from app.core.spreadsheet_text import (
     WHOLE_COMMA_DIGITS,
@@ -48,13 +49,9 @@ from app.core.spreadsheet_text import (
     separator_hint,
 )
 
-BLOCK_LINES = 200_000
 # notes on lines of the file that were not read, which every reader of a record says
 LEFT_OUT = frozenset({"allan.note_last_line_left_out"})
 LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
-MAX_SAMPLES = 20_000_000
-
-Progress = Callable[[str, dict], None]
 
 
 @dataclass
@@ -165,55 +162,13 @@ def read_static_record(
     ------
     UserError
         No readings, a bad cell (its line number), more than one position, or more than
-        ``MAX_SAMPLES`` readings.
+        :data:`app.core.record_blocks.MAX_SAMPLES` readings.
     """
-    values, times, temps = [], [], []
     time_guessed = False  # a bare record's first column taken as its times
     layout: Layout | None = None
-    clock: TimeColumn | None = None  # the time column's reader, once the layout is known
+    blocks: RecordBlocks | None = None  # the rows converted, once the layout is known
     notes: list[dict] = []
-    position_seen: str | None = None
-    block: list[list[str]] = []
-    first_line = 0
     line_number = 0
-    count = 0
-
-    def flush() -> None:
-        nonlocal block, first_line, count, position_seen
-        if not block:
-            return
-        try:
-            rows = np.array(block, dtype=object)
-            if layout.position is not None:
-                positions = set(rows[:, layout.position].tolist())
-                if position_seen is not None:
-                    positions.add(position_seen)
-                if len(positions) > 1:
-                    raise UserError(
-                        "allan.one_position",
-                        count=len(positions),
-                    )
-                position_seen = next(iter(positions))
-            values.append(np.asarray(rows[:, layout.value], dtype=float))
-            if layout.time is not None:
-                times.append(clock.seconds(rows[:, layout.time]))
-            if layout.temperature is not None:
-                temps.append(np.asarray(rows[:, layout.temperature], dtype=float))
-        except (ValueError, IndexError):
-            bad = _first_bad_line(block, layout)
-            raise UserError(
-                "allan.bad_line",
-                line=first_line + bad,
-            ) from None
-        count += len(block)
-        if count > MAX_SAMPLES:
-            raise UserError(
-                "allan.too_many",
-                maximum=MAX_SAMPLES,
-            )
-        block = []
-        if progress:
-            progress("read", {"samples": count})
 
     width = None
     header: list[str] | None = None  # the header's cells, once seen
@@ -268,22 +223,18 @@ def read_static_record(
             else:
                 rows = _look_ahead_rows(first, split, width)
                 layout, time_guessed = bare_record_layout(rows, width, column)
-            clock = TimeColumn(layout.time_scale)
+            blocks = RecordBlocks(layout, TimeColumn(layout.time_scale), progress)
         if short is not None:  # a reading after a short line: that line was a bad one
             raise UserError("allan.bad_line", line=short[0])
         if len(cells) != width:
-            if len(cells) < width and (count or block):  # the last line, if none follows
+            if len(cells) < width and blocks.held:  # the last line, if none follows
                 short = (line_number, text)
                 continue
             raise UserError(
                 "allan.bad_line",
                 line=line_number,
             )
-        if not block:
-            first_line = line_number
-        block.append(cells)
-        if len(block) >= BLOCK_LINES:
-            flush()
+        blocks.add(line_number, cells)
     if short is not None:  # cut off when the logger stopped, or a closing remark
         notes.append(
             {
@@ -291,18 +242,18 @@ def read_static_record(
                 "params": {"line": short[0], "text": _shortened(short[1])},
             }
         )
-    if layout is not None:
-        flush()
-    if not values:
+    if blocks is not None:
+        blocks.flush()
+    if blocks is None or not blocks.values:
         raise UserError("allan.empty")
-    data = np.concatenate(values)
-    all_times = np.concatenate(times) if times else None
+    all_times = np.concatenate(blocks.times) if blocks.times else None
     if time_guessed:
         if np.all(np.diff(all_times) >= 0):
             notes.append({"key": "allan.note_first_column_times", "params": {}})
         else:  # it rose only at first: a counter that wraps, say -- no times
             all_times = None
-    if clock is not None and clock.inferred:
+    clock = blocks.clock
+    if clock.inferred:
         notes.append(
             {
                 "key": "allan.note_spreadsheet_days"
@@ -312,9 +263,9 @@ def read_static_record(
             }
         )
     record = StaticRecord(
-        data,
-        seconds_from_first(all_times) if clock is not None and clock.clock else all_times,
-        np.concatenate(temps) if temps else None,
+        np.concatenate(blocks.values),
+        seconds_from_first(all_times) if clock.clock else all_times,
+        np.concatenate(blocks.temperatures) if blocks.temperatures else None,
         layout.rate_unit,
         notes,
         layout.angle,
@@ -407,16 +358,3 @@ def _joined_decimal_comma(text: str) -> list[str]:
 def _shortened(text: str, length: int = 40) -> str:
     """A line as a note quotes it: at most ``length`` characters."""
     return text if len(text) <= length else text[: length - 1] + "…"
-
-
-def _first_bad_line(block, layout: Layout) -> int:
-    for index, row in enumerate(block):
-        try:
-            float(row[layout.value])
-            if layout.temperature is not None:
-                float(row[layout.temperature])
-            if layout.time is not None and not TimeColumn.readable(row[layout.time]):
-                return index
-        except (ValueError, IndexError):
-            return index
-    return 0
