@@ -15,6 +15,7 @@ from app.core.clock_stamps import clock_seconds, is_clock_stamp
 from app.core.exceptions import UserError
 from app.core.readings_data import MAX_POSITION_NUMBER, WIDE_COLUMN, Readings, cell_number
 from app.core.table_headers import ANGLE, column_name, evenly_round
+from app.core.typed_numbers import is_number
 
 
 def parse_long(index: dict[str, int], rows) -> Readings:
@@ -106,7 +107,7 @@ def _seconds(cell: str, line: int, clock: str, origin: list[int]) -> float:
     """A time as a cell gives it, in seconds: a number of seconds (``time_s``) or of
     milliseconds (``time_ms``), or a logger's clock stamp ("12:00:01.5", "2026-11-28
     12:00:01"; :func:`app.core.clock_stamps.clock_seconds`, from ``origin``'s midnight)."""
-    if is_clock_stamp(cell):
+    if not is_number(cell) and is_clock_stamp(cell):  # a number is never asked a clock's forms
         try:
             return float(clock_seconds([cell], origin)[0])
         except ValueError:

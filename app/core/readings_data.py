@@ -68,7 +68,7 @@ def cell_number(text: str, line: int, column: str) -> float:
         beyond the range a reading may take (both with its line, column and first 40
         characters).
     """
-    if is_spreadsheet_error(text):  # "#DIV/0!": a formula that failed, not a reading
+    if text.startswith("#") and is_spreadsheet_error(text):  # "#DIV/0!": a failed formula
         raise UserError("csv.spreadsheet_error", line=line, column=column, value=text[:40])
     try:
         return parse_decimal(text)
