@@ -549,3 +549,51 @@ def test_a_rate_in_a_unit_gyrolab_does_not_read_is_refused_by_name(reader, text,
     assert translate("csv.unit_unread", "en", unit=unit).endswith(
         "which GyroLab does not read: convert them to °/h, °/s or rad/s first."
     )
+
+
+def test_a_long_tables_angles_round_the_other_way_are_used_as_given_and_said(
+    student_client, capsys, tmp_path
+):
+    """A long table's angles are the axis's, clockwise positive (lab-reference §3), and
+    each reading is saved at its angle's position -- "0, 90, 180, 270" under the handout's
+    counter-clockwise turns puts 90° at position 4.  Students who count the turns made
+    write the same numbers, so the preview and ``solve`` say which way they run."""
+    from app.cli.main import main
+
+    rows = [
+        f"{angle},{value}"
+        for angle, value in zip([0, 90, 180, 270], [10.7, 2.8, -9.0, -0.9], strict=True)
+        for _ in range(10)
+    ]
+    text = "angle,reading\n" + "\n".join(rows) + "\n"
+    session_id = new_session(student_client)  # counter-clockwise
+    page = f"/lab/sessions/{session_id}"
+
+    def preview(text: str) -> dict:
+        body = {"part": "heading", "unit": "deg/h", "text": text}
+        return post_json(student_client, f"{page}/csv/preview", body, page).json()
+
+    said = preview(text)
+    assert [(p["position"], p["angle_deg"]) for p in said["positions"]] == [
+        (1, 0),
+        (4, 90),
+        (3, 180),
+        (2, 270),
+    ]
+    assert said["notes"] == [
+        "The file's angles run 0°, 90°, 180°, 270°, round the other way from this session's "
+        "positions 1–4 (0°, -90°, -180°, -270°). Angles are used as given, clockwise positive "
+        "seen from above, and each reading is saved at the position of its angle; if the "
+        "file's angles count the turns made, write them as 0°, -90°, -180°, -270°."
+    ]
+    turned = (
+        text.replace("\n90,", "\n-90,").replace("\n180,", "\n-180,").replace("\n270,", "\n-270,")
+    )
+    assert preview(turned)["notes"] == []
+
+    path = tmp_path / "long.csv"
+    path.write_text(text)
+    assert main(["solve", "heading", str(path), "--json"]) == 0
+    assert "write them as 0°, -90°, -180°, -270°" in capsys.readouterr().err
+    assert main(["solve", "heading", str(path), "--json", "--rotation", "cw"]) == 0
+    assert capsys.readouterr().err == ""

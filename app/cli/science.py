@@ -89,7 +89,8 @@ def position_angles(part: str, readings: Readings, args: argparse.Namespace) -> 
 
 def said_beside(part: str, readings: Readings, args: argparse.Namespace) -> list[str]:
     """What ``solve`` says on stderr beside its output: the rows a table's reader passed
-    over, and a header of angles round the other way from ``--rotation``."""
+    over, and a header's or a long table's angles round the other way from
+    ``--rotation``."""
     from app.web.i18n import translator
 
     say = translator(args.language)
@@ -106,6 +107,18 @@ def said_beside(part: str, readings: Readings, args: argparse.Namespace) -> list
                     count=len(expected),
                     rotation=args.rotation,
                     other="cw" if args.rotation == "ccw" else "ccw",
+                )
+            )
+    if readings.layout == "long" and readings.angles_deg is not None and part == "heading":
+        count = len(readings.angles_deg)  # used as given: said where --rotation runs the other way
+        turns = heading_angles(count, args.rotation, args.start_angle, args.step).tolist()
+        if turned_other_way(readings.angles_deg, turns):
+            said.append(
+                say(
+                    "cli.long_angles_other_way",
+                    header=", ".join(f"{angle:g}°" for angle in readings.angles_deg),
+                    session=", ".join(f"{angle:g}°" for angle in turns),
+                    rotation=args.rotation,
                 )
             )
     return said

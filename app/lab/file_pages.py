@@ -157,7 +157,17 @@ def preview_csv(
     notes = [translate(key, language, **params) for key, params in readings.left_out()]
     expected = [row["angle_deg"] for row in rows]
     if readings.header_angles is not None and turned_other_way(readings.header_angles, expected):
-        notes.append(other_way_note(readings.header_angles, expected, language))
+        notes.append(
+            other_way_note(
+                "csv.header_angles_other_way", readings.header_angles, expected, language
+            )
+        )
+    elif readings.layout == "long" and readings.angles_deg is not None:  # used as given
+        turns = [nominal_angle(session, body.part, k) for k in range(1, len(rows) + 1)]
+        if turned_other_way(readings.angles_deg, turns):
+            notes.append(
+                other_way_note("csv.long_angles_other_way", readings.angles_deg, turns, language)
+            )
     if single:
         notes.insert(0, translate("csv.one_position_record", language, position=first))
     notes += [translate(note["key"], language, **note["params"]) for note in parsed.notes]
@@ -200,10 +210,11 @@ def file_positions(session: LabSession, part: str, readings: Readings, first: in
     return list(range(1, count + 1))
 
 
-def other_way_note(header: list[float], session: list[float], language: str) -> str:
-    """Said beside a preview whose header's angles run the other way from the session's."""
+def other_way_note(key: str, header: list[float], session: list[float], language: str) -> str:
+    """Said beside a preview whose file's angles run the other way from the session's: a
+    header's (read in column order) or a long table's (used as given)."""
     return translate(
-        "csv.header_angles_other_way",
+        key,
         language,
         header=", ".join(f"{angle:g}°" for angle in header),
         session=", ".join(f"{angle:g}°" for angle in session),

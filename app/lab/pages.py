@@ -307,6 +307,7 @@ JS_MESSAGES = (
     "js.summary_rows_skipped",
     "js.means_row_skipped",
     "js.header_angles_other_way",
+    "js.long_angles_other_way",
     "js.unit_named_other",
     "js.unit_unread",
     "js.spreadsheet_error",

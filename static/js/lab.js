@@ -261,11 +261,14 @@
     });
     const one = (role) => (found[role] && found[role].length === 1 ? found[role][0] : undefined);
     const key = one("position") ?? one("angle_deg");
-    return one("value") !== undefined && key !== undefined ? { key, value: one("value") } : null;
+    const byAngle = one("position") === undefined;  // keyed by the turntable's angle
+    return one("value") !== undefined && key !== undefined ? { key, value: one("value"), byAngle } : null;
   }
-  // Each position's readings put in its column: "3", "P3", "位置3" is position 3; labels
-  // counting from 0, angles or words: the positions in the order the rows give them.
-  function longBlock(body, long, columns) {
+  // Each position's readings put in its column: "3", "P3", "位置3" is position 3; an angle
+  // at the position of the session's whose dial angle it is (clockwise positive, as
+  // app.lab.file_pages.file_positions saves a file's); labels counting from 0, other
+  // angles or words: the positions in the order the rows give them.
+  function longBlock(body, long, columns, part) {
     const labels = [];
     const readings = new Map();
     body.forEach((row) => {
@@ -279,7 +282,13 @@
       const named = POSITION_NAMES.map((pattern) => name.match(pattern)).find(Boolean);
       return named && /^\d+$/.test(named[1]) ? Number(named[1]) : NaN;
     };
-    let numbers = labels.map(numberOf);
+    const dial = (config.angles[part] || []).slice(0, columns);
+    const atAngle = (label) => {
+      const angle = parseFloat(headerName(label).replace(/\s*(?:°|º|˚|度|deg|degrees?)$/, ""));
+      const k = dial.findIndex((at) => Math.abs(((angle - at) % 360 + 540) % 360 - 180) < 1e-6);
+      return k + 1 || NaN;
+    };
+    let numbers = labels.map(long.byAngle ? atAngle : numberOf);
     const fromZero = numbers.includes(0) && numbers.every((n) => n < numbers.length) && new Set(numbers).size === numbers.length;
     if (fromZero) numbers = numbers.map((n) => n + 1);
     if (!numbers.every((n) => n >= 1 && n <= columns) || new Set(numbers).size !== numbers.length) {
@@ -384,7 +393,16 @@
     const long = header && longColumns(header);
     if (long) {  // each position's readings to its own column, from the grid's first
       notes.push("js.long_block");
-      return { rows: longBlock(body.filter((row) => !isSummary(row)), long, columns), notes, whole: true, named: namedRateUnit(header, unitsRow) };
+      const block = body.filter((row) => !isSummary(row));
+      if (long.byAngle) {  // used as given, clockwise positive: said where they run the other way
+        const given = [...new Set(block.map((row) => (row[long.key] || "").trim()))]
+          .map((label) => parseFloat(headerName(label).replace(/\s*(?:°|º|˚|度|deg|degrees?)$/, "")));
+        const turns = (config.angles[part] || []).slice(0, given.length);
+        if (turnedOtherWay(given, turns)) {
+          notes.push(["js.long_angles_other_way", { header: degrees(given), session: degrees(turns), count: turns.length }]);
+        }
+      }
+      return { rows: longBlock(block, long, columns, part), notes, whole: true, named: namedRateUnit(header, unitsRow) };
     }
     const summaries = body.filter(isSummary).length;
     if (summaries) {

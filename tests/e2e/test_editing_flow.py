@@ -197,6 +197,20 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     paste(page, "#part-heading .readings-grid tbody input", session_way)
     expect(page.locator("#part-heading .grid-status")).to_contain_text("Pasted 10 rows")
     expect(page.locator("#part-heading .grid-status")).not_to_contain_text("other way")
+    # a long table keyed by the turntable's angle: each reading at its angle's position
+    # (clockwise positive, as a file's is saved), and said where the angles run the other
+    # way from the session's (90° is position 4 under counter-clockwise turns)
+    by_angle = "角度\t读数\n" + "\n".join(
+        f"{angle}\t{value}"
+        for angle, value in [(0, "10.70"), (90, "2.80"), (180, "-9.00"), (270, "-0.90")]
+        for _ in range(10)
+    )
+    paste(page, "#part-heading .readings-grid tbody input", by_angle)
+    expect(grid.nth(0).locator("input").nth(3)).to_have_value("2.80")  # 90°: position 4
+    expect(grid.nth(0).locator("input").nth(1)).to_have_value("-0.90")  # 270° = -90°: 2
+    expect(page.locator("#part-heading .grid-status")).to_contain_text(
+        "The pasted angles run 0°, 90°, 180°, 270°, round the other way"
+    )
     # a header naming the readings' unit other than the grid's: said, as a file under
     # another unit is refused (°/s saved as °/h would be 3600 times too small)
     per_second = "P1 (°/s)\tP2 (°/s)\tP3 (°/s)\tP4 (°/s)\n" + "\n".join(["0.0030\t-0.0001"] * 10)
