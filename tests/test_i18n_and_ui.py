@@ -238,3 +238,26 @@ def test_a_time_shown_names_its_zone_in_the_readers_language():
     )
     assert format_datetime(moment, "en", None, "Hms", ZoneInfo("UTC")) == "10:00:00 UTC"
     assert format_datetime(moment, "en", "yMMMd", None, shanghai) == "Dec 1, 2026"  # a date alone
+
+
+@pytest.mark.parametrize("control", ["\u202e", "\u202d", "\u2066", "\u2067", "\u2069"])
+def test_a_value_quoted_in_a_message_cannot_reorder_it(control, student_client):
+    """A cell quoted back ("'…' is not a number") keeps its text but not a bidirectional
+    control, which would show the rest of the message reversed (the lab page's own
+    messages: tests/e2e/test_editing_flow.py)."""
+    said = translate("csv.not_a_number", "en", line=2, column="position_1", value=f"{control}°/s")
+    assert said == "Line 2, column position_1: '°/s' is not a number."
+    assert control not in translate("csv.not_a_number", "zh-CN", line=2, column="c", value=control)
+    from tests.factories import new_session, post_json
+
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    text = f"P1,P2,P3,P4\n{control}°/s,x,°/s,°/s\n1,2,3,4\n"
+    refused = post_json(
+        student_client,
+        f"{page}/csv/preview",
+        {"part": "heading", "unit": "deg/h", "text": text},
+        page,
+    )
+    assert refused.status_code == 400
+    assert refused.json()["detail"] == "Line 2, column position_1: '°/s' is not a number."

@@ -24,6 +24,7 @@ from babel.messages.pofile import read_po
 from babel.numbers import format_decimal
 from babel.support import Translations
 
+from app.core.text_files import BIDI_CONTROLS
 from app.paths import LOCALES_DIR
 
 LANGUAGES = ("en", "zh-CN")
@@ -111,12 +112,20 @@ def is_known(key: str) -> bool:
 
 def translate(key: str, language: str, **params: object) -> str:
     """The message ``key`` in ``language`` (English when missing there; the key itself
-    when unknown), its placeholders filled from ``params``."""
+    when unknown), its placeholders filled from ``params`` -- a value quoted from a file or
+    a form without bidirectional controls, which would reorder the message after it
+    ("'\u202e°/s' is not a number")."""
     text, plural_language = _message(key, language)
     if plural_language is not None:
         count = params.get("n", 1)
         text = translations(plural_language).ngettext(key, key, int(count) if count else 0)
-    return text.format(**params) if params else text
+    if not params:
+        return text
+    shown = {
+        name: BIDI_CONTROLS.sub("", value) if isinstance(value, str) else value
+        for name, value in params.items()
+    }
+    return text.format(**shown)
 
 
 @lru_cache(maxsize=64)

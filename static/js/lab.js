@@ -9,7 +9,8 @@
   const t = (key, params = {}) => {
     let text = config.messages[key] || key;
     if (typeof text === "object") text = Number(params.n) === 1 ? text.one : text.other;
-    return text.replace(/\{(\w+)\}/g, (_, name) => params[name] ?? "");
+    // a value quoted from a cell, without bidirectional controls that would reorder the rest
+    return text.replace(/\{(\w+)\}/g, (_, name) => String(params[name] ?? "").replace(/[\u202a-\u202e\u2066-\u2069]/g, ""));
   };
   const base = `/lab/sessions/${config.sessionId}`;
   const MAX_FILE_BYTES = 5_000_000;

@@ -247,6 +247,11 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     expect(bad).to_have_attribute(
         "title", "'#DIV/0!' is a spreadsheet's error (a formula that failed), not a reading"
     )
+    # a cell quoted back keeps its text but not a bidirectional control (it would show
+    # the rest of the message reversed)
+    reversed_cell = "10.74\t2.88\t-9.11\t-0.96\n\u202e°/s\t2.88\t-9.11\t-0.96"
+    paste(page, "#part-heading .readings-grid tbody input", reversed_cell)
+    expect(bad).to_have_attribute("title", "'°/s' is not a number")
 
 
 def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, new_page):
