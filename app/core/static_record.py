@@ -13,9 +13,10 @@ a status flag read without times; a spreadsheet's empty last column dropped; a l
 with fewer cells than the readings (cut off when the logger stopped, or a closing remark)
 left out, with a note; ``#``, ``%`` and ``//`` comment lines, the last one before the
 readings read as the header where it names their columns -- EuRoC, Kalibr and ROS write
-it so; which column is which: :mod:`app.core.record_columns`; what a name says of units:
-:mod:`app.core.column_names`), parsed in blocks of lines (:mod:`app.core.record_blocks`),
-so a 10⁷-sample record never exists as one string.
+it so (:mod:`app.core.record_preamble`); which column is which:
+:mod:`app.core.record_columns`; what a name says of units: :mod:`app.core.column_names`),
+parsed in blocks of lines (:mod:`app.core.record_blocks`), so a 10⁷-sample record never
+exists as one string.
 
 Preparing the record for the analysis: :mod:`app.core.record_preparation`.
 """
@@ -26,7 +27,7 @@ import csv
 import io
 import itertools
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -34,17 +35,16 @@ from app.core.clock_stamps import (
     DATE_TIME,
     TIME_OF_DAY,
     TimeColumn,
-    is_clock_stamp,
     seconds_from_first,
 )
-from app.core.column_names import AngleOutput, comment_text, readable_rate_unit
+from app.core.column_names import AngleOutput, comment_text
 from app.core.exceptions import UserError
 from app.core.record_blocks import Progress, RecordBlocks
-from app.core.record_columns import Layout, bare_record_layout, header_layout
+from app.core.record_columns import Layout
+from app.core.record_preamble import Preamble, header_in_comment, holds_a_number, is_header
 from app.core.spreadsheet_text import (
     WHOLE_COMMA_DIGITS,
     decimal_point,
-    is_units_row,
     one_column_of_decimal_commas,
     separator_hint,
 )
@@ -66,69 +66,6 @@ class StaticRecord:
     unit: str | None = None
     notes: list[dict] = field(default_factory=list)
     angle: AngleOutput | None = None  # the readings are angles per output, not rates
-
-
-def _is_header(cells: list[str]) -> bool:
-    for cell in cells:
-        if cell.strip():
-            try:
-                float(cell)
-            except ValueError:
-                if not is_clock_stamp(cell):
-                    return True
-    return False
-
-
-def _look_ahead_rows(
-    lines: list[str], split: Callable[[str], list[str]], width: int
-) -> list[list[str]]:
-    """The cells of the readings among ``lines`` (the look-ahead) that have ``width``."""
-    rows = []
-    for raw in lines:
-        text = raw.strip().lstrip("\ufeff")
-        if text and comment_text(text) is None and len(cells := split(text)) == width:
-            rows.append(cells)
-    return rows
-
-
-def _holds_a_number(cells: list[str]) -> bool:
-    return any(_is_number(cell) for cell in cells)
-
-
-def _is_number(cell: str) -> bool:
-    try:
-        float(cell)
-    except ValueError:
-        return False
-    return True
-
-
-def _fitted_header(cells: list[str], text: str, width: int) -> list[str] | None:
-    """The header's cells for ``width`` columns of readings: as split, or -- where spaces
-    split the columns and the names have spaces -- a unit in brackets joined to its name
-    ("Time (s)  Rate (deg/h)"), or the whole line as the one column's name; None when
-    they cannot match."""
-    if len(cells) == width:
-        return cells
-    joined: list[str] = []
-    for word in text.split():
-        if joined and word[:1] in "([":
-            joined[-1] += " " + word
-        else:
-            joined.append(word)
-    if len(joined) == width:
-        return joined
-    return [text] if width == 1 else None
-
-
-def _header_in_comment(comment: str | None, split, width: int) -> list[str] | None:
-    """A header written as the comment line just above the readings ("#timestamp [ns],
-    w_x [rad s^-1], …", "%time,field.angular_velocity.x, …"): its cells, when it has the
-    readings' number of columns and is names, not numbers."""
-    if comment is None or width < 2:
-        return None
-    cells = split(comment)
-    return cells if len(cells) == width and _is_header(cells) else None
 
 
 def read_static_record(
@@ -171,12 +108,7 @@ def read_static_record(
     line_number = 0
 
     width = None
-    header: list[str] | None = None  # the header's cells, once seen
-    header_text = ""
-    units_next = False  # the line after a header may name the units
-    units: list[str] | None = None  # that line's cells, where it does
-    comment: str | None = None  # the last comment line before the readings
-    comment_line = 0
+    preamble = Preamble()
     short: tuple[int, str] | None = None  # a line with fewer cells than the readings
     lines = iter(lines)
     first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
@@ -188,7 +120,7 @@ def read_static_record(
             continue
         if (remark := comment_text(text)) is not None:
             if layout is None:
-                comment, comment_line = remark, line_number
+                preamble.comment, preamble.comment_line = remark, line_number
             continue
         if split is None:
             if (hint := separator_hint(raw.rstrip("\r\n"))) is not None:  # Excel's "sep=;"
@@ -196,33 +128,16 @@ def read_static_record(
                 continue
             split = _splitter(text)
         cells = split(text)
-        if units_next:
-            units_next = False
-            if is_units_row(cells):
-                units = cells
-                continue  # "s, °/h, °C" under the names
+        if preamble.takes_units(cells):
+            continue  # "s, °/h, °C" under the names
         if layout is None:
-            named = _header_in_comment(comment, split, len(cells))
-            if header is None and named is None and _is_header(cells):
-                header, header_text, units_next = cells, text, True  # read with the data's width
+            if preamble.takes_header(cells, text, split):
                 continue
             width = len(cells)
-            if header is not None:
-                header = _fitted_header(header, header_text, width)
-                if header is None:
-                    raise UserError("allan.bad_line", line=line_number)
-                layout = header_layout(header, column, guess=guess)
-                if layout.rate_unit is None and units is not None and layout.value < len(units):
-                    # the rates' unit in the row of units under the names, not in the name
-                    layout = replace(
-                        layout, rate_unit=readable_rate_unit(units[layout.value].lower())
-                    )
-            elif named is not None and _holds_a_number(cells):  # a ROS frame's name, say
-                layout = header_layout(named, column, guess=guess)
-                notes.append({"key": "allan.note_comment_header", "params": {"line": comment_line}})
-            else:
-                rows = _look_ahead_rows(first, split, width)
-                layout, time_guessed = bare_record_layout(rows, width, column)
+            layout, time_guessed, said = preamble.layout(
+                cells, line_number, first, split, column, guess
+            )
+            notes += said
             blocks = RecordBlocks(layout, TimeColumn(layout.time_scale), progress)
         if short is not None:  # a reading after a short line: that line was a bad one
             raise UserError("allan.bad_line", line=short[0])
@@ -301,7 +216,7 @@ def names_its_columns_in_a_comment(text: str) -> bool:
             continue
         split = _splitter(stripped)
         cells = split(stripped)
-        return _holds_a_number(cells) and _header_in_comment(comment, split, len(cells)) is not None
+        return holds_a_number(cells) and header_in_comment(comment, split, len(cells)) is not None
     return False
 
 
@@ -345,7 +260,7 @@ def _one_column_with_decimal_commas(first_lines: list[str]) -> bool:
     texts = [text for text in texts if text and comment_text(text) is None]
     if not texts or "\t" in texts[0] or ";" in texts[0]:
         return False
-    named = not WHOLE_COMMA_DIGITS.fullmatch(texts[0]) and _is_header(texts[0].split(","))
+    named = not WHOLE_COMMA_DIGITS.fullmatch(texts[0]) and is_header(texts[0].split(","))
     header = texts[0].split(",") if named else None
     return one_column_of_decimal_commas(header, texts[1:] if named else texts)
 
