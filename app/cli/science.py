@@ -14,6 +14,7 @@ from itertools import pairwise
 
 import numpy as np
 
+from app.cli.solve_angles import position_angles, said_beside
 from app.core.drift_check import warm_up_message
 from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude, render_text
@@ -28,7 +29,6 @@ from app.core.record_checks import WARM_UP_LIMIT_C
 from app.core.simulate import Setup, simulate_run, simulate_static
 from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.solve import solve_heading, solve_latitude
-from app.core.table_headers import turned_other_way
 from app.core.text_files import decode_text
 from app.core.units import (
     DEG_PER_HOUR,
@@ -73,55 +73,6 @@ def _read_text(path: str) -> str:
 def _finite(name: str, value: float | None) -> None:
     if value is not None and not math.isfinite(value):
         raise CommandError(f"{name} must be a finite number")
-
-
-def position_angles(part: str, readings: Readings, args: argparse.Namespace) -> np.ndarray:
-    """Each position's angle: as the file gives them (a long table), else the nominal ones
-    of ``--rotation``, ``--start-angle`` and ``--step`` for the positions' numbers."""
-    if readings.angles_deg is not None:
-        return np.asarray(readings.angles_deg)
-    numbers = np.asarray(readings.numbers or range(1, len(readings.positions) + 1))  # "P3"
-    if part == "heading":
-        angles = heading_angles(numbers.max(), args.rotation, args.start_angle, args.step)
-        return angles[numbers - 1]
-    return elevation_angles(numbers.max(), args.start_angle, args.step)[numbers - 1]
-
-
-def said_beside(part: str, readings: Readings, args: argparse.Namespace) -> list[str]:
-    """What ``solve`` says on stderr beside its output: the rows a table's reader passed
-    over, and a header's or a long table's angles round the other way from
-    ``--rotation``."""
-    from app.web.i18n import translator
-
-    say = translator(args.language)
-    said = [say(key, **params) for key, params in readings.left_out()]
-    header = readings.header_angles
-    if header is not None and part == "heading":
-        expected = [float(angle) for angle in position_angles(part, readings, args)]
-        if turned_other_way(header, expected):
-            said.append(
-                say(
-                    "cli.header_angles_other_way",
-                    header=", ".join(f"{angle:g}°" for angle in header),
-                    session=", ".join(f"{angle:g}°" for angle in expected),
-                    count=len(expected),
-                    rotation=args.rotation,
-                    other="cw" if args.rotation == "ccw" else "ccw",
-                )
-            )
-    if readings.layout == "long" and readings.angles_deg is not None and part == "heading":
-        count = len(readings.angles_deg)  # used as given: said where --rotation runs the other way
-        turns = heading_angles(count, args.rotation, args.start_angle, args.step).tolist()
-        if turned_other_way(readings.angles_deg, turns):
-            said.append(
-                say(
-                    "cli.long_angles_other_way",
-                    header=", ".join(f"{angle:g}°" for angle in readings.angles_deg),
-                    session=", ".join(f"{angle:g}°" for angle in turns),
-                    rotation=args.rotation,
-                )
-            )
-    return said
 
 
 def solve_readings(part: str, readings: Readings, args: argparse.Namespace):

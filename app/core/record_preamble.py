@@ -29,14 +29,7 @@ def is_header(cells: list[str]) -> bool:
     bool
         True where one cell at least is neither a number nor a clock stamp.
     """
-    for cell in cells:
-        if cell.strip():
-            try:
-                float(cell)
-            except ValueError:
-                if not is_clock_stamp(cell):
-                    return True
-    return False
+    return any(cell.strip() and not _is_number(cell) and not is_clock_stamp(cell) for cell in cells)
 
 
 def _look_ahead_rows(

@@ -73,17 +73,19 @@ def spreadsheet_delimiter(text: str) -> str:
         with decimal commas); ``,`` where none does.  Lines about the table above it (a
         title, a name) hold none, or fewer than the table's rows do.
     """
-    lines = [
-        line
-        for line in LINE_END.split(text, maxsplit=4 * SEPARATOR_LINES)[: 4 * SEPARATOR_LINES]
-        if line.strip() and not is_hash_comment(line)
-    ][:SEPARATOR_LINES]
+    lines = _first_lines(text)
     counts = {mark: sum(mark in line for line in lines) for mark in ("\t", ";", ",")}
     most = max(counts.values())
     return next((mark for mark, count in counts.items() if count == most and most), ",")
 
 
 SEPARATOR_LINES = 20  # lines looked at for the separator: a preamble and the table's start
+
+
+def _first_lines(text: str) -> list[str]:
+    """The first ``SEPARATOR_LINES`` lines that are neither empty nor ``#`` comments."""
+    head = LINE_END.split(text, maxsplit=4 * SEPARATOR_LINES)[: 4 * SEPARATOR_LINES]
+    return [line for line in head if line.strip() and not is_hash_comment(line)][:SEPARATOR_LINES]
 
 
 def separated_by_spaces(text: str) -> bool:
@@ -102,11 +104,7 @@ def separated_by_spaces(text: str) -> bool:
     bool
         True where the columns can only be split at spaces.
     """
-    lines = [
-        line
-        for line in LINE_END.split(text, maxsplit=4 * SEPARATOR_LINES)[: 4 * SEPARATOR_LINES]
-        if line.strip() and not is_hash_comment(line)
-    ][:SEPARATOR_LINES]
+    lines = _first_lines(text)
     return not any(mark in line for line in lines for mark in "\t;,") and any(
         len(line.split()) > 1 for line in lines
     )

@@ -145,24 +145,34 @@ def numbered_columns(cells: list[str], more_rows: bool) -> dict[int, int] | None
     dict or None
         Column index → position number, or None when the row is no such header.
     """
+    return _numbered(cells, more_rows)[0]
+
+
+def _numbered(
+    cells: list[str], more_rows: bool
+) -> tuple[dict[int, int] | None, list[float] | None]:
+    """:func:`numbered_columns`'s columns, and the angles that head them where they are
+    the turntable's (:func:`header_angles`)."""
     stripped = [UNIT_SUFFIX.sub("", plain_text(c).strip()) for c in cells]
     used = [(index, cell) for index, cell in enumerate(stripped) if cell]
     numbers = [(index, cell) for index, cell in used if is_number(cell)]
     angles = [(index, _angle(cell)) for index, cell in used if _angle(cell) is not None]
     labelled = len(used) > len(numbers) + len(angles)  # a text cell: "位置", "序号", "time"
     if not labelled and not more_rows:
-        return None  # one row of numbers and nothing under it: readings, not a header
+        return None, None  # one row of numbers and nothing under it: readings, not a header
     if angles:
         if numbers or not evenly_round([angle for _, angle in angles], from_zero=False):
-            return None
-        return {index: k for k, (index, _) in enumerate(angles, start=1)}
+            return None, None
+        columns = {index: k for k, (index, _) in enumerate(angles, start=1)}
+        return columns, [angle for _, angle in angles]
     written = [cell for _, cell in numbers]
     counting = written == [str(k) for k in range(1, len(written) + 1)]
-    if (counting and len(written) >= (2 if labelled else 3)) or evenly_round(
-        [float(cell) for cell in written], from_zero=True
-    ):
-        return {index: k for k, (index, _) in enumerate(numbers, start=1)}
-    return None
+    if counting and len(written) >= (2 if labelled else 3):
+        return {index: k for k, (index, _) in enumerate(numbers, start=1)}, None
+    if evenly_round([float(cell) for cell in written], from_zero=True):  # "0, 90, 180, 270"
+        columns = {index: k for k, (index, _) in enumerate(numbers, start=1)}
+        return columns, [float(cell) for cell in written]
+    return None, None
 
 
 def header_angles(cells: list[str], more_rows: bool) -> list[float] | None:
@@ -185,17 +195,7 @@ def header_angles(cells: list[str], more_rows: bool) -> list[float] | None:
         Each position column's angle (°), or None where the header numbers the positions
         otherwise ("位置 | 1 | 2 | 3 | 4") or is no such header.
     """
-    if numbered_columns(cells, more_rows) is None:
-        return None
-    stripped = [UNIT_SUFFIX.sub("", plain_text(c).strip()) for c in cells]
-    used = [cell for cell in stripped if cell]
-    angles = [angle for cell in used if (angle := _angle(cell)) is not None]
-    if angles:
-        return angles
-    written = [cell for cell in used if is_number(cell)]
-    if written == [str(k) for k in range(1, len(written) + 1)]:
-        return None  # counting the positions, not angles
-    return [float(cell) for cell in written]
+    return _numbered(cells, more_rows)[1]
 
 
 def summary_label(cells: list[str]) -> str | None:
@@ -254,3 +254,19 @@ def turned_other_way(given: list[float], expected: list[float]) -> bool:
 
     ahead = offsets(given, 1.0)
     return same(ahead, offsets(expected, -1.0)) and not same(ahead, offsets(expected, 1.0))
+
+
+def angle_list(angles) -> str:
+    """Angles as a message quotes them: "0°, -90°, -180°, -270°".
+
+    Parameters
+    ----------
+    angles : iterable of float
+        The angles (°).
+
+    Returns
+    -------
+    str
+        Each as few digits as it needs, with its degree sign, comma-separated.
+    """
+    return ", ".join(f"{angle:g}°" for angle in angles)

@@ -19,7 +19,7 @@ from app.core.position_records import (
 from app.core.readings import parse_readings_csv
 from app.core.readings_data import Readings
 from app.core.static_record import names_its_columns_in_a_comment
-from app.core.table_headers import turned_other_way
+from app.core.table_headers import angle_list, turned_other_way
 from app.core.units import canonical_unit, check_named_unit, to_deg_per_hour
 from app.core.workbook_text import workbook_readings
 from app.lab.schemas import CsvUpload
@@ -216,8 +216,8 @@ def other_way_note(key: str, header: list[float], session: list[float], language
     return translate(
         key,
         language,
-        header=", ".join(f"{angle:g}°" for angle in header),
-        session=", ".join(f"{angle:g}°" for angle in session),
+        header=angle_list(header),
+        session=angle_list(session),
         count=len(session),
     )
 

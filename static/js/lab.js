@@ -265,6 +265,8 @@
     const byAngle = one("position") === undefined;  // keyed by the turntable's angle
     return one("value") !== undefined && key !== undefined ? { key, value: one("value"), byAngle } : null;
   }
+  // A long table's angle as a cell writes it, with or without its unit ("90", "90°", "90度").
+  const angleOf = (label) => parseFloat(headerName(label).replace(/\s*(?:°|º|˚|度|deg|degrees?)$/, ""));
   // Each position's readings put in its column: "3", "P3", "位置3" is position 3; an angle
   // at the position of the session's whose dial angle it is (clockwise positive, as
   // app.lab.file_pages.file_positions saves a file's); labels counting from 0, other
@@ -285,7 +287,7 @@
     };
     const dial = (config.angles[part] || []).slice(0, columns);
     const atAngle = (label) => {
-      const angle = parseFloat(headerName(label).replace(/\s*(?:°|º|˚|度|deg|degrees?)$/, ""));
+      const angle = angleOf(label);
       const k = dial.findIndex((at) => Math.abs(((angle - at) % 360 + 540) % 360 - 180) < 1e-6);
       return k + 1 || NaN;
     };
@@ -397,7 +399,7 @@
       const block = body.filter((row) => !isSummary(row));
       if (long.byAngle) {  // used as given, clockwise positive: said where they run the other way
         const given = [...new Set(block.map((row) => (row[long.key] || "").trim()))]
-          .map((label) => parseFloat(headerName(label).replace(/\s*(?:°|º|˚|度|deg|degrees?)$/, "")));
+          .map(angleOf);
         const turns = (config.angles[part] || []).slice(0, given.length);
         if (turnedOtherWay(given, turns)) {
           notes.push(["js.long_angles_other_way", { header: degrees(given), session: degrees(turns), count: turns.length }]);
