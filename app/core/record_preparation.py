@@ -12,9 +12,10 @@ Preparation, in this order:
   replaced by it and counted;
 * warm-up: from the case temperature where there is one (the stretch before it settles to
   within 10 % of its total change of its final value), else from the rate itself (64 block
-  means; the first ones step monotonically towards the settled level of the second half,
-  the first more than ``WARM_UP_LIMIT`` times the block-to-block scatter away): trimmed,
-  at most half the record.
+  means; the first more than ``WARM_UP_LIMIT`` times the block-to-block scatter from the
+  settled level of the second half, and the first four -- or all until one is back within
+  twice the scatter, if fewer -- stepping monotonically towards it): trimmed, at most
+  half the record.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from app.core.static_record import StaticRecord
 SPIKE_LIMIT = 10.0
 WARM_UP_LIMIT = 6.0
 WARM_UP_BLOCKS = 64
+WARM_UP_HEAD = 4  # blocks a warm-up must fall steadily over (fewer if it settles sooner)
 MAX_TRIM_SHARE = 0.5
 # a clock coarser than the readings ties at least one step in six (1.2 readings a tick);
 # fewer ties are a fine clock's stamps written twice (a logger's first line, say)
@@ -140,10 +142,14 @@ def _warm_up_end(values: np.ndarray, temperatures: np.ndarray | None) -> tuple[i
     if abs(deviation[0]) < WARM_UP_LIMIT * scatter:
         return 0, "", 0.0
     sign = np.sign(deviation[0])
-    head = deviation[:4] * sign
-    if not np.all(np.diff(head) < 0):  # a warm-up moves steadily towards the settled level
-        return 0, "", 0.0
     inside = np.flatnonzero(np.abs(deviation) < 2.0 * scatter)
+    # a warm-up moves steadily towards the settled level: over its first four blocks, or
+    # over all of it when it settles sooner (a 5-minute warm-up in an 8-hour record's
+    # 450-s blocks is one or two blocks, the next ones the settled scatter)
+    away = int(inside[0]) if inside.size else WARM_UP_BLOCKS
+    head = deviation[: min(away, WARM_UP_HEAD)] * sign
+    if not np.all(np.diff(head) < 0):
+        return 0, "", 0.0
     end_block = int(inside[0]) if inside.size else WARM_UP_BLOCKS // 2
     return min(end_block * size, limit), "rate", float(deviation[0])
 
