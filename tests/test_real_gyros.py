@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from app.core.allan import allan_curve, allan_deviation, analyse_record
+from app.core.allan import allan_curve, allan_deviation, allan_minimum, analyse_record
 from app.core.exceptions import UserError
 from app.core.noise_model import GyroNoise, recommended_dwell
 from app.core.presets import PRESETS
@@ -182,6 +182,29 @@ def test_the_simulators_flicker_shows_the_flat_floor_of_real_records():
         keep = (taus >= 64) & (taus <= 1024)
         ratios.append(adev[keep] / (0.664 * 0.05))
     assert np.mean(ratios, axis=0) == pytest.approx(1.0, abs=0.12)
+
+
+@pytest.mark.parametrize("seed", [0, 4])
+def test_the_allan_minimum_is_no_dip_below_the_floor_the_fit_resolved(seed):
+    # 8 hours of white and flicker noise: the last τ (13107 s) rests on one difference
+    # (ν ≈ 1) and dipped to 0.18-0.20× the floor; read as the minimum it sat below 0.664·B,
+    # the sign of a fit gone wrong (lab-reference §6) on a fit that was right
+    rates = static_record(8.0, 5.0, arw=0.005, flicker=0.02, seed=seed)
+    result = allan_deviation(rates, 5.0)
+    floor = 0.664 * result.bias_instability_deg_h
+    assert result.adev_deg_h.min() < 0.5 * floor  # the dip is there
+    assert floor <= result.adev_min_deg_h <= 1.3 * 0.664 * 0.02
+    assert result.dwell.source == "model"
+
+
+def test_without_a_model_the_minimum_is_read_where_the_curve_holds_degrees_of_freedom():
+    taus = np.array([1.0, 10.0, 100.0, 1000.0])
+    adev = np.array([1.0, 0.4, 0.3, 0.05])
+    edf = np.array([900.0, 90.0, 9.0, 1.1])  # the last a single difference
+    assert allan_minimum(taus, adev, edf, None) == (100.0, 0.3)
+    assert allan_minimum(taus, adev, np.full(4, 1.1), None) == (1000.0, 0.05)  # none better
+    model = np.array([1.0, 0.35, 0.2, 0.25])
+    assert allan_minimum(taus, adev, edf, model) == (100.0, 0.2)
 
 
 # --- real records: warm-up, temperature, spikes, gaps, length --------------------------

@@ -32,6 +32,9 @@ from app.core.static_record import Progress, StaticRecord
 from app.core.units import MAX_RATE_DEG_H
 
 MIN_SAMPLES = 16
+# the fewest degrees of freedom a point of the curve needs to be read as its minimum (or the
+# best dwell): at ν = 3 the 68 % band is ×0.75 … ×1.8, at ν = 1 ×0.7 … ×4.6
+MIN_READ_EDF = 3.0
 UNITS = {
     "quantization": "°",
     "arw": "°/√h",
@@ -232,6 +235,51 @@ def allan_curve(data: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarra
     return np.asarray(taus[keep], dtype=float), np.asarray(adev[keep], dtype=float)
 
 
+def readable_points(edf: np.ndarray) -> np.ndarray:
+    """The curve's points holding at least ``MIN_READ_EDF`` degrees of freedom (all of them
+    when none does), as a mask."""
+    readable = edf >= MIN_READ_EDF
+    return readable if readable.any() else np.ones(edf.size, dtype=bool)
+
+
+def allan_minimum(
+    taus_s: np.ndarray, adev_deg_h: np.ndarray, edf: np.ndarray, model_adev: np.ndarray | None
+) -> tuple[float, float]:
+    """The Allan minimum: the smallest σ(τ) and its τ.
+
+    Read off the fitted model where it fits and resolves a term, else off the curve's
+    points holding at least ``MIN_READ_EDF`` degrees of freedom.  A record's last τ rests
+    on one or two differences (ν ≈ 1, a 68 % band of ×0.7 … ×4.6) and the lowest of twenty
+    points picks such a dip: an 8-hour flicker record's last point sat at 0.12× the floor
+    the fit resolved, below 0.664·B -- which lab-reference §6 calls a fit gone wrong.
+
+    Parameters
+    ----------
+    taus_s, adev_deg_h : numpy.ndarray
+        The curve: τ (s) and σ(τ) (°/h).
+    edf : numpy.ndarray
+        Each point's equivalent degrees of freedom.
+    model_adev : numpy.ndarray or None
+        The fitted model at each τ (°/h), or None where no model describes the curve.
+
+    Returns
+    -------
+    (float, float)
+        τ (s) and σ (°/h) at the minimum.
+
+    References
+    ----------
+    IEEE Std 952-1997, annex C; NIST SP 1065 (2008), §5.3; lab-reference §6.
+    """
+    if model_adev is not None:
+        taus, values = taus_s, model_adev
+    else:
+        readable = readable_points(edf)
+        taus, values = taus_s[readable], adev_deg_h[readable]
+    smallest = int(np.argmin(values))
+    return float(taus[smallest]), float(values[smallest])
+
+
 def allan_deviation(
     rates_deg_h,
     rate_hz: float,
@@ -290,7 +338,9 @@ def allan_deviation(
     alphas = dominant_alphas(taus, fit)
     edf = degrees_of_freedom(taus, rate_hz, data.size, alphas)
     fit = fit_terms(taus, adev, edf, alphas)
-    smallest = int(np.argmin(adev))
+    modelled = fit.fits and any(t.resolved for t in fit.terms.values())
+    readable = readable_points(edf)
+    tau_min, adev_min = allan_minimum(taus, adev, edf, fit.model_adev if modelled else None)
     result = AllanResult(
         taus,
         adev,
@@ -300,14 +350,14 @@ def allan_deviation(
         fit.model_adev,
         fit.terms,
         fit.fits,
-        float(taus[smallest]),
-        float(adev[smallest]),
-        curve_dwell(taus, adev),
+        tau_min,
+        adev_min,
+        curve_dwell(taus[readable], adev[readable]),
         float(rate_hz),
         int(data.size),
         list(notes or []),
     )
-    if fit.fits and any(t.resolved for t in fit.terms.values()):
+    if modelled:
         advice = recommended_dwell(
             result.noise(), rate_hz, (float(taus[0]), float(taus[-1])), limit="record"
         )

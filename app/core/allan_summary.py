@@ -140,7 +140,7 @@ def summary_lines(result: AllanResult, _: Translate) -> list[str]:
         lines.append(f"{row['label']:<{width}}  {row['text']}")
     lines.append(
         _(
-            "allan.minimum",
+            "allan.minimum_model" if result.dwell.source == "model" else "allan.minimum",
             adev=_number(result.adev_min_deg_h),
             tau=_seconds(result.tau_min_s),
         )
