@@ -16,7 +16,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from app.core.allan import allan_curve, allan_deviation, allan_minimum, analyse_record
+from app.core.allan import allan_deviation, analyse_record
+from app.core.allan_curve import allan_curve, allan_minimum
 from app.core.exceptions import UserError
 from app.core.noise_model import GyroNoise, recommended_dwell
 from app.core.presets import PRESETS

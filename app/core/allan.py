@@ -22,7 +22,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.core.allan_fit import BASES, TERM_ALPHA, TERM_ORDER, TermEstimate, TermFit, fit_terms
+from app.core.allan_curve import (
+    allan_curve,
+    allan_minimum,
+    degrees_of_freedom,
+    dominant_alphas,
+    readable_points,
+)
+from app.core.allan_fit import TermEstimate, fit_terms
 from app.core.angle_outputs import rates_from_angles
 from app.core.exceptions import UserError
 from app.core.flicker import DEFAULT_BAND_S
@@ -32,9 +39,6 @@ from app.core.static_record import Progress, StaticRecord
 from app.core.units import MAX_RATE_DEG_H
 
 MIN_SAMPLES = 16
-# the fewest degrees of freedom a point of the curve needs to be read as its minimum (or the
-# best dwell): at ν = 3 the 68 % band is ×0.75 … ×1.8, at ν = 1 ×0.7 … ×4.6
-MIN_READ_EDF = 3.0
 UNITS = {
     "quantization": "°",
     "arw": "°/√h",
@@ -139,145 +143,6 @@ def _check_range(rates_deg_h: np.ndarray) -> None:
         if not np.all(np.isfinite(rates_deg_h)):
             raise UserError("readings.not_finite")
         raise UserError("readings.out_of_range")
-
-
-def degrees_of_freedom(
-    taus_s: np.ndarray, rate_hz: float, count: int, alphas: np.ndarray
-) -> np.ndarray:
-    """Equivalent degrees of freedom of each overlapping σ̂²(τ).
-
-    Parameters
-    ----------
-    taus_s : numpy.ndarray
-        Averaging times τ (s).
-    rate_hz : float
-        Sample rate (Hz).
-    count : int
-        Samples in the record.
-    alphas : numpy.ndarray
-        The power-law noise type α (S_y ∝ f^α) that dominates at each τ.
-
-    Returns
-    -------
-    numpy.ndarray
-        ν for each τ (≥ 1).
-
-    References
-    ----------
-    Greenhall & Riley, "Uncertainty of stability variances based on finite differences",
-    PTTI 2003; NIST SP 1065 (2008), §5.3; ``allantools.edf_greenhall``.
-    """
-    import allantools
-
-    edf = []
-    for tau, alpha in zip(taus_s, alphas, strict=True):
-        m = max(1, int(round(tau * rate_hz)))
-        try:
-            nu = allantools.edf_greenhall(
-                alpha=int(alpha), d=2, m=m, N=count + 1, overlapping=True, modified=False
-            )
-        except NotImplementedError:  # α = 2 at τ of two differences or fewer: ν ≈ 1
-            nu = 1.0
-        edf.append(nu)
-    return np.maximum(np.asarray(edf, dtype=float), 1.0)
-
-
-def dominant_alphas(taus_s: np.ndarray, fit: TermFit) -> np.ndarray:
-    """The noise type of the resolved term that contributes most at each τ.
-
-    Parameters
-    ----------
-    taus_s : numpy.ndarray
-        Averaging times τ (s).
-    fit : TermFit
-        A first fit of the curve.
-
-    Returns
-    -------
-    numpy.ndarray
-        α (S_y ∝ f^α) at each τ: 2 quantisation, 0 white, −1 flicker, −2 random walk.
-    """
-    tau_h = taus_s / 3600.0
-    contributions, alphas = [], []
-    for name in TERM_ORDER:
-        term = fit.terms[name]
-        if term.resolved:
-            contributions.append(term.value**2 * BASES[name](tau_h))
-            alphas.append(TERM_ALPHA[name])
-    if not contributions:
-        return np.zeros(taus_s.size)
-    return np.asarray(alphas)[np.argmax(np.vstack(contributions), axis=0)]
-
-
-def allan_curve(data: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarray]:
-    """Overlapping Allan deviation at octave τ (allantools), positive values only.
-
-    Parameters
-    ----------
-    data : numpy.ndarray
-        The rate record (°/h).
-    rate_hz : float
-        Sample rate (Hz).
-
-    Returns
-    -------
-    (numpy.ndarray, numpy.ndarray)
-        τ (s) and σ(τ) (°/h).
-
-    References
-    ----------
-    IEEE Std 952-1997, annex C; NIST SP 1065 (2008), §5.2.4 (overlapping ADEV).
-    """
-    import allantools
-
-    taus, adev, _, _ = allantools.oadev(data, rate=rate_hz, data_type="freq", taus="octave")
-    keep = adev > 0
-    return np.asarray(taus[keep], dtype=float), np.asarray(adev[keep], dtype=float)
-
-
-def readable_points(edf: np.ndarray) -> np.ndarray:
-    """The curve's points holding at least ``MIN_READ_EDF`` degrees of freedom (all of them
-    when none does), as a mask."""
-    readable = edf >= MIN_READ_EDF
-    return readable if readable.any() else np.ones(edf.size, dtype=bool)
-
-
-def allan_minimum(
-    taus_s: np.ndarray, adev_deg_h: np.ndarray, edf: np.ndarray, model_adev: np.ndarray | None
-) -> tuple[float, float]:
-    """The Allan minimum: the smallest σ(τ) and its τ.
-
-    Read off the fitted model where it fits and resolves a term, else off the curve's
-    points holding at least ``MIN_READ_EDF`` degrees of freedom.  A record's last τ rests
-    on one or two differences (ν ≈ 1, a 68 % band of ×0.7 … ×4.6) and the lowest of twenty
-    points picks such a dip: an 8-hour flicker record's last point sat at 0.12× the floor
-    the fit resolved, below 0.664·B -- which lab-reference §6 calls a fit gone wrong.
-
-    Parameters
-    ----------
-    taus_s, adev_deg_h : numpy.ndarray
-        The curve: τ (s) and σ(τ) (°/h).
-    edf : numpy.ndarray
-        Each point's equivalent degrees of freedom.
-    model_adev : numpy.ndarray or None
-        The fitted model at each τ (°/h), or None where no model describes the curve.
-
-    Returns
-    -------
-    (float, float)
-        τ (s) and σ (°/h) at the minimum.
-
-    References
-    ----------
-    IEEE Std 952-1997, annex C; NIST SP 1065 (2008), §5.3; lab-reference §6.
-    """
-    if model_adev is not None:
-        taus, values = taus_s, model_adev
-    else:
-        readable = readable_points(edf)
-        taus, values = taus_s[readable], adev_deg_h[readable]
-    smallest = int(np.argmin(values))
-    return float(taus[smallest]), float(values[smallest])
 
 
 def allan_deviation(
