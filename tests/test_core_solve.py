@@ -12,8 +12,9 @@ from hypothesis import strategies as st
 from scipy.stats import t as student_t
 
 from app.core.exceptions import UserError
+from app.core.handout_terms import percent_error
 from app.core.sinusoid import elevation_angles, fit_sinusoid, heading_angles, wrap180
-from app.core.solve import percent_error, solve_heading, solve_latitude
+from app.core.solve import solve_heading, solve_latitude
 from app.core.two_position import solve_two_position
 from tests.factories import DATA, english
 

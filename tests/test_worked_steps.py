@@ -226,7 +226,7 @@ def test_closure_consistency_is_checked_and_flagged():
 
 
 def test_a_refusal_never_prints_a_non_finite_sigma():
-    from app.core.solve import _check_significant
+    from app.core.polar import check_significant as _check_significant
 
     for sigma in (math.nan, math.inf):
         with pytest.raises(UserError) as caught:

@@ -12,8 +12,9 @@ Latitude: ω_i = Ω·cos(e_i − φ) + b  ⇒  a = Ω cos φ, c = Ω sin φ, φ 
 Ω = hypot(ω1−ω3, ω2−ω4)/2.  Percent errors as the handout defines them:
 η_φ = |φ−φ0|/φ0·100 %, η_Ω = |Ω−Ω0|/Ω0·100 %.
 
-Angle uncertainty: for x = H cos A, y = H sin A, σ_A = √(y²σx² + x²σy² − 2xy·cov)/H²
-(rad), σ_H = √(x²σx² + y²σy² + 2xy·cov)/H — the general form of the reference's formula.
+Angle uncertainty (:mod:`app.core.polar`): for x = H cos A, y = H sin A,
+σ_A = √(y²σx² + x²σy² − 2xy·cov)/H² (rad), σ_H = √(x²σx² + y²σy² + 2xy·cov)/H — the
+general form of the reference's formula.
 """
 
 from __future__ import annotations
@@ -24,59 +25,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from app.core.angle_posterior import angle_half_width
 from app.core.drift_check import DriftCheck, drift_and_its_effect
 from app.core.exceptions import UserError
-from app.core.sinusoid import SIGNIFICANCE, SinusoidFit, fit_sinusoid, wrap180, wrap360
+from app.core.handout_terms import handout_theta, percent_error
+from app.core.polar import check_significant, exact_angle_sigma, fit_scale, polar
+from app.core.sinusoid import SinusoidFit, fit_sinusoid, wrap180, wrap360
 from app.core.units import EARTH_RATE_DEG_H
-
-
-def _polar(
-    x: float, y: float, cov_xy: np.ndarray | None
-) -> tuple[float, float, float | None, float | None]:
-    """Angle (deg) and amplitude of (x, y) with 1σ uncertainties from their 2×2 covariance.
-
-    σ²_angle = (y²σ²x + x²σ²y − 2xy·σxy)/(H²·H_c²), the linearised propagation with one
-    factor H² replaced by the noise-bias-corrected H_c² = H² − σ²x − σ²y (E[Ĥ²] = H² + σ²x +
-    σ²y, the Rice bias), floored at H²/4.  At high signal-to-noise H_c = H; near the
-    significance limit the measured H is inflated by the noise and the plain formula is
-    over-confident (a consumer MEMS at 300 s: 64 % coverage instead of 68 %).  Where the
-    amplitude is known beforehand (Ω cos φ at a known station, or Ω) the solvers replace
-    the angle's σ by the exact 68 % half-width of its posterior (:func:`_exact_sigma`)."""
-    amplitude = math.hypot(x, y)
-    angle = math.degrees(math.atan2(y, x))
-    if cov_xy is None or amplitude == 0.0:
-        return angle, amplitude, None, None
-    vx, vy, vxy = cov_xy[0, 0], cov_xy[1, 1], cov_xy[0, 1]
-    corrected = max(amplitude**2 - vx - vy, 0.25 * amplitude**2)
-    var_angle = (y * y * vx + x * x * vy - 2 * x * y * vxy) / (amplitude**2 * corrected)
-    var_amp = (x * x * vx + y * y * vy + 2 * x * y * vxy) / amplitude**2
-    sigma_angle = math.degrees(math.sqrt(max(var_angle, 0.0)))
-    sigma_amp = math.sqrt(max(var_amp, 0.0))
-    return angle, amplitude, sigma_angle, sigma_amp
-
-
-def _exact_sigma(x, y, cov_xy, known_amplitude, sigma_amp) -> float | None:
-    """The angle's exact 68 % half-width given the known amplitude, or None."""
-    if known_amplitude is None or cov_xy is None or sigma_amp is None:
-        return None
-    return angle_half_width(x, y, cov_xy, known_amplitude, sigma_amp)
-
-
-def _check_significant(amplitude: float, sigma: float | None, what: str, scale: float) -> None:
-    """Refuse an amplitude that is zero (to rounding) or below 3σ."""
-    if amplitude <= 1e-9 * max(scale, 1e-300) or (
-        sigma is not None and amplitude < SIGNIFICANCE * sigma
-    ):
-        raise UserError(
-            "readings.amplitude_too_small",
-            amplitude=round(amplitude, 4),
-            sigma=round(sigma, 4) if sigma is not None and math.isfinite(sigma) else None,
-        )
-
-
-def _scale(fit: SinusoidFit) -> float:
-    return float(np.max(np.abs(fit.means))) if fit.means.size else 0.0
 
 
 @dataclass(frozen=True)
@@ -136,45 +90,6 @@ class HeadingResult:
             "azimuth_noise_sigma_deg": self.noise_sigma_deg,
             "warm_up": None if self.drift_check is None else self.drift_check.to_json(),
         }
-
-
-def handout_theta(azimuth_deg: float) -> tuple[float, str, float, str]:
-    """The handout's θ, turn direction, |θ| and where the axis then points.
-
-    θ = arctan(−y/x) with x = H cos A_1, y = H sin A_1 (for four counter-clockwise
-    positions: arctan((ω4−ω2)/(ω1−ω3))).  Turning the table by θ (clockwise positive)
-    brings the axis to A_1 + θ ∈ {0°, 180°}: north when x > 0, south when x < 0.
-
-    Parameters
-    ----------
-    azimuth_deg : float
-        A_1, the azimuth of position 1 (°, clockwise from true north).
-
-    Returns
-    -------
-    theta_deg : float
-        θ in (−90°, 90°].
-    direction : {"clockwise", "counterclockwise"}
-        Which way to turn the table by |θ|.
-    turn_deg : float
-        |θ| (°).
-    axis : {"north", "south"}
-        Where the sensitive axis then points.
-
-    References
-    ----------
-    The handout, part A (``../shared/seeds``); lab-reference §3.
-    """
-    x = math.cos(math.radians(azimuth_deg))
-    y = math.sin(math.radians(azimuth_deg))
-    if abs(x) < 1e-12:  # exactly east or west: a quarter turn reaches north
-        theta = -90.0 if y > 0 else 90.0
-        points = "north"
-    else:
-        theta = math.degrees(math.atan(-y / x))
-        points = "north" if x > 0 else "south"
-    direction = "clockwise" if theta >= 0 else "counterclockwise"
-    return theta, direction, abs(theta), points
 
 
 def solve_heading(
@@ -246,9 +161,9 @@ def solve_heading(
         # (x, y) = (a, −c): flip the sign of c's covariance terms.
         flip = np.diag([1.0, -1.0])
         cov_xy = flip @ fit.cov[:2, :2] @ flip
-    angle_ref, amplitude, linear_az, sigma_amp = _polar(fit.a, -fit.c, cov_xy)
-    _check_significant(amplitude, sigma_amp, "horizontal", _scale(fit))
-    exact = _exact_sigma(fit.a, -fit.c, cov_xy, expected_amplitude_deg_h, sigma_amp)
+    angle_ref, amplitude, linear_az, sigma_amp = polar(fit.a, -fit.c, cov_xy)
+    check_significant(amplitude, sigma_amp, "horizontal", fit_scale(fit))
+    exact = exact_angle_sigma(fit.a, -fit.c, cov_xy, expected_amplitude_deg_h, sigma_amp)
     sigma_az = exact if exact is not None else linear_az
     azimuth = wrap360(angle_ref + float(fit.angles_deg[0]))
     theta, direction, rotate, points = handout_theta(azimuth)
@@ -342,30 +257,6 @@ class LatitudeResult:
         }
 
 
-def percent_error(value: float, true_value: float | None) -> float | None:
-    """The handout's η = |value − true| / |true| × 100 %.
-
-    Parameters
-    ----------
-    value : float
-        The measured value (latitude in °, or Earth rate in °/h).
-    true_value : float or None
-        The true value in the same unit.
-
-    Returns
-    -------
-    float or None
-        η in percent; None when the true value is 0 or unknown.
-
-    References
-    ----------
-    The handout, part B: η_φ = |φ − φ0|/φ0 × 100 %, η_Ω = |Ω − Ω0|/Ω0 × 100 %.
-    """
-    if true_value is None or true_value == 0:
-        return None
-    return abs(value - true_value) / abs(true_value) * 100.0
-
-
 def solve_latitude(
     positions: Sequence[Sequence[float]],
     elevations_deg: Sequence[float],
@@ -420,9 +311,9 @@ def solve_latitude(
         times_s=times_s,
     )
     cov_xy = None if fit.cov is None else fit.cov[:2, :2]
-    latitude, omega, linear_lat, sigma_omega = _polar(fit.a, fit.c, cov_xy)
-    _check_significant(omega, sigma_omega, "Earth-rate", _scale(fit))
-    exact = _exact_sigma(fit.a, fit.c, cov_xy, true_earth_rate_deg_h, sigma_omega)
+    latitude, omega, linear_lat, sigma_omega = polar(fit.a, fit.c, cov_xy)
+    check_significant(omega, sigma_omega, "Earth-rate", fit_scale(fit))
+    exact = exact_angle_sigma(fit.a, fit.c, cov_xy, true_earth_rate_deg_h, sigma_omega)
     sigma_lat = exact if exact is not None else linear_lat
     if abs(latitude) > 90.0:
         raise UserError(

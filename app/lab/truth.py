@@ -13,8 +13,8 @@ from dataclasses import dataclass, field
 
 from sqlmodel import Session
 
+from app.core.handout_terms import percent_error
 from app.core.sinusoid import wrap180
-from app.core.solve import percent_error
 from app.lab.store import current_takes
 from app.models import (
     Assignment,
