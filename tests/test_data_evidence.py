@@ -12,11 +12,11 @@ from app.core.data_evidence import (
     last_digits,
     off_grid,
     part_evidence,
-    reading_moments,
     recording_times,
     too_close,
 )
 from app.core.noise_model import GyroNoise
+from app.core.reading_moments import reading_moments
 from tests.factories import handout
 from tests.noise_sources import static_record
 

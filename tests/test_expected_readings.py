@@ -8,10 +8,10 @@ import math
 
 import numpy as np
 
-from app.core.data_evidence import expected_variance
 from app.core.expected_readings import MAX_READINGS, expected_readings
 from app.core.noise_model import GyroNoise
 from app.core.presets import PRESETS
+from app.core.reading_moments import expected_variance
 
 
 def draws(noise: GyroNoise, rate_hz: float, count: int, runs: int) -> np.ndarray:

@@ -43,7 +43,8 @@ from functools import lru_cache
 import numpy as np
 
 from app.core.data_copies import copy_keys, handout_matches, typed_step
-from app.core.noise_model import GyroNoise, Window
+from app.core.noise_model import GyroNoise
+from app.core.reading_moments import expected_variance, reading_moments
 
 SCATTER_P = 1e-5  # two-sided tail of χ²_ν for the scatter check
 SMOOTH_SIGMAS = 4.0  # r₁ − ρ₁ above this many 1/√N
@@ -67,65 +68,6 @@ class Evidence:
 
     def to_json(self) -> dict:
         return {"check": self.check, "part": self.part, **self.numbers}
-
-
-# --- the model's expectations -----------------------------------------------------------
-
-
-@lru_cache(maxsize=1024)
-def reading_moments(noise: GyroNoise, rate_hz: float, count: int) -> tuple[float, float, float]:
-    """The model's moments of ``count`` consecutive readings from a warm gyro.
-
-    Parameters
-    ----------
-    noise : GyroNoise
-        The gyro's noise terms.
-    rate_hz : float
-        Readings per second.
-    count : int
-        How many readings.
-
-    Returns
-    -------
-    tuple of float
-        σ₁² (one reading's variance, (°/h)²), ρ₁ = Cov(x_i, x_i+1)/σ₁², and σ²_mean (the
-        variance of their mean), from :meth:`GyroNoise.mean_covariance` of one-sample
-        windows and of the whole record.
-    """
-    dt = 1.0 / rate_hz
-    pair = noise.mean_covariance([Window(0.0, dt), Window(dt, dt)], warm_up=False)
-    whole = noise.mean_covariance([Window(0.0, count * dt)], warm_up=False)
-    one = float(pair[0, 0])
-    rho = float(pair[0, 1]) / one if one > 0 else 0.0
-    return one, rho, float(whole[0, 0])
-
-
-def expected_variance(noise: GyroNoise, rate_hz: float, count: int, step: float | None) -> float:
-    """The expected sample variance of ``count`` readings.
-
-    Parameters
-    ----------
-    noise : GyroNoise
-        The gyro's noise terms.
-    rate_hz : float
-        Readings per second.
-    count : int
-        How many readings (≥ 2).
-    step : float or None
-        The step they were typed to.
-
-    Returns
-    -------
-    float
-        E[s²] = n/(n − 1)·(σ₁² − σ²_mean), plus u²/12 when the typed step u is coarser
-        than the gyro's own output step (module docstring).
-    """
-    one, _rho, mean = reading_moments(noise, rate_hz, count)
-    variance = count / (count - 1) * max(one - mean, 0.0)
-    own_step = 3600.0 * noise.angle_lsb_deg * rate_hz
-    if step is not None and step > 1.5 * own_step:
-        variance += step * step / 12.0
-    return variance
 
 
 # --- the checks -------------------------------------------------------------------------

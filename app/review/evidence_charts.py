@@ -9,8 +9,8 @@ import math
 import numpy as np
 
 from app.core.data_copies import typed_step
-from app.core.data_evidence import expected_variance
 from app.core.expected_readings import MAX_READINGS, expected_readings
+from app.core.reading_moments import expected_variance
 from app.lab.charts import LAYOUT, PALETTE, SYMBOLS, titled
 from app.lab.copy_index import own_positions
 from app.lab.planner import gyro_model
