@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.core.allan_fit import BASES, TERM_ALPHA, TERM_ORDER, TermFit
+from app.core.allan_fit import TERM_ALPHA, TERM_ORDER, TermFit
+from app.core.allan_log_fit import BASES
 
 # the fewest degrees of freedom a point of the curve needs to be read as its minimum (or the
 # best dwell): at ν = 3 the 68 % band is ×0.75 … ×1.8, at ν = 1 ×0.7 … ×4.6
