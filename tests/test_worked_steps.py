@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 
 from app.core.exceptions import UserError
-from app.core.explain import Words, explain_heading, explain_latitude, render_text
+from app.core.explain import explain_heading, explain_latitude
 from app.core.readings import parse_readings_csv
 from app.core.sinusoid import heading_angles
 from app.core.solve import solve_heading, solve_latitude
 from app.core.units import to_deg_per_hour
+from app.core.worked_steps import Words, render_text
 from app.web.i18n import translator
 from tests.factories import english, handout
 

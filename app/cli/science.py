@@ -17,7 +17,7 @@ import numpy as np
 from app.cli.solve_angles import position_angles, said_beside
 from app.core.drift_check import warm_up_message
 from app.core.exceptions import UserError
-from app.core.explain import explain_heading, explain_latitude, render_text
+from app.core.explain import explain_heading, explain_latitude
 from app.core.gyro_stream import GyroStream
 from app.core.jsonsafe import json_safe
 from app.core.long_readings import readings_to_long_csv
@@ -39,6 +39,7 @@ from app.core.units import (
 )
 from app.core.workbook_sheets import is_workbook
 from app.core.workbook_text import workbook_text
+from app.core.worked_steps import render_text
 
 WARM_GYRO_S = 3600.0  # simulate's default: a lab gyro is usually left on
 

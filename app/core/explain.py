@@ -1,59 +1,29 @@
 """The handout's calculation written out with the student's numbers substituted.
 
-Each :class:`Step` has a title, and perhaps a legend and a conclusion, as message keys
-with their numbers (:class:`Words`: the catalogues hold the words in each language), and
-lines of mathematics (language-neutral), so the command line, the pages and the reports
-all show the same worked solution.
+Each step (:class:`app.core.worked_steps.Step`) has a title, and perhaps a legend and a
+conclusion, as message keys with their numbers (``Words``: the catalogues hold the words in
+each language), and lines of mathematics (language-neutral), so the command line, the pages
+and the reports all show the same worked solution.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from app.core.solve import HeadingResult, LatitudeResult
-
-
-@dataclass(frozen=True)
-class Words:
-    """A message key of the catalogues and the values of its ``{placeholders}``."""
-
-    key: str
-    params: dict[str, str] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class Step:
-    title: Words
-    lines: tuple[str, ...]
-    sentence: Words | None = None  # a conclusion in words
-    legend: Words | None = None  # what the symbols of the lines mean
-
-
-AZIMUTH_LEGEND = Words("steps.legend_azimuth")
-FIT_LEGEND = Words("steps.legend_fit")
-AMPLITUDE_LEGEND = Words("steps.legend_amplitude")
-ELEVATION_LEGEND = Words("steps.legend_elevation")
-
-
-def _f(value: float, digits: int = 3) -> str:
-    return f"{value:.{digits}f}"
-
-
-def _p(value: float, digits: int = 3) -> str:
-    """A number in a formula: negatives in parentheses."""
-    text = _f(value, digits)
-    return f"({text})" if value < 0 else text
-
-
-MODEL_NOTES = {
-    "white": Words("steps.model_white"),
-    "closure": Words("steps.model_closure"),
-    "allan": Words("steps.model_allan"),
-}
+from app.core.worked_steps import (
+    AMPLITUDE_LEGEND,
+    AZIMUTH_LEGEND,
+    ELEVATION_LEGEND,
+    FIT_LEGEND,
+    MODEL_NOTES,
+    Step,
+    Words,
+)
+from app.core.worked_steps import fixed as _f
+from app.core.worked_steps import in_formula as _p
 
 
 def _means_step(fit) -> Step:
@@ -383,34 +353,3 @@ def _warm_up_lines(check, noise_sigma, final_sigma, name: str, key: str) -> list
         f"ḃ = {rate}{spread} {unit}:  ω̄_i − ḃ·(t̄_i − t̄)  →  Δ{name} = {_f(moved, 3)}°",
         f"σ = √({_f(noise_sigma, 3)}² + {_f(moved, 3)}²) = {_f(final_sigma, 3)}°",
     ]
-
-
-def render_text(steps: list[Step], translate: Callable[..., str]) -> str:
-    """The steps as plain text (the command line's ``--explain``).
-
-    Parameters
-    ----------
-    steps : list of Step
-        From :func:`explain_heading` or :func:`explain_latitude`.
-    translate : callable
-        ``translate(key, **params)``: a message of the catalogues in the reader's language
-        (``app.web.i18n.translator(language)``).
-
-    Returns
-    -------
-    str
-        One line per step.
-    """
-
-    def say(words: Words) -> str:
-        return translate(words.key, **words.params)
-
-    out = []
-    for number, step in enumerate(steps, start=1):
-        out.append(f"{number}. {say(step.title)}")
-        out.extend(f"   {line}" for line in step.lines)
-        if step.legend:
-            out.append(f"   {say(step.legend)}")
-        if step.sentence:
-            out.append(f"   {say(step.sentence)}")
-    return "\n".join(out)
