@@ -12,7 +12,8 @@ from sqlmodel import select
 
 from app.db import read_session
 from app.lab.exports import Selection, readings_csv, session_json
-from app.lab.results import current_data, quality_flags
+from app.lab.result_flags import quality_flags
+from app.lab.results import current_data
 from app.lab.samples import unpack
 from app.lab.store import load_samples
 from app.models import LabSession, SampleChunk, Take

@@ -27,7 +27,8 @@ from app.core.exceptions import UserError
 from app.core.readings import parse_readings_csv
 from app.db import read_session
 from app.lab.exports import Selection, session_json
-from app.lab.results import current_data, quality_flags
+from app.lab.result_flags import quality_flags
+from app.lab.results import current_data
 from app.lab.store import load_samples
 from app.models import LabSession, Take
 from tests.factories import PRACTICE, english, token_for

@@ -15,7 +15,8 @@ from sqlmodel import Session, col, select
 from app.lab.copy_index import keyable_takes
 from app.lab.partners import group_names, member_map
 from app.lab.result_cache import KEY_COLUMNS, SUMMARIES, current_take_rows, data_keys
-from app.lab.results import SessionData, flags_of_checks, iter_takes_data
+from app.lab.result_flags import flags_of_checks
+from app.lab.results import SessionData, iter_takes_data
 from app.lab.store import PARTS
 from app.lab.truth import AutoCheck, Truth, auto_check, session_truth
 from app.models import (

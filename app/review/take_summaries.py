@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 from app.lab.lru import LruCache
 from app.lab.recent_samples import key_of
-from app.lab.results import PositionChecks, PositionData, position_checks
+from app.lab.result_flags import PositionChecks, position_checks
+from app.lab.results import PositionData
 
 
 @dataclass(frozen=True, slots=True)
