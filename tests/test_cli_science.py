@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import os
 import subprocess
 import sys
 
@@ -322,3 +323,21 @@ def test_allan_refuses_bytes_that_are_no_text(capsys, tmp_path):
     path.write_bytes(bytes(range(256)) * 8)
     code, _, err = run(capsys, "allan", str(path))
     assert code != 0 and "not text" in err
+
+
+def test_a_reader_that_stops_early_gets_no_traceback():
+    # ``gyrolab simulate --list-presets | head -1``: the reader has gone before the writing
+    # ends (here, before it starts: the pipe's reading end is closed, so that every write
+    # meets a broken pipe, deterministically)
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        done = subprocess.run(
+            [sys.executable, "-m", "app.cli.main", "simulate", "--list-presets"],
+            stdout=write_end,
+            stderr=subprocess.PIPE,
+            timeout=120,
+        )
+    finally:
+        os.close(write_end)
+    assert done.returncode == 0 and done.stderr == b"", done.stderr

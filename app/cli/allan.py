@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from app.cli.science import CommandError, _finite, to_json_text
+from app.cli.science import CommandError, check_finite, to_json_text
 from app.core.allan import analyse_record
 from app.core.allan_summary import dwell_lines, note_lines, summary_lines, term_rows
 from app.core.static_record import read_static_record
@@ -46,7 +46,7 @@ def _allan(args: argparse.Namespace) -> int:
 
     _ = translator(args.language)
     for name in ("rate", "max_tau"):
-        _finite(f"--{name.replace('_', '-')}", getattr(args, name))
+        check_finite(f"--{name.replace('_', '-')}", getattr(args, name))
     show = args.progress or (sys.stderr.isatty() and not args.json)
 
     def progress(stage: str, details: dict) -> None:

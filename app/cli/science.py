@@ -1,4 +1,5 @@
-"""``gyrolab solve`` / ``simulate`` / ``allan``: the science core on the command line.
+"""``gyrolab solve`` (and, from their own modules, ``simulate``, ``allan``, ``errors``): the
+science core on the command line.
 
 Bad input exits with status 2 and one clear line on stderr, never a traceback.
 """
@@ -9,7 +10,6 @@ import argparse
 import json
 import math
 import sys
-from dataclasses import asdict, replace
 from itertools import pairwise
 
 import numpy as np
@@ -18,16 +18,12 @@ from app.cli.solve_angles import position_angles, said_beside
 from app.core.drift_check import warm_up_message
 from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude
-from app.core.gyro_stream import GyroStream
 from app.core.jsonsafe import json_safe
-from app.core.long_readings import readings_to_long_csv
 from app.core.noise_model import GyroNoise, Window, back_to_back
 from app.core.presets import PRESETS
 from app.core.readings import parse_readings_csv
 from app.core.readings_data import Readings
 from app.core.record_checks import WARM_UP_LIMIT_C
-from app.core.simulate import Setup, simulate_run, simulate_static
-from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.solve import solve_heading, solve_latitude
 from app.core.text_files import decode_text
 from app.core.units import (
@@ -40,8 +36,6 @@ from app.core.units import (
 from app.core.workbook_sheets import is_workbook
 from app.core.workbook_text import workbook_text
 from app.core.worked_steps import render_text
-
-WARM_GYRO_S = 3600.0  # simulate's default: a lab gyro is usually left on
 
 
 class CommandError(Exception):
@@ -71,7 +65,7 @@ def _read_text(path: str) -> str:
     return workbook_text(data) if is_workbook(data) else decode_text(data)
 
 
-def _finite(name: str, value: float | None) -> None:
+def check_finite(name: str, value: float | None) -> None:
     if value is not None and not math.isfinite(value):
         raise CommandError(f"{name} must be a finite number")
 
@@ -131,7 +125,7 @@ def _known_noise(readings: Readings, positions, preset_name: str | None) -> dict
 
 def _solve(args: argparse.Namespace) -> int:
     for name in ("start_angle", "step", "latitude", "earth_rate", "true_azimuth"):
-        _finite(f"--{name.replace('_', '-')}", getattr(args, name))
+        check_finite(f"--{name.replace('_', '-')}", getattr(args, name))
     readings = parse_readings_csv(_read_text(args.file), part=args.part)
     result = solve_readings(args.part, readings, args)
     for line in said_beside(args.part, readings, args):  # beside the output, not in it
@@ -182,110 +176,6 @@ def temperature_summary(readings: Readings, language: str = "en") -> dict | None
     key = "cli.temperature_warming" if warming else "cli.temperature_steady"
     note = translator(language)(key, change=f"{change:.1f}")
     return {"mean_by_position": means, "change": change, "warming_up": warming, "note": note}
-
-
-def preset_table() -> list[dict]:
-    """Every preset's parameters, units in the names, with its source and description."""
-    rows = []
-    for name in sorted(PRESETS):
-        fields = asdict(PRESETS[name])
-        fields["misalignment_deg"] = list(fields["misalignment_deg"])
-        rows.append(fields)
-    return rows
-
-
-def _list_presets(as_json: bool) -> int:
-    rows = preset_table()
-    if as_json:
-        print(to_json_text(rows))
-        return 0
-    for row in rows:
-        print(row["name"])
-        for key, value in row.items():
-            if key not in ("name", "description", "source"):
-                print(f"  {key} = {value}")
-        print(f"  source: {row['source']}")
-    return 0
-
-
-def _simulate(args: argparse.Namespace) -> int:
-    if args.list_presets:
-        return _list_presets(args.json)
-    if args.part is None:
-        raise CommandError("name what to simulate: heading, latitude or static")
-    if args.latitude is None:
-        raise CommandError("--latitude is required")
-    preset = PRESETS[args.preset]
-    if args.rate:
-        preset = replace(preset, sample_rate_hz=args.rate)
-    if args.indexing_sigma is not None:
-        preset = replace(preset, indexing_sigma_arcsec=args.indexing_sigma)
-    for name in ("latitude", "azimuth", "pitch", "roll", "rate", "seconds", "elevation"):
-        _finite(f"--{name}", getattr(args, name))
-    if not -90 <= args.latitude <= 90:
-        raise CommandError("--latitude must be between -90 and 90 degrees")
-    setup = Setup(
-        args.latitude,
-        args.azimuth,
-        args.earth_rate,
-        args.pitch,
-        args.roll,
-        args.elevation if args.part == "heading" else 0.0,
-    )
-    if args.part == "static":
-        seconds = args.seconds or args.seconds_per_position or 600.0
-        _finite("--warm-up", args.warm_up)
-        if not 0 <= args.warm_up <= 86_400:
-            raise CommandError("--warm-up must be between 0 and 86400 seconds")
-        values = simulate_static(
-            preset,
-            setup,
-            seconds,
-            seed=args.seed,
-            elevation_deg=args.elevation,
-            start_s=args.warm_up,
-        )
-        skip = int(round(args.warm_up * preset.sample_rate_hz))
-        times = [(skip + np.arange(values.size)) / preset.sample_rate_hz]
-        clock = GyroStream(preset, args.seed)
-        clock.samples_read = skip
-        temperatures = [clock.temperatures_c(values.size)]
-        sys.stdout.write(
-            readings_to_long_csv(
-                [values], [0.0], times, temperatures_c=temperatures if args.temperature else None
-            )
-        )
-        return 0
-    if args.positions < 3:
-        raise CommandError("--positions must be at least 3")
-    seconds = args.seconds_per_position or args.seconds or 10.0
-    if seconds <= 0 or seconds * preset.sample_rate_hz > 5_000_000:
-        raise CommandError("the dwell time must be positive and under 5 million samples")
-    step = 360.0 / args.positions
-    if args.part == "heading":
-        dials = heading_angles(args.positions, args.rotation, 0.0, step)
-    else:
-        dials = elevation_angles(args.positions, 0.0, step)
-    _finite("--warm-up", args.warm_up)
-    if not 0 <= args.warm_up <= 86_400:
-        raise CommandError("--warm-up must be between 0 and 86400 seconds")
-    run = simulate_run(
-        preset,
-        setup,
-        args.part,
-        dials,
-        seconds,
-        settle_s=args.settle,
-        seed=args.seed,
-        start_s=args.warm_up,
-    )
-    temperatures = run.temperatures_c if args.temperature else None
-    sys.stdout.write(
-        readings_to_long_csv(
-            run.positions, run.dial_angles_deg, run.times_s, temperatures_c=temperatures
-        )
-    )
-    return 0
 
 
 def _guarded(handler):
@@ -348,59 +238,10 @@ def add_science_commands(commands) -> None:
     solve.add_argument("--language", choices=["en", "zh-CN"], default="en")
     solve.set_defaults(handler=_guarded(_solve))
 
-    simulate = commands.add_parser("simulate", help="simulated gyro readings as long CSV")
-    simulate.add_argument("part", nargs="?", choices=["heading", "latitude", "static"])
-    simulate.add_argument(
-        "--list-presets",
-        action="store_true",
-        help="print every preset's parameters (with --json: as JSON) and exit",
-    )
-    simulate.add_argument("--json", action="store_true", help="with --list-presets")
-    simulate.add_argument("--preset", choices=sorted(PRESETS), default="teaching-fog")
-    simulate.add_argument("--latitude", type=float)
-    simulate.add_argument("--earth-rate", type=float, default=EARTH_RATE_DEG_H)
-    simulate.add_argument(
-        "--azimuth",
-        type=float,
-        default=0.0,
-        help="true azimuth of position 1 (heading) or of the vertical plane",
-    )
-    simulate.add_argument("--seconds-per-position", type=float)
-    simulate.add_argument("--seconds", type=float, help="static: record length")
-    simulate.add_argument(
-        "--settle", type=float, default=0.0, help="seconds discarded after each turn"
-    )
-    simulate.add_argument("--rate", type=float, help="sample rate in Hz (default: the preset's)")
-    simulate.add_argument("--positions", type=int, default=4)
-    simulate.add_argument("--rotation", choices=["ccw", "cw"], default="ccw")
-    simulate.add_argument("--pitch", type=float, default=0.0)
-    simulate.add_argument("--roll", type=float, default=0.0)
-    simulate.add_argument(
-        "--elevation",
-        type=float,
-        default=0.0,
-        help="heading/static: axis elevation above the table plane",
-    )
-    simulate.add_argument("--indexing-sigma", type=float, help="arcsec per turn (default: preset)")
-    simulate.add_argument("--seed", type=int, default=0)
-    simulate.add_argument(
-        "--temperature",
-        action="store_true",
-        help="add the gyro case temperature (temperature_c, °C; rises during warm-up)",
-    )
-    simulate.add_argument(
-        "--warm-up",
-        type=float,
-        default=WARM_GYRO_S,
-        metavar="SECONDS",
-        help="the gyro has been on this long before the first reading (default 3600: a lab "
-        "gyro is left on; 0 is a cold start, whose bias still drifts)",
-    )
-    simulate.set_defaults(handler=_guarded(_simulate))
-
     from app.cli.allan import add_allan_command
     from app.cli.error_scenarios import add_errors_command
+    from app.cli.simulate import add_simulate_command
 
+    add_simulate_command(commands, _guarded)
     add_allan_command(commands, _guarded)
-
     add_errors_command(commands, _guarded, to_json_text)
