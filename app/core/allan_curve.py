@@ -113,8 +113,19 @@ def allan_curve(data: np.ndarray, rate_hz: float) -> tuple[np.ndarray, np.ndarra
 
 
 def readable_points(edf: np.ndarray) -> np.ndarray:
-    """The curve's points holding at least ``MIN_READ_EDF`` degrees of freedom (all of them
-    when none does), as a mask."""
+    """The curve's points that can be read alone: those holding at least ``MIN_READ_EDF``
+    degrees of freedom (all of them when none does).
+
+    Parameters
+    ----------
+    edf : numpy.ndarray
+        Each point's equivalent degrees of freedom.
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        A mask over the points.
+    """
     readable = edf >= MIN_READ_EDF
     return readable if readable.any() else np.ones(edf.size, dtype=bool)
 

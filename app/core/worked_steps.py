@@ -32,12 +32,39 @@ ELEVATION_LEGEND = Words("steps.legend_elevation")
 
 
 def fixed(value: float, digits: int = 3) -> str:
-    """A number to ``digits`` decimals."""
+    """A number to a fixed count of decimals, as the worked steps write it.
+
+    Parameters
+    ----------
+    value : float
+        The number.
+    digits : int
+        Decimals.
+
+    Returns
+    -------
+    str
+        ``value`` with ``digits`` decimals ("-0.940").
+    """
     return f"{value:.{digits}f}"
 
 
 def in_formula(value: float, digits: int = 3) -> str:
-    """A number in a formula: negatives in parentheses."""
+    """A number substituted into a formula: negatives in parentheses, so that
+    "10.706 − (-8.951)" reads as the handout writes it.
+
+    Parameters
+    ----------
+    value : float
+        The number.
+    digits : int
+        Decimals.
+
+    Returns
+    -------
+    str
+        ``value`` with ``digits`` decimals, in parentheses when negative.
+    """
     text = fixed(value, digits)
     return f"({text})" if value < 0 else text
 
