@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import pytest
 from sqlmodel import func, select
 
 from app.accounts.security import verify_password
@@ -83,6 +84,33 @@ def test_a_western_excels_roster_keeps_its_accented_names():
     parsed = parse_roster(roster.encode("cp1252"))
     assert not parsed.problems
     assert [row.display_name for row in parsed.rows] == ["Zoë Müller", "Ana Peña"]
+
+
+@pytest.mark.parametrize(
+    "names",
+    [
+        ["François Dubois", "Jürgen Weber"],  # "ço", "ür": GB18030 pairs outside GB2312
+        ["Hélène Noël", "Ñúñez"],  # "Ñú" is a GB2312 character, "ñe" is not: a tie
+    ],
+)
+def test_a_western_roster_that_is_also_gb18030_reads_as_windows_1252(names):
+    """Windows-1252 bytes that GB18030 decodes too ("François" as "Fran鏾is") are read as
+    written: their Chinese characters would lie outside GB2312, where a Chinese-locale
+    Excel's hardly ever are."""
+    from app.accounts.roster_csv import parse_roster
+
+    rows = "".join(f"s{k},{name}\r\n" for k, name in enumerate(names))
+    parsed = parse_roster(("username,display_name\r\n" + rows).encode("cp1252"))
+    assert [row.display_name for row in parsed.rows] == names
+
+
+@pytest.mark.parametrize("names", [["张三", "王喆"], ["赵喆"], ["Müller", "张三"]])
+def test_a_chinese_roster_with_a_rare_character_stays_gb18030(names):
+    from app.accounts.roster_csv import parse_roster
+
+    rows = "".join(f"s{k},{name}\n" for k, name in enumerate(names))
+    parsed = parse_roster(("学号,姓名\n" + rows).encode("gb18030"))
+    assert [row.display_name for row in parsed.rows] == names
 
 
 def test_student_numbers_in_full_width_forms_are_imported_as_ascii(teacher_client):

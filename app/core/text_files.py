@@ -50,7 +50,8 @@ def decode_text(data: bytes) -> str:
 
     UTF-16 is recognised by its byte-order mark; otherwise UTF-8 is tried first (strict),
     then GB18030, which the simplified-Chinese Excel writes ("另存为 CSV"), then
-    Windows-1252, a Western Windows program's ("°/s" is no GB18030).  These decode almost
+    Windows-1252, a Western Windows program's ("°/s" is no GB18030; "François" and "°C"
+    are, but read as Windows-1252: :func:`reads_as_western`).  These decode almost
     any byte string, so a control character other than tab and line ends in the result
     marks the file as binary; Ctrl-Z marks or NUL bytes after the last line (DOS's
     end of file, a logger's unwritten space) are not part of the text.
@@ -80,9 +81,59 @@ def decode_text(data: bytes) -> str:
             text = data.decode(encoding).rstrip(END_OF_FILE_MARK)
         except UnicodeDecodeError:
             continue
+        if encoding == "gb18030" and reads_as_western(data, text):
+            continue  # "François" in Windows-1252, not "Fran鏾is"
         if not _CONTROL.search(text):  # a regular expression: 0.05 s for 18 MB, not 1 s
             return text
     raise UserError("csv.encoding")
+
+
+_NOT_ASCII = re.compile(r"[^\x00-\x7f]")
+# what a Western Windows program writes besides letters: units, signs, typographic quotes
+_WESTERN_SIGNS = frozenset("°±µ²³¹·×÷€£¥¢§¶¼½¾’‘‚“”„–—…«»¿¡©®™‰•")
+
+
+def reads_as_western(data: bytes, gb_text: str) -> bool:
+    """Whether bytes that decode as GB18030 are rather Windows-1252: most of their Chinese
+    characters lie outside GB2312 and Windows-1252 reads them as letters and common signs.
+
+    A Windows-1252 accented letter and the ASCII letter after it form a valid GB18030
+    character ("ç" + "o" in "François": 0xE7 0x6F, "鏾"; "°" + "C": 0xB0 0x43), but
+    never one of GB2312's, whose bytes are both ≥ 0xA1 -- the characters a Chinese-locale
+    program writes almost always are (a rare one in a name is outnumbered by the rest, and
+    a Chinese character read as Windows-1252 is rarely letters only: "喆" is "†´").
+
+    Parameters
+    ----------
+    data : bytes
+        The text's bytes.
+    gb_text : str
+        ``data`` decoded as GB18030.
+
+    Returns
+    -------
+    bool
+        True when the GB18030 characters outside GB2312 are at least as many as those
+        inside it and every character Windows-1252 reads that is not ASCII is a letter or
+        a common sign.
+    """
+    inside = outside = 0
+    for char in _NOT_ASCII.findall(gb_text):
+        code = char.encode("gb18030")
+        if len(code) == 2 and 0xA1 <= code[0] <= 0xF7 and code[1] >= 0xA1:
+            inside += 1
+        else:
+            outside += 1
+    if outside == 0 or outside < inside:  # a tie: "Ñúñez" is one GB2312 character and one not
+        return False
+    try:
+        western = data.decode("cp1252")
+    except UnicodeDecodeError:
+        return False
+    return all(
+        char in _WESTERN_SIGNS or unicodedata.category(char).startswith("L")
+        for char in set(_NOT_ASCII.findall(western))
+    )
 
 
 IDEOGRAPHIC_POINT = re.compile(r"(\d)\u3002(?=\d)")
@@ -181,7 +232,7 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
     """
     buffer = io.BytesIO(data) if isinstance(data, bytes | bytearray) else data
     first = buffer.read(chunk)
-    encoding = _encoding_of(first)
+    encoding = _encoding_of(first, final=len(first) < chunk)
     decoder = codecs.getincrementaldecoder(encoding)()
     pending, piece = "", first
     marked = False  # end-of-file marks ended what was read: text after them is not text
@@ -213,6 +264,10 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
         pending = parts.pop() + pending[cut:]
         yield from parts
         piece = buffer.read(chunk)
+    try:  # bytes left at the end that are no whole character are no text
+        pending += decoder.decode(b"", final=True).rstrip(END_OF_FILE_MARK)
+    except UnicodeDecodeError:
+        raise UserError("csv.encoding") from None
     if pending:
         yield from _line_ends(pending).removesuffix("\n").split("\n")
 
@@ -222,16 +277,20 @@ def _line_ends(text: str) -> str:
     return text.replace("\r\n", "\n").replace("\r", "\n")
 
 
-def _encoding_of(first: bytes) -> str:
+def _encoding_of(first: bytes, final: bool = False) -> str:
     """The encoding of a file from its first block: UTF-16 by its byte-order mark, UTF-8
     where the block decodes as UTF-8 (but for a character cut at its end), else GB18030
-    where it decodes as that, else Windows-1252 (:func:`decode_text`'s order)."""
+    where it decodes as that and does not read as Windows-1252 (:func:`reads_as_western`),
+    else Windows-1252 (:func:`decode_text`'s order).  ``final``: the block is the whole
+    file, so a character cut at its end is no character (cp1252's "José" is no GB18030)."""
     if first.startswith((b"\xff\xfe", b"\xfe\xff")):
         return "utf-16"
     for encoding in ("utf-8", "gb18030"):
         try:
-            codecs.getincrementaldecoder(encoding)().decode(first, final=False)
+            text = codecs.getincrementaldecoder(encoding)().decode(first, final=final)
         except UnicodeDecodeError:
             continue
+        if encoding == "gb18030" and reads_as_western(first[: len(text.encode(encoding))], text):
+            break
         return "utf-8-sig" if encoding == "utf-8" else encoding
     return "cp1252"
