@@ -8,6 +8,7 @@ Chinese input method's full-width forms."""
 from __future__ import annotations
 
 import codecs
+import contextlib
 import io
 import re
 import unicodedata
@@ -264,10 +265,9 @@ def text_lines(data, chunk: int = 1 << 20) -> Iterable[str]:
         pending = parts.pop() + pending[cut:]
         yield from parts
         piece = buffer.read(chunk)
-    try:  # bytes left at the end that are no whole character are no text
+    # half a character last (a logger that lost power mid-write) is dropped, its line cut
+    with contextlib.suppress(UnicodeDecodeError):
         pending += decoder.decode(b"", final=True).rstrip(END_OF_FILE_MARK)
-    except UnicodeDecodeError:
-        raise UserError("csv.encoding") from None
     if pending:
         yield from _line_ends(pending).removesuffix("\n").split("\n")
 
