@@ -95,7 +95,7 @@ def test_allan_white_noise_slope_and_gauss_markov_peak():
 def test_recommended_dwell_comes_from_the_fitted_noise_model():
     """The Allan read-out's advice is the noise model's minimum of the four-position heading
     σ, on the same dwell grid, inside the record's τ range."""
-    from app.core.noise_model import recommended_dwell
+    from app.core.dwell_advice import recommended_dwell
 
     preset = PRESETS["mems"].without("quantization", "warmup")
     record = simulate_static(preset, Setup(40.0), 2 * 3600.0, seed=1)

@@ -18,8 +18,9 @@ import pytest
 
 from app.core.allan import allan_deviation, analyse_record
 from app.core.allan_curve import allan_curve, allan_minimum
+from app.core.dwell_advice import recommended_dwell
 from app.core.exceptions import UserError
-from app.core.noise_model import GyroNoise, recommended_dwell
+from app.core.noise_model import GyroNoise
 from app.core.presets import PRESETS
 from app.core.simulate import Setup, simulate_static
 from app.core.static_record import StaticRecord, read_static_record

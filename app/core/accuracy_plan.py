@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.core.noise_model import NEAR_BEST, GyroNoise, back_to_back
+from app.core.dwell_advice import NEAR_BEST
+from app.core.noise_model import GyroNoise, back_to_back
 
 # the four stops 90° apart, and the orders they are recorded in (indices of the stops)
 STOPS_DEG = (0.0, 90.0, 180.0, 270.0)
@@ -179,7 +180,7 @@ def accuracy_plan(
     -------
     AccuracyPlan
         The points; each order's best dwell (the smallest heading σ) and the shortest dwell
-        within 10 % of that σ (the same rule as :func:`app.core.noise_model.recommended_dwell`).
+        within 10 % of that σ (the same rule as :func:`app.core.dwell_advice.recommended_dwell`).
     """
     points = tuple(
         plan_point(noise, rate_hz, dwell, order, latitude_deg, earth_rate_deg_h)

@@ -11,7 +11,7 @@ freedom, every term ≥ 0, and a term reported only where the curve carries it, 
 
 The dwell to recommend (lab-reference §6): the dwell per position that minimises the
 four-position heading σ of the fitted model, inside the record's τ range
-(:func:`app.core.noise_model.recommended_dwell`); from the curve's minimum where no model
+(:func:`app.core.dwell_advice.recommended_dwell`); from the curve's minimum where no model
 fits; a lower bound where σ still falls at the longest τ.
 """
 
@@ -31,9 +31,10 @@ from app.core.allan_curve import (
 )
 from app.core.allan_fit import TermEstimate, fit_terms
 from app.core.angle_outputs import rates_from_angles
+from app.core.dwell_advice import DwellAdvice, curve_dwell, recommended_dwell
 from app.core.exceptions import UserError
 from app.core.flicker import DEFAULT_BAND_S
-from app.core.noise_model import DwellAdvice, GyroNoise, curve_dwell, recommended_dwell
+from app.core.noise_model import GyroNoise
 from app.core.record_preparation import prepare_record
 from app.core.static_record import Progress, StaticRecord
 from app.core.units import MAX_RATE_DEG_H

@@ -19,9 +19,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from app.core.allan_summary import dwell_lines
+from app.core.dwell_advice import recommended_dwell
 from app.core.error_analysis import ErrorSources, first_order
 from app.core.error_monte_carlo import monte_carlo_heading_errors
-from app.core.noise_model import GyroNoise, recommended_dwell
+from app.core.noise_model import GyroNoise
 from app.core.presets import PRESETS
 from app.core.sinusoid import fit_sinusoid
 from app.core.units import EARTH_RATE_DEG_H
@@ -136,7 +137,7 @@ def dwell_curve(preset_name: str, latitude_deg: float, _=None) -> dict:
     """Expected four-position heading σ (°) against dwell per position, from the preset's
     noise model (flicker bias instability included); the white-noise part alone; the dwell
     that minimises σ within the lab's range -- the same rule and grid as the Allan page and
-    ``gyrolab allan`` (:func:`app.core.noise_model.recommended_dwell`) -- with the advice in
+    ``gyrolab allan`` (:func:`app.core.dwell_advice.recommended_dwell`) -- with the advice in
     words when a translator ``_`` is given."""
     preset = PRESETS[preset_name]
     amplitude = EARTH_RATE_DEG_H * math.cos(math.radians(latitude_deg))
