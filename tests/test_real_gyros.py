@@ -20,7 +20,7 @@ from app.core.allan import allan_deviation, analyse_record
 from app.core.allan_curve import allan_curve, allan_minimum
 from app.core.dwell_advice import recommended_dwell
 from app.core.exceptions import UserError
-from app.core.noise_model import GyroNoise
+from app.core.noise_model import GyroNoise, four_position_sigma
 from app.core.presets import PRESETS
 from app.core.simulate import Setup, simulate_static
 from app.core.static_record import StaticRecord, read_static_record
@@ -337,6 +337,35 @@ def test_dwell_advice_minimises_the_heading_sigma_and_says_when_it_is_a_bound():
     assert white.lower_bound and white.recommended_s == 1800.0 and white.limit == "lab"
     assert white.near_best_s < 1800.0
     assert white.sigma[np.searchsorted(white.dwell_s, white.near_best_s)] <= 1.1 * white.sigma[-1]
+
+
+def test_a_heading_sigma_that_only_approaches_the_flicker_floor_is_said_to_level_off():
+    from app.core.allan_summary import dwell_lines
+    from app.web.i18n import translator
+
+    span = (0.1, 13107.2)  # an 8-hour record's τ
+    floor = recommended_dwell(
+        GyroNoise(arw_deg_rt_h=0.005, bias_instability_deg_h=0.02), 10.0, span, "record"
+    )
+    white = recommended_dwell(GyroNoise(arw_deg_rt_h=0.005), 10.0, span, "record")
+    walk = GyroNoise(arw_deg_rt_h=0.005, bias_instability_deg_h=0.02, rrw_deg_h_rt_h=0.0005)
+    rising = recommended_dwell(walk, 10.0, span, "record")
+    assert floor.lower_bound and floor.levels_off
+    assert white.lower_bound and not white.levels_off  # 1/√T for ever: a longer record helps
+    assert rising.lower_bound and not rising.levels_off  # K turns it up past the record
+    # three times the record's longest τ gains less than 10 % (inside the flicker band)
+    longer = four_position_sigma(
+        GyroNoise(arw_deg_rt_h=0.005, bias_instability_deg_h=0.02), 10.0, 3 * 13107.2, 1.0
+    )
+    assert 0.9 * floor.sigma[-1] < longer < floor.sigma[-1]
+    for language in ("en", "zh-CN"):
+        said = dwell_lines(floor.to_json(), translator(language))[0]
+        assert "13107" in said and said != dwell_lines(white.to_json(), translator(language))[0]
+    # an 8-hour record of white and flicker noise, through the analysis: said so too
+    result = allan_deviation(static_record(8.0, 5.0, arw=0.005, flicker=0.02, seed=0), 5.0)
+    assert result.dwell.levels_off
+    ramp = static_record(8.0, 5.0, arw=0.005, seed=0) + np.arange(144_000) / 5.0 / 3600 * 0.05
+    assert not allan_deviation(ramp, 5.0).dwell.levels_off  # a resolved ramp rises
 
 
 def test_the_explorer_and_the_allan_analysis_give_the_same_dwell_for_the_same_gyro():

@@ -18,7 +18,7 @@ fits; a lower bound where σ still falls at the longest τ.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -227,13 +227,13 @@ def allan_deviation(
         advice = recommended_dwell(
             result.noise(), rate_hz, (float(taus[0]), float(taus[-1])), limit="record"
         )
+        if fit.terms["rate_ramp"].resolved:  # a ramp (no noise term) rises too
+            advice = replace(advice, levels_off=False)
         result = _with_dwell(result, advice)
     return result
 
 
 def _with_dwell(result: AllanResult, advice: DwellAdvice) -> AllanResult:
-    from dataclasses import replace
-
     return replace(result, dwell=advice)
 
 

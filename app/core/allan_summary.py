@@ -88,7 +88,9 @@ def dwell_lines(dwell: dict, _: Translate) -> list[str]:
         One sentence each.
     """
     best = f"{dwell['recommended_s']:.0f}"
-    if dwell["lower_bound"]:
+    if dwell["lower_bound"] and dwell["limit"] == "record" and dwell.get("levels_off"):
+        lines = [_("allan.dwell_floor_record", dwell=best)]
+    elif dwell["lower_bound"]:
         key = "allan.dwell_lower_record" if dwell["limit"] == "record" else "allan.dwell_lower_lab"
         lines = [_(key, dwell=best)]
     else:

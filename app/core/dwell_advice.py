@@ -7,7 +7,7 @@ annex C).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -25,7 +25,9 @@ class DwellAdvice:
     ``recommended_s`` minimises σ within the span; ``lower_bound`` says σ is still falling
     at the span's end (``limit``: "record", the record's longest τ, or "lab", the longest
     dwell the lab allows), so the optimum lies beyond it; ``near_best_s`` is the shortest
-    dwell whose σ is within 10 % of the best."""
+    dwell whose σ is within 10 % of the best; ``levels_off`` says σ falls, at the span's
+    end, only towards the flicker floor: the model holds no term that makes it rise again
+    (rate random walk, a Gauss–Markov bias), so there is no best dwell beyond to find."""
 
     dwell_s: np.ndarray
     sigma: np.ndarray  # the full noise model (or the curve, when no model fits)
@@ -35,6 +37,7 @@ class DwellAdvice:
     near_best_s: float
     limit: str
     source: str = "model"  # "model" or "curve"
+    levels_off: bool = False
 
     def to_json(self) -> dict:
         return {
@@ -43,6 +46,7 @@ class DwellAdvice:
             "near_best_s": self.near_best_s,
             "limit": self.limit,
             "source": self.source,
+            "levels_off": self.levels_off,
         }
 
 
@@ -91,8 +95,9 @@ def recommended_dwell(
     model's covariance of the four means, :func:`four_position_sigma`), minimised over the
     fixed dwell grid inside ``span_s``.  White noise falls as 1/√T, the flicker floor stays,
     rate random walk and a Gauss–Markov bump rise: with only white and flicker noise σ keeps
-    falling, the optimum lies beyond the span, and the advice says so (``lower_bound``) and
-    gives the shortest dwell within 10 % of the best σ.  The heading σ scales as 1/H, so the
+    falling, the optimum lies beyond the span, and the advice says so (``lower_bound``;
+    ``levels_off`` with a flicker floor: σ only approaches it) and gives the shortest dwell
+    within 10 % of the best σ.  The heading σ scales as 1/H, so the
     choice does not depend on the latitude.
 
     Parameters
@@ -120,7 +125,11 @@ def recommended_dwell(
     white_noise = GyroNoise(arw_deg_rt_h=noise.arw_deg_rt_h)
     sigma = np.array([four_position_sigma(noise, rate_hz, t, 1.0) for t in dwell])
     white = np.array([four_position_sigma(white_noise, rate_hz, t, 1.0) for t in dwell])
-    return _advice(dwell, sigma, white, limit, "model")
+    advice = _advice(dwell, sigma, white, limit, "model")
+    rises = noise.rrw_deg_h_rt_h > 0 or noise.markov_sigma_deg_h > 0
+    if advice.lower_bound and noise.bias_instability_deg_h > 0 and not rises:
+        advice = replace(advice, levels_off=True)
+    return advice
 
 
 def curve_dwell(taus_s: np.ndarray, adev: np.ndarray) -> DwellAdvice:
