@@ -47,6 +47,7 @@ UNITS = {
     "rrw": "°/h/√h",
     "rate_ramp": "°/h²",
     "markov": "°/h",
+    "sinusoid": "°/h",
 }
 
 
@@ -97,7 +98,7 @@ class AllanResult:
 
     def noise(self) -> GyroNoise:
         """The resolved terms as a noise model (unresolved terms left out)."""
-        markov = self.terms["markov"]
+        markov, sine = self.terms["markov"], self.terms["sinusoid"]
         band = (
             min(DEFAULT_BAND_S[0], float(self.taus_s[0])),
             max(DEFAULT_BAND_S[1], 10.0 * float(self.taus_s[-1])),
@@ -110,6 +111,8 @@ class AllanResult:
             flicker_band_s=band,
             markov_sigma_deg_h=markov.value or 0.0,
             markov_corr_time_s=markov.corr_time_s or 0.0,
+            sine_amplitude_deg_h=sine.value or 0.0,
+            sine_period_s=sine.period_s or 0.0,
         )
 
     def to_json(self) -> dict:

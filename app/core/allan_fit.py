@@ -6,7 +6,9 @@ Model (IEEE Std 952-1997 annex C, IEEE Std 1554-2005; lab-reference §6), τ in 
 
 quantisation Q (°), angle random walk N (°/√h), bias instability B (°/h) as the flicker
 floor 0.664·B, rate random walk K (°/h/√h), rate ramp R (°/h²) and, only where the curve
-shows its bump, a Gauss–Markov bias σ_m (°/h) with correlation time T_m.
+shows its bump, a Gauss–Markov bias σ_m (°/h) with correlation time T_m, or a sinusoid
+Ω0 (°/h) of period P, Ω0²·sin⁴(πτ/P)/(πτ/P)² (IEEE 952 C.9: a bias swinging with the
+lab's air conditioning), whichever fits the better.
 
 Fit: weighted least squares in the log domain with every coefficient c_k ≥ 0,
 
@@ -43,6 +45,7 @@ from itertools import combinations
 import numpy as np
 
 from app.core.allan_log_fit import BASES, LogFit, Solution
+from app.core.flicker import GM_PEAK_TAU_PER_T, SINE_PEAK_TAU_PER_PERIOD
 
 SIGNIFICANCE = 9.0  # Δχ² a term must earn: 3σ for one parameter
 RIVAL_MARGIN = 4.0  # Δχ² by which a term must beat any other term in its place (2σ)
@@ -60,7 +63,9 @@ TERM_ALPHA = {
     "rrw": -2,
     "rate_ramp": -2,
     "markov": -2,
+    "sinusoid": -2,
 }
+BUMPS = ("markov", "sinusoid")  # terms with a shape parameter, tried where the curve bumps
 
 
 @dataclass(frozen=True)
@@ -73,6 +78,7 @@ class TermEstimate:
     upper_bound: float | None = None  # for an unresolved term
     tau_region_s: tuple[float, float] | None = None  # where its line meets the curve's band
     corr_time_s: float | None = None  # the Gauss–Markov bias only
+    period_s: float | None = None  # the sinusoid only
 
     @property
     def resolved(self) -> bool:
@@ -86,6 +92,7 @@ class TermEstimate:
             "upper_bound": self.upper_bound,
             "tau_region_s": None if self.tau_region_s is None else list(self.tau_region_s),
             **({"corr_time_s": self.corr_time_s} if self.name == "markov" else {}),
+            **({"period_s": self.period_s} if self.name == "sinusoid" else {}),
         }
 
 
@@ -156,9 +163,10 @@ def fit_terms(
     Returns
     -------
     TermFit
-        Every term of ``TERM_ORDER`` and "markov": resolved with a value (Q in °, N °/√h,
-        B °/h, K °/h/√h, R °/h², the Markov σ in °/h with its T in s), its 68 % interval and
-        τ region, or not resolved with its upper bound; χ² and the model curve.
+        Every term of ``TERM_ORDER`` and of ``BUMPS``: resolved with a value (Q in °,
+        N °/√h, B °/h, K °/h/√h, R °/h², the Markov σ in °/h with its T in s, the
+        sinusoid's Ω0 in °/h with its P in s), its 68 % interval and τ region, or not
+        resolved with its upper bound; χ² and the model curve.
 
     References
     ----------
@@ -172,22 +180,25 @@ def fit_terms(
     low, high = fitter.resolve_band()
     best = _resolve(fitter, list(TERM_ORDER), low, high)
     base = best
-    markov = None
     if taus_s.size >= 6:
-        markov = _try_markov(fitter, base, low, high)
-        if markov is not None:
-            best = markov
+        # a bump: a Gauss–Markov bias or a periodic one, whichever fits the better
+        markov = _try_bump(fitter, base, low, high, "markov")
+        sinusoid = _try_bump(fitter, base, low, high, "sinusoid")
+        if markov and (not sinusoid or markov[0].chi2 <= sinusoid[0].chi2):
+            best, fitter.sine_period_h = markov, None
+        elif sinusoid:
+            best, fitter.markov_time_h = sinusoid, None
     resolved = [n for n in best[0].names if best[1].get(n)]
     # Values and intervals from the fit with every term free (≥ 0), where the term is still
     # carried there: a term present but too weak to resolve then takes its share instead of
     # biasing the resolved ones; else from the model that resolved it.
-    solution = fitter.solve([*TERM_ORDER, *(["markov"] if "markov" in resolved else [])])
+    solution = fitter.solve([*TERM_ORDER, *(b for b in BUMPS if b in resolved)])
     terms: dict[str, TermEstimate] = {}
-    for name in (*TERM_ORDER, "markov"):
+    for name in (*TERM_ORDER, *BUMPS):
         if name in resolved:
             carried = _carried(fitter, solution, name, low, high)
             terms[name] = _resolved(fitter, solution if carried else best[0], name, low)
-        elif name == "markov":
+        elif name in BUMPS:
             terms[name] = TermEstimate(name, None)
         else:
             column = BASES[name](fitter.tau_h)
@@ -210,7 +221,8 @@ def _resolved(fitter: LogFit, solution: Solution, name: str, low: np.ndarray) ->
         sigma = math.sqrt(max(solution.cov[index, index], 0.0))
         interval = (_value(name, c - sigma), _value(name, c + sigma))
     corr = fitter.markov_time_h * 3600.0 if name == "markov" else None
-    return TermEstimate(name, _value(name, c), interval, None, region, corr)
+    period = fitter.sine_period_h * 3600.0 if name == "sinusoid" else None
+    return TermEstimate(name, _value(name, c), interval, None, region, corr, period)
 
 
 def _carried(fitter, solution, name, low, high) -> bool:
@@ -264,28 +276,32 @@ def _has_bump(model_variance: np.ndarray) -> bool:
     return bool(rising.size and np.any(steps[rising[0] + 1 :] < 0))
 
 
-def _try_markov(fitter: LogFit, base, low, high):
-    """A Gauss–Markov bias, only where the curve shows its bump: correlation times whose
-    peak 1.89·T lies inside the data, a model that rises and falls there, and a fit better
-    by Δχ² ≥ SIGNIFICANCE than every power-law term together (a flicker floor, a random
-    walk and a ramp are the default explanation); then resolved like every other term."""
+def _try_bump(fitter: LogFit, base, low, high, kind: str):
+    """A bump term (``kind``: a Gauss–Markov bias or a sinusoid), only where the curve shows
+    its bump: shape parameters whose peak lies inside the data (the Markov's at τ = 1.89·T,
+    the sinusoid's at τ = 0.371·P), a model that rises and falls there, and a fit better by
+    Δχ² ≥ SIGNIFICANCE than every power-law term together (a flicker floor, a random walk
+    and a ramp are the default explanation); then resolved like every other term.  Leaves
+    the shape found on ``fitter`` (``markov_time_h`` or ``sine_period_h``)."""
     solution, status = base
     names = [n for n in solution.names if status.get(n)]
     taus_h = fitter.tau_h
-    grid = np.geomspace(taus_h[1] / 1.89, taus_h[-2] / 1.89, 24)
+    peak = GM_PEAK_TAU_PER_T if kind == "markov" else SINE_PEAK_TAU_PER_PERIOD
+    grid = np.geomspace(taus_h[1] / peak, taus_h[-2] / peak, 24 if kind == "markov" else 48)
+    attribute = "markov_time_h" if kind == "markov" else "sine_period_h"
     best = None
-    for corr in grid:
-        fitter.markov_time_h = float(corr)
-        trial = fitter.solve([*names, "markov"])
+    for shape in grid:
+        setattr(fitter, attribute, float(shape))
+        trial = fitter.solve([*names, kind])
         if best is None or trial.chi2 < best[0].chi2:
-            best = (trial, float(corr))
-    fitter.markov_time_h = None
+            best = (trial, float(shape))
+    setattr(fitter, attribute, None)
     power_laws = fitter.solve(list(TERM_ORDER)).chi2
     if best is None or power_laws - best[0].chi2 < SIGNIFICANCE or not _has_bump(best[0].model):
         return None
-    fitter.markov_time_h = best[1]
-    result = _resolve(fitter, [*names, "markov"], low, high)
-    if "markov" not in result[0].names or not result[1].get("markov"):
-        fitter.markov_time_h = None
+    setattr(fitter, attribute, best[1])
+    result = _resolve(fitter, [*names, kind], low, high)
+    if kind not in result[0].names or not result[1].get(kind):
+        setattr(fitter, attribute, None)
         return None
     return result

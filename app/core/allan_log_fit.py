@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.core.flicker import FLOOR_FACTOR, gauss_markov_avar
+from app.core.flicker import FLOOR_FACTOR, gauss_markov_avar, sinusoid_avar
 
 # The band a term's line is held to: 3σ of each log σ̂²(τ), σ including MODEL_ERROR.  A
 # resolved term's line runs along the curve, and with ~20 τ's some point lies outside its own
@@ -45,7 +45,7 @@ BASES: dict[str, Basis] = {  # f_k(τ_h), so that σ² = Σ value_k²·f_k  ((°
 @dataclass
 class Solution:
     names: list[str]
-    coefficients: np.ndarray  # c_k = value_k² (markov: σ_m²)
+    coefficients: np.ndarray  # c_k = value_k² (markov: σ_m²; sinusoid: Ω0²)
     chi2: float
     model: np.ndarray  # σ² at each τ
     cov: np.ndarray | None
@@ -72,6 +72,7 @@ class LogFit:
         self.sampling_error = MODEL_ERROR / m
         self.edf = edf
         self.markov_time_h: float | None = None
+        self.sine_period_h: float | None = None
         rho = np.array([NEIGHBOUR_CORRELATION.get(int(a), 0.5) for a in alphas])
         # neighbours i, i+1 correlated by r_i = √(ρ_i ρ_(i+1)): a first-order Markov chain
         # along τ, whitened by e_i = (u_i − r_(i−1)·u_(i−1))/√(1 − r_(i−1)²)
@@ -105,6 +106,8 @@ class LogFit:
     def basis(self, name: str) -> np.ndarray:
         if name == "markov":
             return gauss_markov_avar(self.tau_h, self.markov_time_h)
+        if name == "sinusoid":
+            return sinusoid_avar(self.tau_h, self.sine_period_h)
         return BASES[name](self.tau_h)
 
     def solve(self, names: list[str]) -> Solution:

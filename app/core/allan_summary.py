@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from app.core.allan import UNITS, AllanResult
-from app.core.allan_fit import TERM_ORDER
+from app.core.allan_fit import BUMPS, TERM_ORDER
 
 Translate = Callable[..., str]
 
@@ -39,7 +39,7 @@ def term_rows(terms: dict[str, dict], _: Translate) -> list[dict]:
         ``name``, ``label``, ``resolved`` and ``text`` of each term.
     """
     rows = []
-    for name in (*TERM_ORDER, "markov"):
+    for name in (*TERM_ORDER, *BUMPS):
         term = terms.get(name) or {"resolved": False}
         unit = UNITS[name]
         if term["resolved"]:
@@ -56,8 +56,12 @@ def term_rows(terms: dict[str, dict], _: Translate) -> list[dict]:
             )
             if term.get("corr_time_s"):
                 text += " " + _("allan.markov_time", time=_seconds(term["corr_time_s"]))
+            if term.get("period_s"):
+                text += " " + _("allan.sine_period", period=_seconds(term["period_s"]))
         elif name == "markov":
             text = _("allan.no_bump")
+        elif name == "sinusoid":
+            text = _("allan.no_swing")
         else:
             text = _("allan.not_resolved", bound=_number(term.get("upper_bound") or 0.0), unit=unit)
         rows.append(

@@ -27,7 +27,8 @@ class DwellAdvice:
     dwell the lab allows), so the optimum lies beyond it; ``near_best_s`` is the shortest
     dwell whose σ is within 10 % of the best; ``levels_off`` says σ falls, at the span's
     end, only towards the flicker floor: the model holds no term that makes it rise again
-    (rate random walk, a Gauss–Markov bias), so there is no best dwell beyond to find."""
+    (rate random walk, a Gauss–Markov or a periodic bias), so there is no best dwell
+    beyond to find."""
 
     dwell_s: np.ndarray
     sigma: np.ndarray  # the full noise model (or the curve, when no model fits)
@@ -126,7 +127,7 @@ def recommended_dwell(
     sigma = np.array([four_position_sigma(noise, rate_hz, t, 1.0) for t in dwell])
     white = np.array([four_position_sigma(white_noise, rate_hz, t, 1.0) for t in dwell])
     advice = _advice(dwell, sigma, white, limit, "model")
-    rises = noise.rrw_deg_h_rt_h > 0 or noise.markov_sigma_deg_h > 0
+    rises = noise.rrw_deg_h_rt_h > 0 or noise.markov_sigma_deg_h > 0 or noise.has_sinusoid
     if advice.lower_bound and noise.bias_instability_deg_h > 0 and not rises:
         advice = replace(advice, levels_off=True)
     return advice

@@ -60,6 +60,36 @@ def gauss_markov_avar(tau, corr_time):
     return np.where(small, 2.0 * x / 3.0 - x * x / 6.0, exact)
 
 
+SINE_PEAK_TAU_PER_PERIOD = 0.371  # the Allan deviation of a sinusoid peaks near τ = 0.371·P
+
+
+def sinusoid_avar(tau, period):
+    """Allan variance of a sinusoid of unit amplitude: σ²(τ) = sin⁴(πτ/P)/(πτ/P)².
+
+    IEEE 952's sinusoidal noise term, Ω0²·(sin²(πf0τ)/(πf0τ))² with f0 = 1/P: it rises as
+    τ² to its peak (≈ 0.725² near τ = 0.371·P), then falls as 1/τ², to zero at every whole
+    period -- a bias that swings with the lab's air conditioning or heating cycle.
+
+    Parameters
+    ----------
+    tau : float or numpy.ndarray
+        Averaging times τ.
+    period : float
+        The period P, in τ's unit.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        σ²(τ) for amplitude 1.
+
+    References
+    ----------
+    IEEE Std 952-1997, annex C (C.9, sinusoidal noise).
+    """
+    x = np.pi * np.asarray(tau, dtype=float) / period
+    return np.sin(x) ** 4 / (x * x)
+
+
 @lru_cache(maxsize=64)
 def _unit_components(low_s: float, high_s: float) -> tuple[tuple[float, ...], float]:
     decades = max(math.log10(high_s / low_s), 0.0)

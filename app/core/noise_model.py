@@ -36,7 +36,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.core.flicker import DEFAULT_BAND_S, flicker_components, gauss_markov_avar
+from app.core.flicker import (
+    DEFAULT_BAND_S,
+    flicker_components,
+    gauss_markov_avar,
+    sinusoid_avar,
+)
 from app.core.presets import GyroPreset
 
 SECONDS_PER_HOUR = 3600.0
@@ -88,7 +93,9 @@ class GyroNoise:
     """The noise terms of one gyro and the indexing σ of its turntable.
 
     ``bias_instability_deg_h`` is the flicker floor B over ``flicker_band_s``;
-    ``markov_sigma_deg_h`` and ``markov_corr_time_s`` a correlated (Gauss–Markov) bias."""
+    ``markov_sigma_deg_h`` and ``markov_corr_time_s`` a correlated (Gauss–Markov) bias;
+    ``sine_amplitude_deg_h`` and ``sine_period_s`` a bias that swings periodically (the
+    lab's air conditioning), of unknown phase."""
 
     arw_deg_rt_h: float = 0.0
     bias_instability_deg_h: float = 0.0
@@ -100,6 +107,8 @@ class GyroNoise:
     markov_corr_time_s: float = 0.0
     warmup_bias_deg_h: float = 0.0  # the warm-up: b_w·e^(−t/τ_w), b_w of this size
     warmup_time_constant_s: float = 0.0
+    sine_amplitude_deg_h: float = 0.0  # a periodic bias: Ω0·sin(2πt/P + φ), φ unknown
+    sine_period_s: float = 0.0
 
     @classmethod
     def from_preset(cls, preset: GyroPreset) -> GyroNoise:
@@ -142,7 +151,33 @@ class GyroNoise:
         for variance, corr in self.correlated_terms():
             total = total + variance * gauss_markov_avar(tau, corr)
         total = total + self.rrw_rate * tau / 3.0
+        if self.has_sinusoid:
+            total = total + self.sine_amplitude_deg_h**2 * sinusoid_avar(tau, self.sine_period_s)
         return float(total) if total.ndim == 0 else total
+
+    @property
+    def has_sinusoid(self) -> bool:
+        return self.sine_amplitude_deg_h > 0 and self.sine_period_s > 0
+
+    def sinusoid_cov(self, windows: Sequence[Window], continuous: bool = True) -> np.ndarray:
+        """The periodic bias's share of :meth:`mean_covariance`.
+
+        Ω0·sin(ωt + φ) with φ uniform has Cov(r(s), r(u)) = (Ω0²/2)·cos(ω(s − u)), so the
+        means over windows i, j share (Ω0²/2)·Re(c_i·c̄_j), c = (e^(iωb) − e^(iωa))/(iωL)
+        the mean of e^(iωt) over [a, b] of length L; separate recordings (not
+        ``continuous``) share nothing, each its own φ."""
+        if not self.has_sinusoid:
+            return np.zeros((len(windows), len(windows)))
+        omega = 2.0 * math.pi / self.sine_period_s
+        c = np.array(
+            [
+                (np.exp(1j * omega * w.end_s) - np.exp(1j * omega * w.start_s))
+                / (1j * omega * w.length_s)
+                for w in windows
+            ]
+        )
+        cov = 0.5 * self.sine_amplitude_deg_h**2 * np.real(np.outer(c, np.conj(c)))
+        return cov if continuous else np.diag(np.diag(cov))
 
     def warm_up_profile(self, windows: Sequence[Window]) -> np.ndarray:
         """Each window's mean of e^(−t/τ_w), t from switch-on:
@@ -194,6 +229,7 @@ class GyroNoise:
                 elif i == j:
                     value += self.rrw_rate * li / 3.0  # a walk from zero at the start
                 cov[i, j] = value
+        cov = cov + self.sinusoid_cov(windows, continuous)
         if continuous and warm_up:
             cov = cov + self.warm_up_cov(windows)
         return cov

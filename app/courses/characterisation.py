@@ -96,6 +96,8 @@ def characterise(
         "flicker_band_s": list(noise.flicker_band_s),
         "markov_sigma_deg_h": noise.markov_sigma_deg_h,
         "markov_corr_time_s": noise.markov_corr_time_s,
+        "sine_amplitude_deg_h": noise.sine_amplitude_deg_h,
+        "sine_period_s": noise.sine_period_s,
         "dwell": result.dwell.to_json(),
         "recommended_dwell_s": result.dwell.recommended_s,
         "notes": result.notes,
@@ -138,5 +140,7 @@ def station_noise(assignment: Assignment | None) -> StationNoise | None:
         flicker_band_s=tuple(summary.get("flicker_band_s", DEFAULT_BAND_S)),
         markov_sigma_deg_h=summary.get("markov_sigma_deg_h", 0.0),
         markov_corr_time_s=summary.get("markov_corr_time_s", 0.0),
+        sine_amplitude_deg_h=summary.get("sine_amplitude_deg_h", 0.0),
+        sine_period_s=summary.get("sine_period_s", 0.0),
     )
     return StationNoise(noise, summary["rate_hz"])
