@@ -81,6 +81,33 @@ def test_an_air_conditioning_cycle_is_resolved_and_no_longer_poses_as_bias_insta
     assert not result.dwell.levels_off  # the heading σ swings with the dwell
 
 
+def test_a_fast_swing_under_angle_random_walk_is_found_by_its_shoulder():
+    # a 20-s swing of 0.5 °/h: the curve has no local maximum (angle random walk falls
+    # through it), only a shoulder -- which no sum of power laws makes
+    rates = static_record(8.0, 5.0, arw=0.005, flicker=0.02, seed=2)
+    t = np.arange(rates.size) / 5.0
+    result = allan_deviation(rates + 0.5 * np.sin(2 * np.pi * t / 20.0), 5.0)
+    sine = result.terms["sinusoid"]
+    assert sine.resolved and sine.period_s == pytest.approx(20.0, rel=0.1)
+    assert sine.value == pytest.approx(0.5, rel=0.2)
+    assert result.arw_deg_rt_h == pytest.approx(0.005, rel=0.1) and result.model_fits
+
+
+def test_power_laws_alone_never_bend_as_a_bump_does():
+    from app.core.allan_fit import BASES, _has_bump
+    from app.core.flicker import gauss_markov_avar
+
+    taus_h = np.geomspace(0.2, 13107.2, 17) / 3600.0
+    rng = np.random.default_rng(5)
+    for _ in range(200):  # any mix of Q, N, B, K, R: log-convex, its slope never falls
+        weights = 10.0 ** rng.uniform(-8, 0, len(BASES)) * (rng.random(len(BASES)) < 0.7)
+        model = sum(w * basis(taus_h) for w, basis in zip(weights, BASES.values(), strict=True))
+        assert not _has_bump(model + 1e-30, taus_h)
+    white = BASES["arw"](taus_h) * 1e-5
+    assert _has_bump(white + 0.01 * sinusoid_avar(taus_h, 60.0 / 3600.0), taus_h)
+    assert _has_bump(white + 1e-3 * gauss_markov_avar(taus_h, 100.0 / 3600.0), taus_h)
+
+
 @pytest.mark.parametrize(
     "terms",
     [

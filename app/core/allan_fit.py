@@ -269,38 +269,55 @@ def _resolve(fitter: LogFit, names: list[str], low, high):
     return solution, status
 
 
-def _has_bump(model_variance: np.ndarray) -> bool:
-    """The model curve rises and then falls inside the data (a local maximum)."""
-    steps = np.diff(model_variance)
-    rising = np.flatnonzero(steps > 0)
-    return bool(rising.size and np.any(steps[rising[0] + 1 :] < 0))
+SHOULDER = 0.05  # the fall of the log-log slope that no sum of power laws can make
+
+
+def _has_bump(model_variance: np.ndarray, taus_h: np.ndarray) -> bool:
+    """The model curve bends as no power laws can: a bump or a shoulder.
+
+    A sum of power laws Σ c_k·τ^a_k is log-convex in log τ (its log-log slope never falls),
+    so a slope that falls by more than ``SHOULDER`` between neighbouring τ's is a feature
+    only a bump term makes -- a local maximum, or a shoulder on a falling curve (a swing
+    under angle random walk).
+    """
+    slopes = np.diff(np.log(np.maximum(model_variance, 1e-300))) / np.diff(np.log(taus_h))
+    return bool(np.any(np.diff(slopes) < -SHOULDER))
 
 
 def _try_bump(fitter: LogFit, base, low, high, kind: str):
     """A bump term (``kind``: a Gauss–Markov bias or a sinusoid), only where the curve shows
     its bump: shape parameters whose peak lies inside the data (the Markov's at τ = 1.89·T,
-    the sinusoid's at τ = 0.371·P), a model that rises and falls there, and a fit better by
+    the sinusoid's at τ = 0.371·P), a model that bends there as power laws cannot
+    (:func:`_has_bump`: a bump or a shoulder), and a fit better by
     Δχ² ≥ SIGNIFICANCE than every power-law term together (a flicker floor, a random walk
     and a ramp are the default explanation); then resolved like every other term.  Leaves
     the shape found on ``fitter`` (``markov_time_h`` or ``sine_period_h``)."""
     solution, status = base
-    names = [n for n in solution.names if status.get(n)]
+    # the shape is sought with every power law free beside it; the terms are then resolved
+    # among those the curve resolved without it -- or all, where the bump hid every one
+    resolved = [n for n in solution.names if status.get(n)] or list(TERM_ORDER)
     taus_h = fitter.tau_h
     peak = GM_PEAK_TAU_PER_T if kind == "markov" else SINE_PEAK_TAU_PER_PERIOD
     grid = np.geomspace(taus_h[1] / peak, taus_h[-2] / peak, 24 if kind == "markov" else 48)
     attribute = "markov_time_h" if kind == "markov" else "sine_period_h"
     best = None
-    for shape in grid:
-        setattr(fitter, attribute, float(shape))
-        trial = fitter.solve([*names, kind])
-        if best is None or trial.chi2 < best[0].chi2:
-            best = (trial, float(shape))
+    step = float(grid[1] / grid[0])
+    for shapes in (grid, None):  # the grid, then finer around its best (a swing's lobes)
+        if shapes is None:
+            shapes = np.geomspace(best[1] / step, best[1] * step, 9)
+        for shape in shapes:
+            setattr(fitter, attribute, float(shape))
+            trial = fitter.solve([*TERM_ORDER, kind])
+            if best is None or trial.chi2 < best[0].chi2:
+                best = (trial, float(shape))
     setattr(fitter, attribute, None)
     power_laws = fitter.solve(list(TERM_ORDER)).chi2
-    if best is None or power_laws - best[0].chi2 < SIGNIFICANCE or not _has_bump(best[0].model):
+    if best is None or power_laws - best[0].chi2 < SIGNIFICANCE:
+        return None
+    if not _has_bump(best[0].model, taus_h):
         return None
     setattr(fitter, attribute, best[1])
-    result = _resolve(fitter, [*names, kind], low, high)
+    result = _resolve(fitter, [*resolved, kind], low, high)
     if kind not in result[0].names or not result[1].get(kind):
         setattr(fitter, attribute, None)
         return None
