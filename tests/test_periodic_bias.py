@@ -155,3 +155,20 @@ def test_a_characterised_bench_gyro_keeps_its_swing_for_the_students_sigma():
     noise = station_noise(assignment).noise
     assert noise.sine_period_s == pytest.approx(PERIOD, rel=0.1)
     assert noise.sine_amplitude_deg_h == pytest.approx(AMPLITUDE, rel=0.25)
+
+
+@pytest.mark.parametrize("preset", ["tactical-fog", "navigation-fog"])
+def test_a_long_tau_wander_of_flicker_is_no_swing(preset):
+    # 24 hours of the simulator's flicker (a sum of Gauss–Markov processes): its longest τ's
+    # wander, and a 3.6-hour "swing" fitted them until a swing had to repeat ~10 times
+    from dataclasses import replace
+
+    from app.core.gyro_stream import GyroStream
+    from app.core.presets import PRESETS
+
+    gyro = replace(PRESETS[preset], turn_on_bias_sigma_deg_h=0.0).without("warmup")
+    count = int(24 * 3600 * gyro.sample_rate_hz)
+    rates = GyroStream(gyro, 500).read(np.full(count, 10.0))
+    result = allan_deviation(rates, gyro.sample_rate_hz)
+    assert not result.terms["sinusoid"].resolved
+    assert result.bias_instability_deg_h == pytest.approx(gyro.bias_instability_deg_h, rel=0.25)

@@ -65,7 +65,11 @@ TERM_ALPHA = {
     "markov": -2,
     "sinusoid": -2,
 }
-BUMPS = ("markov", "sinusoid")  # terms with a shape parameter, tried where the curve bumps
+BUMPS = ("markov", "sinusoid")
+# a swing's period is at most the longest τ / 4 (the record holds ≥ ~10 periods): on 24-hour
+# records of the simulator's flicker (a sum of Gauss–Markov processes) a long-τ wander was
+# taken for a 3.6-hour "swing" in 3 of 8 records
+SWING_REPEATS = 4.0
 
 
 @dataclass(frozen=True)
@@ -297,8 +301,11 @@ def _try_bump(fitter: LogFit, base, low, high, kind: str):
     # among those the curve resolved without it -- or all, where the bump hid every one
     resolved = [n for n in solution.names if status.get(n)] or list(TERM_ORDER)
     taus_h = fitter.tau_h
-    peak = GM_PEAK_TAU_PER_T if kind == "markov" else SINE_PEAK_TAU_PER_PERIOD
-    grid = np.geomspace(taus_h[1] / peak, taus_h[-2] / peak, 24 if kind == "markov" else 48)
+    if kind == "markov":
+        grid = np.geomspace(taus_h[1] / GM_PEAK_TAU_PER_T, taus_h[-2] / GM_PEAK_TAU_PER_T, 24)
+    else:  # a swing the record repeats ~10 times or more: a long-τ wander is no swing
+        longest = min(taus_h[-2] / SINE_PEAK_TAU_PER_PERIOD, taus_h[-1] / SWING_REPEATS)
+        grid = np.geomspace(taus_h[1] / SINE_PEAK_TAU_PER_PERIOD, longest, 48)
     attribute = "markov_time_h" if kind == "markov" else "sine_period_h"
     best = None
     step = float(grid[1] / grid[0])
