@@ -3,7 +3,8 @@ resolved where it is present and left unresolved where it is absent, how close t
 resolved values are, and how often their 68 % intervals hold the truth.
 
 Records come from tests/noise_sources.py (Kasdin–Walter flicker, white, random walk,
-angle quantisation -- written independently of app/core/simulate.py) and, for the presets,
+angle quantisation -- written independently of app/core/simulate.py; a sinusoid added for
+the air-conditioning swing) and, for the presets,
 from GyroLab's own simulator (flicker as a sum of Gauss–Markov processes).
 
     .venv/bin/python bench/bench_allan_fit.py [--records 100]
@@ -26,7 +27,7 @@ from app.core.presets import PRESETS
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # the tests' generator
 from tests.noise_sources import static_record  # noqa: E402
 
-TERMS = {"arw": "arw", "bias_instability": "flicker", "rrw": "rrw"}
+TERMS = {"arw": "arw", "bias_instability": "flicker", "rrw": "rrw", "sinusoid": "swing"}
 CASES = {  # name: (hours, rate Hz, terms of tests/noise_sources.static_record)
     "white": (2.0, 10.0, {"arw": 0.012}),
     "flicker": (2.0, 10.0, {"flicker": 0.05}),
@@ -34,7 +35,21 @@ CASES = {  # name: (hours, rate Hz, terms of tests/noise_sources.static_record)
     "mixed": (24.0, 1.0, {"arw": 0.002, "flicker": 0.05, "rrw": 0.1}),
     "mixed, quantised": (24.0, 1.0, {"arw": 0.002, "flicker": 0.05, "rrw": 0.1, "lsb_deg": 2e-5}),
     "MEMS-like, 100 Hz": (2.8, 100.0, {"arw": 0.3, "flicker": 40.0, "rrw": 2.0}),
+    # a bias swinging with the lab's air conditioning: 0.05 °/h every 20 minutes
+    "flicker + 20-min swing": (8.0, 5.0, {"arw": 0.005, "flicker": 0.02, "swing": 0.05}),
 }
+SWING_PERIOD_S = 1200.0
+
+
+def independent_record(hours: float, rate: float, seed: int, terms: dict) -> np.ndarray:
+    """tests/noise_sources.static_record, plus a sinusoid of random phase for "swing"."""
+    noise = {k: v for k, v in terms.items() if k != "swing"}
+    values = static_record(hours, rate, seed=seed, **noise)
+    if terms.get("swing"):
+        phase = np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi)
+        t = np.arange(values.size) / rate
+        values = values + terms["swing"] * np.sin(2.0 * np.pi * t / SWING_PERIOD_S + phase)
+    return values
 
 
 def preset_record(name: str, hours: float, seed: int) -> tuple[np.ndarray, float, dict]:
@@ -89,13 +104,13 @@ def main() -> None:
     args = parser.parse_args()
     print(f"{args.records} records per row; each cell: truth: resolved, estimate/truth "
           "(mean ± spread), share of 68 % intervals holding the truth")  # fmt: skip
-    print("| records | N (°/√h) | B (°/h) | K (°/h/√h) |")
-    print("|---|---|---|---|")
+    print("| records | N (°/√h) | B (°/h) | K (°/h/√h) | swing Ω0 (°/h) |")
+    print("|---|---|---|---|---|")
     for name, (hours, rate, terms) in CASES.items():
         began = time.perf_counter()
         records = []
         for seed in range(args.records):
-            values = static_record(hours, rate, seed=1000 + seed, **terms)
+            values = independent_record(hours, rate, 1000 + seed, terms)
             records.append((values, rate, terms))
         label = f"{name} ({hours:g} h at {rate:g} Hz, independent generator)"
         for line in table(label, records, time.perf_counter() - began):

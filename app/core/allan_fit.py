@@ -70,6 +70,11 @@ BUMPS = ("markov", "sinusoid")
 # records of the simulator's flicker (a sum of Gauss–Markov processes) a long-τ wander was
 # taken for a 3.6-hour "swing" in 3 of 8 records
 SWING_REPEATS = 4.0
+# Δχ² a swing must earn: its period is sought over ~15 octaves, so the 3σ of one term
+# (Δχ² 9, p 0.27 %) is asked of the best of ~15 tries, each with two parameters:
+# e^(−Δχ²/2) ≤ 0.27 %/15 gives Δχ² ≈ 17 -- a 24-hour record's random-walk wander earned
+# 10.4, a 20-minute swing of 0.05 °/h on a 0.02 °/h gyro 34-54
+SWING_SIGNIFICANCE = 2.0 * SIGNIFICANCE
 
 
 @dataclass(frozen=True)
@@ -276,6 +281,13 @@ def _resolve(fitter: LogFit, names: list[str], low, high):
 SHOULDER = 0.05  # the fall of the log-log slope that no sum of power laws can make
 
 
+def _has_peak(model_variance: np.ndarray, taus_h: np.ndarray) -> bool:
+    """The model curve rises and then falls inside the data (a local maximum)."""
+    steps = np.diff(model_variance)
+    rising = np.flatnonzero(steps > 0)
+    return bool(rising.size and np.any(steps[rising[0] + 1 :] < 0))
+
+
 def _has_bump(model_variance: np.ndarray, taus_h: np.ndarray) -> bool:
     """The model curve bends as no power laws can: a bump or a shoulder.
 
@@ -291,37 +303,45 @@ def _has_bump(model_variance: np.ndarray, taus_h: np.ndarray) -> bool:
 def _try_bump(fitter: LogFit, base, low, high, kind: str):
     """A bump term (``kind``: a Gauss–Markov bias or a sinusoid), only where the curve shows
     its bump: shape parameters whose peak lies inside the data (the Markov's at τ = 1.89·T,
-    the sinusoid's at τ = 0.371·P), a model that bends there as power laws cannot
-    (:func:`_has_bump`: a bump or a shoulder), and a fit better by
+    the sinusoid's at τ = 0.371·P), a model that rises and falls there (the Markov's,
+    :func:`_has_peak`) or bends as power laws cannot (the sinusoid's, :func:`_has_bump`: a
+    shoulder too), and a fit better by
     Δχ² ≥ SIGNIFICANCE than every power-law term together (a flicker floor, a random walk
     and a ramp are the default explanation); then resolved like every other term.  Leaves
     the shape found on ``fitter`` (``markov_time_h`` or ``sine_period_h``)."""
     solution, status = base
-    # the shape is sought with every power law free beside it; the terms are then resolved
-    # among those the curve resolved without it -- or all, where the bump hid every one
-    resolved = [n for n in solution.names if status.get(n)] or list(TERM_ORDER)
+    resolved = [n for n in solution.names if status.get(n)]
     taus_h = fitter.tau_h
-    if kind == "markov":
+    if kind == "markov":  # among the terms resolved without it, at a local maximum
+        searched, bends, refine = resolved, _has_peak, False
         grid = np.geomspace(taus_h[1] / GM_PEAK_TAU_PER_T, taus_h[-2] / GM_PEAK_TAU_PER_T, 24)
-    else:  # a swing the record repeats ~10 times or more: a long-τ wander is no swing
+    else:
+        # a swing hides the power laws it sits on (a fast one under angle random walk left
+        # none resolved): its period is sought with all of them free, and a shoulder counts;
+        # it must repeat ~10 times in the record -- a long-τ wander is no swing
+        searched, bends, refine = list(TERM_ORDER), _has_bump, True
+        resolved = resolved or list(TERM_ORDER)
         longest = min(taus_h[-2] / SINE_PEAK_TAU_PER_PERIOD, taus_h[-1] / SWING_REPEATS)
         grid = np.geomspace(taus_h[1] / SINE_PEAK_TAU_PER_PERIOD, longest, 48)
     attribute = "markov_time_h" if kind == "markov" else "sine_period_h"
     best = None
     step = float(grid[1] / grid[0])
-    for shapes in (grid, None):  # the grid, then finer around its best (a swing's lobes)
+    for shapes in (grid, None):  # the grid, then (a swing's lobes) finer around its best
         if shapes is None:
+            if not refine:
+                break
             shapes = np.geomspace(best[1] / step, best[1] * step, 9)
         for shape in shapes:
             setattr(fitter, attribute, float(shape))
-            trial = fitter.solve([*TERM_ORDER, kind])
+            trial = fitter.solve([*searched, kind])
             if best is None or trial.chi2 < best[0].chi2:
                 best = (trial, float(shape))
     setattr(fitter, attribute, None)
     power_laws = fitter.solve(list(TERM_ORDER)).chi2
-    if best is None or power_laws - best[0].chi2 < SIGNIFICANCE:
+    needed = SIGNIFICANCE if kind == "markov" else SWING_SIGNIFICANCE
+    if best is None or power_laws - best[0].chi2 < needed:
         return None
-    if not _has_bump(best[0].model, taus_h):
+    if not bends(best[0].model, taus_h):
         return None
     setattr(fitter, attribute, best[1])
     result = _resolve(fitter, [*resolved, kind], low, high)
