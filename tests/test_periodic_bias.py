@@ -179,3 +179,19 @@ def test_a_random_walks_wander_earns_no_swing_from_the_search_over_periods():
     # wander at τ 2048-4096 s by Δχ² 10.4 -- past one term's 9, short of a search's 18
     rates = static_record(24.0, 1.0, arw=0.002, flicker=0.05, rrw=0.1, seed=1039)
     assert not allan_deviation(rates, 1.0).terms["sinusoid"].resolved
+
+
+def test_a_term_carried_by_one_tau_names_that_tau_once():
+    from app.core.allan_summary import term_rows
+    from app.web.i18n import translator
+
+    swing = {"resolved": True, "value": 0.05, "interval": [0.045, 0.055]}
+    for language in ("en", "zh-CN"):
+        rows = term_rows(
+            {"sinusoid": {**swing, "tau_region_s": [409.6, 409.6], "period_s": 1200.0},
+             "arw": {**swing, "tau_region_s": [0.2, 13107.2]}},
+            translator(language),
+        )  # fmt: skip
+        text = {row["name"]: row["text"] for row in rows}
+        assert "τ = 410 s" in text["sinusoid"] and "410 … 410" not in text["sinusoid"]
+        assert "τ = 0.2 … 13107 s" in text["arw"]

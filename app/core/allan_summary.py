@@ -45,14 +45,15 @@ def term_rows(terms: dict[str, dict], _: Translate) -> list[dict]:
         if term["resolved"]:
             low, high = term.get("interval") or (term["value"], term["value"])
             region = term.get("tau_region_s") or (0.0, 0.0)
+            tau_low, tau_high = _seconds(region[0]), _seconds(region[1])
             text = _(
-                "allan.resolved",
+                "allan.resolved" if tau_low != tau_high else "allan.resolved_at",
                 value=_number(term["value"]),
                 unit=unit,
                 low=_number(low),
                 high=_number(high),
-                tau_low=_seconds(region[0]),
-                tau_high=_seconds(region[1]),
+                tau_low=tau_low,
+                tau_high=tau_high,
             )
             if term.get("corr_time_s"):
                 text += " " + _("allan.markov_time", time=_seconds(term["corr_time_s"]))
