@@ -324,6 +324,10 @@ def _try_bump(fitter: LogFit, base, low, high, kind: str):
         longest = min(taus_h[-2] / SINE_PEAK_TAU_PER_PERIOD, taus_h[-1] / SWING_REPEATS)
         grid = np.geomspace(taus_h[1] / SINE_PEAK_TAU_PER_PERIOD, longest, 48)
     attribute = "markov_time_h" if kind == "markov" else "sine_period_h"
+    power_laws = fitter.solve(list(TERM_ORDER)).chi2
+    needed = SIGNIFICANCE if kind == "markov" else SWING_SIGNIFICANCE
+    if power_laws < needed:  # no term can lower χ² by more than all of it: nothing to seek
+        return None
     best = None
     step = float(grid[1] / grid[0])
     for shapes in (grid, None):  # the grid, then (a swing's lobes) finer around its best
@@ -337,8 +341,6 @@ def _try_bump(fitter: LogFit, base, low, high, kind: str):
             if best is None or trial.chi2 < best[0].chi2:
                 best = (trial, float(shape))
     setattr(fitter, attribute, None)
-    power_laws = fitter.solve(list(TERM_ORDER)).chi2
-    needed = SIGNIFICANCE if kind == "markov" else SWING_SIGNIFICANCE
     if best is None or power_laws - best[0].chi2 < needed:
         return None
     if not bends(best[0].model, taus_h):
