@@ -68,11 +68,11 @@ def simulate_command(args: argparse.Namespace) -> int:
         args.roll,
         args.elevation if args.part == "heading" else 0.0,
     )
+    check_finite("--warm-up", args.warm_up)
+    if not 0 <= args.warm_up <= 86_400:
+        raise CommandError("--warm-up must be between 0 and 86400 seconds")
     if args.part == "static":
         seconds = args.seconds or args.seconds_per_position or 600.0
-        check_finite("--warm-up", args.warm_up)
-        if not 0 <= args.warm_up <= 86_400:
-            raise CommandError("--warm-up must be between 0 and 86400 seconds")
         values = simulate_static(
             preset,
             setup,
@@ -102,9 +102,6 @@ def simulate_command(args: argparse.Namespace) -> int:
         dials = heading_angles(args.positions, args.rotation, 0.0, step)
     else:
         dials = elevation_angles(args.positions, 0.0, step)
-    check_finite("--warm-up", args.warm_up)
-    if not 0 <= args.warm_up <= 86_400:
-        raise CommandError("--warm-up must be between 0 and 86400 seconds")
     run = simulate_run(
         preset,
         setup,
