@@ -113,6 +113,7 @@ class AllanResult:
             markov_corr_time_s=markov.corr_time_s or 0.0,
             sine_amplitude_deg_h=sine.value or 0.0,
             sine_period_s=sine.period_s or 0.0,
+            ramp_deg_h_per_h=self.value("rate_ramp") or 0.0,
         )
 
     def to_json(self) -> dict:
@@ -230,8 +231,6 @@ def allan_deviation(
         advice = recommended_dwell(
             result.noise(), rate_hz, (float(taus[0]), float(taus[-1])), limit="record"
         )
-        if fit.terms["rate_ramp"].resolved:  # a ramp (no noise term) rises too
-            advice = replace(advice, levels_off=False)
         result = _with_dwell(result, advice)
     return result
 

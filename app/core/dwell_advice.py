@@ -27,7 +27,7 @@ class DwellAdvice:
     dwell the lab allows), so the optimum lies beyond it; ``near_best_s`` is the shortest
     dwell whose σ is within 10 % of the best; ``levels_off`` says σ falls, at the span's
     end, only towards the flicker floor: the model holds no term that makes it rise again
-    (rate random walk, a Gauss–Markov or a periodic bias), so there is no best dwell
+    (rate random walk, a Gauss–Markov or a periodic bias, a ramp), so there is no best dwell
     beyond to find."""
 
     dwell_s: np.ndarray
@@ -95,10 +95,11 @@ def recommended_dwell(
     σ_A(T) = √((v_x + v_y)/2)/H for four back-to-back positions of dwell T (the noise
     model's covariance of the four means, :func:`four_position_sigma`), minimised over the
     fixed dwell grid inside ``span_s``.  White noise falls as 1/√T, the flicker floor stays,
-    rate random walk and a Gauss–Markov bump rise: with only white and flicker noise σ keeps
-    falling, the optimum lies beyond the span, and the advice says so (``lower_bound``;
-    ``levels_off`` with a flicker floor: σ only approaches it) and gives the shortest dwell
-    within 10 % of the best σ.  The heading σ scales as 1/H, so the
+    rate random walk, a Gauss–Markov bump and a rate ramp rise (a ramp R moves
+    x = (ω1 − ω3)/2 and y = (ω2 − ω4)/2 by R·T each, T in hours): with only white and
+    flicker noise σ keeps falling, the optimum lies beyond the span, and the advice says so
+    (``lower_bound``; ``levels_off`` with a flicker floor: σ only approaches it) and gives
+    the shortest dwell within 10 % of the best σ.  The heading σ scales as 1/H, so the
     choice does not depend on the latitude.
 
     Parameters
@@ -127,7 +128,12 @@ def recommended_dwell(
     sigma = np.array([four_position_sigma(noise, rate_hz, t, 1.0) for t in dwell])
     white = np.array([four_position_sigma(white_noise, rate_hz, t, 1.0) for t in dwell])
     advice = _advice(dwell, sigma, white, limit, "model")
-    rises = noise.rrw_deg_h_rt_h > 0 or noise.markov_sigma_deg_h > 0 or noise.has_sinusoid
+    rises = (
+        noise.rrw_deg_h_rt_h > 0
+        or noise.markov_sigma_deg_h > 0
+        or noise.has_sinusoid
+        or noise.ramp_deg_h_per_h > 0
+    )
     if advice.lower_bound and noise.bias_instability_deg_h > 0 and not rises:
         advice = replace(advice, levels_off=True)
     return advice

@@ -18,14 +18,19 @@ Terms, with continuous-time covariances of the rate (°/h):
   in seconds from switch-on;
 * angle quantisation q (°): the rate is the difference of an angle rounded to q, so a
   window mean is off by (e_end − e_start)·3600/L with e uniform: variance 2·(q²/12)·3600²/L²,
-  and adjacent windows share an end.
+  and adjacent windows share an end;
+* a rate ramp R (°/h²), where an Allan fit resolved one: a bias that drifts as R·t, its
+  sign unknown (a slope of variance R²), so window means centred at c_i (h) share
+  R²·(c_i − c̄)(c_j − c̄) -- the origin c̄ is the windows' mean centre, and any other adds
+  only a common bias, which every difference of means (the heading) cancels.
 
 Allan variance of the same model (used by the dwell advice and printed by the CLI):
 
-    σ²_A(τ) = (60N)²/τ + (3600·q)²/(4τ²) + Σ_j v_j·g(τ/T_j) + (K²/3600)·τ/3
+    σ²_A(τ) = (60N)²/τ + (3600·q)²/(4τ²) + Σ_j v_j·g(τ/T_j) + (K²/3600)·τ/3 + R²·τ_h²/2
     g(x) = (2/x)·[1 − (3 − 4e^(−x) + e^(−2x))/(2x)]             (IEEE 952, annex C)
 
-the sum running over the flicker components and the Gauss–Markov bias.
+the sum running over the flicker components and the Gauss–Markov bias, τ_h = τ/3600
+(IEEE Std 952-1997, annex C: C.1–C.6).
 """
 
 from __future__ import annotations
@@ -95,7 +100,8 @@ class GyroNoise:
     ``bias_instability_deg_h`` is the flicker floor B over ``flicker_band_s``;
     ``markov_sigma_deg_h`` and ``markov_corr_time_s`` a correlated (Gauss–Markov) bias;
     ``sine_amplitude_deg_h`` and ``sine_period_s`` a bias that swings periodically (the
-    lab's air conditioning), of unknown phase."""
+    lab's air conditioning), of unknown phase; ``ramp_deg_h_per_h`` a rate ramp, of unknown
+    sign (a long record's slow trend: the Allan fit's R)."""
 
     arw_deg_rt_h: float = 0.0
     bias_instability_deg_h: float = 0.0
@@ -109,6 +115,7 @@ class GyroNoise:
     warmup_time_constant_s: float = 0.0
     sine_amplitude_deg_h: float = 0.0  # a periodic bias: Ω0·sin(2πt/P + φ), φ unknown
     sine_period_s: float = 0.0
+    ramp_deg_h_per_h: float = 0.0  # a rate ramp R (°/h²) of unknown sign
 
     @classmethod
     def from_preset(cls, preset: GyroPreset) -> GyroNoise:
@@ -153,6 +160,7 @@ class GyroNoise:
         total = total + self.rrw_rate * tau / 3.0
         if self.has_sinusoid:
             total = total + self.sine_amplitude_deg_h**2 * sinusoid_avar(tau, self.sine_period_s)
+        total = total + (self.ramp_deg_h_per_h * tau / SECONDS_PER_HOUR) ** 2 / 2.0
         return float(total) if total.ndim == 0 else total
 
     @property
@@ -178,6 +186,16 @@ class GyroNoise:
         )
         cov = 0.5 * self.sine_amplitude_deg_h**2 * np.real(np.outer(c, np.conj(c)))
         return cov if continuous else np.diag(np.diag(cov))
+
+    def ramp_cov(self, windows: Sequence[Window]) -> np.ndarray:
+        """The rate ramp's share of :meth:`mean_covariance` on one timeline:
+        R²·(c_i − c̄)(c_j − c̄), c the windows' centres in hours and c̄ their mean (a slope
+        of unknown sign; the origin adds only a bias common to every window)."""
+        if not self.ramp_deg_h_per_h:
+            return np.zeros((len(windows), len(windows)))
+        centres = np.array([w.start_s + w.length_s / 2.0 for w in windows]) / SECONDS_PER_HOUR
+        offsets = centres - centres.mean()
+        return self.ramp_deg_h_per_h**2 * np.outer(offsets, offsets)
 
     def warm_up_profile(self, windows: Sequence[Window]) -> np.ndarray:
         """Each window's mean of e^(−t/τ_w), t from switch-on:
@@ -230,6 +248,8 @@ class GyroNoise:
                     value += self.rrw_rate * li / 3.0  # a walk from zero at the start
                 cov[i, j] = value
         cov = cov + self.sinusoid_cov(windows, continuous)
+        if continuous:
+            cov = cov + self.ramp_cov(windows)
         if continuous and warm_up:
             cov = cov + self.warm_up_cov(windows)
         return cov

@@ -98,6 +98,7 @@ def characterise(
         "markov_corr_time_s": noise.markov_corr_time_s,
         "sine_amplitude_deg_h": noise.sine_amplitude_deg_h,
         "sine_period_s": noise.sine_period_s,
+        "ramp_deg_h_per_h": noise.ramp_deg_h_per_h,
         "dwell": result.dwell.to_json(),
         "recommended_dwell_s": result.dwell.recommended_s,
         "notes": result.notes,
@@ -142,5 +143,6 @@ def station_noise(assignment: Assignment | None) -> StationNoise | None:
         markov_corr_time_s=summary.get("markov_corr_time_s", 0.0),
         sine_amplitude_deg_h=summary.get("sine_amplitude_deg_h", 0.0),
         sine_period_s=summary.get("sine_period_s", 0.0),
+        ramp_deg_h_per_h=summary.get("ramp_deg_h_per_h", 0.0),
     )
     return StationNoise(noise, summary["rate_hz"])
