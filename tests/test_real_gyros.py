@@ -442,3 +442,24 @@ def test_one_reading_far_from_a_still_record_is_analysed_not_crashed():
     values[-1] = 1e6
     result = analyse_record(StaticRecord(values), 10.0)
     assert np.all(result.edf >= 1.0) and np.all(np.isfinite(result.adev_deg_h))
+
+
+def test_a_terms_region_is_the_run_of_tau_where_its_line_meets_the_band():
+    """A thermostat's square-wave swing over white and flicker noise: angle random walk's
+    line meets the band at the short τ's and again at the last one, whose single
+    difference leaves a band reaching down to it.  Its region was the span between
+    ("carried by τ = 0.2 … 13107 s", the line far under the curve at 1000 s); it is now
+    the run of neighbouring τ's that holds the most degrees of freedom."""
+    from app.core.allan_fit import _carrying_region
+
+    t = np.arange(144_000) / 5.0
+    square = 0.05 * np.where((t / 1200.0 + 0.3) % 1.0 < 0.5, 1.0, -1.0)
+    rates = static_record(8.0, 5.0, arw=0.005, flicker=0.02, seed=201) + square
+    result = allan_deviation(rates, 5.0)
+    low, high = result.terms["arw"].tau_region_s
+    assert low == pytest.approx(0.2) and 10.0 < high < 1000.0
+    taus, edf = np.array([1.0, 2.0, 4.0, 8.0, 16.0]), np.array([100.0, 50.0, 20.0, 5.0, 1.0])
+    inside = np.array([True, True, False, False, True])
+    assert _carrying_region(inside, edf, taus) == (1.0, 2.0)
+    assert _carrying_region(np.array([False, False, True, True, True]), edf, taus) == (4.0, 16.0)
+    assert _carrying_region(np.zeros(5, bool), edf, taus) is None

@@ -222,9 +222,7 @@ def _resolved(fitter: LogFit, solution: Solution, name: str, low: np.ndarray) ->
     index = solution.names.index(name)
     c = float(solution.coefficients[index])
     line = np.sqrt(c * fitter.basis(name))
-    inside = np.flatnonzero(line >= low)
-    taus_s = fitter.tau_h * 3600.0
-    region = (float(taus_s[inside[0]]), float(taus_s[inside[-1]])) if inside.size else None
+    region = _carrying_region(line >= low, fitter.edf, fitter.tau_h * 3600.0)
     interval = None
     if solution.cov is not None:
         sigma = math.sqrt(max(solution.cov[index, index], 0.0))
@@ -232,6 +230,26 @@ def _resolved(fitter: LogFit, solution: Solution, name: str, low: np.ndarray) ->
     corr = fitter.markov_time_h * 3600.0 if name == "markov" else None
     period = fitter.sine_period_h * 3600.0 if name == "sinusoid" else None
     return TermEstimate(name, _value(name, c), interval, None, region, corr, period)
+
+
+def _carrying_region(
+    inside: np.ndarray, edf: np.ndarray, taus_s: np.ndarray
+) -> tuple[float, float] | None:
+    """The τ region said to carry a term: of the runs of neighbouring τ where its line is
+    inside the band, the one holding the most degrees of freedom -- not the span from the
+    first such τ to the last, which would take in the τ's between, where the line can lie
+    far below the curve (angle random walk "carried by τ = 0.2 … 13107 s" because the
+    one-difference last τ's band reaches down to it)."""
+    best, best_edf, start = None, 0.0, None
+    for k, flag in enumerate([*inside.tolist(), False]):
+        if flag and start is None:
+            start = k
+        elif not flag and start is not None:
+            held = float(np.sum(edf[start:k]))
+            if held > best_edf:
+                best, best_edf = (float(taus_s[start]), float(taus_s[k - 1])), held
+            start = None
+    return best
 
 
 def _carried(fitter, solution, name, low, high) -> bool:
