@@ -7,15 +7,18 @@ from __future__ import annotations
 
 import io
 import math
+from dataclasses import replace
 
 import allantools
 import numpy as np
 import pytest
 
 from app.core.allan import allan_deviation
+from app.core.allan_summary import dwell_lines
 from app.core.dwell_advice import recommended_dwell
 from app.core.flicker import sinusoid_avar
 from app.core.noise_model import GyroNoise, Window, back_to_back, four_position_sigma
+from app.web.i18n import translator
 from tests.noise_sources import static_record
 
 PERIOD, AMPLITUDE = 1200.0, 0.05  # a 20-minute air-conditioning cycle of 0.05 °/h
@@ -78,7 +81,10 @@ def test_an_air_conditioning_cycle_is_resolved_and_no_longer_poses_as_bias_insta
     # without the term the fit had taken the swing for flicker: B 0.038 °/h (truth 0.02)
     noise = result.noise()
     assert noise.sine_period_s == sine.period_s and noise.sine_amplitude_deg_h == sine.value
-    assert not result.dwell.levels_off  # the heading σ swings with the dwell
+    # the swing only ripples the heading σ (whole periods average it out): with the floor
+    # resolved σ levels off towards it; the advice names the periods
+    assert result.dwell.levels_off == floor.resolved
+    assert result.dwell.swing_period_s == sine.period_s
 
 
 def test_a_fast_swing_under_angle_random_walk_is_found_by_its_shoulder():
@@ -139,8 +145,29 @@ def test_the_swing_widens_the_heading_sigma_unless_the_dwell_is_whole_periods():
     whole = swinging.mean_covariance(back_to_back([int(PERIOD * 5)] * 4, 5.0), warm_up=False)
     plain = quiet.mean_covariance(back_to_back([int(PERIOD * 5)] * 4, 5.0), warm_up=False)
     assert whole == pytest.approx(plain, rel=1e-6, abs=1e-12)
+    # σ ripples down towards the flicker floor: at whole periods it is the quiet gyro's, and
+    # beyond the record there is no best dwell to find -- not "at least 13107 s"
     advice = recommended_dwell(swinging, 5.0, (0.2, 13107.2), "record")
-    assert not advice.levels_off
+    assert advice.lower_bound and advice.levels_off and advice.swing_period_s == PERIOD
+    for language in ("en", "zh-CN"):
+        lines = dwell_lines(advice.to_json(), translator(language))
+        assert (
+            lines[0]
+            == dwell_lines(
+                recommended_dwell(quiet, 5.0, (0.2, 13107.2), "record").to_json(),
+                translator(language),
+            )[0]
+        )
+        assert "1200 s" in lines[-1] and "2400 s" in lines[-1]
+    assert not any(
+        "1200" in line
+        for line in dwell_lines(
+            recommended_dwell(quiet, 5.0, (0.2, 13107.2), "record").to_json(), translator("en")
+        )
+    )
+    # a swing in a gyro with a random walk still has its best dwell where K turns σ up
+    walking = replace(swinging, rrw_deg_h_rt_h=0.05)
+    assert not recommended_dwell(walking, 5.0, (0.2, 13107.2), "record").levels_off
 
 
 def test_a_characterised_bench_gyro_keeps_its_swing_for_the_students_sigma():

@@ -77,8 +77,9 @@ def term_rows(terms: dict[str, dict], _: Translate) -> list[dict]:
 
 
 def dwell_lines(dwell: dict, _: Translate) -> list[str]:
-    """The dwell advice in words: the best dwell, or the lower bound and why, and the
-    shortest dwell within 10 % of the best σ.
+    """The dwell advice in words: the best dwell, or the lower bound and why, the
+    shortest dwell within 10 % of the best σ, and, with a periodic bias, that whole periods
+    of it average it out.
 
     Parameters
     ----------
@@ -102,6 +103,11 @@ def dwell_lines(dwell: dict, _: Translate) -> list[str]:
         lines = [_("allan.dwell_best", dwell=best)]
     if dwell["near_best_s"] < dwell["recommended_s"]:
         lines.append(_("allan.dwell_near", dwell=f"{dwell['near_best_s']:.0f}"))
+    if dwell.get("swing_period_s"):
+        period = dwell["swing_period_s"]
+        lines.append(
+            _("allan.dwell_whole_periods", period=f"{period:.0f}", twice=f"{2 * period:.0f}")
+        )
     if dwell.get("source") == "curve":
         lines.append(_("allan.dwell_curve"))
     return lines

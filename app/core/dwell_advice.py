@@ -27,8 +27,9 @@ class DwellAdvice:
     dwell the lab allows), so the optimum lies beyond it; ``near_best_s`` is the shortest
     dwell whose σ is within 10 % of the best; ``levels_off`` says σ falls, at the span's
     end, only towards the flicker floor: the model holds no term that makes it rise again
-    (rate random walk, a Gauss–Markov or a periodic bias, a ramp), so there is no best dwell
-    beyond to find."""
+    (rate random walk, a Gauss–Markov bias, a ramp; a periodic bias only ripples it), so
+    there is no best dwell beyond to find; ``swing_period_s`` is a resolved periodic bias's
+    period P, whose whole multiples average it out of every position's mean."""
 
     dwell_s: np.ndarray
     sigma: np.ndarray  # the full noise model (or the curve, when no model fits)
@@ -39,6 +40,7 @@ class DwellAdvice:
     limit: str
     source: str = "model"  # "model" or "curve"
     levels_off: bool = False
+    swing_period_s: float | None = None  # a resolved periodic bias's P: whole periods cancel it
 
     def to_json(self) -> dict:
         return {
@@ -48,6 +50,7 @@ class DwellAdvice:
             "limit": self.limit,
             "source": self.source,
             "levels_off": self.levels_off,
+            "swing_period_s": self.swing_period_s,
         }
 
 
@@ -128,14 +131,13 @@ def recommended_dwell(
     sigma = np.array([four_position_sigma(noise, rate_hz, t, 1.0) for t in dwell])
     white = np.array([four_position_sigma(white_noise, rate_hz, t, 1.0) for t in dwell])
     advice = _advice(dwell, sigma, white, limit, "model")
-    rises = (
-        noise.rrw_deg_h_rt_h > 0
-        or noise.markov_sigma_deg_h > 0
-        or noise.has_sinusoid
-        or noise.ramp_deg_h_per_h > 0
-    )
+    # a swing's share of a position mean falls as 1/T (whole periods average it out): it
+    # makes σ ripple, never rise for good, so it leaves a σ that levels off as it is
+    rises = noise.rrw_deg_h_rt_h > 0 or noise.markov_sigma_deg_h > 0 or noise.ramp_deg_h_per_h > 0
     if advice.lower_bound and noise.bias_instability_deg_h > 0 and not rises:
         advice = replace(advice, levels_off=True)
+    if noise.has_sinusoid:
+        advice = replace(advice, swing_period_s=noise.sine_period_s)
     return advice
 
 
