@@ -403,3 +403,35 @@ def test_a_first_non_ascii_byte_past_the_first_block_chooses_the_encoding(encodi
     assert record.values.size == 30_001
     with pytest.raises(UserError):  # bytes of no text at all are still refused
         list(text_lines(data + b"\xff\xfe\x00\x81\x00", chunk=chunk))
+
+
+@pytest.mark.parametrize(
+    ("header", "unit", "scale"),
+    [
+        ("时间/s,陀螺输出/(°/h),温度/℃", "deg/h", 1.0),  # GB 3101: quantity/unit
+        ("t/s,ω/(°/s)", "deg/s", 1.0),
+        ("时间/ms,角速率/(°/h)", "deg/h", 1e3),
+        ("序号,时间/s,角速率/°/h", "deg/h", 1.0),  # a counter first, the unit unbracketed
+        ("time/(s),rate/dps", "deg/s", 1.0),
+    ],
+)
+def test_a_header_that_writes_quantity_over_unit_as_chinese_tables_do(header, unit, scale):
+    """ISO 80000-1 and China's GB 3101 head a table's column "quantity/unit": "时间/s" was
+    no time column, so a Chinese logger's record was asked for its sample rate, and
+    "温度/℃" no temperature.  A bare unit ("°/h") is still a name."""
+    counter = header.startswith("序号")
+    rows = [
+        (f"{k + 1}," if counter else "")
+        + f"{k * 0.1 * scale:g},{rate}"
+        + (",25.5" if "温度" in header else "")
+        for k, rate in enumerate(RATES)
+    ]
+    for encoding in ("utf-8", "gb18030"):
+        text = (header + "\n" + "\n".join(rows) + "\n").encode(encoding)
+        record = read_static_record(text_lines(text))
+        assert record.times_s == pytest.approx([0.0, 0.1, 0.2, 0.3]), (header, encoding)
+        assert record.values.tolist() == RATES and record.unit == unit
+        if "温度" in header:
+            assert record.temperatures_c.tolist() == [25.5] * 4
+    bare = read("°/h\n" + "\n".join(str(rate) for rate in RATES) + "\n")
+    assert bare.values.tolist() == RATES and bare.times_s is None

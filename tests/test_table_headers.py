@@ -70,6 +70,7 @@ def test_the_handout_table_as_printed_reads_as_its_readings_without_the_means(se
         "1号位置,2号位置,3号位置,4号位置",
         "位置一,位置二,位置三,位置四",
         "位置1（°/h）,位置2（°/h）,位置3（°/h）,位置4（°/h）",
+        "位置1/(°/h),位置2/(°/h),位置3/(°/h),位置4/(°/h)",  # GB 3101: quantity/unit
     ],
 )
 def test_positions_named_as_students_name_them(header):
@@ -79,6 +80,28 @@ def test_positions_named_as_students_name_them(header):
         [2.88, 2.69],
         [-9.11, -8.83],
         [-0.96, -0.96],
+    ]
+
+
+@pytest.mark.parametrize(
+    ("header", "unit"),
+    [
+        ("角度/°,读数/(°/h)", "deg/h"),
+        ("转台角度/度,陀螺输出/(°/s)", "deg/s"),
+        ("angle/deg,rate/(deg/h)", "deg/h"),
+    ],
+)
+def test_a_long_table_headed_quantity_over_unit(header, unit):
+    """ "角度/°" and "读数/(°/h)", as Chinese lab tables head their columns (GB 3101), were
+    no known layout; they read as the angle and the readings, the unit the header names."""
+    rows = "0,10.7\n0,10.8\n90,2.9\n90,2.8\n180,-9.1\n180,-9.0\n270,-1.0\n270,-0.9\n"
+    readings = parse_readings_csv(f"{header}\n{rows}")
+    assert readings.angles_deg == [0.0, 90.0, 180.0, 270.0] and readings.named_unit == unit
+    assert [list(v) for v in readings.positions] == [
+        [10.7, 10.8],
+        [2.9, 2.8],
+        [-9.1, -9.0],
+        [-1.0, -0.9],
     ]
 
 

@@ -1,8 +1,9 @@
 """What one header cell of a record says: its name and its unit -- in brackets or
-parentheses ("Time (s)", "w_RS_S_z [rad s^-1]") or as the name's suffix ("time_ms",
-"rate_deg_h") -- whether the unit is a rate's or an angle's, and the text of a comment
-line that may hold the header ("#timestamp [ns],…", "%time,…", "// …").  Which column is
-which: :mod:`app.core.record_columns`.
+parentheses ("Time (s)", "w_RS_S_z [rad s^-1]"), as the name's suffix ("time_ms",
+"rate_deg_h") or after a slash as Chinese tables write it ("时间/s", "角速率/(°/h)") --
+whether the unit is a rate's or an angle's, and the text of a comment line that may hold
+the header ("#timestamp [ns],…", "%time,…", "// …").  Which column is which:
+:mod:`app.core.record_columns`.
 """
 
 from __future__ import annotations
@@ -65,6 +66,13 @@ INTEGRATED_NAME = re.compile(r"(integrated|cumulative|累积|积分)", re.IGNORE
 _UNIT_IN_BRACKETS = re.compile(r"(.*?)\s*[(\[]([^()\[\]]*)[)\]]")
 _TIME_SUFFIX = re.compile(r"(.+?)_(s|ms|us|ns)")
 _RATE_SUFFIX = re.compile(r"(.+?)_(deg_h|deg_s|dps|dph|rad_s)")
+# "quantity/unit", as ISO 80000-1 and China's GB 3101 head a table's columns ("t/s",
+# "时间/s", "角速率/(°/h)", "温度/℃"); never a bare unit ("°/h", "mdeg/s")
+_QUANTITY_OVER_UNIT = re.compile(r"([^/]+?)\s*/\s*(.+)")
+_ANGLE_WORD = re.compile(r"(?:m|µ|μ|u|k)?(?:deg|degrees?|°|º|˚|rad|arcsec|arcmin|度|弧度|角秒)")
+_SLASHED_UNITS = frozenset(
+    {"s", "sec", "ms", "us", "µs", "μs", "ns", "h", "min", "秒", "毫秒", "℃", "°c", "c", "k", "度"}
+)
 
 
 @dataclass(frozen=True)
@@ -156,12 +164,24 @@ def column_name(cell: str) -> ColumnName:
     -------
     ColumnName
         ("time (s)", "time", "s"), ("w_rs_s_z [rad s^-1]", "w_rs_s_z", "rad s^-1"),
-        ("time_ms", "time", "ms"), ("rate_deg_h", "rate", "deg_h"), ("value", "value", None).
+        ("time_ms", "time", "ms"), ("rate_deg_h", "rate", "deg_h"), ("value", "value", None);
+        "quantity/unit" as ISO 80000-1 and GB 3101 write it: ("时间/s", "时间", "s"),
+        ("角速率/(°/h)", "角速率", "°/h"); a bare unit ("°/h") stays a name.
     """
     full = cell.strip().lower()
     bracketed = _UNIT_IN_BRACKETS.fullmatch(full)
-    if bracketed and bracketed.group(1):
-        return ColumnName(full, bracketed.group(1).strip(), bracketed.group(2).strip())
+    if bracketed and bracketed.group(1).rstrip(" /"):  # "时间/(s)": the slash is no name's
+        return ColumnName(full, bracketed.group(1).rstrip(" /"), bracketed.group(2).strip())
+    slashed = _QUANTITY_OVER_UNIT.fullmatch(full)
+    if slashed and not _ANGLE_WORD.fullmatch(slashed.group(1)):
+        unit = slashed.group(2).strip()
+        if (
+            unit in _SLASHED_UNITS
+            or unit in ANGLE_UNITS
+            or rate_unit(unit)
+            or RATE_LIKE.fullmatch(unit.replace(" ", ""))
+        ):
+            return ColumnName(full, slashed.group(1), unit)
     for suffix in (_RATE_SUFFIX, _TIME_SUFFIX):
         named = suffix.fullmatch(full)
         if named:
