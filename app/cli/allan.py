@@ -54,7 +54,9 @@ def _allan(args: argparse.Namespace) -> int:
             count = f"{details['samples']:,}"
             print(_(f"allan.progress_{stage}", samples=count), file=sys.stderr, flush=True)
 
-    record = read_static_record(_open_record(args.file), progress=progress, column=args.column)
+    record = read_static_record(
+        _open_record(args.file), progress=progress, column=args.column, finite=False
+    )
     result = analyse_record(
         record, args.rate, unit=args.unit, max_tau_s=args.max_tau, progress=progress
     )

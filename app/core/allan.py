@@ -144,7 +144,7 @@ class AllanResult:
 def _check_range(rates_deg_h: np.ndarray) -> None:
     """Refuse non-finite rates, and rates beyond ``MAX_RATE_DEG_H`` (no gyro's; the
     variances' squares would overflow)."""
-    if not (np.all(np.abs(rates_deg_h) <= MAX_RATE_DEG_H)):
+    if not np.all(np.abs(rates_deg_h) <= MAX_RATE_DEG_H):
         if not np.all(np.isfinite(rates_deg_h)):
             raise UserError("readings.not_finite")
         raise UserError("readings.out_of_range")
@@ -302,7 +302,7 @@ def analyse_record(
             {"key": "allan.note_unit_from_header", "params": {"unit": UNIT_SYMBOLS[record.unit]}}
         )
     values = to_deg_per_hour(record.values, chosen or record.unit or DEG_PER_HOUR)
-    _check_range(values)
+    _check_range(values[np.isfinite(values)])  # lost readings: mended or cut out below
     prepared = prepare_record(
         StaticRecord(values, record.times_s, record.temperatures_c), rate_hz, max_tau_s=max_tau_s
     )

@@ -7,6 +7,8 @@ position only, and a bound on the count.  The lines themselves are read by
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Callable
 
 import numpy as np
@@ -73,7 +75,7 @@ class RecordBlocks:
                 if len(positions) > 1:
                     raise UserError("allan.one_position", count=len(positions))
                 self._position = next(iter(positions))
-            self.values.append(np.asarray(rows[:, layout.value], dtype=float))
+            self.values.append(_floats(rows[:, layout.value]))
             if layout.time is not None:
                 self.times.append(self.clock.seconds(rows[:, layout.time]))
             if layout.temperature is not None:
@@ -89,10 +91,54 @@ class RecordBlocks:
             self.progress("read", {"samples": self.count})
 
 
+# Microsoft's C runtime before 2015 printed a NaN as "1.#QNAN" or "-1.#IND", an infinity
+# as "1.#INF" (and later "-nan(ind)"): a Windows logger's mark of a lost reading, as
+# LabVIEW's "NaN" is
+_MSVC_NOT_A_NUMBER = re.compile(r"[+-]?(?:1\.#(?:q|s)?nan|1\.#ind|nan\((?:ind|snan|qnan)\))0*")
+_MSVC_INFINITY = re.compile(r"([+-]?)1\.#inf0*")
+
+
+def reading(cell: str) -> float:
+    """One cell's reading, a C runtime's spelling of NaN or infinity included.
+
+    Parameters
+    ----------
+    cell : str
+        "10.0346", "nan", "1.#QNAN", "-1.#IND", "1.#INF", "-nan(ind)" ….
+
+    Returns
+    -------
+    float
+        The number (NaN or ±inf for those spellings).
+
+    Raises
+    ------
+    ValueError
+        The cell is no number.
+    """
+    try:
+        return float(cell)
+    except ValueError:
+        text = cell.strip().lower()
+        if _MSVC_NOT_A_NUMBER.fullmatch(text):
+            return math.nan
+        infinity = _MSVC_INFINITY.fullmatch(text)
+        if infinity:
+            return -math.inf if infinity.group(1) == "-" else math.inf
+        raise
+
+
+def _floats(cells: np.ndarray) -> np.ndarray:
+    try:
+        return np.asarray(cells, dtype=float)
+    except ValueError:  # a C runtime's NaN, say; else the bad cell is found by its line
+        return np.array([reading(cell) for cell in cells], dtype=float)
+
+
 def _first_bad_row(rows: list[list[str]], layout: Layout) -> int:
     for index, row in enumerate(rows):
         try:
-            float(row[layout.value])
+            reading(row[layout.value])
             if layout.temperature is not None:
                 float(row[layout.temperature])
             if layout.time is not None and not TimeColumn.readable(row[layout.time]):

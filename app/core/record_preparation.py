@@ -7,6 +7,13 @@ Preparation, in this order:
 * gaps (the bridge's times skip readings, k·T steps with k ≥ 2 for the median step T):
   the longest stretch without a gap is analysed -- joining across a gap would fake a
   correlation;
+* lost readings (NaN or infinity, a logger's mark of a reading it lost): up to
+  ``MAX_MENDED_RUN`` in a row are mended by the line between their neighbours and
+  counted; a longer run is a gap like the times' (the longest stretch without one is
+  analysed);
+* disturbances (:func:`disturbances`: the gyro knocked, its output saturated -- readings
+  far from the record's level for longer than a spike): the longest stretch without one
+  is analysed;
 * spikes: readings more than ``SPIKE_LIMIT`` robust σ (1.4826·MAD of the residual from a
   9-point running median, at least one reading step) from their running median are
   replaced by it and counted;
@@ -27,9 +34,15 @@ import numpy as np
 
 from app.core.exceptions import UserError
 from app.core.record_checks import sample_rate_hz
+from app.core.record_repairs import (
+    SPIKE_LIMIT,
+    disturbances,
+    longest_between,
+    mend_lost_readings,
+    reading_step,
+)
 from app.core.static_record import StaticRecord
 
-SPIKE_LIMIT = 10.0
 WARM_UP_LIMIT = 6.0
 WARM_UP_BLOCKS = 64
 WARM_UP_HEAD = 4  # blocks a warm-up must fall steadily over (fewer if it settles sooner)
@@ -106,9 +119,7 @@ def _despike(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     smooth = median_filter(values, size=9, mode="nearest")
     residual = values - smooth
     scale = 1.4826 * float(np.median(np.abs(residual)))
-    distinct = np.unique(values[: min(values.size, 100_000)])
-    step = float(np.min(np.diff(distinct))) if distinct.size > 1 else 0.0
-    scale = max(scale, step)
+    scale = max(scale, reading_step(values))
     if scale <= 0:
         return values, np.zeros(0, dtype=int)
     spikes = np.flatnonzero(np.abs(residual) > SPIKE_LIMIT * scale)
@@ -231,6 +242,44 @@ def prepare_record(
         raise UserError("allan.no_rate")
     if not (rate_hz > 0 and math.isfinite(rate_hz)):
         raise UserError("allan.bad_rate")
+    starts, ends = disturbances(values, rate_hz)
+    if starts.size:
+        stretch = longest_between(starts, ends, values.size)
+        kept = stretch.stop - stretch.start
+        notes.append(
+            _note(
+                "allan.note_disturbances",
+                n=int(starts.size),
+                seconds=round(float(np.sum(ends - starts)) / rate_hz, 1),
+                first_s=round(starts[0] / rate_hz, 1),
+                kept=kept,
+                kept_s=round(kept / rate_hz),
+            )
+        )
+        values = values[stretch]
+        temperatures = None if temperatures is None else temperatures[stretch]
+    mended = mend_lost_readings(values)
+    if mended.gaps:
+        kept = mended.stretch.stop - mended.stretch.start
+        notes.append(
+            _note(
+                "allan.note_gaps",
+                gaps=mended.gaps,
+                missing=mended.missing,
+                kept=kept,
+                seconds=round(kept / rate_hz),
+            )
+        )
+        temperatures = None if temperatures is None else temperatures[mended.stretch]
+    values = mended.values
+    if mended.mended.size:
+        notes.append(
+            _note(
+                "allan.note_lost_mended",
+                n=int(mended.mended.size),
+                first_s=round(mended.mended[0] / rate_hz, 1),
+            )
+        )
     if values.size >= 32:
         values, spikes = _despike(values)
         if spikes.size:

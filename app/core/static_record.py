@@ -74,6 +74,7 @@ def read_static_record(
     progress: Progress | None = None,
     column: str | None = None,
     guess: bool = True,
+    finite: bool = True,
 ) -> StaticRecord:
     """Parse a static record from an iterable of text lines, block by block.
 
@@ -89,6 +90,10 @@ def read_static_record(
     guess : bool
         Read a header of one to three unknown names as the columns without a header
         (False: such a header is refused).
+    finite : bool
+        Refuse a reading that is not a finite number (a lab position's record); False
+        keeps them as NaN or ±inf, a logger's lost readings, for
+        :func:`app.core.record_preparation.prepare_record` to mend or cut out.
 
     Returns
     -------
@@ -185,7 +190,7 @@ def read_static_record(
         notes,
         layout.angle,
     )
-    if not np.all(np.isfinite(record.values)):
+    if finite and not np.all(np.isfinite(record.values)):
         raise UserError("readings.not_finite")
     return record
 

@@ -65,7 +65,7 @@ def characterise(
         raise UserError(
             "characterisation.bad_rate",
         )
-    record = read_static_record(text_lines(source), column=column)
+    record = read_static_record(text_lines(source), column=column, finite=False)
     if rate_hz is not None:
         _check_length(record.values.size / rate_hz)
     elif record.times_s is not None and record.times_s.size > 1:
