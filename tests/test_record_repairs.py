@@ -168,3 +168,14 @@ def test_a_teacher_uploads_a_record_with_lost_readings_and_a_knock():
     said = [note["key"] for note in summary["notes"]]
     assert "allan.note_lost_mended" in said and "allan.note_disturbances" in said
     assert summary["arw_deg_rt_h"] == pytest.approx(ARW, rel=0.05)
+
+
+def test_what_is_said_is_at_the_records_own_times():
+    """A knock at 800 s, so the stretch after it is analysed, and a reading lost at 2000 s:
+    said at 2000 s of the record as uploaded, not 1195 s into the stretch kept."""
+    rates = static_record(1.0, RATE_HZ, arw=ARW, seed=7)
+    rates[8_000:8_050] = 1.0e6
+    result = analysed(record_text(rates, {20_000: "NaN"}))
+    said = {note["key"]: note["params"] for note in result.notes}
+    assert said["allan.note_disturbances"]["first_s"] == pytest.approx(800.0, abs=0.5)
+    assert said["allan.note_lost_mended"]["first_s"] == 2000.0

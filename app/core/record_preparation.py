@@ -165,6 +165,15 @@ def _warm_up_end(values: np.ndarray, temperatures: np.ndarray | None) -> tuple[i
     return min(end_block * size, limit), "rate", float(deviation[0])
 
 
+def _seconds_at(record: StaticRecord, index: int, rate_hz: float) -> float:
+    """When the record's reading ``index`` was taken, in seconds from its first (its own
+    time where it has one: gaps before it counted), to 0.1 s."""
+    times = record.times_s
+    if times is not None and times.size > int(index):
+        return round(float(times[int(index)] - times[0]), 1)
+    return round(int(index) / rate_hz, 1)
+
+
 def prepare_record(
     record: StaticRecord, rate_hz: float | None, *, max_tau_s: float | None = None
 ) -> PreparedRecord:
@@ -199,6 +208,7 @@ def prepare_record(
     values = np.asarray(record.values, dtype=float)
     temperatures = record.temperatures_c
     notes: list[dict] = []
+    origin = 0  # the first kept reading's index in the record: times said are the record's
     coarse = None
     if record.times_s is not None and record.times_s.size > 2:
         coarse = _coarse_clock(np.asarray(record.times_s, float))
@@ -214,7 +224,7 @@ def prepare_record(
             notes.append(
                 _note("allan.note_gaps", gaps=gaps, missing=missing, kept=kept, seconds=seconds)
             )
-        values = values[stretch]
+        values, origin = values[stretch], stretch.start
         temperatures = None if temperatures is None else temperatures[stretch]
     elif record.times_s is not None and record.times_s.size > 2:
         times = np.asarray(record.times_s, float)
@@ -236,7 +246,7 @@ def prepare_record(
                     seconds=round(kept / rate_hz),
                 )
             )
-            values = values[stretch]
+            values, origin = values[stretch], stretch.start
             temperatures = None if temperatures is None else temperatures[stretch]
     if rate_hz is None:
         raise UserError("allan.no_rate")
@@ -251,12 +261,12 @@ def prepare_record(
                 "allan.note_disturbances",
                 n=int(starts.size),
                 seconds=round(float(np.sum(ends - starts)) / rate_hz, 1),
-                first_s=round(starts[0] / rate_hz, 1),
+                first_s=_seconds_at(record, origin + starts[0], rate_hz),
                 kept=kept,
                 kept_s=round(kept / rate_hz),
             )
         )
-        values = values[stretch]
+        values, origin = values[stretch], origin + stretch.start
         temperatures = None if temperatures is None else temperatures[stretch]
     mended = mend_lost_readings(values)
     if mended.gaps:
@@ -271,13 +281,13 @@ def prepare_record(
             )
         )
         temperatures = None if temperatures is None else temperatures[mended.stretch]
-    values = mended.values
+    values, origin = mended.values, origin + mended.stretch.start
     if mended.mended.size:
         notes.append(
             _note(
                 "allan.note_lost_mended",
                 n=int(mended.mended.size),
-                first_s=round(mended.mended[0] / rate_hz, 1),
+                first_s=_seconds_at(record, origin + mended.mended[0], rate_hz),
             )
         )
     if values.size >= 32:
@@ -287,7 +297,7 @@ def prepare_record(
                 _note(
                     "allan.note_spikes",
                     n=int(spikes.size),
-                    first_s=round(spikes[0] / rate_hz, 1),
+                    first_s=_seconds_at(record, origin + spikes[0], rate_hz),
                 )
             )
         end, seen_by, size = _warm_up_end(values, temperatures)
