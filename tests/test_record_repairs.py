@@ -164,6 +164,12 @@ def test_a_teacher_uploads_a_record_with_lost_readings_and_a_knock():
     rates = static_record(1.0, RATE_HZ, arw=ARW, seed=6)
     rates[20_000:20_050] = 1.0e6
     text = record_text(rates, {100: "NaN", 7_000: "1.#QNAN"})
+    # the logger's temperature column, lost at the same moments
+    rows = text.decode().splitlines()
+    rows = [rows[0] + ",temperature_c"] + [
+        row + (",1.#QNAN" if k in (100, 7_000) else ",25.0") for k, row in enumerate(rows[1:])
+    ]
+    text = ("\n".join(rows) + "\n").encode()
     summary = characterise(io.BytesIO(text), None, None, None)
     said = [note["key"] for note in summary["notes"]]
     assert "allan.note_lost_mended" in said and "allan.note_disturbances" in said

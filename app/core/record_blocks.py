@@ -79,7 +79,7 @@ class RecordBlocks:
             if layout.time is not None:
                 self.times.append(self.clock.seconds(rows[:, layout.time]))
             if layout.temperature is not None:
-                self.temperatures.append(np.asarray(rows[:, layout.temperature], dtype=float))
+                self.temperatures.append(_floats(rows[:, layout.temperature]))
         except (ValueError, IndexError):
             bad = _first_bad_row(self._rows, layout)
             raise UserError("allan.bad_line", line=self._first_line + bad) from None
@@ -140,7 +140,7 @@ def _first_bad_row(rows: list[list[str]], layout: Layout) -> int:
         try:
             reading(row[layout.value])
             if layout.temperature is not None:
-                float(row[layout.temperature])
+                reading(row[layout.temperature])
             if layout.time is not None and not TimeColumn.readable(row[layout.time]):
                 return index
         except (ValueError, IndexError):
