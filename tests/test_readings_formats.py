@@ -834,3 +834,26 @@ def test_a_spreadsheets_error_value_is_a_problem_never_a_comment(error):
         with pytest.raises(UserError) as refused:
             read(record + f"{error},10.74\n")
         assert refused.value.params["line"] == 32  # said at its line, not passed over
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "10.74, 2.88, -9.11, -0.96\n10.65, 2.69, -8.83, -0.96\n",  # typed in a text editor
+        "10.74\t 2.88\t -9.11\t -0.96\n10.65\t 2.69\t -8.83\t -0.96\n",
+        "10,74; 2,88; -9,11; -0,96\n10,65; 2,69; -8,83; -0,96\n",
+        "10.74、2.88、-9.11、-0.96\n10.65、2.69、-8.83、-0.96\n",  # a Chinese input method's comma
+        "位置1、位置2、位置3、位置4\n10.74、2.88、-9.11、-0.96\n10.65、2.69、-8.83、-0.96\n",
+    ],
+)
+def test_a_table_typed_with_spaces_after_its_separators_or_chinese_commas(text):
+    """A headerless table typed "10.74, 2.88, -9.11, -0.96" -- a space after each comma, as
+    people type lists -- was "no known layout": its cells kept the spaces and no longer read
+    as numbers.  So was one separated by 、, the comma a Chinese input method types."""
+    readings = parse_readings_csv(text)
+    assert [list(v) for v in readings.positions] == [
+        [10.74, 10.65],
+        [2.88, 2.69],
+        [-9.11, -8.83],
+        [-0.96, -0.96],
+    ]

@@ -95,8 +95,8 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
             rows = list(csv.reader(io.StringIO(text, newline=""), delimiter=delimiter))
         except csv.Error as error:
             raise UserError("csv.unreadable", detail=str(error)) from None
-    rows = [
-        (number, [decimal_point(cell) if delimiter != "," or "," in cell else cell for cell in row])
+    rows = [  # "10.74, 2.88, -9.11" as typed: each cell without the spaces around it
+        (number, [_typed_cell(cell.strip(), delimiter) for cell in row])
         for number, row in enumerate(rows, start=1)
         if any(cell.strip() for cell in row) and not is_hash_comment(row[0])
     ]
@@ -108,6 +108,11 @@ def parse_readings_csv(text: str, part: str | None = None) -> Readings:
         if error.key != "csv.unknown_layout":
             raise
         return _below_lines_about_it(rows, part, error)
+
+
+def _typed_cell(cell: str, delimiter: str) -> str:
+    """A cell with its decimal comma read as a point, where the comma does not separate."""
+    return decimal_point(cell) if delimiter != "," or "," in cell else cell
 
 
 PREAMBLE_ROWS = 10  # lines about the table above it, at most: a title, a name, a date…

@@ -71,10 +71,12 @@ def spreadsheet_delimiter(text: str) -> str:
         lines (not ``#`` comments) hold -- a tab or ``;`` before the comma where they tie
         (what a spreadsheet copies to the clipboard, and what spreadsheets in Europe write,
         with decimal commas); ``,`` where none does.  Lines about the table above it (a
-        title, a name) hold none, or fewer than the table's rows do.
+        title, a name) hold none, or fewer than the table's rows do.  The Chinese
+        enumeration comma ``、`` ("10.74、2.88、-9.11", as typed with a Chinese input method)
+        where it is the only one the most lines hold.
     """
     lines = _first_lines(text)
-    counts = {mark: sum(mark in line for line in lines) for mark in ("\t", ";", ",")}
+    counts = {mark: sum(mark in line for line in lines) for mark in ("\t", ";", ",", "、")}
     most = max(counts.values())
     return next((mark for mark, count in counts.items() if count == most and most), ",")
 
