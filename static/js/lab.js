@@ -468,13 +468,15 @@
     return longer;
   }
 
-  // Cells of each line: tabs (a spreadsheet's copy), else semicolons, else commas -- unless
-  // every line has one comma and no point ("10,74": a decimal comma) -- else blanks.
+  // Cells of each line: tabs (a spreadsheet's copy), else semicolons, else 、 (the comma a
+  // Chinese input method types), else commas -- unless every line has one comma and no
+  // point ("10,74": a decimal comma) -- else blanks.
   function splitLines(lines) {
     const all = lines.join("\n");
     let split;
     if (all.includes("\t")) split = (line) => line.split("\t");
     else if (all.includes(";")) split = (line) => line.split(";");
+    else if (all.includes("\u3001")) split = (line) => line.split("\u3001");
     else if (all.includes(",") && !(lines.every((line) => (line.match(/,/g) || []).length === 1) && !all.includes("."))) split = (line) => line.split(",");
     else return spacedCells(lines);
     return lines.map((line) => split(line).map((cell) => cell.trim()));

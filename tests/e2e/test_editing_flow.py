@@ -132,6 +132,11 @@ def test_a_pasted_table_with_a_row_of_units_under_its_names(live_server, new_pag
     expect(status).to_contain_text("Pasted 10 rows")
     expect(status).to_contain_text("a row of means or another summary skipped")
     expect(status).to_contain_text("the columns before position 1 skipped")
+    # typed with a Chinese input method: cells separated by 、, as the server reads a file
+    paste(page, "#part-heading .readings-grid tbody input", "10.74、2.88、-9.11、-0.96\n" * 3)
+    first = page.locator("#part-heading .readings-grid tbody tr").first.locator("input")
+    expect(first.nth(3)).to_have_value("-0.96")
+    expect(page.locator("#part-heading .grid-status")).to_contain_text("Pasted 3 rows")
     # A long table -- one reading per row beside its position -- pasted into any cell: each
     # position's readings go to its own column, not the positions' numbers to column 1; the
     # columns of positions not in the paste are left as they were.
