@@ -84,6 +84,22 @@ def test_a_loggers_file_cut_off_mid_line_is_saved_without_its_last_line_and_says
     assert take.n_samples == len(values)
 
 
+def test_a_loggers_lost_readings_are_left_out_of_the_position_and_said(lab):
+    """LabVIEW writes NaN for a reading it lost, an old Windows logger 1.#QNAN: one such
+    line had refused the whole file.  The preview and the save leave them out, and say so."""
+    values = [str(v) for v in [*HEADING[2], *HEADING[2]]]  # 20: 18 left, n ≥ 10 still
+    values[3], values[7] = "NaN", "1.#QNAN"
+    text = logger_file(values)
+    preview = lab("/csv/preview", text, position=2).json()
+    assert preview["positions"][0]["n"] == len(values) - 2
+    assert any("Lost readings" in note and "reading 4" in note for note in preview["notes"])
+    saved = lab("/csv", text, position=2)
+    assert saved.status_code == 200 and saved.json()["saved"] == [2]
+    with read_session() as db:
+        [take] = db.exec(select(Take)).all()
+    assert take.n_samples == len(values) - 2
+
+
 def test_one_reading_per_line_is_one_positions_record(lab):
     text = "".join(f"{v}\n" for v in HEADING[3])
     saved = lab("/csv", text, position=3)

@@ -86,9 +86,25 @@ def test_a_long_loss_is_a_gap_and_the_longest_stretch_is_analysed():
     assert refused.value.key == "readings.not_finite"
 
 
-def test_a_lab_positions_record_still_refuses_a_reading_that_is_no_number():
-    # one position's readings (the lab's upload): a NaN there is a typo to fix, not a loss
+def test_a_lab_positions_logger_file_leaves_its_lost_readings_out_and_says_so():
+    """One position recorded by a logger, uploaded in the lab: its mean needs no unbroken
+    timeline, so a lost reading is left out (not mended) and said; one left alone is
+    refused as before, and so is a record made of nothing else."""
+    from app.core.position_records import parse_one_position_record
+    from app.web.i18n import translate
+
+    text = "time_s,value\n0,10.1\n1,NaN\n2,10.2\n3,1.#QNAN\n4,10.0\n"
+    parsed = parse_one_position_record(text, "deg/h")
+    assert parsed.readings.positions[0].tolist() == [10.1, 10.2, 10.0]
+    assert parsed.readings.times_s[0].tolist() == [0.0, 2.0, 4.0]
+    assert parsed.notes == ({"key": "allan.note_lost_left_out", "params": {"n": 2, "first": 2}},)
+    for language in ("en", "zh-CN"):
+        said = translate("allan.note_lost_left_out", language, n=2, first=2)
+        assert "2" in said and "{" not in said
     with pytest.raises(UserError) as refused:
+        parse_one_position_record("time_s,value\n0,NaN\n1,NaN\n", "deg/h")
+    assert refused.value.key == "readings.not_finite"
+    with pytest.raises(UserError) as refused:  # a reader called as the API's callers do
         read_static_record(text_lines(b"time_s,value\n0,10.1\n1,NaN\n2,10.2\n"))
     assert refused.value.key == "readings.not_finite"
 

@@ -311,7 +311,7 @@ def parse_one_position_record(
     text = plain_text(file_text(text))
     columns: tuple[str, ...] = ()
     try:
-        record = read_static_record(io.StringIO(text), column=column, guess=False)
+        record = read_static_record(io.StringIO(text), column=column, guess=False, finite=False)
     except ColumnChoiceNeeded as choice:
         columns = tuple(choice.choices)
         if not columns:
@@ -319,7 +319,7 @@ def parse_one_position_record(
         if not suggest:
             raise UserError("csv.choose_column", columns=", ".join(columns)) from None
         column = columns[0]
-        record = read_static_record(io.StringIO(text), column=column, guess=False)
+        record = read_static_record(io.StringIO(text), column=column, guess=False, finite=False)
     if column is not None and not columns:  # chosen: the choice offered again
         try:
             read_static_record(io.StringIO(_head(text)), guess=False)
@@ -335,12 +335,31 @@ def parse_one_position_record(
         record.times_s = spread_within_ticks(record.times_s)
     if record.angle is not None:
         raise UserError("csv.record_of_angles", unit=record.angle.unit)
+    lost = _without_lost_readings(record)
     times = None if record.times_s is None else [record.times_s]
     temperatures = None if record.temperatures_c is None else [record.temperatures_c]
     check_named_unit(record.unit, unit)
     readings = Readings([record.values], None, times, "record", temperatures)
-    left_out = tuple(note for note in record.notes if note["key"] in LEFT_OUT)
+    left_out = tuple(note for note in record.notes if note["key"] in LEFT_OUT) + lost
     return OnePositionRecord(readings, columns, column if columns else None, left_out)
+
+
+def _without_lost_readings(record) -> tuple[dict, ...]:
+    """A logger's lost readings (NaN, ±inf) taken out of ``record``, and the note saying
+    so: a position's mean needs no unbroken timeline, so they are left out, not mended."""
+    lost = ~np.isfinite(record.values)
+    if not lost.any():
+        return ()
+    if lost.all():
+        raise UserError("readings.not_finite")
+    kept = ~lost
+    record.values = record.values[kept]
+    if record.times_s is not None:
+        record.times_s = record.times_s[kept]
+    if record.temperatures_c is not None:
+        record.temperatures_c = record.temperatures_c[kept]
+    first = int(np.flatnonzero(lost)[0]) + 1
+    return ({"key": "allan.note_lost_left_out", "params": {"n": int(lost.sum()), "first": first}},)
 
 
 def _head(text: str, lines: int = 50) -> str:
