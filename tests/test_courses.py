@@ -91,6 +91,7 @@ def test_a_western_excels_roster_keeps_its_accented_names():
     [
         ["François Dubois", "Jürgen Weber"],  # "ço", "ür": GB18030 pairs outside GB2312
         ["Hélène Noël", "Ñúñez"],  # "Ñú" is a GB2312 character, "ñe" is not: a tie
+        ["Þór"],  # "Þó" is a GB2312 character -- running straight into the small "r"
     ],
 )
 def test_a_western_roster_that_is_also_gb18030_reads_as_windows_1252(names):
@@ -104,7 +105,9 @@ def test_a_western_roster_that_is_also_gb18030_reads_as_windows_1252(names):
     assert [row.display_name for row in parsed.rows] == names
 
 
-@pytest.mark.parametrize("names", [["张三", "王喆"], ["赵喆"], ["Müller", "张三"]])
+@pytest.mark.parametrize(
+    "names", [["张三", "王喆"], ["赵喆"], ["Müller", "张三"], ["X轴组", "王小明Wang"]]
+)
 def test_a_chinese_roster_with_a_rare_character_stays_gb18030(names):
     from app.accounts.roster_csv import parse_roster
 

@@ -102,7 +102,9 @@ def reads_as_western(data: bytes, gb_text: str) -> bool:
     character ("ç" + "o" in "François": 0xE7 0x6F, "鏾"; "°" + "C": 0xB0 0x43), but
     never one of GB2312's, whose bytes are both ≥ 0xA1 -- the characters a Chinese-locale
     program writes almost always are (a rare one in a name is outnumbered by the rest, and
-    a Chinese character read as Windows-1252 is rarely letters only: "喆" is "†´").
+    a Chinese character read as Windows-1252 is rarely letters only: "喆" is "†´").  Two
+    accents in a row can make a GB2312 character ("Þó" in "Þór"); one that runs straight
+    into a small ASCII letter counts as outside GB2312 -- a Chinese character seldom does.
 
     Parameters
     ----------
@@ -119,10 +121,13 @@ def reads_as_western(data: bytes, gb_text: str) -> bool:
         a common sign.
     """
     inside = outside = 0
-    for char in _NOT_ASCII.findall(gb_text):
-        code = char.encode("gb18030")
+    for found in _NOT_ASCII.finditer(gb_text):
+        code = found.group().encode("gb18030")
         if len(code) == 2 and 0xA1 <= code[0] <= 0xF7 and code[1] >= 0xA1:
-            inside += 1
+            if _runs_into_a_small_letter(gb_text, found.start()):
+                outside += 1  # "Þó" + "r" in "Þór": two accents make one, inside a word
+            else:
+                inside += 1
         else:
             outside += 1
     if outside == 0 or outside < inside:  # a tie: "Ñúñez" is one GB2312 character and one not
@@ -135,6 +140,14 @@ def reads_as_western(data: bytes, gb_text: str) -> bool:
         char in _WESTERN_SIGNS or unicodedata.category(char).startswith("L")
         for char in set(_NOT_ASCII.findall(western))
     )
+
+
+def _runs_into_a_small_letter(text: str, index: int) -> bool:
+    """Whether the character at ``index`` runs straight into a small ASCII letter, as two
+    Windows-1252 accents read as one do inside a word ("Þó" + "r"); a Chinese character
+    seldom does ("X轴", "FOG陀螺": a capital before it, not a small letter after)."""
+    after = text[index + 1] if index + 1 < len(text) else ""
+    return after.isascii() and after.islower()
 
 
 IDEOGRAPHIC_POINT = re.compile(r"(\d)\u3002(?=\d)")
