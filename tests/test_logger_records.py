@@ -435,3 +435,41 @@ def test_a_header_that_writes_quantity_over_unit_as_chinese_tables_do(header, un
             assert record.temperatures_c.tolist() == [25.5] * 4
     bare = read("°/h\n" + "\n".join(str(rate) for rate in RATES) + "\n")
     assert bare.values.tolist() == RATES and bare.times_s is None
+
+
+@pytest.mark.parametrize(
+    ("preamble", "key"),
+    [
+        (["Device: DSP-1750", "Serial: 123456", "Date: 2026-11-28 14:00", "Sample rate: 2 Hz", ""],
+         "allan.note_about_the_record"),
+        (["采样率：2 Hz", "设备：光纤陀螺 FOG-50"], "allan.note_about_the_record"),
+        (["Operator: Zhang San"], "allan.note_about_it"),
+    ],
+)  # fmt: skip
+def test_a_loggers_lines_about_the_record_above_its_table_are_passed_over_and_said(preamble, key):
+    """A logger's export that opens with lines about the record ("Device: DSP-1750",
+    "Sample rate: 2 Hz", "采样率：2 Hz") and then its table, columns aligned by spaces:
+    "line 3 of the record is not a reading" before, as the first line set the columns."""
+    from app.web.i18n import translate
+
+    rates = static_record(1.0, 2.0, arw=0.01, seed=8)
+    table = ["Time(s)      Rate(deg/h)    Temp(C)"]
+    table += [f"{k / 2:10.1f}   {rate:12.5f}   {25.0:7.2f}" for k, rate in enumerate(rates)]
+    record = read("\n".join(preamble + table) + "\n")
+    assert record.times_s[:3].tolist() == [0.0, 0.5, 1.0]
+    assert record.values == pytest.approx(rates, abs=1e-5)
+    assert record.temperatures_c[0] == 25.0
+    said = [note for note in record.notes if note["key"] == key]
+    assert said and said[0]["params"]["first"] == 1
+    assert said[0]["params"]["text"] == preamble[0]
+    for language in ("en", "zh-CN"):
+        assert preamble[0] in translate(key, language, **said[0]["params"])
+    result = analyse_record(record, None)
+    assert result.arw_deg_rt_h == pytest.approx(0.01, rel=0.1)
+
+
+def test_a_clocks_readings_are_never_taken_for_lines_about_the_record():
+    lines = stamped(lambda t, r: f"{t:%Y-%m-%d %H:%M:%S.%f}  {r}", LATE)
+    record = read("\n".join(lines) + "\n")
+    assert record.values.tolist() == RATES
+    assert not [n for n in record.notes if n["key"].startswith("allan.note_about")]

@@ -100,6 +100,13 @@ def test_a_loggers_lost_readings_are_left_out_of_the_position_and_said(lab):
     assert take.n_samples == len(values) - 2
 
 
+def test_a_loggers_lines_about_the_record_are_passed_over_and_said_in_the_preview(lab):
+    text = "Device: FOG-50\nOperator: Li Si\n" + logger_file(HEADING[2])
+    preview = lab("/csv/preview", text, position=2).json()
+    assert preview["positions"][0]["n"] == len(HEADING[2])
+    assert any("Lines 1–2 above the readings ('Device: FOG-50'" in n for n in preview["notes"])
+
+
 def test_one_reading_per_line_is_one_positions_record(lab):
     text = "".join(f"{v}\n" for v in HEADING[3])
     saved = lab("/csv", text, position=3)

@@ -6,6 +6,7 @@ it, or from the first lines' numbers where it says nothing.  The record is read 
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
@@ -14,6 +15,29 @@ from app.core.column_names import comment_text, readable_rate_unit
 from app.core.exceptions import UserError
 from app.core.record_columns import Layout, bare_record_layout, header_layout
 from app.core.spreadsheet_text import is_units_row
+
+# "Device: DSP-1750", "Sample rate: 2 Hz", "采样率：10 Hz": a logger's lines about the record
+# above its table -- a name that starts with a letter, then a colon and a space (a clock's
+# "14:00:00" starts with a digit and has none)
+_ABOUT_THE_RECORD = re.compile(r"[^\W\d_][^:：,;\t]{0,40}(?::\s|：|:$)")
+
+
+def describes_the_record(text: str) -> bool:
+    """Whether a line above a record's table says something about it ("Device: DSP-1750",
+    "Date: 2026-11-28 14:00", "采样率：10 Hz") rather than naming its columns.
+
+    Parameters
+    ----------
+    text : str
+        One line, stripped.
+
+    Returns
+    -------
+    bool
+        True for a name that starts with a letter and is followed by a colon and a space
+        (or a full-width colon).
+    """
+    return _ABOUT_THE_RECORD.match(text) is not None
 
 
 def is_header(cells: list[str]) -> bool:

@@ -41,7 +41,13 @@ from app.core.column_names import AngleOutput, comment_text
 from app.core.exceptions import UserError
 from app.core.record_blocks import Progress, RecordBlocks
 from app.core.record_columns import Layout
-from app.core.record_preamble import Preamble, header_in_comment, holds_a_number, is_header
+from app.core.record_preamble import (
+    Preamble,
+    describes_the_record,
+    header_in_comment,
+    holds_a_number,
+    is_header,
+)
 from app.core.spreadsheet_text import (
     WHOLE_COMMA_DIGITS,
     decimal_point,
@@ -50,7 +56,9 @@ from app.core.spreadsheet_text import (
 )
 
 # notes on lines of the file that were not read, which every reader of a record says
-LEFT_OUT = frozenset({"allan.note_last_line_left_out"})
+LEFT_OUT = frozenset(
+    {"allan.note_last_line_left_out", "allan.note_about_the_record", "allan.note_about_it"}
+)
 LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
 
 
@@ -115,6 +123,7 @@ def read_static_record(
     width = None
     preamble = Preamble()
     short: tuple[int, str] | None = None  # a line with fewer cells than the readings
+    about: list[tuple[int, str]] = []  # lines about the record above its table
     lines = iter(lines)
     first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
     split = _joined_decimal_comma if _one_column_with_decimal_commas(first) else None
@@ -126,6 +135,9 @@ def read_static_record(
         if (remark := comment_text(text)) is not None:
             if layout is None:
                 preamble.comment, preamble.comment_line = remark, line_number
+            continue
+        if layout is None and preamble.header is None and describes_the_record(text):
+            about.append((line_number, text))  # "Device: DSP-1750" above the table
             continue
         if split is None:
             if (hint := separator_hint(raw.rstrip("\r\n"))) is not None:  # Excel's "sep=;"
@@ -155,6 +167,14 @@ def read_static_record(
                 line=line_number,
             )
         blocks.add(line_number, cells)
+    if about:
+        first, last = about[0][0], about[-1][0]
+        notes.append(
+            {
+                "key": "allan.note_about_the_record" if last > first else "allan.note_about_it",
+                "params": {"first": first, "last": last, "text": _shortened(about[0][1])},
+            }
+        )
     if short is not None:  # cut off when the logger stopped, or a closing remark
         notes.append(
             {
