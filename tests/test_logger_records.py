@@ -473,3 +473,25 @@ def test_a_clocks_readings_are_never_taken_for_lines_about_the_record():
     record = read("\n".join(lines) + "\n")
     assert record.values.tolist() == RATES
     assert not [n for n in record.notes if n["key"].startswith("allan.note_about")]
+
+
+def test_a_sample_rate_the_file_states_above_its_table_is_used_where_nothing_else_gives_one():
+    from app.core.record_preamble import stated_rate_hz
+
+    rates = static_record(1.0, 2.0, arw=0.01, seed=9)
+    body = "Rate(deg/h)\n" + "".join(f"{rate:.5f}\n" for rate in rates)
+    record = read("Device: DSP-1750\n采样率：2 Hz\n\n" + body)
+    assert record.times_s is None and record.stated_rate_hz == 2.0
+    result = analyse_record(record, None)
+    assert result.rate_hz == 2.0 and result.arw_deg_rt_h == pytest.approx(0.01, rel=0.1)
+    said = [n for n in result.notes if n["key"] == "allan.note_rate_stated"]
+    assert said == [{"key": "allan.note_rate_stated", "params": {"rate": "2"}}]
+    assert analyse_record(record, 4.0).rate_hz == 4.0  # a rate given wins, and is not said
+    with pytest.raises(UserError) as refused:  # nothing states one: asked, as before
+        analyse_record(read(body), None)
+    assert refused.value.key == "allan.no_rate"
+    assert [stated_rate_hz(t) for t in ("Output rate: 1 kHz", "Rate: 100 sps", "Date: 2 Hz")] == [
+        1000.0,
+        100.0,
+        None,
+    ]

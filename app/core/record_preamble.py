@@ -40,6 +40,39 @@ def describes_the_record(text: str) -> bool:
     return _ABOUT_THE_RECORD.match(text) is not None
 
 
+_STATED_RATE = re.compile(
+    r"(?:sample|sampling|output|data)?\s*(?:rate|frequency)|采样率|采样频率|输出频率|数据率",
+    re.IGNORECASE,
+)
+_HERTZ = re.compile(r"([0-9]+(?:\.[0-9]+)?)\s*(k?hz|sps)\b", re.IGNORECASE)
+
+
+def stated_rate_hz(text: str) -> float | None:
+    """The sample rate a line about the record states ("Sample rate: 2 Hz", "采样率：10Hz",
+    "Output rate: 1 kHz"), or None.
+
+    Parameters
+    ----------
+    text : str
+        A line :func:`describes_the_record`.
+
+    Returns
+    -------
+    float or None
+        The rate (Hz) where the line's name is a rate's and its value a number of hertz.
+    """
+    name, _, value = (
+        re.split(r"(:|：)", text, maxsplit=1) if re.search(r"[:：]", text) else ("", "", "")
+    )
+    if not _STATED_RATE.fullmatch(name.strip()):
+        return None
+    hertz = _HERTZ.search(value)
+    if hertz is None:
+        return None
+    rate = float(hertz.group(1)) * (1000.0 if hertz.group(2).lower() == "khz" else 1.0)
+    return rate if rate > 0 else None
+
+
 def is_header(cells: list[str]) -> bool:
     """Whether a line's cells are names.
 

@@ -47,6 +47,7 @@ from app.core.record_preamble import (
     header_in_comment,
     holds_a_number,
     is_header,
+    stated_rate_hz,
 )
 from app.core.spreadsheet_text import (
     WHOLE_COMMA_DIGITS,
@@ -74,6 +75,7 @@ class StaticRecord:
     unit: str | None = None
     notes: list[dict] = field(default_factory=list)
     angle: AngleOutput | None = None  # the readings are angles per output, not rates
+    stated_rate_hz: float | None = None  # "Sample rate: 2 Hz" in the lines above the table
 
 
 def read_static_record(
@@ -209,6 +211,7 @@ def read_static_record(
         layout.rate_unit,
         notes,
         layout.angle,
+        next((rate for _, text in about if (rate := stated_rate_hz(text))), None),
     )
     if finite and not np.all(np.isfinite(record.values)):
         raise UserError("readings.not_finite")
