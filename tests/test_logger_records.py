@@ -6,6 +6,7 @@ empty last column -- read to the same times and the same analysis as a record wi
 from __future__ import annotations
 
 import datetime as dt
+import io
 import math
 
 import numpy as np
@@ -495,3 +496,31 @@ def test_a_sample_rate_the_file_states_above_its_table_is_used_where_nothing_els
         100.0,
         None,
     ]
+
+
+def test_a_workbooks_lines_about_the_record_in_two_cells_and_its_stated_rate():
+    """An Excel logger's sheet: "Device:" | "DSP-1750" and "Sample rate:" | "2 Hz" in two
+    cells each (a CSV's "Device:,DSP-1750"), then the readings without times."""
+    from openpyxl import Workbook
+
+    from app.core.workbook_text import workbook_text
+
+    rates = static_record(1.0, 2.0, arw=0.01, seed=4)
+    sheet = Workbook()
+    rows = sheet.active
+    rows.append(["Device:", "DSP-1750"])
+    rows.append(["Sample rate:", "2 Hz"])
+    rows.append(["Rate (deg/h)"])
+    for rate in rates:
+        rows.append([float(rate)])
+    saved = io.BytesIO()
+    sheet.save(saved)
+    comma = "Device:,DSP-1750\nSample rate:,2 Hz\nRate (deg/h)\n" + "".join(
+        f"{float(rate)!r}\n" for rate in rates
+    )
+    for text in (workbook_text(saved.getvalue()), comma):
+        record = read(text)
+        assert record.stated_rate_hz == 2.0 and record.values == pytest.approx(rates)
+        result = analyse_record(record, None)
+        assert result.rate_hz == 2.0
+        assert result.arw_deg_rt_h == pytest.approx(0.01, rel=0.1)

@@ -17,9 +17,10 @@ from app.core.record_columns import Layout, bare_record_layout, header_layout
 from app.core.spreadsheet_text import is_units_row
 
 # "Device: DSP-1750", "Sample rate: 2 Hz", "采样率：10 Hz": a logger's lines about the record
-# above its table -- a name that starts with a letter, then a colon and a space (a clock's
-# "14:00:00" starts with a digit and has none)
-_ABOUT_THE_RECORD = re.compile(r"[^\W\d_][^:：,;\t]{0,40}(?::\s|：|:$)")
+# above its table -- a name that starts with a letter, then a colon and a space or the next
+# cell ("Device:,DSP-1750": a spreadsheet's two cells; a clock's "14:00:00" starts with a
+# digit and has none)
+_ABOUT_THE_RECORD = re.compile(r"[^\W\d_][^:：,;\t]{0,40}(?::[\s,;]|：|:$)")
 
 
 def describes_the_record(text: str) -> bool:
