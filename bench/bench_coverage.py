@@ -50,13 +50,19 @@ class Coverage:
 
 
 def coverage(
-    preset_name: str, dwell_s: float, runs: int, *, cold: bool, seed: int = 2026
+    preset_name: str,
+    dwell_s: float,
+    runs: int,
+    *,
+    cold: bool,
+    seed: int = 2026,
+    warm_s: float = 3600.0,
 ) -> Coverage:
     """Seeded Monte Carlo: random true azimuths, four positions counter-clockwise, back to
-    back, started at switch-on (cold) or after an hour (warm, ``gyrolab simulate``'s
-    default)."""
+    back, started at switch-on (cold) or after ``warm_s`` (warm: an hour by default,
+    ``gyrolab simulate``'s; each run simulates the gyro's history since switch-on)."""
     preset = PRESETS[preset_name]
-    start_s = 0.0 if cold else 3600.0
+    start_s = 0.0 if cold else warm_s
     noise = GyroNoise.from_preset(preset)
     angles = heading_angles(4, "ccw")
     rng = np.random.default_rng(seed)
