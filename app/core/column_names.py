@@ -69,7 +69,9 @@ _RATE_SUFFIX = re.compile(r"(.+?)_(deg_h|deg_s|dps|dph|rad_s)")
 # "quantity/unit", as ISO 80000-1 and China's GB 3101 head a table's columns ("t/s",
 # "时间/s", "角速率/(°/h)", "温度/℃"); never a bare unit ("°/h", "mdeg/s")
 _QUANTITY_OVER_UNIT = re.compile(r"([^/]+?)\s*/\s*(.+)")
-_ANGLE_WORD = re.compile(r"(?:m|µ|μ|u|k)?(?:deg|degrees?|°|º|˚|rad|arcsec|arcmin|度|弧度|角秒)")
+# an angle's unit as written, with a prefix ("mdeg", "µrad", "度"): a rate's numerator
+_ANGLE_UNIT_WORD = r"(?:m|µ|μ|u|k)?(?:deg|degrees?|°|º|˚|rad|arcsec|arcmin|度|弧度|角秒)"
+_ANGLE_WORD = re.compile(_ANGLE_UNIT_WORD)
 _SLASHED_UNITS = frozenset(
     {"s", "sec", "ms", "us", "µs", "μs", "ns", "h", "min", "秒", "毫秒", "℃", "°c", "c", "k", "度"}
 )
@@ -209,10 +211,7 @@ def rate_unit(unit: str | None) -> str | None:
 
 # A rate unit as written, read or not: an angle over a time ("mdeg/s", "°/min", "度/分"),
 # never a speed ("m/s")
-RATE_LIKE = re.compile(
-    r"(?:m|µ|μ|u|k)?(?:deg|degrees?|°|º|˚|rad|arcsec|arcmin|度|弧度|角秒)"
-    r"\s*/\s*(?:s|sec|h|hr|min|秒|小时|时|分|分钟)"
-)
+RATE_LIKE = re.compile(_ANGLE_UNIT_WORD + r"\s*/\s*(?:s|sec|h|hr|min|秒|小时|时|分|分钟)")
 
 
 def readable_rate_unit(unit: str | None) -> str | None:

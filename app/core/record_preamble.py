@@ -62,11 +62,10 @@ def stated_rate_hz(text: str) -> float | None:
     float or None
         The rate (Hz) where the line's name is a rate's and its value a number of hertz.
     """
-    name, _, value = (
-        re.split(r"(:|：)", text, maxsplit=1) if re.search(r"[:：]", text) else ("", "", "")
-    )
-    if not _STATED_RATE.fullmatch(name.strip()):
+    parts = re.split(r"[:：]", text, maxsplit=1)
+    if len(parts) < 2 or not _STATED_RATE.fullmatch(parts[0].strip()):
         return None
+    value = parts[1]
     hertz = _HERTZ.search(value)
     if hertz is None:
         return None
