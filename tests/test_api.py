@@ -369,6 +369,96 @@ def test_append_with_offsets_is_idempotent(client, auth):
         assert load_samples(db, take)[0].tolist() == [1.0, 2.0, 3.0, 4.0, 5.0]
 
 
+@pytest.mark.parametrize(
+    ("times", "reading", "at", "before"),
+    [
+        ([0.0] * 10, 2, "0", "0"),  # a clock that never ran
+        (list(range(10, 0, -1)), 2, "9", "10"),  # run backwards
+        ([*range(5), *range(5)], 6, "0", "4"),  # two recordings run together
+        ([0.0, 0.1, 0.2, 0.3, 0.4, 0.45, 0.4, 0.7, 0.8, 0.9], 7, "0.4", "0.45"),  # set back
+    ],
+)
+def test_sample_times_that_do_not_rise_are_refused_whatever_brings_them(
+    client, auth, times, reading, at, before
+):
+    """The drift fit and the warm-up check read a position's times as one clock: times
+    that stand still or go back are refused, as JSON, as raw float64 pairs and as ``.npy``
+    (the CSV reader already refused them as not one position's record), naming the
+    reading, in both languages; nothing is stored."""
+    import io
+
+    import numpy as np
+
+    session_id = new_api_session(client, auth)
+    url = f"{API}/sessions/{session_id}/heading/positions/1"
+    values = [10.0 + 0.01 * k for k in range(10)]
+    pairs = np.column_stack([times, values]).astype("<f8")
+    npy = io.BytesIO()
+    np.save(npy, pairs)
+    binary = {"Content-Type": "application/octet-stream"}
+    sent = [
+        client.put(url, json={"samples": values, "times_s": times}, headers=auth),
+        client.put(url, content=pairs.tobytes(), params={"columns": 2}, headers={**auth, **binary}),
+        client.put(url, content=npy.getvalue(), headers={**auth, **binary}),
+    ]
+    for response in sent:
+        assert response.status_code == 400, response.text
+        assert response.json()["key"] == "lab.times_not_rising"
+        assert response.json()["detail"] == (
+            f"Position 1: the sample times must rise, each later than the one before, but "
+            f"reading {reading} is at {at} s and the one before it at {before} s. Was the "
+            "clock set back, or were two recordings run together? Send each recording on "
+            "its own, or send no times."
+        )
+    chinese = client.put(
+        url,
+        json={"samples": values, "times_s": times},
+        headers={**auth, "Accept-Language": "zh-CN"},
+    )
+    assert chinese.json()["detail"].startswith(
+        f"位置 1：采样时间须逐个递增，但第 {reading} 个读数的时间 {at} s 不晚于前一个的 {before} s。"
+    )
+    with read_session() as db:
+        assert db.exec(select(Take)).first() is None
+    rising = client.put(url, json={"samples": values, "times_s": list(range(10))}, headers=auth)
+    assert rising.status_code == 200
+
+
+def test_an_append_carries_its_times_on_from_those_stored(client, auth):
+    """A streaming device's batches are one recording: each batch's times rise from the last
+    one stored; a clock restarted between batches is refused, the reading named by its
+    number in the position; a retried batch (the same offset) is still stored once."""
+    session_id = new_api_session(client, auth)
+    url = f"{API}/sessions/{session_id}/heading/positions/2/samples"
+
+    def post(samples, times, offset, language="en"):
+        body = {"samples": samples, "times_s": times, "offset": offset}
+        return client.post(url, json=body, headers={**auth, "Accept-Language": language})
+
+    assert post([1.0, 2.0, 3.0], [0.0, 0.1, 0.2], 0).json()["added"] == 3
+    assert post([1.0, 2.0, 3.0], [0.0, 0.1, 0.2], 0).json()["added"] == 0  # a retry
+    restarted = post([4.0, 5.0], [0.0, 0.1], 3)
+    assert restarted.status_code == 400 and restarted.json()["key"] == "lab.times_not_after"
+    assert restarted.json()["detail"] == (
+        "Position 2: this batch's first time, 0 s, is not after the last one stored, 0.2 s. "
+        "One recording's times run on from batch to batch."
+    )
+    assert post([4.0, 5.0], [0.2, 0.3], 3, "zh-CN").json()["detail"] == (
+        "位置 2：这批读数的第一个时间 0.2 s 不晚于已保存的最后一个时间 0.2 s。"
+        "同一段记录的时间应一批接一批向后递增。"
+    )
+    inside = post([4.0, 5.0], [0.4, 0.3], 3)
+    assert inside.json()["key"] == "lab.times_not_rising"
+    assert "reading 5 is at 0.3 s and the one before it at 0.4 s" in inside.json()["detail"]
+    assert post([4.0, 5.0], [0.3, 0.4], 3).json()["n_samples"] == 5
+    with read_session() as db:
+        from app.lab.store import load_samples
+
+        values, times = load_samples(db, db.exec(select(Take)).one())[:2]
+        assert values.tolist() == [1.0, 2.0, 3.0, 4.0, 5.0]
+        assert times.tolist() == [0.0, 0.1, 0.2, 0.3, 0.4]
+
+
 def test_objects_of_others_answer_404(client, app, student, auth):
     from fastapi.testclient import TestClient
 

@@ -17,9 +17,17 @@ PLAUSIBLE_TEMPERATURE_C = 200.0  # a case temperature beyond ±200 °C is a deco
 
 
 def check_angle_and_times(
-    position: int, angle_deg: float, times: np.ndarray | None, n_values: int
+    position: int,
+    angle_deg: float,
+    times: np.ndarray | None,
+    n_values: int,
+    first_reading: int = 1,
 ) -> None:
-    """A finite dial angle within ten turns; sample times, if any, one per value, finite."""
+    """A finite dial angle within ten turns; sample times, if any, one per value, finite,
+    each later than the one before (the drift fit and the warm-up check read them as one
+    clock: a clock set back, or two recordings run together, would give a wrong drift);
+    ``first_reading``: the number of the first value among the position's readings (an
+    append's first is after those stored), for the message."""
     if not math.isfinite(angle_deg) or abs(angle_deg) > MAX_ANGLE_DEG:
         raise UserError(
             "lab.bad_angle",
@@ -31,6 +39,33 @@ def check_angle_and_times(
             "lab.bad_times",
             position=position,
         )
+    if times is not None and times.size > 1:
+        steps = np.diff(times)
+        if not np.all(steps > 0):
+            at = int(np.argmax(steps <= 0)) + 1  # the first reading not after the one before
+            raise UserError(
+                "lab.times_not_rising",
+                position=position,
+                reading=first_reading + at,
+                time=_seconds(times[at]),
+                before=_seconds(times[at - 1]),
+            )
+
+
+def check_times_follow(position: int, last_stored_s: float | None, times: np.ndarray) -> None:
+    """An appended batch's first time after the last one stored (one clock, rising)."""
+    if last_stored_s is not None and times.size and not times[0] > last_stored_s:
+        raise UserError(
+            "lab.times_not_after",
+            position=position,
+            time=_seconds(times[0]),
+            last=_seconds(last_stored_s),
+        )
+
+
+def _seconds(value: float) -> str:
+    """A time as a person reads it in a message: up to six decimals, none trailing."""
+    return f"{float(value):.6f}".rstrip("0").rstrip(".")
 
 
 def check_temperatures(position: int, temperatures: np.ndarray | None, n_values: int) -> None:

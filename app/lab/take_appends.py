@@ -9,8 +9,13 @@ from sqlmodel import Session, select
 
 from app.core.exceptions import UserError
 from app.lab.quota import check_storage
-from app.lab.reading_checks import check_angle_and_times, check_temperatures, check_values
-from app.lab.samples import chunks
+from app.lab.reading_checks import (
+    check_angle_and_times,
+    check_temperatures,
+    check_times_follow,
+    check_values,
+)
+from app.lab.samples import chunks, unpack
 from app.lab.store import (
     MAX_SAMPLES_PER_POSITION,
     check_editable,
@@ -89,7 +94,7 @@ def append_samples(
             limit=MAX_SAMPLES_PER_POSITION,
         )
     check_values(session, position, values)
-    check_angle_and_times(position, angle_deg, times, values.size)
+    check_angle_and_times(position, angle_deg, times, values.size, first_reading=stored + 1)
     check_temperatures(position, temperatures, values.size)
     existing = db.exec(
         select(SampleChunk).where(SampleChunk.take_id == take.id).order_by(SampleChunk.seq)
@@ -97,6 +102,9 @@ def append_samples(
     has_times = all(chunk.times is not None for chunk in existing)
     if has_times != (times is not None):
         raise UserError("lab.times_mismatch")
+    if times is not None:
+        last_times = unpack(existing[-1].times) if existing else np.empty(0)
+        check_times_follow(position, float(last_times[-1]) if last_times.size else None, times)
     has_temperatures = all(chunk.temperatures is not None for chunk in existing)
     if has_temperatures != (temperatures is not None):
         raise UserError(
