@@ -325,6 +325,50 @@ def test_strict_validation(client, auth, body, status, text):
         assert text in response.json()["detail"]
 
 
+@pytest.mark.one_backend  # input refused before any write
+def test_a_misspelt_field_is_said_not_dropped(client, auth):
+    """A field the API does not know is refused with its place (422), never dropped: a
+    dropped ``"units": "rad/s"`` stored rad/s as °/h, a dropped ``"start_angle"`` put every
+    dial angle 45° off, a dropped ``"symmetric"`` recorded four positions, not eight."""
+    session_id = new_api_session(client, auth)
+    sent = [
+        ("POST", f"{API}/sessions", {"station": {"latitude_deg": 39.93}, "symmetric": True}),
+        (
+            "POST",
+            f"{API}/sessions",
+            {"station": {"latitude_deg": 39.93}, "heading": {"start_angle": 45}},
+        ),
+        ("POST", f"{API}/sessions", {"station": {"latitude_deg": 39.93, "rate": 15.04}}),
+        (
+            "PUT",
+            f"{API}/sessions/{session_id}/heading/positions/1",
+            {"samples": [1e-5] * 10, "units": "rad/s"},
+        ),
+        ("PUT", f"{API}/sessions/{session_id}/heading/positions/1/trim", {"trim": 1, "n": 2}),
+    ]
+    places = [
+        ["body", "symmetric"],
+        ["body", "heading", "start_angle"],
+        ["body", "station", "rate"],
+        ["units"],
+        ["body", "n"],
+    ]
+    for (method, url, body), place in zip(sent, places, strict=True):
+        for language, message in (
+            ("en", "Not a field of this request."),
+            ("zh-CN", "本请求没有这个字段。"),
+        ):
+            response = client.request(
+                method, url, json=body, headers={**auth, "Accept-Language": language}
+            )
+            assert response.status_code == 422, response.text
+            assert response.json()["detail"] == [
+                {"loc": place, "msg": message, "type": "extra_forbidden"}
+            ]
+    with read_session() as db:
+        assert db.exec(select(Take)).first() is None
+
+
 def test_non_finite_samples_store_nothing(client, auth):
     session_id = new_api_session(client, auth)
     body = '{"samples": [1.0, 2.0, NaN, 4, 5, 6, 7, 8, 9, 10]}'

@@ -13,19 +13,19 @@ from app.web.deps import MAX_ID
 
 
 class Station(BaseModel):
-    model_config = ConfigDict(strict=True, allow_inf_nan=False)
+    model_config = ConfigDict(strict=True, allow_inf_nan=False, extra="forbid")
     latitude_deg: float = Field(ge=-90, le=90)
     earth_rate_deg_h: float = Field(gt=0, lt=1000, default=15.041)
 
 
 class HeadingSettings(BaseModel):
-    model_config = ConfigDict(strict=True, allow_inf_nan=False)
+    model_config = ConfigDict(strict=True, allow_inf_nan=False, extra="forbid")
     rotation: Literal["ccw", "cw"] = "ccw"
     start_angle_deg: float = 0.0
 
 
 class LatitudeSettings(BaseModel):
-    model_config = ConfigDict(strict=True, allow_inf_nan=False)
+    model_config = ConfigDict(strict=True, allow_inf_nan=False, extra="forbid")
     start_angle_deg: float = 0.0
     step_deg: float = 90.0
 
@@ -34,6 +34,7 @@ class SessionCreate(BaseModel):
     model_config = ConfigDict(
         strict=True,
         allow_inf_nan=False,
+        extra="forbid",  # a misspelt field ("units", "start_angle") is said, not dropped
         json_schema_extra={
             "examples": [
                 {
@@ -86,6 +87,7 @@ class PositionUpload(BaseModel):
     model_config = ConfigDict(
         strict=True,
         allow_inf_nan=False,
+        extra="forbid",  # a misspelt field ("units", "start_angle") is said, not dropped
         json_schema_extra={
             "examples": [
                 {
@@ -250,6 +252,7 @@ class AttemptOut(BaseModel):
 
 
 class TrimIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
     trim: int = Field(
         ge=0, le=10_000_000, strict=True, description="readings to leave out at the start"
     )
