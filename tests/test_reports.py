@@ -165,6 +165,65 @@ def test_long_records_are_summarised_and_attached_as_csv(client, student):
     assert "全部所用读数" not in text  # no 120-row table printed
 
 
+@pytest.mark.one_backend  # the layout of a long record; its queries are the ones above
+def test_readings_beyond_the_attach_limit_are_not_attached_and_the_report_says_where(
+    client, student, monkeypatch
+):
+    """A logger's million readings per position made a 29 MB PDF in 18 s: beyond
+    ``ATTACH_LIMIT`` readings (here lowered to 400) none are attached, and the report says
+    so and where every one is, in both languages; the readings figure is drawn from each
+    bucket's lowest and highest reading, as the page's chart."""
+    from app.lab.charts import MAX_POINTS
+    from app.reports import content
+
+    monkeypatch.setattr(content, "ATTACH_LIMIT", 400)
+    auth = token_for(client, "student1")
+    session_id = new_api_session(client, auth)
+    count = 3 * MAX_POINTS
+    for position in range(1, 5):
+        values = [HEADING[position][i % 10] + 0.001 * (i % 7) for i in range(count)]
+        upload = {"samples": values, "times_s": [position * 1e4 + i * 0.1 for i in range(count)]}
+        response = client.put(
+            f"{API}/sessions/{session_id}/heading/positions/{position}", json=upload, headers=auth
+        )
+        assert response.status_code == 200, response.text
+    said = {
+        "en": f"(up to {count} readings per position, {4 * count} in all): the table above "
+        "summarises them. So many readings are not attached to this PDF; every one of them "
+        "is in the session's CSV (“Export CSV” on its page).",
+        "zh-CN": f"（每个位置最多 {count} 个读数，共 {4 * count} 个）：上表为汇总。读数太多，"
+        "未附在本 PDF 中；全部读数见本次实验的 CSV（实验页面上的“导出 CSV”）。",
+    }
+    for language, sentence in said.items():
+        response = client.get(
+            f"{API}/sessions/{session_id}/report.pdf?lang={language}", headers=auth
+        )
+        assert response.status_code == 200 and response.content.startswith(b"%PDF-")
+        reader = PdfReader(io.BytesIO(response.content))
+        assert not reader.attachments
+        text = flat("".join(page.extract_text() for page in reader.pages))
+        assert flat(sentence).replace(" ", "") in text.replace(" ", "")
+    # the figure: each position drawn through at most MAX_POINTS points, not 6000
+    from app.lab.results import session_results
+    from app.reports import figures
+
+    drawn = []
+
+    def counted(times, values, limit=MAX_POINTS):
+        kept = downsample(times, values, limit)
+        drawn.append((values.size, kept[1].size))
+        return kept
+
+    downsample = figures.downsample
+    monkeypatch.setattr(figures, "downsample", counted)
+    with read_session() as db:
+        outcome = session_results(db, db.get(LabSession, session_id))["heading"]
+    assert figures.readings_svg(outcome, lambda key, **_: key).startswith("<svg")
+    assert len(drawn) == 4 and all(
+        n == count and MAX_POINTS // 2 < kept <= MAX_POINTS for n, kept in drawn
+    )
+
+
 @pytest.mark.one_backend  # refused before any report is built
 @pytest.mark.parametrize("query", ["?attempt=7", "?attempt=0", "?attempt=x", "?attempt=1e400"])
 def test_a_missing_or_bad_attempt_is_a_clear_4xx(student_client, query):

@@ -24,6 +24,10 @@ from app.lab.truth import AutoCheck, Truth, auto_check, session_truth, truth_vis
 from app.models import Assignment, Attempt, Course, LabSession, User, utcnow
 
 FULL_TABLE_LIMIT = 50  # readings per position printed in full; longer records are attached
+# readings attached to the PDF as CSV at most (≈ 8 MB of CSV, 1.5 MB in the PDF, a second to
+# write); a logger's million per position made a 29 MB PDF in 18 s, so beyond this the
+# report says where every reading is (the session's CSV export) instead
+ATTACH_LIMIT = 200_000
 
 
 @dataclass
@@ -57,6 +61,16 @@ class Report:
         """Short records are printed reading by reading; long ones are summarised and the
         samples attached to the PDF as CSV."""
         return self.longest_record <= FULL_TABLE_LIMIT
+
+    @property
+    def stored_readings(self) -> int:
+        """Every reading of the takes shown, those trimmed off included (what the CSV holds)."""
+        return sum(n_samples for _id, _trim, n_samples in self.take_keys)
+
+    @property
+    def readings_attached(self) -> bool:
+        """Long records' readings go with the PDF as CSV, up to :data:`ATTACH_LIMIT`."""
+        return not self.readings_in_full and self.stored_readings <= ATTACH_LIMIT
 
     @property
     def uncertainty_notes(self) -> list[tuple[list[str], str]]:

@@ -14,7 +14,7 @@ from functools import cache
 
 import numpy as np
 
-from app.lab.charts import PALETTE
+from app.lab.charts import PALETTE, downsample
 
 MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*"]
 STYLE = {
@@ -91,7 +91,10 @@ def figure_inputs(part_result) -> bytes:
 
 
 def readings_svg(part_result, _: Callable[..., str]) -> str | None:
-    """Each position's used readings against time (or reading number when untimed)."""
+    """Each position's used readings against time (or reading number when untimed); a
+    long record drawn from each bucket's lowest and highest reading, as the page's chart
+    (:func:`app.lab.charts.downsample`): 2000 points are more than the figure's width has
+    printed dots, and a logger's million readings per position made a 29 MB PDF in 25 s."""
     if not has_readings_figure(part_result):
         return None
     positions = sorted(part_result.positions.items())
@@ -100,11 +103,12 @@ def readings_svg(part_result, _: Callable[..., str]) -> str | None:
     def draw(axes):
         for position, item in positions:
             x = item.times if timed else np.arange(1, item.values.size + 1)
+            x, y = downsample(x, item.values)
             style = PALETTE[(position - 1) % len(PALETTE)]
             few = item.values.size <= 60
             axes.plot(
                 x,
-                item.values,
+                y,
                 color=style,
                 linewidth=0.8,
                 marker=MARKERS[(position - 1) % len(MARKERS)] if few else None,

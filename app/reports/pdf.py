@@ -86,7 +86,7 @@ def report_pdf(report: Report, language: str) -> bytes:
 
     fetcher = URLFetcher(allowed_protocols={"data"})
     attachments = []
-    if not report.readings_in_full:
+    if report.readings_attached:
         selection = Selection(report.session.id, report.attempt.id if report.attempt else None)
         attachments.append(
             Attachment(
