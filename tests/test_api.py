@@ -460,7 +460,8 @@ def test_sample_times_that_do_not_rise_are_refused_whatever_brings_them(
         headers={**auth, "Accept-Language": "zh-CN"},
     )
     assert chinese.json()["detail"].startswith(
-        f"位置 1：采样时间须逐个递增，但第 {reading} 个读数的时间 {at} s 不晚于前一个的 {before} s。"
+        f"位置 1：采样时间须逐个递增，但第 {reading} 个读数的时间 {at} s "
+        f"不晚于前一个的 {before} s。"
     )
     with read_session() as db:
         assert db.exec(select(Take)).first() is None

@@ -298,3 +298,77 @@ def test_a_record_saved_as_an_excel_workbook_is_read(world):
     assert reply.status_code == 303, reply.text[-500:]
     summary = stored(world)
     assert summary["rate_hz"] == pytest.approx(10.0) and summary["samples"] == 7_200
+
+
+def test_a_device_faster_than_the_characterisation_gets_the_sigma_of_its_own_span(world):
+    """A teacher characterises the bench gyro from a 10 Hz logger; a group's bridge sends
+    the same gyro at 1 kHz with its times.  Each position mean averages over its own span
+    (5 s here), so its σ is 60·N/√5 (lab-reference §3), not that of 5000 readings taken
+    as 500 s at the characterisation's rate (√100 = 10× too small).  Readings without
+    times still count at the characterisation's rate.  An independent white-noise Monte
+    Carlo at 1 kHz scatters as the σ says."""
+    arw, rate, count = 0.01, 1000.0, 5000
+    summary = {"arw_deg_rt_h": arw, "bias_instability_deg_h": 0.0, "rrw_deg_h_rt_h": 0.0,
+               "quantization_deg": 0.0, "rate_hz": 10.0, "terms": {}}  # fmt: skip
+    with write_session() as db:
+        db.get(Assignment, world["assignment"]).gyro_characterisation = json.dumps(summary)
+    student = browser(world, "s1")
+    from tests.factories import API, token_for
+
+    auth = token_for(student, "s1")
+    h = 15.04 * math.cos(math.radians(39.93))
+    angles = [0.0, -90.0, -180.0, -270.0]
+    rng = np.random.default_rng(7)
+    per_reading = 60.0 * arw * math.sqrt(rate)  # white noise of ARW N at 1 kHz (°/h)
+
+    def readings(azimuth: float) -> list[np.ndarray]:
+        return [h * np.cos(np.radians(azimuth + a)) + 0.3 + rng.normal(0, per_reading, count)
+                for a in angles]  # fmt: skip
+
+    def sigma_of(timed: bool) -> dict:
+        body = {"assignment_id": world["assignment"]}
+        session_id = student.post(f"{API}/sessions", json=body, headers=auth).json()["id"]
+        for k, values in enumerate(readings(30.0), 1):
+            upload = {"samples": values.tolist()}
+            if timed:
+                upload["times_s"] = (100.0 * k + np.arange(count) / rate).tolist()
+            url = f"{API}/sessions/{session_id}/heading/positions/{k}"
+            assert student.put(url, json=upload, headers=auth).status_code == 200
+        result = student.get(f"{API}/sessions/{session_id}/results", headers=auth).json()
+        assert result["heading"]["uncertainty_model"] == "allan"
+        return result["heading"]
+
+    # σ = 60·N/√T for each mean and σ_A = σ/(√2·H) (lab-reference §3), in °/h and degrees
+    def mean_sigma(seconds: float) -> float:
+        return 60.0 * arw / math.sqrt(seconds)
+
+    def closed_form(seconds: float) -> float:
+        return math.degrees(mean_sigma(seconds) / (math.sqrt(2.0) * h))
+
+    timed = sigma_of(timed=True)
+    assert timed["position_sigmas_deg_h"] == pytest.approx([mean_sigma(count / rate)] * 4)
+    assert timed["azimuth_sigma_deg"] == pytest.approx(closed_form(count / rate), rel=0.02)
+    # without times: 5000 readings at 10 Hz, 500 s -- and the readings' scatter, ten times
+    # that, is then flagged (the closure far beyond its σ) and widens the result's σ
+    untimed = sigma_of(timed=False)
+    assert untimed["position_sigmas_deg_h"] == pytest.approx([mean_sigma(count / 10.0)] * 4)
+    assert untimed["warm_up"]["flagged"]
+    # the span: first to last time plus one step
+    from types import SimpleNamespace
+
+    from app.lab.results import recorded_seconds
+
+    position = SimpleNamespace(times=np.arange(count) / rate, values=np.zeros(count))
+    assert recorded_seconds(position, 10.0) == pytest.approx(5.0)
+    assert recorded_seconds(SimpleNamespace(times=None, values=np.zeros(count)), 10.0) == 500.0
+    # independent Monte Carlo: the RMS heading error against the σ for 5 s windows
+    noise = GyroNoise(arw_deg_rt_h=arw, bias_instability_deg_h=0.0, rrw_deg_h_rt_h=0.0)
+    cov = noise.mean_covariance([Window(0.0, count / rate)] * 4, continuous=False)
+    errors = []
+    for _run in range(300):
+        azimuth = float(rng.uniform(0.0, 360.0))
+        solved = solve_heading(readings(azimuth), angles, position_cov=cov,
+                               true_azimuth_deg=azimuth)  # fmt: skip
+        errors.append(solved.azimuth_error_deg)
+    rms = math.sqrt(float(np.mean(np.square(errors))))
+    assert rms == pytest.approx(closed_form(count / rate), rel=0.12)  # 300 runs: ±4 %

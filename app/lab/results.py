@@ -193,15 +193,32 @@ def simulated_noise(session: LabSession, ordered: list[PositionData]) -> dict:
 def characterised_noise(station: StationNoise | None, ordered: list[PositionData]) -> dict:
     """Readings from a real gyro the teacher characterised (typed, CSV, API, bridge): each
     position mean's variance from its noise model over the position's recording, taken as
-    separate recordings (their timing on the bench is not known)."""
+    separate recordings (their timing on the bench is not known).  A recording's length
+    is its times' span where it has times (:func:`recorded_seconds`), else its count at
+    the characterisation's rate."""
     if (
         station is None
         or not ordered
         or any(p.take.source == InputMethod.simulator for p in ordered)
     ):
         return {}
-    windows = [Window(0.0, p.values.size / station.rate_hz) for p in ordered]
+    windows = [Window(0.0, recorded_seconds(p, station.rate_hz)) for p in ordered]
     return {"position_cov": station.noise.mean_covariance(windows, continuous=False)}
+
+
+def recorded_seconds(position: PositionData, rate_hz: float) -> float:
+    """How long a position's used readings took: first to last time plus one sample
+    period (the median step) where they have times, else their count at ``rate_hz``.
+    A device sampling faster than the characterisation's record (1 kHz against 10 Hz)
+    averages over its own span: the count alone would make 1000 s of readings 100000 s
+    long and their σ 10× too small."""
+    times = position.times
+    if times is not None and times.size >= 2:
+        steps = np.diff(times)
+        span = float(times[-1] - times[0]) + float(np.median(steps))
+        if math.isfinite(span) and span > 0:
+            return span
+    return position.values.size / rate_hz
 
 
 def station_noise_for(db: Session, session: LabSession) -> StationNoise | None:
