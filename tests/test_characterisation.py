@@ -305,7 +305,8 @@ def test_a_device_faster_than_the_characterisation_gets_the_sigma_of_its_own_spa
     the same gyro at 1 kHz with its times.  Each position mean averages over its own span
     (5 s here), so its σ is 60·N/√5 (lab-reference §3), not that of 5000 readings taken
     as 500 s at the characterisation's rate (√100 = 10× too small).  Readings without
-    times still count at the characterisation's rate.  An independent white-noise Monte
+    times, or spread wider than their count allows, still count at the characterisation's
+    rate.  An independent white-noise Monte
     Carlo at 1 kHz scatters as the σ says."""
     arw, rate, count = 0.01, 1000.0, 5000
     summary = {"arw_deg_rt_h": arw, "bias_instability_deg_h": 0.0, "rrw_deg_h_rt_h": 0.0,
@@ -361,6 +362,10 @@ def test_a_device_faster_than_the_characterisation_gets_the_sigma_of_its_own_spa
     position = SimpleNamespace(times=np.arange(count) / rate, values=np.zeros(count))
     assert recorded_seconds(position, 10.0) == pytest.approx(5.0)
     assert recorded_seconds(SimpleNamespace(times=None, values=np.zeros(count)), 10.0) == 500.0
+    # ten single samples logged 10 s apart from the 10 Hz gyro: each as noisy as one 0.1 s
+    # sample, so the count's 1 s, not the 100 s span
+    sparse = SimpleNamespace(times=10.0 * np.arange(10), values=np.zeros(10))
+    assert recorded_seconds(sparse, 10.0) == 1.0
     # independent Monte Carlo: the RMS heading error against the σ for 5 s windows
     noise = GyroNoise(arw_deg_rt_h=arw, bias_instability_deg_h=0.0, rrw_deg_h_rt_h=0.0)
     cov = noise.mean_covariance([Window(0.0, count / rate)] * 4, continuous=False)

@@ -193,9 +193,8 @@ def simulated_noise(session: LabSession, ordered: list[PositionData]) -> dict:
 def characterised_noise(station: StationNoise | None, ordered: list[PositionData]) -> dict:
     """Readings from a real gyro the teacher characterised (typed, CSV, API, bridge): each
     position mean's variance from its noise model over the position's recording, taken as
-    separate recordings (their timing on the bench is not known).  A recording's length
-    is its times' span where it has times (:func:`recorded_seconds`), else its count at
-    the characterisation's rate."""
+    separate recordings (their timing on the bench is not known), each as long as
+    :func:`recorded_seconds` says."""
     if (
         station is None
         or not ordered
@@ -207,18 +206,22 @@ def characterised_noise(station: StationNoise | None, ordered: list[PositionData
 
 
 def recorded_seconds(position: PositionData, rate_hz: float) -> float:
-    """How long a position's used readings took: first to last time plus one sample
-    period (the median step) where they have times, else their count at ``rate_hz``.
+    """How long a position's used readings average over: their count at ``rate_hz`` (the
+    characterisation's), or, where they have times spanning less (first to last time plus
+    one median step), that span.
+
     A device sampling faster than the characterisation's record (1 kHz against 10 Hz)
-    averages over its own span: the count alone would make 1000 s of readings 100000 s
-    long and their σ 10× too small."""
+    averages over its own span: its count alone made 5 s of readings 500 s long and their
+    σ 10× too small.  A span longer than the count allows is not taken: readings logged
+    at 10 s steps from a 10 Hz gyro are single samples (each as noisy as the count says),
+    and an integrating output at a slower rate only makes the count's σ cautious."""
+    counted = position.values.size / rate_hz
     times = position.times
     if times is not None and times.size >= 2:
-        steps = np.diff(times)
-        span = float(times[-1] - times[0]) + float(np.median(steps))
-        if math.isfinite(span) and span > 0:
+        span = float(times[-1] - times[0]) + float(np.median(np.diff(times)))
+        if math.isfinite(span) and 0.0 < span < counted:
             return span
-    return position.values.size / rate_hz
+    return counted
 
 
 def station_noise_for(db: Session, session: LabSession) -> StationNoise | None:
