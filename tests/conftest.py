@@ -36,6 +36,8 @@ from tests.pgserver import ADMIN_URL_ENV, PostgresServer, PostgresUnavailable
 
 BACKENDS = ("sqlite", "postgresql")
 IN_CI = os.environ.get("CI", "").lower() == "true"
+# the command line speaks the language LANG names: the tests expect English unless they ask
+os.environ["LANG"] = "C.UTF-8"
 PRODUCTION_ARGON2 = (
     security.ARGON2_MEMORY_KIB,
     security.ARGON2_TIME_COST,

@@ -222,6 +222,65 @@ def test_bad_input_exits_2_with_one_line(capsys, args, stdin, message):
     assert "Traceback" not in err
 
 
+@pytest.mark.parametrize(
+    ("args", "english", "chinese"),
+    [
+        (
+            ["solve", "heading", "/no/such.csv"],
+            "no such file: /no/such.csv",
+            "没有这个文件：/no/such.csv",
+        ),
+        (["allan", "/"], "/ is a folder, not a file", "/ 是文件夹，不是文件"),
+        (
+            ["solve", "heading", str(DATA / "handout_horizontal.csv"), "--latitude", "95"],
+            "--latitude must be between -90 and 90 degrees",
+            "--latitude 必须在 -90 到 90 度之间",
+        ),
+        (
+            ["solve", "latitude", str(DATA / "handout_vertical.csv"), "--earth-rate", "1e300"],
+            "--earth-rate must be above 0 and below 1000 °/h",
+            "--earth-rate 必须大于 0 且小于 1000 °/h",
+        ),
+        (
+            ["solve", "heading", "-", "--step", "inf"],
+            "--step must be a finite number",
+            "--step 必须是有限的数",
+        ),  # fmt: skip
+        (
+            ["simulate"],
+            "name what to simulate: heading, latitude or static",
+            "请指定要模拟的内容：heading、latitude 或 static",
+        ),  # fmt: skip
+        (["simulate", "heading"], "--latitude is required", "需要 --latitude"),
+        (
+            ["errors"],
+            "name a scenario (--scenario NAME) or --list",
+            "请指定一个场景（--scenario 名称），或用 --list 列出场景",
+        ),  # fmt: skip
+    ],
+)
+def test_the_commands_own_messages_in_both_languages(capsys, monkeypatch, args, english, chinese):
+    """The science commands' own refusals, like the core's, in the language asked for
+    (``--language``, else the one ``LANG`` names); a true latitude beyond ±90° or an Earth
+    rate outside (0, 1000) °/h is refused as the lab's pages and the API refuse it (it
+    gave a percent error against latitude 95°)."""
+    name = args[0]
+    assert run(capsys, *args)[2] == f"gyrolab {name}: {english}\n"
+    assert run(capsys, *args, "--language", "zh-CN")[2] == f"gyrolab {name}: {chinese}\n"
+    monkeypatch.setenv("LANG", "zh_CN.UTF-8")
+    code, _, err = run(capsys, *args)
+    assert code == 2 and err == f"gyrolab {name}: {chinese}\n"
+    assert run(capsys, *args, "--language", "en")[2] == f"gyrolab {name}: {english}\n"
+
+
+def test_the_error_scenarios_report_in_chinese(capsys):
+    code, out, _ = run(capsys, "errors", "--scenario", "indexing-level", "--language", "zh-CN")
+    assert code == 0 and "方法 seeker（蒙特卡罗：每个方位" in out and "一阶公式 °" in out
+    assert "论文：转位误差" in out.splitlines()[0]
+    code, out, _ = run(capsys, "errors", "--scenario", "indexing-level", "--json")
+    assert json.loads(out)["title"].startswith("Paper: indexing error")
+
+
 def test_real_process_prints_no_traceback(tmp_path):
     bad = tmp_path / "bad.csv"
     bad.write_text("position_1,position_2,position_3,position_4\n1,2,3,oops\n")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from app.cli.science import CommandError, check_finite, to_json_text
+from app.cli.science import check_finite, to_json_text, unreadable
 from app.core.allan import analyse_record
 from app.core.allan_summary import dwell_lines, note_lines, summary_lines, term_rows
 from app.core.static_record import read_static_record
@@ -24,10 +24,8 @@ def _open_record(path: str):
         return text_lines(binary) if binary is not None else iter(sys.stdin)
     try:
         handle = open(path, "rb")  # noqa: SIM115 -- closed when the lines run out
-    except FileNotFoundError:
-        raise CommandError(f"no such file: {path}") from None
     except OSError as error:
-        raise CommandError(f"cannot read {path}: {error.strerror}") from None
+        raise unreadable(path, error) from None
 
     def lines():
         with handle:
@@ -116,6 +114,6 @@ def add_allan_command(commands, guarded) -> None:
     allan.add_argument(
         "--progress", action="store_true", help="report reading and analysis on stderr"
     )
-    allan.add_argument("--language", choices=["en", "zh-CN"], default="en")
+    allan.add_argument("--language", choices=["en", "zh-CN"], help="default: from LANG")
     allan.add_argument("--json", action="store_true")
     allan.set_defaults(handler=guarded(_allan))

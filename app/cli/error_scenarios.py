@@ -8,15 +8,17 @@ heading errors (°) of each method -- the numbers behind the explorer's chart.
 from __future__ import annotations
 
 import argparse
-import sys
 from dataclasses import asdict, replace
 
 from app.core.error_analysis import METHODS
+from app.core.exceptions import UserError
 from app.explore.scenarios import SCENARIOS, heading_error_curves, scenario_input
 from app.web.i18n import translate
 
 
-def scenario_report(name: str, method: str | None = None, seed: int = 1) -> dict:
+def scenario_report(
+    name: str, method: str | None = None, seed: int = 1, language: str = "en"
+) -> dict:
     """The scenario's parameters and its heading errors at the Monte Carlo azimuths."""
     params = scenario_input(name)
     if method:
@@ -24,7 +26,7 @@ def scenario_report(name: str, method: str | None = None, seed: int = 1) -> dict
     curves, info = heading_error_curves(params, seed, formula_at_mc_points=True)
     return {
         "scenario": name,
-        "title": translate(f"scenario.{name}", "en"),
+        "title": translate(f"scenario.{name}", language),
         "parameters": asdict(params),
         "runs_per_azimuth": info["runs"],
         "methods": [
@@ -44,13 +46,20 @@ def _text(value: float | None) -> str:
     return "—" if value is None else f"{value:+.5f}"
 
 
-def print_report(report: dict) -> None:
+def print_report(report: dict, language: str = "en") -> None:
+    def say(key: str, **params) -> str:
+        return translate(key, language, **params)
+
     print(f"{report['scenario']}: {report['title']}")
     for key, value in report["parameters"].items():
         print(f"  {key} = {value}")
+    columns = [say(f"cli.errors_{name}") for name in ("azimuth", "first_order", "simulated")]
+    columns.append(say("cli.errors_spread"))
     for method in report["methods"]:
-        print(f"\nmethod {method['method']}  (Monte Carlo: {report['runs_per_azimuth']} run(s))")
-        print(f"{'azimuth °':>10} {'first order °':>14} {'simulated °':>12} {'spread °':>10}")
+        runs = report["runs_per_azimuth"]
+        print("\n" + say("cli.errors_method", method=method["method"], runs=runs))
+        widths = (10, 14, 12, 10)
+        print(" ".join(f"{text:>{width}}" for text, width in zip(columns, widths, strict=True)))
         rows = zip(
             method["azimuth_deg"],
             method["first_order_error_deg"],
@@ -72,20 +81,20 @@ def add_errors_command(commands, guarded, to_json_text) -> None:
         "--method", choices=METHODS, help="override the scenario's method (two|four|seeker)"
     )
     errors.add_argument("--json", action="store_true")
+    errors.add_argument("--language", choices=["en", "zh-CN"], help="default: from LANG")
 
     def run(args: argparse.Namespace) -> int:
         if args.list:
             for name in SCENARIOS:
-                print(f"{name:30} {translate(f'scenario.{name}', 'en')}")
+                print(f"{name:30} {translate(f'scenario.{name}', args.language)}")
             return 0
         if not args.scenario:
-            print("gyrolab errors: name a scenario (--scenario NAME) or --list", file=sys.stderr)
-            return 2
-        report = scenario_report(args.scenario, args.method)
+            raise UserError("cli.name_a_scenario")
+        report = scenario_report(args.scenario, args.method, language=args.language)
         if args.json:
             print(to_json_text(report))
         else:
-            print_report(report)
+            print_report(report, args.language)
         return 0
 
     errors.set_defaults(handler=guarded(run))

@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from itertools import pairwise
 
@@ -38,8 +39,28 @@ from app.core.workbook_text import workbook_text
 from app.core.worked_steps import render_text
 
 
-class CommandError(Exception):
-    """A problem with the command's input: printed as one line, exit status 2."""
+class CommandError(UserError):
+    """A problem with the command's input (a ``cli.*`` message key): printed as one line
+    in the command's language, exit status 2."""
+
+
+def unreadable(path: str, error: OSError) -> CommandError:
+    """Why a file could not be opened, in words the catalogue has in both languages."""
+    if isinstance(error, FileNotFoundError):
+        return CommandError("cli.no_such_file", path=path)
+    if isinstance(error, IsADirectoryError):
+        return CommandError("cli.is_a_folder", path=path)
+    if isinstance(error, PermissionError):
+        return CommandError("cli.no_permission", path=path)
+    return CommandError("cli.cannot_read", path=path, reason=error.strerror or str(error))
+
+
+def command_language(args: argparse.Namespace) -> str:
+    """``--language``, else the one ``LANG`` names (``zh_CN.UTF-8`` → zh-CN), else English."""
+    from app.web.i18n import normalise
+
+    language = getattr(args, "language", None)
+    return language or normalise(os.environ.get("LANG", "").split(".")[0]) or "en"
 
 
 def to_json_text(payload: dict) -> str:
@@ -58,16 +79,14 @@ def _read_text(path: str) -> str:
         else:
             with open(path, "rb") as handle:
                 data = handle.read()
-    except FileNotFoundError:
-        raise CommandError(f"no such file: {path}") from None
     except OSError as error:
-        raise CommandError(f"cannot read {path}: {error.strerror}") from None
+        raise unreadable(path, error) from None
     return workbook_text(data) if is_workbook(data) else decode_text(data)
 
 
 def check_finite(name: str, value: float | None) -> None:
     if value is not None and not math.isfinite(value):
-        raise CommandError(f"{name} must be a finite number")
+        raise CommandError("cli.not_finite", name=name)
 
 
 def solve_readings(part: str, readings: Readings, args: argparse.Namespace):
@@ -126,6 +145,11 @@ def _known_noise(readings: Readings, positions, preset_name: str | None) -> dict
 def _solve(args: argparse.Namespace) -> int:
     for name in ("start_angle", "step", "latitude", "earth_rate", "true_azimuth"):
         check_finite(f"--{name.replace('_', '-')}", getattr(args, name))
+    # the station as the lab's pages and the API take it
+    if args.latitude is not None and not -90.0 <= args.latitude <= 90.0:
+        raise CommandError("cli.latitude_range")
+    if not 0.0 < args.earth_rate < 1000.0:
+        raise CommandError("cli.earth_rate_range")
     readings = parse_readings_csv(_read_text(args.file), part=args.part)
     result = solve_readings(args.part, readings, args)
     for line in said_beside(args.part, readings, args):  # beside the output, not in it
@@ -180,17 +204,14 @@ def temperature_summary(readings: Readings, language: str = "en") -> dict | None
 
 def _guarded(handler):
     def run(args: argparse.Namespace) -> int:
+        args.language = command_language(args)
         try:
             return handler(args)
-        except UserError as error:
+        except UserError as error:  # a CommandError too
             from app.web.i18n import translator
 
-            language = getattr(args, "language", "en")
-            message = translator(language)(error.key, **error.params)
+            message = translator(args.language)(error.key, **error.params)
             print(f"gyrolab {args.command}: {message}", file=sys.stderr)
-            return 2
-        except CommandError as error:
-            print(f"gyrolab {args.command}: {error}", file=sys.stderr)
             return 2
 
     return run
@@ -235,7 +256,7 @@ def add_science_commands(commands) -> None:
         "noise (uncertainty_model 'allan') instead of assuming white noise",
     )
     solve.add_argument("--json", action="store_true")
-    solve.add_argument("--language", choices=["en", "zh-CN"], default="en")
+    solve.add_argument("--language", choices=["en", "zh-CN"], help="default: from LANG")
     solve.set_defaults(handler=_guarded(_solve))
 
     from app.cli.allan import add_allan_command

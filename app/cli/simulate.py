@@ -48,9 +48,9 @@ def simulate_command(args: argparse.Namespace) -> int:
     if args.list_presets:
         return _list_presets(args.json)
     if args.part is None:
-        raise CommandError("name what to simulate: heading, latitude or static")
+        raise CommandError("cli.name_what_to_simulate")
     if args.latitude is None:
-        raise CommandError("--latitude is required")
+        raise CommandError("cli.latitude_required")
     preset = PRESETS[args.preset]
     if args.rate:
         preset = replace(preset, sample_rate_hz=args.rate)
@@ -59,7 +59,7 @@ def simulate_command(args: argparse.Namespace) -> int:
     for name in ("latitude", "azimuth", "pitch", "roll", "rate", "seconds", "elevation"):
         check_finite(f"--{name}", getattr(args, name))
     if not -90 <= args.latitude <= 90:
-        raise CommandError("--latitude must be between -90 and 90 degrees")
+        raise CommandError("cli.latitude_range")
     setup = Setup(
         args.latitude,
         args.azimuth,
@@ -70,7 +70,7 @@ def simulate_command(args: argparse.Namespace) -> int:
     )
     check_finite("--warm-up", args.warm_up)
     if not 0 <= args.warm_up <= 86_400:
-        raise CommandError("--warm-up must be between 0 and 86400 seconds")
+        raise CommandError("cli.warm_up_range")
     if args.part == "static":
         seconds = args.seconds or args.seconds_per_position or 600.0
         values = simulate_static(
@@ -93,10 +93,10 @@ def simulate_command(args: argparse.Namespace) -> int:
         )
         return 0
     if args.positions < 3:
-        raise CommandError("--positions must be at least 3")
+        raise CommandError("cli.positions_minimum")
     seconds = args.seconds_per_position or args.seconds or 10.0
     if seconds <= 0 or seconds * preset.sample_rate_hz > 5_000_000:
-        raise CommandError("the dwell time must be positive and under 5 million samples")
+        raise CommandError("cli.dwell_range")
     step = 360.0 / args.positions
     if args.part == "heading":
         dials = heading_angles(args.positions, args.rotation, 0.0, step)
@@ -157,6 +157,9 @@ def add_simulate_command(commands, guarded) -> None:
     )
     simulate.add_argument("--indexing-sigma", type=float, help="arcsec per turn (default: preset)")
     simulate.add_argument("--seed", type=int, default=0)
+    simulate.add_argument(
+        "--language", choices=["en", "zh-CN"], help="of the messages; default: from LANG"
+    )
     simulate.add_argument(
         "--temperature",
         action="store_true",
