@@ -14,9 +14,11 @@ from pathlib import Path
 
 from sqlalchemy.engine import make_url
 
+from app.core.exceptions import UserError
 
-class BackupError(Exception):
-    pass
+
+class BackupError(UserError):
+    """Why a backup or a restore cannot be done (a ``cli.backup_*`` message key)."""
 
 
 def sqlite_path(database_url: str) -> Path | None:
@@ -24,7 +26,7 @@ def sqlite_path(database_url: str) -> Path | None:
     if not url.drivername.startswith("sqlite"):
         return None
     if not url.database or url.database == ":memory:":
-        raise BackupError("an in-memory database cannot be backed up")
+        raise BackupError("cli.backup_in_memory")
     return Path(url.database)
 
 
@@ -48,7 +50,7 @@ def postgres_hint(database_url: str, action: str, target: str) -> str:
 
 def check_file(path: Path) -> None:
     if not path.is_file():
-        raise BackupError(f"{path} does not exist")
+        raise BackupError("cli.backup_missing", path=path)
     try:
         connection = sqlite3.connect(f"file:{path}?mode=ro", uri=True)
         try:
@@ -60,18 +62,18 @@ def check_file(path: Path) -> None:
         finally:
             connection.close()
     except sqlite3.DatabaseError as error:
-        raise BackupError(f"{path} is not an SQLite database ({error})") from None
+        raise BackupError("cli.backup_not_sqlite", path=path, reason=error) from None
     if result != "ok":
-        raise BackupError(f"{path} fails the integrity check: {result}")
+        raise BackupError("cli.backup_integrity", path=path, result=result)
     if not {"alembic_version", "user"} <= tables:
-        raise BackupError(f"{path} is not a GyroLab database")
+        raise BackupError("cli.backup_not_gyrolab", path=path)
 
 
 def backup(database: Path, target: Path) -> None:
     if not database.exists():
-        raise BackupError(f"no database at {database}")
+        raise BackupError("cli.backup_no_database", path=database)
     if target.exists():
-        raise BackupError(f"{target} exists already; choose a new file name")
+        raise BackupError("cli.backup_exists", path=target)
     source = sqlite3.connect(database)
     destination = sqlite3.connect(target)
     try:

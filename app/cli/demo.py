@@ -145,6 +145,7 @@ def write_credentials_file(path: Path, credentials: list[tuple[str, str, str]]) 
         handle.write("\n".join(lines) + "\n")
 
 
-def format_credentials(credentials: list[tuple[str, str, str]]) -> str:
+def format_credentials(credentials: list[tuple[str, str, str]], say) -> str:
+    """The demo accounts as the command prints them, in its language (``say``)."""
     rows = [f"  {role:<8} {username:<10} {password}" for role, username, password in credentials]
-    return "\n".join(["Demo accounts (role, username, password):", *rows])
+    return "\n".join([say("cli.demo_accounts"), *rows])

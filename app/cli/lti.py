@@ -7,12 +7,15 @@ import sys
 
 from sqlmodel import select
 
+from app.cli.language import speaker
 from app.core.exceptions import UserError
 
 
 def _add_platform(args: argparse.Namespace) -> int:
     from app.db import write_session
     from app.lti.platforms import PlatformFields, add_platform
+
+    say = speaker()
 
     fields = PlatformFields(
         name=args.name or "",
@@ -27,16 +30,10 @@ def _add_platform(args: argparse.Namespace) -> int:
     try:
         with write_session() as db:
             platform = add_platform(db, fields)
-            print(
-                f"registered {platform.name}: issuer {platform.issuer}, client {platform.client_id}"
-            )
+            issuer, client = platform.issuer, platform.client_id
+            print(say("cli.lti_registered", name=platform.name, issuer=issuer, client=client))
     except UserError as error:
-        from app.web.i18n import translator
-
-        print(
-            f"gyrolab lti add-platform: {translator('en')(error.key, **error.params)}",
-            file=sys.stderr,
-        )
+        print(f"gyrolab lti add-platform: {say(error.key, **error.params)}", file=sys.stderr)
         return 2
     return 0
 
@@ -63,7 +60,7 @@ def _rotate(_args: argparse.Namespace) -> int:
     with write_session() as db:
         key = keys.rotate(db)
         days = keys.KEEP_RETIRED.days
-        print(f"new signing key {key.kid}; older keys stay published for {days} days")
+        print(speaker()("cli.lti_new_key", kid=key.kid, days=days))
     return 0
 
 
@@ -74,10 +71,8 @@ def _registration_link(args: argparse.Namespace) -> int:
 
     base = (args.base_url or get_settings().public_url or "").rstrip("/")
     if not base:
-        print(
-            "gyrolab lti registration-link: give --base-url or set GYROLAB_PUBLIC_URL",
-            file=sys.stderr,
-        )
+        message = speaker()("cli.lti_needs_base_url")
+        print(f"gyrolab lti registration-link: {message}", file=sys.stderr)
         return 2
     with write_session() as db:
         token = new_registration_link(db)
@@ -89,7 +84,7 @@ def _send_grades(_args: argparse.Namespace) -> int:
     from app.lti.grades import send_due
 
     counts = send_due()
-    print(f"sent {counts['sent']}, failed {counts['failed']}")
+    print(speaker()("cli.lti_grades_sent", sent=counts["sent"], failed=counts["failed"]))
     return 1 if counts["failed"] else 0
 
 
@@ -98,19 +93,19 @@ def _sync_roster(args: argparse.Namespace) -> int:
     from app.lti.roster import sync_roster
     from app.models import LtiContext
 
+    say = speaker()
     with read_session() as db:
         contexts = db.exec(select(LtiContext.id).where(LtiContext.course_id == args.course)).all()
     if not contexts:
-        print(
-            f"gyrolab lti sync-roster: course {args.course} is not linked to an LMS",
-            file=sys.stderr,
-        )
+        message = say("cli.lti_not_linked", course=args.course)
+        print(f"gyrolab lti sync-roster: {message}", file=sys.stderr)
         return 2
     failed = False
     for context_id in contexts:
         outcome = sync_roster(context_id)
         failed |= outcome.problem is not None
-        print(outcome.problem or f"{outcome.students} students ({outcome.newly_enrolled} new)")
+        synced = say("cli.lti_roster_synced", students=outcome.students, new=outcome.newly_enrolled)
+        print(outcome.problem or synced)
     return 1 if failed else 0
 
 

@@ -7,6 +7,8 @@ import getpass
 import os
 import sys
 
+from app.cli.language import speaker
+
 
 def _serve(args: argparse.Namespace) -> int:
     import uvicorn
@@ -21,6 +23,7 @@ def _serve(args: argparse.Namespace) -> int:
     from app.db import write_session
     from app.migrate import upgrade_to_head
 
+    say = speaker(args)
     settings = get_settings()
     upgrade_to_head()
     credentials_file = settings.var_dir / "demo-credentials.txt"
@@ -29,13 +32,13 @@ def _serve(args: argparse.Namespace) -> int:
             credentials = create_demo_data(db) if database_is_empty(db) else None
         if credentials:
             write_credentials_file(credentials_file, credentials)
-            print(format_credentials(credentials), flush=True)
-            print(f"(also saved in {credentials_file})", flush=True)
+            print(format_credentials(credentials, say), flush=True)
+            print(say("cli.demo_saved", path=credentials_file), flush=True)
         elif credentials_file.exists():
-            print(f"Demo accounts: see {credentials_file}", flush=True)
+            print(say("cli.demo_see", path=credentials_file), flush=True)
     host = args.host or settings.host
     port = args.port or settings.port
-    print(f"GyroLab is serving on http://{host}:{port}  (Ctrl+C stops it)", flush=True)
+    print(say("cli.serving", url=f"http://{host}:{port}"), flush=True)
     uvicorn.run(
         "app.main:app",
         host=host,
@@ -63,30 +66,33 @@ def _migrate(_args: argparse.Namespace) -> int:
     from app.migrate import upgrade_to_head
 
     upgrade_to_head()
-    print("database is at the newest schema")
+    print(speaker()("cli.migrated"))
     return 0
 
 
 def _create_user(args: argparse.Namespace) -> int:
-    from app.accounts.security import password_problem
+    from app.accounts.security import MIN_PASSWORD_LENGTH, password_problem
     from app.accounts.service import create_user
     from app.core.exceptions import UserError
     from app.db import write_session
     from app.migrate import upgrade_to_head
     from app.models import Role
 
+    say = speaker(args)
     password = args.password
     if password is None:
         if not sys.stdin.isatty():
             password = sys.stdin.readline().rstrip("\n")
         else:
-            password = getpass.getpass("Password: ")
-            if getpass.getpass("Password again: ") != password:
-                print("error: the passwords differ", file=sys.stderr)
+            password = getpass.getpass(say("cli.password_prompt"))
+            if getpass.getpass(say("cli.password_again")) != password:
+                print(say("cli.error", message=say("cli.passwords_differ")), file=sys.stderr)
                 return 2
     problem = password_problem(password, args.username)
     if problem:
-        print(f"error: unacceptable password ({problem})", file=sys.stderr)
+        reason = say(problem, minimum=MIN_PASSWORD_LENGTH)
+        message = say("cli.password_unacceptable", problem=reason)
+        print(say("cli.error", message=message), file=sys.stderr)
         return 2
     upgrade_to_head()
     try:
@@ -100,11 +106,9 @@ def _create_user(args: argparse.Namespace) -> int:
                 email=args.email,
             )
     except UserError as error:
-        from app.web.i18n import translate
-
-        print(f"error: {translate(error.key, 'en', **error.params)}", file=sys.stderr)
+        print(say("cli.error", message=say(error.key, **error.params)), file=sys.stderr)
         return 2
-    print(f"created {args.role} {args.username}")
+    print(say("cli.user_created", role=say(f"role.{args.role}"), username=args.username))
     return 0
 
 
@@ -116,10 +120,8 @@ def _prune(args: argparse.Namespace) -> int:
     upgrade_to_head()
     with write_session() as db:
         pruned = prune_takes(db, args.days)
-    print(
-        f"removed {pruned.takes} re-recording(s) superseded more than {args.days} days ago "
-        f"({pruned.bytes / 1e6:.1f} MB); submitted data is never removed"
-    )
+    megabytes = f"{pruned.bytes / 1e6:.1f}"
+    print(speaker()("cli.pruned", takes=pruned.takes, days=args.days, megabytes=megabytes))
     return 0
 
 
@@ -129,6 +131,7 @@ def _backup(args: argparse.Namespace) -> int:
     from app.cli.backup import BackupError, backup, postgres_hint, sqlite_path
     from app.config import get_settings
 
+    say = speaker(args)
     url = get_settings().database_url
     try:
         database = sqlite_path(url)
@@ -137,9 +140,9 @@ def _backup(args: argparse.Namespace) -> int:
             return 2
         backup(database, Path(args.file))
     except BackupError as error:
-        print(f"gyrolab backup: {error}", file=sys.stderr)
+        print(f"gyrolab backup: {say(error.key, **error.params)}", file=sys.stderr)
         return 2
-    print(f"backed up {database} to {args.file}")
+    print(say("cli.backed_up", database=database, file=args.file))
     return 0
 
 
@@ -151,6 +154,7 @@ def _restore(args: argparse.Namespace) -> int:
     from app.migrate import upgrade_to_head
     from app.serving_lock import servers_using
 
+    say = speaker(args)
     url = get_settings().database_url
     try:
         database = sqlite_path(url)
@@ -158,25 +162,17 @@ def _restore(args: argparse.Namespace) -> int:
             print(postgres_hint(url, "restore", args.file))
             return 2
         if not args.yes:
-            print(
-                "gyrolab restore: this replaces the whole database; stop the server and "
-                "repeat with --yes",
-                file=sys.stderr,
-            )
+            print(f"gyrolab restore: {say('cli.restore_needs_yes')}", file=sys.stderr)
             return 2
         if servers_using(url):
-            print(
-                "gyrolab restore: a GyroLab server is using this database; stop every "
-                "'gyrolab serve' of this installation (Ctrl+C, or its service) and repeat",
-                file=sys.stderr,
-            )
+            print(f"gyrolab restore: {say('cli.restore_server_running')}", file=sys.stderr)
             return 2
         restore(Path(args.file), database)
     except BackupError as error:
-        print(f"gyrolab restore: {error}", file=sys.stderr)
+        print(f"gyrolab restore: {say(error.key, **error.params)}", file=sys.stderr)
         return 2
     upgrade_to_head()
-    print(f"restored {database} from {args.file}")
+    print(say("cli.restored", database=database, file=args.file))
     return 0
 
 
@@ -250,9 +246,8 @@ def main(argv: list[str] | None = None) -> int:
             raise
         # another writer held the write lock past the busy timeout (SQLite's, PostgreSQL's
         # lock_timeout): nothing was written; a sentence, not a traceback
-        from app.web.i18n import translate
-
-        print(f"error: {translate('error.busy', 'en')}", file=sys.stderr)
+        say = speaker(args)
+        print(say("cli.error", message=say("error.busy")), file=sys.stderr)
         return 3
 
 

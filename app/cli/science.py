@@ -9,12 +9,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import sys
 from itertools import pairwise
 
 import numpy as np
 
+from app.cli.language import command_language
 from app.cli.solve_angles import position_angles, said_beside
 from app.core.drift_check import warm_up_message
 from app.core.exceptions import UserError
@@ -53,14 +53,6 @@ def unreadable(path: str, error: OSError) -> CommandError:
     if isinstance(error, PermissionError):
         return CommandError("cli.no_permission", path=path)
     return CommandError("cli.cannot_read", path=path, reason=error.strerror or str(error))
-
-
-def command_language(args: argparse.Namespace) -> str:
-    """``--language``, else the one ``LANG`` names (``zh_CN.UTF-8`` → zh-CN), else English."""
-    from app.web.i18n import normalise
-
-    language = getattr(args, "language", None)
-    return language or normalise(os.environ.get("LANG", "").split(".")[0]) or "en"
 
 
 def to_json_text(payload: dict) -> str:
