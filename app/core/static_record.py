@@ -39,6 +39,7 @@ from app.core.clock_stamps import (
 )
 from app.core.column_names import AngleOutput, comment_text
 from app.core.exceptions import UserError
+from app.core.labview_lvm import LabviewHeaders, is_labview_measurement, labview_lines
 from app.core.record_blocks import Progress, RecordBlocks
 from app.core.record_columns import Layout
 from app.core.record_preamble import (
@@ -58,7 +59,13 @@ from app.core.spreadsheet_text import (
 
 # notes on lines of the file that were not read, which every reader of a record says
 LEFT_OUT = frozenset(
-    {"allan.note_last_line_left_out", "allan.note_about_the_record", "allan.note_about_it"}
+    {
+        "allan.note_last_line_left_out",
+        "allan.note_about_the_record",
+        "allan.note_about_it",
+        "allan.note_labview",
+        "allan.note_labview_segments",
+    }
 )
 LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
 
@@ -128,6 +135,11 @@ def read_static_record(
     about: list[tuple[int, str]] = []  # lines about the record above its table
     lines = iter(lines)
     first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
+    labview = None
+    if is_labview_measurement(next((line for line in first if line.strip()), "")):
+        labview = LabviewHeaders()  # its headers passed over, its rate where it states one
+        lines = labview_lines(itertools.chain(first, lines), labview)
+        first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
     split = _joined_decimal_comma if _one_column_with_decimal_commas(first) else None
     for raw in itertools.chain(first, lines):
         line_number += 1
@@ -177,6 +189,13 @@ def read_static_record(
                 "params": {"first": first, "last": last, "text": _shortened(about[0][1])},
             }
         )
+    if labview is not None:
+        params = {"first": labview.first_line, "last": labview.last_line}
+        if labview.segments > 1:
+            notes.append({"key": "allan.note_labview_segments", "params": {
+                **params, "segments": labview.segments}})  # fmt: skip
+        else:
+            notes.append({"key": "allan.note_labview", "params": params})
     if short is not None:  # cut off when the logger stopped, or a closing remark
         notes.append(
             {
@@ -211,7 +230,8 @@ def read_static_record(
         layout.rate_unit,
         notes,
         layout.angle,
-        next((rate for _, text in about if (rate := stated_rate_hz(text))), None),
+        next((rate for _, text in about if (rate := stated_rate_hz(text))), None)
+        or (labview.rate_hz if labview is not None else None),
     )
     if finite and not np.all(np.isfinite(record.values)):
         raise UserError("readings.not_finite")
