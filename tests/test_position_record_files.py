@@ -13,6 +13,7 @@ from sqlmodel import select
 
 from app.db import read_session
 from app.lab.samples import unpack
+from app.lab.store import load_samples
 from app.models import SampleChunk, Take
 from tests.factories import HEADING, login, new_session, post_json
 
@@ -105,6 +106,27 @@ def test_a_loggers_lines_about_the_record_are_passed_over_and_said_in_the_previe
     preview = lab("/csv/preview", text, position=2).json()
     assert preview["positions"][0]["n"] == len(HEADING[2])
     assert any("Lines 1–2 above the readings ('Device: FOG-50'" in n for n in preview["notes"])
+
+
+def test_a_labview_file_for_one_position_is_previewed_and_saved_as_a_record(lab):
+    """LabVIEW's .lvm (its headers look like a table of two columns to the table reader,
+    whose "second table" it was): read as one position's record, said in the preview."""
+    from tests.test_labview_lvm import lvm
+
+    values = np.array(HEADING[3] * 6)
+    text = lvm(values)
+    preview = lab("/csv/preview", text, position=3).json()
+    assert preview["positions"][0]["n"] == values.size
+    assert (
+        "Read as a LabVIEW measurement file (.lvm): its headers, lines 1–21, were passed over."
+        in preview["notes"]
+    )
+    saved = lab("/csv", text, position=3)
+    assert saved.status_code == 200 and saved.json()["saved"] == [3]
+    with read_session() as db:
+        [take] = db.exec(select(Take)).all()
+        values_stored, times = load_samples(db, take)
+    assert values_stored == pytest.approx(values) and times[1] == pytest.approx(0.1)
 
 
 def test_one_reading_per_line_is_one_positions_record(lab):

@@ -238,6 +238,25 @@ def read_static_record(
     return record
 
 
+def written_as_a_record(text: str) -> bool:
+    """Whether a file can only be one record, never a table of positions: its header is
+    the comment line above its readings (:func:`names_its_columns_in_a_comment`), or it is
+    LabVIEW's measurement file (:mod:`app.core.labview_lvm`).
+
+    Parameters
+    ----------
+    text : str
+        The file's text (its first lines are enough).
+
+    Returns
+    -------
+    bool
+        True for either.
+    """
+    first = next((line for line in itertools.islice(io.StringIO(text), 50) if line.strip()), "")
+    return is_labview_measurement(first) or names_its_columns_in_a_comment(text)
+
+
 def names_its_columns_in_a_comment(text: str) -> bool:
     """Whether a file's header is the comment line just above its readings, as EuRoC,
     Kalibr and ROS write it ("#timestamp [ns],w_RS_S_x [rad s^-1],…"): a record, whose

@@ -18,7 +18,7 @@ from app.core.position_records import (
 )
 from app.core.readings import parse_readings_csv
 from app.core.readings_data import Readings
-from app.core.static_record import names_its_columns_in_a_comment
+from app.core.static_record import written_as_a_record
 from app.core.table_headers import angle_list, turned_other_way
 from app.core.units import canonical_unit, check_named_unit, to_deg_per_hour
 from app.core.workbook_text import workbook_readings
@@ -48,8 +48,8 @@ def parse_csv_upload(body: CsvUpload, *, suggest: bool = False) -> OnePositionRe
             limit_mb=MAX_CSV_CHARS // 1_000_000,
         )
     unit = canonical_unit(body.unit)
-    if body.column is not None or names_its_columns_in_a_comment(body.text):
-        # a column chosen, or a header behind '#' (an IMU's record): a record's file only
+    if body.column is not None or written_as_a_record(body.text):
+        # a column chosen, a header behind '#' (an IMU's record) or LabVIEW's file: a record
         return checked(parse_one_position_record(body.text, unit, body.column, suggest=suggest))
     try:
         parsed = OnePositionRecord(parse_readings_csv(body.text, part=body.part))

@@ -15,6 +15,7 @@ from pydantic import ValidationError
 from app.core.clock_stamps import epoch_scale
 from app.core.exceptions import UserError
 from app.core.jsonsafe import loads_finite
+from app.core.labview_lvm import is_labview_measurement
 from app.core.position_records import (
     RECORD_PROBLEMS,
     parse_one_position_record,
@@ -118,7 +119,8 @@ def csv_position(body: bytes, unit: str, column: str | None = None) -> Arrays:
     reader's.
     """
     try:
-        if column is not None:  # a column chosen: the record's reader, which knows columns
+        if column is not None or is_labview_measurement(body[:200].decode("utf-8", "ignore")):
+            # a column chosen, or LabVIEW's file: the record's reader, which knows them
             raise UserError("csv.not_a_record")
         values, times = parse_position_csv(body, unit)
         if times is None:
