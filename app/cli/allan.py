@@ -9,6 +9,7 @@ import sys
 from app.cli.science import check_finite, to_json_text, unreadable
 from app.core.allan import analyse_record
 from app.core.allan_summary import dwell_lines, note_lines, summary_lines, term_rows
+from app.core.matlab_files import is_matlab_file, matlab_record
 from app.core.static_record import read_static_record
 from app.core.text_files import text_lines
 from app.core.units import UNITS
@@ -39,6 +40,20 @@ def _open_record(path: str):
     return lines()
 
 
+def _matlab_data(path: str) -> bytes | None:
+    """The file's bytes where it is a MATLAB data file (not read from stdin), else None."""
+    if path == "-":
+        return None
+    try:
+        with open(path, "rb") as handle:
+            if not is_matlab_file(handle.read(20)):
+                return None
+            handle.seek(0)
+            return handle.read()
+    except OSError as error:
+        raise unreadable(path, error) from None
+
+
 def _allan(args: argparse.Namespace) -> int:
     from app.web.i18n import translator
 
@@ -52,9 +67,12 @@ def _allan(args: argparse.Namespace) -> int:
             count = f"{details['samples']:,}"
             print(_(f"allan.progress_{stage}", samples=count), file=sys.stderr, flush=True)
 
-    record = read_static_record(
-        _open_record(args.file), progress=progress, column=args.column, finite=False
-    )
+    matlab = _matlab_data(args.file)
+    if matlab is not None:  # MATLAB's data file: its vector, its times and rate
+        record = matlab_record(matlab, args.column)
+    else:
+        lines = _open_record(args.file)
+        record = read_static_record(lines, progress=progress, column=args.column, finite=False)
     result = analyse_record(
         record, args.rate, unit=args.unit, max_tau_s=args.max_tau, progress=progress
     )

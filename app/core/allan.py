@@ -289,7 +289,8 @@ def analyse_record(
     notes = list(record.notes)
     if rate_hz is None and record.times_s is None and record.stated_rate_hz:
         rate_hz = record.stated_rate_hz  # no times, no rate given: the one the file states
-        notes.append({"key": "allan.note_rate_stated", "params": {"rate": f"{rate_hz:g}"}})
+        stated = {"key": "allan.note_rate_stated", "params": {"rate": f"{rate_hz:g}"}}
+        notes.append(record.rate_note or stated)
     chosen = canonical_unit(unit) if unit else None
     if record.angle is not None:  # angles per output: rates from them, in °/h
         if chosen:

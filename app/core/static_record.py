@@ -83,6 +83,9 @@ class StaticRecord:
     notes: list[dict] = field(default_factory=list)
     angle: AngleOutput | None = None  # the readings are angles per output, not rates
     stated_rate_hz: float | None = None  # "Sample rate: 2 Hz" in the lines above the table
+    # the note that says the stated rate was used, where the file states it otherwise than
+    # above a table (a MATLAB file's Fs); None: ``allan.note_rate_stated``
+    rate_note: dict | None = None
 
 
 def read_static_record(

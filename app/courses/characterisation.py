@@ -12,6 +12,7 @@ white noise (lab-reference §3).
 
 from __future__ import annotations
 
+import io
 import json
 import math
 from dataclasses import dataclass
@@ -22,8 +23,9 @@ import numpy as np
 from app.core.allan import analyse_record
 from app.core.exceptions import UserError
 from app.core.flicker import DEFAULT_BAND_S
+from app.core.matlab_files import is_matlab_file, matlab_record
 from app.core.noise_model import GyroNoise
-from app.core.static_record import read_static_record
+from app.core.static_record import StaticRecord, read_static_record
 from app.core.text_files import text_lines
 from app.core.units import DEG_PER_HOUR, UNIT_SYMBOLS, canonical_unit
 from app.models import Assignment, utcnow
@@ -49,6 +51,20 @@ def _check_length(seconds: float) -> None:
         )
 
 
+def read_record(source, column: str | None = None) -> StaticRecord:
+    """The static record in ``source`` (bytes or a binary file): a MATLAB data file's
+    (:func:`app.core.matlab_files.matlab_record`), else a text record's, read in blocks of
+    lines (:func:`app.core.static_record.read_static_record`, lost readings kept for the
+    preparation to mend)."""
+    if isinstance(source, bytes | bytearray):
+        source = io.BytesIO(source)
+    magic = source.read(20)
+    source.seek(0)
+    if is_matlab_file(magic):
+        return matlab_record(source.read(), column)
+    return read_static_record(text_lines(source), column=column, finite=False)
+
+
 def characterise(
     source, rate_hz: float | None, unit: str | None = None, column: str | None = None
 ) -> dict:
@@ -65,7 +81,7 @@ def characterise(
         raise UserError(
             "characterisation.bad_rate",
         )
-    record = read_static_record(text_lines(source), column=column, finite=False)
+    record = read_record(source, column)
     if rate_hz is not None:
         _check_length(record.values.size / rate_hz)
     elif record.times_s is not None and record.times_s.size > 1:

@@ -149,7 +149,7 @@ def _record_source(record: UploadFile):
         return gzip.GzipFile(fileobj=handle, mode="rb")
     if is_workbook(magic):
         return io.BytesIO(workbook_text(handle.read()).encode())
-    return handle
+    return handle  # text, or a MATLAB data file (read as such by the characterisation)
 
 
 # a refused characterisation upload: the field its problem is about (else the file)
@@ -163,6 +163,7 @@ CHARACTERISATION_FIELDS = {
     "allan.no_value_column": "characterisation-column",
     "allan.no_such_column": "characterisation-column",
     "allan.choose_column": "characterisation-column",
+    "matlab.choose_vector": "characterisation-column",
 }
 
 
@@ -201,7 +202,10 @@ def upload_characterisation(
         try:
             with pool("analysis").slot(course.teacher_id):
                 summary = characterisation.characterise(
-                    _record_source(record), rate, unit.strip() or None, column.strip() or None
+                    _record_source(record),
+                    rate,
+                    unit.strip() or None,
+                    column.strip() or None,
                 )
         except (OSError, EOFError):  # a truncated or corrupt gzip stream
             raise UserError("characterisation.bad_gzip") from None
