@@ -90,9 +90,9 @@ def labview_lines(lines: Iterable[str], headers: LabviewHeaders) -> Iterator[str
     headers : LabviewHeaders
         Filled in with what the headers say, as they are read.
 
-    Yields
-    ------
-    str
+    Returns
+    -------
+    iterator of str
         Each line: "" for a header's (and a later segment's repeated column line), the
         column line with ``X_Value`` as ``time (s)`` (X in time) and without ``Comment``,
         and the readings as they are.
