@@ -90,3 +90,47 @@ def test_a_student_cannot_read_the_class_accuracy(world):
     auth = token_for(student, "s1")
     response = student.get(f"{API}/assignments/{world['assignment']}/accuracy", headers=auth)
     assert response.status_code in (403, 404)
+
+
+def test_groups_whose_device_is_faster_than_the_characterisation_are_planned_for_their_span(
+    world,
+):
+    """The station's gyro characterised from a 10 Hz record; three groups send it at 1 kHz
+    with the times, 5000 readings (5 s) a position.  The class's predicted σ is the plan's
+    for 5 s, as each group's own σ is (their readings' span), not for the 500 s their count
+    makes at 10 Hz -- which predicted ten times too little and called honest scatter
+    "larger" than the gyro's noise."""
+    import json
+
+    import numpy as np
+
+    from app.models import Assignment
+
+    arw, count, rate = 0.01, 5000, 1000.0
+    summary = {"arw_deg_rt_h": arw, "bias_instability_deg_h": 0.0, "rrw_deg_h_rt_h": 0.0,
+               "quantization_deg": 0.0, "rate_hz": 10.0, "terms": {}}  # fmt: skip
+    with write_session() as db:
+        db.get(Assignment, world["assignment"]).gyro_characterisation = json.dumps(summary)
+    set_assignment(world, true_heading_deg=30.0)
+    h = 15.04 * math.cos(math.radians(39.93))
+    rng = np.random.default_rng(3)
+    for name in ("s1", "s2", "s3"):
+        student = browser(world, name)
+        auth = token_for(student, name)
+        body = {"assignment_id": world["assignment"]}
+        session_id = student.post(f"{API}/sessions", json=body, headers=auth).json()["id"]
+        for k, angle in enumerate((0.0, -90.0, -180.0, -270.0), 1):
+            values = h * np.cos(np.radians(30.0 + angle)) + rng.normal(0.0, 19.0, count)
+            upload = {"samples": values.tolist(),
+                      "times_s": (100.0 * k + np.arange(count) / rate).tolist()}  # fmt: skip
+            url = f"{API}/sessions/{session_id}/heading/positions/{k}"
+            assert student.put(url, json=upload, headers=auth).status_code == 200
+        assert student.post(f"{API}/sessions/{session_id}/submit", headers=auth).status_code == 200
+    teacher = browser(world, "teacher1")
+    auth = token_for(teacher, "teacher1")
+    heading = teacher.get(f"{API}/assignments/{world['assignment']}/accuracy", headers=auth)
+    heading = heading.json()["heading"]
+    noise = GyroNoise(arw_deg_rt_h=arw, bias_instability_deg_h=0.0, rrw_deg_h_rt_h=0.0)
+    expected = plan_point(noise, 10.0, 5.0, "1234", 39.93, 15.04).heading_sigma_deg
+    assert heading["groups"] == 3 and heading["median_dwell_s"] == pytest.approx(5.0)
+    assert heading["predicted_sigma"] == pytest.approx(expected, rel=1e-9)

@@ -39,6 +39,17 @@ def group_errors(row) -> dict[str, tuple[float, int, int]]:
     return found
 
 
+def _dwell(row, quantity: str, count: int, rate_hz: float) -> float:
+    """The time a group's positions averaged over: what its readings' times say where it
+    recorded them itself (a device faster than the characterisation's record averages
+    over less than its count at that rate, as the result's σ takes it), else the count at
+    the gyro's rate."""
+    part = "heading" if quantity == "heading" else "latitude"
+    evidence = getattr(row, "data_evidence", None)
+    seconds = evidence.seconds.get(part) if evidence is not None else None
+    return seconds if seconds else count / rate_hz
+
+
 def class_accuracy(assignment: Assignment, rows) -> dict:
     """Per quantity: the groups compared, their median dwell, the predicted 1σ there, the
     measured RMS error, R = RMS(e/σ) with its 95 % range, and the verdict."""
@@ -52,7 +63,7 @@ def class_accuracy(assignment: Assignment, rows) -> dict:
             order = _ORDER_OF.get(positions)
             if order is None or count < 1:
                 continue  # a plan exists for four positions and the symmetric eight
-            dwell = count / rate_hz
+            dwell = _dwell(row, name, count, rate_hz)
             point = planned(
                 noise, rate_hz, dwell, order, session.latitude_deg, session.earth_rate_deg_h
             )

@@ -20,6 +20,7 @@ from app.core.exceptions import UserError
 from app.core.output_grid import GridPart, class_step
 from app.lab.copy_index import own_positions
 from app.lab.planner import gyro_model
+from app.lab.results import recorded_seconds
 from app.lab.store import PARTS
 from app.models import Assignment, EvidenceNote, InputMethod, LabSession, User, utcnow
 
@@ -34,6 +35,9 @@ class SessionEvidence:
     # part → its first readings, for the class's output step (a real gyro's grid unknown)
     readings: dict[str, GridPart] = field(default_factory=dict)
     model_step: float = 0.0  # the station's gyro's rate step 3600·LSB·f (°/h), 0 if none
+    # part → the median time its own positions average over (s), as the result's σ takes
+    # it (:func:`app.lab.results.recorded_seconds`): the class accuracy's dwell
+    seconds: dict[str, float] = field(default_factory=dict)
 
 
 GRID_READINGS = 2000  # readings of each part kept for the class's output step
@@ -61,6 +65,7 @@ def session_evidence(assignment: Assignment, session: LabSession, data: dict) ->
         )
         out.findings += [finding.to_json() for finding in found]
         out.keys[part] = copy_keys(values)
+        out.seconds[part] = float(np.median([recorded_seconds(item, rate_hz) for item in own]))
         out.recorded.add(part)
         if source != "preset":  # the simulated gyro's grid is known: checked above
             out.readings[part] = GridPart.of(np.concatenate(values)[:GRID_READINGS])
