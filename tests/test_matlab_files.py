@@ -57,7 +57,7 @@ def test_matlabs_example_layout_omega_in_rad_per_s_beside_fs():
     assert translator("en")("allan.note_matlab", **said["allan.note_matlab"]) == (
         "Read as a MATLAB data file (.mat): the readings are its vector omega."
     )
-    assert translator("zh-CN")("allan.note_matlab_rate", **said["allan.note_matlab_rate"]) == (
+    assert translator("zh-CN")("allan.note_array_rate", **said["allan.note_array_rate"]) == (
         "没有时间，也没有填写采样率：使用了文件中的 Fs = 50 Hz。"
     )
     assert "allan.note_rate_stated" not in said  # no line above a table

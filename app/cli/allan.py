@@ -10,6 +10,7 @@ from app.cli.science import check_finite, to_json_text, unreadable
 from app.core.allan import analyse_record
 from app.core.allan_summary import dwell_lines, note_lines, summary_lines, term_rows
 from app.core.matlab_files import is_matlab_file, matlab_record
+from app.core.numpy_files import is_npy, is_npz, numpy_record
 from app.core.static_record import read_static_record
 from app.core.text_files import text_lines
 from app.core.units import UNITS
@@ -40,18 +41,25 @@ def _open_record(path: str):
     return lines()
 
 
-def _matlab_data(path: str) -> bytes | None:
-    """The file's bytes where it is a MATLAB data file (not read from stdin), else None."""
+def _array_file(path: str, column: str | None):
+    """The record of a MATLAB data file or a NumPy array or archive (not read from
+    stdin), else None."""
     if path == "-":
         return None
     try:
         with open(path, "rb") as handle:
-            if not is_matlab_file(handle.read(20)):
+            magic = handle.read(20)
+            if not (is_matlab_file(magic) or is_npy(magic) or is_workbook(magic)):
                 return None
             handle.seek(0)
-            return handle.read()
+            data = handle.read()
     except OSError as error:
         raise unreadable(path, error) from None
+    if is_matlab_file(magic):
+        return matlab_record(data, column)
+    if is_npy(magic) or is_npz(data):
+        return numpy_record(data, column)
+    return None  # an Excel workbook: read as text
 
 
 def _allan(args: argparse.Namespace) -> int:
@@ -67,10 +75,8 @@ def _allan(args: argparse.Namespace) -> int:
             count = f"{details['samples']:,}"
             print(_(f"allan.progress_{stage}", samples=count), file=sys.stderr, flush=True)
 
-    matlab = _matlab_data(args.file)
-    if matlab is not None:  # MATLAB's data file: its vector, its times and rate
-        record = matlab_record(matlab, args.column)
-    else:
+    record = _array_file(args.file, args.column)  # MATLAB's or NumPy's arrays
+    if record is None:
         lines = _open_record(args.file)
         record = read_static_record(lines, progress=progress, column=args.column, finite=False)
     result = analyse_record(

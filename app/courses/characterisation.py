@@ -25,9 +25,11 @@ from app.core.exceptions import UserError
 from app.core.flicker import DEFAULT_BAND_S
 from app.core.matlab_files import is_matlab_file, matlab_record
 from app.core.noise_model import GyroNoise
+from app.core.numpy_files import is_npy, is_npz, numpy_record
 from app.core.static_record import StaticRecord, read_static_record
 from app.core.text_files import text_lines
 from app.core.units import DEG_PER_HOUR, UNIT_SYMBOLS, canonical_unit
+from app.core.workbook_sheets import is_workbook
 from app.models import Assignment, utcnow
 
 MAX_RATE_HZ = 10_000.0
@@ -53,7 +55,8 @@ def _check_length(seconds: float) -> None:
 
 def read_record(source, column: str | None = None) -> StaticRecord:
     """The static record in ``source`` (bytes or a binary file): a MATLAB data file's
-    (:func:`app.core.matlab_files.matlab_record`), else a text record's, read in blocks of
+    (:func:`app.core.matlab_files.matlab_record`), a NumPy array's or archive's
+    (:func:`app.core.numpy_files.numpy_record`), else a text record's, read in blocks of
     lines (:func:`app.core.static_record.read_static_record`, lost readings kept for the
     preparation to mend)."""
     if isinstance(source, bytes | bytearray):
@@ -62,6 +65,13 @@ def read_record(source, column: str | None = None) -> StaticRecord:
     source.seek(0)
     if is_matlab_file(magic):
         return matlab_record(source.read(), column)
+    if is_npy(magic):
+        return numpy_record(source.read(), column)
+    if is_workbook(magic):  # a zip: NumPy's archive (a workbook arrives as its text)
+        data = source.read()
+        if is_npz(data):
+            return numpy_record(data, column)
+        source.seek(0)
     return read_static_record(text_lines(source), column=column, finite=False)
 
 

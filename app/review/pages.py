@@ -11,6 +11,7 @@ from fastapi import APIRouter, File, Form, Request, UploadFile
 from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.allan_summary import dwell_lines, note_lines, term_rows
 from app.core.exceptions import FieldProblems, UserError
+from app.core.numpy_files import is_npz
 from app.core.presets import PRESETS
 from app.core.typed_numbers import parse_typed_number
 from app.core.workbook_sheets import is_workbook
@@ -148,7 +149,10 @@ def _record_source(record: UploadFile):
     if magic[:2] == b"\x1f\x8b":
         return gzip.GzipFile(fileobj=handle, mode="rb")
     if is_workbook(magic):
-        return io.BytesIO(workbook_text(handle.read()).encode())
+        data = handle.read()
+        if is_npz(data):  # a zip too: NumPy's archive, read as such by the characterisation
+            return io.BytesIO(data)
+        return io.BytesIO(workbook_text(data).encode())
     return handle  # text, or a MATLAB data file (read as such by the characterisation)
 
 
