@@ -46,6 +46,30 @@ def test_honest_independent_records_are_not_flagged():
     assert flagged == []
 
 
+def test_a_device_faster_than_the_gyros_record_is_judged_at_its_own_rate():
+    """The station's gyro characterised at 10 Hz; a group sends it at 1 kHz with its times
+    (honest white noise of the same N, independent of GyroLab's simulator): each reading
+    is 10× noisier, as a 1 ms average is.  Judged at the readings' own rate only the time
+    step is said -- before, "scatter ten times the gyro's" too.  Without times, or logged
+    sparsely (single 10 Hz samples 10 s apart), the gyro's rate is the one."""
+    from app.core.data_evidence import readings_rate_hz
+
+    fast = 1000.0
+    record = static_record(4 * 2000 / fast / 3600.0, fast, arw=0.02, seed=4)
+    part = [record[k * 2000 : (k + 1) * 2000] + 11.0 * np.cos(k * np.pi / 2) for k in range(4)]
+    times = [100.0 * k + np.arange(2000) / fast for k in range(4)]
+    white = GyroNoise(arw_deg_rt_h=0.02)
+    found = part_evidence("heading", part, False, white, RATE, times=times)
+    assert [e.check for e in found] == ["time_step"]
+    assert readings_rate_hz(times, RATE) == pytest.approx(fast)
+    untimed = part_evidence("heading", part, False, white, RATE)
+    assert [e.check for e in untimed] == ["scatter_high"]
+    assert untimed[0].numbers["ratio"] == pytest.approx(10.0, rel=0.05)
+    sparse = [10.0 * np.arange(30) + 1000.0 * k for k in range(4)]
+    assert readings_rate_hz(sparse, RATE) == RATE
+    assert readings_rate_hz([times[0], None], RATE) == RATE
+
+
 def test_smoothed_and_invented_readings_are_found():
     kernel = np.ones(5) / 5
     smoothed = [np.convolve(v, kernel, mode="valid") for v in honest_part(1)]

@@ -296,6 +296,35 @@ def too_close(part: str, error: float | None, sigma: float | None) -> list[Evide
 # --- a part, and a class ----------------------------------------------------------------
 
 
+def readings_rate_hz(times: Sequence[np.ndarray | None] | None, rate_hz: float) -> float:
+    """The rate at which a part's readings were averaged: their times' typical step where
+    every position has times and that step is shorter than the gyro's (a device sampling
+    faster than the characterisation's record: each reading's noise is that of its own
+    short average, √(f/f₀) times the gyro's per-reading noise for white noise), else the
+    gyro's rate -- as a position's σ takes its span (:func:`app.lab.results.recorded_seconds`).
+
+    Parameters
+    ----------
+    times : sequence of numpy.ndarray or None, optional
+        Each position's reading times (s), None where the readings came without.
+    rate_hz : float
+        The station's gyro's readings per second.
+
+    Returns
+    -------
+    float
+        Readings per second: ``max(rate_hz, 1/step)`` for timed readings, else ``rate_hz``.
+    """
+    if not times or any(t is None for t in times):
+        return rate_hz
+    steps = [np.diff(np.asarray(t, float)) for t in times if np.asarray(t).size >= 2]
+    steps = [step for step in steps if step.size]
+    if not steps:
+        return rate_hz
+    typical = float(np.median(np.concatenate(steps)))
+    return max(rate_hz, 1.0 / typical) if typical > 0 else rate_hz
+
+
 def part_evidence(
     part: str,
     positions: Sequence[np.ndarray],
@@ -328,11 +357,12 @@ def part_evidence(
     Returns
     -------
     list of Evidence
-        Scatter and smoothness, the output grid, last digits, the handout's tables, the
-        recording times.
+        Scatter and smoothness (judged at the readings' own rate where their times are
+        faster than the gyro's: :func:`readings_rate_hz`), the output grid, last digits,
+        the handout's tables, the recording times.
     """
     positions = [np.asarray(v, float) for v in positions]
-    found = scatter_and_smoothness(part, positions, noise, rate_hz)
+    found = scatter_and_smoothness(part, positions, noise, readings_rate_hz(times, rate_hz))
     if simulated:
         found += off_grid(part, positions, 3600.0 * noise.angle_lsb_deg * rate_hz)
     if typed and positions:
