@@ -239,6 +239,30 @@ def test_csv_long_layout_keeps_angles_and_times(student_client):
     assert latitude == pytest.approx(39.93, abs=0.05)
 
 
+def test_csv_long_layout_time_going_back_is_refused_and_a_coarse_clock_said(student_client):
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+
+    def table(time_of) -> str:
+        rows = ["position,angle_deg,time_s,value"]
+        for position, angle in enumerate([0, 90, 180, 270], start=1):
+            rows += [
+                f"{position},{angle},{time_of(position, i)},{10 + 0.01 * i}" for i in range(12)
+            ]
+        return "\n".join(rows)
+
+    def send(path: str, text: str):
+        body = {"part": "heading", "unit": "deg/h", "text": text}
+        return post_json(student_client, f"{page}{path}", body, page)
+
+    back = send("/csv", table(lambda position, i: 100 * position - i))
+    assert back.status_code == 400 and "Line 3: the time goes back" in back.json()["detail"]
+    preview = send("/csv/preview", table(lambda position, i: 100 * position + i // 3)).json()
+    assert any("spread evenly over it" in note for note in preview["notes"])
+    with read_session() as db:
+        assert db.exec(select(Take)).first() is None
+
+
 @pytest.mark.one_backend  # input refused before any write
 @pytest.mark.parametrize(
     ("text", "message"),

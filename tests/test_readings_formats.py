@@ -541,6 +541,42 @@ def test_a_long_tables_times_in_seconds_milliseconds_or_a_loggers_clock(header, 
     assert refused.value.key == "csv.not_a_number"
 
 
+def long_table(times_of) -> str:
+    rows = ["position,angle_deg,time_s,value"]
+    for position, angle in enumerate([0, -90, -180, -270], start=1):
+        rows += [f"{position},{angle},{times_of(position, i)},{10.0 + 0.01 * i}" for i in range(12)]
+    return "\n".join(rows) + "\n"
+
+
+def test_a_long_tables_time_that_goes_back_is_refused_at_its_line():
+    """The drift fit and the warm-up check read a position's times as one clock: a time
+    that goes back within a position (two recordings joined, a clock set back) is refused
+    where it is, in both languages -- before, the CLI solved it and the lab page took it."""
+    text = long_table(lambda position, i: 100 * position + (i if i < 6 else i - 6))
+    with pytest.raises(UserError) as refused:
+        parse_readings_csv(text)
+    assert refused.value.key == "csv.time_goes_back"
+    assert refused.value.params == {"line": 8, "position": "1", "time": "100", "before": "105"}
+    assert translate("csv.time_goes_back", "en", **refused.value.params).startswith(
+        "Line 8: the time goes back within position 1 (100 after 105)"
+    )
+    assert translate("csv.time_goes_back", "zh-CN", **refused.value.params).startswith(
+        "第 8 行：位置 1 内的时间倒退了（105 之后是 100）"
+    )
+
+
+def test_a_long_tables_coarse_clock_is_spread_and_one_stamp_a_position_passed_over():
+    coarse = parse_readings_csv(long_table(lambda position, i: 100 * position + i // 4))
+    assert coarse.times_s[0].tolist() == pytest.approx([100 + k / 4 for k in range(12)])
+    assert [key for key, _ in coarse.left_out()] == ["csv.times_spread"]
+    one = parse_readings_csv(long_table(lambda position, i: 100 * position))
+    assert one.times_s is None and [key for key, _ in one.left_out()] == ["csv.times_dropped"]
+    assert translate("csv.times_dropped", "en") == (
+        "Every reading of a position has the same time: the time column was passed over, "
+        "and the readings are taken without times."
+    )
+
+
 def _record_bodies(seed: int, count: int):
     """Records of one position in the spellings a device or a script sends, a few with a
     fault: headers, units rows, comments, blank lines, CRLF and bare CR ends, decimal

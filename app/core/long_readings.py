@@ -11,7 +11,7 @@ import io
 
 import numpy as np
 
-from app.core.clock_stamps import clock_seconds, is_clock_stamp
+from app.core.clock_stamps import clock_seconds, is_clock_stamp, spread_within_ticks
 from app.core.exceptions import UserError
 from app.core.readings_data import MAX_POSITION_NUMBER, WIDE_COLUMN, Readings, cell_number
 from app.core.table_headers import ANGLE, column_name, evenly_round
@@ -63,11 +63,14 @@ def parse_long(index: dict[str, int], rows) -> Readings:
             label = _angle_label(_angle(label, line))
         entry = grouped.get(label)
         if entry is None:
-            entry = grouped[label] = {"values": [], "times": [], "temps": [], "angle": None}
+            entry = grouped[label] = {
+                "values": [], "times": [], "temps": [], "angle": None, "lines": []
+            }  # fmt: skip
             labels.append(label)
         elif keyed == "angle_deg" and labels[-1] != label:
             raise UserError("csv.angle_returns", line=line, angle=label)
         entry["values"].append(cell_number(cell("value"), line, "value"))
+        entry["lines"].append(line)
         if clock is not None:
             entry["times"].append(_seconds(cell(clock), line, clock, origin))
         if "temperature_c" in index:
@@ -95,12 +98,45 @@ def parse_long(index: dict[str, int], rows) -> Readings:
         order = sorted(range(len(labels)), key=numbers.__getitem__)
         labels, numbers = [labels[k] for k in order], [numbers[k] for k in order]
     angles = [grouped[label]["angle"] for label in labels] if has_angles else None
-    times = [np.array(grouped[label]["times"]) for label in labels] if clock else None
+    time_notes: list[tuple[str, dict]] = []
+    times = None
+    if clock:
+        times, time_notes = _rising_times([grouped[label] for label in labels], labels)
     positions = [np.array(grouped[label]["values"]) for label in labels]
     temperatures = None
     if "temperature_c" in index:
         temperatures = [np.array(grouped[label]["temps"]) for label in labels]
-    return Readings(positions, angles, times, "long", temperatures, numbers=numbers)
+    return Readings(
+        positions, angles, times, "long", temperatures, numbers=numbers, time_notes=time_notes
+    )
+
+
+def _rising_times(
+    entries: list[dict], labels: list[str]
+) -> tuple[list[np.ndarray] | None, list[tuple[str, dict]]]:
+    """Each position's times, rising: a time that goes back within a position is refused
+    (its line); a clock coarser than the readings (several share a stamp) is spread over
+    each tick (:func:`app.core.clock_stamps.spread_within_ticks`); one stamp for a whole
+    position is no reading's time, and the column is passed over.  With what is said."""
+    times = [np.array(entry["times"]) for entry in entries]
+    notes: list[tuple[str, dict]] = []
+    for label, entry, stamps in zip(labels, entries, times, strict=True):
+        steps = np.diff(stamps)
+        if steps.size and bool(np.any(steps < 0)):
+            at = int(np.argmax(steps < 0)) + 1
+            raise UserError(
+                "csv.time_goes_back",
+                line=entry["lines"][at],
+                position=label,
+                time=f"{stamps[at]:.6g}",
+                before=f"{stamps[at - 1]:.6g}",
+            )
+    if any(stamps.size > 1 and np.unique(stamps).size == 1 for stamps in times):
+        return None, [("csv.times_dropped", {})]
+    if any(bool(np.any(np.diff(stamps) == 0)) for stamps in times):
+        times = [spread_within_ticks(s) if np.any(np.diff(s) == 0) else s for s in times]
+        notes.append(("csv.times_spread", {}))
+    return times, notes
 
 
 def _seconds(cell: str, line: int, clock: str, origin: list[int]) -> float:

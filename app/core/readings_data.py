@@ -32,16 +32,18 @@ class Readings:
     means_row: int | None = None  # the line of an unlabelled row of means, left out
     header_angles: list[float] | None = None  # a wide header's angles ("0° | 90° …")
     named_unit: str | None = None  # the rate unit the header or a row of units names
+    # how the time column was read, where not as written (a coarse clock's ticks spread)
+    time_notes: list[tuple[str, dict]] = field(default_factory=list)
 
     def left_out(self) -> list[tuple[str, dict]]:
         """What the reader passed over, as message keys and their values: each summary
-        row, and an unlabelled row of means."""
+        row, an unlabelled row of means, and a time column not read as written."""
         notes = [
             ("csv.summary_skipped", {"line": line, "label": label}) for line, label in self.skipped
         ]
         if self.means_row is not None:
             notes.append(("csv.means_row_skipped", {"line": self.means_row}))
-        return notes
+        return notes + self.time_notes
 
 
 def cell_number(text: str, line: int, column: str) -> float:
