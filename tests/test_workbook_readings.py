@@ -158,7 +158,7 @@ def test_the_lab_page_reads_a_workbook_as_the_text_it_previews_and_saves(student
         content=OLE_MAGIC + b"\x00" * 64,
         headers={**headers, "X-CSRF-Token": token},
     )
-    assert old.status_code == 400 and "Excel 97-2003" in old.json()["detail"]
+    assert old.status_code == 400 and "旧版 Excel 工作簿（.xls" in old.json()["detail"]
     assert "另存为" in old.json()["detail"]
 
 
@@ -171,6 +171,23 @@ def test_gyrolab_solve_reads_a_workbook(tmp_path, capsys):
     out, err = capsys.readouterr()
     assert json.loads(out)["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
     assert "Line 12 was passed over" in err
+
+
+def test_an_old_excel_workbook_of_readings_is_read_as_its_xlsx_is(tmp_path, capsys):
+    """The handout's table saved as Excel 97-2003 (.xls, written by xlwt): the same
+    readings as the .xlsx, on the lab page's reader and ``gyrolab solve``."""
+    from app.cli.main import main
+    from tests.test_roster_workbook import old_workbook
+
+    rows = [[cell for cell in row if not str(cell).startswith("=")] for row in handout_rows()]
+    data = old_workbook([[("" if cell is None else cell) for cell in row] for row in rows], "数据")
+    readings = parse_readings_csv(workbook_text(data))
+    expected = parse_readings_csv(workbook_text(workbook(handout_rows(), formulas=True)))
+    assert [v.tolist() for v in readings.positions] == [v.tolist() for v in expected.positions]
+    path = tmp_path / "readings.xls"
+    path.write_bytes(data)
+    assert main(["solve", "heading", str(path), "--json"]) == 0
+    assert json.loads(capsys.readouterr()[0])["theta_deg"] == pytest.approx(-10.753, abs=5e-4)
 
 
 def test_a_students_sheet_with_lines_about_the_table_above_it():

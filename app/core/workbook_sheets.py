@@ -5,7 +5,10 @@ together (shared strings, styles) are bounded before any XML is parsed (openpyxl
 sheet twice, ≈ 6 µs an element, empty or not: 10 MB of "<row/>" is a 20 kB upload of 1.6
 million; 1.5 million shared strings, a 67 kB upload, took 12 s), and openpyxl parses through
 defusedxml (no entity expansion, no external entities).  An Excel 97-2003 file (.xls),
-which openpyxl cannot read, is named as such.  The callers -- a class roster
+as a school's records system still exports a class roster, is read with xlrd (its BIFF
+records, no compression to unpack: bounded by the upload's own size and its sheets'
+declared cells); one xlrd cannot read either is named as an old workbook, with the fix.
+The callers -- a class roster
 (:mod:`app.accounts.roster_workbook`), a student's readings (:mod:`app.core.workbook_text`)
 -- set the bounds and say each problem in their own words.
 """
@@ -96,10 +99,8 @@ def _elements(archive: zipfile.ZipFile, member: zipfile.ZipInfo) -> int:
 
 
 def _checked(data: bytes, limits: SheetLimits) -> None:
-    """Refuse an .xls, a file that is no zip, one that unpacks too large, or a worksheet
-    of too many elements -- before openpyxl parses any XML."""
-    if data.startswith(OLE_MAGIC):
-        raise UserError(limits.old_excel)
+    """Refuse a file that is no zip, one that unpacks too large, or a worksheet of too many
+    elements -- before openpyxl parses any XML."""
     try:
         with zipfile.ZipFile(io.BytesIO(data)) as archive:
             unpacked = sum(member.file_size for member in archive.infolist())
@@ -177,6 +178,8 @@ def all_sheets(
     UserError
         As :func:`sheet_rows`.
     """
+    if data.startswith(OLE_MAGIC):
+        return _old_excel_sheets(data, limits, max_rows, first_only)
     _checked(data, limits)
     import openpyxl  # only when a workbook is uploaded (0.2 s to import)
 
@@ -208,3 +211,61 @@ def all_sheets(
     if not sheets:
         raise UserError(limits.unreadable)
     return sheets
+
+
+def _old_excel_sheets(
+    data: bytes, limits: SheetLimits, max_rows: int, first_only: bool
+) -> list[tuple[str, list[Row]]]:
+    """:func:`all_sheets` of an Excel 97-2003 workbook (.xls), read with xlrd: dates as
+    dates (the workbook's 1900 or 1904 system), whole numbers without ".0", text as it is;
+    a sheet that declares more cells than ``limits.max_sheet_elements`` refused."""
+    import xlrd  # only when an .xls is uploaded
+
+    if len(data) > limits.max_unpacked_bytes:
+        raise UserError(limits.too_large, limit_mb=limits.max_unpacked_bytes // 1_000_000)
+    sheets: list[tuple[str, list[Row]]] = []
+    try:
+        book = xlrd.open_workbook(file_contents=data, on_demand=True)
+        try:
+            for index in range(1 if first_only else book.nsheets):
+                sheet = book.sheet_by_index(index)
+                if sheet.nrows * max(sheet.ncols, 1) > limits.max_sheet_elements:
+                    raise UserError(limits.too_many_elements, limit=limits.max_sheet_elements)
+                rows: list[Row] = []
+                width = min(sheet.ncols, limits.max_columns)
+                for number in range(sheet.nrows):
+                    values = [_old_excel_value(sheet.cell(number, k), book.datemode)
+                              for k in range(width)]  # fmt: skip
+                    cells = [cell_text(value).strip() for value in values]
+                    if any(cells):
+                        rows.append((number + 1, cells))
+                        if len(rows) > max_rows:
+                            break
+                sheets.append((str(sheet.name), rows))
+        finally:
+            book.release_resources()
+    except UserError:
+        raise
+    except Exception:  # an untrusted file through a third-party parser: an OLE file that
+        # is no workbook xlrd reads (encrypted, Excel 95's BIFF5 damaged, a Word file)
+        raise UserError(limits.old_excel) from None
+    if not sheets:
+        raise UserError(limits.unreadable)
+    return sheets
+
+
+def _old_excel_value(cell, datemode: int) -> object:
+    """An .xls cell's value as openpyxl would give it: None, bool, float, datetime, str."""
+    import xlrd
+
+    kind = cell.ctype
+    if kind in (xlrd.XL_CELL_EMPTY, xlrd.XL_CELL_BLANK, xlrd.XL_CELL_ERROR):
+        return None
+    if kind == xlrd.XL_CELL_BOOLEAN:
+        return bool(cell.value)
+    if kind == xlrd.XL_CELL_DATE:
+        try:
+            return xlrd.xldate_as_datetime(cell.value, datemode)
+        except (ValueError, OverflowError, xlrd.xldate.XLDateError):
+            return float(cell.value)
+    return cell.value
