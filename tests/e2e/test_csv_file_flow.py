@@ -1,7 +1,8 @@
 """The lab page's CSV file, in a real browser: a spreadsheet's table chosen as a file is
 previewed and saved; an Excel workbook (.xlsx) is read from its sheet of readings and
-previewed as the same table saved as CSV; an Excel 97-2003 file is named as such, with the
-fix, in the page's language -- never garbled bytes sent to the server."""
+previewed as the same table saved as CSV, and so is an Excel 97-2003 one (.xls); an old
+Office file that cannot be read is named as such, with the fix, in the page's language --
+never garbled bytes sent to the server."""
 
 from __future__ import annotations
 
@@ -17,8 +18,8 @@ from tests.test_workbook_readings import workbook
 pytestmark = pytest.mark.e2e
 
 OLD_EXCEL_WORDS = {
-    "en": "This is an Excel 97-2003 workbook (.xls)",
-    "zh-CN": "这是 Excel 97-2003 工作簿",
+    "en": "This old Excel workbook (.xls, or another Office file) cannot be read",
+    "zh-CN": "无法读取这个旧版 Excel 工作簿",
 }
 OLE_MAGIC = b"\xd0\xcf\x11\xe0\xa1\xb1\x1a\xe1"
 
@@ -58,6 +59,13 @@ def test_a_csv_file_is_previewed_and_saved_and_a_workbook_is_named(
     panel.locator(".csv-file").set_input_files(str(old))
     expect(panel.locator(".csv-preview .error-text")).to_contain_text(OLD_EXCEL_WORDS[language])
     expect(panel.locator(".accept-csv")).to_be_disabled()
+    from tests.test_roster_workbook import old_workbook
+
+    real = tmp_path / "表.xls"
+    real.write_bytes(old_workbook([header, *([float(v) for v in row] for row in rows)], "数据"))
+    panel.locator(".csv-file").set_input_files(str(real))  # a real .xls: read as its .xlsx
+    expect(panel.locator(".csv-preview tbody tr")).to_have_count(4)
+    expect(panel.locator(".accept-csv")).to_be_enabled()
 
     # a workbook of both parts, a sheet each: part A's read, the other offered
     book = tmp_path / "readings.xlsx"
