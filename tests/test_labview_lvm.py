@@ -64,6 +64,7 @@ def lvm(
     x_column: bool = True,
     segments: int = 1,
     channels: tuple[str, ...] = ("Untitled",),
+    separator: str = "\t",
 ) -> str:
     lines = file_header(decimal, "One" if x_column else "No")
     for part, chunk in enumerate(np.array_split(values, segments)):
@@ -75,7 +76,10 @@ def lvm(
             cells = [f"{(start + k) / RATE_HZ:.6f}"] if x_column else []
             cells += [f"{value + 3.0 * c:.6f}" for c in range(len(channels))]
             lines.append("\t".join(cells).replace(".", decimal))
-    return "\n".join(lines) + "\n"
+    text = "\n".join(lines) + "\n"
+    if separator != "\t":  # "Separator Comma": every tab of the file a comma
+        text = text.replace("Separator\tTab", "Separator\tComma").replace("\t", separator)
+    return text
 
 
 def record() -> np.ndarray:
@@ -93,6 +97,7 @@ def notes_of(result) -> dict:
         ({"decimal": ","}, None, "allan.note_labview"),  # a European Windows
         ({"x_column": False}, None, "allan.note_labview"),  # the rate from Delta_X
         ({"segments": 3}, None, "allan.note_labview_segments"),
+        ({"separator": ","}, None, "allan.note_labview"),  # "Separator Comma"
     ],
 )
 def test_a_labview_record_is_read_and_its_noise_found(options, rate, note):

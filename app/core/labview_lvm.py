@@ -110,8 +110,8 @@ def labview_lines(lines: Iterable[str], headers: LabviewHeaders) -> Iterator[str
                 in_header, expect_columns = False, True
             yield "\n"
             continue
-        if not text:
-            yield raw
+        if not text.strip("\t,; "):  # blank, or only the separator (",": a comma file's)
+            yield "\n"
             continue
         if expect_columns:
             expect_columns = False
@@ -128,7 +128,8 @@ def _named_columns(text: str, headers: LabviewHeaders) -> str:
     """The column line as a record names its columns: the first ``X_Value`` a time in
     seconds (where X is time), the empty ``Comment`` column dropped, and a lone channel
     that LabVIEW named ``Untitled`` the record's ``value``."""
-    cells = [cell.strip() for cell in re.split(r"[\t,;]", text)]
+    separator = next((mark for mark in "\t,;" if mark in text), "\t")  # the file's own
+    cells = [cell.strip() for cell in text.split(separator)]
     if cells and cells[-1] == "Comment":
         cells.pop()
     if cells and cells[0] == "X_Value" and headers.x_dimension.lower() == "time":
@@ -136,7 +137,7 @@ def _named_columns(text: str, headers: LabviewHeaders) -> str:
     channels = [k for k, cell in enumerate(cells) if cell not in ("X_Value", "time (s)")]
     if len(channels) == 1 and _UNTITLED.fullmatch(cells[channels[0]]):
         cells[channels[0]] = "value"  # LabVIEW's default name says nothing: the one channel
-    return "\t".join(cells)
+    return separator.join(cells)
 
 
 _UNTITLED = re.compile(r"Untitled(?: \d+)?")
