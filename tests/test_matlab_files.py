@@ -133,3 +133,25 @@ def test_the_teacher_characterises_the_bench_from_a_mat_file(world):  # noqa: F8
     assert summary["arw_deg_rt_h"] == pytest.approx(ARW, rel=0.05)
     page = shown(teacher, reply)
     assert "the readings are its vector omega" in page and "Fs = 50 Hz was used" in page
+
+
+def test_a_structs_fields_are_read_and_a_cell_array_passed_over():
+    """A lab's script saves its record in a struct (``imu.gyro``, ``imu.fs``, ``imu.t``)
+    beside a cell array of notes: the fields read by their own names, the cells passed
+    over (before, the struct was no record and the cells could fail the reader)."""
+    rates = gyro(0.2)
+    cells = np.empty((1, 3), dtype=object)
+    cells[0, 0], cells[0, 1], cells[0, 2] = np.arange(5.0), "bench 3", np.ones((2, 2))
+    imu = {"gyro": np.column_stack([rates + 1.0, rates]), "fs": RATE_HZ}
+    data = saved({"imu": imu, "notes": cells})
+    with pytest.raises(ColumnChoiceNeeded) as offered:
+        read(data)
+    assert offered.value.choices == ["imu.gyro 1", "imu.gyro 2"]
+    record = read(data, "imu.gyro 2")
+    assert record.values == pytest.approx(rates) and record.stated_rate_hz == RATE_HZ
+    assert record.rate_note["params"] == {"name": "imu.fs", "rate": "50"}
+    timed = read(saved({"run": {"w": rates, "t": np.arange(rates.size) / RATE_HZ}}))
+    assert timed.notes[0]["params"] == {"variable": "run.w", "time": "run.t"}
+    with pytest.raises(UserError) as refused:
+        read(saved({"notes": cells}))
+    assert refused.value.key == "matlab.no_record"

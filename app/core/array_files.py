@@ -55,7 +55,7 @@ def record_from_variables(variables: dict, column: str | None, kind: str) -> Sta
         raise UserError(f"{kind}.no_record")
     length = max(values.size for values in columns.values())
     columns = {name: values for name, values in columns.items() if values.size == length}
-    time = next((name for name in columns if _TIME_NAMES.fullmatch(name.lower())), None)
+    time = next((name for name in columns if _is_time_name(name)), None)
     offered = [name for name in columns if name != time]
     if not offered:
         raise UserError(f"{kind}.no_record")
@@ -100,15 +100,17 @@ def _columns_and_rate(
     states with that scalar's name, by the variables' names."""
     columns: dict[str, np.ndarray] = {}
     rate = rate_name = None
-    for name, value in variables.items():
-        if name.startswith("__"):
+    for name, value in _flattened(variables):
+        last = name.rsplit(".", 1)[-1]  # a struct's field is named by its own name
+        try:
+            array = np.squeeze(np.asarray(value))
+        except (ValueError, TypeError):  # a cell array of unlike parts: no readings
             continue
-        array = np.squeeze(np.asarray(value))
         if array.dtype.kind not in "fiu":
             continue  # text, cells, structs, logicals, complex numbers: no readings
         if array.ndim == 0 or array.size == 1:
             number = float(array.reshape(-1)[0])
-            if _RATE_NAMES.fullmatch(name.lower()) and np.isfinite(number) and number > 0:
+            if _RATE_NAMES.fullmatch(last.lower()) and np.isfinite(number) and number > 0:
                 rate, rate_name = number, name
             continue
         if array.ndim == 1 and array.size >= MIN_READINGS:
@@ -120,3 +122,22 @@ def _columns_and_rate(
             for k in range(matrix.shape[1]):
                 columns[f"{name} {k + 1}"] = matrix[:, k].astype(float)
     return columns, rate, rate_name
+
+
+def _is_time_name(name: str) -> bool:
+    """Whether a vector's name (a struct's field by its own) is a time's: t, time, …"""
+    return _TIME_NAMES.fullmatch(name.rsplit(".", 1)[-1].lower()) is not None
+
+
+def _flattened(variables: dict, prefix: str = "", depth: int = 0):
+    """Each variable's name and value, a struct's fields (nested dicts, as MATLAB's
+    structs load) as ``struct.field``, three levels deep at most; names MATLAB's loader
+    adds (``__header__``) passed over."""
+    for name, value in variables.items():
+        if name.startswith("__"):
+            continue
+        if isinstance(value, dict):
+            if depth < 3:
+                yield from _flattened(value, f"{prefix}{name}.", depth + 1)
+            continue
+        yield f"{prefix}{name}", value

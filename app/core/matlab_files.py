@@ -6,6 +6,7 @@ its gyro in ``omega`` beside the sample rate ``Fs``, and a lab's scripts keep th
 code run) into the static record a text file would give (:mod:`app.core.static_record`):
 the readings a vector (or a matrix's column) chosen by its name where there are several,
 the times a vector such as ``t`` as long, the sample rate a scalar such as ``Fs`` states
+(a struct's fields too: ``imu.gyro``, ``imu.fs``)
 (used where no rate is given, as a text file's stated rate is).  A file saved as
 ``-v7.3`` (HDF5) is refused with how to save it instead.
 
@@ -82,7 +83,7 @@ def matlab_record(data: bytes, column: str | None = None) -> StaticRecord:
     if sum(int(np.prod(shape)) for _, shape, _ in listed) > MAX_ELEMENTS:
         raise UserError("matlab.too_large", limit=MAX_ELEMENTS)
     try:
-        variables = loadmat(io.BytesIO(data), squeeze_me=True)
+        variables = loadmat(io.BytesIO(data), squeeze_me=True, simplify_cells=True)
     except Exception:
         raise UserError("matlab.unreadable") from None
     return record_from_variables(variables, column, "matlab")
