@@ -6,6 +6,7 @@ the rate the file states used and said, a time vector as the times, an IMU's axe
 
 from __future__ import annotations
 
+import base64
 import io
 import math
 
@@ -26,6 +27,26 @@ from tests.test_characterisation import world as world  # noqa: F401 -- the fixt
 ARW = 0.02  # °/√h
 RATE_HZ = 50.0
 DEG_H_PER_RAD_S = 3600.0 * 180.0 / math.pi
+# a valid file (``omega`` and ``Fs``, saved uncompressed) with a few bytes changed, as a
+# fuzzer changed them: scipy 1.17's compiled reader dies of a segmentation fault on it
+CRASHING_MAT = base64.b64decode(
+    "0kFUTEFCIDUuMCBNQVQtZmlsZSBQbGF0Zm9ybTogcG9zaXgsIENyZWF0ZWQgb246IE1vbiBEZWMgIDcgMjE6MDY6"
+    "MDAgMjAyNgAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAAABSU0OAAAA"
+    "WAMAAAYAAAAIAAAABgAAAAAAAAAFAAAACAAAAAEAAABkAAAAAQAAAAUAAABvbWVnYQAAACQAAAAgAwAAAAAAAAAA"
+    "AAAAAAAAAADwPwAAAAAAAABAAAAAAAAACEAAAAAAAAAQQAAAAAAAABRAAAAAAAAAGEAAAAAAAAAcQAAAAAAAACBA"
+    "AAAAAAAAIkAAAAAAAAAkQAAAAAAAACZAAAAAAAAAKEAAAAAAAAAqQAAAAAAAACxAAAAAAAAALkAAAAAAAAAwQAAA"
+    "AAAAADFAAAAAAIcAMkAAAAAAAAAzQAAAAAAAADRAAAAAAAAANUAAAAAAAAA2QAAAAAAAADdAAAAAAAAAOEAAAAAA"
+    "AAA5QAAAAAAAADpAAAAAAAAAO0AAAAAAAAA8QAAAAAAAAD1AAAAAAAAAPkAAAAAAAAA/QAAAAAAAAEBAAAAAAACA"
+    "QEAAAAAAAABBQAAAAAAAgEFAAAAAAAAAQkAAAAAAAIBCQAAAAAAAAENAAAAAAACAQ0AAAAAAAABEQAAAAAAAgERA"
+    "AAAAAAAARUAAAAAAAIBFQAAAAAAAAEZAAAAAAACARkAAAAAAAABHQAAAAAAAgEdAAAAAAAAASEAAAAAAAIBIQAAA"
+    "AAAAAElAAAAAAACASUAAAAAAAABKQAAAAAAAgEpAAAAAAAAAS0AAAAAAAIBLQAAAAACTAExAAAAAAACATEAAAAAA"
+    "AABNQAAAAAAAgE1AAAAAAAAATkAAAAAAAIBOQAAAAAAAAE9AAAAAAACAT0AAAAAAAABQQAAAAAAAQFBAAAAAAACA"
+    "UEAAAAAAAMBQQAAAAAAAAFFAAAAAAABAUUAAAAAAAIBRQAAAAABkwFFAAAAAAAAAUkAAAAAAAEBSQAAAAAAAgFJA"
+    "AAAAAADAUkAAAAAAAABTQAAAAAAAQFNAAAAAAACAU0AAAAAAAMBTQAAAAAAAAFRAAAAAAABAVEAAAAAAAIBUQAAA"
+    "AAAAwFRAAAAAAAAAVUAAAAAAAEBVQAAAAAAAgFVAAAAAAADAVUAAAAAAAABWQAAAAAAAQFZAAE0AAACAVkAAAAAA"
+    "AMBWQAAAAAAAAFdAAAAAAABAV0AAAAAAAIBXQAAAAAAAwFdAAAAAAAAAWEAAAAAAAEBYQAAAAAAAgFhAAAAAAADA"
+    "WEAOAAAAOAAAAAYAAAAIAAAABgAAAAAAAAAFAAAACAAAAAEAAAABAAAAAQACAEZzAAAJAAAACAAAAAAAAAAAACRA"
+)
 
 
 def saved(variables: dict, **options) -> bytes:
@@ -155,3 +176,22 @@ def test_a_structs_fields_are_read_and_a_cell_array_passed_over():
     with pytest.raises(UserError) as refused:
         read(saved({"notes": cells}))
     assert refused.value.key == "matlab.no_record"
+
+
+def test_a_file_that_crashes_scipys_reader_is_refused_and_nothing_else_dies():
+    """The loader runs in a process of its own: a crafted file that crashes scipy's
+    compiled reader ends that process, and the file is refused in words -- the server, the
+    command line and this test go on."""
+    import subprocess
+    import sys
+
+    crash = subprocess.run(
+        [sys.executable, "-c", "import io, sys; from scipy.io import loadmat; "
+         "loadmat(io.BytesIO(sys.stdin.buffer.read()), squeeze_me=True, simplify_cells=True)"],
+        input=CRASHING_MAT, capture_output=True, check=False,
+    )  # fmt: skip
+    assert crash.returncode != 0  # in-process, this file ends the process (or, fixed, raises)
+    with pytest.raises(UserError) as refused:
+        matlab_record(CRASHING_MAT)
+    assert refused.value.key == "matlab.unreadable"
+    assert read(saved({"omega": gyro(0.05), "Fs": RATE_HZ})).values.size == 9000

@@ -100,8 +100,10 @@ def _columns_and_rate(
     states with that scalar's name, by the variables' names."""
     columns: dict[str, np.ndarray] = {}
     rate = rate_name = None
-    for name, value in _flattened(variables):
-        last = name.rsplit(".", 1)[-1]  # a struct's field is named by its own name
+    for name, value in variables.items():
+        if name.startswith("__"):
+            continue
+        last = name.rsplit(".", 1)[-1]  # a struct's field ("imu.fs") by its own name
         try:
             array = np.squeeze(np.asarray(value))
         except (ValueError, TypeError):  # a cell array of unlike parts: no readings
@@ -127,17 +129,3 @@ def _columns_and_rate(
 def _is_time_name(name: str) -> bool:
     """Whether a vector's name (a struct's field by its own) is a time's: t, time, …"""
     return _TIME_NAMES.fullmatch(name.rsplit(".", 1)[-1].lower()) is not None
-
-
-def _flattened(variables: dict, prefix: str = "", depth: int = 0):
-    """Each variable's name and value, a struct's fields (nested dicts, as MATLAB's
-    structs load) as ``struct.field``, three levels deep at most; names MATLAB's loader
-    adds (``__header__``) passed over."""
-    for name, value in variables.items():
-        if name.startswith("__"):
-            continue
-        if isinstance(value, dict):
-            if depth < 3:
-                yield from _flattened(value, f"{prefix}{name}.", depth + 1)
-            continue
-        yield f"{prefix}{name}", value
