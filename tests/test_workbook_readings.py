@@ -294,3 +294,15 @@ def test_the_lab_route_offers_the_sheets_and_reads_the_one_asked_for(student_cli
     assert missing.status_code == 400 and "x" in missing.json()["detail"]
     bad_part = student_client.post(f"{route}?part=x", content=data, headers=headers)
     assert bad_part.status_code == 422
+
+
+def test_a_damaged_old_excel_file_is_refused_without_a_word_on_stdout(capsys):
+    """xlrd writes its warnings about a damaged file to stdout by default: they would land
+    in ``gyrolab solve --json``'s output; they are kept from it."""
+    from tests.test_roster_workbook import old_workbook
+
+    data = old_workbook([[f"position_{k}" for k in range(1, 5)], *[[1.0, 2.0, 3.0, 4.0]] * 12])
+    with pytest.raises(UserError) as refused:
+        workbook_text(data[: len(data) - 700])  # cut short, as a failed copy leaves it
+    assert refused.value.key == "workbook.old_excel"
+    assert capsys.readouterr().out == ""

@@ -225,7 +225,9 @@ def _old_excel_sheets(
         raise UserError(limits.too_large, limit_mb=limits.max_unpacked_bytes // 1_000_000)
     sheets: list[tuple[str, list[Row]]] = []
     try:
-        book = xlrd.open_workbook(file_contents=data, on_demand=True)
+        # xlrd writes its warnings about a damaged file to stdout by default: kept, not
+        # printed (they would land in a command's JSON output, or the server's log)
+        book = xlrd.open_workbook(file_contents=data, on_demand=True, logfile=io.StringIO())
         try:
             for index in range(1 if first_only else book.nsheets):
                 sheet = book.sheet_by_index(index)
