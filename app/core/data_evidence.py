@@ -44,7 +44,7 @@ import numpy as np
 
 from app.core.data_copies import copy_keys, handout_matches, typed_step
 from app.core.noise_model import GyroNoise
-from app.core.reading_moments import expected_variance, reading_moments
+from app.core.reading_moments import expected_variance, reading_moments, readings_rate_hz
 
 SCATTER_P = 1e-5  # two-sided tail of χ²_ν for the scatter check
 SMOOTH_SIGMAS = 4.0  # r₁ − ρ₁ above this many 1/√N
@@ -294,35 +294,6 @@ def too_close(part: str, error: float | None, sigma: float | None) -> list[Evide
 
 
 # --- a part, and a class ----------------------------------------------------------------
-
-
-def readings_rate_hz(times: Sequence[np.ndarray | None] | None, rate_hz: float) -> float:
-    """The rate at which a part's readings were averaged: their times' typical step where
-    every position has times and that step is shorter than the gyro's (a device sampling
-    faster than the characterisation's record: each reading's noise is that of its own
-    short average, √(f/f₀) times the gyro's per-reading noise for white noise), else the
-    gyro's rate -- as a position's σ takes its span (:func:`app.lab.results.recorded_seconds`).
-
-    Parameters
-    ----------
-    times : sequence of numpy.ndarray or None, optional
-        Each position's reading times (s), None where the readings came without.
-    rate_hz : float
-        The station's gyro's readings per second.
-
-    Returns
-    -------
-    float
-        Readings per second: ``max(rate_hz, 1/step)`` for timed readings, else ``rate_hz``.
-    """
-    if not times or any(t is None for t in times):
-        return rate_hz
-    steps = [np.diff(np.asarray(t, float)) for t in times if np.asarray(t).size >= 2]
-    steps = [step for step in steps if step.size]
-    if not steps:
-        return rate_hz
-    typical = float(np.median(np.concatenate(steps)))
-    return max(rate_hz, 1.0 / typical) if typical > 0 else rate_hz
 
 
 def part_evidence(

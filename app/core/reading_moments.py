@@ -9,7 +9,10 @@ E[s²] = n/(n − 1)·(σ₁² − σ²_mean) (+ u²/12 for a typed step u coars
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from functools import lru_cache
+
+import numpy as np
 
 from app.core.noise_model import GyroNoise, Window
 
@@ -68,3 +71,32 @@ def expected_variance(noise: GyroNoise, rate_hz: float, count: int, step: float 
     if step is not None and step > 1.5 * own_step:
         variance += step * step / 12.0
     return variance
+
+
+def readings_rate_hz(times: Sequence[np.ndarray | None] | None, rate_hz: float) -> float:
+    """The rate at which a part's readings were averaged: their times' typical step where
+    every position has times and that step is shorter than the gyro's (a device sampling
+    faster than the characterisation's record: each reading's noise is that of its own
+    short average, √(f/f₀) times the gyro's per-reading noise for white noise), else the
+    gyro's rate -- as a position's σ takes its span (:func:`app.lab.results.recorded_seconds`).
+
+    Parameters
+    ----------
+    times : sequence of numpy.ndarray or None, optional
+        Each position's reading times (s), None where the readings came without.
+    rate_hz : float
+        The station's gyro's readings per second.
+
+    Returns
+    -------
+    float
+        Readings per second: ``max(rate_hz, 1/step)`` for timed readings, else ``rate_hz``.
+    """
+    if not times or any(t is None for t in times):
+        return rate_hz
+    steps = [np.diff(np.asarray(t, float)) for t in times if np.asarray(t).size >= 2]
+    steps = [step for step in steps if step.size]
+    if not steps:
+        return rate_hz
+    typical = float(np.median(np.concatenate(steps)))
+    return max(rate_hz, 1.0 / typical) if typical > 0 else rate_hz
