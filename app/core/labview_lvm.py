@@ -25,20 +25,20 @@ END_OF_HEADER = "***End_of_Header***"
 _FIELD = re.compile(r"([^\t,;]+)[\t,;]+([^\t,;]*)")
 
 
-def is_labview_measurement(first_line: str) -> bool:
-    """Whether a record's first line is the signature of LabVIEW's measurement file.
+def is_labview_measurement(start: str) -> bool:
+    """Whether a file starts with the signature of LabVIEW's measurement file.
 
     Parameters
     ----------
-    first_line : str
-        The file's first line that is not blank.
+    start : str
+        The file's beginning (blank lines and a byte-order mark before it allowed).
 
     Returns
     -------
     bool
         True where it starts with ``LabVIEW Measurement``.
     """
-    return first_line.strip().lstrip("\ufeff").startswith(SIGNATURE)
+    return start.lstrip().lstrip("\ufeff").lstrip().startswith(SIGNATURE)
 
 
 @dataclass

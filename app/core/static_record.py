@@ -139,7 +139,7 @@ def read_static_record(
     lines = iter(lines)
     first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
     labview = None
-    if is_labview_measurement(next((line for line in first if line.strip()), "")):
+    if is_labview_measurement("".join(first[:50])[:200]):
         labview = LabviewHeaders()  # its headers passed over, its rate where it states one
         lines = labview_lines(itertools.chain(first, lines), labview)
         first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
@@ -256,8 +256,7 @@ def written_as_a_record(text: str) -> bool:
     bool
         True for either.
     """
-    first = next((line for line in itertools.islice(io.StringIO(text), 50) if line.strip()), "")
-    return is_labview_measurement(first) or names_its_columns_in_a_comment(text)
+    return is_labview_measurement(text[:200]) or names_its_columns_in_a_comment(text)
 
 
 def names_its_columns_in_a_comment(text: str) -> bool:
