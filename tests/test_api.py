@@ -313,6 +313,12 @@ def test_csv_bodies_separated_by_tabs_or_semicolons_read_as_the_lab_page_reads_t
         ({"samples": [1.0] * 10, "times_s": [0.0] * 9}, 400, "one entry per sample"),
         ({"samples": [1.0] * 10, "unit": "deg/s"}, 200, ""),
         ({"samples": [3.0] * 10, "unit": "deg/s"}, 400, "check the unit"),
+        # the aliases ?unit= and the pages take: "dps" is °/s (so 3 of it is no Earth rate)
+        ({"samples": [1.0] * 10, "unit": "°/h"}, 200, ""),
+        ({"samples": [1.0] * 10, "unit": "dph"}, 200, ""),
+        ({"samples": [3.0] * 10, "unit": "dps"}, 400, "check the unit"),
+        ({"samples": [3.0] * 10, "unit": " °/s "}, 400, "check the unit"),
+        ({"samples": [1.0] * 10, "unit": 3}, 422, ""),
     ],
 )
 def test_strict_validation(client, auth, body, status, text):

@@ -6,10 +6,23 @@ from __future__ import annotations
 from datetime import datetime
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, StrictFloat, StrictInt
 
+from app.core.units import ALIASES
 from app.lab.store import MAX_SAMPLES_PER_POSITION, POSITIONS
 from app.web.deps import MAX_ID
+
+
+def _unit_by_its_canonical_name(value: object) -> object:
+    """"°/h", "dph", "dps", "deg/hr", "rad/sec" as the same unit's canonical name, as the
+    query's ``?unit=`` and the pages take them; anything else is left to be refused."""
+    return ALIASES.get(value.strip(), value.strip()) if isinstance(value, str) else value
+
+
+# the canonical names are the schema's choices; their aliases are taken as they
+RateUnit = Annotated[
+    Literal["deg/h", "deg/s", "rad/s"], BeforeValidator(_unit_by_its_canonical_name)
+]
 
 
 class Station(BaseModel):
@@ -111,7 +124,7 @@ class PositionUpload(BaseModel):
     samples: list[StrictFloat | StrictInt] = Field(
         min_length=1, max_length=MAX_SAMPLES_PER_POSITION
     )
-    unit: Literal["deg/h", "deg/s", "rad/s"] = "deg/h"
+    unit: RateUnit = "deg/h"
     angle_deg: StrictFloat | StrictInt | None = Field(
         default=None, description="the dial angle; default: from the session's settings"
     )
