@@ -14,8 +14,8 @@ from app.web.deps import MAX_ID
 
 
 def _unit_by_its_canonical_name(value: object) -> object:
-    """"°/h", "dph", "dps", "deg/hr", "rad/sec" as the same unit's canonical name, as the
-    query's ``?unit=`` and the pages take them; anything else is left to be refused."""
+    """The aliases "°/h", "dph", "dps", "deg/hr", "rad/sec" as their unit's canonical name,
+    as the query's ``?unit=`` and the pages take them; anything else is left to be refused."""
     return ALIASES.get(value.strip(), value.strip()) if isinstance(value, str) else value
 
 
