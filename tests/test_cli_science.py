@@ -355,14 +355,23 @@ def test_a_cold_gyro_shows_its_warm_up_in_the_temperature_column(capsys):
     assert "温度稳定" in text
 
 
-@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-be", "gb18030"])
-def test_solve_and_allan_read_the_encodings_spreadsheets_save(capsys, tmp_path, encoding):
+@pytest.mark.parametrize(
+    ("encoding", "bom"),
+    [
+        ("utf-16", ""),  # utf-16 writes its own mark
+        ("utf-16-be", "\ufeff"),
+        ("gb18030", ""),
+        ("utf-16-le", ""),  # a Windows program's "Unicode" without its mark
+        ("utf-16-be", ""),
+    ],
+)
+def test_solve_and_allan_read_the_encodings_spreadsheets_save(capsys, tmp_path, encoding, bom):
     """Excel's "Unicode text" (UTF-16 with its byte-order mark, tabs) and a Chinese-locale
-    Excel's CSV (GB18030): solve said "not UTF-8 text", allan "not text"."""
+    Excel's CSV (GB18030): solve said "not UTF-8 text", allan "not text"; UTF-16 without
+    its mark was "not text" to both."""
     import numpy as np
 
     table = (DATA / "handout_horizontal.csv").read_text(encoding="utf-8-sig")
-    bom = "\ufeff" if encoding == "utf-16-be" else ""  # utf-16 writes its own mark
     path = tmp_path / "table.txt"
     path.write_bytes((bom + table.replace(",", "\t")).encode(encoding))
     code, out, _ = run(capsys, "solve", "heading", str(path), "--json")

@@ -77,7 +77,9 @@ def test_two_headerless_columns_stay_a_time_value_record():
     np.testing.assert_allclose(parse_static_record("0.0,10.74\n0.1,10.65\n"), [10.74, 10.65])
 
 
-@pytest.mark.parametrize("encoding", ["utf-8", "utf-8-sig", "gb18030", "utf-16"])
+@pytest.mark.parametrize(
+    "encoding", ["utf-8", "utf-8-sig", "gb18030", "utf-16", "utf-16-le", "utf-16-be"]
+)
 def test_chinese_headers_in_every_encoding_excel_writes(encoding):
     from app.core.text_files import decode_text
 
@@ -893,3 +895,45 @@ def test_a_table_typed_with_spaces_after_its_separators_or_chinese_commas(text):
         [-9.11, -8.83],
         [-0.96, -0.96],
     ]
+
+
+@pytest.mark.parametrize("encoding", ["utf-16-le", "utf-16-be"])
+def test_utf16_without_its_mark_is_read_by_every_reader(encoding):
+    """A Windows program's "Unicode" file written without a byte-order mark (.NET's
+    UnicodeEncoding without a preamble, a LabVIEW string as UTF-16): was "not text" --
+    now read whole and in blocks (a character cut across a block's end), as the API's
+    body of one position and a roster's names."""
+    from app.core.position_records import parse_position_csv
+    from app.core.text_files import decode_text, text_lines, utf16_without_mark
+
+    record = "时间 (s),角速率 (°/h)\r\n0.0,10.74\r\n0.1,10.65\r\n0.2,10.70\r\n"
+    data = record.encode(encoding)
+    assert utf16_without_mark(data) == encoding
+    assert decode_text(data) == record
+    for chunk in (51, 50, 1 << 20):  # told by the first block; a character cut at its end
+        assert list(text_lines(data, chunk)) == record.splitlines()
+    values, times = parse_position_csv(data)
+    np.testing.assert_allclose(values, [10.74, 10.65, 10.70])
+    np.testing.assert_allclose(times, [0.0, 0.1, 0.2])
+    roster = "学号,姓名\r\n2023001,张三\r\n2023002,李四\r\n"
+    assert decode_text(roster.encode(encoding)) == roster
+
+
+def test_what_has_zero_bytes_but_is_no_utf16_is_not_read_as_it():
+    """Raw float64 readings, NUL padding after a logger's last line, one-byte text and a
+    file too short to tell are not taken for UTF-16; int16 counts whose high bytes are
+    zero are, but decode to control characters and stay "not text"."""
+    from app.core.exceptions import UserError
+    from app.core.text_files import decode_text, utf16_without_mark
+
+    floats = np.random.default_rng(3).normal(10.0, 0.5, 500).tobytes()
+    padded = b"10.74\n10.65\n" + b"\x00" * 4000
+    for data in (floats, padded, "10.74,°/h\n".encode("gb18030"), b"1\x00"):
+        assert utf16_without_mark(data) is None
+    assert decode_text(padded) == "10.74\n10.65\n"
+    counts = np.arange(1, 250, dtype="<i2").tobytes()
+    assert utf16_without_mark(counts) == "utf-16-le"
+    for data in (floats, counts):
+        with pytest.raises(UserError) as refused:
+            decode_text(data)
+        assert refused.value.key == "csv.encoding"

@@ -60,7 +60,7 @@ def to_json_text(payload: dict) -> str:
 
 
 def _read_text(path: str) -> str:
-    """The file's text in UTF-8, UTF-16 (by its byte-order mark), GB18030 or Windows-1252,
+    """The file's text in UTF-8, UTF-16 (with or without its mark), GB18030 or Windows-1252,
     or an Excel workbook's sheet of readings, as a page's upload reads it."""
     try:
         if path == "-":

@@ -81,7 +81,7 @@ def parse_position_csv(
     Parameters
     ----------
     data : bytes or str
-        The CSV, as bytes (UTF-8, UTF-16 with a byte-order mark, GB18030 or
+        The CSV, as bytes (UTF-8, UTF-16 with or without its mark, GB18030 or
         Windows-1252) or text.
     unit : str, optional
         The unit the readings are said to be in (canonical): a header or a row of units

@@ -763,11 +763,29 @@
 
   // --- CSV file ---------------------------------------------------------------------------
   // UTF-8 first, then GB18030 (what a Chinese-locale Excel saves), then Windows-1252 (a
-  // Western Windows program's "°/s"); UTF-16 by its mark -- as the server reads a file.
+  // Western Windows program's "°/s"); UTF-16 by its mark, or without one by the zero high
+  // bytes of its ASCII characters -- as the server reads a file (text_files.py).
+  function utf16WithoutMark(bytes) {
+    const count = Math.min(4096, bytes.length - (bytes.length % 2));
+    if (count < 4) return null;
+    let evenZeros = 0;
+    let oddZeros = 0;
+    for (let i = 0; i < count; i += 2) {
+      if (bytes[i] === 0) evenZeros += 1;
+      if (bytes[i + 1] === 0) oddZeros += 1;
+    }
+    const half = count / 2;
+    if (oddZeros >= 0.5 * half && evenZeros <= 0.05 * half) return "utf-16le";
+    if (evenZeros >= 0.5 * half && oddZeros <= 0.05 * half) return "utf-16be";
+    return null;
+  }
+
   function decodeFile(buffer) {
     const bytes = new Uint8Array(buffer);
     if (bytes[0] === 0xff && bytes[1] === 0xfe) return new TextDecoder("utf-16le").decode(bytes);
     if (bytes[0] === 0xfe && bytes[1] === 0xff) return new TextDecoder("utf-16be").decode(bytes);
+    const unmarked = utf16WithoutMark(bytes);
+    if (unmarked) return new TextDecoder(unmarked).decode(bytes);
     for (const encoding of ["utf-8", "gb18030"]) {
       try {
         return new TextDecoder(encoding, { fatal: true }).decode(bytes);

@@ -102,8 +102,9 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
     live_server, new_page, tmp_path
 ):
     """A real gyro's logger writes one file per position (its clock, the rate): the first
-    is offered for the first empty position, the next for the position chosen in the
-    preview -- its angle follows the choice -- and each is saved there.  The next comes
+    is offered for the first empty position (this one in UTF-16 without its mark), the
+    next for the position chosen in the preview -- its angle follows the choice -- and
+    each is saved there.  The next comes
     from a Western Windows program (Windows-1252, "°/s" in its header): its unit is read
     from the header, and the preview asks for it while another is chosen."""
     page = new_page()
@@ -119,7 +120,9 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
         lines = ["时间,角速率 (°/h)"] + [
             f"2026-11-28 14:00:{k:02d}.0,{value}" for k, value in enumerate(columns[position - 1])
         ]
-        path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+        # the first as a Windows program writes "Unicode": UTF-16 without its mark
+        encoding = "utf-16-le" if position == 1 else "utf-8"
+        path.write_bytes(("\n".join(lines) + "\n").encode(encoding))
         return str(path)
 
     panel.locator(".csv-file").set_input_files(logger_file(1))
