@@ -476,7 +476,7 @@ ACCESS = {
     "GET /lab/sessions/{session_id}": "owner",
     "POST /lab/sessions/{session_id}/manual": "owner",
     "POST /lab/sessions/{session_id}/csv/preview": "owner",
-    "POST /lab/sessions/{session_id}/csv/workbook": "owner",
+    "POST /lab/sessions/{session_id}/csv/binary": "owner",
     "POST /lab/sessions/{session_id}/csv": "owner",
     "POST /lab/sessions/{session_id}/turn": "owner",
     "POST /lab/sessions/{session_id}/plane": "owner",
@@ -537,7 +537,7 @@ JSON_BODIES = {  # routes of the lab page that take JSON (fetch) rather than for
 
 
 RAW_BODIES = {  # routes of the lab page that take a file's bytes as they are
-    "/csv/workbook": b"PK\x03\x04 an Excel workbook's bytes",
+    "/csv/binary": b"PK\x03\x04 an Excel workbook's bytes",
 }
 
 

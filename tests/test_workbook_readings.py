@@ -137,10 +137,10 @@ def test_the_lab_page_reads_a_workbook_as_the_text_it_previews_and_saves(student
     data = workbook(handout_rows(), formulas=True)
     token = _form_token(student_client, page)
     headers = {"Content-Type": "application/octet-stream", "Accept": "application/json"}
-    refused = student_client.post(f"{page}/csv/workbook", content=data, headers=headers)
+    refused = student_client.post(f"{page}/csv/binary", content=data, headers=headers)
     assert refused.status_code == 403  # no CSRF token
     response = student_client.post(
-        f"{page}/csv/workbook", content=data, headers={**headers, "X-CSRF-Token": token}
+        f"{page}/csv/binary", content=data, headers={**headers, "X-CSRF-Token": token}
     )
     assert response.status_code == 200, response.text
     text = response.json()["text"]
@@ -154,7 +154,7 @@ def test_the_lab_page_reads_a_workbook_as_the_text_it_previews_and_saves(student
     assert theta == pytest.approx(-10.753, abs=5e-4)  # the handout's θ
     student_client.cookies.set("gyrolab_lang", "zh-CN")
     old = student_client.post(
-        f"{page}/csv/workbook",
+        f"{page}/csv/binary",
         content=OLE_MAGIC + b"\x00" * 64,
         headers={**headers, "X-CSRF-Token": token},
     )
@@ -217,12 +217,12 @@ def test_workbooks_are_read_a_few_at_a_time(student_client):
     for other in others:  # other students' workbooks under way
         pool("workbooks").take(other)
     try:
-        busy = student_client.post(f"{page}/csv/workbook", content=data, headers=headers)
+        busy = student_client.post(f"{page}/csv/binary", content=data, headers=headers)
         assert busy.status_code == 503 and "reading other workbooks" in busy.json()["detail"]
     finally:
         for other in others:
             pool("workbooks").give_back(other)
-    read = student_client.post(f"{page}/csv/workbook", content=data, headers=headers)
+    read = student_client.post(f"{page}/csv/binary", content=data, headers=headers)
     assert read.status_code == 200 and read.json()["text"].startswith("序号\t位置1")
 
 
@@ -285,7 +285,7 @@ def test_the_lab_route_offers_the_sheets_and_reads_the_one_asked_for(student_cli
         "X-CSRF-Token": _form_token(student_client, page),
     }
     data = workbook(handout_rows(), latitude_rows(), names=("寻北", "纬度"))
-    route = f"{page}/csv/workbook"
+    route = f"{page}/csv/binary"
     latitude = student_client.post(f"{route}?part=latitude", content=data, headers=headers).json()
     assert latitude["sheet"] == "纬度" and latitude["sheets"] == ["寻北", "纬度"]
     chosen = student_client.post(f"{route}?part=latitude&sheet=寻北", content=data, headers=headers)

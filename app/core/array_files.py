@@ -7,6 +7,7 @@ scalar such as ``Fs`` states -- each said in a note of the file's kind."""
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -20,6 +21,61 @@ _RATE_NAMES = re.compile(
     r"f_?s|fs_?hz|sample_?rate(?:_?hz)?|sampling_?rate|rate_?hz|freq(?:uency)?"
 )
 _TIME_NAMES = re.compile(r"t|time(?:_?s)?|times?_?s|timestamps?|tt")
+
+
+@dataclass(frozen=True)
+class ArrayTable:
+    """A file's vectors of one length as a table's columns: a matrix's columns are
+    ``name 1``, ``name 2``, …; ``time`` the column of times where one is named so; the
+    sample rate a scalar such as ``Fs`` states, with that scalar's name."""
+
+    columns: dict[str, np.ndarray]
+    time: str | None
+    rate_hz: float | None
+    rate_name: str | None
+
+    @property
+    def offered(self) -> list[str]:
+        """The columns that may hold the readings: all but the times."""
+        return [name for name in self.columns if name != self.time]
+
+
+def array_table(variables: dict, kind: str, min_readings: int = MIN_READINGS) -> ArrayTable:
+    """The table a file's named arrays hold: its longest vectors (a matrix's columns each,
+    vectors of another length passed over), the times among them, the stated rate.
+
+    Parameters
+    ----------
+    variables : dict
+        Name → value (arrays, scalars; anything else is passed over).
+    kind : str
+        The file's kind, ``matlab`` or ``numpy``: the prefix of its messages' keys.
+    min_readings : int
+        The fewest numbers a vector (a matrix's longer side) has to be a column: a
+        record's for the Allan analysis; fewer for one position's readings on the lab
+        page, whose own check then asks for its minimum.
+
+    Returns
+    -------
+    ArrayTable
+        The columns, in the file's order, as float64.
+
+    Raises
+    ------
+    UserError
+        ``<kind>.no_record`` where no array other than the times is a vector of
+        ``min_readings`` numbers or more.
+    """
+    columns, rate, rate_name = _columns_and_rate(variables, min_readings)
+    if not columns:
+        raise UserError(f"{kind}.no_record")
+    length = max(values.size for values in columns.values())
+    columns = {name: values for name, values in columns.items() if values.size == length}
+    time = next((name for name in columns if _is_time_name(name)), None)
+    table = ArrayTable(columns, time, rate, rate_name)
+    if not table.offered:
+        raise UserError(f"{kind}.no_record")
+    return table
 
 
 def record_from_variables(variables: dict, column: str | None, kind: str) -> StaticRecord:
@@ -50,31 +106,24 @@ def record_from_variables(variables: dict, column: str | None, kind: str) -> Sta
         offered) for several and none chosen; ``allan.no_such_column`` for a choice that
         is not among them.
     """
-    columns, rate, rate_name = _columns_and_rate(variables)
-    if not columns:
-        raise UserError(f"{kind}.no_record")
-    length = max(values.size for values in columns.values())
-    columns = {name: values for name, values in columns.items() if values.size == length}
-    time = next((name for name in columns if _is_time_name(name)), None)
-    offered = [name for name in columns if name != time]
-    if not offered:
-        raise UserError(f"{kind}.no_record")
+    table = array_table(variables, kind)
+    offered, time, rate = table.offered, table.time, table.rate_hz
     if column is not None:
         chosen = _chosen(column, offered)
     elif len(offered) > 1:
         raise ColumnChoiceNeeded(f"{kind}.choose_vector", offered, columns=", ".join(offered))
     else:
         chosen = offered[0]
-    times = columns[time] if time else None
+    times = table.columns[time] if time else None
     said = {"key": f"allan.note_{kind}", "params": {"variable": chosen}}
     if times is not None:
         said = {"key": f"allan.note_{kind}_times", "params": {"variable": chosen, "time": time}}
     rate_note = None
     if rate and times is None:  # said where it is used: no times, no rate given
-        params = {"name": rate_name, "rate": f"{rate:g}"}
+        params = {"name": table.rate_name, "rate": f"{rate:g}"}
         rate_note = {"key": "allan.note_array_rate", "params": params}
     return StaticRecord(
-        columns[chosen],
+        table.columns[chosen],
         times,
         notes=[said],
         stated_rate_hz=rate if times is None else None,
@@ -94,7 +143,7 @@ def _chosen(column: str, offered: list[str]) -> str:
 
 
 def _columns_and_rate(
-    variables: dict,
+    variables: dict, min_readings: int
 ) -> tuple[dict[str, np.ndarray], float | None, str | None]:
     """The vectors of real numbers (a matrix's columns each), and the sample rate a scalar
     states with that scalar's name, by the variables' names."""
@@ -115,10 +164,10 @@ def _columns_and_rate(
             if _RATE_NAMES.fullmatch(last.lower()) and np.isfinite(number) and number > 0:
                 rate, rate_name = number, name
             continue
-        if array.ndim == 1 and array.size >= MIN_READINGS:
+        if array.ndim == 1 and array.size >= min_readings:
             columns[name] = array.astype(float)
         elif (
-            array.ndim == 2 and min(array.shape) <= MAX_COLUMNS and max(array.shape) >= MIN_READINGS
+            array.ndim == 2 and min(array.shape) <= MAX_COLUMNS and max(array.shape) >= min_readings
         ):
             matrix = array if array.shape[0] >= array.shape[1] else array.T
             for k in range(matrix.shape[1]):

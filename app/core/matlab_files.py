@@ -75,12 +75,33 @@ def matlab_record(data: bytes, column: str | None = None) -> StaticRecord:
         ``matlab.choose_vector`` (a :class:`ColumnChoiceNeeded`, the vectors offered) for
         several and none chosen; ``allan.no_such_column`` for a choice it does not hold.
     """
+    return record_from_variables(matlab_variables(data), column, "matlab")
+
+
+def matlab_variables(data: bytes) -> dict[str, np.ndarray]:
+    """The file's numeric variables by name (a struct's fields as ``struct.field``).
+
+    Parameters
+    ----------
+    data : bytes
+        The whole file.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Each numeric variable, loaded in a process of its own (:mod:`app.core.matlab_loader`).
+
+    Raises
+    ------
+    UserError
+        ``matlab.v73`` for an HDF5 (``-v7.3``) file; ``matlab.unreadable`` for one that is
+        not a MATLAB file after all; ``matlab.too_large`` past :data:`MAX_ELEMENTS`.
+    """
     if data.startswith(LEVEL_7_3):
         raise UserError("matlab.v73")
     loaded = _load_apart(data)
     with np.load(io.BytesIO(loaded), allow_pickle=False) as arrays:
-        variables = {name: arrays[name] for name in arrays.files}
-    return record_from_variables(variables, column, "matlab")
+        return {name: arrays[name] for name in arrays.files}
 
 
 def _load_apart(data: bytes) -> bytes:

@@ -85,22 +85,46 @@ def numpy_record(data: bytes, column: str | None = None) -> StaticRecord:
         ``numpy.too_large`` past :data:`MAX_ELEMENTS`; ``numpy.shape`` for a ``.npy``
         of another shape; those of :func:`app.core.array_files.record_from_variables`.
     """
+    loaded = numpy_arrays(data)
+    if isinstance(loaded, dict):
+        return record_from_variables(loaded, column, "numpy")
+    return _array_record(loaded)
+
+
+def numpy_arrays(data: bytes) -> np.ndarray | dict[str, np.ndarray]:
+    """A ``.npy`` file's array, or a ``.npz`` archive's arrays by name.
+
+    Parameters
+    ----------
+    data : bytes
+        The whole file.
+
+    Returns
+    -------
+    numpy.ndarray or dict of str to numpy.ndarray
+        The array (``.npy``); the arrays by name (``.npz``).  Never unpickled.
+
+    Raises
+    ------
+    UserError
+        ``numpy.unreadable`` for a damaged file or a pickle; ``numpy.too_large`` for an
+        archive whose arrays unpack past :data:`MAX_ELEMENTS` numbers.
+    """
     try:
         loaded = np.load(io.BytesIO(data), allow_pickle=False)
     except Exception:  # NumPy raises several kinds for a damaged file or a pickle
         raise UserError("numpy.unreadable") from None
-    if isinstance(loaded, np.lib.npyio.NpzFile):
-        with loaded:
-            # the members' sizes unpacked, from the zip's directory: nothing loaded yet
-            unpacked = sum(member.file_size for member in loaded.zip.infolist())
-            if unpacked > 8 * MAX_ELEMENTS + 4096 * len(loaded.files):
-                raise UserError("numpy.too_large", limit=MAX_ELEMENTS)
-            try:
-                variables = {name: loaded[name] for name in loaded.files}
-            except Exception:
-                raise UserError("numpy.unreadable") from None
-        return record_from_variables(variables, column, "numpy")
-    return _array_record(loaded)
+    if not isinstance(loaded, np.lib.npyio.NpzFile):
+        return loaded
+    with loaded:
+        # the members' sizes unpacked, from the zip's directory: nothing loaded yet
+        unpacked = sum(member.file_size for member in loaded.zip.infolist())
+        if unpacked > 8 * MAX_ELEMENTS + 4096 * len(loaded.files):
+            raise UserError("numpy.too_large", limit=MAX_ELEMENTS)
+        try:
+            return {name: loaded[name] for name in loaded.files}
+        except Exception:
+            raise UserError("numpy.unreadable") from None
 
 
 def _array_record(array: np.ndarray) -> StaticRecord:

@@ -1,7 +1,7 @@
 """The student lab's file routes: a CSV or Excel file's readings previewed (with the
 positions and angles they will be saved as, and what was passed over) and saved, and a
-workbook's sheet of readings read as text.  Parsing happens before the session is looked
-up, so no write transaction waits on it."""
+workbook's sheet of readings, or a MATLAB or NumPy file's vectors, read as text.  Parsing
+happens before the session is looked up, so no write transaction waits on it."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ from typing import Annotated
 from fastapi import APIRouter, Body, Depends, Query, Request
 
 from app.accounts.deps import CsrfProtected, CurrentUser
+from app.core.array_text import array_file_text, is_array_file
 from app.core.exceptions import UserError
 from app.core.position_records import (
     RECORD_PROBLEMS,
@@ -35,7 +36,7 @@ from app.web.work_slots import pool
 router = APIRouter(prefix="/lab", tags=["pages: lab"], include_in_schema=False)
 
 MAX_CSV_CHARS = 5_000_000
-MAX_WORKBOOK_BYTES = 5_000_000  # as a CSV file chosen on the page (lab.js MAX_FILE_BYTES)
+MAX_BINARY_FILE_BYTES = 5_000_000  # as a CSV file chosen on the page (lab.js MAX_FILE_BYTES)
 
 
 def parse_csv_upload(body: CsvUpload, *, suggest: bool = False) -> OnePositionRecord:
@@ -92,33 +93,38 @@ def check_position_count(count: int, limit: int) -> None:
         )
 
 
-async def workbook_body(request: Request) -> bytes:
-    """A workbook's bytes, as the page sends them (the only async step: reading them)."""
+async def binary_file_body(request: Request) -> bytes:
+    """A binary file's bytes, as the page sends them (the only async step: reading them)."""
     data = await request.body()
-    if len(data) > MAX_WORKBOOK_BYTES:
-        raise UserError("lab.file_too_large", limit_mb=MAX_WORKBOOK_BYTES // 1_000_000)
+    if len(data) > MAX_BINARY_FILE_BYTES:
+        raise UserError("lab.file_too_large", limit_mb=MAX_BINARY_FILE_BYTES // 1_000_000)
     return data
 
 
-@router.post("/sessions/{session_id}/csv/workbook", dependencies=[CsrfProtected, ReadOnlySession])
-def workbook_as_text(
+@router.post("/sessions/{session_id}/csv/binary", dependencies=[CsrfProtected, ReadOnlySession])
+def binary_file_as_text(
     session_id: ObjectId,
     user: CurrentUser,
     db: SessionDep,
-    data: Annotated[bytes, Depends(workbook_body)],
+    data: Annotated[bytes, Depends(binary_file_body)],
     part: Annotated[Part, Query()] = Part.heading,
     sheet: Annotated[str | None, Query(min_length=1, max_length=100)] = None,
 ):
-    """An Excel workbook chosen as the file: its sheet of readings (``sheet``, else the
-    one for ``part``) as the text the page then previews and saves as a CSV file's, and the
-    sheets that hold readings, to choose from
-    (:func:`app.core.workbook_text.workbook_readings`)."""
+    """A file chosen on the page that is not text, as the text the page then previews and
+    saves as a CSV file's: an Excel workbook's sheet of readings (``sheet``, else the one
+    for ``part``) and the sheets that hold readings, to choose from
+    (:func:`app.core.workbook_text.workbook_readings`); a MATLAB or NumPy file's vectors
+    as one position's record (:func:`app.core.array_text.array_file_text`)."""
     recordable_session(db, user, session_id, InputMethod.csv)
     with pool("workbooks").slot(user.id):
-        book = workbook_readings(data, sheet, part.value)
-    if len(book.text) > MAX_CSV_CHARS:
+        if is_array_file(data):
+            text, sheet, sheets = array_file_text(data), None, ()
+        else:
+            book = workbook_readings(data, sheet, part.value)
+            text, sheet, sheets = book.text, book.sheet, book.sheets
+    if len(text) > MAX_CSV_CHARS:
         raise UserError("lab.file_too_large", limit_mb=MAX_CSV_CHARS // 1_000_000)
-    return {"text": book.text, "sheet": book.sheet, "sheets": list(book.sheets)}
+    return {"text": text, "sheet": sheet, "sheets": list(sheets)}
 
 
 @router.post("/sessions/{session_id}/csv/preview", dependencies=[CsrfProtected, ReadOnlySession])

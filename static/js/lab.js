@@ -796,11 +796,14 @@
     return new TextDecoder("windows-1252").decode(bytes);
   }
 
-  // An Excel workbook: .xlsx is a zip ("PK\x03\x04"), .xls an OLE file.
-  function isWorkbook(buffer) {
-    const head = new Uint8Array(buffer, 0, Math.min(4, buffer.byteLength));
+  // A file the server reads as text: an Excel workbook (.xlsx is a zip, "PK\x03\x04", as
+  // NumPy's .npz is; .xls an OLE file), a MATLAB data file ("MATLAB"), a NumPy array
+  // ("\x93NUMPY").
+  function isBinaryTable(buffer) {
+    const head = new Uint8Array(buffer, 0, Math.min(6, buffer.byteLength));
     const starts = (magic) => magic.every((byte, i) => head[i] === byte);
-    return starts([0x50, 0x4b, 0x03, 0x04]) || starts([0xd0, 0xcf, 0x11, 0xe0]);
+    return starts([0x50, 0x4b, 0x03, 0x04]) || starts([0xd0, 0xcf, 0x11, 0xe0])
+      || starts([0x4d, 0x41, 0x54, 0x4c, 0x41, 0x42]) || starts([0x93, 0x4e, 0x55, 0x4d, 0x50, 0x59]);
   }
 
   function setupCsv(panel) {
@@ -879,10 +882,10 @@
       }
       const buffer = await file.arrayBuffer();
       try {
-        if (isWorkbook(buffer)) {  // its sheet of readings, as text, from the server
+        if (isBinaryTable(buffer)) {  // its sheet or vectors of readings, as text, from the server
           const query = new URLSearchParams({ part: panel.dataset.part });
           if (sheet !== null) query.set("sheet", sheet);
-          const book = await postBytes(`/csv/workbook?${query}`, buffer);
+          const book = await postBytes(`/csv/binary?${query}`, buffer);
           ({ text, sheet, sheets } = book);
         } else {
           // Ctrl-Z or NUL bytes after the last line (DOS's end of file, a logger's

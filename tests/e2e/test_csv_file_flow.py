@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.io
 from playwright.sync_api import expect
 
 from tests.e2e.conftest import STUDENT_PASSWORD, axe_problems, log_in
@@ -106,7 +107,8 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
     next for the position chosen in the preview -- its angle follows the choice -- and
     each is saved there.  The next comes
     from a Western Windows program (Windows-1252, "°/s" in its header): its unit is read
-    from the header, and the preview asks for it while another is chosen."""
+    from the header, and the preview asks for it while another is chosen; the last is a
+    MATLAB file of ``t`` and ``omega`` (rad/s)."""
     page = new_page()
     log_in(page, live_server.url, "student", STUDENT_PASSWORD)
     page.context.add_cookies([{"name": "gyrolab_lang", "value": "zh-CN", "url": live_server.url}])
@@ -174,3 +176,19 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
     with page.expect_navigation():
         panel.locator(".accept-csv").click()
     expect(page.locator("#take-history tbody tr")).to_have_count(3)
+
+    # a MATLAB file of the last position (t and omega in rad/s, as MATLAB saves a log)
+    panel = csv_panel(page)
+    panel.locator(".unit").select_option("rad/s")
+    rates = np.radians([float(v) for v in columns[3]]) / 3600.0
+    mat = tmp_path / "pos4.mat"
+    scipy.io.savemat(mat, {"t": 0.1 * np.arange(rates.size), "omega": rates})
+    panel.locator(".csv-file").set_input_files(str(mat))
+    page.wait_for_timeout(2000)
+    print("PREVIEW", panel.locator(".csv-preview").inner_text())
+    expect(panel.locator(".csv-preview select.record-position")).to_have_value("4")
+    mean = np.mean([float(v) for v in columns[3]])
+    expect(panel.locator(".csv-preview tbody tr td").nth(3)).to_have_text(f"{mean:.3f}")
+    with page.expect_navigation():
+        panel.locator(".accept-csv").click()
+    expect(page.locator("#take-history tbody tr")).to_have_count(4)

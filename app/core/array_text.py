@@ -1,0 +1,116 @@
+"""A MATLAB data file's or a NumPy file's table of readings as text, for the readers of a
+position's record that the lab page's file panel uses.
+
+A student who logs the gyro from MATLAB saves ``t`` and ``omega`` (or an IMU's matrix)
+to a ``.mat`` file; a Python script saves ``np.save`` or ``np.savez``.  The file's longest
+vectors (:func:`app.core.array_files.array_table`) become the columns of a table whose
+header is a comment line above the readings, as EuRoC's records have it -- so it is read
+as one position's record, never as a table of positions -- with the times' column named
+``time (s)``: the file's own (``t``, ``time``), or those its stated rate gives
+(``k / Fs``).  The numbers are written as the shortest text that reads back as the same
+float64, so the readings stored are the file's.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from app.core.array_files import ArrayTable, array_table
+from app.core.exceptions import UserError
+from app.core.matlab_files import is_matlab_file, matlab_variables
+from app.core.numpy_files import is_npy, is_npz, numpy_arrays
+
+# the fewest numbers a vector has to be a column: the lab's own check of a position's
+# readings then asks for its minimum (10), in its words
+MIN_POSITION_READINGS = 2
+MAX_NUMBERS = 600_000  # numbers written, at most: ≈ 12 MB of text, twice a file's 5 MB
+TIME_HEADER = "time (s)"
+# a .npy's columns, by its shape's second length (the REST API's layouts)
+NPY_HEADERS = {1: ("rate",), 2: (TIME_HEADER, "rate"), 3: (TIME_HEADER, "rate", "temperature (°C)")}
+_NOT_IN_A_NAME = re.compile(r"[\s#,;]+")  # what would split a header cell, or start one
+
+
+def is_array_file(data: bytes) -> bool:
+    """Whether a file is a MATLAB data file, a ``.npy`` array or a ``.npz`` archive.
+
+    Parameters
+    ----------
+    data : bytes
+        The whole file (an archive is told from a workbook by its members).
+
+    Returns
+    -------
+    bool
+        True for any of the three.
+    """
+    return is_matlab_file(data[:20]) or is_npy(data[:6]) or is_npz(data)
+
+
+def array_file_text(data: bytes) -> str:
+    """The file's table of readings as tab-separated text under a ``#`` header line.
+
+    Parameters
+    ----------
+    data : bytes
+        A MATLAB data file, a ``.npy`` array or a ``.npz`` archive (:func:`is_array_file`).
+
+    Returns
+    -------
+    str
+        ``#time (s)<TAB>omega`` (the vectors' names; a matrix's columns ``name 1``, …),
+        then a line per reading.
+
+    Raises
+    ------
+    UserError
+        Those of :func:`app.core.matlab_files.matlab_variables`,
+        :func:`app.core.numpy_files.numpy_arrays` and
+        :func:`app.core.array_files.array_table`; ``numpy.shape`` for a ``.npy`` that is
+        not ``(n,)``, ``(n, 2)`` or ``(n, 3)`` numbers; ``arrays.too_many_numbers`` past
+        :data:`MAX_NUMBERS`.
+    """
+    if is_matlab_file(data[:20]):
+        return _table_text(array_table(matlab_variables(data), "matlab", MIN_POSITION_READINGS))
+    loaded = numpy_arrays(data)
+    if isinstance(loaded, dict):
+        return _table_text(array_table(loaded, "numpy", MIN_POSITION_READINGS))
+    return _npy_text(loaded)
+
+
+def _npy_text(array: np.ndarray) -> str:
+    """A ``.npy``'s columns: readings; time and readings; and case temperatures."""
+    if array.ndim == 1:
+        array = array[:, None]
+    if array.dtype.kind not in "fiu" or array.ndim != 2 or array.shape[1] not in NPY_HEADERS:
+        raise UserError("numpy.shape", shape=str(tuple(array.shape)))
+    columns = [array[:, k].astype(float) for k in range(array.shape[1])]
+    return _text(NPY_HEADERS[array.shape[1]], columns)
+
+
+def _table_text(table: ArrayTable) -> str:
+    """The vectors as columns, the times first; times from the stated rate where the file
+    has none."""
+    length = next(iter(table.columns.values())).size
+    names = [_header_cell(name) for name in table.offered]
+    columns = [table.columns[name] for name in table.offered]
+    if table.time is not None:
+        return _text([TIME_HEADER, *names], [table.columns[table.time], *columns])
+    if table.rate_hz:
+        return _text([TIME_HEADER, *names], [np.arange(length) / table.rate_hz, *columns])
+    return _text(names, columns)
+
+
+def _header_cell(name: str) -> str:
+    """A vector's name as a header cell: nothing in it that splits a cell or starts one."""
+    return _NOT_IN_A_NAME.sub(" ", name).strip() or "rate"
+
+
+def _text(header, columns: list[np.ndarray]) -> str:
+    count = len(columns) * columns[0].size
+    if count > MAX_NUMBERS:
+        raise UserError("arrays.too_many_numbers", count=count, limit=MAX_NUMBERS)
+    cells = [column.astype(str) for column in columns]  # the shortest that reads back
+    lines = ["#" + "\t".join(header), *("\t".join(row) for row in zip(*cells, strict=True))]
+    return "\n".join(lines) + "\n"
