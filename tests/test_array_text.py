@@ -209,3 +209,20 @@ def test_ten_readings_as_the_handout_takes_them_are_read(lab):
     np.testing.assert_allclose(values, rates / RAD_S, rtol=1e-14)
     few = send("/csv/preview", as_text(mat_file(omega=rates[:5]))["text"], position=2)
     assert few.status_code == 200 and few.json()["positions"][0]["n"] == 5
+
+
+@pytest.mark.parametrize(
+    "fault", [{"version": 85}, {"method": 9}, {"encrypted": True}], ids=["version", "m9", "lock"]
+)
+def test_zips_the_zip_module_cannot_read_are_refused_in_words(lab, fault):
+    """A ``.npz`` or a workbook whose zip the module cannot open or read (a newer zip
+    version, Deflate64, a password): was a 500 (NotImplementedError, RuntimeError)."""
+    from tests.test_workbook_readings import handout_rows, workbook
+    from tests.zip_faults import zip_patched
+
+    _, as_text, _ = lab
+    buffer = io.BytesIO()
+    np.savez(buffer, rate=omega(40))
+    for data in (buffer.getvalue(), workbook(handout_rows())):
+        refused = as_text(zip_patched(data, **fault), status=400)
+        assert "cannot be read" in refused["detail"] or "could not be read" in refused["detail"]

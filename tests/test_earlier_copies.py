@@ -24,6 +24,7 @@ from tests.factories import (
     token_for,
 )
 from tests.test_evidence_pages import hand_in, honest_columns
+from tests.zip_faults import zip_patched
 
 
 def shifted(columns: dict, offset: float) -> dict:
@@ -280,6 +281,14 @@ def test_one_readings_csv_is_an_archive_too(world):
     assert labels == {("group7", None, "heading"), ("group7", None, "latitude")}
 
 
+def teacher1_export(world) -> bytes:
+    """teacher1's class zip of the assignment, as the dashboard exports it."""
+    teacher1 = browser(world, "teacher1")
+    return teacher1.get(
+        f"/courses/{world['course']}/assignments/{world['assignment']}/export.zip"
+    ).content
+
+
 def test_bad_uploads_are_refused_and_nothing_is_kept(world, monkeypatch):
     import io
     import zipfile
@@ -307,13 +316,20 @@ def test_bad_uploads_are_refused_and_nothing_is_kept(world, monkeypatch):
             "No readings recorded by students",
         ),
     ]
+    # what the zip module cannot open or read: was a 500 (NotImplementedError, RuntimeError)
+    student, session_id = hand_in(world, "s1", honest_columns(73), honest_columns(74, 9.8))
+    exported = teacher1_export(world)
+    cases += [
+        ("new.zip", zip_patched(exported, version=85), "This is not a zip file that can be read."),
+        ("locked.zip", zip_patched(exported, encrypted=True), "protected by a password"),
+        ("7z.zip", zip_patched(exported, method=9), "such as Deflate64"),
+    ]
     for name, content, message in cases:
         refused = upload(teacher2, name, content)
         assert refused.status_code == 400, name
         assert 'id="error-readings"' in refused.text, name  # beside the file field
         assert message in html.unescape(refused.text), name
     hostile = "<script>alert(1)</script>=cmd|x.csv"
-    student, session_id = hand_in(world, "s1", honest_columns(71), honest_columns(72, 9.8))
     readings = student.get(f"/lab/sessions/{session_id}/export.csv").content
     assert upload(teacher2, hostile, readings).status_code == 303
     raw = teacher2.get("/review/archives").text

@@ -18,6 +18,7 @@ from app.core.workbook_sheets import OLE_MAGIC
 from app.core.workbook_text import READINGS_LIMITS, workbook_readings, workbook_text
 from tests.factories import _form_token, handout, new_session, post_json
 from tests.test_roster_workbook import with_shared_strings, zip_of
+from tests.zip_faults import zip_patched
 
 
 def workbook(
@@ -122,8 +123,23 @@ def shared_strings(count: int) -> bytes:
             "workbook.too_many_cells",
         ),
         (shared_strings(READINGS_LIMITS.max_sheet_elements), "workbook.too_many_cells"),
+        # what the zip module cannot open or read: were NotImplementedError or
+        # RuntimeError (a 500 on the lab page, the roster, the characterisation)
+        (zip_patched(workbook(handout_rows()), version=85), "workbook.unreadable"),
+        (zip_patched(workbook(handout_rows()), method=9), "workbook.unreadable"),
+        (zip_patched(workbook(handout_rows()), encrypted=True), "workbook.unreadable"),
     ],
-    ids=["xls", "cut", "zipped-csv", "bomb", "empty-rows", "shared-strings"],
+    ids=[
+        "xls",
+        "cut",
+        "zipped-csv",
+        "bomb",
+        "empty-rows",
+        "shared-strings",
+        "zip-version",
+        "deflate64",
+        "encrypted",
+    ],
 )
 def test_a_workbook_that_cannot_be_read_is_refused_with_its_reason(data, key):
     with pytest.raises(UserError) as refused:

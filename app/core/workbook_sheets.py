@@ -117,7 +117,17 @@ def _checked(data: bytes, limits: SheetLimits) -> None:
                     raise UserError(limits.too_many_elements, limit=limits.max_sheet_elements)
     except UserError:
         raise
-    except (zipfile.BadZipFile, OSError, ValueError, EOFError, zlib.error):
+    # NotImplementedError: a zip version or compression method the module does not read
+    # (Deflate64, as 7-Zip and Windows write it); RuntimeError: a member behind a password
+    except (
+        zipfile.BadZipFile,
+        OSError,
+        ValueError,
+        EOFError,
+        zlib.error,
+        NotImplementedError,
+        RuntimeError,
+    ):
         raise UserError(limits.unreadable) from None
 
 

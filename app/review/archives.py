@@ -26,6 +26,7 @@ from app.web.work_slots import pool
 MAX_MEMBERS = 20_000  # CSV files in one zip
 MAX_UNPACKED = 256 * 1024 * 1024  # bytes of CSV read from one upload
 MAX_NAME = 200
+ENCRYPTED = 0x1  # a zip member's general-purpose flag: encrypted (PKWARE's APPNOTE 4.4.4)
 ATTEMPT_FILE = re.compile(r"(?:^|/)([^/]+)/attempt-(\d{1,6})\.csv$")
 PARTS = ("heading", "latitude")
 
@@ -86,9 +87,12 @@ def _file_keys(handle: BinaryIO, where: str) -> dict[str, list[str]]:
 def _zip_groups(handle: BinaryIO) -> Iterator[ArchivedGroup]:
     try:
         archive = zipfile.ZipFile(handle)
-    except (zipfile.BadZipFile, OSError):
+    # NotImplementedError: a zip version the module does not read ("zip file version 8.5")
+    except (zipfile.BadZipFile, OSError, ValueError, EOFError, NotImplementedError):
         raise UserError("archive.bad_zip") from None
     members = [info for info in archive.infolist() if ATTEMPT_FILE.search(info.filename)]
+    if any(info.flag_bits & ENCRYPTED for info in members):  # a zip behind a password
+        raise UserError("archive.encrypted")
     if len(members) > MAX_MEMBERS:
         raise UserError("archive.too_many", limit=MAX_MEMBERS)
     # a member never yields more than its stated size (zipfile stops there)
@@ -99,7 +103,9 @@ def _zip_groups(handle: BinaryIO) -> Iterator[ArchivedGroup]:
         try:
             with archive.open(info) as member:
                 keys = _file_keys(member, info.filename)
-        except (zipfile.BadZipFile, OSError, EOFError, NotImplementedError):
+        except NotImplementedError:  # a compression method the module does not read
+            raise UserError("archive.compression", file=info.filename[:MAX_NAME]) from None
+        except (zipfile.BadZipFile, OSError, EOFError, RuntimeError):
             raise UserError("archive.bad_zip") from None
         if keys:
             yield ArchivedGroup(match.group(1)[:MAX_NAME], int(match.group(2)), keys)
