@@ -40,6 +40,13 @@ def npy(array: np.ndarray) -> bytes:
     return buffer.getvalue()
 
 
+def npy_claiming(shape: tuple, descr: str = "<f8", data: bytes = b"\x00" * 64) -> bytes:
+    """A ``.npy`` file (NEP 1, version 1.0) whose header claims ``shape``, before ``data``."""
+    header = f"{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape!r}, }}"
+    header += " " * (-(10 + len(header) + 1) % 64) + "\n"
+    return b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + data
+
+
 def stored(session_id: int, position: int = 1) -> tuple[np.ndarray, np.ndarray | None]:
     with read_session() as db:
         take = db.exec(
@@ -109,6 +116,13 @@ def test_units_angle_and_appends_ride_in_the_query(client, auth):
         (npy(np.zeros((2, 2, 2))), {}, "shape (2, 2, 2)"),
         (npy(np.array(["a", "b"])), {}, "not a readable .npy"),
         (b"\x93NUMPY\x01\x00garbage", {}, "not a readable .npy"),
+        # headers np.load believed: a 500 (MemoryError: 10¹² numbers set aside for 64
+        # bytes; a TokenError for a header that is no literal) -- now checked first
+        (npy_claiming((10**12,)), {}, "not a readable .npy"),
+        (npy_claiming((10**8, 2)), {}, "not a readable .npy"),
+        (b"\x93NUMPY\x01\x00\x10\x00{'descr': __import__('os')}\n", {}, "not a readable .npy"),
+        (npy_claiming((-5,)), {}, "not a readable .npy"),
+        (npy_claiming((4,), descr="<c16"), {}, "not a readable .npy"),
         (np.ones(10).tobytes(), {"offset": "-1"}, "offset must be"),
     ],
 )
@@ -208,3 +222,20 @@ def test_gyro_temperatures_are_stored_exported_and_flag_a_warm_up(client, auth):
     exported = json.loads("".join(session_json(Selection(session_id))))
     assert exported["positions"][0]["temperatures_c"] == pytest.approx(temperatures)
     assert exported["positions"][0]["times_s"] == pytest.approx(times)
+
+
+def test_a_npy_in_any_byte_order_and_layout_is_read_as_saved(client, auth):
+    """Big-endian integers, Fortran-ordered time and value rows, half precision: read
+    from the file's own bytes as np.load reads them."""
+    session_id = new_api_session(client, auth)
+    rows = np.column_stack([0.5 * np.arange(12), 10.0 + np.arange(12)])
+    for position, array in enumerate(
+        [np.arange(10, 22, dtype=">i4"), np.asfortranarray(rows), rows.astype("<f2")], start=1
+    ):
+        assert put_binary(client, auth, session_id, npy(array), position).status_code == 200
+    values, times = stored(session_id, 1)
+    np.testing.assert_array_equal(values, np.arange(10, 22))
+    for position in (2, 3):
+        values, times = stored(session_id, position)
+        np.testing.assert_array_equal(values, 10.0 + np.arange(12))
+        np.testing.assert_array_equal(times, 0.5 * np.arange(12))

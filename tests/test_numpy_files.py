@@ -17,6 +17,7 @@ from app.core.numpy_files import is_npy, is_npz, numpy_record
 from app.core.record_columns import ColumnChoiceNeeded
 from app.web.i18n import translator
 from tests.noise_sources import static_record
+from tests.test_binary_uploads import npy_claiming
 from tests.test_characterisation import shown, stored, upload
 from tests.test_characterisation import world as world  # noqa: F401 -- the fixture
 
@@ -92,6 +93,9 @@ def test_an_archive_of_named_arrays_is_read_as_matlabs_variables_are():
         (saved(np.arange(5000.0))[:300], "numpy.unreadable"),
         (saved(np.array(["a", "b"] * 20)), "numpy.unreadable"),
         (archived(name=np.array("bench"), fs=np.array(10.0)), "numpy.no_record"),
+        # a header claiming 10¹² numbers over 64 bytes: np.load set them aside first
+        (npy_claiming((10**12,)), "numpy.unreadable"),
+        (npy_claiming((-5,)), "numpy.unreadable"),
     ],
 )
 def test_what_cannot_be_read_is_said_in_both_languages_and_nothing_is_unpickled(data, key):

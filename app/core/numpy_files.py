@@ -40,6 +40,56 @@ def is_npy(magic: bytes) -> bool:
     return magic.startswith(NPY_MAGIC)
 
 
+def read_npy(data: bytes) -> np.ndarray:
+    """A ``.npy`` file's array of numbers, its header checked against its bytes first.
+
+    ``np.load`` allocates the array its header claims before it reads the data: 200 bytes
+    claiming 10¹² numbers raised MemoryError, 10⁹ numbers set 8 GB aside.  Here the header
+    (NEP 1: magic, version, a Python literal of ``descr``, ``fortran_order``, ``shape``) is
+    read alone, the array must be real numbers that its bytes hold whole, and the numbers
+    are viewed where they lie (``np.frombuffer``: no copy, never unpickled).
+
+    Parameters
+    ----------
+    data : bytes
+        The whole file.
+
+    Returns
+    -------
+    numpy.ndarray
+        The array (read-only, in the file's byte order), of float, signed or unsigned
+        integer numbers.
+
+    Raises
+    ------
+    ValueError
+        For a header that cannot be read (any version but 1.0 and 2.0), another kind of
+        data (text, complex, dates, records, objects), or fewer bytes than it claims.
+    """
+    stream = io.BytesIO(data)
+    try:
+        version = np.lib.format.read_magic(stream)
+        if version == (1, 0):
+            shape, fortran_order, dtype = np.lib.format.read_array_header_1_0(stream)
+        elif version == (2, 0):
+            shape, fortran_order, dtype = np.lib.format.read_array_header_2_0(stream)
+        else:
+            raise ValueError(f"version {version}")
+    except Exception as error:  # a header NumPy cannot parse (ValueError, a TokenError, …)
+        raise ValueError("not a .npy header") from error
+    if dtype.kind not in "fiu" or dtype.hasobject:
+        raise ValueError(f"not numbers: {dtype}")
+    if any(length < 0 for length in shape):  # NumPy's header reader lets (-5,) through
+        raise ValueError(f"shape {shape}")
+    count = 1
+    for length in shape:
+        count *= length
+    if count * dtype.itemsize > len(data) - stream.tell():
+        raise ValueError("fewer bytes than the header claims")
+    flat = np.frombuffer(data, dtype=dtype, count=count, offset=stream.tell())
+    return flat.reshape(shape, order="F" if fortran_order else "C")
+
+
 def is_npz(data: bytes) -> bool:
     """Whether a file is a ``.npz`` archive: a zip whose members are all ``.npy`` arrays.
 
@@ -110,12 +160,17 @@ def numpy_arrays(data: bytes) -> np.ndarray | dict[str, np.ndarray]:
         ``numpy.unreadable`` for a damaged file or a pickle; ``numpy.too_large`` for an
         archive whose arrays unpack past :data:`MAX_ELEMENTS` numbers.
     """
+    if is_npy(data[:6]):
+        try:
+            return read_npy(data)
+        except ValueError:
+            raise UserError("numpy.unreadable") from None
     try:
         loaded = np.load(io.BytesIO(data), allow_pickle=False)
     except Exception:  # NumPy raises several kinds for a damaged file or a pickle
         raise UserError("numpy.unreadable") from None
     if not isinstance(loaded, np.lib.npyio.NpzFile):
-        return loaded
+        raise UserError("numpy.unreadable")
     with loaded:
         # the members' sizes unpacked, from the zip's directory: nothing loaded yet
         unpacked = sum(member.file_size for member in loaded.zip.infolist())
