@@ -116,6 +116,19 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
     assert result["uncertainty_model"] == "white"
 
 
+def damaged_gzip() -> bytes:
+    """A gzip-compressed record with a byte of its compressed data flipped (zlib's
+    "invalid distance too far back", or another such error, where it is read)."""
+    import gzip
+
+    rng = np.random.default_rng(8)
+    packed = bytearray(
+        gzip.compress("".join(f"{v!r}\n" for v in rng.normal(size=7000).tolist()).encode())
+    )
+    packed[20] ^= 0xFF  # early in the first block (a byte in the middle: the CRC's error)
+    return bytes(packed)
+
+
 @pytest.mark.one_backend  # input refused before any write
 @pytest.mark.parametrize(
     ("content", "rate", "message"),
@@ -129,6 +142,9 @@ def test_teacher_characterises_the_bench_gyro_and_real_readings_use_it(world):
         ("position_1,position_2\n1,2\n", "10", "one static record"),
         ("x\n" + "1.0\n" * 7000, "10", "never change"),
         (b"\x00\x01\x81\x00", "10", "not text (UTF-8, UTF-16, GB18030 or Windows-1252)"),
+        # a gzip whose compressed data is damaged: zlib.error, a 500
+        (damaged_gzip(), "10", "The compressed file is damaged or incomplete."),
+        (damaged_gzip()[:200], "10", "The compressed file is damaged or incomplete."),
         # rates no gyro gives: the fit's squares overflowed (a 500)
         (
             "".join(f"{(-1) ** k * 3e300 * (1 + k % 7)!r}\n" for k in range(7000)),

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import math
+import zlib
 from typing import Annotated
 
 from fastapi import APIRouter, File, Form, Request, UploadFile
@@ -211,7 +212,9 @@ def upload_characterisation(
                     unit.strip() or None,
                     column.strip() or None,
                 )
-        except (OSError, EOFError):  # a truncated or corrupt gzip stream
+        # a truncated gzip stream (EOFError), a damaged header or check (BadGzipFile, an
+        # OSError), damaged compressed data (zlib.error: was a 500)
+        except (OSError, EOFError, zlib.error):
             raise UserError("characterisation.bad_gzip") from None
     except UserError as error:  # the section again: what was typed, the refusal beside its field
         typed = {"rate_hz": rate_hz.strip(), "unit": unit.strip(), "column": column.strip()}
