@@ -105,39 +105,31 @@ def _allan(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_allan_command(commands, guarded) -> None:
+def add_allan_command(commands, guarded, say) -> None:
     allan = commands.add_parser(
         "allan",
-        help="Allan deviation of a static record, the IEEE 952 terms it resolves, dwell advice",
+        help=say("clihelp.allan"),
     )
     allan.add_argument(
         "file",
-        help="CSV: one value per line, time_s,value[,temperature_c], or the long layout "
-        "with one position; '-' reads stdin",
+        help=say("clihelp.allan.file"),
     )
-    allan.add_argument(
-        "--rate", type=float, help="sample rate in Hz (default: from the record's times)"
-    )
+    allan.add_argument("--rate", type=float, help=say("clihelp.allan.rate"))
     allan.add_argument(
         "--unit",
         choices=UNITS,
         default=None,
-        help="the rates' unit (default: as the record's header names it, else deg/h)",
+        help=say("clihelp.allan.unit"),
     )
     allan.add_argument(
         "--column",
         metavar="NAME|N",
-        help="the rates' column: a header name or a number from 1 (one axis of an IMU record)",
+        help=say("clihelp.allan.column"),
     )
     allan.add_argument(
-        "--max-tau",
-        type=float,
-        metavar="SECONDS",
-        help="the longest τ to analyse: refused when the record is shorter than twice it",
+        "--max-tau", type=float, metavar="SECONDS", help=say("clihelp.allan.max_tau")
     )
-    allan.add_argument(
-        "--progress", action="store_true", help="report reading and analysis on stderr"
-    )
-    allan.add_argument("--language", choices=["en", "zh-CN"], help="default: from LANG")
+    allan.add_argument("--progress", action="store_true", help=say("clihelp.allan.progress"))
+    allan.add_argument("--language", choices=["en", "zh-CN"], help=say("clihelp.language"))
     allan.add_argument("--json", action="store_true")
     allan.set_defaults(handler=guarded(_allan))

@@ -24,60 +24,55 @@ RUN_ERRORS = {"bridge.refused", "bridge.server_lost", "bridge.unreachable", "bri
 INSTRUMENT_KEYS = ("format", "axis", "unit", "rate_hz", "integrated", "temperature_scale")
 
 
-def add_bridge_command(commands) -> None:
+def add_bridge_command(commands, say) -> None:
     bridge = commands.add_parser(
         "bridge",
-        help="send a gyro's output (serial port, file, or a recorded run) to a session",
-        description="Read a gyro, decode its output and store it in a session position. "
-        "Without --session it only decodes (and records), to check the wiring.",
+        help=say("clihelp.bridge"),
+        description=say("clihelp.bridge.about"),
     )
     source = bridge.add_mutually_exclusive_group()
-    source.add_argument("--serial", help="serial port, e.g. /dev/ttyUSB0 or COM3")
-    source.add_argument("--file", help="read bytes from a file ('-' or nothing: stdin)")
-    source.add_argument("--replay", help="play back a raw recording made with --record")
+    source.add_argument("--serial", help=say("clihelp.bridge.serial"))
+    source.add_argument("--file", help=say("clihelp.bridge.file"))
+    source.add_argument("--replay", help=say("clihelp.bridge.replay"))
     bridge.add_argument(
         "--format",
-        help=f"{' | '.join(FORMATS)} (default text; a replay: the recording's)",
+        help=say("clihelp.bridge.format", formats=" | ".join(FORMATS)),
     )
-    bridge.add_argument("--baud", type=int, help="default: the format's (38400, 921600, 9600)")
-    bridge.add_argument("--axis", choices=["x", "y", "z"], help="default: the first valid one")
+    bridge.add_argument("--baud", type=int, help=say("clihelp.bridge.baud"))
+    bridge.add_argument("--axis", choices=["x", "y", "z"], help=say("clihelp.bridge.axis"))
     bridge.add_argument(
         "--unit",
         choices=list(UNITS),
-        help="what the gyro sends: a rate, or an angle increment per output (default: "
-        "the format's: text deg/h, kvh-dsp3000 deg/s, kvh-dsp1750 rad)",
+        help=say("clihelp.bridge.unit"),
     )
-    bridge.add_argument("--rate", type=float, help="the gyro's output rate in Hz")
+    bridge.add_argument("--rate", type=float, help=say("clihelp.bridge.rate"))
     bridge.add_argument(
-        "--integrated", action="store_true", default=None, help="the output is an integrated angle"
+        "--integrated", action="store_true", default=None, help=say("clihelp.bridge.integrated")
     )
-    bridge.add_argument("--temp-scale", type=float, help="°C per count of the temperature field")
+    bridge.add_argument("--temp-scale", type=float, help=say("clihelp.bridge.temp_scale"))
     bridge.add_argument(
         "--regex",
-        help="text: a regular expression; its first group (or the group named 'value') is "
-        "the reading",
+        help=say("clihelp.bridge.regex"),
     )
-    bridge.add_argument("--column", type=int, help="text: 1-based column of the reading")
-    bridge.add_argument("--scale", type=float, help="text: multiply readings by this")
-    bridge.add_argument("--record", help="keep the raw bytes with their times in this file")
-    bridge.add_argument(
-        "--speed", type=float, default=1.0, help="replay this many times faster (0: at once)"
-    )
-    bridge.add_argument("--csv", help="also append the samples to this CSV (long layout)")
-    bridge.add_argument("--url", default="http://127.0.0.1:8000", help="GyroLab server")
-    bridge.add_argument("--token", help="personal access token (or GYROLAB_TOKEN)")
-    bridge.add_argument("--session", type=int, help="the session to store into")
+    bridge.add_argument("--column", type=int, help=say("clihelp.bridge.column"))
+    bridge.add_argument("--scale", type=float, help=say("clihelp.bridge.scale"))
+    bridge.add_argument("--record", help=say("clihelp.bridge.record"))
+    bridge.add_argument("--speed", type=float, default=1.0, help=say("clihelp.bridge.speed"))
+    bridge.add_argument("--csv", help=say("clihelp.bridge.csv"))
+    bridge.add_argument("--url", default="http://127.0.0.1:8000", help=say("clihelp.bridge.url"))
+    bridge.add_argument("--token", help=say("clihelp.bridge.token"))
+    bridge.add_argument("--session", type=int, help=say("clihelp.bridge.session"))
     bridge.add_argument("--part", choices=["heading", "latitude"])
     bridge.add_argument("--position", type=int, choices=range(1, 9), metavar="1-8")
-    bridge.add_argument("--batch", type=int, default=50, help="readings per upload")
+    bridge.add_argument("--batch", type=int, default=50, help=say("clihelp.bridge.batch"))
     bridge.add_argument(
         "--json",
         action="store_true",
-        help="upload JSON instead of raw little-endian float64 (for an older server)",
+        help=say("clihelp.bridge.json"),
     )
-    bridge.add_argument("--max-samples", type=int, help="stop after this many samples")
-    bridge.add_argument("--seconds", type=float, help="stop after this long")
-    bridge.add_argument("--language", choices=["en", "zh-CN"], help="default: from LANG")
+    bridge.add_argument("--max-samples", type=int, help=say("clihelp.bridge.max_samples"))
+    bridge.add_argument("--seconds", type=float, help=say("clihelp.bridge.seconds"))
+    bridge.add_argument("--language", choices=["en", "zh-CN"], help=say("clihelp.language"))
     bridge.set_defaults(handler=bridge_command)
 
 

@@ -71,17 +71,13 @@ def print_report(report: dict, language: str = "en") -> None:
             print(f"{azimuth:10.1f} {_text(formula):>14} {_text(mean):>12} {_text(std):>10}")
 
 
-def add_errors_command(commands, guarded, to_json_text) -> None:
-    errors = commands.add_parser(
-        "errors", help="heading errors of an error-explorer scenario (first order and simulated)"
-    )
-    errors.add_argument("--list", action="store_true", help="name the scenarios")
+def add_errors_command(commands, guarded, to_json_text, say) -> None:
+    errors = commands.add_parser("errors", help=say("clihelp.errors"))
+    errors.add_argument("--list", action="store_true", help=say("clihelp.errors.list"))
     errors.add_argument("--scenario", choices=sorted(SCENARIOS), metavar="NAME")
-    errors.add_argument(
-        "--method", choices=METHODS, help="override the scenario's method (two|four|seeker)"
-    )
+    errors.add_argument("--method", choices=METHODS, help=say("clihelp.errors.method"))
     errors.add_argument("--json", action="store_true")
-    errors.add_argument("--language", choices=["en", "zh-CN"], help="default: from LANG")
+    errors.add_argument("--language", choices=["en", "zh-CN"], help=say("clihelp.language"))
 
     def run(args: argparse.Namespace) -> int:
         if args.list:

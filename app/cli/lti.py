@@ -109,29 +109,31 @@ def _sync_roster(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
-def add_lti_commands(commands) -> None:
-    lti = commands.add_parser("lti", help="LTI 1.3: platforms, keys, grades, rosters")
+def add_lti_commands(commands, say) -> None:
+    lti = commands.add_parser("lti", help=say("clihelp.lti"))
     sub = lti.add_subparsers(dest="lti_command", required=True)
-    add = sub.add_parser("add-platform", help="register an LMS by hand (or add a deployment)")
+    add = sub.add_parser("add-platform", help=say("clihelp.lti.add_platform"))
     add.add_argument("--name")
     add.add_argument("--issuer", required=True)
     add.add_argument("--client-id", required=True)
-    add.add_argument("--login-url", required=True, help="the platform's OIDC authorization URL")
-    add.add_argument("--token-url", required=True, help="the platform's access token URL")
-    add.add_argument("--jwks-url", required=True, help="the platform's public keyset URL")
-    add.add_argument("--audience", help="token audience, if not the token URL")
-    add.add_argument("--deployment", action="append", help="a deployment id (repeatable)")
-    add.set_defaults(handler=_add_platform)
-    sub.add_parser("list", help="the registered platforms").set_defaults(handler=_list)
-    sub.add_parser("rotate-key", help="new signing key; old ones kept a week").set_defaults(
-        handler=_rotate
+    add.add_argument("--login-url", required=True, help=say("clihelp.lti.add_platform.login_url"))
+    add.add_argument("--token-url", required=True, help=say("clihelp.lti.add_platform.token_url"))
+    add.add_argument("--jwks-url", required=True, help=say("clihelp.lti.add_platform.jwks_url"))
+    add.add_argument("--audience", help=say("clihelp.lti.add_platform.audience"))
+    add.add_argument(
+        "--deployment", action="append", help=say("clihelp.lti.add_platform.deployment")
     )
-    link = sub.add_parser("registration-link", help="a one-time dynamic registration URL")
-    link.add_argument("--base-url", help="GyroLab's public address (default GYROLAB_PUBLIC_URL)")
+    add.set_defaults(handler=_add_platform)
+    sub.add_parser("list", help=say("clihelp.lti.list")).set_defaults(handler=_list)
+    sub.add_parser("rotate-key", help=say("clihelp.lti.rotate_key")).set_defaults(handler=_rotate)
+    link = sub.add_parser("registration-link", help=say("clihelp.lti.registration_link"))
+    link.add_argument("--base-url", help=say("clihelp.lti.registration_link.base_url"))
     link.set_defaults(handler=_registration_link)
-    sub.add_parser("send-grades", help="send grade posts that are due").set_defaults(
+    sub.add_parser("send-grades", help=say("clihelp.lti.send_grades")).set_defaults(
         handler=_send_grades
     )
-    sync = sub.add_parser("sync-roster", help="fetch a linked course's roster from the LMS")
-    sync.add_argument("--course", type=int, required=True, help="GyroLab course id")
+    sync = sub.add_parser("sync-roster", help=say("clihelp.lti.sync_roster"))
+    sync.add_argument(
+        "--course", type=int, required=True, help=say("clihelp.lti.sync_roster.course")
+    )
     sync.set_defaults(handler=_sync_roster)

@@ -8,6 +8,7 @@ import os
 import sys
 
 from app.cli.language import speaker
+from app.cli.localised_parser import help_speaker, parser_class, wanted_language
 
 
 def _serve(args: argparse.Namespace) -> int:
@@ -176,61 +177,60 @@ def _restore(args: argparse.Namespace) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="gyrolab", description=__doc__)
+def build_parser(language: str = "en") -> argparse.ArgumentParser:
+    """Every command's parser, its help and argparse's own words in ``language``."""
+    say = help_speaker(language)
+    parser = parser_class(language)(prog="gyrolab", description=say("clihelp.about"))
     commands = parser.add_subparsers(dest="command", required=True)
 
-    serve = commands.add_parser("serve", help="migrate, add demo data if empty, and serve")
-    serve.add_argument("--host", help="default: GYROLAB_HOST or 127.0.0.1")
-    serve.add_argument("--port", type=int, help="default: GYROLAB_PORT or 8000")
+    serve = commands.add_parser("serve", help=say("clihelp.serve"))
+    serve.add_argument("--host", help=say("clihelp.serve.host"))
+    serve.add_argument("--port", type=int, help=say("clihelp.serve.port"))
     serve.add_argument("--workers", type=int, default=1)
-    serve.add_argument("--no-demo", action="store_true", help="do not create demo accounts")
+    serve.add_argument("--no-demo", action="store_true", help=say("clihelp.serve.no_demo"))
     serve.add_argument(
-        "--proxy-headers", action="store_true", help="trust X-Forwarded-* from a reverse proxy"
+        "--proxy-headers", action="store_true", help=say("clihelp.serve.proxy_headers")
     )
     serve.add_argument("--no-access-log", action="store_true")
     serve.set_defaults(handler=_serve)
 
-    migrate = commands.add_parser("migrate", help="apply database migrations")
+    migrate = commands.add_parser("migrate", help=say("clihelp.migrate"))
     migrate.set_defaults(handler=_migrate)
 
-    create = commands.add_parser(
-        "create-user", help="create an administrator, teacher or student account"
-    )
+    create = commands.add_parser("create-user", help=say("clihelp.create_user"))
     create.add_argument("--role", choices=["admin", "teacher", "student"], default="teacher")
     create.add_argument("--username", required=True)
     create.add_argument("--display-name")
     create.add_argument("--email")
-    create.add_argument("--password", help="default: asked for (or one line of stdin)")
+    create.add_argument("--password", help=say("clihelp.create_user.password"))
     create.set_defaults(handler=_create_user)
 
-    prune = commands.add_parser(
-        "prune", help="remove old re-recordings that no submitted attempt refers to"
-    )
-    prune.add_argument("--days", type=int, default=30, help="superseded more than N days ago")
+    prune = commands.add_parser("prune", help=say("clihelp.prune"))
+    prune.add_argument("--days", type=int, default=30, help=say("clihelp.prune.days"))
     prune.set_defaults(handler=_prune)
-    backup = commands.add_parser("backup", help="copy the database (safe while serving)")
-    backup.add_argument("file", help="new file to write, e.g. gyrolab-2026-11-21.db")
+    backup = commands.add_parser("backup", help=say("clihelp.backup"))
+    backup.add_argument("file", help=say("clihelp.backup.file"))
     backup.set_defaults(handler=_backup)
-    restore = commands.add_parser("restore", help="replace the database with a backup")
+    restore = commands.add_parser("restore", help=say("clihelp.restore"))
     restore.add_argument("file")
-    restore.add_argument("--yes", action="store_true", help="really replace everything")
+    restore.add_argument("--yes", action="store_true", help=say("clihelp.restore.yes"))
     restore.set_defaults(handler=_restore)
 
     from app.cli.bridge import add_bridge_command
 
-    add_bridge_command(commands)
+    add_bridge_command(commands, say)
 
     from app.cli.lti import add_lti_commands
     from app.cli.science import add_science_commands
 
-    add_science_commands(commands)
-    add_lti_commands(commands)
+    add_science_commands(commands, say)
+    add_lti_commands(commands, say)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    arguments = sys.argv[1:] if argv is None else argv
+    args = build_parser(wanted_language(arguments)).parse_args(arguments)
     try:
         return args.handler(args)
     except BrokenPipeError:

@@ -209,52 +209,50 @@ def _guarded(handler):
     return run
 
 
-def add_science_commands(commands) -> None:
-    solve = commands.add_parser("solve", help="heading, or latitude and Earth rate, from a CSV")
+def add_science_commands(commands, say) -> None:
+    solve = commands.add_parser("solve", help=say("clihelp.solve"))
     solve.add_argument("part", choices=["heading", "latitude"])
-    solve.add_argument("file", help="CSV file (wide or long layout); '-' reads stdin")
+    solve.add_argument("file", help=say("clihelp.solve.file"))
     solve.add_argument(
         "--rotation",
         choices=["ccw", "cw"],
         default="ccw",
-        help="heading: direction the table was turned (handout: ccw)",
+        help=say("clihelp.solve.rotation"),
     )
     solve.add_argument(
         "--start-angle",
         type=float,
         default=0.0,
-        help="angle of position 1 (heading: relative azimuth; latitude: "
-        "elevation from the north horizon)",
+        help=say("clihelp.solve.start_angle"),
     )
-    solve.add_argument("--step", type=float, default=90.0, help="step between positions (deg)")
+    solve.add_argument("--step", type=float, default=90.0, help=say("clihelp.solve.step"))
     solve.add_argument(
         "--unit",
         choices=UNITS,
         default=None,
-        help="the readings' unit (default: as the table's header names it, else deg/h)",
+        help=say("clihelp.solve.unit"),
     )
-    solve.add_argument("--latitude", type=float, help="true latitude φ0 (for percent errors)")
+    solve.add_argument("--latitude", type=float, help=say("clihelp.solve.latitude"))
     solve.add_argument(
         "--earth-rate",
         type=float,
         default=EARTH_RATE_DEG_H,
-        help="true Earth rate Ω0 in °/h (default 15.041; the handout used 15.04)",
+        help=say("clihelp.solve.earth_rate"),
     )
-    solve.add_argument("--true-azimuth", type=float, help="true azimuth of position 1 (deg)")
+    solve.add_argument("--true-azimuth", type=float, help=say("clihelp.solve.true_azimuth"))
     solve.add_argument(
         "--gyro-preset",
         choices=sorted(PRESETS),
-        help="the gyro's noise model (a simulator preset): the 1σ then includes correlated "
-        "noise (uncertainty_model 'allan') instead of assuming white noise",
+        help=say("clihelp.solve.gyro_preset"),
     )
     solve.add_argument("--json", action="store_true")
-    solve.add_argument("--language", choices=["en", "zh-CN"], help="default: from LANG")
+    solve.add_argument("--language", choices=["en", "zh-CN"], help=say("clihelp.language"))
     solve.set_defaults(handler=_guarded(_solve))
 
     from app.cli.allan import add_allan_command
     from app.cli.error_scenarios import add_errors_command
     from app.cli.simulate import add_simulate_command
 
-    add_simulate_command(commands, _guarded)
-    add_allan_command(commands, _guarded)
-    add_errors_command(commands, _guarded, to_json_text)
+    add_simulate_command(commands, _guarded, say)
+    add_allan_command(commands, _guarded, say)
+    add_errors_command(commands, _guarded, to_json_text, say)

@@ -121,15 +121,15 @@ def simulate_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_simulate_command(commands, guarded) -> None:
-    simulate = commands.add_parser("simulate", help="simulated gyro readings as long CSV")
+def add_simulate_command(commands, guarded, say) -> None:
+    simulate = commands.add_parser("simulate", help=say("clihelp.simulate"))
     simulate.add_argument("part", nargs="?", choices=["heading", "latitude", "static"])
     simulate.add_argument(
         "--list-presets",
         action="store_true",
-        help="print every preset's parameters (with --json: as JSON) and exit",
+        help=say("clihelp.simulate.list_presets"),
     )
-    simulate.add_argument("--json", action="store_true", help="with --list-presets")
+    simulate.add_argument("--json", action="store_true", help=say("clihelp.simulate.json"))
     simulate.add_argument("--preset", choices=sorted(PRESETS), default="teaching-fog")
     simulate.add_argument("--latitude", type=float)
     simulate.add_argument("--earth-rate", type=float, default=EARTH_RATE_DEG_H)
@@ -137,14 +137,12 @@ def add_simulate_command(commands, guarded) -> None:
         "--azimuth",
         type=float,
         default=0.0,
-        help="true azimuth of position 1 (heading) or of the vertical plane",
+        help=say("clihelp.simulate.azimuth"),
     )
     simulate.add_argument("--seconds-per-position", type=float)
-    simulate.add_argument("--seconds", type=float, help="static: record length")
-    simulate.add_argument(
-        "--settle", type=float, default=0.0, help="seconds discarded after each turn"
-    )
-    simulate.add_argument("--rate", type=float, help="sample rate in Hz (default: the preset's)")
+    simulate.add_argument("--seconds", type=float, help=say("clihelp.simulate.seconds"))
+    simulate.add_argument("--settle", type=float, default=0.0, help=say("clihelp.simulate.settle"))
+    simulate.add_argument("--rate", type=float, help=say("clihelp.simulate.rate"))
     simulate.add_argument("--positions", type=int, default=4)
     simulate.add_argument("--rotation", choices=["ccw", "cw"], default="ccw")
     simulate.add_argument("--pitch", type=float, default=0.0)
@@ -153,24 +151,21 @@ def add_simulate_command(commands, guarded) -> None:
         "--elevation",
         type=float,
         default=0.0,
-        help="heading/static: axis elevation above the table plane",
+        help=say("clihelp.simulate.elevation"),
     )
-    simulate.add_argument("--indexing-sigma", type=float, help="arcsec per turn (default: preset)")
+    simulate.add_argument(
+        "--indexing-sigma", type=float, help=say("clihelp.simulate.indexing_sigma")
+    )
     simulate.add_argument("--seed", type=int, default=0)
+    simulate.add_argument("--language", choices=["en", "zh-CN"], help=say("clihelp.language"))
     simulate.add_argument(
-        "--language", choices=["en", "zh-CN"], help="of the messages; default: from LANG"
-    )
-    simulate.add_argument(
-        "--temperature",
-        action="store_true",
-        help="add the gyro case temperature (temperature_c, °C; rises during warm-up)",
+        "--temperature", action="store_true", help=say("clihelp.simulate.temperature")
     )
     simulate.add_argument(
         "--warm-up",
         type=float,
         default=WARM_GYRO_S,
         metavar="SECONDS",
-        help="the gyro has been on this long before the first reading (default 3600: a lab "
-        "gyro is left on; 0 is a cold start, whose bias still drifts)",
+        help=say("clihelp.simulate.warm_up"),
     )
     simulate.set_defaults(handler=guarded(simulate_command))
