@@ -19,7 +19,7 @@ from app.core.exceptions import UserError
 from app.db import read_session
 from app.lab.samples import unpack
 from app.models import SampleChunk, Take
-from tests.factories import _form_token, login, new_session, post_json
+from tests.factories import _form_token, handout, login, new_session, post_json
 from tests.noise_sources import static_record
 
 pytestmark = pytest.mark.one_backend  # the reading is new; the saving is the CSV method's
@@ -68,6 +68,7 @@ def lab(client, student):
         body = {"part": "heading", "unit": "rad/s", "text": text, **extra}
         return post_json(client, page + path, body, page)
 
+    send.page = page  # the session's page
     return client, as_text, send
 
 
@@ -226,3 +227,30 @@ def test_zips_the_zip_module_cannot_read_are_refused_in_words(lab, fault):
     for data in (buffer.getvalue(), workbook(handout_rows())):
         refused = as_text(zip_patched(data, **fault), status=400)
         assert "cannot be read" in refused["detail"] or "could not be read" in refused["detail"]
+
+
+def test_vectors_named_for_their_positions_are_the_handouts_table(lab):
+    """A student keeps the handout's table in MATLAB as ``p1`` … ``p4`` (one a reading
+    longer): read as the four positions, and the heading is the handout's θ."""
+    client, as_text, send = lab
+    table = handout("handout_horizontal.csv")
+    columns = [np.array(table[k]) for k in (1, 2, 3, 4)]
+    data = mat_file(**{f"p{k}": column for k, column in enumerate(columns, start=1)}, Fs=1.0)
+    text = as_text(data)["text"]
+    assert text.splitlines()[0] == "position_1\tposition_2\tposition_3\tposition_4"
+    longer = as_text(mat_file(p1=columns[0], p2=columns[1], p3=columns[2], p4=[*columns[3], -0.91]))
+    preview = send("/csv/preview", longer["text"], unit="deg/h").json()
+    assert [row["n"] for row in preview["positions"]] == [10, 10, 10, 11]
+    saved = send("/csv", text, unit="deg/h")
+    assert saved.status_code == 200 and saved.json()["saved"] == [1, 2, 3, 4]
+    theta = client.get(f"{send.page}/results.json").json()["heading"]["theta_deg"]
+    assert theta == pytest.approx(-10.753, abs=5e-4)  # the handout's θ
+
+
+def test_position_names_that_clash_or_are_too_few_are_a_records_columns():
+    """``p1`` and ``pos1`` name one position twice; two positions are no table: each is
+    then offered as a record's column, as before."""
+    clash = array_file_text(mat_file(p1=omega(20), pos1=omega(20), p2=omega(20), p3=omega(20)))
+    assert clash.startswith("#")
+    two = array_file_text(mat_file(p1=omega(20), p2=omega(20)))
+    assert two.startswith("#p1\tp2")

@@ -7,8 +7,10 @@ vectors (:func:`app.core.array_files.array_table`) become the columns of a table
 header is a comment line above the readings, as EuRoC's records have it -- so it is read
 as one position's record, never as a table of positions -- with the times' column named
 ``time (s)``: the file's own (``t``, ``time``), or those its stated rate gives
-(``k / Fs``).  The numbers are written as the shortest text that reads back as the same
-float64, so the readings stored are the file's.
+(``k / Fs``).  Vectors named for their positions (``p1`` … ``p4``, as a student keeps
+the handout's table in MATLAB) are written as the handout's wide table instead, read as
+the positions they name.  The numbers are written as the shortest text that reads back as
+the same float64, so the readings stored are the file's.
 """
 
 from __future__ import annotations
@@ -30,6 +32,8 @@ TIME_HEADER = "time (s)"
 # a .npy's columns, by its shape's second length (the REST API's layouts)
 NPY_HEADERS = {1: ("rate",), 2: (TIME_HEADER, "rate"), 3: (TIME_HEADER, "rate", "temperature (°C)")}
 _NOT_IN_A_NAME = re.compile(r"[\s#,;]+")  # what would split a header cell, or start one
+# a vector named for its position: p1, P3, pos2, pos_4, position1, position_8
+_POSITION_NAME = re.compile(r"(?:p|pos|position)_?([1-8])", re.IGNORECASE)
 
 
 def is_array_file(data: bytes) -> bool:
@@ -60,7 +64,8 @@ def array_file_text(data: bytes) -> str:
     -------
     str
         ``#time (s)<TAB>omega`` (the vectors' names; a matrix's columns ``name 1``, …),
-        then a line per reading.
+        then a line per reading; for vectors named for positions, ``position_1<TAB>…``
+        over a row per reading.
 
     Raises
     ------
@@ -72,11 +77,46 @@ def array_file_text(data: bytes) -> str:
         :data:`MAX_NUMBERS`.
     """
     if is_matlab_file(data[:20]):
-        return _table_text(array_table(matlab_variables(data), "matlab", MIN_POSITION_READINGS))
-    loaded = numpy_arrays(data)
-    if isinstance(loaded, dict):
-        return _table_text(array_table(loaded, "numpy", MIN_POSITION_READINGS))
-    return _npy_text(loaded)
+        variables, kind = matlab_variables(data), "matlab"
+    else:
+        loaded = numpy_arrays(data)
+        if not isinstance(loaded, dict):
+            return _npy_text(loaded)
+        variables, kind = loaded, "numpy"
+    positions = _position_vectors(variables)
+    if positions:
+        return _positions_text(positions)
+    return _table_text(array_table(variables, kind, MIN_POSITION_READINGS))
+
+
+def _position_vectors(variables: dict) -> dict[int, np.ndarray]:
+    """The file's vectors named for the positions they were read at (``p1`` … ``p4``,
+    ``pos3``, ``position_2``; a struct's ``heading.p1``), where there are three or more
+    and no two name one position; else none."""
+    found: dict[int, np.ndarray] = {}
+    for name, value in variables.items():
+        named = _POSITION_NAME.fullmatch(name.rsplit(".", 1)[-1])
+        array = np.asarray(value)
+        if named is None or array.dtype.kind not in "fiu" or array.size < MIN_POSITION_READINGS:
+            continue
+        if np.squeeze(array).ndim != 1 or int(named.group(1)) in found:
+            return {}
+        found[int(named.group(1))] = np.squeeze(array).astype(float)
+    return dict(sorted(found.items())) if len(found) >= 3 else {}
+
+
+def _positions_text(positions: dict[int, np.ndarray]) -> str:
+    """Vectors of positions as the handout's wide table: ``position_1 …`` over a row per
+    reading, a shorter position's cells left empty -- read as a table of positions."""
+    count = sum(values.size for values in positions.values())
+    if count > MAX_NUMBERS:
+        raise UserError("arrays.too_many_numbers", count=count, limit=MAX_NUMBERS)
+    longest = max(values.size for values in positions.values())
+    cells = [
+        list(values.astype(str)) + [""] * (longest - values.size) for values in positions.values()
+    ]
+    header = "\t".join(f"position_{number}" for number in positions)
+    return "\n".join([header, *("\t".join(row) for row in zip(*cells, strict=True))]) + "\n"
 
 
 def _npy_text(array: np.ndarray) -> str:
