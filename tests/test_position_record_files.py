@@ -237,3 +237,15 @@ def test_a_long_file_saves_each_position_as_the_number_it_gives(lab):
     assert sorted((t.position, t.n_samples) for t in takes) == [
         (k, len(HEADING[k])) for k in (1, 2, 3)
     ]
+
+
+def test_a_template_not_filled_in_is_refused_in_words(lab, client):
+    """The handout's header alone, saved before the readings were typed: was a 500."""
+    for path in ("/csv/preview", "/csv"):
+        refused = lab(path, "position_1,position_2,position_3,position_4\n")
+        assert (
+            refused.status_code == 400 and refused.json()["detail"] == "The file has no readings."
+        )
+    client.cookies.set("gyrolab_lang", "zh-CN")
+    refused = lab("/csv/preview", "位置1,位置2,位置3,位置4\n")
+    assert refused.status_code == 400 and "没有读数" in refused.json()["detail"]

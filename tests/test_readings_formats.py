@@ -937,3 +937,22 @@ def test_what_has_zero_bytes_but_is_no_utf16_is_not_read_as_it():
         with pytest.raises(UserError) as refused:
             decode_text(data)
         assert refused.value.key == "csv.encoding"
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "position_1,position_2,position_3,position_4",
+        "序号,位置1,位置2,位置3,位置4\n",
+        "位置,1,2,3,4\r\n,,,,\r\n",
+        "sample,position_1,position_2\n\n\n",
+    ],
+)
+def test_a_header_with_no_readings_under_it_is_said(text):
+    """A template saved before it was filled in: "The file has no readings.", not a 500
+    (the check for a row of means took the empty last row for one)."""
+    from app.core.exceptions import UserError
+
+    with pytest.raises(UserError) as refused:
+        parse_readings_csv(text, part="heading")
+    assert refused.value.key == "csv.empty"

@@ -261,6 +261,8 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
                 values[slot].append(cell_number(cell, line, f"position_{numbers[slot]}"))
                 decimals[slot] = max(decimals[slot], written_decimals(cell, significant=True) or 0)
     means_row = None
+    if not any(values):  # a header alone: a template not filled in (was a 500)
+        raise UserError("csv.empty")
     if all(cells) and is_row_of_means(cells, [v[:-1] for v in values], above):
         means_row = rows[-1][0]  # a spreadsheet's =AVERAGE row, unlabelled: no reading
         values = [v[:-1] for v in values]
