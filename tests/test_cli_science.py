@@ -409,3 +409,35 @@ def test_a_reader_that_stops_early_gets_no_traceback():
     finally:
         os.close(write_end)
     assert done.returncode == 0 and done.stderr == b"", done.stderr
+
+
+def test_solve_refuses_one_positions_record_and_reads_a_matlab_table(capsys, tmp_path):
+    """A logger's or an IMU's record, LabVIEW's .lvm, a MATLAB vector: one position, whose
+    time and axis columns ``solve`` read as four positions (an IMU's record "solved" to a
+    heading; an .lvm was "a second table") -- now refused, pointing to the lab page and
+    ``allan``; a MATLAB file of ``p1`` … ``p4`` is the handout's table."""
+    import numpy as np
+    import scipy.io
+
+    from tests.factories import handout
+    from tests.test_labview_lvm import lvm
+    from tests.test_position_record_files import imu_file
+
+    table = handout("handout_horizontal.csv")
+    rates = np.array(table[1])
+    records = {
+        "imu.csv": imu_file([float(v) for v in rates]).encode(),
+        "fog.lvm": lvm(np.tile(rates, 3)).encode(),
+    }
+    for name, data in records.items():
+        (tmp_path / name).write_bytes(data)
+    scipy.io.savemat(tmp_path / "imu.mat", {"gyro": np.column_stack([rates] * 3), "Fs": 10.0})
+    for name in (*records, "imu.mat"):
+        code, out, err = run(capsys, "solve", "heading", str(tmp_path / name))
+        assert code == 2 and out == "", name
+        assert "is one position's record" in err and "gyrolab allan" in err, (name, err)
+    code, _, err = run(capsys, "solve", "heading", str(tmp_path / "fog.lvm"), "--language", "zh-CN")
+    assert code == 2 and "是一个位置的记录" in err
+    scipy.io.savemat(tmp_path / "table.mat", {f"p{k}": table[k] for k in (1, 2, 3, 4)})
+    code, out, _ = run(capsys, "solve", "heading", str(tmp_path / "table.mat"), "--json")
+    assert code == 0 and json.loads(out)["theta_deg"] == pytest.approx(-10.753, abs=5e-4)

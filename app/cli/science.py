@@ -16,6 +16,7 @@ import numpy as np
 
 from app.cli.language import command_language
 from app.cli.solve_angles import position_angles, said_beside
+from app.core.array_text import array_file_text, is_array_file
 from app.core.drift_check import warm_up_message
 from app.core.exceptions import UserError
 from app.core.explain import explain_heading, explain_latitude
@@ -26,6 +27,7 @@ from app.core.readings import parse_readings_csv
 from app.core.readings_data import Readings
 from app.core.record_checks import WARM_UP_LIMIT_C
 from app.core.solve import solve_heading, solve_latitude
+from app.core.static_record import written_as_a_record
 from app.core.text_files import decode_text
 from app.core.units import (
     DEG_PER_HOUR,
@@ -61,7 +63,8 @@ def to_json_text(payload: dict) -> str:
 
 def _read_text(path: str) -> str:
     """The file's text in UTF-8, UTF-16 (with or without its mark), GB18030 or Windows-1252,
-    or an Excel workbook's sheet of readings, as a page's upload reads it."""
+    an Excel workbook's sheet of readings, or a MATLAB or NumPy file's vectors, as the lab
+    page reads it."""
     try:
         if path == "-":
             binary = getattr(sys.stdin, "buffer", None)
@@ -73,6 +76,8 @@ def _read_text(path: str) -> str:
                 data = handle.read()
     except OSError as error:
         raise unreadable(path, error) from None
+    if is_array_file(data):  # MATLAB or NumPy: p1 … p4 a table, one vector a record
+        return array_file_text(data)
     return workbook_text(data) if is_workbook(data) else decode_text(data)
 
 
@@ -142,7 +147,11 @@ def _solve(args: argparse.Namespace) -> int:
         raise CommandError("cli.latitude_range")
     if not 0.0 < args.earth_rate < 1000.0:
         raise CommandError("cli.earth_rate_range")
-    readings = parse_readings_csv(_read_text(args.file), part=args.part)
+    text = _read_text(args.file)
+    if written_as_a_record(text):  # its header a comment, LabVIEW's, a MATLAB vector's
+        # one position's record: read as a table, its time and axis columns were positions
+        raise CommandError("cli.solve_one_record", path=args.file)
+    readings = parse_readings_csv(text, part=args.part)
     result = solve_readings(args.part, readings, args)
     for line in said_beside(args.part, readings, args):  # beside the output, not in it
         print(line, file=sys.stderr)
