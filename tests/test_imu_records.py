@@ -433,3 +433,29 @@ def test_the_columns_offered_as_the_gyros_axis(header, offered):
     assert raised.value.choices == offered and raised.value.key == "allan.no_value_column"
     for column in offered:  # each offered is a column the reader takes
         assert header_layout(header.split(","), column).value_name == column
+
+
+@pytest.mark.parametrize(
+    "header",
+    [
+        "#position_1,position_2,position_3,position_4",
+        "# sample, P1, P2, P3, P4",
+        "#位置1,位置2,位置3,位置4",
+    ],
+)
+def test_the_handouts_header_commented_out_heads_a_table_not_a_record(header):
+    """A table whose header was commented out ("#position_1,…") names positions, not an
+    IMU's axes: read as the handout's table (it was a record whose columns were offered as
+    axes on the lab page, and refused by ``gyrolab solve``)."""
+    from app.core.readings import parse_readings_csv
+    from app.core.static_record import written_as_a_record
+    from tests.factories import DATA
+
+    rows = (DATA / "handout_horizontal.csv").read_text().splitlines()[1:]
+    if "sample" not in header:
+        rows = [row.split(",", 1)[1] for row in rows]
+    text = "\n".join([header, *rows]) + "\n"
+    assert not written_as_a_record(text)
+    readings = parse_readings_csv(text, part="heading")
+    assert [len(p) for p in readings.positions] == [10, 10, 10, 10]
+    assert written_as_a_record("#timestamp [ns],w_x [rad s^-1]\n1403636579758555392,0.001\n")

@@ -56,6 +56,7 @@ from app.core.spreadsheet_text import (
     one_column_of_decimal_commas,
     separator_hint,
 )
+from app.core.table_headers import column_name
 
 # notes on lines of the file that were not read, which every reader of a record says
 LEFT_OUT = frozenset(
@@ -273,7 +274,8 @@ def names_its_columns_in_a_comment(text: str) -> bool:
     -------
     bool
         True where the last comment line before the first reading names as many columns
-        as that reading has.
+        as that reading has, two of them not positions' ("位置1", "P2": the handout's
+        table, its header commented out).
     """
     comment = None
     for line in itertools.islice(io.StringIO(text), LOOK_AHEAD_LINES):
@@ -285,7 +287,11 @@ def names_its_columns_in_a_comment(text: str) -> bool:
             continue
         split = _splitter(stripped)
         cells = split(stripped)
-        return holds_a_number(cells) and header_in_comment(comment, split, len(cells)) is not None
+        names = header_in_comment(comment, split, len(cells))
+        if not holds_a_number(cells) or names is None:
+            return False
+        # "#position_1,position_2,…" heads the handout's table, commented out: positions
+        return sum(column_name(name).startswith("position_") for name in names) < 2
     return False
 
 
