@@ -50,6 +50,7 @@ from app.core.record_preamble import (
     is_header,
     stated_rate_hz,
 )
+from app.core.sentence_records import LOOK_AT, Sentences, is_sentence_record, sentence_lines
 from app.core.spreadsheet_text import (
     WHOLE_COMMA_DIGITS,
     decimal_point,
@@ -66,6 +67,9 @@ LEFT_OUT = frozenset(
         "allan.note_about_it",
         "allan.note_labview",
         "allan.note_labview_segments",
+        "allan.note_sentences",
+        "allan.note_sentences_checksum",
+        "allan.note_sentences_other",
     }
 )
 LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
@@ -144,6 +148,13 @@ def read_static_record(
         labview = LabviewHeaders()  # its headers passed over, its rate where it states one
         lines = labview_lines(itertools.chain(first, lines), labview)
         first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
+    sentences = None
+    if labview is None and is_sentence_record(first):
+        sentences = Sentences()  # "$VNYMR,…*CS" lines: their fields, named as the maker's
+        lines = sentence_lines(itertools.chain(first, lines), sentences)
+        first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
+        # the fields' names, as a header in a comment above the first reading would be
+        preamble.comment, preamble.comment_line = sentences.header, 0
     split = _joined_decimal_comma if _one_column_with_decimal_commas(first) else None
     for raw in itertools.chain(first, lines):
         line_number += 1
@@ -200,6 +211,10 @@ def read_static_record(
                 **params, "segments": labview.segments}})  # fmt: skip
         else:
             notes.append({"key": "allan.note_labview", "params": params})
+    if sentences is not None and sentences.kept:
+        # the names are the maker's, not a comment line's: said as such
+        notes = [note for note in notes if note["key"] != "allan.note_comment_header"]
+        notes += sentences.notes()
     if short is not None:  # cut off when the logger stopped, or a closing remark
         notes.append(
             {
@@ -244,8 +259,9 @@ def read_static_record(
 
 def written_as_a_record(text: str) -> bool:
     """Whether a file can only be one record, never a table of positions: its header is
-    the comment line above its readings (:func:`names_its_columns_in_a_comment`), or it is
-    LabVIEW's measurement file (:mod:`app.core.labview_lvm`).
+    the comment line above its readings (:func:`names_its_columns_in_a_comment`), it is
+    LabVIEW's measurement file (:mod:`app.core.labview_lvm`), or an instrument's captured
+    sentences (:mod:`app.core.sentence_records`).
 
     Parameters
     ----------
@@ -255,9 +271,13 @@ def written_as_a_record(text: str) -> bool:
     Returns
     -------
     bool
-        True for either.
+        True for any of them.
     """
-    return is_labview_measurement(text[:200]) or names_its_columns_in_a_comment(text)
+    return (
+        is_labview_measurement(text[:200])
+        or names_its_columns_in_a_comment(text)
+        or is_sentence_record(itertools.islice(io.StringIO(text), LOOK_AT))
+    )
 
 
 def names_its_columns_in_a_comment(text: str) -> bool:
