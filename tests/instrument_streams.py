@@ -11,7 +11,9 @@ the bridge's decoder or its checksum library — so that a round trip tests both
 
 from __future__ import annotations
 
+import functools
 import math
+import operator
 import struct
 
 import numpy as np
@@ -83,6 +85,35 @@ def dsp1750_stream(
 
 def dsp3000_lines(values: np.ndarray, faults: set[int] = frozenset()) -> list[bytes]:
     return [f"{v:.6f} {0 if i in faults else 1}\r\n".encode() for i, v in enumerate(values)]
+
+
+def vectornav_lines(
+    rates_deg_h: np.ndarray,
+    *,
+    kind: str = "VNYMR",
+    axis: int = 2,
+    crc: bool = False,
+    temperature_c: float = 24.5,
+) -> list[bytes]:
+    """A VN-100's ASCII sentences, one per rate: the rate in rad/s to six decimals on
+    ``axis`` (the others small), checked by the 8-bit XOR or the 16-bit CRC (CRC-16/XMODEM:
+    poly 0x1021, init 0, as VectorNav's manual computes it)."""
+    lines = []
+    for rate in rates_deg_h:
+        gyro = ["+00.000010", "-00.000020", "+00.000030"]
+        gyro[axis] = f"{rate / 3600.0 * RAD_PER_DEG:+010.6f}"
+        fields = ["+00.1234", "-00.5678", "+00.1234", "-00.012", "+00.034", "-09.801", *gyro]
+        if kind == "VNYMR":
+            fields = ["+010.123", "-001.234", "+000.567", *fields]
+        else:  # VNIMU: the temperature and the pressure after the rates
+            fields += [f"{temperature_c:+05.1f}", "+084.322"]
+        body = ",".join([kind, *fields]).encode()
+        if crc:
+            check = f"{crc_msb_first(body, 16, 0x1021, 0x0000):04X}"
+        else:
+            check = f"{functools.reduce(operator.xor, body, 0):02X}"
+        lines.append(b"$" + body + b"*" + check.encode() + b"\r\n")
+    return lines
 
 
 def teaching_frame(rate_deg_h: float, counter: int, temperature_c: float = 24.5) -> bytes:

@@ -28,6 +28,7 @@ from tests.instrument_streams import (
     dsp1750_stream,
     dsp3000_lines,
     teaching_frame,
+    vectornav_lines,
 )
 
 RATES = 15.0 + 0.5 * np.sin(np.arange(600) / 40.0)  # °/h, a gyro at rest plus a slow wave
@@ -186,6 +187,28 @@ def test_dsp3000_garbled_and_overlong_lines_are_dropped_with_bounded_memory():
     assert setup.decoder.stats.garbage_bytes >= 10_000
 
 
+def test_vectornav_sentences_checksums_other_outputs_and_the_axis():
+    """$VNYMR with 8-bit checksums, the port opened mid-sentence: the z axis's rate, to
+    the sentence's six decimals of rad/s (0.21 °/h); a sentence whose checksum fails is a
+    one-period gap; a reply to a command ($VNRRG) is no period."""
+    lines = vectornav_lines(RATES[:200])
+    lines[30] = lines[30].replace(b"+00.1234", b"+00.1334", 1)  # a bit flipped on the wire
+    lines.insert(100, b"$VNRRG,07,40*59\r\n")
+    data = b"$VNYMR,+0.000" + b"\r\n" + b"".join(lines)
+    samples, stats, maker = decode(Instrument("vectornav"), data, mid_line=True)
+    assert values(samples) == pytest.approx(np.delete(RATES[:200], 30), abs=0.21 / 2)
+    assert stats.corrupt == 1 and maker.absent == 1
+    assert times(samples)[30] == pytest.approx(31 / 40.0)  # 40 Hz, the gap kept
+    imu = vectornav_lines(RATES[:50], kind="VNIMU", axis=0, crc=True, temperature_c=31.5)
+    samples, stats, _ = decode(Instrument("vectornav", axis="x"), b"".join(imu))
+    assert len(samples) == 50 and stats.corrupt == 0
+    assert values(samples) == pytest.approx(RATES[:50], abs=0.21 / 2)
+    assert {s.temperature_c for s in samples} == {31.5}
+    samples, _, _ = decode(Instrument("vectornav"), b"".join(imu))  # z: the small one
+    assert abs(np.mean(values(samples))) < 10.0
+    assert Instrument("vectornav").default_baud() == 115200
+
+
 def test_a_described_teaching_frame_round_trips_through_the_mini_language_and_toml(tmp_path):
     frames = [teaching_frame(rate, i, 24.5 + i / 100) for i, rate in enumerate(RATES[:300])]
     frames[77] = frames[77][:-1] + bytes([(frames[77][-1] + 1) % 256])  # bad sum
@@ -333,6 +356,7 @@ def test_any_bytes_at_all_never_break_a_decoder(pieces, seed):
         Instrument("kvh-dsp3000"),
         Instrument("frame:" + TEACHING_SPEC),
         Instrument("text", column=1),
+        Instrument("vectornav"),
     ):
         samples, stats, _ = decode(instrument, stream, seed=seed % 1000)
         assert all(math.isfinite(s.rate_deg_h) for s in samples)

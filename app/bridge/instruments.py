@@ -12,6 +12,11 @@ over bytes 0–31, big-endian.  Default output rate 1000 Hz.
 KVH DSP-3000 (RS-232, 38400 baud 8N1): a line ``(-)xxx.xxxxxx y`` per output period at
 100 Hz, the reading as a rate (°/s), an incremental angle (°) or an integrated angle (°)
 as configured, and y = 1 valid, 0 fault.
+
+VectorNav VN-100/VN-200 (115200 baud): an ASCII sentence per output period at 40 Hz as
+shipped (``$VNYMR``, ``$VNQMR`` or ``$VNIMU``, the angular rates in rad/s, an 8-bit
+checksum or a 16-bit CRC; VectorNav UM001, asynchronous outputs), read by
+:mod:`app.core.sentence_records`; the axis z unless ``--axis`` chooses another.
 """
 
 from __future__ import annotations
@@ -21,10 +26,10 @@ import re
 from dataclasses import dataclass
 
 from app.bridge.frames import FrameDecoder, FrameSpec, build_spec, parse_spec
-from app.bridge.lines import Dsp3000Decoder, LineParser, TextDecoder
+from app.bridge.lines import Dsp3000Decoder, LineParser, SentenceDecoder, TextDecoder
 from app.core.exceptions import UserError
 
-FORMATS = ("text", "kvh-dsp3000", "kvh-dsp1750", "frame:SPEC")
+FORMATS = ("text", "kvh-dsp3000", "kvh-dsp1750", "vectornav", "frame:SPEC")
 
 KVH_DSP1750 = dataclasses.replace(
     build_spec(
@@ -49,6 +54,8 @@ KVH_DSP1750 = dataclasses.replace(
 DSP3000_RATE_HZ = 100.0
 DSP3000_BAUD = 38400
 DSP1750_BAUD = 921600
+VECTORNAV_RATE_HZ = 40.0  # the VN-100's asynchronous output rate as it leaves the factory
+VECTORNAV_BAUD = 115200
 
 
 @dataclass
@@ -73,14 +80,15 @@ class Instrument:
         return None
 
     def default_baud(self) -> int:
-        return {"kvh-dsp3000": DSP3000_BAUD, "kvh-dsp1750": DSP1750_BAUD}.get(self.format, 9600)
+        bauds = {"kvh-dsp3000": DSP3000_BAUD, "kvh-dsp1750": DSP1750_BAUD}
+        return {**bauds, "vectornav": VECTORNAV_BAUD}.get(self.format, 9600)
 
 
 @dataclass
 class Setup:
     """A decoder with the unit and output rate its frames are in."""
 
-    decoder: TextDecoder | Dsp3000Decoder | FrameDecoder
+    decoder: TextDecoder | Dsp3000Decoder | SentenceDecoder | FrameDecoder
     unit: str
     rate_hz: float | None
     has_temperature: bool
@@ -102,6 +110,10 @@ def set_up(instrument: Instrument, *, mid_line: bool = True) -> Setup:
         decoder = Dsp3000Decoder(mid_line=mid_line)
         rate = instrument.rate_hz or DSP3000_RATE_HZ
         return Setup(decoder, instrument.unit or "deg/s", rate, False)
+    if name == "vectornav":  # the axis the gyro's sensitive one: z unless chosen
+        decoder = SentenceDecoder(instrument.axis or "z", mid_line=mid_line)
+        rate = instrument.rate_hz or VECTORNAV_RATE_HZ
+        return Setup(decoder, instrument.unit or "rad/s", rate, False)  # $VNIMU: per frame
     spec = instrument.spec()
     if spec is None:
         raise UserError("bridge.format", format=name[:40], known=", ".join(FORMATS))

@@ -1,5 +1,6 @@
 """Gyros that print lines of text: any instrument read by regular expression or column
-(``--format text``) and the KVH DSP-3000's ASCII output (``--format kvh-dsp3000``).
+(``--format text``), the KVH DSP-3000's ASCII output (``--format kvh-dsp3000``) and a
+VectorNav's asynchronous ASCII sentences (``--format vectornav``).
 
 Both split the byte stream into lines themselves, so a line longer than the limit (a
 line with its end lost, or binary noise) is dropped and counted, never buffered without
@@ -13,6 +14,7 @@ import re
 from dataclasses import dataclass
 
 from app.bridge.frames import Frame, LinkStats
+from app.core.sentence_records import FIELDS, SENTENCE, checksum_holds
 
 MAX_LINE_BYTES = 4096
 # "(-)xxx.xxxxxx y": the reading, then 1 (valid) or 0 (fault); KVH DSP-3000 manual, RS-232
@@ -157,4 +159,64 @@ class Dsp3000Decoder:
                 continue
             stats.frames += 1
             frames.append(Frame(self._count, value))
+        return frames
+
+
+class SentenceDecoder:
+    """``--format vectornav``: a VectorNav's ASCII sentences (``$VNYMR``, ``$VNQMR``,
+    ``$VNIMU``), one per output period at the rate it was set to, the chosen axis's rate
+    in rad/s (``$VNIMU``'s temperature too).
+
+    The sentences carry no counter: as for the DSP-3000's lines, every sentence of the
+    kind is one output period, so one whose checksum fails (or that is cut) is dropped
+    and leaves a one-sample gap; a sentence of another kind (a reply to a command,
+    ``$VNERR``) is skipped and counted, not a period.
+    """
+
+    def __init__(self, axis: str, *, mid_line: bool = True) -> None:
+        self.axis = axis
+        self.stats = LinkStats()
+        self._splitter = LineSplitter(self.stats, limit=512)
+        self._splitter.start_mid_line(mid_line)
+        self._count = -1
+        self._kind: str | None = None
+
+    def feed(self, chunk: bytes) -> list[Frame]:
+        frames = []
+        stats = self.stats
+        for line in self._splitter.lines(chunk):
+            text = line.decode("ascii", errors="replace").strip()
+            if not text:
+                continue
+            found = SENTENCE.fullmatch(text)
+            kind = found["kind"] if found is not None else None
+            if kind is not None and self._kind is None and kind in FIELDS:
+                self._kind = kind  # the first sentence with angular rates sets the kind
+            if kind is not None and kind != self._kind:
+                stats.garbage_bytes += len(line) + 1  # another output, or a reply
+                continue
+            self._count += 1
+            if found is None or (found["check"] and not checksum_holds(text, found["check"])):
+                stats.corrupt += 1
+                stats.missing += 1
+                continue
+            names = FIELDS[self._kind]
+            cells = found["body"].split(",")
+            try:
+                value = float(cells[names.index(f"gyro_{self.axis} (rad/s)")])
+                temperature = (
+                    float(cells[names.index("temperature (°C)")])
+                    if "temperature (°C)" in names
+                    else None
+                )
+            except (ValueError, IndexError):
+                stats.corrupt += 1
+                stats.missing += 1
+                continue
+            if not math.isfinite(value):
+                stats.corrupt += 1
+                stats.missing += 1
+                continue
+            stats.frames += 1
+            frames.append(Frame(self._count, value, temperature))
         return frames
