@@ -165,8 +165,8 @@ def test_files_that_hold_no_record_are_refused_in_words(lab):
     client, as_text, _ = lab
     scalars = as_text(mat_file(omega=1.5e-5, Fs=10.0), status=400)
     assert "no vector of readings" in scalars["detail"]
-    wide = as_text(npy_file(np.zeros((50, 4))), status=400)
-    assert "(50, 4)" in wide["detail"]
+    wide = as_text(npy_file(np.zeros((50, 5))), status=400)
+    assert "(50, 5)" in wide["detail"]
     v73 = as_text(b"MATLAB 7.3 MAT-file, Platform: GLNXA64" + b"\x00" * 200, status=400)
     assert "-v7.3" in v73["detail"] or "7.3" in v73["detail"]
     client.cookies.set("gyrolab_lang", "zh-CN")
@@ -254,3 +254,20 @@ def test_position_names_that_clash_or_are_too_few_are_a_records_columns():
     assert clash.startswith("#")
     two = array_file_text(mat_file(p1=omega(20), p2=omega(20)))
     assert two.startswith("#p1\tp2")
+
+
+def test_one_matrix_of_four_columns_and_nothing_else_is_the_handouts_table(lab):
+    """``A = [10.74 2.88 -9.11 -0.96; …]`` saved alone (or as its transpose), and a
+    ``.npy`` of four columns: the four positions, the handout's θ.  With a sample rate
+    beside it the matrix is an IMU's record, offered axis by axis, as before."""
+    client, as_text, send = lab
+    table = handout("handout_horizontal.csv")
+    matrix = np.column_stack([table[k] for k in (1, 2, 3, 4)])
+    for data in (mat_file(A=matrix), mat_file(A=matrix.T), npy_file(matrix)):
+        text = as_text(data)["text"]
+        assert text.splitlines()[0] == "position_1\tposition_2\tposition_3\tposition_4"
+    assert send("/csv", text, unit="deg/h").json()["saved"] == [1, 2, 3, 4]
+    theta = client.get(f"{send.page}/results.json").json()["heading"]["theta_deg"]
+    assert theta == pytest.approx(-10.753, abs=5e-4)
+    assert as_text(mat_file(A=matrix, fs=10.0))["text"].startswith("#time (s)\tA 1")
+    assert as_text(mat_file(gyro=np.column_stack([omega(50)] * 3)))["text"].startswith("#gyro 1")

@@ -8,9 +8,10 @@ header is a comment line above the readings, as EuRoC's records have it -- so it
 as one position's record, never as a table of positions -- with the times' column named
 ``time (s)``: the file's own (``t``, ``time``), or those its stated rate gives
 (``k / Fs``).  Vectors named for their positions (``p1`` … ``p4``, as a student keeps
-the handout's table in MATLAB) are written as the handout's wide table instead, read as
-the positions they name.  The numbers are written as the shortest text that reads back as
-the same float64, so the readings stored are the file's.
+the handout's table in MATLAB), a file's one matrix of four or eight columns and nothing
+else, and a ``.npy`` of four or eight columns are written as the handout's wide table
+instead, read as the positions they hold.  The numbers are written as the shortest text
+that reads back as the same float64, so the readings stored are the file's.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from app.core.numpy_files import is_npy, is_npz, numpy_arrays
 # the fewest numbers a vector has to be a column: the lab's own check of a position's
 # readings then asks for its minimum (10), in its words
 MIN_POSITION_READINGS = 2
+POSITION_COUNTS = (4, 8)  # a table's columns: the four positions, or the symmetric eight
 MAX_NUMBERS = 600_000  # numbers written, at most: ≈ 12 MB of text, twice a file's 5 MB
 TIME_HEADER = "time (s)"
 # a .npy's columns, by its shape's second length (the REST API's layouts)
@@ -73,7 +75,8 @@ def array_file_text(data: bytes) -> str:
         Those of :func:`app.core.matlab_files.matlab_variables`,
         :func:`app.core.numpy_files.numpy_arrays` and
         :func:`app.core.array_files.array_table`; ``numpy.shape`` for a ``.npy`` that is
-        not ``(n,)``, ``(n, 2)`` or ``(n, 3)`` numbers; ``arrays.too_many_numbers`` past
+        not ``(n,)``, ``(n, 2)``, ``(n, 3)``, ``(n, 4)`` or ``(n, 8)`` numbers;
+        ``arrays.too_many_numbers`` past
         :data:`MAX_NUMBERS`.
     """
     if is_matlab_file(data[:20]):
@@ -83,10 +86,33 @@ def array_file_text(data: bytes) -> str:
         if not isinstance(loaded, dict):
             return _npy_text(loaded)
         variables, kind = loaded, "numpy"
-    positions = _position_vectors(variables)
+    positions = _position_vectors(variables) or _position_matrix(variables)
     if positions:
         return _positions_text(positions)
     return _table_text(array_table(variables, kind, MIN_POSITION_READINGS))
+
+
+def _position_matrix(variables: dict) -> dict[int, np.ndarray]:
+    """The file's one matrix of four or eight columns (or rows), where it holds nothing
+    else -- no other vector, no times, no sample rate: the handout's table as a student
+    keeps it in MATLAB (``A = [10.74 2.88 -9.11 -0.96; …]``), a column a position.  An
+    IMU's record states its rate or times, or has other than four or eight axes."""
+    arrays = []
+    for value in variables.values():
+        array = np.squeeze(np.asarray(value))
+        if array.dtype.kind not in "fiu" or array.size == 0:
+            continue
+        if array.ndim == 0 or array.size == 1:
+            return {}  # a scalar: a sample rate, most likely
+        arrays.append(array)
+    if len(arrays) != 1 or arrays[0].ndim != 2:
+        return {}
+    matrix = arrays[0]
+    if matrix.shape[1] not in POSITION_COUNTS or matrix.shape[0] < matrix.shape[1]:
+        matrix = matrix.T  # positions as rows
+    if matrix.shape[1] not in POSITION_COUNTS or matrix.shape[0] < matrix.shape[1]:
+        return {}
+    return {k + 1: matrix[:, k].astype(float) for k in range(matrix.shape[1])}
 
 
 def _position_vectors(variables: dict) -> dict[int, np.ndarray]:
@@ -120,7 +146,10 @@ def _positions_text(positions: dict[int, np.ndarray]) -> str:
 
 
 def _npy_text(array: np.ndarray) -> str:
-    """A ``.npy``'s columns: readings; time and readings; and case temperatures."""
+    """A ``.npy``'s columns: readings; time and readings; and case temperatures -- or,
+    four or eight columns, the handout's table of positions."""
+    if array.dtype.kind in "fiu" and array.ndim == 2 and array.shape[1] in POSITION_COUNTS:
+        return _positions_text({k + 1: array[:, k].astype(float) for k in range(array.shape[1])})
     if array.ndim == 1:
         array = array[:, None]
     if array.dtype.kind not in "fiu" or array.ndim != 2 or array.shape[1] not in NPY_HEADERS:
