@@ -21,7 +21,10 @@ import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
+# a sentence, perhaps after the time a serial monitor stamped it with (its arrow already
+# made a separator: app.core.monitor_stamps)
 SENTENCE = re.compile(
+    r"(?:(?P<stamp>\d{1,2}:\d{2}:\d{2}(?:[.,]\d+)?)[\t ,;]+)?"
     r"\$(?P<kind>[A-Z][A-Z0-9]{2,9}),(?P<body>[^*$]*)(?:\*(?P<check>[0-9A-Fa-f]{2}|[0-9A-Fa-f]{4}))?"
 )
 _AXES = ("x", "y", "z")
@@ -172,12 +175,17 @@ def sentence_lines(lines: Iterable[str], sentences: Sentences) -> Iterator[str]:
         found = SENTENCE.fullmatch(text)
         if found is not None and sentences.kind is None:
             sentences.kind = found["kind"]
-        if found is None or found["kind"] != sentences.kind:
+        stamped = found is not None and found["stamp"] is not None
+        if (
+            found is None
+            or found["kind"] != sentences.kind
+            or (sentences.header is not None and stamped != sentences.header.startswith("time"))
+        ):
             sentences.passed_over += 1
             sentences.first_passed = sentences.first_passed or number
             yield "\n"
             continue
-        if found["check"] and not checksum_holds(text, found["check"]):
+        if found["check"] and not checksum_holds(text[found.start("kind") - 1 :], found["check"]):
             sentences.bad_checksums += 1
             sentences.first_bad = sentences.first_bad or number
             yield "\n"
@@ -187,8 +195,8 @@ def sentence_lines(lines: Iterable[str], sentences: Sentences) -> Iterator[str]:
             names = FIELDS.get(sentences.kind, ())
             if len(names) != count:
                 names = tuple(f"field {k}" for k in range(1, count + 1))
-            sentences.header = ",".join(names)
+            sentences.header = ",".join(("time",) * stamped + names)
         sentences.kept += 1
         sentences.first_line = sentences.first_line or number
         sentences.last_line = number
-        yield found["body"] + "\n"
+        yield (f"{found['stamp']}," if stamped else "") + found["body"] + "\n"

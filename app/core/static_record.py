@@ -40,6 +40,7 @@ from app.core.clock_stamps import (
 from app.core.column_names import AngleOutput, comment_text
 from app.core.exceptions import UserError
 from app.core.labview_lvm import LabviewHeaders, is_labview_measurement, labview_lines
+from app.core.monitor_stamps import is_stamped_capture, unstamped_lines
 from app.core.record_blocks import Progress, RecordBlocks
 from app.core.record_columns import Layout
 from app.core.record_preamble import (
@@ -70,6 +71,7 @@ LEFT_OUT = frozenset(
         "allan.note_sentences",
         "allan.note_sentences_checksum",
         "allan.note_sentences_other",
+        "allan.note_monitor_stamps",
     }
 )
 LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
@@ -143,6 +145,10 @@ def read_static_record(
     about: list[tuple[int, str]] = []  # lines about the record above its table
     lines = iter(lines)
     first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
+    if is_stamped_capture(first):  # "10:00:00.123 -> 10.74": the stamp a time column
+        lines = unstamped_lines(itertools.chain(first, lines))
+        first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
+        notes.append({"key": "allan.note_monitor_stamps", "params": {}})
     labview = None
     if is_labview_measurement("".join(first[:50])[:200]):
         labview = LabviewHeaders()  # its headers passed over, its rate where it states one
@@ -260,8 +266,9 @@ def read_static_record(
 def written_as_a_record(text: str) -> bool:
     """Whether a file can only be one record, never a table of positions: its header is
     the comment line above its readings (:func:`names_its_columns_in_a_comment`), it is
-    LabVIEW's measurement file (:mod:`app.core.labview_lvm`), or an instrument's captured
-    sentences (:mod:`app.core.sentence_records`).
+    LabVIEW's measurement file (:mod:`app.core.labview_lvm`), an instrument's captured
+    sentences (:mod:`app.core.sentence_records`), or a serial monitor's stamped capture
+    (:mod:`app.core.monitor_stamps`).
 
     Parameters
     ----------
@@ -277,6 +284,7 @@ def written_as_a_record(text: str) -> bool:
         is_labview_measurement(text[:200])
         or names_its_columns_in_a_comment(text)
         or is_sentence_record(itertools.islice(io.StringIO(text), LOOK_AT))
+        or is_stamped_capture(itertools.islice(io.StringIO(text), LOOK_AT))
     )
 
 
