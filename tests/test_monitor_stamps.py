@@ -110,3 +110,23 @@ def test_the_lab_page_saves_a_stamped_position_with_its_times(client, student):
         chunk = db.exec(select(SampleChunk)).one()
     np.testing.assert_allclose(unpack(chunk.times)[:3], [0.0, 0.1, 0.2], atol=1e-9)
     assert math.isclose(float(np.mean(unpack(chunk.values))), float(np.mean(np.round(rates, 4))))
+
+
+def test_a_stamp_that_goes_back_is_said_not_a_500():
+    """The PC's clock stepped back under the monitor (a time server's correction): its
+    stamps do not rise.  A bare first column that goes back is taken for a counter that
+    wraps and dropped -- a clock's stamps are none, and reading them was an
+    AttributeError; now the record's times are refused in words."""
+    from app.core.exceptions import UserError
+
+    lines = [f"{rate:.4f}" for rate in static_record(0.02, 10.0, arw=ARW, seed=7)]
+    text = stamped(lines, 10.0).splitlines()
+    text[200] = "10:00:00.500 -> 10.0000"
+    with pytest.raises(UserError) as refused:  # the rates' column chosen: the stamps guessed
+        read("\n".join(text) + "\n", column="2")
+    assert refused.value.key == "allan.bad_times"
+    from app.core.allan import analyse_record
+
+    with pytest.raises(UserError) as refused:  # found by name: refused where it is analysed
+        analyse_record(read("\n".join(text) + "\n"), None)
+    assert refused.value.key == "allan.bad_times"

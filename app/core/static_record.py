@@ -236,6 +236,8 @@ def read_static_record(
     if time_guessed:
         if np.all(np.diff(all_times) >= 0):
             notes.append({"key": "allan.note_first_column_times", "params": {}})
+        elif blocks.clock.clock:  # a clock's stamps that go back are no counter's wrap
+            raise UserError("allan.bad_times")
         else:  # it rose only at first: a counter that wraps, say -- no times
             all_times = None
     clock = blocks.clock
