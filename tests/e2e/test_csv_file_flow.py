@@ -184,8 +184,6 @@ def test_one_positions_logger_files_are_saved_where_the_student_says(
     mat = tmp_path / "pos4.mat"
     scipy.io.savemat(mat, {"t": 0.1 * np.arange(rates.size), "omega": rates})
     panel.locator(".csv-file").set_input_files(str(mat))
-    page.wait_for_timeout(2000)
-    print("PREVIEW", panel.locator(".csv-preview").inner_text())
     expect(panel.locator(".csv-preview select.record-position")).to_have_value("4")
     mean = np.mean([float(v) for v in columns[3]])
     expect(panel.locator(".csv-preview tbody tr td").nth(3)).to_have_text(f"{mean:.3f}")
