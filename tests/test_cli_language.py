@@ -62,3 +62,26 @@ def test_the_operators_commands_speak_the_language_lang_names(
         out, err = capsys.readouterr()
         expected = (english if language == "en" else chinese).format(**names)
         assert (out + err).strip() == expected, command
+
+
+@pytest.mark.sqlite_only  # a database file the server has never started on
+def test_the_lti_commands_bring_a_new_database_to_its_schema_first(tmp_path, capsys, monkeypatch):
+    """An administrator registers the LMS before the server's first start: the lti
+    commands met SQLAlchemy's "no such table" traceback; now they migrate first, as
+    create-user does."""
+    from app.config import get_settings
+    from app.db import engine_for
+
+    monkeypatch.setenv("GYROLAB_VAR_DIR", str(tmp_path / "new-var"))
+    monkeypatch.setenv("LANG", "en_GB.UTF-8")
+    get_settings.cache_clear()
+    engine_for.cache_clear()
+    try:
+        assert main(["lti", "list"]) == 0
+        assert main(["lti", "send-grades"]) == 0
+        assert main(["lti", "rotate-key"]) == 0
+        out, err = capsys.readouterr()
+        assert "sent 0, failed 0" in out and "new signing key" in out and err == ""
+    finally:
+        get_settings.cache_clear()
+        engine_for.cache_clear()

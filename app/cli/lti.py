@@ -4,11 +4,26 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 
 from sqlmodel import select
 
 from app.cli.language import speaker
 from app.core.exceptions import UserError
+
+
+def _on_a_current_database(handler: Callable[[argparse.Namespace], int]):
+    """``handler`` run after the database is brought to the newest schema, as
+    ``create-user`` runs: an administrator registers the LMS before the server's first
+    start, or after an upgrade, and met SQLAlchemy's "no such table" traceback."""
+
+    def run(args: argparse.Namespace) -> int:
+        from app.migrate import upgrade_to_head
+
+        upgrade_to_head()
+        return handler(args)
+
+    return run
 
 
 def _add_platform(args: argparse.Namespace) -> int:
@@ -123,17 +138,21 @@ def add_lti_commands(commands, say) -> None:
     add.add_argument(
         "--deployment", action="append", help=say("clihelp.lti.add_platform.deployment")
     )
-    add.set_defaults(handler=_add_platform)
-    sub.add_parser("list", help=say("clihelp.lti.list")).set_defaults(handler=_list)
-    sub.add_parser("rotate-key", help=say("clihelp.lti.rotate_key")).set_defaults(handler=_rotate)
+    add.set_defaults(handler=_on_a_current_database(_add_platform))
+    sub.add_parser("list", help=say("clihelp.lti.list")).set_defaults(
+        handler=_on_a_current_database(_list)
+    )
+    sub.add_parser("rotate-key", help=say("clihelp.lti.rotate_key")).set_defaults(
+        handler=_on_a_current_database(_rotate)
+    )
     link = sub.add_parser("registration-link", help=say("clihelp.lti.registration_link"))
     link.add_argument("--base-url", help=say("clihelp.lti.registration_link.base_url"))
-    link.set_defaults(handler=_registration_link)
+    link.set_defaults(handler=_on_a_current_database(_registration_link))
     sub.add_parser("send-grades", help=say("clihelp.lti.send_grades")).set_defaults(
-        handler=_send_grades
+        handler=_on_a_current_database(_send_grades)
     )
     sync = sub.add_parser("sync-roster", help=say("clihelp.lti.sync_roster"))
     sync.add_argument(
         "--course", type=int, required=True, help=say("clihelp.lti.sync_roster.course")
     )
-    sync.set_defaults(handler=_sync_roster)
+    sync.set_defaults(handler=_on_a_current_database(_sync_roster))
