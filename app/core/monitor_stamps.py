@@ -10,6 +10,8 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Iterator
 
+from app.core.text_files import first_texts
+
 # "10:00:00.123 -> …": the Arduino IDE's serial monitor with its timestamps shown
 STAMPED = re.compile(r"(?P<stamp>\d{1,2}:\d{2}:\d{2}(?:[.,]\d+)?) -> ?(?P<rest>.*)")
 LOOK_AT = 20  # the first non-blank lines that tell a stamped capture
@@ -29,16 +31,9 @@ def is_stamped_capture(first_lines: Iterable[str]) -> bool:
         True where most of the first 20 non-blank lines, and at least two, start with a
         time of day and an arrow (``10:00:00.123 -> ``).
     """
-    stamped = looked = 0
-    for line in first_lines:
-        text = line.strip().lstrip("\ufeff")
-        if not text:
-            continue
-        looked += 1
-        stamped += STAMPED.fullmatch(text) is not None
-        if looked == LOOK_AT:
-            break
-    return stamped >= 2 and 2 * stamped > looked
+    texts = first_texts(first_lines, LOOK_AT)
+    stamped = sum(STAMPED.fullmatch(text) is not None for text in texts)
+    return stamped >= 2 and 2 * stamped > len(texts)
 
 
 def unstamped_lines(lines: Iterable[str]) -> Iterator[str]:

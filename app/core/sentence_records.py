@@ -21,6 +21,8 @@ import re
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 
+from app.core.text_files import first_texts
+
 # a sentence, perhaps after the time a serial monitor stamped it with (its arrow already
 # made a separator: app.core.monitor_stamps)
 SENTENCE = re.compile(
@@ -64,21 +66,12 @@ def is_sentence_record(first_lines: Iterable[str]) -> bool:
         True where most of the first 20 non-blank lines, and at least two, are sentences
         of one kind (the first may be cut: a capture starts mid-sentence).
     """
-    kinds: list[str] = []
-    looked = 0
-    for line in first_lines:
-        text = line.strip().lstrip("\ufeff")
-        if not text:
-            continue
-        looked += 1
-        if (found := SENTENCE.fullmatch(text)) is not None:
-            kinds.append(found["kind"])
-        if looked == LOOK_AT:
-            break
+    texts = first_texts(first_lines, LOOK_AT)
+    kinds = [found["kind"] for text in texts if (found := SENTENCE.fullmatch(text))]
     if len(kinds) < 2:
         return False
     most = max(kinds.count(kind) for kind in set(kinds))
-    return most >= 2 and 2 * most > looked
+    return most >= 2 and 2 * most > len(texts)
 
 
 def checksum_holds(text: str, check: str) -> bool:

@@ -51,7 +51,7 @@ from app.core.record_preamble import (
     is_header,
     stated_rate_hz,
 )
-from app.core.sentence_records import LOOK_AT, Sentences, is_sentence_record, sentence_lines
+from app.core.sentence_records import Sentences, is_sentence_record, sentence_lines
 from app.core.spreadsheet_text import (
     WHOLE_COMMA_DIGITS,
     decimal_point,
@@ -285,8 +285,8 @@ def written_as_a_record(text: str) -> bool:
     return (
         is_labview_measurement(text[:200])
         or names_its_columns_in_a_comment(text)
-        or is_sentence_record(itertools.islice(io.StringIO(text), LOOK_AT))
-        or is_stamped_capture(itertools.islice(io.StringIO(text), LOOK_AT))
+        or is_sentence_record(io.StringIO(text))
+        or is_stamped_capture(io.StringIO(text))
     )
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import codecs
 import contextlib
 import io
+import itertools
 import re
 import unicodedata
 from collections.abc import Iterable
@@ -44,6 +45,26 @@ def file_text(text: str) -> str:
         one in the middle of the text is left to the reader to refuse.
     """
     return text.lstrip("\ufeff").rstrip(END_OF_FILE_MARK)
+
+
+def first_texts(lines: Iterable[str], count: int) -> list[str]:
+    """A file's first ``count`` lines that are not blank, stripped (and a byte-order mark
+    with them): what its readers look at to tell its kind.
+
+    Parameters
+    ----------
+    lines : iterable of str
+        The file's lines, from its first (read only as far as needed).
+    count : int
+        How many to take.
+
+    Returns
+    -------
+    list of str
+        At most ``count`` texts.
+    """
+    texts = (line.strip().lstrip("\ufeff") for line in lines)
+    return list(itertools.islice((text for text in texts if text), count))
 
 
 def decode_text(data: bytes) -> str:
