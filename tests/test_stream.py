@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import re
 
 import numpy as np
 import pytest
@@ -159,6 +160,64 @@ def test_bad_stream_requests(student_client, message, text):
     with connect(student_client, session_id) as ws:
         frames = record(ws, **message)
     assert frames[-1]["type"] == "error" and text in frames[-1]["message"]
+
+
+@pytest.mark.one_backend  # refused before any database work
+@pytest.mark.parametrize(
+    ("frame", "key"),
+    [
+        ("hello", "stream.bad_frame"),
+        (b"\x00\x01\xff", "stream.bad_frame"),  # a binary frame that is no UTF-8
+        ("[1, 2]", "stream.bad_frame"),
+        ('{"action": "jump"}', "stream.bad_frame"),
+        ('{"action": ["start"]}', "stream.bad_frame"),
+        ('{"action": "\\ud800"}', "stream.bad_frame"),  # a lone surrogate
+        # these three ended the frame reader: the socket hung, open, answering nothing
+        ('{"action": "start", "a": ' + "9" * 5000 + "}", "json.out_of_range"),
+        ("[" * 100_000 + "]" * 100_000, "json.too_deep"),
+        ('{"a": ' * 50_000 + "1" + "}" * 50_000, "json.too_deep"),
+        # an OverflowError that closed the socket with 1011; an int that float() takes
+        (
+            '{"action": "start", "part": "heading", "position": 1, "dwell_s": 1' + "0" * 400 + "}",
+            "json.out_of_range",
+        ),  # fmt: skip
+        (
+            '{"action": "start", "part": "heading", "position": 1, "dwell_s": 1' + "0" * 299 + "}",
+            "stream.out_of_range",
+        ),  # fmt: skip
+        ('{"action": "start", "part": "heading", "position": 1, "dwell_s": NaN}', "json.constant"),
+        ('{"action": "start", "part": "heading", "position": true}', "stream.bad_position"),
+    ],
+)
+def test_a_frame_that_is_no_request_is_answered_and_the_stream_goes_on(student_client, frame, key):
+    """Whatever a frame holds, the server says what is wrong with it, in the page's
+    language, and the same socket then records."""
+    session_id = new_session(student_client, preset="tactical-fog")
+    headers = {**ORIGIN, "accept-language": "zh-CN"}
+    path = f"/lab/sessions/{session_id}/stream"
+    with student_client.websocket_connect(path, headers=headers) as ws:
+        ws.send_bytes(frame) if isinstance(frame, bytes) else ws.send_text(frame)
+        answer = ws.receive_json()
+        assert (answer["type"], answer["key"]) == ("error", key)
+        assert re.search("[\u4e00-\u9fff]", answer["message"]), answer
+        frames = record(ws, part="heading", position=1, dwell_s=10, speed=60)
+    assert frames[-1]["type"] == "saved", frames[-1]
+    with read_session() as db:
+        assert db.exec(select(Take)).one().n_samples == frames[-1]["n"]
+
+
+def test_a_stop_after_the_recording_is_no_error_and_json_in_a_binary_frame_is_read(
+    student_client,
+):
+    session_id = new_session(student_client, preset="tactical-fog")
+    with connect(student_client, session_id) as ws:
+        ws.send_json({"action": "stop"})  # a second click on Stop, after the save
+        start = {"action": "start", "part": "heading", "position": 1, "dwell_s": 10, "speed": 60}
+        ws.send_bytes(json.dumps(start).encode())
+        frames = []
+        while not frames or frames[-1]["type"] not in ("saved", "error"):
+            frames.append(ws.receive_json())
+    assert frames[0]["type"] == "started" and frames[-1]["type"] == "saved", frames
 
 
 def test_stop_early_keeps_what_was_recorded(student_client):

@@ -22,6 +22,7 @@ def _serve(args: argparse.Namespace) -> int:
     )
     from app.config import get_settings
     from app.db import write_session
+    from app.lab.stream import MAX_FRAME_BYTES
     from app.migrate import upgrade_to_head
 
     say = speaker(args)
@@ -56,6 +57,7 @@ def _serve(args: argparse.Namespace) -> int:
         # in a frame (py-spy under the 60-student load test), to save bytes no network here
         # is short of.
         ws_per_message_deflate=False,
+        ws_max_size=MAX_FRAME_BYTES,
     )
     return 0
 

@@ -8,6 +8,10 @@ Protocol (JSON text frames):
   client → {"action": "stop"}           (ends the dwell early; what was recorded is kept)
   server → {"type": "saved", "position": 2, "n": 30}  or  {"type": "error", "message": ...}
 
+A frame that is not such an object (not JSON, not UTF-8, NaN, a number past 300 digits,
+nesting too deep, an unknown action) is answered with an error between recordings and
+ignored during one; the connection stays open either way.
+
 Only measured readings leave the server: the run's true azimuth, biases and indexing
 errors stay in the database.  A recording is saved in one transaction when it ends; a
 dropped connection saves nothing and the page says the position must be recorded again.
@@ -16,7 +20,6 @@ dropped connection saves nothing and the page says the position must be recorded
 from __future__ import annotations
 
 import asyncio
-import json
 import math
 from urllib.parse import urlsplit
 
@@ -28,6 +31,7 @@ from starlette.concurrency import run_in_threadpool
 from app.accounts.deps import login_for_cookie
 from app.config import get_settings
 from app.core.exceptions import UserError
+from app.core.jsonsafe import loads_finite
 from app.db import database_busy, read_session, write_session
 from app.lab.service import locked_session, record_position, recordable_session
 from app.lab.sim import (
@@ -49,6 +53,11 @@ router = APIRouter(tags=["streams"])
 FRAME_SECONDS = 0.2
 MAX_SPEED = 60.0
 INBOX_FRAMES = 64
+# The largest client frame the server reads (``gyrolab serve`` gives it to uvicorn, which
+# closes the socket with 1009 on a longer one): the page's frames are under 200 bytes, and a
+# frame is parsed on the event loop every student's stream shares -- uvicorn's 16 MiB
+# default let one student hold it 0.5 s a frame (12 MB of numbers), 64 KiB at most ≈ 3 ms.
+MAX_FRAME_BYTES = 64 * 1024
 
 
 def _same_origin(websocket: WebSocket) -> bool:
@@ -132,9 +141,11 @@ def _clear_mark(session_id: int) -> None:
 
 def _number(message: dict, name: str, default: float, low: float, high: float) -> float:
     value = message.get(name, default)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, int | float):
         raise UserError("stream.bad_number", name=name)
-    if not low <= value <= high:
+    if isinstance(value, float) and not math.isfinite(value):
+        raise UserError("stream.bad_number", name=name)
+    if not low <= value <= high:  # (an int of any size compares; float() of one may overflow)
         raise UserError("stream.out_of_range", name=name, low=low, high=high)
     return float(value)
 
@@ -157,9 +168,13 @@ async def stream(websocket: WebSocket, session_id: ObjectId) -> None:
             message = await inbox.get()
             if message is None:
                 return
-            if message.get("action") != "start":
-                continue
             try:
+                if isinstance(message, UserError):
+                    raise message
+                if message.get("action") == "stop":
+                    continue  # after the recording it ended (or a second click): nothing to do
+                if message.get("action") != "start":
+                    raise UserError("stream.bad_frame")
                 await _record(websocket, session_id, message, inbox)
             except UserError as error:
                 await websocket.send_json(
@@ -180,18 +195,31 @@ class _Closed(Exception):
 
 
 async def _read_into(websocket: WebSocket, inbox: asyncio.Queue) -> None:
-    """Read client frames into a queue (so waiting for a 'stop' never loses a frame)."""
+    """Read client frames into a queue (so waiting for a 'stop' never loses a frame): each
+    a JSON object, or the ``UserError`` that says why it is none; ``None`` when the client
+    has gone.  No frame ends the reading: a binary frame is read as UTF-8 text, and one
+    that cannot be parsed is refused in words (``loads_finite``)."""
     try:
         while True:
-            text = await websocket.receive_text()
-            try:
-                message = json.loads(text)
-            except json.JSONDecodeError:
-                continue
-            if isinstance(message, dict):
-                await inbox.put(message)
+            frame = await websocket.receive()
+            if frame["type"] == "websocket.disconnect":
+                break
+            await inbox.put(_message(frame))
     except (WebSocketDisconnect, RuntimeError):
-        await inbox.put(None)
+        pass
+    await inbox.put(None)
+
+
+def _message(frame: dict) -> dict | UserError:
+    """A received frame as the client's JSON object, or the error that says why not."""
+    text = frame.get("text")
+    if text is None:
+        text = frame.get("bytes") or b""
+    try:
+        message = loads_finite(text)
+    except UserError as error:
+        return UserError("stream.bad_frame") if error.key == "json.invalid" else error
+    return message if isinstance(message, dict) else UserError("stream.bad_frame")
 
 
 _TICK = object()  # FramePacer: the frame's time came first (no client frame)
@@ -242,7 +270,7 @@ class FramePacer:
                 raise _Closed()
             now = self.loop.time()
             ticked = incoming is _TICK
-            stopped = not ticked and incoming.get("action") == "stop"
+            stopped = isinstance(incoming, dict) and incoming.get("action") == "stop"
             if ticked or stopped or now >= deadline:
                 break
             # any other client frame before the tick: not a reason to send samples
@@ -259,7 +287,12 @@ async def _record(
     websocket: WebSocket, session_id: int, message: dict, inbox: asyncio.Queue
 ) -> None:
     part, position = message.get("part"), message.get("position")
-    if part not in PARTS or not isinstance(position, int) or not 1 <= position <= POSITIONS:
+    if (
+        part not in PARTS
+        or isinstance(position, bool)  # JSON's true is no position (Python's int 1)
+        or not isinstance(position, int)
+        or not 1 <= position <= POSITIONS
+    ):
         raise UserError("stream.bad_position")
     dwell = _number(message, "dwell_s", 30.0, 1.0, MAX_DWELL_S)
     settle = _number(message, "settle_s", 0.0, 0.0, MAX_SETTLE_S)
