@@ -309,6 +309,70 @@ def test_the_command_line_replays_checks_and_explains(tmp_path, capsys):
     assert code == 2 and "cannot open" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize(
+    ("option", "words"),
+    [
+        (["--rate", "0"], "--rate must be a sample rate above 0 Hz"),  # was a TypeError
+        (["--rate", "nan"], "--rate must be a finite number"),  # NaN times in the CSV
+        (["--rate", "-5"], "--rate must be a sample rate above 0 Hz"),  # times going back
+        (["--scale", "nan"], "--scale must be a finite number"),  # every reading dropped
+        (["--scale", "0"], "--scale must not be 0"),
+        (["--temp-scale", "inf"], "--temp-scale must be a finite number"),
+        (["--column", "-3"], "--column must be a whole number of at least 1"),  # all dropped
+        (["--batch", "0"], "--batch must be a whole number of at least 1"),
+        (["--max-samples", "-1"], "--max-samples must be a whole number of at least 1"),
+        (["--baud", "-1"], "--baud must be a whole number of at least 1"),
+        (["--speed", "-1"], "--speed must not be negative"),
+        (["--seconds", "0"], "--seconds must be above 0"),
+    ],
+)
+def test_an_option_the_bridge_cannot_use_is_refused_before_anything_is_written(
+    tmp_path, capsys, option, words
+):
+    source = tmp_path / "gyro.txt"
+    source.write_text("10.1\n10.2\n10.3\n")
+    table = tmp_path / "samples.csv"
+    code = main(["bridge", "--file", str(source), "--csv", str(table), *option, "--language", "en"])
+    assert code == 2 and words in capsys.readouterr().err
+    assert not table.exists()
+    assert main(["bridge", "--file", str(source), *option, "--language", "zh-CN"]) == 2
+    assert re.search("[\u4e00-\u9fff]", capsys.readouterr().err)
+
+
+@pytest.mark.parametrize(
+    ("description", "field"),
+    [
+        ('{"format": "text", "rate_hz": "fast"}', "rate_hz"),  # each of these a traceback
+        ('{"format": "text", "rate_hz": 0}', "rate_hz"),
+        ('{"format": "text", "wall_clock_s": 1e300}', "wall_clock_s"),
+        ('{"format": "text", "wall_clock_s": NaN}', "wall_clock_s"),
+        ('{"format": "text", "wall_clock_s": [1]}', "wall_clock_s"),
+        ('{"format": "text", "scale": "big"}', "scale"),
+        ('{"format": "text", "regex": 5}', "regex"),
+        ('{"format": ["text"]}', "format"),
+        ('{"format": "vectornav", "axis": "w"}', "axis"),
+        ('{"format": "text", "column": "two"}', "column"),
+        ('{"format": "text", "mid_line": "no"}', "mid_line"),
+    ],
+)
+def test_a_recordings_damaged_description_is_named(tmp_path, capsys, description, field):
+    recording = tmp_path / "edited.gyroraw"
+    recording.write_bytes(b"GYROLAB-RAW 1\n" + description.encode() + b"\n")
+    with pytest.raises(UserError) as caught:
+        open_recording(recording)
+    assert (caught.value.key, caught.value.params["field"]) == ("bridge.damaged_description", field)
+    code = main(["bridge", "--replay", str(recording), "--speed", "0", "--language", "en"])
+    assert code == 2 and f"damaged: {field} = " in capsys.readouterr().err
+
+
+def test_a_description_nested_too_deep_is_a_damaged_recording(tmp_path):
+    recording = tmp_path / "deep.gyroraw"
+    recording.write_bytes(b"GYROLAB-RAW 1\n" + b"[" * 5000 + b"]" * 5000 + b"\n")
+    with pytest.raises(UserError) as caught:
+        open_recording(recording)  # was a RecursionError
+    assert caught.value.key == "bridge.bad_recording"
+
+
 def test_a_recording_remembers_how_it_was_read(tmp_path, capsys, monkeypatch):
     """``--record`` keeps the format and its options; a replay needs only the file."""
     source = tmp_path / "gyro.bin"

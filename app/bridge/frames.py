@@ -37,6 +37,8 @@ from pathlib import Path
 from app.bridge.checksums import CHECKSUMS, Checksum
 from app.core.exceptions import UserError
 
+MAX_RATE_HZ = 1.0e6  # the highest output rate the bridge takes (a FOG's is ≤ 10 kHz)
+
 AXES = ("x", "y", "z")
 ROLES = (*AXES, "temp", "seq", "status", "_")
 RATE_UNITS = ("deg/h", "deg/s", "rad/s")
@@ -161,7 +163,7 @@ def build_spec(
         raise spec_error("too_long", limit=MAX_FRAME_BYTES)
     if unit is not None and unit not in RATE_UNITS + ANGLE_UNITS:
         raise spec_error("unit", unit=unit[:20], known=", ".join(RATE_UNITS + ANGLE_UNITS))
-    if rate_hz is not None and not 0 < rate_hz <= 1e6:
+    if rate_hz is not None and not 0 < rate_hz <= MAX_RATE_HZ:
         raise spec_error("rate")
     return FrameSpec(head, tuple(parsed), length, check, checksum_from, unit, rate_hz)
 

@@ -10,6 +10,7 @@ axis, unit, rate, when it started), then records of ``<d`` seconds since the sta
 from __future__ import annotations
 
 import json
+import math
 import struct
 import time
 from collections.abc import Iterator
@@ -17,6 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import BinaryIO
 
+from app.bridge.frames import MAX_RATE_HZ
 from app.core.exceptions import UserError
 
 MAGIC = b"GYROLAB-RAW 1\n"
@@ -97,13 +99,61 @@ def open_recording(path: Path) -> Recording:
     line = handle.readline(MAX_META_BYTES)
     try:
         meta = json.loads(line)
-    except (ValueError, UnicodeDecodeError):
+    except (ValueError, UnicodeDecodeError, RecursionError):
         handle.close()
         raise damaged() from None
     if not isinstance(meta, dict):
         handle.close()
         raise damaged()
+    try:
+        check_description(meta)
+    except UserError:
+        handle.close()
+        raise
     return Recording(meta, handle)
+
+
+TEXT_KEYS = ("format", "axis", "unit", "regex", "source", "started")
+FLAG_KEYS = ("integrated", "mid_line")
+COUNT_KEYS = ("column", "baud")
+NUMBER_KEYS = ("rate_hz", "temperature_scale", "scale", "wall_clock_s")
+AXES = ("x", "y", "z")
+LATEST_CLOCK_S = 253_402_300_799.0  # the end of the year 9999: as far as datetime reads
+
+
+def check_description(meta: dict) -> None:
+    """A recording's description as the bridge wrote it (:func:`app.cli.bridge._meta`):
+    each known value of its type and range, or ``bridge.damaged_description`` naming the
+    first that is not (a damaged or hand-edited file was a traceback: a rate of 0 or a
+    string, a clock of 1e300, NaN)."""
+    for key, value in meta.items():
+        if value is None or _usable(key, value):
+            continue
+        raise UserError("bridge.damaged_description", field=key[:40], value=str(value)[:40])
+
+
+def _usable(key: str, value: object) -> bool:
+    if key == "axis":
+        return value in AXES  # as --axis chooses
+    if key in TEXT_KEYS:
+        return isinstance(value, str)
+    if key in FLAG_KEYS:
+        return isinstance(value, bool)
+    if key in COUNT_KEYS:
+        return isinstance(value, int) and not isinstance(value, bool) and value >= 1
+    if key not in NUMBER_KEYS:
+        return True  # kept, not used
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return False
+    if not math.isfinite(value):
+        return False
+    if key == "rate_hz":
+        return 0 < value <= MAX_RATE_HZ
+    if key == "scale":
+        return value != 0
+    if key == "wall_clock_s":
+        return 0 <= value <= LATEST_CLOCK_S
+    return True
 
 
 def paced(

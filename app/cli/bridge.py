@@ -4,6 +4,7 @@ language, exit status)."""
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import re
 import sys
@@ -11,8 +12,9 @@ import time
 from datetime import datetime
 from pathlib import Path
 
+from app.bridge.frames import MAX_RATE_HZ
 from app.bridge.instruments import FORMATS, Instrument, set_up
-from app.bridge.recording import Recorder, open_recording, paced
+from app.bridge.recording import AXES, Recorder, open_recording, paced
 from app.bridge.run import Outcome, SampleTable, run_bridge
 from app.bridge.samples import UNITS, SampleMaker
 from app.bridge.sources import serial_chunks, stream_chunks
@@ -39,7 +41,7 @@ def add_bridge_command(commands, say) -> None:
         help=say("clihelp.bridge.format", formats=" | ".join(FORMATS)),
     )
     bridge.add_argument("--baud", type=int, help=say("clihelp.bridge.baud"))
-    bridge.add_argument("--axis", choices=["x", "y", "z"], help=say("clihelp.bridge.axis"))
+    bridge.add_argument("--axis", choices=AXES, help=say("clihelp.bridge.axis"))
     bridge.add_argument(
         "--unit",
         choices=list(UNITS),
@@ -91,7 +93,39 @@ def bridge_command(args: argparse.Namespace) -> int:
         return 1 if error.key in RUN_ERRORS else 2
 
 
+def check_options(args: argparse.Namespace) -> None:
+    """The command's numbers as the bridge can use them, each refused in words: a rate of
+    0 was a traceback, NaN or a negative rate wrote NaN or falling times into the CSV, a
+    scale of NaN or 0 and a column of −3 dropped or zeroed every reading without a word."""
+    for name, value in (
+        ("--rate", args.rate),
+        ("--temp-scale", args.temp_scale),
+        ("--scale", args.scale),
+        ("--speed", args.speed),
+        ("--seconds", args.seconds),
+    ):
+        if value is not None and not math.isfinite(value):
+            raise UserError("cli.not_finite", name=name)
+    if args.rate is not None and not 0 < args.rate <= MAX_RATE_HZ:
+        raise UserError("bridge.bad_rate", name="--rate", most=f"{MAX_RATE_HZ:,.0f}")
+    if args.scale == 0:
+        raise UserError("bridge.zero_scale", name="--scale")
+    if args.speed < 0:  # 0: as fast as the recording can be read
+        raise UserError("bridge.negative", name="--speed")
+    if args.seconds is not None and args.seconds <= 0:
+        raise UserError("bridge.not_positive", name="--seconds")
+    for name, value in (
+        ("--column", args.column),
+        ("--batch", args.batch),
+        ("--max-samples", args.max_samples),
+        ("--baud", args.baud),
+    ):
+        if value is not None and value < 1:
+            raise UserError("bridge.not_a_count", name=name)
+
+
 def _run(args: argparse.Namespace, say) -> int:
+    check_options(args)
     recording = open_recording(Path(args.replay)) if args.replay else None
     saved = recording.meta if recording else {}
     instrument = _instrument(args, saved)
@@ -112,7 +146,7 @@ def _run(args: argparse.Namespace, say) -> int:
     )
     baud = args.baud or saved.get("baud") or instrument.default_baud()
     if recording is not None:
-        chunks = paced(recording.chunks(), max(args.speed, 0.0))
+        chunks = paced(recording.chunks(), args.speed)
     elif args.serial:
         chunks = serial_chunks(args.serial, int(baud))
     elif args.file and args.file != "-":
