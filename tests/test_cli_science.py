@@ -213,6 +213,19 @@ def test_simulate_static_and_allan(capsys, tmp_path):
         (["solve", "heading", "-", "--start-angle", "nan"], "position_1\n1\n", "finite"),
         (["allan", "-", "--rate", "10"], "1\n2\n", "at least 16"),
         (["simulate", "heading", "--latitude", "95"], None, "between -90 and 90"),
+        # each of these was a traceback, NaN readings, a run out of memory, or taken
+        (["simulate", "heading", "--latitude", "40", "--settle", "nan"], None, "finite"),
+        (["simulate", "heading", "--latitude", "40", "--seed", "-1"], None, "--seed must be"),
+        (["simulate", "heading", "--latitude", "40", "--earth-rate", "nan"], None, "finite"),
+        (["simulate", "heading", "--latitude", "40", "--earth-rate", "-1"], None, "above 0"),
+        (["simulate", "heading", "--latitude", "40", "--settle", "1e9"], None, "between 0 and"),
+        (["simulate", "heading", "--latitude", "40", "--settle", "-1"], None, "between 0 and"),
+        (["simulate", "heading", "--latitude", "40", "--rate", "-3"], None, "--rate must be above"),
+        (["simulate", "heading", "--latitude", "40", "--positions", "10000"], None, "and 360"),
+        (["simulate", "heading", "--latitude", "40", "--indexing-sigma", "-1"], None, "between"),
+        (["simulate", "heading", "--latitude", "40", "--pitch", "100"], None, "between -90"),
+        (["simulate", "static", "--latitude", "40", "--seconds", "1e9"], None, "shorter than"),
+        (["simulate", "static", "--latitude", "40", "--seconds", "-5"], None, "above 0"),
     ],
 )
 def test_bad_input_exits_2_with_one_line(capsys, args, stdin, message):

@@ -18,6 +18,45 @@ from app.core.sinusoid import elevation_angles, heading_angles
 from app.core.units import EARTH_RATE_DEG_H
 
 WARM_GYRO_S = 3600.0  # simulate's default: a lab gyro is usually left on
+MAX_SAMPLES = 5_000_000  # a position's (or a static record's) readings
+MAX_POSITIONS = 360  # one every degree
+MAX_SETTLE_S = 3600.0  # discarded after each turn (the lab page's stream: 120 s)
+MAX_INDEXING_ARCSEC = 3600.0  # a table read to a degree
+
+
+def check_simulation_options(args: argparse.Namespace) -> None:
+    """Every number the simulation takes, refused in words where it cannot be simulated
+    (NaN settle and a negative seed were tracebacks; NaN Earth rate wrote NaN readings; a
+    settle of 1e9 s or a 1e9 s static record ran out of memory; 0 or negative rates,
+    settles, lengths and σ were taken)."""
+    for name in (
+        "latitude", "earth_rate", "azimuth", "pitch", "roll", "elevation", "rate",
+        "seconds", "seconds_per_position", "settle", "indexing_sigma", "warm_up",
+    ):  # fmt: skip
+        check_finite(f"--{name.replace('_', '-')}", getattr(args, name))
+    if not -90 <= args.latitude <= 90:
+        raise CommandError("cli.latitude_range")
+    if not 0 < args.earth_rate < 1000:
+        raise CommandError("cli.earth_rate_range")
+    for name in ("rate", "seconds", "seconds_per_position"):
+        value = getattr(args, name)
+        if value is not None and value <= 0:
+            raise CommandError("cli.not_positive", name=f"--{name.replace('_', '-')}")
+    ranges = (
+        ("--settle", args.settle, 0.0, MAX_SETTLE_S),
+        ("--positions", args.positions, 3, MAX_POSITIONS),
+        ("--indexing-sigma", args.indexing_sigma, 0.0, MAX_INDEXING_ARCSEC),
+        ("--pitch", args.pitch, -90.0, 90.0),
+        ("--roll", args.roll, -90.0, 90.0),
+        ("--elevation", args.elevation, -90.0, 90.0),
+    )
+    for name, value, low, high in ranges:
+        if value is not None and not low <= value <= high:
+            raise CommandError("cli.between", name=name, low=f"{low:g}", high=f"{high:g}")
+    if args.seed < 0:
+        raise CommandError("cli.seed_negative")
+    if not 0 <= args.warm_up <= 86_400:
+        raise CommandError("cli.warm_up_range")
 
 
 def preset_table() -> list[dict]:
@@ -51,15 +90,12 @@ def simulate_command(args: argparse.Namespace) -> int:
         raise CommandError("cli.name_what_to_simulate")
     if args.latitude is None:
         raise CommandError("cli.latitude_required")
+    check_simulation_options(args)
     preset = PRESETS[args.preset]
     if args.rate:
         preset = replace(preset, sample_rate_hz=args.rate)
     if args.indexing_sigma is not None:
         preset = replace(preset, indexing_sigma_arcsec=args.indexing_sigma)
-    for name in ("latitude", "azimuth", "pitch", "roll", "rate", "seconds", "elevation"):
-        check_finite(f"--{name}", getattr(args, name))
-    if not -90 <= args.latitude <= 90:
-        raise CommandError("cli.latitude_range")
     setup = Setup(
         args.latitude,
         args.azimuth,
@@ -68,11 +104,10 @@ def simulate_command(args: argparse.Namespace) -> int:
         args.roll,
         args.elevation if args.part == "heading" else 0.0,
     )
-    check_finite("--warm-up", args.warm_up)
-    if not 0 <= args.warm_up <= 86_400:
-        raise CommandError("cli.warm_up_range")
     if args.part == "static":
         seconds = args.seconds or args.seconds_per_position or 600.0
+        if seconds * preset.sample_rate_hz > MAX_SAMPLES:
+            raise CommandError("cli.record_length_range", most=f"{MAX_SAMPLES:,}")
         values = simulate_static(
             preset,
             setup,
@@ -92,10 +127,8 @@ def simulate_command(args: argparse.Namespace) -> int:
             )
         )
         return 0
-    if args.positions < 3:
-        raise CommandError("cli.positions_minimum")
     seconds = args.seconds_per_position or args.seconds or 10.0
-    if seconds <= 0 or seconds * preset.sample_rate_hz > 5_000_000:
+    if seconds * preset.sample_rate_hz > MAX_SAMPLES:
         raise CommandError("cli.dwell_range")
     step = 360.0 / args.positions
     if args.part == "heading":
