@@ -78,10 +78,25 @@ def test_the_lti_commands_bring_a_new_database_to_its_schema_first(tmp_path, cap
     engine_for.cache_clear()
     try:
         assert main(["lti", "list"]) == 0
+        out, err = capsys.readouterr()  # no rows, and a word where a person reads it
+        assert out == "" and "No LTI platform is registered yet" in err
         assert main(["lti", "send-grades"]) == 0
         assert main(["lti", "rotate-key"]) == 0
         out, err = capsys.readouterr()
         assert "sent 0, failed 0" in out and "new signing key" in out and err == ""
+        monkeypatch.setenv("LANG", "zh_CN.UTF-8")
+        assert main(["lti", "list"]) == 0
+        assert "尚未登记任何 LTI 平台" in capsys.readouterr().err
+        lms = "https://lms.example.edu"
+        assert main([
+            "lti", "add-platform", "--issuer", lms, "--client-id", "c1",
+            "--login-url", f"{lms}/auth", "--token-url", f"{lms}/token",
+            "--jwks-url", f"{lms}/jwks", "--name", "Moodle",
+        ]) == 0  # fmt: skip
+        capsys.readouterr()
+        assert main(["lti", "list"]) == 0
+        out, err = capsys.readouterr()
+        assert out.split("\t")[1:4] == ["Moodle", lms, "c1"] and err == ""
     finally:
         get_settings.cache_clear()
         engine_for.cache_clear()

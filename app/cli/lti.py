@@ -59,12 +59,15 @@ def _list(_args: argparse.Namespace) -> int:
     from app.models import LtiPlatform
 
     with read_session() as db:
-        for platform in db.exec(select(LtiPlatform).order_by(LtiPlatform.id)):
+        platforms = db.exec(select(LtiPlatform).order_by(LtiPlatform.id)).all()
+        for platform in platforms:
             deployments = ",".join(deployments_of(platform)) or "-"
             print(
                 f"{platform.id}\t{platform.name}\t{platform.issuer}\t{platform.client_id}"
                 f"\t{deployments}\t{platform.registered_by}"
             )
+    if not platforms:  # said on stderr: the rows on stdout stay a script's to count
+        print(speaker()("cli.lti_no_platforms"), file=sys.stderr)
     return 0
 
 
