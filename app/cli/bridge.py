@@ -4,7 +4,6 @@ language, exit status)."""
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import re
 import sys
@@ -18,6 +17,7 @@ from app.bridge.recording import AXES, Recorder, open_recording, paced
 from app.bridge.run import Outcome, SampleTable, run_bridge
 from app.bridge.samples import UNITS, SampleMaker
 from app.bridge.sources import serial_chunks, stream_chunks
+from app.cli.science import check_finite
 from app.core.exceptions import UserError
 
 EXIT_GAPS = 3  # the run finished but its record has gaps
@@ -104,8 +104,7 @@ def check_options(args: argparse.Namespace) -> None:
         ("--speed", args.speed),
         ("--seconds", args.seconds),
     ):
-        if value is not None and not math.isfinite(value):
-            raise UserError("cli.not_finite", name=name)
+        check_finite(name, value)
     if args.rate is not None and not 0 < args.rate <= MAX_RATE_HZ:
         raise UserError("bridge.bad_rate", name="--rate", most=f"{MAX_RATE_HZ:,.0f}")
     if args.scale == 0:
