@@ -266,6 +266,28 @@ def test_one_axis_of_an_imus_record_is_the_column_the_script_names(client, auth)
         assert unpack(chunk.values).tolist() == pytest.approx(values)  # °/h, the z axis
 
 
+@pytest.mark.one_backend  # the body's parsing; storing is the same as for any CSV
+def test_a_phones_semicolon_export_is_saved_from_the_axis_named_with_its_times(client, auth):
+    """phyphox's "CSV (Semicolon, decimal comma)": its quoted header's names were kept with
+    their quotes, so the axis could not be named and "Time (s)" was offered as one."""
+    from app.lab.samples import unpack
+    from tests.test_imu_records import RATE_HZ, phyphox_text, white_rates
+
+    session_id = new_api_session(client, auth)
+    url = f"{API}/sessions/{session_id}/heading/positions/1?unit=rad/s"
+    csv = {**auth, "Content-Type": "text/csv"}
+    text = phyphox_text(";", ",")
+    asked = client.put(url, content=text, headers=csv)
+    assert asked.status_code == 400 and asked.json()["key"] == "csv.choose_column"
+    assert '"Time (s)"' not in asked.json()["detail"]
+    saved = client.put(url + "&column=Gyroscope z", content=text, headers=csv)
+    assert saved.status_code == 200, saved.text
+    with read_session() as db:
+        chunk = db.exec(select(SampleChunk)).one()
+    assert unpack(chunk.times)[:3] == pytest.approx([0.0, 1 / RATE_HZ, 2 / RATE_HZ])
+    assert unpack(chunk.values) == pytest.approx(white_rates()[:, 2] * 3600.0, rel=1e-9)
+
+
 @pytest.mark.one_backend  # the body's parsing; storing is the same as for commas
 @pytest.mark.parametrize(
     ("separator", "decimal"),

@@ -421,6 +421,14 @@ def test_the_one_column_with_a_rates_unit_is_the_rate():
             ["gyro_x", "gyro_y", "gyro_z"],
         ),
         ("Time (s),X,Y,Z,Temperature", ["X", "Y", "Z"]),  # times beside them: a record
+        (  # Sensor Logger (a phone app): ns since 1970, then a second clock, not a rate
+            "time,seconds_elapsed,z,y,x",
+            ["z", "y", "x"],
+        ),
+        (  # an evaluation board's export: the samples' number is no rate either
+            "Sample,Time (ms),X_GYRO (deg/s),Y_GYRO (deg/s),Z_GYRO (deg/s),TEMP (C)",
+            ["X_GYRO (deg/s)", "Y_GYRO (deg/s)", "Z_GYRO (deg/s)"],
+        ),
         ("hello,world", []),  # names of no record: nothing offered
     ],
 )
@@ -459,3 +467,79 @@ def test_the_handouts_header_commented_out_heads_a_table_not_a_record(header):
     readings = parse_readings_csv(text, part="heading")
     assert [len(p) for p in readings.positions] == [10, 10, 10, 10]
     assert written_as_a_record("#timestamp [ns],w_x [rad s^-1]\n1403636579758555392,0.001\n")
+
+
+def phyphox_text(separator: str, decimal: str) -> str:
+    """A record as phyphox (the phone app labs use) exports its gyroscope: each header name
+    quoted whatever the separator, numbers to ten significant digits in scientific form,
+    rad/s, and no newline after the last line; here the independent white noise."""
+    rates = np.radians(white_rates())
+    names = ["Time (s)", "Gyroscope x (rad/s)", "Gyroscope y (rad/s)", "Gyroscope z (rad/s)"]
+    lines = [separator.join(f'"{name}"' for name in names)]
+    for k, row in enumerate(rates):
+        cells = [f"{k / RATE_HZ:.9E}", *(f"{value:.9E}" for value in row)]
+        lines.append(separator.join(cell.replace(".", decimal) for cell in cells))
+    return "\n".join(lines)
+
+
+@pytest.mark.parametrize(
+    ("separator", "decimal"),
+    [(",", "."), ("\t", "."), (";", "."), ("\t", ","), (";", ",")],
+    ids=["comma", "tab", "semicolon", "tab, decimal comma", "semicolon, decimal comma"],
+)
+def test_each_of_phyphoxs_csv_exports_keeps_its_times_and_offers_only_the_axes(separator, decimal):
+    """phyphox quotes its header's names with every separator: with tabs or semicolons the
+    quotes were kept, so "Time (s)" was no time column -- the times were lost and offered as
+    a gyro axis -- and no axis could be chosen by its name."""
+    text = phyphox_text(separator, decimal)
+    with pytest.raises(UserError) as asked:
+        read(text)
+    assert asked.value.choices == [
+        "Gyroscope x (rad/s)",
+        "Gyroscope y (rad/s)",
+        "Gyroscope z (rad/s)",
+    ]
+    record = read(text, column="Gyroscope z")
+    assert record.unit == "rad/s"
+    assert record.times_s[:3] == pytest.approx([0.0, 0.01, 0.02], abs=1e-12)
+    assert record.values == pytest.approx(np.radians(white_rates()[:, 2]), rel=1e-9)
+    result = analyse_record(record, None)
+    assert result.rate_hz == pytest.approx(RATE_HZ, rel=1e-9)
+    assert result.arw_deg_rt_h == pytest.approx(ARW_DEG_RT_H, rel=0.05)
+
+
+@pytest.mark.parametrize(
+    ("header", "seconds_per_unit"),
+    [
+        ("Elapsed Time (s),Rate (deg/h)", 1.0),
+        ("seconds_elapsed,rate_deg_h", 1.0),
+        ("Time since start (ms),Rate (deg/h)", 1e-3),
+        ("elapsed_s,value", 1.0),
+        ("Zeit (s),Drehrate (°/h)", 1.0),
+        ("历时(s),角速度(°/h)", 1.0),
+        ("Rate (deg/h),Elapsed (us)", 1e-6),
+    ],
+)
+def test_a_time_column_named_otherwise_keeps_the_records_times(header, seconds_per_unit):
+    """A time column whose name is not one of the usual ones ("time", "t", "timestamp" …)
+    but says times by its unit or its words: the times were dropped without a word, and
+    with them the record's rate, its gaps and its warm-up check."""
+    rates = [10.0 + 0.01 * (k % 7) for k in range(60)]
+    times = [5 * k for k in range(60)]  # in the header's unit
+    rate_first = header.startswith("Rate")
+    text = (
+        header
+        + "\n"
+        + "".join(
+            f"{r},{t}\n" if rate_first else f"{t},{r}\n" for t, r in zip(times, rates, strict=True)
+        )
+    )
+    record = read(text)
+    assert record.values.tolist() == rates
+    assert record.times_s == pytest.approx([seconds_per_unit * t for t in times], rel=1e-12)
+    assert analyse_record(record, None).rate_hz == pytest.approx(1 / (5 * seconds_per_unit))
+
+
+def test_a_column_chosen_that_is_the_times_is_read_without_times():
+    record = read("Elapsed (s),Rate (deg/h)\n0,10\n1,11\n2,12\n", column="1")
+    assert record.values.tolist() == [0.0, 1.0, 2.0] and record.times_s is None

@@ -198,7 +198,7 @@ def test_an_imus_record_is_read_from_the_column_the_student_chooses(lab):
     assert refused.status_code == 400
     assert "say which column is the gyro's axis" in refused.json()["detail"]
     unknown = lab("/csv", text, unit="rad/s", position=4, column="w_RS_S_q")
-    assert unknown.status_code == 400 and "w_rs_s_z" in unknown.json()["detail"]
+    assert unknown.status_code == 400 and "w_RS_S_z [rad s^-1]" in unknown.json()["detail"]
     with read_session() as db:
         assert db.exec(select(Take)).all() == []
     saved = lab("/csv", text, unit="rad/s", position=4, column="w_RS_S_z")  # its name is enough

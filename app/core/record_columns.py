@@ -38,6 +38,11 @@ TIME_NAMES = ("time", "t", "timestamp", "datetime", "date_time", "sampletimefine
 TEMPERATURE_NAMES = ("temperature", "temperature_c", "temp", "temp_c", "温度")
 TIME_SCALES = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6, "ns": 1e-9}
 NAMED_TIME_SCALES = {"sampletimefine": 1e-4}  # Xsens: ticks of 100 µs
+# a time column named otherwise: "Elapsed Time (s)", Sensor Logger's "seconds_elapsed",
+# "Time since start (ms)", German "Zeit (s)", 历时
+TIME_WORDS = re.compile(
+    r"(?:^|[^a-z])(?:time|elapsed|zeit|tiempo)(?:$|[^a-z])|时间|时刻|历时", re.IGNORECASE
+)
 # columns an IMU's record holds beside its rates: counters, stamps, frame names,
 # accelerations, magnetic fields, orientations (EuRoC's a_RS_S_x, ROS's
 # field.linear_acceleration.x and field.header.seq, Xsens's PacketCounter and Acc_X, a
@@ -83,7 +88,7 @@ class Layout:
     angle: AngleOutput | None = None  # the readings are angles per output, not rates
 
 
-def chosen_column(column: str, names: list[ColumnName]) -> int:
+def chosen_column(column: str, names: list[ColumnName], written: list[str] | None = None) -> int:
     """The column asked for: its header cell, its name without the unit, or its number
     counted from 1.
 
@@ -93,6 +98,9 @@ def chosen_column(column: str, names: list[ColumnName]) -> int:
         As the user gave it ("w_RS_S_z", "gyr_z", "4").
     names : list of ColumnName
         The header's columns.
+    written : list of str, optional
+        The header's cells as the file writes them, for the message that lists them
+        (default: the names as read, in small letters).
 
     Returns
     -------
@@ -114,7 +122,7 @@ def chosen_column(column: str, names: list[ColumnName]) -> int:
     raise UserError(
         "allan.no_such_column",
         column=column,
-        columns=", ".join(name.full for name in names) or "1",
+        columns=", ".join(written or [name.full for name in names]) or "1",
     )
 
 
@@ -122,6 +130,36 @@ def _find(names: list[ColumnName], options: tuple[str, ...]) -> int | None:
     return next(
         (k for option in options for k, name in enumerate(names) if name.base == option), None
     )
+
+
+def _names_a_time(name: ColumnName) -> bool:
+    """Whether a column's name says it holds times: one of :data:`TIME_NAMES`, a time's unit
+    ("Zeit (s)", "elapsed_ms"), or a time's word beside no rate's unit ("seconds_elapsed")."""
+    return (
+        name.base in TIME_NAMES
+        or (name.unit or "") in TIME_SCALES
+        or bool(TIME_WORDS.search(name.base) and not rate_unit(name.unit))
+    )
+
+
+def time_column(names: list[ColumnName]) -> int | None:
+    """The column of a record's times: the first named as :data:`TIME_NAMES` lists, else the
+    first whose name says times (:func:`_names_a_time`), else none.
+
+    Parameters
+    ----------
+    names : list of ColumnName
+        The header's columns.
+
+    Returns
+    -------
+    int or None
+        The time column's index from 0.
+    """
+    exact = _find(names, TIME_NAMES)
+    if exact is not None:
+        return exact
+    return next((k for k, name in enumerate(names) if _names_a_time(name)), None)
 
 
 def _only_rate_column(names: list[ColumnName], others: tuple[int | None, ...]) -> int | None:
@@ -160,11 +198,13 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
         ``allan.no_value_column`` when no column is the rates and none was chosen.
     """
     names = [column_name(cell) for cell in header]
-    time = _find(names, TIME_NAMES)
+    time = time_column(names)
     temperature = _find(names, TEMPERATURE_NAMES)
     if column is not None:
-        value = chosen_column(column, names)
+        value = chosen_column(column, names, [cell.strip() for cell in header])
         position = None
+        if time == value:  # the times chosen as the rates: no times beside them
+            time = None
     else:
         wide = [k for k, name in enumerate(names) if name.full.startswith("position_")]
         if len(wide) > 1:  # the wide layout: one column per position
@@ -335,10 +375,11 @@ def _without_times(rows: list[list[str]], layout: Layout) -> Layout:
 
 def rate_column_choices(header: list[str]) -> list[str]:
     """The columns of a header that may hold the rates, the likeliest first: not the times,
-    the case temperature or the position; not a counter, a stamp, an acceleration or a
-    magnetic field (:data:`NOT_RATE_NAME`, :data:`NOT_RATE_UNITS`) unless nothing else is
-    left; first those whose unit is a rate's or an angle's or whose name says rate
-    ("w_RS_S_z", "Gyr_Z", "field.angular_velocity.z", "gz").
+    the case temperature or the position; not a counter, a second clock, a stamp, an
+    acceleration or a magnetic field (:data:`NOT_RATE_NAME`, :data:`COUNTER_NAME`,
+    :data:`NOT_RATE_UNITS`, :data:`TIME_WORDS`) unless nothing else is left; first those
+    whose unit is a rate's or an angle's or whose name says rate ("w_RS_S_z", "Gyr_Z",
+    "field.angular_velocity.z", "gz").
 
     Parameters
     ----------
@@ -353,7 +394,7 @@ def rate_column_choices(header: list[str]) -> list[str]:
         more others (names of no record).
     """
     names = [column_name(cell) for cell in header]
-    time = _find(names, TIME_NAMES)
+    time = time_column(names)
     taken = {time, _find(names, TEMPERATURE_NAMES), _find(names, ("position",))}
     free = [k for k in range(len(names)) if k not in taken]
     plausible = [k for k in free if not _not_a_rate(names[k])] or free
@@ -365,8 +406,14 @@ def rate_column_choices(header: list[str]) -> list[str]:
 
 
 def _not_a_rate(name: ColumnName) -> bool:
+    """A counter, a second clock ("seconds_elapsed" beside "time"), a stamp, an
+    acceleration, a magnetic field …: no column of rates."""
     unit = (name.unit or "").replace(" ", "")
-    return bool(NOT_RATE_NAME.search(name.base)) or unit in NOT_RATE_UNITS
+    return (
+        bool(NOT_RATE_NAME.search(name.base) or COUNTER_NAME.fullmatch(name.base))
+        or unit in NOT_RATE_UNITS
+        or _names_a_time(name)
+    )
 
 
 def _looks_like_a_rate(name: ColumnName) -> bool:

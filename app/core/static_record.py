@@ -325,6 +325,16 @@ def names_its_columns_in_a_comment(text: str) -> bool:
     return False
 
 
+def _quoted_split(text: str, delimiter: str) -> list[str]:
+    """A line's cells between ``delimiter``s, a quoted cell unquoted (phyphox quotes its
+    header's names whatever the separator, LibreOffice every text cell where asked); after
+    semicolons, a spreadsheet's empty last column dropped."""
+    text = text.rstrip(delimiter) if delimiter != "\t" else text
+    if '"' not in text:
+        return text.split(delimiter)
+    return next(csv.reader([text], delimiter=delimiter))
+
+
 def _splitter(first: str) -> Callable[[str], list[str]]:
     """How the record's lines split into cells, decided by its first line: commas (quotes
     allowed), tabs or semicolons with decimal commas (a spreadsheet's copy, a European
@@ -333,12 +343,12 @@ def _splitter(first: str) -> Callable[[str], list[str]]:
     if "\t" in first:  # a spreadsheet's copy: decimal commas too, as the lab page reads it
 
         def tabs(text: str) -> list[str]:
-            cells = [c.strip() for c in text.split("\t")]
+            cells = [c.strip() for c in _quoted_split(text, "\t")]
             return [decimal_point(c) for c in cells] if "," in text else cells
 
         return tabs
     if ";" in first:
-        return lambda text: [c.strip().replace(",", ".") for c in text.rstrip(";").split(";")]
+        return lambda text: [c.strip().replace(",", ".") for c in _quoted_split(text, ";")]
     if "," in first:
 
         def commas(text: str) -> list[str]:  # a spreadsheet's empty last column dropped
