@@ -159,6 +159,29 @@ def test_the_table_turned_on_its_side():
     assert twice.value.key == "csv.position_twice" and twice.value.params["line"] == 2
 
 
+@pytest.mark.parametrize(
+    "label",
+    ["位置{k}：", "位置{k} ： ", "P{k} = ", "Position {k}: ", "第{k}位置:", "position_{k}="],
+)
+@pytest.mark.parametrize("separator", [" ", ", ", "\t", "，"])
+def test_notes_typed_one_line_per_position_its_name_ended_by_a_colon(label, separator):
+    """"位置1：10.74 10.65 …" as a student types notes: refused as an unknown layout, now
+    read as the table turned on its side (the lab page's grid takes a paste of it so)."""
+    columns = list(handout("handout_horizontal.csv").values())
+    text = "\n".join(
+        label.format(k=k + 1) + separator.join(f"{v:.2f}" for v in column)
+        for k, column in enumerate(columns)
+    )
+    readings = parse_readings_csv(text)
+    assert [v.tolist() for v in readings.positions] == columns
+
+
+def test_a_colon_that_follows_no_positions_name_is_no_label():
+    with pytest.raises(UserError) as unknown:  # clock stamps: no position's name before ":"
+        parse_readings_csv("10:00:00.1,10.7\n10:00:00.2,10.8\n10:00:00.3,10.6\n")
+    assert unknown.value.key == "csv.unknown_layout"
+
+
 def test_summary_rows_of_a_named_table_are_passed_over():
     text = (
         "sample,position_1,position_2\n1,10.74,-0.5\n2,10.65,-0.4\n"

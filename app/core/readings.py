@@ -192,11 +192,12 @@ def _parse_layout(rows, header_line: int, header: list[str], names, part: str | 
             column = long["part"]
             body = [(n, r) for n, r in body if column < len(r) and r[column].strip() == part]
         return parse_long(long, body)
-    if len(rows) > 1 and all(
+    turned = [(line, _label_apart(row)) for line, row in rows]
+    if len(turned) > 1 and all(
         WIDE_COLUMN.match(column_name(row[0])) and all(is_number(c) for c in row[1:] if c.strip())
-        for _, row in rows
+        for _, row in turned
     ):  # one row per position, its name first: the table turned on its side
-        return _parse_rows_of_positions(rows)
+        return _parse_rows_of_positions(turned)
     wide = {
         index: int(m.group(1)) for index, name in enumerate(names) if (m := WIDE_COLUMN.match(name))
     }
@@ -272,6 +273,31 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
     given = None if numbers == list(range(1, len(numbers) + 1)) else numbers
     arrays = [np.array(v) for v in values]
     return Readings(arrays, None, None, "wide", numbers=given, means_row=means_row)
+
+
+LABEL_MARK = re.compile(r"\s*[:=]\s*")  # "位置1：10.74", "P1 = 10.74" (full width made plain)
+
+
+def _label_apart(row: list[str]) -> list[str]:
+    """A row whose position's name ends in a colon or an equals sign, as notes are typed
+    ("位置1：10.74 10.65 …", "P1 = 10.74, 10.65", "Position 1: 10.74 …" split at its
+    spaces): the name and the readings in cells of their own; any other row as it is."""
+    for end, cell in enumerate(row[:3]):
+        name, mark, first = _split_label(cell)
+        if mark:
+            label = " ".join([*row[:end], name]).strip()
+            if not WIDE_COLUMN.match(column_name(label)):
+                return row
+            return [label, *([first] if first else []), *row[end + 1 :]]
+    return row
+
+
+def _split_label(cell: str) -> tuple[str, str, str]:
+    """A cell split at its first colon or equals sign: (before, the mark, after)."""
+    match = LABEL_MARK.search(cell)
+    if match is None:
+        return cell, "", ""
+    return cell[: match.start()], match.group(), cell[match.end() :]
 
 
 def _parse_rows_of_positions(rows) -> Readings:

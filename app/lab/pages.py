@@ -313,6 +313,7 @@ JS_MESSAGES = (
     "js.spreadsheet_error",
     "js.lines_above_skipped",
     "js.own_table_taken",
+    "js.turned_table",
     "js.second_table_skipped",
     "js.record_position",
     "js.record_column",

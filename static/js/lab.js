@@ -351,6 +351,44 @@
   }
   const sameRow = (a, b) => a.join("\t").replace(/\t+$/, "") === b.join("\t").replace(/\t+$/, "");
 
+  // A table turned on its side: one row per position, its name first ("位置1 | 10.74 | 10.65 …"),
+  // the name ended by a colon or "=" as notes are typed ("位置1：10.74 …", "P1 = 10.74, 10.65")
+  // -- app.core.readings reads a file of it so.  Each position's readings go down its column.
+  const LABEL_MARK = /\s*[:=]\s*/;
+  function labelApart(row) {
+    for (let end = 0; end < Math.min(3, row.length); end++) {
+      const mark = LABEL_MARK.exec(row[end]);
+      if (mark) {
+        const label = [...row.slice(0, end), row[end].slice(0, mark.index)].join(" ").trim();
+        const first = row[end].slice(mark.index + mark[0].length);
+        return [label, ...(first ? [first] : []), ...row.slice(end + 1)];
+      }
+    }
+    return row;
+  }
+  const CHINESE_DIGITS = "一二三四五六七八九十";
+  function positionNamed(cell) {
+    const name = headerName(cell);
+    const named = POSITION_NAMES.map((pattern) => name.match(pattern)).find(Boolean);
+    if (!named) return NaN;
+    return /^\d+$/.test(named[1]) ? Number(named[1]) : CHINESE_DIGITS.indexOf(named[1]) + 1;
+  }
+  function turnedBlock(rows, columns) {
+    const named = rows.map(labelApart).map((row) => row.filter((cell) => cell !== ""));
+    if (named.length < 2) return null;
+    const numbers = named.map((row) => positionNamed(row[0]));
+    const readings = named.map((row) => row.slice(1));
+    if (!numbers.every((n) => n >= 1 && n <= columns) || new Set(numbers).size !== numbers.length ||
+        !readings.every((cells) => cells.length > 0 && cells.every((cell) => !isText(cell)))) {
+      return null;
+    }
+    const length = Math.max(...readings.map((cells) => cells.length));
+    const width = Math.max(...numbers);
+    const block = Array.from({ length }, () => new Array(width).fill(undefined));
+    readings.forEach((cells, i) => cells.forEach((value, r) => { block[r][numbers[i] - 1] = value; }));
+    return block;
+  }
+
   function parseBlock(text, columns, part) {
     const lines = plain(text).replace(/\r\n?/g, "\n").split("\n").filter((line) => line.trim() !== "");
     let rows = splitLines(lines);
@@ -364,6 +402,11 @@
     if (above) {
       rows = rows.slice(above);
       notes.push("js.lines_above_skipped");
+    }
+    const turned = turnedBlock(rows, columns);
+    if (turned) {
+      notes.push("js.turned_table");
+      return { rows: turned, notes, whole: true, named: namedRateUnit(rows.map((row) => labelApart(row)[0]), null) };
     }
     let header = null;
     let unitsRow = null;

@@ -285,3 +285,33 @@ def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, n
     expect(status).to_contain_text("Pasted 100001 rows")
     page.locator("#part-heading .save-manual").click()
     expect(status).to_contain_text("Position 1: Too many readings: at most 100000 per position.")
+
+
+@pytest.mark.parametrize("locale", ["en-US", "zh-CN"])
+def test_a_table_with_one_row_per_position_goes_down_the_columns(live_server, new_page, locale):
+    """A sheet laid out one row per position ("位置1 | 10.74 | 10.65 …"), or notes typed
+    so ("位置1：10.74 10.65 …", "P2 = 2.88, 2.69"): each position's readings go down its
+    own column, as a file of it is read (app.core.readings). The label column was skipped
+    and the rows put across the grid -- position 1's column held the first reading of
+    every position, said to be "all valid" -- and the rest dropped."""
+    page = new_page(locale)
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    start_practice(page, live_server.url)
+    columns = list(zip(*table("handout_horizontal.csv"), strict=True))
+    said = "one row per position" if locale == "en-US" else "每行是一个位置"
+    grid = "#part-heading .readings-grid tbody"
+    rows = page.locator(f"{grid} tr")
+    sheet = "\n".join(f"位置{k + 1}\t" + "\t".join(column) for k, column in enumerate(columns))
+    paste(page, f"{grid} input", sheet)
+    expect(page.locator("#part-heading .grid-status")).to_contain_text(said)
+    for r in (0, 9):
+        for k in range(4):
+            expect(rows.nth(r).locator("input").nth(k)).to_have_value(columns[k][r])
+    # typed notes, a position at a time: only its column changes
+    paste(page, f"{grid} input", f"位置3：{' '.join(columns[0])}\n位置4：{' '.join(columns[1])}")
+    paste(page, f"{grid} input", f"P2 = {', '.join(columns[3])}\nP1 = {', '.join(columns[0])}")
+    expect(rows.nth(9).locator("input").nth(2)).to_have_value(columns[0][9])
+    expect(rows.nth(0).locator("input").nth(1)).to_have_value(columns[3][0])
+    expect(rows.nth(9).locator("input").nth(3)).to_have_value(columns[1][9])
+    expect(rows.nth(0).locator("input").nth(0)).to_have_value(columns[0][0])
+    expect(page.locator("#part-heading .readings-grid input.invalid")).to_have_count(0)
