@@ -165,8 +165,9 @@ def test_the_table_turned_on_its_side():
 )
 @pytest.mark.parametrize("separator", [" ", ", ", "\t", "，"])
 def test_notes_typed_one_line_per_position_its_name_ended_by_a_colon(label, separator):
-    """"位置1：10.74 10.65 …" as a student types notes: refused as an unknown layout, now
-    read as the table turned on its side (the lab page's grid takes a paste of it so)."""
+    """Notes typed one line per position, "位置1：10.74 10.65 …": refused as an unknown
+    layout, now read as the table turned on its side (the lab page's grid takes a paste of
+    it so)."""
     columns = list(handout("handout_horizontal.csv").values())
     text = "\n".join(
         label.format(k=k + 1) + separator.join(f"{v:.2f}" for v in column)
