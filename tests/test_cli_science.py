@@ -434,13 +434,15 @@ def test_solve_refuses_one_positions_record_and_reads_a_matlab_table(capsys, tmp
 
     from tests.factories import handout
     from tests.test_labview_lvm import lvm
-    from tests.test_position_record_files import imu_file
+    from tests.test_position_record_files import axes_file, imu_file
 
     table = handout("handout_horizontal.csv")
     rates = np.array(table[1])
     records = {
         "imu.csv": imu_file([float(v) for v in rates]).encode(),
         "fog.lvm": lvm(np.tile(rates, 3)).encode(),
+        # its header not behind '#': it was solved as four positions, the times position 1
+        "export.csv": axes_file("Time (s),Gyro X,Gyro Y,Gyro Z", rates).encode(),
     }
     for name, data in records.items():
         (tmp_path / name).write_bytes(data)

@@ -249,3 +249,48 @@ def test_a_template_not_filled_in_is_refused_in_words(lab, client):
     client.cookies.set("gyrolab_lang", "zh-CN")
     refused = lab("/csv/preview", "位置1,位置2,位置3,位置4\n")
     assert refused.status_code == 400 and "没有读数" in refused.json()["detail"]
+
+
+def axes_file(header: str, axis_z, rate_hz: float = 10.0, unit_scale: float = 1.0) -> str:
+    """An IMU's export with its times in the first column and no '#' before its header:
+    x, y and z with the z axis ``axis_z`` (°/h) written in the header's unit."""
+    lines = [header]
+    for k, value in enumerate(axis_z):
+        z = float(value) * unit_scale
+        lines.append(f"{k / rate_hz:.2f},{0.3 * unit_scale},{-0.2 * unit_scale},{z!r}")
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize(
+    ("header", "unit", "scale", "z"),
+    [
+        ("time,gx,gy,gz", "deg/h", 1.0, "gz"),
+        ("Time (s),Gyro X (deg/s),Gyro Y (deg/s),Gyro Z (deg/s)", "deg/s", 1 / 3600, "Gyro Z"),
+        (
+            '"Time (s)";"Gyroscope x (rad/s)";"Gyroscope y (rad/s)";"Gyroscope z (rad/s)"',
+            "rad/s",
+            np.pi / 180 / 3600,
+            "Gyroscope z",
+        ),
+    ],
+    ids=["bare names", "units in the names", "phyphox, semicolons"],
+)
+def test_an_imus_export_with_a_time_column_is_one_record_not_a_table(lab, header, unit, scale, z):
+    """Its header was taken for a line about a table and its columns for positions -- the
+    times position 1 -- and it was saved so. Now it is one position's record: its axes
+    offered, the times its times."""
+    values = HEADING[3]
+    text = axes_file(header, values, unit_scale=scale)
+    if ";" in header:
+        text = text.replace(",", ";")
+    preview = lab("/csv/preview", text, unit=unit)
+    assert preview.status_code == 200, preview.text
+    body = preview.json()
+    assert body["layout"] == "record" and len(body["positions"]) == 1
+    assert [c["value"] for c in body["columns"]][2].startswith(z)
+    saved = lab("/csv", text, unit=unit, position=3, column=z)
+    assert saved.status_code == 200 and saved.json()["saved"] == [3], saved.text
+    with read_session() as db:
+        chunk = db.exec(select(SampleChunk)).one()
+    assert unpack(chunk.times)[:3].tolist() == [0.0, 0.1, 0.2]
+    assert unpack(chunk.values) == pytest.approx(values)  # stored in °/h

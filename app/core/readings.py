@@ -41,6 +41,7 @@ from app.core.long_readings import parse_long
 from app.core.means_row import is_row_of_means, written_decimals
 from app.core.part_names import part_table
 from app.core.readings_data import WIDE_COLUMN, Readings, cell_number
+from app.core.record_columns import names_a_records_times
 from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
@@ -124,7 +125,12 @@ def _below_lines_about_it(rows, part: str | None, unknown: UserError) -> Reading
     :func:`app.core.spreadsheet_text.title_lines_blanked` passes over: read from the first
     row (within ``PREAMBLE_ROWS``) that heads a table in a layout this module reads, as
     long as no line above it holds two numbers (a row of readings is no line about them).
-    Where none does, the first row's ``unknown`` layout is said."""
+    Where none does, the first row's ``unknown`` layout is said -- at once where the first
+    row is a record's header, naming its times (``time,gx,gy,gz``): the numbers under it
+    are one position's record, never a table of positions with the times for position 1."""
+    first = rows[0][1]
+    if len(rows) > 1 and len(first) == len(rows[1][1]) and names_a_records_times(first):
+        raise unknown
     for start in range(1, min(PREAMBLE_ROWS, len(rows) - 1) + 1):
         if sum(is_number(cell.strip()) for cell in rows[start - 1][1]) >= 2:
             break  # readings above: no table starts below them

@@ -30,7 +30,8 @@ from app.core.column_names import (
     readable_rate_unit,
 )
 from app.core.exceptions import UserError
-from app.core.long_headers import is_value_name
+from app.core.long_headers import is_value_name, long_columns
+from app.core.table_headers import column_name as position_column_name
 from app.core.units import RAD_PER_SECOND
 
 VALUE_NAMES = ("value", "rate", "omega", "reading", "角速度", "角速率")
@@ -160,6 +161,31 @@ def time_column(names: list[ColumnName]) -> int | None:
     if exact is not None:
         return exact
     return next((k for k, name in enumerate(names) if _names_a_time(name)), None)
+
+
+def names_a_records_times(header: list[str]) -> bool:
+    """Whether a header names a time column among two or more and no position ("Time (ms),
+    X_GYRO (deg/s), …", "time,gx,gy,gz", phyphox's and Sensor Logger's): the header of one
+    position's record.  A table of positions names its positions ("time, P1, P2 …"), or
+    its position column beside the times (the long layout, "time_s, position, value").
+
+    Parameters
+    ----------
+    header : list of str
+        A first row's cells.
+
+    Returns
+    -------
+    bool
+        True where two or more cells are filled, one of them names times and none a
+        position or the long layout's position or angle.
+    """
+    cells = [cell for cell in header if cell.strip()]
+    if len(cells) < 2 or long_columns(cells) is not None:
+        return False
+    if any(position_column_name(cell).startswith("position_") for cell in cells):
+        return False
+    return time_column([column_name(cell) for cell in cells]) is not None
 
 
 def _only_rate_column(names: list[ColumnName], others: tuple[int | None, ...]) -> int | None:

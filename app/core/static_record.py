@@ -42,7 +42,7 @@ from app.core.exceptions import UserError
 from app.core.labview_lvm import LabviewHeaders, is_labview_measurement, labview_lines
 from app.core.monitor_stamps import is_stamped_capture, unstamped_lines
 from app.core.record_blocks import Progress, RecordBlocks
-from app.core.record_columns import Layout
+from app.core.record_columns import Layout, names_a_records_times
 from app.core.record_preamble import (
     Preamble,
     describes_the_record,
@@ -59,6 +59,8 @@ from app.core.spreadsheet_text import (
     separator_hint,
 )
 from app.core.table_headers import column_name
+from app.core.text_files import first_texts
+from app.core.typed_numbers import is_number
 
 # notes on lines of the file that were not read, which every reader of a record says
 LEFT_OUT = frozenset(
@@ -267,7 +269,8 @@ def read_static_record(
 
 def written_as_a_record(text: str) -> bool:
     """Whether a file can only be one record, never a table of positions: its header is
-    the comment line above its readings (:func:`names_its_columns_in_a_comment`), it is
+    the comment line above its readings (:func:`names_its_columns_in_a_comment`) or a
+    first line naming its times (:func:`names_its_times_in_its_header`), it is
     LabVIEW's measurement file (:mod:`app.core.labview_lvm`), an instrument's captured
     sentences (:mod:`app.core.sentence_records`), or a serial monitor's stamped capture
     (:mod:`app.core.monitor_stamps`).
@@ -285,6 +288,7 @@ def written_as_a_record(text: str) -> bool:
     return (
         is_labview_measurement(text[:200])
         or names_its_columns_in_a_comment(text)
+        or names_its_times_in_its_header(text)
         or is_sentence_record(io.StringIO(text))
         or is_stamped_capture(io.StringIO(text))
     )
@@ -323,6 +327,35 @@ def names_its_columns_in_a_comment(text: str) -> bool:
         # "#position_1,position_2,…" heads the handout's table, commented out: positions
         return sum(column_name(name).startswith("position_") for name in names) < 2
     return False
+
+
+def names_its_times_in_its_header(text: str) -> bool:
+    """Whether a file's first line is a header naming a time column above readings of as
+    many columns ("Time (ms),X_GYRO (deg/s),…", "time,gx,gy,gz", phyphox's and Sensor
+    Logger's exports): one position's record -- a table of positions names its positions,
+    never a time beside them (:func:`app.core.record_columns.names_a_records_times`).
+
+    Parameters
+    ----------
+    text : str
+        The file's text (its first lines are enough).
+
+    Returns
+    -------
+    bool
+        True where the first line names a time column and the second holds a number in
+        each of as many cells.
+    """
+    lines = first_texts(itertools.islice(io.StringIO(text), LOOK_AHEAD_LINES), 2)
+    if len(lines) < 2 or comment_text(lines[0]) is not None:
+        return False
+    split = _splitter(lines[0])
+    header, first = split(lines[0]), split(lines[1])
+    return (
+        len(header) == len(first)
+        and all(is_number(cell) for cell in first)
+        and names_a_records_times(header)
+    )
 
 
 def _quoted_split(text: str, delimiter: str) -> list[str]:
