@@ -475,9 +475,10 @@ def phyphox_text(separator: str, decimal: str) -> str:
     rad/s, and no newline after the last line; here the independent white noise."""
     rates = np.radians(white_rates())
     names = ["Time (s)", "Gyroscope x (rad/s)", "Gyroscope y (rad/s)", "Gyroscope z (rad/s)"]
-    lines = [separator.join(f'"{name}"' for name in names)]
+    lines = [separator.join(f'"{name}"' for name in [*names, "Absolute (rad/s)"])]
     for k, row in enumerate(rates):
-        cells = [f"{k / RATE_HZ:.9E}", *(f"{value:.9E}" for value in row)]
+        values = [*row, np.linalg.norm(row)]
+        cells = [f"{k / RATE_HZ:.9E}", *(f"{value:.9E}" for value in values)]
         lines.append(separator.join(cell.replace(".", decimal) for cell in cells))
     return "\n".join(lines)
 
@@ -490,7 +491,8 @@ def phyphox_text(separator: str, decimal: str) -> str:
 def test_each_of_phyphoxs_csv_exports_keeps_its_times_and_offers_only_the_axes(separator, decimal):
     """phyphox quotes its header's names with every separator: with tabs or semicolons the
     quotes were kept, so "Time (s)" was no time column -- the times were lost and offered as
-    a gyro axis -- and no axis could be chosen by its name."""
+    a gyro axis -- and no axis could be chosen by its name; its "Absolute", the rate
+    vector's length, is no axis either."""
     text = phyphox_text(separator, decimal)
     with pytest.raises(UserError) as asked:
         read(text)

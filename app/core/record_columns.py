@@ -47,10 +47,11 @@ TIME_WORDS = re.compile(
 # columns an IMU's record holds beside its rates: counters, stamps, frame names,
 # accelerations, magnetic fields, orientations (EuRoC's a_RS_S_x, ROS's
 # field.linear_acceleration.x and field.header.seq, Xsens's PacketCounter and Acc_X, a
-# STIM's status word, latency and CRC)
+# STIM's status word, latency and CRC, phyphox's "Absolute" -- the rate vector's length)
 NOT_RATE_NAME = re.compile(
     r"seq|count|packet|stamp|frame|status|index|acc(?!um)|(?:^|[^a-z])a_|mag|(?:^|[^a-z])m_"
-    r"|quat|orient|covariance|pressure|baro|gps|temp|温度|latency|crc|checksum|valid|flag",
+    r"|quat|orient|covariance|pressure|baro|gps|temp|温度|latency|crc|checksum|valid|flag"
+    r"|absolute|magnitude|(?:^|[^a-z])norm(?:$|[^a-z])",  # phyphox's "Absolute": |ω|, no axis
     re.IGNORECASE,
 )
 # a column that numbers the readings (not their times): "index", "Sample #", 序号, 采样点
