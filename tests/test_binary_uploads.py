@@ -239,3 +239,31 @@ def test_a_npy_in_any_byte_order_and_layout_is_read_as_saved(client, auth):
         values, times = stored(session_id, position)
         np.testing.assert_array_equal(values, 10.0 + np.arange(12))
         np.testing.assert_array_equal(times, 0.5 * np.arange(12))
+
+
+def test_a_npy_of_one_or_three_columns_is_read_as_the_raw_columns_are(client, auth):
+    """A column vector ``(n, 1)`` is the values; ``(n, 3)`` is time, value and temperature,
+    as ``?columns=3`` reads raw floats and the lab page reads such a ``.npy`` -- both were
+    refused by shape."""
+    session_id = new_api_session(client, auth)
+    times = 2.0 + 0.1 * np.arange(12)
+    values = 10.0 + 0.01 * np.arange(12)
+    temperatures = 25.0 + 0.05 * np.arange(12)
+    column = put_binary(client, auth, session_id, npy(values[:, None]), 1)
+    assert column.status_code == 200, column.text
+    assert stored(session_id, 1)[0].tolist() == values.tolist()
+    triples = np.column_stack([times, values, temperatures])
+    saved = put_binary(client, auth, session_id, npy(triples), 2)
+    assert saved.status_code == 200, saved.text
+    got_values, got_times = stored(session_id, 2)
+    assert got_values.tolist() == values.tolist() and got_times.tolist() == times.tolist()
+    with read_session() as db:
+        take = db.exec(select(Take).where(Take.session_id == session_id, Take.position == 2)).one()
+        chunk = db.exec(select(SampleChunk).where(SampleChunk.take_id == take.id)).one()
+    assert unpack(chunk.temperatures).tolist() == temperatures.tolist()
+    hot = triples.copy()
+    hot[3, 2] = 1e6  # a temperature no gyro has: refused as the JSON's and raw's are
+    refused = put_binary(client, auth, session_id, npy(hot), 3)
+    assert refused.status_code == 400 and refused.json()["key"] == "lab.bad_temperatures"
+    four = put_binary(client, auth, session_id, npy(np.ones((5, 4))), 3)
+    assert four.status_code == 400 and "(n, 3)" in four.json()["detail"]

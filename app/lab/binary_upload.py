@@ -5,8 +5,9 @@ NumPy ``.npy`` file, read straight into arrays (no text parsing, no Python lists
   ``time_s, value`` pairs, ``?columns=3`` for ``time_s, value, temperature_c`` triples
   (the bridge, from an instrument that reports its temperature);
 * ``.npy`` (recognised by its magic bytes, or sent as ``application/x-npy``): a float or
-  integer array of shape ``(n,)`` (values) or ``(n, 2)`` (``time_s, value`` rows), any byte
-  order; never unpickled.
+  integer array of shape ``(n,)`` or ``(n, 1)`` (values), ``(n, 2)`` (``time_s, value``
+  rows) or ``(n, 3)`` (``time_s, value, temperature_c``), any byte order, as the lab page
+  reads one; never unpickled.
 """
 
 from __future__ import annotations
@@ -51,13 +52,20 @@ def _columns(array: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     return np.ascontiguousarray(values), None if times is None else np.ascontiguousarray(times)
 
 
-def parse_npy(body: bytes) -> tuple[np.ndarray, np.ndarray | None]:
-    """A ``.npy`` file's values (and times): float or integer, 1-D or two columns."""
+def parse_npy(body: bytes) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """A ``.npy`` file's values, times and temperatures: float or integer, 1-D or one, two
+    (time, value) or three (time, value, temperature) columns."""
     try:
         array = read_npy(body)  # its header checked against its bytes before any allocation
     except ValueError:
         raise UserError("api.bad_npy") from None
-    return _columns(array.astype(np.float64, copy=False))
+    array = array.astype(np.float64, copy=False)
+    if array.ndim == 2 and array.shape[1] == 1:  # a column vector: the values
+        array = array[:, 0]
+    if array.ndim == 2 and array.shape[1] == 3:
+        values, times = _columns(array[:, :2])
+        return values, times, np.ascontiguousarray(array[:, 2])
+    return *_columns(array), None
 
 
 def parse_raw(

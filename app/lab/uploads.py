@@ -92,8 +92,7 @@ def read_upload(request: Request, body: bytes) -> tuple[UploadMeta, *Arrays]:
     if content_type in BINARY_TYPES:
         query = request.query_params
         if is_npy(body, content_type):
-            values, times = parse_npy(body)
-            temperatures = None
+            values, times, temperatures = parse_npy(body)
         else:
             values, times, temperatures = parse_raw(body, query.get("dtype"), query.get("columns"))
         return query_meta(request), values, times, temperatures
