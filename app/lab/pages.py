@@ -314,6 +314,8 @@ JS_MESSAGES = (
     "js.lines_above_skipped",
     "js.own_table_taken",
     "js.turned_table",
+    "js.time_column_skipped",
+    "js.record_of_axes",
     "js.second_table_skipped",
     "js.record_position",
     "js.record_column",

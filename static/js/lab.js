@@ -389,6 +389,12 @@
     return block;
   }
 
+  // A header cell that names times: "time", "t", "时间", a time's word ("Elapsed Time",
+  // "seconds_elapsed") or its unit ("Zeit (s)") -- app.core.record_columns.time_column.
+  const TIME_WORDS = /^(?:t|timestamp|datetime|date_time|sampletimefine)$|(?:^|[^a-z])(?:time|elapsed|zeit|tiempo)(?:$|[^a-z])|时间|时刻|历时/;
+  const TIME_UNIT = /[(\[（【]\s*(?:s|sec|ms|us|µs|μs|ns|秒)\s*[)\]）】]$|_(?:s|ms|us|ns)$/;
+  const namesTime = (cell) => TIME_WORDS.test(headerName(cell)) || TIME_UNIT.test(plain(cell).trim().toLowerCase());
+
   function parseBlock(text, columns, part) {
     const lines = plain(text).replace(/\r\n?/g, "\n").split("\n").filter((line) => line.trim() !== "");
     let rows = splitLines(lines);
@@ -449,6 +455,17 @@
         }
       }
       return { rows: longBlock(block, long, columns, part), notes, whole: true, named: namedRateUnit(header, unitsRow) };
+    }
+    // One position's record copied from a logger's sheet ("Time (s) | Rate (°/h)"): its
+    // times are no position's readings; with several axes beside them (an IMU's "time | gx |
+    // gy | gz") which is the gyro's cannot be told here -- the file method asks
+    // (app.core.record_columns.names_a_records_times).
+    if (header && !header.some(namesPosition) && namesTime(header[0] || "")) {
+      const kept = header.slice(1).filter((cell) => cell !== "").length;
+      if (kept !== 1) return { rows: [], notes, problem: "js.record_of_axes", named: { unit: null, unread: null } };
+      body = body.map((row) => row.slice(1));
+      notes.push("js.time_column_skipped");
+      return { rows: body.filter((row) => !isSummary(row)), notes, named: namedRateUnit(header, unitsRow) };
     }
     const summaries = body.filter(isSummary).length;
     if (summaries) {
@@ -669,7 +686,13 @@
       const text = (event.clipboardData || window.clipboardData).getData("text");
       if (!target || !/[\t\n;]|,.*,|\s\S/.test(plain(text).trim())) return;
       event.preventDefault();
-      const { rows, notes, whole, named } = parseBlock(text, columns, panel.dataset.part);
+      const { rows, notes, whole, named, problem } = parseBlock(text, columns, panel.dataset.part);
+      if (problem) {
+        held = null;
+        status.textContent = t(problem);
+        status.classList.add("error-text");
+        return;
+      }
       const unit = panel.querySelector(".unit");
       // °/s typed as °/h: 3600 times too small; mdeg/s as either: wrong by a factor
       const clash = Boolean(named.unread) || (named.unit !== null && named.unit !== unit.value);

@@ -315,3 +315,40 @@ def test_a_table_with_one_row_per_position_goes_down_the_columns(live_server, ne
     expect(rows.nth(9).locator("input").nth(3)).to_have_value(columns[1][9])
     expect(rows.nth(0).locator("input").nth(0)).to_have_value(columns[0][0])
     expect(page.locator("#part-heading .readings-grid input.invalid")).to_have_count(0)
+
+
+@pytest.mark.parametrize("locale", ["en-US", "zh-CN"])
+def test_a_loggers_record_pasted_keeps_its_times_out_of_the_positions(
+    live_server, new_page, locale
+):
+    """Two columns copied from a logger's sheet, "Time (s) | Rate (°/h)", pasted into
+    position 3's column: the times went into position 3 and the rates into position 4, "all
+    valid". The time column is skipped; an IMU's record of several axes is not pasted but
+    sent to the file method, which asks for the axis."""
+    page = new_page(locale)
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    start_practice(page, live_server.url)
+    words = {
+        "en-US": ("the time column skipped", "Nothing pasted"),
+        "zh-CN": ("已跳过时间列", "未粘贴"),
+    }[locale]
+    rates = [row[2] for row in table("handout_horizontal.csv")]
+    grid = "#part-heading .readings-grid tbody"
+    third = f"{grid} tr:first-child input[data-column='3']"
+    record = "Elapsed Time (s)\tRate (°/h)\n" + "\n".join(
+        f"{0.1 * k:.1f}\t{rate}" for k, rate in enumerate(rates)
+    )
+    paste(page, third, record)
+    status = page.locator("#part-heading .grid-status")
+    expect(status).to_contain_text(words[0])
+    rows = page.locator(f"{grid} tr")
+    for r in (0, 9):
+        expect(rows.nth(r).locator("input").nth(2)).to_have_value(rates[r])
+        expect(rows.nth(r).locator("input").nth(3)).to_have_value("")
+    axes = "time\tgx\tgy\tgz\n" + "\n".join(
+        f"{0.1 * k:.1f}\t0.1\t0.2\t{r}" for k, r in enumerate(rates)
+    )
+    paste(page, f"{grid} input", axes)
+    expect(status).to_contain_text(words[1])
+    expect(status).to_have_class(re.compile("error-text"))
+    expect(rows.nth(0).locator("input").nth(0)).to_have_value("")
