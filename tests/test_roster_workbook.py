@@ -259,6 +259,37 @@ def test_title_lines_in_a_csv_and_a_header_without_names_names_its_line():
     assert [(p.line, p.key) for p in no_names.problems] == [(2, "roster.no_name_column")]
 
 
+@pytest.mark.parametrize(
+    ("encoding", "separator"), [("utf-16", "\t"), ("gb18030", "\t"), ("utf-8-sig", ";")]
+)
+def test_title_lines_above_a_tab_or_semicolon_separated_header(encoding, separator):
+    """A student system's export saved as text: title lines ("课程名称：惯性导航") above a
+    tab-separated header. The separator was sniffed from the title lines with the table,
+    so each row was one cell and every student "a bad username"."""
+    lines = [
+        "课程名称：惯性导航实验",
+        "学年学期：2026-2027-1",
+        separator.join(["序号", "学号", "姓名", "行政班级"]),
+        separator.join(["1", "2023010101", "张三", "光电2301"]),
+        separator.join(["2", "2023010102", "欧阳 娜娜", "光电2301"]),
+    ]
+    parsed = parse_roster("\r\n".join(lines).encode(encoding))
+    assert parsed.problems == []
+    assert [(r.line, r.username, r.display_name) for r in parsed.rows] == [
+        (4, "2023010101", "张三"),
+        (5, "2023010102", "欧阳 娜娜"),
+    ]
+
+
+def test_english_headers_as_lms_exports_name_them():
+    text = "Student No.;Name;Email address\n12345;Lee, Ann;ann@uni.edu\n"
+    parsed = parse_roster(text.encode())
+    assert parsed.problems == []
+    assert [(r.username, r.display_name, r.email) for r in parsed.rows] == [
+        ("12345", "Lee, Ann", "ann@uni.edu")
+    ]
+
+
 def test_a_roster_without_a_header_keeps_every_row():
     """A student named "login" on the second row is not a header: the first row has two
     cells, so the file has none."""

@@ -59,6 +59,13 @@ HEADER_NAMES = {
         "用户名/学号",  # the one-time passwords' download names its columns as the page does
         "username / student number",
         "账号",
+        "student no.",
+        "student no",
+        "student #",
+        "id number",
+        "学工号",
+        "学生编号",
+        "学籍号",
     },
     "display_name": {
         "display_name",
@@ -69,7 +76,16 @@ HEADER_NAMES = {
         "学生姓名",
         "名字",
     },
-    "email": {"email", "e-mail", "mail", "邮箱", "电子邮件", "电子邮箱"},
+    "email": {
+        "email",
+        "e-mail",
+        "mail",
+        "email address",
+        "e-mail address",
+        "邮箱",
+        "电子邮件",
+        "电子邮箱",
+    },
 }
 
 
@@ -122,6 +138,18 @@ def _header_index(lines: list[tuple[int, list[str]]]) -> int | None:
     return None
 
 
+def _dialect(text: str) -> type[csv.Dialect] | csv.Dialect:
+    """The roster's separator, sniffed from its lines from the first that holds one: a
+    student system's title lines above the header hold none ("课程名称：惯性导航"), and
+    sniffing them with the table took a tab-separated export for one column."""
+    lines = text.splitlines()
+    first = next((k for k, line in enumerate(lines) if any(c in line for c in ",;\t")), 0)
+    try:
+        return csv.Sniffer().sniff("\n".join(lines[first : first + 50])[:4096], delimiters=",;\t")
+    except csv.Error:
+        return csv.excel
+
+
 def parse_roster(data: bytes) -> RosterParse:
     if len(data) > MAX_ROSTER_BYTES:
         return RosterParse(
@@ -137,10 +165,7 @@ def parse_roster(data: bytes) -> RosterParse:
             text = decode_text(data)
         except UserError:
             return RosterParse([], [RosterProblem(0, "roster.encoding")])
-        try:
-            dialect = csv.Sniffer().sniff(text[:4096], delimiters=",;\t")
-        except csv.Error:
-            dialect = csv.excel
+        dialect = _dialect(text)
         lines = [
             (number, cells)
             for number, cells in enumerate(csv.reader(io.StringIO(text), dialect), start=1)
