@@ -177,6 +177,57 @@ def test_notes_typed_one_line_per_position_its_name_ended_by_a_colon(label, sepa
     assert [v.tolist() for v in readings.positions] == columns
 
 
+def turned_sheet(header: str | None, means: str | None) -> str:
+    """The handout's part A laid out one row per position, as a spreadsheet: perhaps a
+    header numbering the readings, perhaps each row's mean at its end."""
+    columns = list(handout("handout_horizontal.csv").values())
+    lines = [] if header is None else [header]
+    for k, column in enumerate(columns):
+        cells = [f"位置{k + 1}", *(f"{v:.2f}" for v in column)]
+        if means is not None:
+            cells.append(means.format(sum(column) / len(column)))
+        lines.append(",".join(cells))
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize(
+    ("header", "means", "said"),
+    [
+        ("位置," + ",".join(str(k) for k in range(1, 11)) + ",平均值", "{:.3f}", "summary_column"),
+        (
+            "Position," + ",".join(f"#{k}" for k in range(1, 11)) + ",Mean",
+            "{:.2f}",
+            "summary_column",
+        ),
+        (None, "{:.4f}", "means_column"),
+        ("位置," + ",".join(f"第{k}次" for k in range(1, 11)), None, None),
+    ],
+    ids=[
+        "numbered, 平均值",
+        "Mean written at the readings' decimals",
+        "unlabelled means",
+        "header",
+    ],
+)
+def test_a_table_turned_on_its_side_under_a_header_with_its_means(header, means, said):
+    """One row per position under "位置 | 1 | 2 | … | 10 | 平均值": the header was read as the
+    handout's "位置 | 1 | 2 | 3 | 4" -- ten positions, each the k-th reading of every
+    position -- and an unlabelled mean at each row's end was one more reading."""
+    readings = parse_readings_csv(turned_sheet(header, means))
+    assert [v.tolist() for v in readings.positions] == list(
+        handout("handout_horizontal.csv").values()
+    )
+    keys = [key for key, _ in readings.left_out()]
+    assert keys == ([] if said is None else [f"csv.{said}_skipped"])
+
+
+def test_a_turned_tables_genuine_last_reading_is_kept():
+    """A last reading is no mean unless, in every row, it is the mean written longer."""
+    text = turned_sheet(None, None).replace("\n", ",10.700\n", 1)  # longer, but no mean
+    readings = parse_readings_csv(text)
+    assert readings.positions[0].tolist()[-1] == 10.7 and readings.left_out() == []
+
+
 def test_a_colon_that_follows_no_positions_name_is_no_label():
     with pytest.raises(UserError) as unknown:  # clock stamps: no position's name before ":"
         parse_readings_csv("10:00:00.1,10.7\n10:00:00.2,10.8\n10:00:00.3,10.6\n")

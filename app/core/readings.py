@@ -199,11 +199,12 @@ def _parse_layout(rows, header_line: int, header: list[str], names, part: str | 
             body = [(n, r) for n, r in body if column < len(r) and r[column].strip() == part]
         return parse_long(long, body)
     turned = [(line, _label_apart(row)) for line, row in rows]
-    if len(turned) > 1 and all(
-        WIDE_COLUMN.match(column_name(row[0])) and all(is_number(c) for c in row[1:] if c.strip())
-        for _, row in turned
-    ):  # one row per position, its name first: the table turned on its side
-        return _parse_rows_of_positions(turned)
+    if len(turned) > 1 and all(_names_its_position(row) for _, row in turned):
+        return _parse_rows_of_positions(turned)  # one row per position, its name first
+    if len(turned) > 2 and all(_names_its_position(row) for _, row in turned[1:]):
+        # the same under a header that numbers the readings ("位置 | 1 | 2 | … | 平均值"):
+        # not the handout's "位置 | 1 | 2 | 3 | 4", whose rows name no position
+        return _parse_rows_of_positions(turned[1:], header=turned[0][1])
     wide = {
         index: int(m.group(1)) for index, name in enumerate(names) if (m := WIDE_COLUMN.match(name))
     }
@@ -306,20 +307,54 @@ def _split_label(cell: str) -> tuple[str, str, str]:
     return cell[: match.start()], match.group(), cell[match.end() :]
 
 
-def _parse_rows_of_positions(rows) -> Readings:
+def _names_its_position(row: list[str]) -> bool:
+    """A row of the table turned on its side: a position's name, then readings."""
+    return bool(WIDE_COLUMN.match(column_name(row[0]))) and all(
+        is_number(c) for c in row[1:] if c.strip()
+    )
+
+
+def _parse_rows_of_positions(rows, header: list[str] | None = None) -> Readings:
     """A wide table turned on its side: one row per position, its name first ("位置1,
-    10.74, 10.65, …"), as a student types it line by line."""
+    10.74, 10.65, …"), as a student types it line by line, perhaps under a header that
+    numbers the readings.  A column the header names a summary ("平均值", "mean"), or a
+    last column of each row's mean written to more decimals than its readings (a
+    spreadsheet's =AVERAGE), is left out and said, as such a row under a table is."""
+    notes: list[tuple[str, dict]] = []
+    summaries = [k for k, cell in enumerate(header or []) if k and summary_label([cell])]
+    for k in summaries:
+        notes.append(("csv.summary_column_skipped", {"label": summary_label([header[k]])}))
+    cells = {
+        line: [c.strip() for k, c in enumerate(row) if k and k not in summaries and c.strip()]
+        for line, row in rows
+    }
+    if _last_column_of_means(list(cells.values())):
+        cells = {line: row[:-1] for line, row in cells.items()}
+        notes.append(("csv.means_column_skipped", {}))
     columns = {}
     for line, row in rows:
         number = int(WIDE_COLUMN.match(column_name(row[0])).group(1))
         if number in columns:
             raise UserError("csv.position_twice", line=line, position=number)
-        columns[number] = [
-            cell_number(c.strip(), line, f"position_{number}") for c in row[1:] if c.strip()
-        ]
+        columns[number] = [cell_number(c, line, f"position_{number}") for c in cells[line]]
     numbers = sorted(columns)
     for number in numbers:
         if not columns[number]:
             raise UserError("readings.empty_position", position=number)
     given = None if numbers == list(range(1, len(numbers) + 1)) else numbers
-    return Readings([np.array(columns[k]) for k in numbers], None, None, "wide", numbers=given)
+    readings = Readings([np.array(columns[k]) for k in numbers], None, None, "wide", numbers=given)
+    readings.layout_notes = notes
+    return readings
+
+
+def _last_column_of_means(rows: list[list[str]]) -> bool:
+    """Whether each row's last cell is the mean of the readings before it, written to more
+    decimals than they are (:func:`app.core.means_row.is_row_of_means`, turned)."""
+    if not rows or any(len(row) < 2 for row in rows):
+        return False
+    try:
+        above = [[float(c) for c in row[:-1]] for row in rows]
+    except ValueError:
+        return False
+    decimals = [max(written_decimals(c, significant=True) or 0 for c in row[:-1]) for row in rows]
+    return is_row_of_means([row[-1] for row in rows], above, decimals)

@@ -34,16 +34,19 @@ class Readings:
     named_unit: str | None = None  # the rate unit the header or a row of units names
     # how the time column was read, where not as written (a coarse clock's ticks spread)
     time_notes: list[tuple[str, dict]] = field(default_factory=list)
+    # columns of a table turned on its side left out: a summary, each row's mean
+    layout_notes: list[tuple[str, dict]] = field(default_factory=list)
 
     def left_out(self) -> list[tuple[str, dict]]:
         """What the reader passed over, as message keys and their values: each summary
-        row, an unlabelled row of means, and a time column not read as written."""
+        row, an unlabelled row of means, a turned table's summary or means column, and a
+        time column not read as written."""
         notes = [
             ("csv.summary_skipped", {"line": line, "label": label}) for line, label in self.skipped
         ]
         if self.means_row is not None:
             notes.append(("csv.means_row_skipped", {"line": self.means_row}))
-        return notes + self.time_notes
+        return notes + self.layout_notes + self.time_notes
 
 
 def cell_number(text: str, line: int, column: str) -> float:

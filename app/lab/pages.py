@@ -314,6 +314,7 @@ JS_MESSAGES = (
     "js.lines_above_skipped",
     "js.own_table_taken",
     "js.turned_table",
+    "js.summary_column_skipped",
     "js.time_column_skipped",
     "js.record_of_axes",
     "js.second_table_skipped",

@@ -374,19 +374,27 @@
     return /^\d+$/.test(named[1]) ? Number(named[1]) : CHINESE_DIGITS.indexOf(named[1]) + 1;
   }
   function turnedBlock(rows, columns) {
-    const named = rows.map(labelApart).map((row) => row.filter((cell) => cell !== ""));
-    if (named.length < 2) return null;
+    const turnedRow = (row) => positionNamed(row[0] || "") >= 1 &&
+      row.slice(1).every((cell) => cell === "" || !isText(cell));
+    let named = rows.map(labelApart);
+    let header = null;  // "位置 | 1 | 2 | … | 平均值" over the rows: it numbers the readings
+    if (named.length > 2 && !turnedRow(named[0]) && named.slice(1).every(turnedRow)) {
+      header = named[0];
+      named = named.slice(1);
+    }
+    if (named.length < 2 || !named.every(turnedRow)) return null;
+    const summaries = new Set((header || []).flatMap((cell, k) => (k > 0 && isSummary([cell]) ? [k] : [])));
     const numbers = named.map((row) => positionNamed(row[0]));
-    const readings = named.map((row) => row.slice(1));
-    if (!numbers.every((n) => n >= 1 && n <= columns) || new Set(numbers).size !== numbers.length ||
-        !readings.every((cells) => cells.length > 0 && cells.every((cell) => !isText(cell)))) {
+    const readings = named.map((row) => row.filter((cell, k) => k > 0 && !summaries.has(k) && cell !== ""));
+    if (!numbers.every((n) => n <= columns) || new Set(numbers).size !== numbers.length ||
+        !readings.every((cells) => cells.length > 0)) {
       return null;
     }
     const length = Math.max(...readings.map((cells) => cells.length));
     const width = Math.max(...numbers);
     const block = Array.from({ length }, () => new Array(width).fill(undefined));
     readings.forEach((cells, i) => cells.forEach((value, r) => { block[r][numbers[i] - 1] = value; }));
-    return block;
+    return { block, summaries: summaries.size > 0 };
   }
 
   // A header cell that names times: "time", "t", "时间", a time's word ("Elapsed Time",
@@ -412,7 +420,12 @@
     const turned = turnedBlock(rows, columns);
     if (turned) {
       notes.push("js.turned_table");
-      return { rows: turned, notes, whole: true, named: namedRateUnit(rows.map((row) => labelApart(row)[0]), null) };
+      let { block } = turned;
+      // each row's mean in its last cell, unlabelled: the block's last row is the means
+      const means = isRowOfMeans(block.map((row) => row.map((cell) => cell ?? "")));
+      if (means) block = block.slice(0, -1);
+      if (turned.summaries || means) notes.push("js.summary_column_skipped");
+      return { rows: block, notes, whole: true, named: namedRateUnit(rows.map((row) => labelApart(row)[0]), null) };
     }
     let header = null;
     let unitsRow = null;

@@ -315,6 +315,23 @@ def test_a_table_with_one_row_per_position_goes_down_the_columns(live_server, ne
     expect(rows.nth(9).locator("input").nth(3)).to_have_value(columns[1][9])
     expect(rows.nth(0).locator("input").nth(0)).to_have_value(columns[0][0])
     expect(page.locator("#part-heading .readings-grid input.invalid")).to_have_count(0)
+    # a sheet with a header that numbers the readings and each row's mean at its end
+    means = [sum(map(float, column)) / len(column) for column in columns]
+    sheet = (
+        "位置\t"
+        + "\t".join(str(k) for k in range(1, 11))
+        + "\t平均值\n"
+        + "\n".join(
+            f"位置{k + 1}\t" + "\t".join(column) + f"\t{means[k]:.3f}"
+            for k, column in enumerate(columns)
+        )
+    )
+    paste(page, f"{grid} input", sheet)
+    summary = "a column of means" if locale == "en-US" else "已跳过平均值等汇总列"
+    expect(page.locator("#part-heading .grid-status")).to_contain_text(summary)
+    expect(rows).to_have_count(10)
+    for k in range(4):
+        expect(rows.nth(9).locator("input").nth(k)).to_have_value(columns[k][9])
 
 
 @pytest.mark.parametrize("locale", ["en-US", "zh-CN"])
