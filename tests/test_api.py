@@ -288,6 +288,42 @@ def test_a_phones_semicolon_export_is_saved_from_the_axis_named_with_its_times(c
     assert unpack(chunk.values) == pytest.approx(white_rates()[:, 2] * 3600.0, rel=1e-9)
 
 
+@pytest.mark.one_backend  # the body's parsing; storing is the same as for any CSV
+@pytest.mark.parametrize(
+    ("header", "first", "times", "temperatures"),
+    [
+        ("Time (ms),Rate (deg/h)", lambda k: f"{100 * k}", [0.0, 0.1, 0.2], None),
+        ("Temp (C),Rate (deg/h)", lambda k: f"{25 + 0.01 * k:.2f}", None, [25.0, 25.01, 25.02]),
+        ("Sample,Rate (deg/h)", lambda k: f"{k + 1}", None, None),
+    ],
+    ids=["ms", "a temperature", "a sample number"],
+)
+def test_a_two_column_records_header_says_what_its_first_column_is(
+    client, auth, header, first, times, temperatures
+):
+    """Two columns were times in seconds and readings by their places, whatever the
+    header said: milliseconds were seconds (a 10 Hz record stored at 0.01 Hz), a case
+    temperature and a sample number were times.  They are read as the lab page reads
+    the file."""
+    from app.lab.samples import unpack
+
+    session_id = new_api_session(client, auth)
+    url = f"{API}/sessions/{session_id}/heading/positions/1?unit=deg/h"
+    values = handout("handout_horizontal.csv")[1]
+    text = header + "\n" + "".join(f"{first(k)},{v}\n" for k, v in enumerate(values))
+    response = client.put(url, content=text, headers={**auth, "Content-Type": "text/csv"})
+    assert response.status_code == 200, response.text
+    with read_session() as db:
+        chunk = db.exec(select(SampleChunk)).one()
+    assert unpack(chunk.values).tolist() == values
+    stored_times = None if chunk.times is None else unpack(chunk.times)[:3].tolist()
+    assert stored_times == (None if times is None else pytest.approx(times))
+    stored_temperatures = None if chunk.temperatures is None else unpack(chunk.temperatures)
+    assert (None if stored_temperatures is None else stored_temperatures[:3].tolist()) == (
+        None if temperatures is None else pytest.approx(temperatures)
+    )
+
+
 @pytest.mark.one_backend  # the body's parsing; storing is the same as for commas
 @pytest.mark.parametrize(
     ("separator", "decimal"),

@@ -15,7 +15,7 @@ from app.core.column_names import column_name, is_hash_comment, readable_rate_un
 from app.core.exceptions import UserError
 from app.core.readings import parse_readings_csv
 from app.core.readings_data import Readings, cell_number
-from app.core.record_columns import ColumnChoiceNeeded
+from app.core.record_columns import ColumnChoiceNeeded, header_layout
 from app.core.spreadsheet_text import (
     decimal_point,
     is_units_row,
@@ -62,7 +62,7 @@ def parse_static_record(text: str) -> np.ndarray:
 
 
 def parse_position_csv(
-    data: bytes | str, unit: str | None = None
+    data: bytes | str, unit: str | None = None, *, as_named: bool = False
 ) -> tuple[np.ndarray, np.ndarray | None]:
     r"""One position's readings: one value per line, or ``time_s,value`` per line.
 
@@ -87,6 +87,11 @@ def parse_position_csv(
         The unit the readings are said to be in (canonical): a header or a row of units
         naming another rate unit for the readings' column is refused, as a logger's
         record's is (``csv.unit_conflict``).
+    as_named : bool
+        Refuse (``csv.not_a_record``) a header that names its two columns otherwise than
+        a time in seconds and the readings, in that order ("Time (ms), Rate", "Temp (C),
+        Rate", "Sample, Rate"): a record for the reader that knows such names
+        (:func:`parse_one_position_record`), not times and readings by their place.
 
     Returns
     -------
@@ -107,6 +112,10 @@ def parse_position_csv(
     data = plain_text(file_text(data))
     delimiter = spreadsheet_delimiter(data)
     spaced = delimiter == "," and _spaced_columns(data)
+    if as_named and not _named_time_and_value(
+        _first_line_cells(data, " " if spaced else delimiter)
+    ):
+        raise UserError("csv.not_a_record")
     if delimiter == "," and not spaced and (fast := _plain_numbers(data, unit)) is not None:
         return fast
     if spaced:  # "0.1  10.74": a script's or logger's
@@ -128,6 +137,35 @@ def parse_position_csv(
     if not values:
         raise UserError("csv.empty")
     return np.array(values), (np.array(times) if times else None)
+
+
+def _first_line_cells(data: str, delimiter: str) -> list[str] | None:
+    """The first line's cells where it is a header: not a comment, not numbers."""
+    end = data.find("\n")
+    line = (data if end < 0 else data[:end]).strip()
+    if not line or is_hash_comment(line):
+        return None
+    parts = line.split() if delimiter == " " else line.split(delimiter)
+    cells = [cell.strip().strip('"').strip() for cell in parts]
+    return None if all(is_number(cell) for cell in cells if cell) else cells
+
+
+def _named_time_and_value(header: list[str] | None) -> bool:
+    """Whether a header leaves the columns as their places say: none, one name, or a time
+    in seconds (or a name that is no time's) then the readings."""
+    names = [cell for cell in header or [] if cell]
+    if len(names) != 2:
+        return True  # no header, one name (perhaps over decimal commas), or not two columns
+    try:
+        layout = header_layout(names)
+    except UserError:
+        return True  # names that say nothing: by their places, as before
+    return (
+        layout.time == 0
+        and layout.value == 1
+        and layout.temperature is None
+        and layout.time_scale in (None, 1.0)
+    )
 
 
 def _read_rows(

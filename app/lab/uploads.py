@@ -121,7 +121,7 @@ def csv_position(body: bytes, unit: str, column: str | None = None) -> Arrays:
         if column is not None or is_labview_measurement(body[:200].decode("utf-8", "ignore")):
             # a column chosen, or LabVIEW's file: the record's reader, which knows them
             raise UserError("csv.not_a_record")
-        values, times = parse_position_csv(body, unit)
+        values, times = parse_position_csv(body, unit, as_named=True)
         if times is None:
             return values, times, None
         if epoch_scale(float(times[0])) is None and bool(np.all(np.diff(times) > 0)):
