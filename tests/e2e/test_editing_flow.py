@@ -287,7 +287,7 @@ def test_a_paste_longer_than_the_grid_is_held_and_saved_as_pasted(live_server, n
     expect(status).to_contain_text("Position 1: Too many readings: at most 100000 per position.")
 
 
-@pytest.mark.parametrize("locale", ["en-US", "zh-CN"])
+@pytest.mark.parametrize("locale", ["zh-CN"])  # the other test speaks English
 def test_a_table_with_one_row_per_position_goes_down_the_columns(live_server, new_page, locale):
     """A sheet laid out one row per position ("位置1 | 10.74 | 10.65 …"), or notes typed
     so ("位置1：10.74 10.65 …", "P2 = 2.88, 2.69"): each position's readings go down its
@@ -334,7 +334,7 @@ def test_a_table_with_one_row_per_position_goes_down_the_columns(live_server, ne
         expect(rows.nth(9).locator("input").nth(k)).to_have_value(columns[k][9])
 
 
-@pytest.mark.parametrize("locale", ["en-US", "zh-CN"])
+@pytest.mark.parametrize("locale", ["en-US"])  # the other test speaks Chinese
 def test_a_loggers_record_pasted_keeps_its_times_out_of_the_positions(
     live_server, new_page, locale
 ):
