@@ -695,3 +695,20 @@ def test_a_long_tables_angles_round_the_other_way_are_used_as_given_and_said(
     assert "write them as 0°, -90°, -180°, -270°" in capsys.readouterr().err
     assert main(["solve", "heading", str(path), "--json", "--rotation", "cw"]) == 0
     assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize(
+    ("header", "record"),
+    [
+        ("时间(s),1,2,3,4", False),  # the handout's numbering beside a time column
+        ("t,0°,-90°,-180°,-270°", False),
+        ("time_s,position_1,position_2,position_3,position_4", False),
+        ("time_s,position,value,x", False),  # the long layout
+        ("Time (s),Gyro X,Gyro Y,Gyro Z,Temp", True),  # an IMU's export: one record
+    ],
+)
+def test_a_time_column_beside_numbered_or_named_positions_heads_a_table(header, record):
+    from app.core.static_record import written_as_a_record
+
+    rows = "".join(f"{0.1 * k:.1f},10.7,2.8,-9.1,-0.9\n" for k in range(5))
+    assert written_as_a_record(f"{header}\n{rows}") is record

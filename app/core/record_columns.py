@@ -32,6 +32,7 @@ from app.core.column_names import (
 from app.core.exceptions import UserError
 from app.core.long_headers import is_value_name, long_columns
 from app.core.table_headers import column_name as position_column_name
+from app.core.table_headers import numbered_columns
 from app.core.units import RAD_PER_SECOND
 
 VALUE_NAMES = ("value", "rate", "omega", "reading", "角速度", "角速率")
@@ -167,8 +168,9 @@ def time_column(names: list[ColumnName]) -> int | None:
 def names_a_records_times(header: list[str]) -> bool:
     """Whether a header names a time column among two or more and no position ("Time (ms),
     X_GYRO (deg/s), …", "time,gx,gy,gz", phyphox's and Sensor Logger's): the header of one
-    position's record.  A table of positions names its positions ("time, P1, P2 …"), or
-    its position column beside the times (the long layout, "time_s, position, value").
+    position's record.  A table of positions names its positions ("time, P1, P2 …"),
+    numbers them ("时间 | 1 | 2 | 3 | 4", "t | 0° | 90° …"), or has a position column beside
+    the times (the long layout, "time_s, position, value").
 
     Parameters
     ----------
@@ -184,6 +186,8 @@ def names_a_records_times(header: list[str]) -> bool:
     cells = [cell for cell in header if cell.strip()]
     if len(cells) < 2 or long_columns(cells) is not None:
         return False
+    if numbered_columns(header, more_rows=True) is not None:
+        return False  # "时间(s) | 1 | 2 | 3 | 4", "t | 0° | 90° …": positions numbered
     if any(position_column_name(cell).startswith("position_") for cell in cells):
         return False
     return time_column([column_name(cell) for cell in cells]) is not None
