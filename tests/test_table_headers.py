@@ -712,3 +712,29 @@ def test_a_time_column_beside_numbered_or_named_positions_heads_a_table(header, 
 
     rows = "".join(f"{0.1 * k:.1f},10.7,2.8,-9.1,-0.9\n" for k in range(5))
     assert written_as_a_record(f"{header}\n{rows}") is record
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        ",".join(f"位置{k}" for k in (1, 2, 3, 4, 4, 3, 2, 1)) + "\n" + "1,2,3,4,5,6,7,8\n" * 3,
+        "位置,1,2,3,4,4,3,2,1\n" + ",1,2,3,4,5,6,7,8\n" * 3,
+        "".join(f"P{k},{n},{n},{n}\n" for n, k in enumerate((1, 2, 3, 4, 4, 3, 2, 1), start=1)),
+    ],
+    ids=["named", "numbered", "one row per visit"],
+)
+def test_the_symmetric_order_named_there_and_back_is_positions_one_to_eight(text):
+    """1-2-3-4-4-3-2-1 with each position named again on its second visit: "a position
+    named twice" before; the second visits are positions 5-8, as the session numbers them."""
+    readings = parse_readings_csv(text)
+    assert [v.tolist() for v in readings.positions] == [[float(n)] * 3 for n in range(1, 9)]
+
+
+@pytest.mark.parametrize(
+    "header",
+    ["位置1,位置2,位置2,位置1", "位置1,位置2,位置3,位置3", "位置1,位置2,位置3,位置4,位置4"],
+)
+def test_other_repeated_positions_are_still_refused(header):
+    with pytest.raises(UserError) as twice:
+        parse_readings_csv(header + "\n" + ",".join(["1"] * (header.count(",") + 1)) + "\n")
+    assert twice.value.key == "csv.position_columns"

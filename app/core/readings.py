@@ -40,7 +40,7 @@ from app.core.long_headers import long_columns, name_and_unit
 from app.core.long_readings import parse_long
 from app.core.means_row import is_row_of_means, written_decimals
 from app.core.part_names import part_table
-from app.core.readings_data import WIDE_COLUMN, Readings, cell_number
+from app.core.readings_data import WIDE_COLUMN, Readings, cell_number, symmetric_numbers
 from app.core.record_columns import names_a_records_times
 from app.core.spreadsheet_text import (
     decimal_point,
@@ -251,6 +251,10 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
     A table of some positions only ("位置3" alone, a workbook's sheet of one position)
     keeps the numbers its header gives, as a long table does; a position named twice is
     refused."""
+    in_order = sorted(columns)
+    revisits = symmetric_numbers([columns[index] for index in in_order])
+    if revisits is not None:  # "位置1 … 位置4, 位置4 … 位置1": the symmetric order's 1 … 8
+        columns = dict(zip(in_order, revisits, strict=True))
     numbers = sorted(columns.values())
     if len(set(numbers)) != len(numbers):
         raise UserError(
@@ -331,9 +335,10 @@ def _parse_rows_of_positions(rows, header: list[str] | None = None) -> Readings:
     if _last_column_of_means(list(cells.values())):
         cells = {line: row[:-1] for line, row in cells.items()}
         notes.append(("csv.means_column_skipped", {}))
+    named = [int(WIDE_COLUMN.match(column_name(row[0])).group(1)) for _, row in rows]
+    order = symmetric_numbers(named) or named  # 1-2-3-4-4-3-2-1: the second visits 5 … 8
     columns = {}
-    for line, row in rows:
-        number = int(WIDE_COLUMN.match(column_name(row[0])).group(1))
+    for (line, _row), number in zip(rows, order, strict=True):
         if number in columns:
             raise UserError("csv.position_twice", line=line, position=number)
         columns[number] = [cell_number(c, line, f"position_{number}") for c in cells[line]]

@@ -15,6 +15,7 @@ from app.core.exceptions import UserError
 from app.core.typed_numbers import NumberOutOfRange, parse_decimal
 
 WIDE_COLUMN = re.compile(r"^position_(\d+)$")
+SYMMETRIC_HALF = 4  # the symmetric order visits 1-2-3-4, then 4-3-2-1 as positions 5-8
 MAX_POSITION_NUMBER = 360  # one position per degree of the turntable at most
 
 
@@ -47,6 +48,25 @@ class Readings:
         if self.means_row is not None:
             notes.append(("csv.means_row_skipped", {"line": self.means_row}))
         return notes + self.layout_notes + self.time_notes
+
+
+def symmetric_numbers(numbers: list[int]) -> list[int] | None:
+    """The positions 1 … 8 that 1, 2, 3, 4, 4, 3, 2, 1 in order mean: the symmetric
+    recording order with each position named again on its second visit, as a student heads
+    the columns or rows of it -- positions 5 … 8 revisit 4 … 1 (lab-reference §3).
+
+    Parameters
+    ----------
+    numbers : list of int
+        The positions' numbers as a header or the rows give them, in order.
+
+    Returns
+    -------
+    list of int or None
+        1, 2, …, 8; None for any other sequence.
+    """
+    there_and_back = [*range(1, SYMMETRIC_HALF + 1), *range(SYMMETRIC_HALF, 0, -1)]
+    return list(range(1, 2 * SYMMETRIC_HALF + 1)) if numbers == there_and_back else None
 
 
 def cell_number(text: str, line: int, column: str) -> float:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import re
 
+from app.core.readings_data import symmetric_numbers
 from app.core.text_files import plain_text
 from app.core.typed_numbers import is_number
 
@@ -166,7 +167,10 @@ def _numbered(
         columns = {index: k for k, (index, _) in enumerate(angles, start=1)}
         return columns, [angle for _, angle in angles]
     written = [cell for _, cell in numbers]
-    counting = written == [str(k) for k in range(1, len(written) + 1)]
+    counting = written == [str(k) for k in range(1, len(written) + 1)] or (
+        all(cell.isdigit() for cell in written)
+        and symmetric_numbers([int(cell) for cell in written]) is not None
+    )  # "位置 | 1 | 2 | 3 | 4 | 4 | 3 | 2 | 1": the symmetric order, read in column order
     if counting and len(written) >= (2 if labelled else 3):
         return {index: k for k, (index, _) in enumerate(numbers, start=1)}, None
     if evenly_round([float(cell) for cell in written], from_zero=True):  # "0, 90, 180, 270"

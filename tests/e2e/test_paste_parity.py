@@ -86,3 +86,45 @@ def test_the_grid_reads_each_layout_as_a_file_of_it_is_read(live_server, new_pag
         pasted = [[float(row[k].replace(",", ".")) for row in cells if row[k]] for k in range(4)]
         read = parse_readings_csv(text, part="heading").positions
         assert pasted == [list(column) for column in read], name
+
+
+SYMMETRIC = [f"位置{k}" for k in (1, 2, 3, 4, 4, 3, 2, 1)]
+VISITS = [COLUMNS[k % 4] for k in range(8)]  # eight columns of readings, as recorded
+SYMMETRIC_LAYOUTS = {
+    "each position named again on its second visit": TAB.join(SYMMETRIC)
+    + "\n"
+    + "\n".join(TAB.join(column[i] for column in VISITS) for i in range(10)),
+    "the handout's numbering there and back": "位置\t1\t2\t3\t4\t4\t3\t2\t1\n"
+    + "\n".join(TAB + TAB.join(column[i] for column in VISITS) for i in range(10)),
+    "one row per visit": "\n".join(
+        f"{name}\t{TAB.join(column)}" for name, column in zip(SYMMETRIC, VISITS, strict=True)
+    ),
+}
+
+
+def test_the_symmetric_orders_second_visits_are_positions_five_to_eight(live_server, new_page):
+    """1-2-3-4-4-3-2-1 with each position named again ("位置4" twice): refused as a
+    position named twice by the file's reader, the rows of it laid wrongly by the grid's;
+    both now read the second visits as positions 5-8, as the session numbers them."""
+    page = new_page()
+    log_in(page, live_server.url, "student", STUDENT_PASSWORD)
+    start_practice(page, live_server.url)
+    with page.expect_navigation():
+        page.locator("#order-toggle").click()
+    grid = "#part-heading .readings-grid tbody"
+    for name, text in SYMMETRIC_LAYOUTS.items():
+        page.locator("#part-heading .clear-grid").click()
+        paste(page, f"{grid} input", text)
+        expect(page.locator("#part-heading .grid-status")).to_contain_text("80 readings")
+        cells = page.evaluate(
+            """(grid) => [...document.querySelectorAll(grid + ' tr')].map(
+                (tr) => [...tr.querySelectorAll('input')].map((input) => input.value))""",
+            grid,
+        )
+        pasted = [[float(row[k]) for row in cells if row[k]] for k in range(8)]
+        read = parse_readings_csv(text, part="heading").positions
+        assert (
+            pasted
+            == [list(column) for column in read]
+            == [[float(v) for v in column] for column in VISITS]
+        ), name
