@@ -56,6 +56,53 @@ MEANS_LEGEND = Words("steps.legend_means")
 _FIT_TITLE = Words("steps.fit")
 
 
+def _percent_error_line(
+    symbol: str, value: float, true: float, decimals: int, percent: float
+) -> str:
+    """η = |x − x0|/x0 × 100% with the numbers written in: x0 as given, x to ``decimals``
+    or, where those give another η than the one written, to the fewest more decimals
+    (up to six) that give it -- so that the line, worked by hand, gives its own result
+    (φ = 31.24695° written 31.25 gave 21.74 % where η = 21.75 %).
+
+    Parameters
+    ----------
+    symbol : str
+        "φ" or "Ω".
+    value, true : float
+        The measured and the true value.
+    decimals : int
+        The decimals x is written to elsewhere in the steps.
+    percent : float
+        η (%), written to two decimals.
+
+    Returns
+    -------
+    str
+        The line.
+    """
+    given = f"{true:.6f}".rstrip("0")
+    given = given + "0" * max(0, decimals - len(given.split(".")[1]))  # "15.04" → "15.040"
+    written = _f(percent, 2)
+    shown = next(
+        (
+            digits
+            for digits in range(decimals, 7)
+            if _f(abs(round(value, digits) - float(given)) / abs(float(given)) * 100, 2) == written
+        ),
+        decimals,
+    )
+    measured = f"({_f(value, shown)})" if value < 0 else _f(value, shown)
+    if true < 0:  # a southern latitude: η over its size
+        return (
+            f"η_{symbol} = |{symbol} − {symbol}0|/|{symbol}0| × 100% = "
+            f"|{measured} − ({given})| / |{given}| × 100% = {written}%"
+        )
+    return (
+        f"η_{symbol} = |{symbol} − {symbol}0|/{symbol}0 × 100% = "
+        f"|{measured} − {given}| / {given} × 100% = {written}%"
+    )
+
+
 def _four_apart(angles: np.ndarray) -> int:
     """+1 for four positions 90° apart clockwise, −1 counter-clockwise, 0 otherwise."""
     if angles.size != 4:
@@ -303,18 +350,12 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
             steps.append(Step(UNWEIGHTED_TITLE, closed[0].lines + closed[1].lines))
     lines = []
     if result.latitude_error_percent is not None:
-        lines.append(
-            f"η_φ = |φ − φ0|/φ0 × 100% = |{_f(phi, 2)} − {_f(result.true_latitude_deg, 2)}|"
-            f" / {_f(result.true_latitude_deg, 2)} × 100% = "
-            f"{_f(result.latitude_error_percent, 2)}%"
-        )
+        lines.append(_percent_error_line("φ", phi, result.true_latitude_deg, 2,
+                                         result.latitude_error_percent))  # fmt: skip
     if result.latitude_error_deg is not None:
         lines.append(f"Δφ = φ − φ0 = {_f(result.latitude_error_deg, 2)}°")
-    lines.append(
-        f"η_Ω = |Ω − Ω0|/Ω0 × 100% = |{_f(result.earth_rate_deg_h)} − "
-        f"{_f(result.true_earth_rate_deg_h)}| / {_f(result.true_earth_rate_deg_h)} × "
-        f"100% = {_f(result.earth_rate_error_percent, 2)}%"
-    )
+    lines.append(_percent_error_line("Ω", result.earth_rate_deg_h, result.true_earth_rate_deg_h,
+                                     3, result.earth_rate_error_percent))  # fmt: skip
     if result.latitude_sigma_deg is not None:
         linear = result.linear_sigma_deg
         if linear is not None and result.exact_sigma_deg is not None:
