@@ -289,3 +289,49 @@ def test_when_one_sigma_differs_from_s_over_root_n_every_sigma_is_shown():
     assert len(means) == 4
     for i, (line, sigma) in enumerate(zip(means, result.fit.position_sigmas, strict=True), 1):
         assert f"σ{i} = {sigma:.3f}" in line, line
+
+
+def test_the_chinese_steps_have_no_english_words_in_their_lines():
+    """The lines of mathematics are the same in both languages, so the words among them --
+    "(propagated)", "known: 68 % of … within", "°/h per reading" -- were English on the
+    Chinese page and in its PDF.  They come from the catalogues now."""
+    rng = np.random.default_rng(3)
+    angles = heading_angles(4, "ccw")
+    drifting, index = [], 0
+    for angle in angles:  # a bias falling by 0.05 °/h per reading, typed (no clock)
+        clean = 12.0 * math.cos(math.radians(40.0 + angle))
+        drifting.append(clean + 2.0 - 0.05 * (index + np.arange(12)) + rng.normal(0, 0.03, 12))
+        index += 12
+    noisy = [np.array(VERTICAL[k]) + rng.normal(0.0, 2.0, len(VERTICAL[k])) for k in range(1, 5)]
+    results = {
+        "warm-up": explain_heading(solve_heading(drifting, angles, true_azimuth_deg=40.0)),
+        "exact": explain_latitude(
+            solve_latitude(noisy, ELEVATIONS, true_latitude_deg=39.93, true_earth_rate_deg_h=15.04)
+        ),
+    }
+    allowed = {"atan", "arctan", "true"}  # function names; A1,true is a symbol's subscript
+    for name, steps in results.items():
+        english_text = render_text(steps, translator("en"))
+        chinese = render_text(steps, translator("zh-CN"))
+        words = {w for line in chinese.splitlines() for w in re.findall(r"[A-Za-z]{4,}", line)}
+        assert words <= allowed, (name, words - allowed)
+        assert ("per reading" in english_text) == (name == "warm-up"), english_text
+        if name == "exact":
+            assert "(propagated)" in english_text and "（线性传播）" in chinese
+
+
+@pytest.mark.one_backend  # the page's words, not the database's
+def test_the_lab_page_says_a_steps_words_in_its_language(student_client):
+    """A line with words among its mathematics is a message of the catalogues on the page
+    too (the PDF's template is the same loop): the handout's station, whose known Earth
+    rate makes the latitude's exact σ differ from the propagated one."""
+    from tests.factories import new_session, save_manual
+
+    session_id = new_session(student_client)
+    noisy = {k: [v + 1.5 * (-1) ** i for i, v in enumerate(VERTICAL[k])] for k in range(1, 5)}
+    assert save_manual(student_client, session_id, "latitude", noisy).status_code == 200
+    page = f"/lab/sessions/{session_id}"
+    zh = student_client.get(page, headers={"Accept-Language": "zh-CN"}).text
+    en = student_client.get(page, headers={"Accept-Language": "en"}).text
+    assert "σ_φ（线性传播）" in zh and "propagated" not in zh
+    assert "σ_φ (propagated)" in en

@@ -359,7 +359,7 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
     if result.latitude_sigma_deg is not None:
         linear = result.linear_sigma_deg
         if linear is not None and result.exact_sigma_deg is not None:
-            lines.append(f"σ_φ (propagated) = {_f(linear, 3)}°")
+            lines.append(Words("steps.sigma_propagated", {"name": "φ", "sigma": _f(linear, 3)}))
             lines.extend(_exact_lines(result.exact_sigma_deg, linear,
                                       result.true_earth_rate_deg_h, "φ", "Ω0"))  # fmt: skip
         lines.extend(_warm_up_lines(result.drift_check, result.noise_sigmas[0],
@@ -372,25 +372,26 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
     return steps
 
 
-def _exact_lines(exact, linear, amplitude, name: str, amplitude_name: str) -> list[str]:
+def _exact_lines(exact, linear, amplitude, name: str, amplitude_name: str) -> list[Words]:
     """The exact σ of the angle when it differs from the propagated one as shown."""
     if exact is None or linear is None or _f(exact, 3) == _f(linear, 3):
         return []
-    return [
-        f"{amplitude_name} = {_f(amplitude)} °/h known:  68 % of p({name} | x, y) within "
-        f"± {_f(exact, 3)}°"
-    ]
+    params = {"known": amplitude_name, "amplitude": _f(amplitude), "name": name}
+    return [Words("steps.sigma_exact", {**params, "sigma": _f(exact, 3)})]
 
 
-def _warm_up_lines(check, noise_sigma, final_sigma, name: str, key: str) -> list[str]:
+def _warm_up_lines(check, noise_sigma, final_sigma, name: str, key: str) -> list[str | Words]:
     """A drift flagged as warm-up: its rate, how far it moved the result, and the widened σ."""
     if check is None or not check.flagged or not check.shift or noise_sigma is None:
         return []
-    unit = "°/h²" if check.timed else "°/h per reading"
     rate = _f(check.rate, 4) if check.rate is not None else "—"
     spread = f" ± {_f(check.sigma, 4)}" if check.sigma is not None else ""
     moved = check.shift.get(key, 0.0)
+    drift = f"{rate}{spread}"
+    shift = f"ω̄_i − ḃ·(t̄_i − t̄)  →  Δ{name} = {_f(moved, 3)}°"
     return [
-        f"ḃ = {rate}{spread} {unit}:  ω̄_i − ḃ·(t̄_i − t̄)  →  Δ{name} = {_f(moved, 3)}°",
+        f"ḃ = {drift} °/h²:  {shift}"
+        if check.timed  # a clock: per hour; else per reading, said in words
+        else Words("steps.drift_per_reading", {"drift": drift, "shift": shift}),
         f"σ = √({_f(noise_sigma, 3)}² + {_f(moved, 3)}²) = {_f(final_sigma, 3)}°",
     ]

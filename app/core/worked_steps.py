@@ -20,7 +20,7 @@ class Words:
 @dataclass(frozen=True)
 class Step:
     title: Words
-    lines: tuple[str, ...]
+    lines: tuple[str | Words, ...]  # mathematics; a line with words in it as Words
     sentence: Words | None = None  # a conclusion in words
     legend: Words | None = None  # what the symbols of the lines mean
 
@@ -99,7 +99,7 @@ def render_text(steps: list[Step], translate: Callable[..., str]) -> str:
     out = []
     for number, step in enumerate(steps, start=1):
         out.append(f"{number}. {say(step.title)}")
-        out.extend(f"   {line}" for line in step.lines)
+        out.extend(f"   {line if isinstance(line, str) else say(line)}" for line in step.lines)
         if step.legend:
             out.append(f"   {say(step.legend)}")
         if step.sentence:
