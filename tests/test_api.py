@@ -15,6 +15,7 @@ from app.models import ApiToken, Assignment, Role, SampleChunk, Take, utcnow
 from app.web.workbooks import XLSX_MEDIA_TYPE
 from tests.factories import (
     API,
+    DATA,
     HEADING_KEYS,
     LATITUDE_KEYS,
     PASSWORD,
@@ -286,6 +287,22 @@ def test_a_phones_semicolon_export_is_saved_from_the_axis_named_with_its_times(c
         chunk = db.exec(select(SampleChunk)).one()
     assert unpack(chunk.times)[:3] == pytest.approx([0.0, 1 / RATE_HZ, 2 / RATE_HZ])
     assert unpack(chunk.values) == pytest.approx(white_rates()[:, 2] * 3600.0, rel=1e-9)
+
+
+@pytest.mark.one_backend  # the body's parsing
+def test_a_table_of_every_position_sent_to_one_position_says_so(client, auth):
+    """The handout's whole table PUT to one position's route was "Line 2: expected 'value'
+    or 'time_s,value'"; it is named for what it is, with what to send instead."""
+    session_id = new_api_session(client, auth)
+    url = f"{API}/sessions/{session_id}/heading/positions/1"
+    table = (DATA / "handout_horizontal.csv").read_bytes()
+    for language, words in (("en", "a table of 4 positions"), ("zh-CN", "4 个位置的表格")):
+        headers = {**auth, "Content-Type": "text/csv", "Accept-Language": language}
+        refused = client.put(url, content=table, headers=headers)
+        assert refused.status_code == 400 and refused.json()["key"] == "api.table_of_positions"
+        assert words in refused.json()["detail"] and "/positions/4" in refused.json()["detail"]
+    with read_session() as db:
+        assert db.exec(select(SampleChunk)).all() == []
 
 
 @pytest.mark.one_backend  # the body's parsing; storing is the same as for any CSV

@@ -21,6 +21,7 @@ from app.core.position_records import (
     parse_one_position_record,
     parse_position_csv,
 )
+from app.core.readings import parse_readings_csv
 from app.core.text_files import decode_text
 from app.core.typed_numbers import parse_decimal
 from app.core.units import canonical_unit
@@ -133,15 +134,27 @@ def csv_position(body: bytes, unit: str, column: str | None = None) -> Arrays:
     except UserError as error:
         if error.key in ("csv.encoding", "csv.unit_conflict"):
             raise
+        text = decode_text(body)
         try:
-            readings = parse_one_position_record(decode_text(body), unit, column).readings
+            readings = parse_one_position_record(text, unit, column).readings
         except UserError as record_error:
             if record_error.key in RECORD_PROBLEMS:  # a record, with a problem in it
                 raise
+            count = _positions_in_a_table(text)
+            if count > 1:  # the handout's table of every position, to one position's route
+                raise UserError("api.table_of_positions", count=count) from None
             raise error from None
     times = readings.times_s[0] if readings.times_s else None
     temperatures = readings.temperatures_c[0] if readings.temperatures_c else None
     return readings.positions[0], times, temperatures
+
+
+def _positions_in_a_table(text: str) -> int:
+    """How many positions a body holds as a table of them (the lab's layouts), else 0."""
+    try:
+        return len(parse_readings_csv(text).positions)
+    except UserError:
+        return 0
 
 
 def query_meta(request: Request) -> UploadMeta:
