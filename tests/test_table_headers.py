@@ -738,3 +738,17 @@ def test_other_repeated_positions_are_still_refused(header):
     with pytest.raises(UserError) as twice:
         parse_readings_csv(header + "\n" + ",".join(["1"] * (header.count(",") + 1)) + "\n")
     assert twice.value.key == "csv.position_columns"
+
+
+def test_the_handouts_omega_names_each_positions_column_beside_a_time():
+    """ "时间 | ω1 | ω2 | ω3 | ω4": the handout writes ω1 … ω4 for the positions' means, and
+    students head their columns so. Beside a time column the header was taken for an
+    IMU's record of four axes (before that, the times were position 1)."""
+    from app.core.static_record import written_as_a_record
+
+    columns = list(handout("handout_horizontal.csv").values())
+    text = "时间(s),ω1,ω2,ω3,ω4\n" + "".join(
+        f"{0.1 * i:.1f}," + ",".join(f"{c[i]:.2f}" for c in columns) + "\n" for i in range(10)
+    )
+    assert not written_as_a_record(text)
+    assert [v.tolist() for v in parse_readings_csv(text).positions] == columns

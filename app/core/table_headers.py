@@ -22,6 +22,7 @@ POSITION_NAMES = [
     re.compile(rf"^(?:position|pos\.?|p|位置)\s*[_#.\-]?\s*{NUMBER}\s*号?$"),  # P1, 位置 1
     re.compile(rf"^第\s*{NUMBER}\s*个?\s*位置$"),  # 第1位置, 第一个位置
     re.compile(rf"^{NUMBER}\s*号\s*位置$"),  # 1号位置
+    re.compile(rf"^(?:ω|omega)\s*_?\s*{NUMBER}$"),  # the handout's ω1 … ω4, each position's
 ]
 UNIT_SUFFIX = re.compile(r"\s*[(\[（【][^()\[\]（）【】]*[)\]）】]$")  # "(°/h)", "（度/时）"
 ANGLE = re.compile(r"^([+-]?\d+(?:\.\d+)?)\s*(?:°|º|˚|度|deg|degrees?)$")
@@ -75,8 +76,9 @@ def _number_of(text: str) -> int:
 
 def column_name(cell: str) -> str:
     """A header cell as the layouts name it: "位置1", "Position 1", "P1", "pos. 2",
-    "第3位置", "4号位置", "位置一" and "位置1 (°/h)" → "position_1" … (a unit in brackets
-    is the student's note; the unit is the form's); other names lower-cased.
+    "第3位置", "4号位置", "位置一", the handout's "ω1" and "位置1 (°/h)" → "position_1" …
+    (a unit in brackets is the student's note; the unit is the form's); other names
+    lower-cased.
 
     Parameters
     ----------

@@ -179,6 +179,7 @@
     new RegExp(`^(?:position|pos\\.?|p|位置)\\s*[_#.\\-]?\\s*${NUMBER}\\s*号?$`),
     new RegExp(`^第\\s*${NUMBER}\\s*个?\\s*位置$`),
     new RegExp(`^${NUMBER}\\s*号\\s*位置$`),
+    new RegExp(`^(?:ω|omega)\\s*_?\\s*${NUMBER}$`),  // the handout's ω1 … ω4
   ];
   const ANGLE_NAME = /^[+-]?\d+(?:\.\d+)?\s*(?:°|º|˚|度|deg|degrees?)$/;
   const headerName = (cell) => plain(cell).trim().toLowerCase().replace(/\s*[(\[][^()\[\]]*[)\]]$/, "");

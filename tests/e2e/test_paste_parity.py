@@ -63,6 +63,8 @@ LAYOUTS = {
     + "\n表2 竖直面内\n"
     + NAMES
     + PLAIN,
+    "the handout's ω1 … ω4 beside a time": "时间(s)\tω1\tω2\tω3\tω4\n"
+    + "\n".join(f"{0.1 * i:.1f}\t{TAB.join(r)}" for i, r in enumerate(ROWS)),
     "a cell left empty": NAMES
     + "\n".join(TAB.join(r[:3] + [""] if i == 2 else r) for i, r in enumerate(ROWS)),
 }
