@@ -752,3 +752,27 @@ def test_the_handouts_omega_names_each_positions_column_beside_a_time():
     )
     assert not written_as_a_record(text)
     assert [v.tolist() for v in parse_readings_csv(text).positions] == columns
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["位置1,位置400\n1,2\n", "位置1,1,2\n位置99999999999999999999,3,4\n", "P1：1 2\nP361：3 4\n"],
+)
+def test_a_position_numbered_past_the_turntables_is_refused_in_every_layout(text):
+    """The long layout refused a position past 360; a wide or turned table's was read,
+    and previewed at an angle of 9e+21°."""
+    with pytest.raises(UserError) as refused:
+        parse_readings_csv(text)
+    assert refused.value.key == "csv.position_number"
+
+
+@pytest.mark.one_backend  # the preview's check, not the database's
+def test_the_preview_refuses_a_position_the_session_has_not_as_the_save_does(student_client):
+    from tests.factories import new_session, post_json
+
+    session_id = new_session(student_client)
+    page = f"/lab/sessions/{session_id}"
+    body = {"part": "heading", "unit": "deg/h", "text": "P1,P2,P3,P5\n" + "1,2,3,4\n" * 10}
+    for path in ("/csv/preview", "/csv"):
+        refused = post_json(student_client, page + path, body, page)
+        assert refused.status_code == 400 and refused.json()["key"] == "lab.needs_symmetric"

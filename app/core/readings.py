@@ -40,7 +40,13 @@ from app.core.long_headers import long_columns, name_and_unit
 from app.core.long_readings import parse_long
 from app.core.means_row import is_row_of_means, written_decimals
 from app.core.part_names import part_table
-from app.core.readings_data import WIDE_COLUMN, Readings, cell_number, symmetric_numbers
+from app.core.readings_data import (
+    MAX_POSITION_NUMBER,
+    WIDE_COLUMN,
+    Readings,
+    cell_number,
+    symmetric_numbers,
+)
 from app.core.record_columns import names_a_records_times
 from app.core.spreadsheet_text import (
     decimal_point,
@@ -251,6 +257,10 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
     A table of some positions only ("位置3" alone, a workbook's sheet of one position)
     keeps the numbers its header gives, as a long table does; a position named twice is
     refused."""
+    if max(columns.values(), default=0) > MAX_POSITION_NUMBER:
+        raise UserError(
+            "csv.position_number", position=max(columns.values()), limit=MAX_POSITION_NUMBER
+        )
     in_order = sorted(columns)
     revisits = symmetric_numbers([columns[index] for index in in_order])
     if revisits is not None:  # "位置1 … 位置4, 位置4 … 位置1": the symmetric order's 1 … 8
@@ -336,6 +346,8 @@ def _parse_rows_of_positions(rows, header: list[str] | None = None) -> Readings:
         cells = {line: row[:-1] for line, row in cells.items()}
         notes.append(("csv.means_column_skipped", {}))
     named = [int(WIDE_COLUMN.match(column_name(row[0])).group(1)) for _, row in rows]
+    if max(named) > MAX_POSITION_NUMBER:
+        raise UserError("csv.position_number", position=max(named), limit=MAX_POSITION_NUMBER)
     order = symmetric_numbers(named) or named  # 1-2-3-4-4-3-2-1: the second visits 5 … 8
     columns = {}
     for (line, _row), number in zip(rows, order, strict=True):

@@ -198,12 +198,15 @@ def preview_csv(
 
 def file_positions(session: LabSession, part: str, readings: Readings, first: int) -> list[int]:
     """The positions a file's readings are saved as: the record's chosen position; the
-    numbers a long file gives ("P3"); the positions at the angles it gives, where each
-    is one of the session's dial angles; else 1, 2, … in the file's order."""
+    numbers a file gives ("P3", "位置400" -- refused, as the save refuses it, where the
+    session has no such position); the positions at the angles it gives, where each is
+    one of the session's dial angles; else 1, 2, … in the file's order."""
     count = len(readings.positions)
     if readings.layout == "record":
         return [first]
     if readings.numbers is not None:
+        for number in readings.numbers:  # the preview says so before the save does
+            check_position(session, part, number)
         return list(readings.numbers)
     if readings.angles_deg is not None:
         dial = [(k, nominal_angle(session, part, k)) for k in range(1, position_count(session) + 1)]
