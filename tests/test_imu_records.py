@@ -545,3 +545,79 @@ def test_a_time_column_named_otherwise_keeps_the_records_times(header, seconds_p
 def test_a_column_chosen_that_is_the_times_is_read_without_times():
     record = read("Elapsed (s),Rate (deg/h)\n0,10\n1,11\n2,12\n", column="1")
     assert record.values.tolist() == [0.0, 1.0, 2.0] and record.times_s is None
+
+
+@pytest.mark.parametrize(
+    ("header", "rates_at"),
+    [("time,x", 1), ("Time (s),gyro output", 1), ("z,time", 0), ("t,Time (s),x", 2)],
+)
+def test_the_one_column_beside_the_times_is_the_rates(header, rates_at):
+    """A record of times and one column named otherwise ("time, x") is that column's
+    record: it was refused as having no 'value' column, and "z, time" was read as times
+    in "z" and rates in "time"."""
+    rates = white_rates(seed=11, axes=1)[:, 0]
+    width = len(header.split(","))
+    rows = []
+    for k, rate in enumerate(rates):
+        cells = [f"{k / RATE_HZ:.2f}"] * width
+        cells[rates_at] = repr(float(rate))
+        rows.append(",".join(cells))
+    record = read(header + "\n" + "\n".join(rows) + "\n")
+    assert record.values.tolist() == rates.tolist()
+    assert record.times_s == pytest.approx(np.arange(rates.size) / RATE_HZ)
+    result = analyse_record(record, None)  # no unit named: the readings are in °/h
+    assert result.arw_deg_rt_h == pytest.approx(ARW_DEG_RT_H / 3600, rel=0.05)
+
+
+@pytest.mark.parametrize(
+    "header",
+    [
+        "time,Time (s),sample",  # a second clock and a reading's number
+        "time,Elapsed (s)",
+        "Time (s),温度 (°C)",  # a logger of the case temperature alone
+        "温度 (°C),t,序号,Temp",
+        "t,Absolute",  # phyphox's |ω|: no axis
+    ],
+)
+def test_no_clock_count_or_temperature_is_taken_for_the_rates(header):
+    """Beside the times, columns that are a second clock, a reading's number or a
+    temperature are no rates: the lab page's preview read "Time (s)" or "sample" as the
+    gyro's rates, and ``gyrolab allan`` gave the Allan deviation of a clock."""
+    from app.lab.file_pages import parse_csv_upload
+    from app.lab.schemas import CsvUpload
+
+    width = len(header.split(","))
+    text = header + "\n" + "".join(",".join([f"{k * 0.1:.1f}"] * width) + "\n" for k in range(40))
+    for guess in (True, False):  # the command line guesses, the lab page does not
+        with pytest.raises(UserError) as error:
+            read_static_record(text_lines(text.encode()), guess=guess)
+        assert error.value.key == "allan.no_rate_column"
+    with pytest.raises(UserError) as error:
+        parse_csv_upload(CsvUpload(text=text, unit="deg/h", part="heading"), suggest=True)
+    assert error.value.key == "allan.no_rate_column"
+    assert header.split(",")[0] in error.value.params["columns"]
+
+
+def test_unknown_names_beside_the_times_are_asked_not_guessed():
+    """ "time, a, b": which of a and b is the rates cannot be told; the command line read a
+    as the rates and b as the case temperature, as if there were no header."""
+    from app.core.record_columns import ColumnChoiceNeeded
+
+    with pytest.raises(ColumnChoiceNeeded) as raised:
+        header_layout(["time", "a", "b"])
+    assert raised.value.choices == ["a", "b"] and raised.value.key == "allan.no_value_column"
+    layout = header_layout(["time", "a", "b"], "b")
+    assert (layout.value, layout.time, layout.temperature) == (2, 0, None)
+    bare = header_layout(["a", "b", "c"])  # no name known: as without a header
+    assert (bare.value, bare.time, bare.temperature) == (1, 0, 2)
+
+
+def test_a_record_of_several_positions_is_said_to_be_so():
+    """The long layout's table (``time_s, position, value``) given for an Allan analysis:
+    "needs one position, not 4" -- it was "line 2 is not a reading", a line that is one."""
+    text = "time_s,position,value\n" + "".join(
+        f"{k * 0.1:.1f},{1 + k // 10},{10 + 0.01 * (k % 3)}\n" for k in range(40)
+    )
+    with pytest.raises(UserError) as error:
+        read(text)
+    assert error.value.key == "allan.one_position" and error.value.params == {"count": 4}

@@ -80,6 +80,8 @@ class RecordBlocks:
                 self.times.append(self.clock.seconds(rows[:, layout.time]))
             if layout.temperature is not None:
                 self.temperatures.append(_floats(rows[:, layout.temperature]))
+        except UserError:
+            raise  # a second position: said as such, not as a bad line
         except (ValueError, IndexError):
             bad = _first_bad_row(self._rows, layout)
             raise UserError("allan.bad_line", line=self._first_line + bad) from None

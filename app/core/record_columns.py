@@ -55,6 +55,7 @@ NOT_RATE_NAME = re.compile(
     r"|absolute|magnitude|(?:^|[^a-z])norm(?:$|[^a-z])",  # phyphox's "Absolute": |ω|, no axis
     re.IGNORECASE,
 )
+TEMPERATURE_WORD = re.compile(r"temp|温度", re.IGNORECASE)
 # a column that numbers the readings (not their times): "index", "Sample #", 序号, 采样点
 COUNTER_NAME = re.compile(
     r"index|idx|no\.?|n|num|number|#|sample(?:s| no\.?| number| #)?|count(?:er)?|seq"
@@ -226,7 +227,8 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
     ------
     UserError
         ``allan.one_position`` for the wide layout of several positions;
-        ``allan.no_value_column`` when no column is the rates and none was chosen.
+        ``allan.no_value_column`` when no column is the rates and none was chosen;
+        ``allan.no_rate_column`` when the columns beside the times are none that may be.
     """
     names = [column_name(cell) for cell in header]
     time = time_column(names)
@@ -247,8 +249,15 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
             value = _only_rate_column(names, (time, temperature))
         if value is None:  # a gyro's output as students and loggers name it: 陀螺输出, output
             value = next((k for k, name in enumerate(names) if is_value_name(name.base)), None)
+        position = _find(names, ("position",))
+        alone = time is not None and position is None  # times beside no position column
+        if value is None and alone:  # "time, x": the one column beside the times
+            rates = _plausible_rates(names)[1]
+            value = rates[0] if len(rates) == 1 and not _not_a_rate(names[rates[0]]) else None
         if value is None:
-            if guess and len(names) <= 3:  # unknown names: as without a header, their
+            if (
+                guess and len(names) <= 3 and time is None
+            ):  # unknown names: as without a header, their
                 bare = bare_layout(len(names))  # units as the names say
                 value, time, temperature = bare.value, bare.time, bare.temperature
                 if time is not None and COUNTER_NAME.fullmatch(names[time].base):
@@ -256,11 +265,12 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
             else:
                 choices = rate_column_choices(header)
                 raise ColumnChoiceNeeded(
-                    "allan.no_value_column",
+                    "allan.no_rate_column"
+                    if not choices and alone  # "time, Time (s), sample"
+                    else "allan.no_value_column",
                     choices,
                     columns=", ".join(choices or [cell.strip() for cell in header]),
                 )
-        position = _find(names, ("position",))
     if time is not None:
         name = names[time]
         scale = NAMED_TIME_SCALES.get(name.base, TIME_SCALES.get(name.unit or ""))
@@ -425,15 +435,33 @@ def rate_column_choices(header: list[str]) -> list[str]:
         more others (names of no record).
     """
     names = [column_name(cell) for cell in header]
-    time = time_column(names)
-    taken = {time, _find(names, TEMPERATURE_NAMES), _find(names, ("position",))}
-    free = [k for k in range(len(names)) if k not in taken]
-    plausible = [k for k in free if not _not_a_rate(names[k])] or free
+    time, plausible = _plausible_rates(names)
     likely = [k for k in plausible if _looks_like_a_rate(names[k])]
     if not likely and (time is None or len(plausible) < 2):
         return []  # names of no record ("hello, world"): nothing to offer
     order = likely + [k for k in plausible if k not in likely]
     return [header[k].strip() for k in order]
+
+
+def _plausible_rates(names: list[ColumnName]) -> tuple[int | None, list[int]]:
+    """A header's time column, and the columns that may hold the rates: not the times,
+    the case temperature or the position, nor what :func:`_not_a_rate` names -- unless
+    nothing else is left, and then never a second clock, a reading's number or a
+    temperature ("time, Time (s), sample" has no rates)."""
+    time = time_column(names)
+    taken = {time, _find(names, TEMPERATURE_NAMES), _find(names, ("position",))}
+    free = [k for k in range(len(names)) if k not in taken]
+    plausible = [k for k in free if not _not_a_rate(names[k])]
+    return time, plausible or [k for k in free if not _a_clock_count_or_temperature(names[k])]
+
+
+def _a_clock_count_or_temperature(name: ColumnName) -> bool:
+    return bool(
+        _names_a_time(name)
+        or COUNTER_NAME.fullmatch(name.base)
+        or TEMPERATURE_WORD.search(name.base)
+        or (name.unit or "").replace(" ", "").lower() in ("°c", "c", "k", "℃")
+    )
 
 
 def _not_a_rate(name: ColumnName) -> bool:

@@ -166,6 +166,7 @@ CHARACTERISATION_FIELDS = {
     "allan.unit_conflict": "characterisation-unit",
     "allan.angle_not_rate": "characterisation-unit",
     "allan.no_value_column": "characterisation-column",
+    "allan.no_rate_column": "characterisation-column",
     "allan.no_such_column": "characterisation-column",
     "allan.choose_column": "characterisation-column",
     "matlab.choose_vector": "characterisation-column",
