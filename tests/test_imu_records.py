@@ -433,7 +433,8 @@ def test_the_one_column_with_a_rates_unit_is_the_rate():
     ],
 )
 def test_the_columns_offered_as_the_gyros_axis(header, offered):
-    from app.core.record_columns import ColumnChoiceNeeded, rate_column_choices
+    from app.core.column_roles import rate_column_choices
+    from app.core.record_columns import ColumnChoiceNeeded
 
     assert rate_column_choices(header.split(",")) == offered
     with pytest.raises(ColumnChoiceNeeded) as raised:

@@ -8,13 +8,13 @@ bridge), "Time (s)" and "Rate (°/h)" (a spreadsheet), "#timestamp [ns]" and
 "Gyr_Z" (Xsens MT Manager, ``//`` comments).  A unit in brackets or parentheses, or as
 the name's suffix ("time_ms", "rate_deg_h"), is read.  A time column that names no unit
 and whose numbers are too large for seconds is read as milliseconds, microseconds or
-nanoseconds since 1970 (:func:`epoch_scale`).  The records themselves:
-:mod:`app.core.static_record`; one cell's name and unit: :mod:`app.core.column_names`.
+nanoseconds since 1970 (:func:`epoch_scale`).  What each column is by its name:
+:mod:`app.core.column_roles`; the records themselves: :mod:`app.core.static_record`; one
+cell's name and unit: :mod:`app.core.column_names`.
 """
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -26,46 +26,26 @@ from app.core.column_names import (
     ColumnName,
     angle_output,
     column_name,
-    rate_unit,
     readable_rate_unit,
+)
+from app.core.column_roles import (
+    COUNTER_NAME,
+    NAMED_TIME_SCALES,
+    TEMPERATURE_NAMES,
+    TIME_SCALES,
+    VALUE_NAMES,
+    find_named,
+    not_a_rate,
+    only_rate_column,
+    plausible_rates,
+    rate_column_choices,
+    time_column,
 )
 from app.core.exceptions import UserError
 from app.core.long_headers import is_value_name, long_columns
 from app.core.table_headers import column_name as position_column_name
 from app.core.table_headers import numbered_columns
 from app.core.units import RAD_PER_SECOND
-
-VALUE_NAMES = ("value", "rate", "omega", "reading", "角速度", "角速率")
-TIME_NAMES = ("time", "t", "timestamp", "datetime", "date_time", "sampletimefine", "时间")
-TEMPERATURE_NAMES = ("temperature", "temperature_c", "temp", "temp_c", "温度")
-TIME_SCALES = {"s": 1.0, "sec": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "μs": 1e-6, "ns": 1e-9}
-NAMED_TIME_SCALES = {"sampletimefine": 1e-4}  # Xsens: ticks of 100 µs
-# a time column named otherwise: "Elapsed Time (s)", Sensor Logger's "seconds_elapsed",
-# "Time since start (ms)", German "Zeit (s)", 历时
-TIME_WORDS = re.compile(
-    r"(?:^|[^a-z])(?:time|elapsed|zeit|tiempo)(?:$|[^a-z])|时间|时刻|历时", re.IGNORECASE
-)
-# columns an IMU's record holds beside its rates: counters, stamps, frame names,
-# accelerations, magnetic fields, orientations (EuRoC's a_RS_S_x, ROS's
-# field.linear_acceleration.x and field.header.seq, Xsens's PacketCounter and Acc_X, a
-# STIM's status word, latency and CRC, phyphox's "Absolute" -- the rate vector's length)
-NOT_RATE_NAME = re.compile(
-    r"seq|count|packet|stamp|frame|status|index|acc(?!um)|(?:^|[^a-z])a_|mag|(?:^|[^a-z])m_"
-    r"|quat|orient|covariance|pressure|baro|gps|temp|温度|latency|crc|checksum|valid|flag"
-    r"|absolute|magnitude|(?:^|[^a-z])norm(?:$|[^a-z])",  # phyphox's "Absolute": |ω|, no axis
-    re.IGNORECASE,
-)
-TEMPERATURE_WORD = re.compile(r"temp|温度", re.IGNORECASE)
-# a column that numbers the readings (not their times): "index", "Sample #", 序号, 采样点
-COUNTER_NAME = re.compile(
-    r"index|idx|no\.?|n|num|number|#|sample(?:s| no\.?| number| #)?|count(?:er)?|seq"
-    r"|序号|点数|采样点|点号|编号|样点|计数|数据点|采样序号",
-    re.IGNORECASE,
-)
-NOT_RATE_UNITS = {"m/s^2", "ms^-2", "m/s2", "m/s²", "g", "mg", "gauss", "ut", "µt", "μt", "nt"}
-RATE_NAME = re.compile(
-    r"gyr|omega|angular|rate|(?:^|[^a-z])w_|^w[xyz]$|^g[xyz]$|角速", re.IGNORECASE
-)
 
 
 class ColumnChoiceNeeded(UserError):
@@ -130,42 +110,6 @@ def chosen_column(column: str, names: list[ColumnName], written: list[str] | Non
     )
 
 
-def _find(names: list[ColumnName], options: tuple[str, ...]) -> int | None:
-    return next(
-        (k for option in options for k, name in enumerate(names) if name.base == option), None
-    )
-
-
-def _names_a_time(name: ColumnName) -> bool:
-    """Whether a column's name says it holds times: one of :data:`TIME_NAMES`, a time's unit
-    ("Zeit (s)", "elapsed_ms"), or a time's word beside no rate's unit ("seconds_elapsed")."""
-    return (
-        name.base in TIME_NAMES
-        or (name.unit or "") in TIME_SCALES
-        or bool(TIME_WORDS.search(name.base) and not rate_unit(name.unit))
-    )
-
-
-def time_column(names: list[ColumnName]) -> int | None:
-    """The column of a record's times: the first named as :data:`TIME_NAMES` lists, else the
-    first whose name says times (:func:`_names_a_time`), else none.
-
-    Parameters
-    ----------
-    names : list of ColumnName
-        The header's columns.
-
-    Returns
-    -------
-    int or None
-        The time column's index from 0.
-    """
-    exact = _find(names, TIME_NAMES)
-    if exact is not None:
-        return exact
-    return next((k for k, name in enumerate(names) if _names_a_time(name)), None)
-
-
 def names_a_records_times(header: list[str]) -> bool:
     """Whether a header names a time column among two or more and no position ("Time (ms),
     X_GYRO (deg/s), …", "time,gx,gy,gz", phyphox's and Sensor Logger's): the header of one
@@ -192,15 +136,6 @@ def names_a_records_times(header: list[str]) -> bool:
     if any(position_column_name(cell).startswith("position_") for cell in cells):
         return False
     return time_column([column_name(cell) for cell in cells]) is not None
-
-
-def _only_rate_column(names: list[ColumnName], others: tuple[int | None, ...]) -> int | None:
-    found = [
-        k
-        for k, name in enumerate(names)
-        if k not in others and (rate_unit(name.unit) or angle_output(name))
-    ]
-    return found[0] if len(found) == 1 else None
 
 
 def header_layout(header: list[str], column: str | None = None, *, guess: bool = True) -> Layout:
@@ -232,7 +167,7 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
     """
     names = [column_name(cell) for cell in header]
     time = time_column(names)
-    temperature = _find(names, TEMPERATURE_NAMES)
+    temperature = find_named(names, TEMPERATURE_NAMES)
     if column is not None:
         value = chosen_column(column, names, [cell.strip() for cell in header])
         position = None
@@ -242,18 +177,18 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
         wide = [k for k, name in enumerate(names) if name.full.startswith("position_")]
         if len(wide) > 1:  # the wide layout: one column per position
             raise UserError("allan.one_position", count=len(wide))
-        value = _find(names, VALUE_NAMES)
+        value = find_named(names, VALUE_NAMES)
         if value is None and wide:
             value = wide[0]
         if value is None:  # the one column whose header names a rate's or an angle's unit
-            value = _only_rate_column(names, (time, temperature))
+            value = only_rate_column(names, (time, temperature))
         if value is None:  # a gyro's output as students and loggers name it: 陀螺输出, output
             value = next((k for k, name in enumerate(names) if is_value_name(name.base)), None)
-        position = _find(names, ("position",))
+        position = find_named(names, ("position",))
         alone = time is not None and position is None  # times beside no position column
         if value is None and alone:  # "time, x": the one column beside the times
-            rates = _plausible_rates(names)[1]
-            value = rates[0] if len(rates) == 1 and not _not_a_rate(names[rates[0]]) else None
+            rates = plausible_rates(names)[1]
+            value = rates[0] if len(rates) == 1 and not not_a_rate(names[rates[0]]) else None
         if value is None:
             if (
                 guess and len(names) <= 3 and time is None
@@ -412,73 +347,3 @@ def _without_times(rows: list[list[str]], layout: Layout) -> Layout:
     width = len(rows[0])
     varying = [k for k in range(width) if len({row[k] for row in rows}) > 1]
     return Layout(varying[0]) if len(varying) == 1 else layout
-
-
-def rate_column_choices(header: list[str]) -> list[str]:
-    """The columns of a header that may hold the rates, the likeliest first: not the times,
-    the case temperature or the position; not a counter, a second clock, a stamp, an
-    acceleration or a magnetic field (:data:`NOT_RATE_NAME`, :data:`COUNTER_NAME`,
-    :data:`NOT_RATE_UNITS`, :data:`TIME_WORDS`) unless nothing else is left; first those
-    whose unit is a rate's or an angle's or whose name says rate ("w_RS_S_z", "Gyr_Z",
-    "field.angular_velocity.z", "gz").
-
-    Parameters
-    ----------
-    header : list of str
-        The header's cells.
-
-    Returns
-    -------
-    list of str
-        The cells as written (stripped), each a valid ``column`` for :func:`header_layout`;
-        none where no column's name says rate and there is no time column beside two or
-        more others (names of no record).
-    """
-    names = [column_name(cell) for cell in header]
-    time, plausible = _plausible_rates(names)
-    likely = [k for k in plausible if _looks_like_a_rate(names[k])]
-    if not likely and (time is None or len(plausible) < 2):
-        return []  # names of no record ("hello, world"): nothing to offer
-    order = likely + [k for k in plausible if k not in likely]
-    return [header[k].strip() for k in order]
-
-
-def _plausible_rates(names: list[ColumnName]) -> tuple[int | None, list[int]]:
-    """A header's time column, and the columns that may hold the rates: not the times,
-    the case temperature or the position, nor what :func:`_not_a_rate` names -- unless
-    nothing else is left, and then never a second clock, a reading's number or a
-    temperature ("time, Time (s), sample" has no rates)."""
-    time = time_column(names)
-    taken = {time, _find(names, TEMPERATURE_NAMES), _find(names, ("position",))}
-    free = [k for k in range(len(names)) if k not in taken]
-    plausible = [k for k in free if not _not_a_rate(names[k])]
-    return time, plausible or [k for k in free if not _a_clock_count_or_temperature(names[k])]
-
-
-def _a_clock_count_or_temperature(name: ColumnName) -> bool:
-    return bool(
-        _names_a_time(name)
-        or COUNTER_NAME.fullmatch(name.base)
-        or TEMPERATURE_WORD.search(name.base)
-        or (name.unit or "").replace(" ", "").lower() in ("°c", "c", "k", "℃")
-    )
-
-
-def _not_a_rate(name: ColumnName) -> bool:
-    """A counter, a second clock ("seconds_elapsed" beside "time"), a stamp, an
-    acceleration, a magnetic field …: no column of rates."""
-    unit = (name.unit or "").replace(" ", "")
-    return (
-        bool(NOT_RATE_NAME.search(name.base) or COUNTER_NAME.fullmatch(name.base))
-        or unit in NOT_RATE_UNITS
-        or _names_a_time(name)
-    )
-
-
-def _looks_like_a_rate(name: ColumnName) -> bool:
-    return bool(
-        rate_unit(name.unit)
-        or angle_output(name)
-        or ROS_ANGULAR_VELOCITY.fullmatch(name.base)
-        or RATE_NAME.search(name.base)
-    )
