@@ -457,7 +457,7 @@ def test_the_handouts_header_commented_out_heads_a_table_not_a_record(header):
     IMU's axes: read as the handout's table (it was a record whose columns were offered as
     axes on the lab page, and refused by ``gyrolab solve``)."""
     from app.core.readings import parse_readings_csv
-    from app.core.static_record import written_as_a_record
+    from app.core.record_kinds import written_as_a_record
     from tests.factories import DATA
 
     rows = (DATA / "handout_horizontal.csv").read_text().splitlines()[1:]

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from app.core.monitor_stamps import is_stamped_capture, unstamped_lines
-from app.core.static_record import read_static_record, written_as_a_record
+from app.core.record_kinds import written_as_a_record
+from app.core.static_record import read_static_record
 from app.core.text_files import text_lines
 from tests.noise_sources import static_record
 from tests.test_sentence_records import capture

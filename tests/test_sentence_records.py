@@ -13,8 +13,9 @@ from functools import reduce
 import numpy as np
 import pytest
 
+from app.core.record_kinds import written_as_a_record
 from app.core.sentence_records import checksum_holds, is_sentence_record
-from app.core.static_record import read_static_record, written_as_a_record
+from app.core.static_record import read_static_record
 from app.core.text_files import text_lines
 from tests.noise_sources import static_record
 

@@ -708,7 +708,7 @@ def test_a_long_tables_angles_round_the_other_way_are_used_as_given_and_said(
     ],
 )
 def test_a_time_column_beside_numbered_or_named_positions_heads_a_table(header, record):
-    from app.core.static_record import written_as_a_record
+    from app.core.record_kinds import written_as_a_record
 
     rows = "".join(f"{0.1 * k:.1f},10.7,2.8,-9.1,-0.9\n" for k in range(5))
     assert written_as_a_record(f"{header}\n{rows}") is record
@@ -744,7 +744,7 @@ def test_the_handouts_omega_names_each_positions_column_beside_a_time():
     """ "时间 | ω1 | ω2 | ω3 | ω4": the handout writes ω1 … ω4 for the positions' means, and
     students head their columns so. Beside a time column the header was taken for an
     IMU's record of four axes (before that, the times were position 1)."""
-    from app.core.static_record import written_as_a_record
+    from app.core.record_kinds import written_as_a_record
 
     columns = list(handout("handout_horizontal.csv").values())
     text = "时间(s),ω1,ω2,ω3,ω4\n" + "".join(

@@ -26,8 +26,8 @@ from app.core.presets import PRESETS
 from app.core.readings import parse_readings_csv
 from app.core.readings_data import Readings
 from app.core.record_checks import WARM_UP_LIMIT_C
+from app.core.record_kinds import written_as_a_record
 from app.core.solve import solve_heading, solve_latitude
-from app.core.static_record import written_as_a_record
 from app.core.text_files import decode_text
 from app.core.units import (
     DEG_PER_HOUR,

@@ -14,53 +14,38 @@ with fewer cells than the readings (cut off when the logger stopped, or a closin
 left out, with a note; ``#``, ``%`` and ``//`` comment lines, the last one before the
 readings read as the header where it names their columns -- EuRoC, Kalibr and ROS write
 it so (:mod:`app.core.record_preamble`); which column is which:
-:mod:`app.core.record_columns`; what a name says of units: :mod:`app.core.column_names`),
-parsed in blocks of lines (:mod:`app.core.record_blocks`), so a 10⁷-sample record never
-exists as one string.
+:mod:`app.core.record_columns`; what a name says of units: :mod:`app.core.column_names`;
+how its lines split: :mod:`app.core.record_lines`), parsed in blocks of lines
+(:mod:`app.core.record_blocks`), so a 10⁷-sample record never exists as one string.  Whether
+a file can only be a record, never a table of positions: :mod:`app.core.record_kinds`.
 
 Preparing the record for the analysis: :mod:`app.core.record_preparation`.
 """
 
 from __future__ import annotations
 
-import csv
-import io
 import itertools
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.core.clock_stamps import (
-    DATE_TIME,
-    TIME_OF_DAY,
-    TimeColumn,
-    seconds_from_first,
-)
+from app.core.clock_stamps import TimeColumn, seconds_from_first
 from app.core.column_names import AngleOutput, comment_text
 from app.core.exceptions import UserError
 from app.core.labview_lvm import LabviewHeaders, is_labview_measurement, labview_lines
 from app.core.monitor_stamps import is_stamped_capture, unstamped_lines
 from app.core.record_blocks import Progress, RecordBlocks
-from app.core.record_columns import Layout, names_a_records_times
-from app.core.record_preamble import (
-    Preamble,
-    describes_the_record,
-    header_in_comment,
-    holds_a_number,
-    is_header,
-    stated_rate_hz,
+from app.core.record_columns import Layout
+from app.core.record_lines import (
+    LOOK_AHEAD_LINES,
+    joined_decimal_comma,
+    line_splitter,
+    one_column_with_decimal_commas,
 )
+from app.core.record_preamble import Preamble, describes_the_record, stated_rate_hz
 from app.core.sentence_records import Sentences, is_sentence_record, sentence_lines
-from app.core.spreadsheet_text import (
-    WHOLE_COMMA_DIGITS,
-    decimal_point,
-    one_column_of_decimal_commas,
-    separator_hint,
-)
-from app.core.table_headers import column_name
-from app.core.text_files import first_texts
-from app.core.typed_numbers import is_number
+from app.core.spreadsheet_text import separator_hint
 
 # notes on lines of the file that were not read, which every reader of a record says
 LEFT_OUT = frozenset(
@@ -76,7 +61,6 @@ LEFT_OUT = frozenset(
         "allan.note_monitor_stamps",
     }
 )
-LOOK_AHEAD_LINES = 1_000  # lines read before the layout is decided (decimal commas or not)
 
 
 @dataclass
@@ -163,7 +147,7 @@ def read_static_record(
         first = list(itertools.islice(lines, LOOK_AHEAD_LINES))
         # the fields' names, as a header in a comment above the first reading would be
         preamble.comment, preamble.comment_line = sentences.header, 0
-    split = _joined_decimal_comma if _one_column_with_decimal_commas(first) else None
+    split = joined_decimal_comma if one_column_with_decimal_commas(first) else None
     for raw in itertools.chain(first, lines):
         line_number += 1
         text = raw.strip().lstrip("\ufeff")
@@ -178,9 +162,9 @@ def read_static_record(
             continue
         if split is None:
             if (hint := separator_hint(raw.rstrip("\r\n"))) is not None:  # Excel's "sep=;"
-                split = _splitter(hint)
+                split = line_splitter(hint)
                 continue
-            split = _splitter(text)
+            split = line_splitter(text)
         cells = split(text)
         if preamble.takes_units(cells):
             continue  # "s, °/h, °C" under the names
@@ -265,157 +249,6 @@ def read_static_record(
     if finite and not np.all(np.isfinite(record.values)):
         raise UserError("readings.not_finite")
     return record
-
-
-def written_as_a_record(text: str) -> bool:
-    """Whether a file can only be one record, never a table of positions: its header is
-    the comment line above its readings (:func:`names_its_columns_in_a_comment`) or a
-    first line naming its times (:func:`names_its_times_in_its_header`), it is
-    LabVIEW's measurement file (:mod:`app.core.labview_lvm`), an instrument's captured
-    sentences (:mod:`app.core.sentence_records`), or a serial monitor's stamped capture
-    (:mod:`app.core.monitor_stamps`).
-
-    Parameters
-    ----------
-    text : str
-        The file's text (its first lines are enough).
-
-    Returns
-    -------
-    bool
-        True for any of them.
-    """
-    return (
-        is_labview_measurement(text[:200])
-        or names_its_columns_in_a_comment(text)
-        or names_its_times_in_its_header(text)
-        or is_sentence_record(io.StringIO(text))
-        or is_stamped_capture(io.StringIO(text))
-    )
-
-
-def names_its_columns_in_a_comment(text: str) -> bool:
-    """Whether a file's header is the comment line just above its readings, as EuRoC,
-    Kalibr and ROS write it ("#timestamp [ns],w_RS_S_x [rad s^-1],…"): a record, whose
-    columns are named -- not a table of positions whose comments are passed over.
-
-    Parameters
-    ----------
-    text : str
-        The file's text (its first lines are enough).
-
-    Returns
-    -------
-    bool
-        True where the last comment line before the first reading names as many columns
-        as that reading has, two of them not positions' ("位置1", "P2": the handout's
-        table, its header commented out).
-    """
-    comment = None
-    for line in itertools.islice(io.StringIO(text), LOOK_AHEAD_LINES):
-        stripped = line.strip().lstrip("\ufeff")
-        if not stripped:
-            continue
-        if (remark := comment_text(stripped)) is not None:
-            comment = remark
-            continue
-        split = _splitter(stripped)
-        cells = split(stripped)
-        names = header_in_comment(comment, split, len(cells))
-        if not holds_a_number(cells) or names is None:
-            return False
-        # "#position_1,position_2,…" heads the handout's table, commented out: positions
-        return sum(column_name(name).startswith("position_") for name in names) < 2
-    return False
-
-
-def names_its_times_in_its_header(text: str) -> bool:
-    """Whether a file's first line is a header naming a time column above readings of as
-    many columns ("Time (ms),X_GYRO (deg/s),…", "time,gx,gy,gz", phyphox's and Sensor
-    Logger's exports): one position's record -- a table of positions names its positions,
-    never a time beside them (:func:`app.core.record_columns.names_a_records_times`).
-
-    Parameters
-    ----------
-    text : str
-        The file's text (its first lines are enough).
-
-    Returns
-    -------
-    bool
-        True where the first line names a time column and the second holds a number in
-        each of as many cells.
-    """
-    lines = first_texts(itertools.islice(io.StringIO(text), LOOK_AHEAD_LINES), 2)
-    if len(lines) < 2 or comment_text(lines[0]) is not None:
-        return False
-    split = _splitter(lines[0])
-    header, first = split(lines[0]), split(lines[1])
-    return (
-        len(header) == len(first)
-        and all(is_number(cell) for cell in first)
-        and names_a_records_times(header)
-    )
-
-
-def _quoted_split(text: str, delimiter: str) -> list[str]:
-    """A line's cells between ``delimiter``s, a quoted cell unquoted (phyphox quotes its
-    header's names whatever the separator, LibreOffice every text cell where asked); after
-    semicolons, a spreadsheet's empty last column dropped."""
-    text = text.rstrip(delimiter) if delimiter != "\t" else text
-    if '"' not in text:
-        return text.split(delimiter)
-    return next(csv.reader([text], delimiter=delimiter))
-
-
-def _splitter(first: str) -> Callable[[str], list[str]]:
-    """How the record's lines split into cells, decided by its first line: commas (quotes
-    allowed), tabs or semicolons with decimal commas (a spreadsheet's copy, a European
-    spreadsheet), or runs of spaces (the plain text files of instruments and public data
-    sets)."""
-    if "\t" in first:  # a spreadsheet's copy: decimal commas too, as the lab page reads it
-
-        def tabs(text: str) -> list[str]:
-            cells = [c.strip() for c in _quoted_split(text, "\t")]
-            return [decimal_point(c) for c in cells] if "," in text else cells
-
-        return tabs
-    if ";" in first:
-        return lambda text: [c.strip().replace(",", ".") for c in _quoted_split(text, ";")]
-    if "," in first:
-
-        def commas(text: str) -> list[str]:  # a spreadsheet's empty last column dropped
-            if '"' in text:  # quoted: a cell holding a comma holds a decimal comma
-                return [decimal_point(c.strip()) for c in next(csv.reader([text.rstrip(",")]))]
-            return [c.strip() for c in text.rstrip(",").split(",")]
-
-        return commas
-    words = first.split()
-    if len(words) > 2 and DATE_TIME.fullmatch(words[0]) and TIME_OF_DAY.fullmatch(words[1]):
-
-        def stamped(text: str) -> list[str]:  # "2026-11-28 10:00:00.123  10.74"
-            cells = text.split()
-            return [f"{cells[0]} {cells[1]}", *cells[2:]] if len(cells) > 1 else cells
-
-        return stamped
-    return lambda text: text.split()
-
-
-def _one_column_with_decimal_commas(first_lines: list[str]) -> bool:
-    """Whether a comma-separated record is one column of numbers with decimal commas, by
-    its first lines (:func:`app.core.readings.one_column_of_decimal_commas`)."""
-    texts = [line.strip().lstrip("\ufeff") for line in first_lines]
-    texts = [text for text in texts if text and comment_text(text) is None]
-    if not texts or "\t" in texts[0] or ";" in texts[0]:
-        return False
-    named = not WHOLE_COMMA_DIGITS.fullmatch(texts[0]) and is_header(texts[0].split(","))
-    header = texts[0].split(",") if named else None
-    return one_column_of_decimal_commas(header, texts[1:] if named else texts)
-
-
-def _joined_decimal_comma(text: str) -> list[str]:
-    """One cell: the line's decimal comma read as a point ("0,0123" → "0.0123")."""
-    return [text.replace(",", ".")]
 
 
 def _shortened(text: str, length: int = 40) -> str:

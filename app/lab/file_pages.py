@@ -19,7 +19,7 @@ from app.core.position_records import (
 )
 from app.core.readings import parse_readings_csv
 from app.core.readings_data import Readings
-from app.core.static_record import written_as_a_record
+from app.core.record_kinds import written_as_a_record
 from app.core.table_headers import angle_list, turned_other_way
 from app.core.units import canonical_unit, check_named_unit, to_deg_per_hour
 from app.core.workbook_text import workbook_readings
