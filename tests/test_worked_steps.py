@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import re
+from decimal import ROUND_HALF_UP, Decimal, localcontext
 
 import numpy as np
 import pytest
@@ -291,6 +292,100 @@ def test_when_one_sigma_differs_from_s_over_root_n_every_sigma_is_shown():
         assert f"σ{i} = {sigma:.3f}" in line, line
 
 
+def _as_written(worked: Decimal, written: str) -> str:
+    """A number worked by hand, rounded as a student rounds (a half away from zero) to the
+    decimals ``written`` has."""
+    decimals = len(written.split(".")[1]) if "." in written else 0
+    return str(worked.quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_HALF_UP))
+
+
+def _fog_readings(rng, angles, amplitude, phase_deg, bias) -> list[np.ndarray]:
+    """Ten readings per position written to three decimals, as a FOG's logger writes them:
+    their means have four, which the steps write to three where that is enough."""
+    return [
+        np.round(bias + amplitude * np.cos(np.radians(a - phase_deg)) + rng.normal(0, 0.1, 10), 3)
+        for a in angles
+    ]
+
+
+NUMBER = r"\(?(-?[\d.]+)\)?"
+
+
+def test_each_heading_line_worked_by_hand_from_the_means_gives_its_own_result():
+    """From the means as step 1 writes them, by hand: tan θ, θ = arctan(tan θ), x, y and
+    H = √(x² + y²).  With readings of three decimals, the means written to three gave another
+    x or y in the last digit in 97 % of sessions, another tan θ in 56 % and another θ in 8 %.
+    The steps now write the means (and x, y, H, tan θ) to as many decimals as it takes."""
+    rng = np.random.default_rng(11)
+    for _ in range(150):
+        positions = _fog_readings(
+            rng, ANGLES, rng.uniform(4, 12), rng.uniform(0, 360), rng.uniform(-2, 2)
+        )
+        text = render_text(explain_heading(solve_heading(positions, ANGLES)), translator("en"))
+        w = [Decimal(v) for v in re.findall(r"ω\d = (-?[\d.]+) °/h", text)[:4]]
+        tan = re.search(rf"tan θ = .*? = \({NUMBER} − {NUMBER}\) / \({NUMBER} − {NUMBER}\) "
+                        r"= (-?[\d.]+)", text)  # fmt: skip
+        top, bottom = Decimal(tan[1]) - Decimal(tan[2]), Decimal(tan[3]) - Decimal(tan[4])
+        assert [Decimal(tan[k]) for k in (3, 4)] == [w[0], w[2]], text  # the means of step 1
+        assert _as_written(top / bottom, tan[5]) == tan[5], text
+        theta = re.search(r"θ = arctan\((-?[\d.]+)\) = (-?[\d.]+)°", text)
+        assert f"{math.degrees(math.atan(float(theta[1]))):.2f}" == theta[2], text
+        xy = re.search(r"x = \(ω1 − ω3\)/2 = (-?[\d.]+) °/h,\s+y = \(ω(\d) − ω(\d)\)/2 = "
+                       r"(-?[\d.]+)", text)  # fmt: skip
+        assert _as_written((w[0] - w[2]) / 2, xy[1]) == xy[1], text
+        y = (w[int(xy[2]) - 1] - w[int(xy[3]) - 1]) / 2
+        assert _as_written(y, xy[4]) == xy[4], text
+        size = re.search(r"H = √\(x² \+ y²\) = (-?[\d.]+)", text)[1]
+        with localcontext() as context:
+            context.prec = 40
+            by_hand = (Decimal(xy[1]) ** 2 + Decimal(xy[4]) ** 2).sqrt()
+        assert _as_written(by_hand, size) == size, text
+
+
+def test_each_latitude_line_worked_by_hand_from_the_means_gives_its_own_result():
+    """From the means of step 1 and φ as the lines write it, by hand: tan φ, φ, and Ω three
+    ways.  The lines of Ω took φ to the two decimals "φ = 40.73°" shows and gave another Ω
+    in most sessions (the handout's own: 15.131 for 15.133); they now write the φ they use
+    (cos 40.7274°) and the means to as many decimals as it takes."""
+    rng = np.random.default_rng(12)
+    for _ in range(150):
+        phi = rng.uniform(15, 65)
+        positions = _fog_readings(rng, ELEVATIONS, 15.041, phi, rng.uniform(-2, 2))
+        result = solve_latitude(positions, ELEVATIONS, true_latitude_deg=39.93)
+        text = render_text(explain_latitude(result), translator("en"))
+        w = [Decimal(v) for v in re.findall(r"ω\d = (-?[\d.]+) °/h", text)[:4]]
+        ratio = re.search(r"tan φ = .*? = (-?[\d.]+)\n", text)[1]
+        assert _as_written((w[1] - w[3]) / (w[0] - w[2]), ratio) == ratio, text
+        written_phi = re.search(r"\n\s*φ = (-?[\d.]+)°", text)[1]
+        assert f"{math.degrees(math.atan(float(ratio))):.2f}" == written_phi, text
+        for difference, trig, function in (
+            (w[0] - w[2], "cos", math.cos),
+            (w[1] - w[3], "sin", math.sin),
+        ):
+            line = re.search(rf"/\(2 {trig} φ\) = .*? {trig} (-?[\d.]+)°\) = (-?[\d.]+)", text)
+            angle = Decimal(repr(function(math.radians(float(line[1])))))
+            assert _as_written(difference / (2 * angle), line[2]) == line[2], text
+        omega = re.search(r"Ω = √\(\(ω1 − ω3\)² \+ \(ω2 − ω4\)²\)/2 = (-?[\d.]+)", text)[1]
+        with localcontext() as context:
+            context.prec = 40
+            by_hand = ((w[0] - w[2]) ** 2 + (w[1] - w[3]) ** 2).sqrt() / 2
+        assert _as_written(by_hand, omega) == omega, text
+
+
+def test_the_handouts_means_are_written_as_the_handout_writes_them():
+    """Readings of two decimals: their means are exact to three, and the steps keep three."""
+    heading = render_text(
+        explain_heading(solve_heading([HEADING[k] for k in range(1, 5)], ANGLES)),
+        translator("en"),
+    )
+    assert "ω1 = 10.706 °/h" in heading and "x = (ω1 − ω3)/2 = 9.8285 °/h" in heading
+    latitude = render_text(
+        explain_latitude(solve_latitude([VERTICAL[k] for k in range(1, 5)], ELEVATIONS)),
+        translator("en"),
+    )
+    assert "ω1 = 11.133 °/h" in latitude and "(2 cos 40.7274°) = 15.133 °/h" in latitude
+
+
 def test_the_chinese_steps_have_no_english_words_in_their_lines():
     """The lines of mathematics are the same in both languages, so the words among them --
     "(propagated)", "known: 68 % of … within", "°/h per reading" -- were English on the
@@ -335,3 +430,18 @@ def test_the_lab_page_says_a_steps_words_in_its_language(student_client):
     en = student_client.get(page, headers={"Accept-Language": "en"}).text
     assert "σ_φ（线性传播）" in zh and "propagated" not in zh
     assert "σ_φ (propagated)" in en
+
+
+def test_a_hand_rounds_a_half_away_from_zero_and_a_ratio_gets_the_decimals_its_angle_needs():
+    from app.core.worked_decimals import by_hand, hypot_decimals, ratio_decimals
+
+    assert (
+        by_hand(Decimal("0.44645"), 4) == "0.4465" and by_hand(Decimal("-0.44645"), 4) == "-0.4465"
+    )
+    # tan 40.7275° = 0.861044…: written 0.8610, arctan gives 40.727…° → 40.73° (enough)
+    assert ratio_decimals(math.tan(math.radians(40.7275)), 40.7275) == 4
+    # θ = 41.84593° (41.85°): tan θ = 0.895547… written 0.8955 gives 41.8444° → 41.84°
+    theta = 41.84593
+    assert f"{math.degrees(math.atan(0.8955)):.2f}" == "41.84"
+    assert ratio_decimals(math.tan(math.radians(theta)), theta) == 5
+    assert hypot_decimals("3.0000", "4.0000", 5.0) == 3  # 3-4-5: three decimals are exact

@@ -9,10 +9,21 @@ and the reports all show the same worked solution.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from decimal import Decimal, localcontext
 
 import numpy as np
 
 from app.core.solve import HeadingResult, LatitudeResult
+from app.core.worked_decimals import (
+    MEANS_DECIMALS,
+    MOST_DECIMALS,
+    RATIO_DECIMALS,
+    by_hand,
+    hypot_decimals,
+    means_decimals,
+    ratio_decimals,
+)
 from app.core.worked_steps import (
     AMPLITUDE_LEGEND,
     AZIMUTH_LEGEND,
@@ -26,7 +37,8 @@ from app.core.worked_steps import fixed as _f
 from app.core.worked_steps import in_formula as _p
 
 
-def _means_step(fit) -> Step:
+def _means_step(fit, decimals: int = MEANS_DECIMALS) -> Step:
+    """The positions' means, written to ``decimals`` (:mod:`app.core.worked_decimals`)."""
     sigmas = fit.position_sigmas or [None] * len(fit.stats)
     # σi is shown when the model's σ differs from s/√n at any position -- and then at every
     # position, so that one equal to s/√n never reads as a missing number
@@ -36,7 +48,7 @@ def _means_step(fit) -> Step:
     )
     lines = []
     for i, (s, sigma) in enumerate(zip(fit.stats, sigmas, strict=True), start=1):
-        line = f"ω{i} = {_f(s.mean)} °/h   (n = {s.n}"
+        line = f"ω{i} = {_f(s.mean, decimals)} °/h   (n = {s.n}"
         if s.sem is not None:
             line += f", s = {_f(s.std)}, s/√n = {_f(s.sem)}"
         if shows_sigma and sigma is not None:
@@ -123,16 +135,62 @@ def _drift_lines(fit) -> list[str]:
     return [f"+ ḃ·(t − t̄):  ḃ = {_f(fit.drift, 4)}{sigma} °/h²"]
 
 
-def _handout_ratio(means: np.ndarray, turn: int) -> tuple[str, str, float]:
+def _handout_ratio(
+    means: np.ndarray, turn: int, decimals: int = MEANS_DECIMALS
+) -> tuple[str, str, float]:
     """The handout's tan θ from four position means: its formula, the substituted
-    numerator and denominator, and the value (∞ when ω1 = ω3)."""
+    numerator and denominator (the means to ``decimals``), and the value (∞ when
+    ω1 = ω3)."""
     w1, w2, w3, w4 = means
+    d = decimals
     if turn < 0:
-        top, sub_top, numerator = "ω4 − ω2", f"{_p(w4)} − {_p(w2)}", w4 - w2
+        top, sub_top, numerator = "ω4 − ω2", f"{_p(w4, d)} − {_p(w2, d)}", w4 - w2
     else:
-        top, sub_top, numerator = "ω2 − ω4", f"{_p(w2)} − {_p(w4)}", w2 - w4
-    formula = f"tan θ = ({top}) / (ω1 − ω3) = ({sub_top}) / ({_p(w1)} − {_p(w3)})"
+        top, sub_top, numerator = "ω2 − ω4", f"{_p(w2, d)} − {_p(w4, d)}", w2 - w4
+    formula = f"tan θ = ({top}) / (ω1 − ω3) = ({sub_top}) / ({_p(w1, d)} − {_p(w3, d)})"
     return formula, top, numerator / (w1 - w3) if w1 != w3 else math.inf
+
+
+def _ratio_decimals(ratio: float, angle_deg: float) -> int:
+    return ratio_decimals(ratio, angle_deg) if math.isfinite(ratio) else RATIO_DECIMALS
+
+
+def _same_ratio(ratio: float, decimals: int, turn: int) -> Callable[[list[Decimal]], bool]:
+    """Whether means as written give ``ratio`` to ``decimals`` by the handout's formula."""
+
+    def check(written: list[Decimal]) -> bool:
+        if not math.isfinite(ratio):
+            return written[0] == written[2]
+        if written[0] == written[2]:
+            return False
+        by_hand_ratio = _handout_ratio(np.array([float(w) for w in written]), turn)[2]
+        return _f(by_hand_ratio, decimals) == _f(ratio, decimals)
+
+    return check
+
+
+def _heading_decimals(
+    means: np.ndarray, turn: int, ratio: float, ratio_at: int, xy: tuple[float, float] | None
+) -> tuple[int, int]:
+    """The decimals of the means, and of x and y, for which the ratio's line and, where
+    given, the lines x = (ω1 − ω3)/2 and y = ±(ω2 − ω4)/2 work out by hand: x and y to
+    four decimals, or more where a half in the fifth makes four ambiguous."""
+    same_ratio = _same_ratio(ratio, ratio_at, turn)
+    for xy_at in range(4, MOST_DECIMALS + 1):
+
+        def check(written: list[Decimal], xy_at: int = xy_at) -> bool:
+            if not same_ratio(written) or xy is None:
+                return xy is None and same_ratio(written)
+            w1, w2, w3, w4 = written
+            x, y = (w1 - w3) / 2, ((w2 - w4) if turn < 0 else (w4 - w2)) / 2
+            return by_hand(x, xy_at) == _f(xy[0], xy_at) and by_hand(y, xy_at) == _f(xy[1], xy_at)
+
+        decimals = means_decimals(means, check)
+        if decimals is not None:
+            return decimals, xy_at
+        if xy is None:
+            break
+    return MEANS_DECIMALS, 4
 
 
 def _equal_counts(stats) -> bool:
@@ -167,20 +225,30 @@ def explain_heading(result: HeadingResult) -> list[Step]:
     The handout, part A; lab-reference §3.
     """
     fit = result.fit
-    steps = [_means_step(fit)]
     w = fit.means
     turn = _four_apart(fit.angles_deg)
     # What the result uses: x and y of position 1 from the fit (lab-reference §3).
     x_used = result.amplitude_deg_h * math.cos(math.radians(result.azimuth_deg))
     y_used = result.amplitude_deg_h * math.sin(math.radians(result.azimuth_deg))
-    if turn and _equal_counts(fit.stats):
-        formula, _, ratio = _handout_ratio(w, turn)
+    closed_form = bool(turn) and _equal_counts(fit.stats)
+    # the means and the ratio to as many decimals as make the lines work out by hand
+    ratio = _handout_ratio(w, turn)[2] if turn and w[0] != w[2] else math.inf
+    theta = result.theta_deg if closed_form else math.degrees(math.atan(ratio))
+    ratio_at = _ratio_decimals(ratio, theta)
+    decimals, xy_at = (
+        _heading_decimals(w, turn, ratio, ratio_at, (x_used, y_used) if closed_form else None)
+        if turn
+        else (MEANS_DECIMALS, 4)
+    )
+    steps = [_means_step(fit, decimals)]
+    if closed_form:
+        formula, _, ratio = _handout_ratio(w, turn, decimals)
         steps.append(
             Step(
                 Words("steps.handout_theta"),
                 (
-                    f"{formula} = {_f(ratio, 4)}",
-                    f"θ = arctan({_f(ratio, 4)}) = {_f(result.theta_deg, 2)}°",
+                    f"{formula} = {_f(ratio, ratio_at)}",
+                    f"θ = arctan({_f(ratio, ratio_at)}) = {_f(result.theta_deg, 2)}°",
                 ),
             )
         )
@@ -189,7 +257,8 @@ def explain_heading(result: HeadingResult) -> list[Step]:
             Step(
                 Words("steps.full_circle_azimuth"),
                 (
-                    f"x = (ω1 − ω3)/2 = {_f(x_used, 4)} °/h,   y = {y_text} = {_f(y_used, 4)} °/h",
+                    f"x = (ω1 − ω3)/2 = {_f(x_used, xy_at)} °/h,   "
+                    f"y = {y_text} = {_f(y_used, xy_at)} °/h",
                     f"A1 = atan2(y, x) = {_f(result.azimuth_deg, 2)}°",
                 ),
                 legend=AZIMUTH_LEGEND,
@@ -213,14 +282,14 @@ def explain_heading(result: HeadingResult) -> list[Step]:
             lines.append(f"θ = {_f(result.theta_deg, 2)}°")
         steps.append(Step(WEIGHTED_TITLE if turn else _FIT_TITLE, tuple(lines), legend=FIT_LEGEND))
         if turn and w[0] != w[2]:
-            formula, _, ratio = _handout_ratio(w, turn)
+            formula, _, ratio = _handout_ratio(w, turn, decimals)
             closed = math.degrees(math.atan(ratio))
             steps.append(
                 Step(
                     UNWEIGHTED_TITLE,
                     (
-                        f"{formula} = {_f(ratio, 4)}",
-                        f"θ = arctan({_f(ratio, 4)}) = {_f(closed, 2)}°",
+                        f"{formula} = {_f(ratio, ratio_at)}",
+                        f"θ = arctan({_f(ratio, ratio_at)}) = {_f(closed, 2)}°",
                     ),
                     Words(
                         "steps.handout_weights",
@@ -237,7 +306,8 @@ def explain_heading(result: HeadingResult) -> list[Step]:
             Words(f"steps.turn_{turn_words}_{result.then_axis_points}", {"rotate": rotate}),
         )
     )
-    lines = [f"H = √(x² + y²) = {_f(result.amplitude_deg_h)} °/h,   b = {_f(fit.b)} °/h"]
+    h_at = hypot_decimals(_f(x_used, xy_at), _f(y_used, xy_at), result.amplitude_deg_h)
+    lines = [f"H = √(x² + y²) = {_f(result.amplitude_deg_h, h_at)} °/h,   b = {_f(fit.b)} °/h"]
     if result.closure_residual_deg_h is not None:
         closure = f"d = (ω1 + ω3 − ω2 − ω4)/2 = {_f(result.closure_residual_deg_h)} °/h"
         if fit.closure_sigma is not None and fit.uncertainty_model != "closure":
@@ -274,36 +344,87 @@ def explain_heading(result: HeadingResult) -> list[Step]:
 
 def _latitude_closed_form(
     means: np.ndarray, phi_used: float | None, omega_used: float | None
-) -> list[Step]:
+) -> tuple[list[Step], int]:
     """The handout's latitude and Earth rate from four means at e = 0°, 90°, 180°, 270°.
 
     ``phi_used``/``omega_used`` are the reported values (equal to the closed form when
-    every position has the same number of readings); None computes them from the means."""
+    every position has the same number of readings); None computes them from the means.
+    The means, the ratio and φ in the lines of Ω are written to as many decimals as make
+    each line work out by hand (:mod:`app.core.worked_decimals`): the steps, and the
+    decimals of the means."""
     w1, w2, w3, w4 = means
     phi = phi_used if phi_used is not None else math.degrees(math.atan2(w2 - w4, w1 - w3))
     omega = omega_used if omega_used is not None else math.hypot(w1 - w3, w2 - w4) / 2
-    ratio = _f((w2 - w4) / (w1 - w3), 4) if w1 != w3 else "∞"
+    cos_phi, sin_phi = math.cos(math.radians(phi)), math.sin(math.radians(phi))
+    by_cos = (w1 - w3) / (2 * cos_phi) if abs(cos_phi) > 1e-9 else None
+    by_sin = (w2 - w4) / (2 * sin_phi) if abs(sin_phi) > 1e-9 else None
+    ratio = (w2 - w4) / (w1 - w3) if w1 != w3 else math.inf
+    ratio_at = ratio_decimals(ratio, phi) if math.isfinite(ratio) and w1 > w3 else RATIO_DECIMALS
+    decimals, phi_at = _latitude_decimals(means, ratio, ratio_at, omega, phi, by_cos, by_sin)
+    d = decimals
+    differences = {
+        "cos": f"({_p(w1, d)} − {_p(w3, d)}) / (2 cos {_f(phi, phi_at)}°)",
+        "sin": f"({_p(w2, d)} − {_p(w4, d)}) / (2 sin {_f(phi, phi_at)}°)",
+    }
     lines = []
-    if abs(math.cos(math.radians(phi))) > 1e-9:
-        lines.append(
-            f"Ω = (ω1 − ω3)/(2 cos φ) = {_f((w1 - w3) / (2 * math.cos(math.radians(phi))))} °/h"
-        )
-    if abs(math.sin(math.radians(phi))) > 1e-9:
-        lines.append(
-            f"Ω = (ω2 − ω4)/(2 sin φ) = {_f((w2 - w4) / (2 * math.sin(math.radians(phi))))} °/h"
-        )
+    if by_cos is not None:
+        lines.append(f"Ω = (ω1 − ω3)/(2 cos φ) = {differences['cos']} = {_f(by_cos)} °/h")
+    if by_sin is not None:
+        lines.append(f"Ω = (ω2 − ω4)/(2 sin φ) = {differences['sin']} = {_f(by_sin)} °/h")
     lines.append(f"Ω = √((ω1 − ω3)² + (ω2 − ω4)²)/2 = {_f(omega)} °/h")
     return [
         Step(
             Words("steps.latitude"),
             (
-                f"tan φ = (ω2 − ω4)/(ω1 − ω3) = ({_p(w2)} − {_p(w4)}) / "
-                f"({_p(w1)} − {_p(w3)}) = {ratio}",
+                f"tan φ = (ω2 − ω4)/(ω1 − ω3) = ({_p(w2, d)} − {_p(w4, d)}) / "
+                f"({_p(w1, d)} − {_p(w3, d)}) = "
+                + (_f(ratio, ratio_at) if math.isfinite(ratio) else "∞"),
                 f"φ = {_f(phi, 2)}°",
             ),
         ),
         Step(Words("steps.earth_rate"), tuple(lines)),
-    ]
+    ], decimals
+
+
+def _latitude_decimals(
+    means: np.ndarray,
+    ratio: float,
+    ratio_at: int,
+    omega: float,
+    phi: float,
+    by_cos: float | None,
+    by_sin: float | None,
+) -> tuple[int, int]:
+    """The decimals of the means, and of φ in the lines of Ω, for which tan φ, the three
+    lines of Ω (to three decimals) work out by hand."""
+    omega_written = _f(omega)
+    for phi_at in range(2, MOST_DECIMALS + 1):
+        phi_written = math.radians(float(_f(phi, phi_at)))
+
+        def check(written: list[Decimal], phi_written: float = phi_written) -> bool:
+            w1, w2, w3, w4 = written
+            if math.isfinite(ratio) and (
+                w1 == w3 or _f(float((w2 - w4) / (w1 - w3)), ratio_at) != _f(ratio, ratio_at)
+            ):
+                return False
+            with localcontext() as context:
+                context.prec = 40
+                if by_hand(((w1 - w3) ** 2 + (w2 - w4) ** 2).sqrt() / 2, 3) != omega_written:
+                    return False
+                for value, difference, trig in (
+                    (by_cos, w1 - w3, math.cos(phi_written)),
+                    (by_sin, w2 - w4, math.sin(phi_written)),
+                ):
+                    if value is None:
+                        continue
+                    if by_hand(difference / (2 * Decimal(trig)), 3) != _f(value):
+                        return False
+            return True
+
+        decimals = means_decimals(means, check)
+        if decimals is not None:
+            return decimals, phi_at
+    return MEANS_DECIMALS, 2
 
 
 def explain_latitude(result: LatitudeResult) -> list[Step]:
@@ -324,13 +445,15 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
     The handout, part B; lab-reference §3.
     """
     fit = result.fit
-    steps = [_means_step(fit)]
+    steps: list[Step] = []
+    decimals = MEANS_DECIMALS
     phi = result.latitude_deg
     standard = fit.angles_deg.size == 4 and np.allclose(
         np.mod(fit.angles_deg, 360), [0, 90, 180, 270]
     )
     if standard and _equal_counts(fit.stats):
-        steps.extend(_latitude_closed_form(fit.means, phi, result.earth_rate_deg_h))
+        closed, decimals = _latitude_closed_form(fit.means, phi, result.earth_rate_deg_h)
+        steps.extend(closed)
     else:
         steps.append(
             Step(
@@ -346,8 +469,9 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
             )
         )
         if standard:
-            closed = _latitude_closed_form(fit.means, None, None)
+            closed, decimals = _latitude_closed_form(fit.means, None, None)
             steps.append(Step(UNWEIGHTED_TITLE, closed[0].lines + closed[1].lines))
+    steps.insert(0, _means_step(fit, decimals))
     lines = []
     if result.latitude_error_percent is not None:
         lines.append(_percent_error_line("φ", phi, result.true_latitude_deg, 2,
