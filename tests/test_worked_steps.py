@@ -342,6 +342,36 @@ def test_each_heading_line_worked_by_hand_from_the_means_gives_its_own_result():
         assert _as_written(by_hand, size) == size, text
 
 
+def test_the_weighted_fits_tan_theta_worked_by_hand_from_x_and_y_gives_its_own_result():
+    """Unequal numbers of readings: tan θ = −y/x from x and y as written, and θ from it.
+    Written to four decimals each, a third of the sessions' lines gave another tan θ or θ;
+    x and y now take a decimal or two more where that makes it work (not within 5° of
+    ±90°, where x is too small for any few decimals to fix tan θ's fourth)."""
+    rng = np.random.default_rng(13)
+    checked = 0
+    for _ in range(150):
+        angles, counts = ANGLES, (4, 10, 7, 10)
+        amplitude, phase, bias = rng.uniform(4, 12), rng.uniform(0, 360), rng.uniform(-2, 2)
+        positions = [
+            np.round(bias + amplitude * np.cos(np.radians(a - phase)) + rng.normal(0, 0.1, n), 3)
+            for a, n in zip(angles, counts, strict=True)
+        ]
+        result = solve_heading(positions, angles)
+        if abs(result.theta_deg) > 85:
+            continue
+        text = render_text(explain_heading(result), translator("en"))
+        line = re.search(
+            r"x = H·cos A1 = (-?[\d.]+) °/h,\s+y = H·sin A1 = (-?[\d.]+).*?"
+            r"tan θ = −y/x = (-?[\d.]+),\s+θ = arctan\((-?[\d.]+)\) = (-?[\d.]+)°",
+            text,
+            re.S,
+        )
+        assert _as_written(-Decimal(line[2]) / Decimal(line[1]), line[3]) == line[3], text
+        assert f"{math.degrees(math.atan(float(line[4]))):.2f}" == line[5], text
+        checked += 1
+    assert checked > 120
+
+
 def test_each_latitude_line_worked_by_hand_from_the_means_gives_its_own_result():
     """From the means of step 1 and φ as the lines write it, by hand: tan φ, φ, and Ω three
     ways.  The lines of Ω took φ to the two decimals "φ = 40.73°" shows and gave another Ω

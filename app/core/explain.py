@@ -193,6 +193,18 @@ def _heading_decimals(
     return MEANS_DECIMALS, 4
 
 
+def _slope_decimals(x: float, y: float, slope: float, slope_at: int) -> int:
+    """The decimals (four to six) of x and y for which −y/x, worked by hand from them,
+    gives the slope as written."""
+    if not math.isfinite(slope):
+        return 4
+    for decimals in range(4, MOST_DECIMALS + 1):
+        x_written, y_written = Decimal(_f(x, decimals)), Decimal(_f(y, decimals))
+        if x_written != 0 and by_hand(-y_written / x_written, slope_at) == _f(slope, slope_at):
+            return decimals
+    return 4
+
+
 def _equal_counts(stats) -> bool:
     return len({s.n for s in stats}) == 1
 
@@ -265,17 +277,19 @@ def explain_heading(result: HeadingResult) -> list[Step]:
             )
         )
     else:
+        slope = -y_used / x_used if abs(x_used) > 1e-12 else math.inf
+        slope_at = _ratio_decimals(slope, result.theta_deg)
+        xy_at = _slope_decimals(x_used, y_used, slope, slope_at)
         lines = [
             "ω = a·cos α + c·sin α + b",
             f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
             *_drift_lines(fit),
-            f"x = H·cos A1 = {_f(x_used, 4)} °/h,   y = H·sin A1 = {_f(y_used, 4)} °/h",
+            f"x = H·cos A1 = {_f(x_used, xy_at)} °/h,   y = H·sin A1 = {_f(y_used, xy_at)} °/h",
             f"A1 = atan2(y, x) = {_f(result.azimuth_deg, 2)}°",
         ]
-        if abs(x_used) > 1e-12:
-            ratio = -y_used / x_used
+        if math.isfinite(slope):
             lines.append(
-                f"tan θ = −y/x = {_f(ratio, 4)},   θ = arctan({_f(ratio, 4)}) = "
+                f"tan θ = −y/x = {_f(slope, slope_at)},   θ = arctan({_f(slope, slope_at)}) = "
                 f"{_f(result.theta_deg, 2)}°"
             )
         else:
