@@ -29,7 +29,7 @@ from app.core.allan_curve import (
     dominant_alphas,
     readable_points,
 )
-from app.core.allan_fit import TermEstimate, fit_terms
+from app.core.allan_fit import MIN_REGION_EDF, TermEstimate, fit_terms
 from app.core.angle_outputs import rates_from_angles
 from app.core.dwell_advice import DwellAdvice, curve_dwell, recommended_dwell
 from app.core.exceptions import UserError
@@ -228,11 +228,43 @@ def allan_deviation(
         list(notes or []),
     )
     if modelled:
-        advice = recommended_dwell(
-            result.noise(), rate_hz, (float(taus[0]), float(taus[-1])), limit="record"
-        )
-        result = _with_dwell(result, advice)
+        noise, source = result.noise(), "model"
+        if fit.fits and _holds_more_than(noise, taus[readable], adev[readable],
+                                         fit.band[0][readable], edf[readable]):  # fmt: skip
+            noise, source = _fitted_noise(noise, fit.fitted), "fit"
+        advice = recommended_dwell(noise, rate_hz, (float(taus[0]), float(taus[-1])), "record")
+        result = _with_dwell(result, replace(advice, source=source))
     return result
+
+
+MISSING_SHARE = 0.2  # the share of the curve's variance the resolved terms may leave out
+
+
+def _holds_more_than(
+    noise: GyroNoise, taus: np.ndarray, adev: np.ndarray, low: np.ndarray, edf: np.ndarray
+) -> bool:
+    """Whether the curve holds noise the resolved terms leave out: their σ²(τ) lies under the
+    curve's 68 % band, short of the curve by a fifth of its variance or more, over τ's
+    holding at least ``MIN_REGION_EDF`` degrees of freedom (a flicker floor and a random
+    walk together that the curve carries but neither alone: the resolved angle random walk
+    alone keeps falling where the curve has levelled off).  A resolved model a hair under
+    a band made narrow by 10⁵ degrees of freedom leaves out nothing that moves the dwell."""
+    resolved = noise.allan_variance(taus)
+    short = (np.sqrt(resolved) < low) & (resolved < (1.0 - MISSING_SHARE) * adev**2)
+    return bool(np.sum(edf[short]) >= MIN_REGION_EDF)
+
+
+def _fitted_noise(noise: GyroNoise, fitted: dict[str, float]) -> GyroNoise:
+    """The noise model of the fitted curve as a whole: each power-law term at its value in
+    the fit with every term free, resolved or not (the resolved bumps kept)."""
+    return replace(
+        noise,
+        arw_deg_rt_h=fitted.get("arw", 0.0),
+        bias_instability_deg_h=fitted.get("bias_instability", 0.0),
+        rrw_deg_h_rt_h=fitted.get("rrw", 0.0),
+        angle_lsb_deg=fitted.get("quantization", 0.0) * math.sqrt(12.0),
+        ramp_deg_h_per_h=fitted.get("rate_ramp", 0.0),
+    )
 
 
 def _with_dwell(result: AllanResult, advice: DwellAdvice) -> AllanResult:

@@ -113,6 +113,9 @@ class TermFit:
     model_adev: np.ndarray  # the fitted model's σ(τ) at each τ (°/h)
     band: tuple[np.ndarray, np.ndarray]  # the curve's 68 % band (low, high) (°/h)
     edf: np.ndarray = field(repr=False, default_factory=lambda: np.empty(0))
+    # each power-law term's value in the fit with every term free (the model curve's),
+    # resolved or not: what the curve holds as a whole where no one term carries it alone
+    fitted: dict[str, float] = field(default_factory=dict)
 
     @property
     def fits(self) -> bool:
@@ -215,7 +218,11 @@ def fit_terms(
             terms[name] = TermEstimate(name, None, upper_bound=_value(name, bound))
     dof = int(taus_s.size - np.count_nonzero(solution.coefficients))
     band = curve_band(adev, edf)
-    return TermFit(terms, solution.chi2, dof, np.sqrt(solution.model), band, edf)
+    fitted = {
+        name: _value(name, float(solution.coefficients[solution.names.index(name)]))
+        for name in TERM_ORDER
+    }
+    return TermFit(terms, solution.chi2, dof, np.sqrt(solution.model), band, edf, fitted)
 
 
 def _resolved(fitter: LogFit, solution: Solution, name: str, low: np.ndarray) -> TermEstimate:

@@ -110,6 +110,8 @@ def dwell_lines(dwell: dict, _: Translate) -> list[str]:
         )
     if dwell.get("source") == "curve":
         lines.append(_("allan.dwell_curve"))
+    elif dwell.get("source") == "fit":
+        lines.append(_("allan.dwell_fitted"))
     return lines
 
 
@@ -153,7 +155,7 @@ def summary_lines(result: AllanResult, _: Translate) -> list[str]:
         lines.append(f"{row['label']:<{width}}  {row['text']}")
     lines.append(
         _(
-            "allan.minimum_model" if result.dwell.source == "model" else "allan.minimum",
+            "allan.minimum_model" if result.dwell.source in ("model", "fit") else "allan.minimum",
             adev=_number(result.adev_min_deg_h),
             tau=_seconds(result.tau_min_s),
         )
