@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from app.core.gyro_stream import GyroStream
-from app.core.noise_model import GyroNoise, Window
+from app.core.noise_model import GyroNoise, Window, four_position_sigma
 from app.core.presets import PRESETS
 from app.core.solve import solve_heading
 from app.db import read_session, write_session
@@ -393,3 +393,35 @@ def test_a_device_faster_than_the_characterisation_gets_the_sigma_of_its_own_spa
         errors.append(solved.azimuth_error_deg)
     rms = math.sqrt(float(np.mean(np.square(errors))))
     assert rms == pytest.approx(closed_form(count / rate), rel=0.12)  # 300 runs: ±4 %
+
+
+@pytest.mark.one_backend  # the record's analysis does not depend on the database
+def test_a_bench_whose_floor_and_walk_no_term_carries_alone_keeps_their_noise(world):
+    """A FOG whose curve levels off from a flicker floor and a random walk that neither
+    alone carries (only N resolved): the stored noise model, which gives real readings their
+    1σ, was N alone -- white noise, whose σ keeps falling with the dwell where the gyro's
+    does not.  It now holds the fitted curve's floor and walk, as the dwell advice does."""
+    from tests.noise_sources import static_record as independent_record
+
+    rates = independent_record(2.5, 10.0, arw=0.005, flicker=0.02, rrw=0.05, seed=0)
+    text = "time_s,value\n" + "".join(f"{k / 10:.1f},{r:.6f}\n" for k, r in enumerate(rates))
+    teacher = browser(world, "teacher1")
+    assert upload(teacher, world, text).status_code == 303
+    summary = stored(world)
+    assert not summary["terms"]["bias_instability"]["resolved"]
+    assert not summary["terms"]["rrw"]["resolved"]
+    assert summary["dwell"]["source"] == "fit"
+    assert summary["bias_instability_deg_h"] > 0 or summary["rrw_deg_h_rt_h"] > 0
+    noise = GyroNoise(
+        arw_deg_rt_h=summary["arw_deg_rt_h"],
+        bias_instability_deg_h=summary["bias_instability_deg_h"],
+        rrw_deg_h_rt_h=summary["rrw_deg_h_rt_h"],
+    )
+    truth = GyroNoise(arw_deg_rt_h=0.005, bias_instability_deg_h=0.02, rrw_deg_h_rt_h=0.05)
+    # a heading's σ from four 10-minute positions: the stored model's near the truth's
+    # (within the scatter of one 2.5 h record), N alone's far under it
+    stored_sigma = four_position_sigma(noise, 10.0, 600.0, 10.0)
+    true_sigma = four_position_sigma(truth, 10.0, 600.0, 10.0)
+    white_sigma = four_position_sigma(GyroNoise(arw_deg_rt_h=0.005), 10.0, 600.0, 10.0)
+    assert stored_sigma == pytest.approx(true_sigma, rel=0.35)
+    assert white_sigma < 0.6 * true_sigma

@@ -494,3 +494,12 @@ def test_a_floor_and_a_random_walk_that_no_term_carries_alone_still_set_the_dwel
     assert 0.5 <= float(np.median(found)) <= 2.0 and 0.5 <= float(np.median(near)) <= 2.0
     for language, words in (("en", "fitted curve as a whole"), ("zh-CN", "整条拟合曲线")):
         assert words in "\n".join(summary_lines(result, translator(language)))
+    # the σ the results carry follows the same model: N alone lies far under the curve
+    # where it levels off, the fitted curve's terms within its band
+    readable = result.edf >= 10
+    taus, low = result.taus_s[readable], result.band_low_deg_h[readable]
+    assert np.any(np.sqrt(result.noise().allan_variance(taus)) < 0.8 * low)
+    modelled = np.sqrt(result.model_noise().allan_variance(taus))
+    assert np.all(modelled >= 0.9 * low) and np.all(
+        modelled <= 1.1 * result.band_high_deg_h[readable]
+    )

@@ -67,6 +67,8 @@ class AllanResult:
     rate_hz: float
     samples: int
     notes: list[dict] = field(default_factory=list)  # what was done to the record
+    # each power-law term in the fit with every term free, resolved or not (°, °/√h …)
+    fitted: dict[str, float] = field(default_factory=dict)
 
     def value(self, name: str) -> float | None:
         return self.terms[name].value
@@ -115,6 +117,13 @@ class AllanResult:
             sine_period_s=sine.period_s or 0.0,
             ramp_deg_h_per_h=self.value("rate_ramp") or 0.0,
         )
+
+    def model_noise(self) -> GyroNoise:
+        """The noise model the dwell advice follows: the resolved terms (:meth:`noise`), or
+        where the curve holds more than they do, the fitted curve's terms as a whole
+        (``dwell.source`` "fit") -- the model whose σ the results should carry."""
+        noise = self.noise()
+        return _fitted_noise(noise, self.fitted) if self.dwell.source == "fit" else noise
 
     def to_json(self) -> dict:
         return {
@@ -226,6 +235,7 @@ def allan_deviation(
         float(rate_hz),
         int(data.size),
         list(notes or []),
+        dict(fit.fitted),
     )
     if modelled:
         noise, source = result.noise(), "model"

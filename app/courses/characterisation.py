@@ -108,7 +108,7 @@ def characterise(
         raise UserError(
             "characterisation.bad_rate",
         )
-    noise = result.noise()
+    noise = result.model_noise()  # the fitted curve's where the resolved terms leave out noise
     seconds = result.samples / result.rate_hz
     return {
         "rate_hz": result.rate_hz,
