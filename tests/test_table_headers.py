@@ -776,3 +776,38 @@ def test_the_preview_refuses_a_position_the_session_has_not_as_the_save_does(stu
     for path in ("/csv/preview", "/csv"):
         refused = post_json(student_client, page + path, body, page)
         assert refused.status_code == 400 and refused.json()["key"] == "lab.needs_symmetric"
+
+
+@pytest.mark.parametrize(
+    ("header", "said"),
+    [
+        ("P1,P2,P3,P4,x", [("csv.column_left_out", {"column": "x"})]),
+        ("ω1,ω2,ω3,ω4,note", [("csv.column_left_out", {"column": "note"})]),
+        ("value,ω1", [("csv.column_left_out", {"column": "value"})]),
+        ("位置1,位置2,位置3,位置4,平均", [("csv.summary_column_skipped", {"label": "平均"})]),
+        ("位置,1,2,3,4,平均值", [("csv.summary_column_skipped", {"label": "平均值"})]),
+        ("sample,position_1,position_2,position_3,position_4", []),  # the readings' numbers
+        ("时间(s),1,2,3,4", []),  # the times
+        ("position_1,position_2,position_3,position_4,remarks", []),  # words: no readings
+    ],
+)
+def test_a_column_of_numbers_beside_the_positions_is_never_dropped_without_a_word(header, said):
+    """A wide table's column that names no position was left out of the readings, and the
+    preview, the lab page and ``gyrolab solve`` said nothing: a fifth position headed "x",
+    the numbers under "value".  It is said now, as a summary column is; the readings' own
+    numbers (1, 2, 3 … under "位置" or "sample"), times and remarks are no readings and go
+    unsaid."""
+    width = len(header.split(","))
+    rows = []
+    for k in range(10):
+        cells = [f"{10 + 0.1 * k + j:.2f}" for j in range(width)]
+        if header.startswith(("位置,", "sample,")):
+            cells[0] = str(k + 1)
+        if header.endswith("remarks"):
+            cells[-1] = "ok" if k % 2 else ""
+        rows.append(",".join(cells))
+    readings = parse_readings_csv(header + "\n" + "\n".join(rows) + "\n")
+    assert readings.layout_notes == said
+    for language in ("en", "zh-CN"):
+        for key, params in said:
+            assert translate(key, language, **params) != key

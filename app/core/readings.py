@@ -34,7 +34,9 @@ import re
 
 import numpy as np
 
+from app.core.column_names import column_name as record_column_name
 from app.core.column_names import is_hash_comment, readable_rate_unit
+from app.core.column_roles import COUNTER_NAME, names_a_time
 from app.core.exceptions import UserError
 from app.core.long_headers import long_columns, name_and_unit
 from app.core.long_readings import parse_long
@@ -215,11 +217,14 @@ def _parse_layout(rows, header_line: int, header: list[str], names, part: str | 
         index: int(m.group(1)) for index, name in enumerate(names) if (m := WIDE_COLUMN.match(name))
     }
     if wide:
-        return _parse_wide(wide, rows[1:])
+        readings = _parse_wide(wide, rows[1:])
+        readings.layout_notes = _columns_left_out(header, wide, rows[1:])
+        return readings
     numbered = numbered_columns(header, more_rows=len(rows) > 1)
     if numbered is not None:  # "位置 | 1 | 2 | 3 | 4" as the handout's tables, "0° | 90° …"
         readings = _parse_wide(numbered, rows[1:])
         readings.header_angles = header_angles(header, more_rows=len(rows) > 1)
+        readings.layout_notes = _columns_left_out(header, numbered, rows[1:])
         return readings
     headerless = _headerless_columns(rows)
     if headerless is not None:
@@ -294,6 +299,49 @@ def _parse_wide(columns: dict[int, int], rows) -> Readings:
     given = None if numbers == list(range(1, len(numbers) + 1)) else numbers
     arrays = [np.array(v) for v in values]
     return Readings(arrays, None, None, "wide", numbers=given, means_row=means_row)
+
+
+def _columns_left_out(header: list[str], taken: dict[int, int], rows) -> list[tuple[str, dict]]:
+    """What a wide table's header names beside its positions and the readings leave out,
+    said: a summary column ("平均值", "mean"), or a column of numbers whose name is no
+    position's ("x", "note" …) -- not a time column, a column numbering the readings
+    ("sample", "序号", or 1, 2, 3 … under any name) or a column of words (remarks), which
+    hold no readings.
+
+    Parameters
+    ----------
+    header : list of str
+        The header's cells.
+    taken : dict
+        The position columns read (column index → position number).
+    rows : list of (int, list of str)
+        The table's rows under the header, with their line numbers.
+
+    Returns
+    -------
+    list of (str, dict)
+        Notes (message key, parameters), in column order.
+    """
+    notes: list[tuple[str, dict]] = []
+    for index, cell in enumerate(header):
+        if index in taken or not cell.strip():
+            continue
+        if not any(index < len(row) and is_number(row[index].strip()) for _, row in rows):
+            continue  # remarks, or an empty column: nothing a reading could be
+        if _counts([row[index].strip() if index < len(row) else "" for _, row in rows]):
+            continue  # "位置 | 1 | 2 | 3 | 4" over the readings' numbers 1, 2, 3 …
+        name = record_column_name(cell)
+        if label := summary_label([cell]):
+            notes.append(("csv.summary_column_skipped", {"label": label}))
+        elif not (names_a_time(name) or COUNTER_NAME.fullmatch(name.base)):
+            notes.append(("csv.column_left_out", {"column": cell.strip()[:40]}))
+    return notes
+
+
+def _counts(cells: list[str]) -> bool:
+    """Whether a column's cells number the rows: 1, 2, 3 … (or 0, 1, 2 …)."""
+    start = cells[0] if cells else ""
+    return start in ("0", "1") and cells == [str(int(start) + k) for k in range(len(cells))]
 
 
 LABEL_MARK = re.compile(r"\s*[:=]\s*")  # "位置1：10.74", "P1 = 10.74" (full width made plain)
