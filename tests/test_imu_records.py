@@ -578,6 +578,7 @@ def test_the_one_column_beside_the_times_is_the_rates(header, rates_at):
         "Time (s),温度 (°C)",  # a logger of the case temperature alone
         "温度 (°C),t,序号,Temp",
         "t,Absolute",  # phyphox's |ω|: no axis
+        "time,position",  # a long table's keys without its readings
     ],
 )
 def test_no_clock_count_or_temperature_is_taken_for_the_rates(header):

@@ -201,7 +201,8 @@ def header_layout(header: list[str], column: str | None = None, *, guess: bool =
                 choices = rate_column_choices(header)
                 raise ColumnChoiceNeeded(
                     "allan.no_rate_column"
-                    if not choices and alone  # "time, Time (s), sample"
+                    if not choices and time is not None and (alone or len(names) == 2)
+                    # "time, Time (s), sample"; "time, position": no column left for rates
                     else "allan.no_value_column",
                     choices,
                     columns=", ".join(choices or [cell.strip() for cell in header]),
