@@ -312,8 +312,8 @@ NUMBER = r"\(?(-?[\d.]+)\)?"
 
 
 def test_each_heading_line_worked_by_hand_from_the_means_gives_its_own_result():
-    """From the means as step 1 writes them, by hand: tan θ, θ = arctan(tan θ), x, y and
-    H = √(x² + y²).  With readings of three decimals, the means written to three gave another
+    """From the means as step 1 writes them, by hand: tan θ, θ = arctan(tan θ), x, y,
+    H = √(x² + y²), the bias b and the closure d.  With readings of three decimals, the means written to three gave another
     x or y in the last digit in 97 % of sessions, another tan θ in 56 % and another θ in 8 %.
     The steps now write the means (and x, y, H, tan θ) to as many decimals as it takes."""
     rng = np.random.default_rng(11)
@@ -335,6 +335,10 @@ def test_each_heading_line_worked_by_hand_from_the_means_gives_its_own_result():
         assert _as_written((w[0] - w[2]) / 2, xy[1]) == xy[1], text
         y = (w[int(xy[2]) - 1] - w[int(xy[3]) - 1]) / 2
         assert _as_written(y, xy[4]) == xy[4], text
+        bias = re.search(r"b = (-?[\d.]+) °/h", text)[1]
+        assert _as_written((w[0] + w[1] + w[2] + w[3]) / 4, bias) == bias, text
+        closure = re.search(r"d = \(ω1 \+ ω3 − ω2 − ω4\)/2 = (-?[\d.]+)", text)[1]
+        assert _as_written((w[0] + w[2] - w[1] - w[3]) / 2, closure) == closure, text
         size = re.search(r"H = √\(x² \+ y²\) = (-?[\d.]+)", text)[1]
         with localcontext() as context:
             context.prec = 40

@@ -170,27 +170,53 @@ def _same_ratio(ratio: float, decimals: int, turn: int) -> Callable[[list[Decima
 
 
 def _heading_decimals(
-    means: np.ndarray, turn: int, ratio: float, ratio_at: int, xy: tuple[float, float] | None
-) -> tuple[int, int]:
-    """The decimals of the means, and of x and y, for which the ratio's line and, where
-    given, the lines x = (ω1 − ω3)/2 and y = ±(ω2 − ω4)/2 work out by hand: x and y to
-    four decimals, or more where a half in the fifth makes four ambiguous."""
+    means: np.ndarray,
+    turn: int,
+    ratio: float,
+    ratio_at: int,
+    closed: tuple[float, float, float, float | None] | None,
+) -> tuple[int, tuple[int, int, int]]:
+    """The decimals of the means for which the ratio's line and, where ``closed`` gives
+    the handout's closed form (x, y, b and the closure d, the last None where not shown),
+    the lines x = (ω1 − ω3)/2, y = ±(ω2 − ω4)/2 (four decimals), b = (ω1 + ω2 + ω3 + ω4)/4
+    and d = (ω1 + ω3 − ω2 − ω4)/2 (three) work out by hand; and the decimals of x and y, of
+    b and of d -- each a decimal or two more where a half in the next makes it ambiguous."""
+    usual = (4, 3, 3)
     same_ratio = _same_ratio(ratio, ratio_at, turn)
-    for xy_at in range(4, MOST_DECIMALS + 1):
+    found: list[tuple[int, int, int]] = []
 
-        def check(written: list[Decimal], xy_at: int = xy_at) -> bool:
-            if not same_ratio(written) or xy is None:
-                return xy is None and same_ratio(written)
-            w1, w2, w3, w4 = written
-            x, y = (w1 - w3) / 2, ((w2 - w4) if turn < 0 else (w4 - w2)) / 2
-            return by_hand(x, xy_at) == _f(xy[0], xy_at) and by_hand(y, xy_at) == _f(xy[1], xy_at)
+    def check(written: list[Decimal]) -> bool:
+        if not same_ratio(written):
+            return False
+        if closed is None:
+            return True
+        w1, w2, w3, w4 = written
+        x, y = (w1 - w3) / 2, ((w2 - w4) if turn < 0 else (w4 - w2)) / 2
+        lines = [
+            [(x, closed[0]), (y, closed[1])],
+            [((w1 + w2 + w3 + w4) / 4, closed[2])],
+            [((w1 + w3 - w2 - w4) / 2, closed[3])] if closed[3] is not None else [],
+        ]
+        decimals = []
+        for pairs, fewest in zip(lines, usual, strict=True):
+            at = next(
+                (
+                    at
+                    for at in range(fewest, MOST_DECIMALS + 1)
+                    if all(by_hand(hand, at) == _f(value, at) for hand, value in pairs)
+                ),
+                None,
+            )
+            if at is None:
+                return False
+            decimals.append(at)
+        found.append((decimals[0], decimals[1], decimals[2]))
+        return True
 
-        decimals = means_decimals(means, check)
-        if decimals is not None:
-            return decimals, xy_at
-        if xy is None:
-            break
-    return MEANS_DECIMALS, 4
+    decimals = means_decimals(means, check)
+    if decimals is None:
+        return MEANS_DECIMALS, usual
+    return decimals, found[-1] if found else usual
 
 
 def _slope_decimals(x: float, y: float, slope: float, slope_at: int) -> int:
@@ -247,10 +273,9 @@ def explain_heading(result: HeadingResult) -> list[Step]:
     ratio = _handout_ratio(w, turn)[2] if turn and w[0] != w[2] else math.inf
     theta = result.theta_deg if closed_form else math.degrees(math.atan(ratio))
     ratio_at = _ratio_decimals(ratio, theta)
-    decimals, xy_at = (
-        _heading_decimals(w, turn, ratio, ratio_at, (x_used, y_used) if closed_form else None)
-        if turn
-        else (MEANS_DECIMALS, 4)
+    closed = (x_used, y_used, fit.b, result.closure_residual_deg_h) if closed_form else None
+    decimals, (xy_at, b_at, d_at) = (
+        _heading_decimals(w, turn, ratio, ratio_at, closed) if turn else (MEANS_DECIMALS, (4, 3, 3))
     )
     steps = [_means_step(fit, decimals)]
     if closed_form:
@@ -321,9 +346,11 @@ def explain_heading(result: HeadingResult) -> list[Step]:
         )
     )
     h_at = hypot_decimals(_f(x_used, xy_at), _f(y_used, xy_at), result.amplitude_deg_h)
-    lines = [f"H = √(x² + y²) = {_f(result.amplitude_deg_h, h_at)} °/h,   b = {_f(fit.b)} °/h"]
+    lines = [
+        f"H = √(x² + y²) = {_f(result.amplitude_deg_h, h_at)} °/h,   b = {_f(fit.b, b_at)} °/h"
+    ]
     if result.closure_residual_deg_h is not None:
-        closure = f"d = (ω1 + ω3 − ω2 − ω4)/2 = {_f(result.closure_residual_deg_h)} °/h"
+        closure = f"d = (ω1 + ω3 − ω2 − ω4)/2 = {_f(result.closure_residual_deg_h, d_at)} °/h"
         if fit.closure_sigma is not None and fit.uncertainty_model != "closure":
             closure += f"  (σ_d = {_f(fit.closure_sigma)} °/h)"
         lines.append(closure)
