@@ -9,19 +9,22 @@ and the reports all show the same worked solution.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from decimal import Decimal, localcontext
 
 import numpy as np
 
 from app.core.solve import HeadingResult, LatitudeResult
+from app.core.step_decimals import (
+    handout_ratio,
+    heading_decimals,
+    latitude_decimals,
+    percent_error_line,
+    ratio_decimals_or_usual,
+    slope_decimals,
+)
 from app.core.worked_decimals import (
     MEANS_DECIMALS,
-    MOST_DECIMALS,
     RATIO_DECIMALS,
-    by_hand,
     hypot_decimals,
-    means_decimals,
     ratio_decimals,
 )
 from app.core.worked_steps import (
@@ -68,53 +71,6 @@ MEANS_LEGEND = Words("steps.legend_means")
 _FIT_TITLE = Words("steps.fit")
 
 
-def _percent_error_line(
-    symbol: str, value: float, true: float, decimals: int, percent: float
-) -> str:
-    """η = |x − x0|/x0 × 100% with the numbers written in: x0 as given, x to ``decimals``
-    or, where those give another η than the one written, to the fewest more decimals
-    (up to six) that give it -- so that the line, worked by hand, gives its own result
-    (φ = 31.24695° written 31.25 gave 21.74 % where η = 21.75 %).
-
-    Parameters
-    ----------
-    symbol : str
-        "φ" or "Ω".
-    value, true : float
-        The measured and the true value.
-    decimals : int
-        The decimals x is written to elsewhere in the steps.
-    percent : float
-        η (%), written to two decimals.
-
-    Returns
-    -------
-    str
-        The line.
-    """
-    given = f"{true:.6f}".rstrip("0")
-    given = given + "0" * max(0, decimals - len(given.split(".")[1]))  # "15.04" → "15.040"
-    written = _f(percent, 2)
-    shown = next(
-        (
-            digits
-            for digits in range(decimals, 7)
-            if _f(abs(round(value, digits) - float(given)) / abs(float(given)) * 100, 2) == written
-        ),
-        decimals,
-    )
-    measured = f"({_f(value, shown)})" if value < 0 else _f(value, shown)
-    if true < 0:  # a southern latitude: η over its size
-        return (
-            f"η_{symbol} = |{symbol} − {symbol}0|/|{symbol}0| × 100% = "
-            f"|{measured} − ({given})| / |{given}| × 100% = {written}%"
-        )
-    return (
-        f"η_{symbol} = |{symbol} − {symbol}0|/{symbol}0 × 100% = "
-        f"|{measured} − {given}| / {given} × 100% = {written}%"
-    )
-
-
 def _four_apart(angles: np.ndarray) -> int:
     """+1 for four positions 90° apart clockwise, −1 counter-clockwise, 0 otherwise."""
     if angles.size != 4:
@@ -133,102 +89,6 @@ def _drift_lines(fit) -> list[str]:
         return []
     sigma = f" ± {_f(fit.drift_sigma, 4)}" if fit.drift_sigma is not None else ""
     return [f"+ ḃ·(t − t̄):  ḃ = {_f(fit.drift, 4)}{sigma} °/h²"]
-
-
-def _handout_ratio(
-    means: np.ndarray, turn: int, decimals: int = MEANS_DECIMALS
-) -> tuple[str, str, float]:
-    """The handout's tan θ from four position means: its formula, the substituted
-    numerator and denominator (the means to ``decimals``), and the value (∞ when
-    ω1 = ω3)."""
-    w1, w2, w3, w4 = means
-    d = decimals
-    if turn < 0:
-        top, sub_top, numerator = "ω4 − ω2", f"{_p(w4, d)} − {_p(w2, d)}", w4 - w2
-    else:
-        top, sub_top, numerator = "ω2 − ω4", f"{_p(w2, d)} − {_p(w4, d)}", w2 - w4
-    formula = f"tan θ = ({top}) / (ω1 − ω3) = ({sub_top}) / ({_p(w1, d)} − {_p(w3, d)})"
-    return formula, top, numerator / (w1 - w3) if w1 != w3 else math.inf
-
-
-def _ratio_decimals(ratio: float, angle_deg: float) -> int:
-    return ratio_decimals(ratio, angle_deg) if math.isfinite(ratio) else RATIO_DECIMALS
-
-
-def _same_ratio(ratio: float, decimals: int, turn: int) -> Callable[[list[Decimal]], bool]:
-    """Whether means as written give ``ratio`` to ``decimals`` by the handout's formula."""
-
-    def check(written: list[Decimal]) -> bool:
-        if not math.isfinite(ratio):
-            return written[0] == written[2]
-        if written[0] == written[2]:
-            return False
-        by_hand_ratio = _handout_ratio(np.array([float(w) for w in written]), turn)[2]
-        return _f(by_hand_ratio, decimals) == _f(ratio, decimals)
-
-    return check
-
-
-def _heading_decimals(
-    means: np.ndarray,
-    turn: int,
-    ratio: float,
-    ratio_at: int,
-    closed: tuple[float, float, float, float | None] | None,
-) -> tuple[int, tuple[int, int, int]]:
-    """The decimals of the means for which the ratio's line and, where ``closed`` gives
-    the handout's closed form (x, y, b and the closure d, the last None where not shown),
-    the lines x = (ω1 − ω3)/2, y = ±(ω2 − ω4)/2 (four decimals), b = (ω1 + ω2 + ω3 + ω4)/4
-    and d = (ω1 + ω3 − ω2 − ω4)/2 (three) work out by hand; and the decimals of x and y, of
-    b and of d -- each a decimal or two more where a half in the next makes it ambiguous."""
-    usual = (4, 3, 3)
-    same_ratio = _same_ratio(ratio, ratio_at, turn)
-    found: list[tuple[int, int, int]] = []
-
-    def check(written: list[Decimal]) -> bool:
-        if not same_ratio(written):
-            return False
-        if closed is None:
-            return True
-        w1, w2, w3, w4 = written
-        x, y = (w1 - w3) / 2, ((w2 - w4) if turn < 0 else (w4 - w2)) / 2
-        lines = [
-            [(x, closed[0]), (y, closed[1])],
-            [((w1 + w2 + w3 + w4) / 4, closed[2])],
-            [((w1 + w3 - w2 - w4) / 2, closed[3])] if closed[3] is not None else [],
-        ]
-        decimals = []
-        for pairs, fewest in zip(lines, usual, strict=True):
-            at = next(
-                (
-                    at
-                    for at in range(fewest, MOST_DECIMALS + 1)
-                    if all(by_hand(hand, at) == _f(value, at) for hand, value in pairs)
-                ),
-                None,
-            )
-            if at is None:
-                return False
-            decimals.append(at)
-        found.append((decimals[0], decimals[1], decimals[2]))
-        return True
-
-    decimals = means_decimals(means, check)
-    if decimals is None:
-        return MEANS_DECIMALS, usual
-    return decimals, found[-1] if found else usual
-
-
-def _slope_decimals(x: float, y: float, slope: float, slope_at: int) -> int:
-    """The decimals (four to six) of x and y for which −y/x, worked by hand from them,
-    gives the slope as written."""
-    if not math.isfinite(slope):
-        return 4
-    for decimals in range(4, MOST_DECIMALS + 1):
-        x_written, y_written = Decimal(_f(x, decimals)), Decimal(_f(y, decimals))
-        if x_written != 0 and by_hand(-y_written / x_written, slope_at) == _f(slope, slope_at):
-            return decimals
-    return 4
 
 
 def _equal_counts(stats) -> bool:
@@ -270,16 +130,16 @@ def explain_heading(result: HeadingResult) -> list[Step]:
     y_used = result.amplitude_deg_h * math.sin(math.radians(result.azimuth_deg))
     closed_form = bool(turn) and _equal_counts(fit.stats)
     # the means and the ratio to as many decimals as make the lines work out by hand
-    ratio = _handout_ratio(w, turn)[2] if turn and w[0] != w[2] else math.inf
+    ratio = handout_ratio(w, turn)[2] if turn and w[0] != w[2] else math.inf
     theta = result.theta_deg if closed_form else math.degrees(math.atan(ratio))
-    ratio_at = _ratio_decimals(ratio, theta)
+    ratio_at = ratio_decimals_or_usual(ratio, theta)
     closed = (x_used, y_used, fit.b, result.closure_residual_deg_h) if closed_form else None
     decimals, (xy_at, b_at, d_at) = (
-        _heading_decimals(w, turn, ratio, ratio_at, closed) if turn else (MEANS_DECIMALS, (4, 3, 3))
+        heading_decimals(w, turn, ratio, ratio_at, closed) if turn else (MEANS_DECIMALS, (4, 3, 3))
     )
     steps = [_means_step(fit, decimals)]
     if closed_form:
-        formula, _, ratio = _handout_ratio(w, turn, decimals)
+        formula, _, ratio = handout_ratio(w, turn, decimals)
         steps.append(
             Step(
                 Words("steps.handout_theta"),
@@ -303,8 +163,8 @@ def explain_heading(result: HeadingResult) -> list[Step]:
         )
     else:
         slope = -y_used / x_used if abs(x_used) > 1e-12 else math.inf
-        slope_at = _ratio_decimals(slope, result.theta_deg)
-        xy_at = _slope_decimals(x_used, y_used, slope, slope_at)
+        slope_at = ratio_decimals_or_usual(slope, result.theta_deg)
+        xy_at = slope_decimals(x_used, y_used, slope, slope_at)
         lines = [
             "ω = a·cos α + c·sin α + b",
             f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
@@ -321,7 +181,7 @@ def explain_heading(result: HeadingResult) -> list[Step]:
             lines.append(f"θ = {_f(result.theta_deg, 2)}°")
         steps.append(Step(WEIGHTED_TITLE if turn else _FIT_TITLE, tuple(lines), legend=FIT_LEGEND))
         if turn and w[0] != w[2]:
-            formula, _, ratio = _handout_ratio(w, turn, decimals)
+            formula, _, ratio = handout_ratio(w, turn, decimals)
             closed = math.degrees(math.atan(ratio))
             steps.append(
                 Step(
@@ -401,7 +261,7 @@ def _latitude_closed_form(
     by_sin = (w2 - w4) / (2 * sin_phi) if abs(sin_phi) > 1e-9 else None
     ratio = (w2 - w4) / (w1 - w3) if w1 != w3 else math.inf
     ratio_at = ratio_decimals(ratio, phi) if math.isfinite(ratio) and w1 > w3 else RATIO_DECIMALS
-    decimals, phi_at = _latitude_decimals(means, ratio, ratio_at, omega, phi, by_cos, by_sin)
+    decimals, phi_at = latitude_decimals(means, ratio, ratio_at, omega, phi, by_cos, by_sin)
     d = decimals
     differences = {
         "cos": f"({_p(w1, d)} − {_p(w3, d)}) / (2 cos {_f(phi, phi_at)}°)",
@@ -425,47 +285,6 @@ def _latitude_closed_form(
         ),
         Step(Words("steps.earth_rate"), tuple(lines)),
     ], decimals
-
-
-def _latitude_decimals(
-    means: np.ndarray,
-    ratio: float,
-    ratio_at: int,
-    omega: float,
-    phi: float,
-    by_cos: float | None,
-    by_sin: float | None,
-) -> tuple[int, int]:
-    """The decimals of the means, and of φ in the lines of Ω, for which tan φ, the three
-    lines of Ω (to three decimals) work out by hand."""
-    omega_written = _f(omega)
-    for phi_at in range(2, MOST_DECIMALS + 1):
-        phi_written = math.radians(float(_f(phi, phi_at)))
-
-        def check(written: list[Decimal], phi_written: float = phi_written) -> bool:
-            w1, w2, w3, w4 = written
-            if math.isfinite(ratio) and (
-                w1 == w3 or _f(float((w2 - w4) / (w1 - w3)), ratio_at) != _f(ratio, ratio_at)
-            ):
-                return False
-            with localcontext() as context:
-                context.prec = 40
-                if by_hand(((w1 - w3) ** 2 + (w2 - w4) ** 2).sqrt() / 2, 3) != omega_written:
-                    return False
-                for value, difference, trig in (
-                    (by_cos, w1 - w3, math.cos(phi_written)),
-                    (by_sin, w2 - w4, math.sin(phi_written)),
-                ):
-                    if value is None:
-                        continue
-                    if by_hand(difference / (2 * Decimal(trig)), 3) != _f(value):
-                        return False
-            return True
-
-        decimals = means_decimals(means, check)
-        if decimals is not None:
-            return decimals, phi_at
-    return MEANS_DECIMALS, 2
 
 
 def explain_latitude(result: LatitudeResult) -> list[Step]:
@@ -515,11 +334,11 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
     steps.insert(0, _means_step(fit, decimals))
     lines = []
     if result.latitude_error_percent is not None:
-        lines.append(_percent_error_line("φ", phi, result.true_latitude_deg, 2,
+        lines.append(percent_error_line("φ", phi, result.true_latitude_deg, 2,
                                          result.latitude_error_percent))  # fmt: skip
     if result.latitude_error_deg is not None:
         lines.append(f"Δφ = φ − φ0 = {_f(result.latitude_error_deg, 2)}°")
-    lines.append(_percent_error_line("Ω", result.earth_rate_deg_h, result.true_earth_rate_deg_h,
+    lines.append(percent_error_line("Ω", result.earth_rate_deg_h, result.true_earth_rate_deg_h,
                                      3, result.earth_rate_error_percent))  # fmt: skip
     if result.latitude_sigma_deg is not None:
         linear = result.linear_sigma_deg

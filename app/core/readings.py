@@ -66,6 +66,7 @@ from app.core.table_headers import (
     summary_label,
 )
 from app.core.text_files import file_text, plain_text
+from app.core.turned_tables import label_apart, names_its_position, parse_rows_of_positions
 from app.core.typed_numbers import is_number
 
 
@@ -206,13 +207,13 @@ def _parse_layout(rows, header_line: int, header: list[str], names, part: str | 
             column = long["part"]
             body = [(n, r) for n, r in body if column < len(r) and r[column].strip() == part]
         return parse_long(long, body)
-    turned = [(line, _label_apart(row)) for line, row in rows]
-    if len(turned) > 1 and all(_names_its_position(row) for _, row in turned):
-        return _parse_rows_of_positions(turned)  # one row per position, its name first
-    if len(turned) > 2 and all(_names_its_position(row) for _, row in turned[1:]):
+    turned = [(line, label_apart(row)) for line, row in rows]
+    if len(turned) > 1 and all(names_its_position(row) for _, row in turned):
+        return parse_rows_of_positions(turned)  # one row per position, its name first
+    if len(turned) > 2 and all(names_its_position(row) for _, row in turned[1:]):
         # the same under a header that numbers the readings ("位置 | 1 | 2 | … | 平均值"):
         # not the handout's "位置 | 1 | 2 | 3 | 4", whose rows name no position
-        return _parse_rows_of_positions(turned[1:], header=turned[0][1])
+        return parse_rows_of_positions(turned[1:], header=turned[0][1])
     wide = {
         index: int(m.group(1)) for index, name in enumerate(names) if (m := WIDE_COLUMN.match(name))
     }
@@ -342,84 +343,3 @@ def _counts(cells: list[str]) -> bool:
     """Whether a column's cells number the rows: 1, 2, 3 … (or 0, 1, 2 …)."""
     start = cells[0] if cells else ""
     return start in ("0", "1") and cells == [str(int(start) + k) for k in range(len(cells))]
-
-
-LABEL_MARK = re.compile(r"\s*[:=]\s*")  # "位置1：10.74", "P1 = 10.74" (full width made plain)
-
-
-def _label_apart(row: list[str]) -> list[str]:
-    """A row whose position's name ends in a colon or an equals sign, as notes are typed
-    ("位置1：10.74 10.65 …", "P1 = 10.74, 10.65", "Position 1: 10.74 …" split at its
-    spaces): the name and the readings in cells of their own; any other row as it is."""
-    for end, cell in enumerate(row[:3]):
-        name, mark, first = _split_label(cell)
-        if mark:
-            label = " ".join([*row[:end], name]).strip()
-            if not WIDE_COLUMN.match(column_name(label)):
-                return row
-            return [label, *([first] if first else []), *row[end + 1 :]]
-    return row
-
-
-def _split_label(cell: str) -> tuple[str, str, str]:
-    """A cell split at its first colon or equals sign: (before, the mark, after)."""
-    match = LABEL_MARK.search(cell)
-    if match is None:
-        return cell, "", ""
-    return cell[: match.start()], match.group(), cell[match.end() :]
-
-
-def _names_its_position(row: list[str]) -> bool:
-    """A row of the table turned on its side: a position's name, then readings."""
-    return bool(WIDE_COLUMN.match(column_name(row[0]))) and all(
-        is_number(c) for c in row[1:] if c.strip()
-    )
-
-
-def _parse_rows_of_positions(rows, header: list[str] | None = None) -> Readings:
-    """A wide table turned on its side: one row per position, its name first ("位置1,
-    10.74, 10.65, …"), as a student types it line by line, perhaps under a header that
-    numbers the readings.  A column the header names a summary ("平均值", "mean"), or a
-    last column of each row's mean written to more decimals than its readings (a
-    spreadsheet's =AVERAGE), is left out and said, as such a row under a table is."""
-    notes: list[tuple[str, dict]] = []
-    summaries = [k for k, cell in enumerate(header or []) if k and summary_label([cell])]
-    for k in summaries:
-        notes.append(("csv.summary_column_skipped", {"label": summary_label([header[k]])}))
-    cells = {
-        line: [c.strip() for k, c in enumerate(row) if k and k not in summaries and c.strip()]
-        for line, row in rows
-    }
-    if _last_column_of_means(list(cells.values())):
-        cells = {line: row[:-1] for line, row in cells.items()}
-        notes.append(("csv.means_column_skipped", {}))
-    named = [int(WIDE_COLUMN.match(column_name(row[0])).group(1)) for _, row in rows]
-    if max(named) > MAX_POSITION_NUMBER:
-        raise UserError("csv.position_number", position=max(named), limit=MAX_POSITION_NUMBER)
-    order = symmetric_numbers(named) or named  # 1-2-3-4-4-3-2-1: the second visits 5 … 8
-    columns = {}
-    for (line, _row), number in zip(rows, order, strict=True):
-        if number in columns:
-            raise UserError("csv.position_twice", line=line, position=number)
-        columns[number] = [cell_number(c, line, f"position_{number}") for c in cells[line]]
-    numbers = sorted(columns)
-    for number in numbers:
-        if not columns[number]:
-            raise UserError("readings.empty_position", position=number)
-    given = None if numbers == list(range(1, len(numbers) + 1)) else numbers
-    readings = Readings([np.array(columns[k]) for k in numbers], None, None, "wide", numbers=given)
-    readings.layout_notes = notes
-    return readings
-
-
-def _last_column_of_means(rows: list[list[str]]) -> bool:
-    """Whether each row's last cell is the mean of the readings before it, written to more
-    decimals than they are (:func:`app.core.means_row.is_row_of_means`, turned)."""
-    if not rows or any(len(row) < 2 for row in rows):
-        return False
-    try:
-        above = [[float(c) for c in row[:-1]] for row in rows]
-    except ValueError:
-        return False
-    decimals = [max(written_decimals(c, significant=True) or 0 for c in row[:-1]) for row in rows]
-    return is_row_of_means([row[-1] for row in rows], above, decimals)
