@@ -313,9 +313,10 @@ NUMBER = r"\(?(-?[\d.]+)\)?"
 
 def test_each_heading_line_worked_by_hand_from_the_means_gives_its_own_result():
     """From the means as step 1 writes them, by hand: tan θ, θ = arctan(tan θ), x, y,
-    H = √(x² + y²), the bias b and the closure d.  With readings of three decimals, the means written to three gave another
-    x or y in the last digit in 97 % of sessions, another tan θ in 56 % and another θ in 8 %.
-    The steps now write the means (and x, y, H, tan θ) to as many decimals as it takes."""
+    H = √(x² + y²), the bias b and the closure d.  With readings of three decimals, the
+    means written to three gave another x or y in the last digit in 97 % of sessions,
+    another tan θ in 56 %, another θ in 8 %, another b or d in 3 %.  The steps now write
+    the means (and each line's result) to as many decimals as it takes."""
     rng = np.random.default_rng(11)
     for _ in range(150):
         positions = _fog_readings(
