@@ -14,6 +14,7 @@ import numpy as np
 
 from app.core.solve import HeadingResult, LatitudeResult
 from app.core.step_decimals import (
+    fit_decimals,
     handout_ratio,
     heading_decimals,
     latitude_decimals,
@@ -133,7 +134,11 @@ def explain_heading(result: HeadingResult) -> list[Step]:
     ratio = handout_ratio(w, turn)[2] if turn and w[0] != w[2] else math.inf
     theta = result.theta_deg if closed_form else math.degrees(math.atan(ratio))
     ratio_at = ratio_decimals_or_usual(ratio, theta)
-    closed = (x_used, y_used, fit.b, result.closure_residual_deg_h) if closed_form else None
+    closed = (
+        (x_used, y_used, fit.b, result.closure_residual_deg_h, result.azimuth_deg)
+        if closed_form
+        else None
+    )
     decimals, (xy_at, b_at, d_at) = (
         heading_decimals(w, turn, ratio, ratio_at, closed) if turn else (MEANS_DECIMALS, (4, 3, 3))
     )
@@ -164,7 +169,7 @@ def explain_heading(result: HeadingResult) -> list[Step]:
     else:
         slope = -y_used / x_used if abs(x_used) > 1e-12 else math.inf
         slope_at = ratio_decimals_or_usual(slope, result.theta_deg)
-        xy_at = slope_decimals(x_used, y_used, slope, slope_at)
+        xy_at = slope_decimals(x_used, y_used, slope, slope_at, result.azimuth_deg)
         lines = [
             "ω = a·cos α + c·sin α + b",
             f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
@@ -315,12 +320,13 @@ def explain_latitude(result: LatitudeResult) -> list[Step]:
         closed, decimals = _latitude_closed_form(fit.means, phi, result.earth_rate_deg_h)
         steps.extend(closed)
     else:
+        ac_at = fit_decimals(fit.a, fit.c, phi, result.earth_rate_deg_h)
         steps.append(
             Step(
                 WEIGHTED_TITLE if standard else _FIT_TITLE,
                 (
                     "ω = a·cos e + c·sin e + b",
-                    f"a = {_f(fit.a, 4)}, c = {_f(fit.c, 4)}, b = {_f(fit.b, 4)} °/h",
+                    f"a = {_f(fit.a, ac_at)}, c = {_f(fit.c, ac_at)}, b = {_f(fit.b, 4)} °/h",
                     *_drift_lines(fit),
                     f"φ = atan2(c, a) = {_f(phi, 2)}°,   Ω = √(a² + c²) = "
                     f"{_f(result.earth_rate_deg_h)} °/h",

@@ -154,7 +154,7 @@ def heading_decimals(
     turn: int,
     ratio: float,
     ratio_at: int,
-    closed: tuple[float, float, float, float | None] | None,
+    closed: tuple[float, float, float, float | None, float] | None,
 ) -> tuple[int, tuple[int, int, int]]:
     """The decimals of part A's lines worked from the means.
 
@@ -170,7 +170,7 @@ def heading_decimals(
         The decimals tan θ is written to.
     closed : tuple or None
         The handout's closed form where it is the result (equal numbers of readings): x,
-        y, b and the closure d as the result has them (d None where not shown).
+        y, b, the closure d (None where not shown) and A1 (°) as the result has them.
 
     Returns
     -------
@@ -198,12 +198,13 @@ def heading_decimals(
             [((w1 + w3 - w2 - w4) / 2, closed[3])] if closed[3] is not None else [],
         ]
         decimals = []
-        for pairs, fewest in zip(lines, usual, strict=True):
+        for group, (pairs, fewest) in enumerate(zip(lines, usual, strict=True)):
             at = next(
                 (
                     at
                     for at in range(fewest, MOST_DECIMALS + 1)
                     if all(by_hand(hand, at) == _f(value, at) for hand, value in pairs)
+                    and (group or same_azimuth(_f(closed[0], at), _f(closed[1], at), closed[4]))
                 ),
                 None,
             )
@@ -219,7 +220,57 @@ def heading_decimals(
     return decimals, found[-1] if found else usual
 
 
-def slope_decimals(x: float, y: float, slope: float, slope_at: int) -> int:
+def same_azimuth(x: str, y: str, azimuth_deg: float) -> bool:
+    """Whether A1 = atan2(y, x), worked by hand from x and y as written, gives the azimuth
+    to its two decimals.
+
+    Parameters
+    ----------
+    x, y : str
+        The components as written.
+    azimuth_deg : float
+        A1 as the result has it, in [0°, 360°).
+
+    Returns
+    -------
+    bool
+        True where they agree.
+    """
+    by_hand_azimuth = math.degrees(math.atan2(float(y), float(x))) % 360.0
+    return _f(by_hand_azimuth, 2) == _f(azimuth_deg, 2)
+
+
+def fit_decimals(a: float, c: float, phi_deg: float, omega: float) -> int:
+    """The decimals of the fit's a and c for the line φ = atan2(c, a), Ω = √(a² + c²).
+
+    Parameters
+    ----------
+    a, c : float
+        The fit's cosine and sine terms (°/h).
+    phi_deg, omega : float
+        φ (°, two decimals) and Ω (°/h, three) as the result has them.
+
+    Returns
+    -------
+    int
+        The fewest decimals (four to six) of a and c from which both work out by hand;
+        four where none does.
+    """
+    for decimals in range(4, MOST_DECIMALS + 1):
+        a_written, c_written = _f(a, decimals), _f(c, decimals)
+        if _f(math.degrees(math.atan2(float(c_written), float(a_written))), 2) != _f(phi_deg, 2):
+            continue
+        with localcontext() as context:
+            context.prec = 40
+            size = (Decimal(a_written) ** 2 + Decimal(c_written) ** 2).sqrt()
+        if by_hand(size, 3) == _f(omega):
+            return decimals
+    return 4
+
+
+def slope_decimals(
+    x: float, y: float, slope: float, slope_at: int, azimuth_deg: float | None = None
+) -> int:
     """The decimals of the weighted fit's x and y for the line tan θ = −y/x.
 
     Parameters
@@ -230,18 +281,22 @@ def slope_decimals(x: float, y: float, slope: float, slope_at: int) -> int:
         −y/x as the result has it.
     slope_at : int
         The decimals the slope is written to.
+    azimuth_deg : float, optional
+        A1, which atan2(y, x) must give too.
 
     Returns
     -------
     int
-        The fewest decimals (four to six) of x and y for which −y/x, worked by hand from
-        them, gives the slope as written; four where none does (x near 0).
+        The fewest decimals (four to six) of x and y for which −y/x (and A1), worked by
+        hand from them, give the slope as written; four where none does (x near 0).
     """
     if not math.isfinite(slope):
         return 4
     for decimals in range(4, MOST_DECIMALS + 1):
         x_written, y_written = Decimal(_f(x, decimals)), Decimal(_f(y, decimals))
-        if x_written != 0 and by_hand(-y_written / x_written, slope_at) == _f(slope, slope_at):
+        if x_written == 0 or by_hand(-y_written / x_written, slope_at) != _f(slope, slope_at):
+            continue
+        if azimuth_deg is None or same_azimuth(str(x_written), str(y_written), azimuth_deg):
             return decimals
     return 4
 
