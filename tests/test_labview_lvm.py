@@ -14,7 +14,7 @@ import pytest
 
 from app.core.allan import analyse_record
 from app.core.exceptions import UserError
-from app.core.position_records import parse_one_position_record
+from app.core.one_position_records import parse_one_position_record
 from app.core.static_record import read_static_record
 from app.core.text_files import text_lines
 from app.web.i18n import translator

@@ -318,7 +318,7 @@ def test_a_clock_that_runs_back_is_still_refused():
 def test_one_positions_record_stamped_to_the_second_at_two_hertz():
     """Two readings share each whole-second stamp: the record is read, its times spread
     over each second (each moved by less than its tick), not refused as "not rising"."""
-    from app.core.position_records import parse_one_position_record
+    from app.core.one_position_records import parse_one_position_record
 
     start = dt.datetime(2026, 11, 28, 14, 0, 0)
     lines = [

@@ -93,7 +93,7 @@ def test_a_western_windows_programs_record_is_read_with_its_degree_sign():
     """A degree sign in Windows-1252 ("°/s": 0xB0 then "/") is neither UTF-8 nor GB18030: read as
     Windows-1252 whole or in blocks, its unit in the header known to every reader -- one
     position's record and a record read in blocks; a row of units under the names too."""
-    from app.core.position_records import parse_one_position_record
+    from app.core.one_position_records import parse_one_position_record
     from app.core.static_record import read_static_record
     from app.core.text_files import decode_text, text_lines
 
@@ -121,7 +121,8 @@ def test_a_western_windows_programs_record_is_read_with_its_degree_sign():
 def test_one_positions_record_typed_in_full_width_is_read_as_the_table_reads_it():
     """A Chinese input method in full-width mode, and the minus sign "−": one position's
     record reads them as the pasted table does (not as a header with no readings)."""
-    from app.core.position_records import parse_one_position_record, parse_position_csv
+    from app.core.one_position_records import parse_one_position_record
+    from app.core.position_records import parse_position_csv
 
     typed = "１０．７４\n１０．６５\n－０．５\n−0.4\n"
     want = [10.74, 10.65, -0.5, -0.4]
@@ -172,7 +173,8 @@ def test_a_dos_programs_end_of_file_mark_is_not_part_of_the_file(marks):
     file as NUL bytes: read as the same file without them, by every reader -- the table,
     one position's record, the API's CSV body, a record read in blocks (the marks, and a
     CRLF, across a block's end) -- and a Ctrl-Z inside a file is still not text."""
-    from app.core.position_records import parse_one_position_record, parse_position_csv
+    from app.core.one_position_records import parse_one_position_record
+    from app.core.position_records import parse_position_csv
     from app.core.static_record import read_static_record
     from app.core.text_files import decode_text, text_lines
 
@@ -816,7 +818,7 @@ def test_a_table_of_columns_between_spaces_reads_as_its_csv(text):
 
 def test_a_one_position_record_between_spaces_is_still_a_record():
     """Two columns between spaces are a logger's time and reading, not a table."""
-    from app.core.position_records import parse_one_position_record
+    from app.core.one_position_records import parse_one_position_record
 
     text = "".join(f"{k * 0.1:.1f} {10.74 + 0.01 * (k % 3):.2f}\n" for k in range(20))
     with pytest.raises(UserError) as table:
@@ -848,7 +850,7 @@ def test_a_spreadsheets_error_value_is_a_problem_never_a_comment(error):
     """A row whose first cell is a failed formula ("#DIV/0!") was passed over as a "#"
     comment, with the row's other readings; now every reader names it, and a comment is
     still a comment."""
-    from app.core.position_records import parse_one_position_record
+    from app.core.one_position_records import parse_one_position_record
     from app.core.static_record import read_static_record
     from app.core.text_files import text_lines
 

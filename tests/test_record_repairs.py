@@ -90,7 +90,7 @@ def test_a_lab_positions_logger_file_leaves_its_lost_readings_out_and_says_so():
     """One position recorded by a logger, uploaded in the lab: its mean needs no unbroken
     timeline, so a lost reading is left out (not mended) and said; one left alone is
     refused as before, and so is a record made of nothing else."""
-    from app.core.position_records import parse_one_position_record
+    from app.core.one_position_records import parse_one_position_record
     from app.web.i18n import translate
 
     text = "time_s,value\n0,10.1\n1,NaN\n2,10.2\n3,1.#QNAN\n4,10.0\n"

@@ -626,7 +626,7 @@ def test_a_rate_in_a_unit_gyrolab_does_not_read_is_refused_by_name(reader, text,
     too small: refused, naming the unit, by the table, one-position record and bench
     record readers alike (before, a header's unit was passed over as a note and a row of
     units refused as "'mdeg/s' is not a number")."""
-    from app.core.position_records import parse_one_position_record
+    from app.core.one_position_records import parse_one_position_record
     from app.core.static_record import read_static_record
     from app.core.text_files import text_lines
 

@@ -82,7 +82,7 @@ def test_a_line_the_readers_name_is_the_sheets_own_row():
 
 
 def test_a_loggers_record_with_its_clock_reads_as_one_positions_record():
-    from app.core.position_records import parse_one_position_record
+    from app.core.one_position_records import parse_one_position_record
 
     start = datetime(2026, 12, 7, 10, 0, 0)
     rows = [["时间", "角速度 (°/h)"]]

@@ -12,7 +12,7 @@ from fastapi import APIRouter, Body, Depends, Query, Request
 from app.accounts.deps import CsrfProtected, CurrentUser
 from app.core.array_text import array_file_text, is_array_file
 from app.core.exceptions import UserError
-from app.core.position_records import (
+from app.core.one_position_records import (
     RECORD_PROBLEMS,
     OnePositionRecord,
     parse_one_position_record,

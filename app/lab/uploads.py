@@ -16,11 +16,8 @@ from app.core.clock_stamps import epoch_scale
 from app.core.exceptions import UserError
 from app.core.jsonsafe import loads_finite
 from app.core.labview_lvm import is_labview_measurement
-from app.core.position_records import (
-    RECORD_PROBLEMS,
-    parse_one_position_record,
-    parse_position_csv,
-)
+from app.core.one_position_records import RECORD_PROBLEMS, parse_one_position_record
+from app.core.position_records import parse_position_csv
 from app.core.readings import parse_readings_csv
 from app.core.text_files import decode_text
 from app.core.typed_numbers import parse_decimal
@@ -113,7 +110,7 @@ def csv_position(body: bytes, unit: str, column: str | None = None) -> Arrays:
     """One position's ``text/csv``: a reading (or ``time_s,value``) per line, else one
     position's record as a gyro's logger writes it -- its clock or ns, a header with
     units, a header behind ``#``, one axis of an IMU's record (``column``;
-    :func:`app.core.position_records.parse_one_position_record`, as the lab page reads
+    :func:`app.core.one_position_records.parse_one_position_record`, as the lab page reads
     such a file).  A record's own problem (a bad line, a unit against the header's,
     several axes and none chosen) is said as such; where neither reads it, the first
     reader's.
